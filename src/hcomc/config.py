@@ -1,0 +1,319 @@
+"""Scenario configuration: TOML files validated into frozen pydantic v2 models.
+
+Every parameter carries its SI unit in the field description and a default from
+``MODELS.md`` (section given per model). Unknown keys are rejected (``extra="forbid"``),
+so a typo in a config file is an error, never a silently ignored setting.
+
+A config is named either by a path to a TOML file or by a built-in preset name
+(``C1`` … ``C5`` for the paper's Table I conditions, ``platoon`` for the scripted-leader
+platoon), see :func:`load_config`.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from importlib.resources import files
+from itertools import pairwise
+from pathlib import Path
+from typing import Any, Literal
+
+import tomli_w
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+__all__ = [
+    "CAVParams",
+    "ConfigError",
+    "DemandParams",
+    "HDVParams",
+    "IDMParams",
+    "LaneChangeParams",
+    "PlatoonParams",
+    "RoadParams",
+    "ScenarioConfig",
+    "config_to_toml",
+    "load_config",
+    "preset_names",
+]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class IDMParams(_Frozen):
+    """Intelligent Driver Model parameters (paper Eq. 1; MODELS.md §0-§1)."""
+
+    desired_speed: float = Field(33.3, gt=0, le=70, description="v0, desired speed [m/s]")
+    time_headway: float = Field(1.5, gt=0, le=10, description="T_s, safe time headway [s]")
+    min_gap: float = Field(2.0, ge=0, le=20, description="s0, jam distance [m]")
+    max_accel: float = Field(1.0, gt=0, le=10, description="a, maximum acceleration [m/s^2]")
+    comfort_decel: float = Field(
+        2.0, gt=0, le=10, description="b, comfortable deceleration [m/s^2]"
+    )
+    exponent: float = Field(4.0, gt=0, le=20, description="delta, acceleration exponent [-]")
+    variant: Literal["idm", "iidm"] = Field(
+        "idm", description="'idm' = Eq. 1 as printed; 'iidm' = improved IDM (MODELS.md §1)"
+    )
+    lane_change_duration: float = Field(
+        4.0, gt=0.5, le=15, description="duration of a quintic lane change (Eq. 4-6) [s]"
+    )
+
+
+class HDVParams(IDMParams):
+    """Human-driven vehicle: IDM with reaction delays and estimation errors (Eq. 2; MODELS §2).
+
+    Defaults follow the Human Driver Model (Treiber, Kesting & Helbing 2006): equal delays
+    of 0.6 s for gap, speed and approach rate (the paper does not separate them), a
+    log-normal relative gap error V_s = 0.05 and an inverse-TTC error sigma_r = 0.01 1/s,
+    both Ornstein-Uhlenbeck processes with correlation time 20 s.
+    """
+
+    reaction_time_gap: float = Field(0.6, ge=0, le=3, description="tau_s, delay on the gap [s]")
+    reaction_time_speed: float = Field(0.6, ge=0, le=3, description="tau_v, delay on own speed [s]")
+    reaction_time_approach: float = Field(
+        0.6, ge=0, le=3, description="tau_dv, delay on the approach rate [s]"
+    )
+    estimation_errors: bool = Field(True, description="switch the Wiener estimation errors on/off")
+    gap_error: float = Field(0.05, ge=0, le=1, description="V_s, relative gap-estimation error [-]")
+    inverse_ttc_error: float = Field(
+        0.01, ge=0, le=1, description="sigma_r, error on the inverse TTC dv/s [1/s]"
+    )
+    error_correlation_time: float = Field(
+        20.0, gt=0, le=1000, description="tau~, correlation time of the estimation errors [s]"
+    )
+
+
+class CAVParams(IDMParams):
+    """Connected automated vehicle: ACC with the constant-acceleration heuristic (Eq. 3; §3).
+
+    Kesting et al. (2010) ACC values, with T = 1.0 s (CACC-like, MODELS.md §0) and the
+    coolness factor c = 0.99. Perception is exact and immediate.
+    """
+
+    time_headway: float = Field(1.0, gt=0, le=10, description="T_s, safe time headway [s]")
+    max_accel: float = Field(1.4, gt=0, le=10, description="a, maximum acceleration [m/s^2]")
+    coolness: float = Field(0.99, ge=0, le=1, description="c, coolness factor of Eq. 3 [-]")
+
+
+class LaneChangeParams(_Frozen):
+    """MOBIL lane-change decisions and their execution (MODELS.md §5, §8)."""
+
+    politeness: float = Field(0.5, ge=0, le=1, description="p (eta in Eq. 17), politeness [-]")
+    threshold: float = Field(0.2, ge=0, le=5, description="Delta a_th, changing threshold [m/s^2]")
+    keep_right_bias: float = Field(
+        0.2, ge=0, le=5, description="Delta a_bias, keep-right bias towards lane 1 [m/s^2]"
+    )
+    safe_decel: float = Field(4.0, gt=0, le=10, description="b_safe, safety criterion [m/s^2]")
+    min_gap: float = Field(2.0, ge=0, le=50, description="minimum bumper gap to accept [m]")
+    decision_interval: float = Field(
+        0.5, gt=0, le=10, description="time between lane-change decisions [s]"
+    )
+    transition_tolerance: float = Field(
+        0.01, gt=0, lt=0.5, description="epsilon of the Eq. 14 tanh transition, Psi(0)=eps [-]"
+    )
+    emergency_decel: float = Field(
+        9.0, gt=0, le=15, description="physical braking limit applied to every vehicle [m/s^2]"
+    )
+
+
+class RoadParams(_Frozen):
+    """Two-lane highway with an on-ramp and acceleration lane (DESIGN.md §3).
+
+    Lane 2 (outer) has its centre at y = +W, lane 1 at y = 0, the ramp and acceleration lane
+    at y = -W. The ramp runs parallel to lane 1 from ``ramp_start``; merging is allowed on
+    the acceleration lane ``[accel_lane_start, accel_lane_end]``, which ends there.
+    """
+
+    length: float = Field(1500.0, gt=100, le=100_000, description="mainline length [m]")
+    lane_width: float = Field(3.75, gt=2, le=6, description="W, lane width [m]")
+    accel_lane_start: float = Field(700.0, ge=0, description="start of the acceleration lane [m]")
+    accel_lane_end: float = Field(950.0, gt=0, description="end of the acceleration lane [m]")
+    ramp_start: float = Field(250.0, ge=0, description="where ramp vehicles enter [m]")
+    control_zone_length: float = Field(
+        300.0, ge=0, description="cooperative control zone upstream of the acceleration lane [m]"
+    )
+    vehicle_length: float = Field(5.0, gt=1, le=25, description="vehicle length [m]")
+    vehicle_width: float = Field(1.8, gt=0.5, le=3, description="vehicle width [m]")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> RoadParams:
+        if not self.ramp_start < self.accel_lane_start < self.accel_lane_end < self.length:
+            raise ValueError(
+                "need ramp_start < accel_lane_start < accel_lane_end < length, got "
+                f"{self.ramp_start} < {self.accel_lane_start} < {self.accel_lane_end} "
+                f"< {self.length}"
+            )
+        return self
+
+    @property
+    def control_zone_start(self) -> float:
+        """Upstream end of the cooperative control zone [m]."""
+        return max(0.0, self.accel_lane_start - self.control_zone_length)
+
+
+class DemandParams(_Frozen):
+    """Traffic demand (DESIGN.md §3): shifted exponential headways per lane, CAV share.
+
+    Headways are ``min_headway + Exp(mean - min_headway)``, so the mean is exactly the
+    condition's average time headway. Each vehicle is a CAV with probability
+    ``cav_penetration``. The ramp either releases one key merging vehicle
+    (``ramp = "single"``, the paper's setting) or a continuous flow.
+    """
+
+    mean_headway_main_1: float = Field(5.0, gt=0, le=3600, description="lane 1 mean headway [s]")
+    mean_headway_main_2: float = Field(5.0, gt=0, le=3600, description="lane 2 mean headway [s]")
+    min_headway: float = Field(1.0, gt=0, le=60, description="minimum (shift) headway [s]")
+    cav_penetration: float = Field(0.9, ge=0, le=1, description="share of CAVs [-]")
+    main_speed: float = Field(30.0, gt=0, le=70, description="insertion speed, mainline [m/s]")
+    ramp: Literal["single", "flow", "none"] = Field(
+        "single", description="'single' key merge, 'flow' continuous ramp demand, 'none'"
+    )
+    ramp_entry_time: float = Field(
+        5.0, ge=0, description="'single': release time after warm-up [s]"
+    )
+    ramp_mean_headway: float = Field(20.0, gt=0, le=3600, description="'flow': ramp headway [s]")
+    ramp_speed: float = Field(22.0, gt=0, le=70, description="insertion speed, ramp [m/s]")
+
+    @model_validator(mode="after")
+    def _headways(self) -> DemandParams:
+        for key in ("mean_headway_main_1", "mean_headway_main_2", "ramp_mean_headway"):
+            value = getattr(self, key)
+            if value <= self.min_headway:
+                raise ValueError(
+                    f"{key} = {value} must be greater than min_headway = {self.min_headway}"
+                )
+        return self
+
+
+class PlatoonParams(_Frozen):
+    """Scripted-leader platoon on one lane (car-following and string-stability studies).
+
+    The leader follows the piecewise-linear speed profile through ``profile`` points
+    ``[[t0, v0], [t1, v1], ...]`` (time [s], speed [m/s]); K followers of one kind start at
+    their equilibrium gap behind it.
+    """
+
+    followers: int = Field(10, ge=1, le=100_000, description="K, number of followers")
+    kind: Literal["hdv", "cav"] = Field("hdv", description="follower kind")
+    initial_speed: float = Field(25.0, ge=0, le=70, description="initial speed [m/s]")
+    profile: list[tuple[float, float]] = Field(
+        default_factory=lambda: [
+            (0.0, 25.0),
+            (10.0, 25.0),
+            (15.0, 15.0),
+            (40.0, 15.0),
+            (50.0, 25.0),
+        ],
+        description="leader speed profile points (t [s], v [m/s]), linear in between",
+    )
+
+    @model_validator(mode="after")
+    def _profile(self) -> PlatoonParams:
+        times = [p[0] for p in self.profile]
+        if len(times) < 1 or any(b <= a for a, b in pairwise(times)):
+            raise ValueError(f"profile times must be strictly increasing, got {times}")
+        if any(p[1] < 0 for p in self.profile):
+            raise ValueError("profile speeds must be >= 0")
+        return self
+
+
+class ScenarioConfig(_Frozen):
+    """A complete, resolved scenario: road, demand, vehicle models and run control."""
+
+    name: str = Field("custom", description="scenario name")
+    description: str = Field("", description="free text")
+    scenario: Literal["merge", "platoon"] = Field("merge", description="scenario type")
+    seed: int = Field(0, ge=0, description="default random seed (the CLI --seed overrides it)")
+    dt: float = Field(0.1, gt=0, le=1, description="simulation step [s]")
+    duration: float = Field(120.0, gt=0, le=86_400, description="measured duration [s]")
+    warmup: float = Field(30.0, ge=0, le=3600, description="unlogged warm-up before t = 0 [s]")
+    log_interval: float = Field(0.1, gt=0, le=60, description="logging interval [s]")
+    road: RoadParams = Field(default_factory=RoadParams)
+    demand: DemandParams = Field(default_factory=DemandParams)
+    hdv: HDVParams = Field(default_factory=HDVParams)
+    cav: CAVParams = Field(default_factory=CAVParams)
+    lane_change: LaneChangeParams = Field(default_factory=LaneChangeParams)
+    platoon: PlatoonParams = Field(default_factory=PlatoonParams)
+
+    @model_validator(mode="after")
+    def _steps(self) -> ScenarioConfig:
+        ratio = self.log_interval / self.dt
+        if abs(ratio - round(ratio)) > 1e-9:
+            raise ValueError(
+                f"log_interval = {self.log_interval} must be a multiple of dt = {self.dt}"
+            )
+        return self
+
+
+class ConfigError(ValueError):
+    """A config could not be read or validated; the message names key, value and rule."""
+
+
+_PRESET_DIR = "configs/conditions"
+
+
+def preset_names() -> list[str]:
+    """Names of the built-in presets (``C1`` … ``C5``, ``platoon``)."""
+    root = files("hcomc").joinpath(_PRESET_DIR)
+    return sorted(p.name.removesuffix(".toml") for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def _read_toml(source: str | Path) -> tuple[dict[str, Any], str]:
+    """Return the raw TOML mapping of a preset name or file path, and its origin."""
+    path = Path(source)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise ConfigError(f"config file '{source}' does not exist")
+        text, origin = path.read_text(encoding="utf-8"), str(path)
+    else:
+        names = preset_names()
+        match = {n.lower(): n for n in names}.get(str(source).lower())
+        if match is None:
+            raise ConfigError(
+                f"unknown preset '{source}'; allowed: {', '.join(names)} or a path to a .toml file"
+            )
+        text = files("hcomc").joinpath(f"{_PRESET_DIR}/{match}.toml").read_text(encoding="utf-8")
+        origin = f"preset {match}"
+    try:
+        return tomllib.loads(text), origin
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{origin}: invalid TOML: {exc}") from None
+
+
+def _describe(error: ValidationError, origin: str) -> str:
+    """One line per problem: dotted key, offending value, what is allowed."""
+    lines = []
+    for item in error.errors():
+        key = ".".join(str(p) for p in item["loc"]) or "(top level)"
+        if item["type"] == "extra_forbidden":
+            lines.append(f"{origin}: unknown key '{key}' (value {item['input']!r}); not allowed")
+        else:
+            value = item.get("input")
+            shown = "(missing)" if item["type"] == "missing" else repr(value)
+            msg = item["msg"].removeprefix("Value error, ")
+            lines.append(f"{origin}: key '{key}' = {shown}: {msg}")
+    return "; ".join(lines)
+
+
+def validate_config(data: dict[str, Any], origin: str = "config") -> ScenarioConfig:
+    """Validate a raw mapping into a :class:`ScenarioConfig`, raising :class:`ConfigError`."""
+    try:
+        return ScenarioConfig.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(_describe(exc, origin)) from None
+
+
+def load_config(source: str | Path, **overrides: Any) -> ScenarioConfig:
+    """Load a preset name (``C1``, ``platoon`` …) or a TOML file into a validated config.
+
+    Top-level ``overrides`` (e.g. ``duration=600``) are applied before validation, so they are
+    checked like file values. Raises :class:`ConfigError` with a one-line message.
+    """
+    data, origin = _read_toml(source)
+    data.update({k: v for k, v in overrides.items() if v is not None})
+    return validate_config(data, origin)
+
+
+def config_to_toml(config: ScenarioConfig) -> str:
+    """The fully resolved config as TOML text that :func:`load_config` reads back."""
+    return tomli_w.dumps(config.model_dump(mode="json"))

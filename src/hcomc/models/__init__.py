@@ -1,0 +1,1 @@
+"""Physical sub-models: car following, lane-change paths, transitions, fuel."""

@@ -1,0 +1,167 @@
+r"""CAV car-following kernels: constant-acceleration heuristic (CAH) and the ACC blend.
+
+Vectorised implementation of the ACC model of Kesting, Treiber & Helbing (2010), which the HCOMC
+paper uses for connected and automated vehicles (paper Eq. 3, MODELS.md §3). The CAH gives the
+maximum acceleration that avoids a crash if the leader keeps its current acceleration; the ACC
+blend mixes it with the IDM/IIDM acceleration through the coolness factor ``c``.
+
+Sign conventions as in :mod:`hcomc.models.idm`: ``s`` is the bumper-to-bumper gap [m] (``np.inf``
+for no leader), ``v`` the own speed and ``v_l`` the leader speed [m/s], ``a_l`` the leader
+acceleration [m/s^2] (in a connected setting, the leader's broadcast acceleration).
+
+References
+----------
+.. [1] A. Kesting, M. Treiber and D. Helbing, "Enhanced intelligent driver model to access the
+   impact of driving strategies on traffic capacity", Phil. Trans. R. Soc. A 368, 4585-4605
+   (2010), arXiv:0912.3613.
+.. [2] MovSim ``ACC.java``; SUMO ``MSCFModel_EIDM.cpp`` (same CAH and blend).
+.. [3] HCOMC paper (arXiv:2507.11621), Eq. (3).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc._typing import FloatArray
+
+__all__ = ["acc_acceleration", "cah_acceleration"]
+
+S_MIN_CAH: float = 0.01
+"""Lower guard on the gap [m] in the CAH (as in MovSim and SUMO)."""
+
+
+def cah_acceleration(
+    s: FloatArray | float,
+    v: FloatArray | float,
+    v_l: FloatArray | float,
+    a_l: FloatArray | float,
+    *,
+    a: FloatArray | float,
+) -> FloatArray:
+    r"""Constant-acceleration heuristic (CAH) of Kesting et al. (2010), MODELS.md §3.
+
+    With the leader acceleration capped at the own maximum acceleration,
+    :math:`\tilde a_l = \min(a_l, a)`,
+
+    .. math::
+       :label: eq-3-cah
+
+       a_\mathrm{CAH} = \begin{cases}
+         \dfrac{v^2\,\tilde a_l}{v_l^2 - 2 s \tilde a_l}
+           & v_l\,(v - v_l) \le -2 s \tilde a_l \\[1ex]
+         \tilde a_l - \dfrac{(v - v_l)^2\,\Theta(v - v_l)}{2 s} & \text{otherwise}
+       \end{cases}
+
+    where :math:`\Theta` is the Heaviside step function. The first branch is the case in which
+    both vehicles would come to a stop before the gap closes.
+
+    Parameters
+    ----------
+    s : float or array_like
+        Bumper-to-bumper gap [m], guarded by ``s >= 0.01`` (:data:`S_MIN_CAH`). ``np.inf`` means
+        no leader; the result is then :math:`\tilde a_l` (so pass the own acceleration, as
+        MovSim does, or 0 as ``a_l`` for vehicles without a leader).
+    v : float or array_like
+        Own speed [m/s].
+    v_l : float or array_like
+        Leader speed [m/s].
+    a_l : float or array_like
+        Leader acceleration [m/s^2].
+    a : float or array_like
+        Own maximum acceleration [m/s^2], the cap on ``a_l``.
+
+    Returns
+    -------
+    numpy.ndarray
+        CAH acceleration [m/s^2], ``float64``, broadcast shape of the inputs.
+
+    Notes
+    -----
+    The first branch is only used where its denominator :math:`v_l^2 - 2 s \tilde a_l` is
+    strictly positive. Under the branch condition the denominator is :math:`\ge v\,v_l \ge 0`
+    and vanishes only in the degenerate cases ``v = 0`` or ``v_l = 0 = a_l``; there the second
+    branch is used instead, as MovSim does (``denomCAH != 0``). No division by zero or runtime
+    warning occurs for any finite input.
+
+    References
+    ----------
+    .. [1] Kesting, Treiber & Helbing, Phil. Trans. R. Soc. A 368, 4585 (2010).
+    .. [2] MovSim ``ACC.java`` (``calcAcc``); SUMO ``MSCFModel_EIDM.cpp``.
+
+    Examples
+    --------
+    Stopped leader (``a_l = 0``), closing at 10 m/s from 50 m: deceleration to stop exactly at
+    the leader, -v^2/(2s).
+
+    >>> float(cah_acceleration(50.0, 10.0, 0.0, 0.0, a=1.4))
+    -1.0
+    """
+    s = np.asarray(s, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    a_lt = np.minimum(a_l, a)
+    no_leader = np.isinf(s)
+    # Finite stand-in for "no leader" keeps inf * 0 out of the branch condition.
+    s_g = np.where(no_leader, 1.0, np.maximum(s, S_MIN_CAH))
+    two_s_a = 2.0 * s_g * a_lt
+    denom = np.square(v_l) - two_s_a
+    use_first = (v_l * (v - v_l) <= -two_s_a) & (denom > 0.0)
+    first = np.square(v) * a_lt / np.where(use_first, denom, 1.0)
+    dvp = np.maximum(v - v_l, 0.0)
+    second = a_lt - dvp * dvp / (2.0 * s_g)
+    out = np.where(no_leader, a_lt, np.where(use_first, first, second))
+    return np.asarray(out, dtype=np.float64)
+
+
+def acc_acceleration(
+    a_idm: FloatArray | float,
+    a_cah: FloatArray | float,
+    *,
+    b: FloatArray | float,
+    c: FloatArray | float,
+) -> FloatArray:
+    r"""ACC acceleration: IDM/CAH blend with coolness factor, paper Eq. (3).
+
+    .. math::
+       :label: eq-3-acc
+
+       a_\mathrm{ACC} = \begin{cases}
+         a_\mathrm{IDM} & a_\mathrm{IDM} \ge a_\mathrm{CAH} \\
+         (1 - c)\,a_\mathrm{IDM} + c\left[a_\mathrm{CAH}
+           + b \tanh\left(\dfrac{a_\mathrm{IDM} - a_\mathrm{CAH}}{b}\right)\right]
+           & \text{otherwise}
+       \end{cases}
+
+    The paper's Eq. (3) prints only the second branch; the first branch of Kesting et al. (2010)
+    is restored here (MODELS.md §3, §16 item 3). Without it, a large :math:`a_\mathrm{IDM}`
+    would be capped near :math:`a_\mathrm{CAH} + b`.
+
+    Parameters
+    ----------
+    a_idm : float or array_like
+        IDM (or IIDM) acceleration [m/s^2].
+    a_cah : float or array_like
+        CAH acceleration from :func:`cah_acceleration` [m/s^2].
+    b : float or array_like
+        Comfortable deceleration (positive) [m/s^2].
+    c : float or array_like
+        Coolness factor [-] in [0, 1] (the paper's "cooling factor"); 0 recovers the IDM,
+        Kesting's default is 0.99.
+
+    Returns
+    -------
+    numpy.ndarray
+        ACC acceleration [m/s^2], ``float64``, broadcast shape of the inputs.
+
+    References
+    ----------
+    .. [1] Kesting, Treiber & Helbing, Phil. Trans. R. Soc. A 368, 4585 (2010).
+    .. [2] HCOMC paper (arXiv:2507.11621), Eq. (3).
+
+    Examples
+    --------
+    >>> float(acc_acceleration(0.5, -1.0, b=2.0, c=0.99))
+    0.5
+    """
+    a_idm = np.asarray(a_idm, dtype=np.float64)
+    blend = (1.0 - c) * a_idm + c * (a_cah + b * np.tanh((a_idm - a_cah) / b))
+    return np.asarray(np.where(a_idm >= a_cah, a_idm, blend), dtype=np.float64)

@@ -1,0 +1,319 @@
+r"""Intelligent Driver Model (IDM) and Improved IDM (IIDM) kernels.
+
+Pure, vectorised implementations of the car-following law of the HCOMC paper, Eq. (1)
+(Treiber, Hennecke & Helbing 2000), the IIDM variant used by MovSim's ACC model and SUMO's EIDM
+(Treiber & Kesting 2013), and the IDM equilibrium gap. All functions take scalars or arrays (for
+example one entry per vehicle, with per-vehicle parameter arrays), broadcast them with the usual
+numpy rules and return ``float64`` arrays. They are called inside the simulation step loop, so
+they avoid Python-level loops and keep temporaries to a minimum.
+
+Sign conventions (MODELS.md notation): ``s`` is the bumper-to-bumper gap to the leader [m]
+(``np.inf`` when there is no leader), ``v`` the own speed [m/s] and ``dv = v - v_leader`` the
+approach rate [m/s] (positive when closing in).
+
+References
+----------
+.. [1] M. Treiber, A. Hennecke and D. Helbing, "Congested traffic states in empirical
+   observations and microscopic simulations", Phys. Rev. E 62, 1805 (2000).
+.. [2] M. Treiber and A. Kesting, "Traffic Flow Dynamics", Springer (2013), Sec. 11.3
+   (IIDM).
+.. [3] Wang, Wang, Pan, Jiao and Claudel, "Hierarchical cooperative on-ramp merging control
+   (HCOMC) ...", arXiv:2507.11621, Eq. (1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc._typing import FloatArray
+
+__all__ = ["desired_gap", "equilibrium_gap", "idm_acceleration", "iidm_acceleration"]
+
+S_MIN: float = 1e-3
+"""Lower guard on the gap [m] used in the interaction term (avoids division by zero)."""
+
+_A_FREE_FLOOR: float = 1e-300
+"""Floor on the IIDM free-road acceleration [m/s^2] inside its exponent ``2a/a_free``."""
+
+
+def desired_gap(
+    v: FloatArray | float,
+    dv: FloatArray | float,
+    *,
+    T: FloatArray | float,
+    a: FloatArray | float,
+    b: FloatArray | float,
+    s0: FloatArray | float,
+) -> FloatArray:
+    r"""Desired (dynamic safety) gap :math:`s^*` of the IDM, paper Eq. (1).
+
+    .. math::
+       :label: eq-1-sstar
+
+       s^*(v, \Delta v) = s_0 + \max\left(0,\; vT + \frac{v\,\Delta v}{2\sqrt{ab}}\right)
+
+    The :math:`\max(0,\cdot)` clamp keeps :math:`s^* \ge s_0` when the leader is much faster
+    (large negative ``dv``).
+
+    Parameters
+    ----------
+    v : float or array_like
+        Own speed [m/s].
+    dv : float or array_like
+        Approach rate ``v - v_leader`` [m/s].
+    T : float or array_like
+        Desired time gap (``T_s`` in Eq. 1) [s].
+    a : float or array_like
+        Maximum acceleration [m/s^2].
+    b : float or array_like
+        Comfortable deceleration (positive) [m/s^2].
+    s0 : float or array_like
+        Minimum (jam) gap [m].
+
+    Returns
+    -------
+    numpy.ndarray
+        Desired gap :math:`s^*` [m], broadcast shape of the inputs, ``float64``.
+
+    References
+    ----------
+    .. [1] Treiber, Hennecke & Helbing, Phys. Rev. E 62, 1805 (2000).
+    .. [2] HCOMC paper (arXiv:2507.11621), Eq. (1).
+
+    Examples
+    --------
+    >>> float(desired_gap(20.0, 0.0, T=1.5, a=1.0, b=2.0, s0=2.0))
+    32.0
+    >>> float(desired_gap(20.0, -100.0, T=1.5, a=1.0, b=2.0, s0=2.0))
+    2.0
+    """
+    v = np.asarray(v, dtype=np.float64)
+    dyn = v * T + v * dv / (2.0 * np.sqrt(np.multiply(a, b)))
+    return np.asarray(np.maximum(dyn, 0.0) + s0, dtype=np.float64)
+
+
+def idm_acceleration(
+    s: FloatArray | float,
+    v: FloatArray | float,
+    dv: FloatArray | float,
+    *,
+    v0: FloatArray | float,
+    T: FloatArray | float,
+    a: FloatArray | float,
+    b: FloatArray | float,
+    s0: FloatArray | float,
+    delta: FloatArray | float,
+) -> FloatArray:
+    r"""IDM acceleration, paper Eq. (1).
+
+    .. math::
+       :label: eq-1-idm
+
+       \dot v = a\left[1 - \left(\frac{v}{v_0}\right)^{\delta}
+                - \left(\frac{s^*(v, \Delta v)}{s}\right)^2\right]
+
+    with :math:`s^*` from :func:`desired_gap`.
+
+    Parameters
+    ----------
+    s : float or array_like
+        Bumper-to-bumper gap to the leader [m]. ``np.inf`` means no leader (the interaction
+        term is then exactly 0). Gaps ``<= 0`` (overlap after a collision or a cut-in) are
+        guarded by ``s = max(s, 1e-3)`` (:data:`S_MIN`), which yields a very strong but finite
+        deceleration instead of a division by zero.
+    v : float or array_like
+        Own speed [m/s].
+    dv : float or array_like
+        Approach rate ``v - v_leader`` [m/s].
+    v0 : float or array_like
+        Desired speed [m/s].
+    T : float or array_like
+        Desired time gap [s].
+    a : float or array_like
+        Maximum acceleration [m/s^2].
+    b : float or array_like
+        Comfortable deceleration (positive) [m/s^2].
+    s0 : float or array_like
+        Minimum (jam) gap [m].
+    delta : float or array_like
+        Acceleration exponent [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Acceleration [m/s^2], ``float64``, broadcast shape of the inputs.
+
+    See Also
+    --------
+    iidm_acceleration : improved IDM with the same parameters.
+    equilibrium_gap : steady-state gap at which this acceleration is zero.
+
+    References
+    ----------
+    .. [1] Treiber, Hennecke & Helbing, Phys. Rev. E 62, 1805 (2000).
+    .. [2] HCOMC paper (arXiv:2507.11621), Eq. (1).
+
+    Examples
+    --------
+    >>> float(idm_acceleration(np.inf, 0.0, 0.0, v0=33.3, T=1.5, a=1.0, b=2.0, s0=2.0, delta=4))
+    1.0
+    """
+    v = np.asarray(v, dtype=np.float64)
+    z = desired_gap(v, dv, T=T, a=a, b=b, s0=s0) / np.maximum(s, S_MIN)
+    return np.asarray(a * (1.0 - np.power(v / v0, delta) - z * z), dtype=np.float64)
+
+
+def iidm_acceleration(
+    s: FloatArray | float,
+    v: FloatArray | float,
+    dv: FloatArray | float,
+    *,
+    v0: FloatArray | float,
+    T: FloatArray | float,
+    a: FloatArray | float,
+    b: FloatArray | float,
+    s0: FloatArray | float,
+    delta: FloatArray | float,
+) -> FloatArray:
+    r"""Improved IDM (IIDM) acceleration (Treiber & Kesting 2013; MODELS.md §1).
+
+    With :math:`z = s^*(v, \Delta v)/s` and :math:`a_\mathrm{free}` the free-road term,
+
+    .. math::
+       :label: eq-iidm
+
+       \dot v = \begin{cases}
+         a_\mathrm{free}\,\left(1 - z^{2a/a_\mathrm{free}}\right) & v \le v_0,\ z < 1 \\
+         a\,(1 - z^2) & v \le v_0,\ z \ge 1 \\
+         a_\mathrm{free} & v > v_0,\ z < 1 \\
+         a_\mathrm{free} + a\,(1 - z^2) & v > v_0,\ z \ge 1
+       \end{cases}
+       \qquad
+       a_\mathrm{free} = \begin{cases}
+         a\left[1 - (v/v_0)^{\delta}\right] & v \le v_0 \\
+         -b\left[1 - (v_0/v)^{a\delta/b}\right] & v > v_0
+       \end{cases}
+
+    Unlike the IDM, the IIDM equilibrium gap is exactly :math:`s_0 + vT` for all
+    :math:`v < v_0`. It is the base of Kesting's ACC/CAH model (MODELS.md §3), so it is offered
+    as a switch next to the paper's plain IDM of Eq. (1).
+
+    Parameters
+    ----------
+    s : float or array_like
+        Bumper-to-bumper gap [m]. ``np.inf`` gives ``z = 0`` (free road); gaps ``<= 0`` are
+        guarded by ``max(s, 1e-3)`` as in :func:`idm_acceleration`.
+    v : float or array_like
+        Own speed [m/s].
+    dv : float or array_like
+        Approach rate ``v - v_leader`` [m/s].
+    v0 : float or array_like
+        Desired speed [m/s] (must be > 0).
+    T : float or array_like
+        Desired time gap [s].
+    a : float or array_like
+        Maximum acceleration [m/s^2].
+    b : float or array_like
+        Comfortable deceleration (positive) [m/s^2].
+    s0 : float or array_like
+        Minimum (jam) gap [m].
+    delta : float or array_like
+        Acceleration exponent [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Acceleration [m/s^2], ``float64``, broadcast shape of the inputs.
+
+    Notes
+    -----
+    At :math:`v = v_0` the exponent :math:`2a/a_\mathrm{free}` is infinite; the free-road term is
+    floored at 1e-300 inside the exponent and ``z`` is clipped to 1 there, so the limit
+    (:math:`z^{\infty} = 0` for :math:`z < 1`) is reproduced without warnings.
+
+    References
+    ----------
+    .. [1] M. Treiber and A. Kesting, "Traffic Flow Dynamics", Springer (2013), Sec. 11.3.
+    .. [2] MovSim ``ACC.java`` (IIDM branch); SUMO ``MSCFModel_EIDM.cpp``.
+
+    Examples
+    --------
+    >>> float(iidm_acceleration(32.0, 20.0, 0.0, v0=33.3, T=1.5, a=1.0, b=2.0, s0=2.0, delta=4))
+    0.0
+    """
+    v = np.asarray(v, dtype=np.float64)
+    z = desired_gap(v, dv, T=T, a=a, b=b, s0=s0) / np.maximum(s, S_MIN)
+    below = v <= v0
+    # Free-road term of both speed regimes; each ratio is formed so that it is <= 1 and finite.
+    a_free = np.where(
+        below,
+        a * (1.0 - np.power(np.minimum(v, v0) / v0, delta)),
+        -b * (1.0 - np.power(v0 / np.maximum(v, v0), np.divide(a, b) * delta)),
+    )
+    interaction = a * (1.0 - z * z)
+    small = z < 1.0
+    # v <= v0 and z < 1: a_free (1 - z^(2a/a_free)), a_free >= 0 floored inside the exponent and
+    # z clipped to 1 so that the unused lanes of np.where cannot overflow.
+    exponent = np.multiply(a, 2.0) / np.maximum(a_free, _A_FREE_FLOOR)
+    approach = a_free * (1.0 - np.power(np.minimum(z, 1.0), exponent))
+    out = np.where(
+        below,
+        np.where(small, approach, interaction),
+        np.where(small, a_free, a_free + interaction),
+    )
+    return np.asarray(out, dtype=np.float64)
+
+
+def equilibrium_gap(
+    v: FloatArray | float,
+    *,
+    v0: FloatArray | float,
+    T: FloatArray | float,
+    s0: FloatArray | float,
+    delta: FloatArray | float,
+) -> FloatArray:
+    r"""Steady-state (equilibrium) gap of the IDM for a leader at the same speed.
+
+    Setting :math:`\dot v = 0` and :math:`\Delta v = 0` in Eq. (1):
+
+    .. math::
+       :label: eq-1-idm-equilibrium
+
+       s_e(v) = \frac{s_0 + vT}{\sqrt{1 - (v/v_0)^{\delta}}}, \qquad v < v_0
+
+    and :math:`s_e = \infty` for :math:`v \ge v_0` (no finite gap sustains the desired speed).
+    It does not depend on ``a`` and ``b``.
+
+    Parameters
+    ----------
+    v : float or array_like
+        Speed [m/s].
+    v0 : float or array_like
+        Desired speed [m/s].
+    T : float or array_like
+        Desired time gap [s].
+    s0 : float or array_like
+        Minimum (jam) gap [m].
+    delta : float or array_like
+        Acceleration exponent [-].
+
+    Returns
+    -------
+    numpy.ndarray
+        Equilibrium gap [m] (``inf`` where ``v >= v0``), ``float64``.
+
+    References
+    ----------
+    .. [1] Treiber, Hennecke & Helbing, Phys. Rev. E 62, 1805 (2000).
+    .. [2] MODELS.md §1.
+
+    Examples
+    --------
+    >>> round(float(equilibrium_gap(20.0, v0=33.3, T=1.5, s0=2.0, delta=4)), 2)
+    34.31
+    """
+    v = np.asarray(v, dtype=np.float64)
+    denom = 1.0 - np.power(v / v0, delta)
+    valid = denom > 0.0
+    gap = (s0 + v * T) / np.sqrt(np.where(valid, denom, 1.0))
+    return np.asarray(np.where(valid, gap, np.inf), dtype=np.float64)

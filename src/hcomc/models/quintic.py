@@ -1,0 +1,375 @@
+r"""Quintic-polynomial lane-change path, paper Eqs. (4)-(6).
+
+The lateral position during a lane change is a quintic polynomial of the longitudinal position,
+
+.. math:: y(x) = a_0 + a_1 x + a_2 x^2 + a_3 x^3 + a_4 x^4 + a_5 x^5, \qquad x \in [x_0, x_f]
+
+(paper Eq. 4). The longitudinal position ``x(t)`` comes from the car-following model (Eqs. 5-6),
+so the engine evaluates ``y(x(t))`` every step with :func:`lateral_offset`, which uses the
+normalised rest-to-rest closed form :math:`y_0 + W\,p(\xi)` with
+:math:`p(\xi) = 10\xi^3 - 15\xi^4 + 6\xi^5`. :func:`quintic_coefficients` solves the general
+6x6 boundary-value system for non-zero end states. The ``peak_*`` and :func:`min_duration`
+helpers give the exact time-parametrised extrema (MODELS.md §4) used to choose the lane-change
+duration.
+
+References
+----------
+.. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Eqs. (4)-(6).
+.. [2] MODELS.md §4 (peak values, duration selection).
+"""
+
+from __future__ import annotations
+
+from math import comb, sqrt
+
+import numpy as np
+
+from hcomc._typing import FloatArray
+
+__all__ = [
+    "lateral_offset",
+    "min_duration",
+    "peak_lateral_accel",
+    "peak_lateral_jerk",
+    "peak_lateral_speed",
+    "quintic_coefficients",
+    "quintic_shape",
+]
+
+PEAK_SPEED_FACTOR: float = 15.0 / 8.0
+"""max p'(ξ) = 15/8 = 1.875, attained at ξ = 1/2."""
+
+PEAK_ACCEL_FACTOR: float = 10.0 / sqrt(3.0)
+"""max |p''(ξ)| = 10/√3 ≈ 5.7735, attained at ξ = (3 ∓ √3)/6."""
+
+PEAK_JERK_FACTOR: float = 60.0
+"""max |p'''(ξ)| = 60, attained at ξ = 0 and ξ = 1."""
+
+_MIN_LENGTH: float = 1e-9
+"""Guard on the manoeuvre length xf - x0 [m] in :func:`lateral_offset`."""
+
+# Boundary system in the normalised variable ξ = (x - x0)/L: rows are p(0), p'(0), p''(0),
+# p(1), p'(1), p''(1) applied to the monomials ξ^0 .. ξ^5.
+_BC_MATRIX = np.array(
+    [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 2.0, 0.0, 0.0, 0.0],
+        [1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+        [0.0, 1.0, 2.0, 3.0, 4.0, 5.0],
+        [0.0, 0.0, 2.0, 6.0, 12.0, 20.0],
+    ]
+)
+# Taylor-shift tables: a_j = sum_k C(k, j) (-x0)^(k-j) d_k for the monomials in (x - x0).
+_BINOM = np.array([[comb(k, j) for k in range(6)] for j in range(6)], dtype=np.float64)
+_SHIFT_POW = np.array([[max(k - j, 0) for k in range(6)] for j in range(6)], dtype=np.intp)
+
+
+def quintic_coefficients(
+    x0: FloatArray | float,
+    xf: FloatArray | float,
+    y0: FloatArray | float,
+    yf: FloatArray | float,
+    dy0: FloatArray | float = 0.0,
+    ddy0: FloatArray | float = 0.0,
+    dyf: FloatArray | float = 0.0,
+    ddyf: FloatArray | float = 0.0,
+) -> FloatArray:
+    r"""Coefficients :math:`a_0 \ldots a_5` of the lane-change quintic, paper Eq. (4).
+
+    Solves the boundary-value problem
+
+    .. math::
+       :label: eq-4-quintic
+
+       y(x) = \sum_{k=0}^{5} a_k x^k, \quad
+       y(x_0) = y_0,\ y'(x_0) = y'_0,\ y''(x_0) = y''_0,\quad
+       y(x_f) = y_f,\ y'(x_f) = y'_f,\ y''(x_f) = y''_f.
+
+    Parameters
+    ----------
+    x0, xf : float or array_like
+        Longitudinal start and end positions [m] (``xf != x0``).
+    y0, yf : float or array_like
+        Lateral start and end positions [m].
+    dy0, dyf : float or array_like, optional
+        Slopes :math:`dy/dx` at the start and end [-] (default 0).
+    ddy0, ddyf : float or array_like, optional
+        Curvatures :math:`d^2y/dx^2` at the start and end [1/m] (default 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(..., 6)``: ``[a0, a1, a2, a3, a4, a5]`` in the absolute coordinate ``x``
+        (units [m], [-], [1/m], [1/m^2], [1/m^3], [1/m^4]); ``...`` is the broadcast shape of
+        the inputs. Evaluate with ``numpy.polynomial.polynomial.polyval(x, a.T)`` or similar.
+
+    Notes
+    -----
+    The 6x6 system is solved for all boundary sets at once (one ``numpy.linalg.solve`` call with
+    the batch as right-hand-side columns) in the normalised variable
+    :math:`\xi = (x - x_0)/(x_f - x_0)`, whose matrix is constant and well conditioned, and the
+    solution is mapped exactly to the monomials of Eq. (4) by scaling and a Taylor (binomial)
+    shift. Solving the Vandermonde-type system directly in absolute ``x`` is numerically
+    hopeless at highway positions of hundreds of metres. For the same reason, coefficients in
+    absolute ``x`` lose accuracy by cancellation when ``|x0|`` is much larger than
+    ``xf - x0``; the engine uses :func:`lateral_offset` (closed form in ξ) instead.
+
+    References
+    ----------
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4); MODELS.md §4.
+
+    Examples
+    --------
+    Rest-to-rest change of 3.75 m over 100 m starting at x = 0:
+    ``W (10 ξ^3 - 15 ξ^4 + 6 ξ^5)`` with ξ = x/100.
+
+    >>> np.round(quintic_coefficients(0.0, 100.0, 0.0, 3.75) * [1, 1, 1, 1e6, 1e8, 1e10], 12)
+    array([  0.  ,   0.  ,   0.  ,  37.5 , -56.25,  22.5 ])
+    """
+    x0_, xf_, y0_, yf_, dy0_, ddy0_, dyf_, ddyf_ = np.broadcast_arrays(
+        *(np.asarray(q, dtype=np.float64) for q in (x0, xf, y0, yf, dy0, ddy0, dyf, ddyf))
+    )
+    length = xf_ - x0_
+    length2 = length * length
+    rhs = np.stack(
+        (y0_, dy0_ * length, ddy0_ * length2, yf_, dyf_ * length, ddyf_ * length2), axis=-1
+    )
+    shape = rhs.shape
+    # Coefficients c_k of the monomials xi^k, solved for the whole batch at once.
+    c = np.linalg.solve(_BC_MATRIX, rhs.reshape(-1, 6).T).T.reshape(shape)
+    # d_k = c_k / L^k: coefficients of (x - x0)^k.
+    d = c / np.power(length[..., None], np.arange(6))
+    # Taylor shift to absolute x: a_j = sum_k C(k, j) (-x0)^(k-j) d_k.
+    neg_x0_pow = np.power(-x0_[..., None], np.arange(6))
+    return np.einsum("jk,...jk,...k->...j", _BINOM, neg_x0_pow[..., _SHIFT_POW], d)
+
+
+def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, FloatArray]:
+    r"""Normalised rest-to-rest quintic and its first two derivatives.
+
+    .. math::
+       :label: eq-4-shape
+
+       p(\xi) = 10\xi^3 - 15\xi^4 + 6\xi^5, \quad
+       p'(\xi) = 30\xi^2(1 - \xi)^2, \quad
+       p''(\xi) = 60\xi(1 - \xi)(1 - 2\xi)
+
+    This is Eq. (4) with the boundary conditions :math:`p(0) = p'(0) = p''(0) = 0`,
+    :math:`p(1) = 1`, :math:`p'(1) = p''(1) = 0`.
+
+    Parameters
+    ----------
+    xi : float or array_like
+        Normalised progress ξ [-]; clipped to [0, 1], so that the path is constant (and its
+        derivatives zero) before the start and after the end of the manoeuvre.
+
+    Returns
+    -------
+    p, dp, ddp : numpy.ndarray
+        :math:`p(\xi)`, :math:`dp/d\xi` and :math:`d^2p/d\xi^2` [-], ``float64``.
+
+    References
+    ----------
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4); MODELS.md §4.
+
+    Examples
+    --------
+    >>> [float(q) for q in quintic_shape(0.5)]
+    [0.5, 1.875, 0.0]
+    """
+    xi = np.clip(np.asarray(xi, dtype=np.float64), 0.0, 1.0)
+    xi2 = xi * xi
+    om = 1.0 - xi
+    p = xi2 * xi * (10.0 + xi * (6.0 * xi - 15.0))
+    dp = 30.0 * xi2 * om * om
+    ddp = 60.0 * xi * om * (1.0 - 2.0 * xi)
+    return (
+        np.asarray(p, dtype=np.float64),
+        np.asarray(dp, dtype=np.float64),
+        np.asarray(ddp, dtype=np.float64),
+    )
+
+
+def lateral_offset(
+    x: FloatArray | float,
+    x0: FloatArray | float,
+    xf: FloatArray | float,
+    y0: FloatArray | float,
+    yf: FloatArray | float,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    r"""Lateral position and its x-derivatives on a rest-to-rest lane change, Eqs. (4)-(6).
+
+    .. math::
+       :label: eq-4-6-lateral
+
+       y(x) = y_0 + W p(\xi),\quad
+       \frac{dy}{dx} = \frac{W}{L} p'(\xi),\quad
+       \frac{d^2y}{dx^2} = \frac{W}{L^2} p''(\xi),\qquad
+       \xi = \frac{x - x_0}{L},\ L = x_f - x_0,\ W = y_f - y_0
+
+    with :math:`p` from :func:`quintic_shape`. Time derivatives follow from the chain rule
+    (MODELS.md §4): :math:`\dot y = y'\dot x` and :math:`\ddot y = y''\dot x^2 + y'\ddot x`.
+
+    Parameters
+    ----------
+    x : float or array_like
+        Current longitudinal position [m]; clamped to ``[x0, xf]``.
+    x0, xf : float or array_like
+        Longitudinal start and (predicted) end of the manoeuvre [m], ``xf > x0``. A length
+        ``xf - x0`` below 1e-9 m is raised to 1e-9 m (an instantaneous change), so the result
+        stays finite.
+    y0, yf : float or array_like
+        Lateral start and target positions [m]; ``yf < y0`` changes lane to the other side.
+
+    Returns
+    -------
+    y : numpy.ndarray
+        Lateral position [m].
+    dy_dx : numpy.ndarray
+        Slope :math:`dy/dx` [-].
+    d2y_dx2 : numpy.ndarray
+        Curvature term :math:`d^2y/dx^2` [1/m].
+
+    References
+    ----------
+    .. [1] HCOMC paper (arXiv:2507.11621), Eqs. (4)-(6); MODELS.md §4.
+
+    Examples
+    --------
+    >>> [round(float(q), 6) for q in lateral_offset(50.0, 0.0, 100.0, 0.0, 3.75)]
+    [1.875, 0.070312, 0.0]
+    """
+    length = np.maximum(np.subtract(xf, x0), _MIN_LENGTH)
+    width = np.subtract(yf, y0)
+    p, dp, ddp = quintic_shape(np.subtract(x, x0) / length)
+    slope = width / length
+    return (
+        np.asarray(y0 + width * p, dtype=np.float64),
+        np.asarray(slope * dp, dtype=np.float64),
+        np.asarray(slope / length * ddp, dtype=np.float64),
+    )
+
+
+def peak_lateral_speed(width: FloatArray | float, duration: FloatArray | float) -> FloatArray:
+    r"""Peak lateral speed of a time-parametrised rest-to-rest quintic lane change.
+
+    .. math:: \max_t |\dot y| = \frac{15}{8}\,\frac{W}{T_{lc}} = 1.875\,\frac{W}{T_{lc}}
+
+    attained at mid-manoeuvre (MODELS.md §4).
+
+    Parameters
+    ----------
+    width : float or array_like
+        Lateral displacement W [m] (its magnitude is used).
+    duration : float or array_like
+        Lane-change duration T_lc [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Peak lateral speed [m/s].
+
+    Examples
+    --------
+    >>> round(float(peak_lateral_speed(3.75, 4.0)), 4)
+    1.7578
+    """
+    return np.asarray(PEAK_SPEED_FACTOR * np.abs(width) / duration, dtype=np.float64)
+
+
+def peak_lateral_accel(width: FloatArray | float, duration: FloatArray | float) -> FloatArray:
+    r"""Peak lateral acceleration of a time-parametrised rest-to-rest quintic lane change.
+
+    .. math:: \max_t |\ddot y| = \frac{10}{\sqrt 3}\,\frac{W}{T_{lc}^2}
+              \approx 5.7735\,\frac{W}{T_{lc}^2}
+
+    attained at :math:`\xi = (3 \mp \sqrt 3)/6` (MODELS.md §4).
+
+    Parameters
+    ----------
+    width : float or array_like
+        Lateral displacement W [m] (its magnitude is used).
+    duration : float or array_like
+        Lane-change duration T_lc [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Peak lateral acceleration [m/s^2].
+
+    Examples
+    --------
+    >>> round(float(peak_lateral_accel(3.75, 4.0)), 4)
+    1.3532
+    """
+    duration = np.asarray(duration, dtype=np.float64)
+    return np.asarray(PEAK_ACCEL_FACTOR * np.abs(width) / (duration * duration), dtype=np.float64)
+
+
+def peak_lateral_jerk(width: FloatArray | float, duration: FloatArray | float) -> FloatArray:
+    r"""Peak lateral jerk of a time-parametrised rest-to-rest quintic lane change.
+
+    .. math:: \max_t |\dddot y| = 60\,\frac{W}{T_{lc}^3}
+
+    attained at the start and end of the manoeuvre (MODELS.md §4).
+
+    Parameters
+    ----------
+    width : float or array_like
+        Lateral displacement W [m] (its magnitude is used).
+    duration : float or array_like
+        Lane-change duration T_lc [s].
+
+    Returns
+    -------
+    numpy.ndarray
+        Peak lateral jerk [m/s^3].
+
+    Examples
+    --------
+    >>> round(float(peak_lateral_jerk(3.75, 4.0)), 4)
+    3.5156
+    """
+    duration = np.asarray(duration, dtype=np.float64)
+    peak = PEAK_JERK_FACTOR * np.abs(width) / (duration * duration * duration)
+    return np.asarray(peak, dtype=np.float64)
+
+
+def min_duration(
+    width: FloatArray | float, a_max: FloatArray | float, j_max: FloatArray | float
+) -> FloatArray:
+    r"""Shortest lane-change duration meeting lateral acceleration and jerk limits.
+
+    .. math::
+       T_\mathrm{min} = \max\left(\sqrt{\frac{10}{\sqrt 3}\frac{W}{a_{y,\max}}},\;
+                        \left(\frac{60\,W}{j_{y,\max}}\right)^{1/3}\right)
+
+    (MODELS.md §4), the inverse of :func:`peak_lateral_accel` and :func:`peak_lateral_jerk`.
+
+    Parameters
+    ----------
+    width : float or array_like
+        Lateral displacement W [m] (its magnitude is used).
+    a_max : float or array_like
+        Admissible peak lateral acceleration [m/s^2].
+    j_max : float or array_like
+        Admissible peak lateral jerk [m/s^3].
+
+    Returns
+    -------
+    numpy.ndarray
+        Minimum duration [s].
+
+    Examples
+    --------
+    With W = 3.75 m, 2 m/s^2 and 5 m/s^3 the jerk limit governs: (45)^(1/3) = 3.557 s
+    (the acceleration limit alone gives 3.290 s).
+
+    >>> round(float(min_duration(3.75, 2.0, 5.0)), 3)
+    3.557
+    """
+    w = np.abs(np.asarray(width, dtype=np.float64))
+    t_acc = np.sqrt(PEAK_ACCEL_FACTOR * w / a_max)
+    t_jerk = np.cbrt(PEAK_JERK_FACTOR * w / j_max)
+    return np.asarray(np.maximum(t_acc, t_jerk), dtype=np.float64)
