@@ -1,0 +1,649 @@
+"""Simulation log: preallocated struct-of-arrays trajectories plus a list of events.
+
+The engine writes one row per logging step with :meth:`SimulationLog.record` (a handful
+of vectorised numpy operations, no Python loop over vehicles) and appends rare discrete
+events (insertions, lane changes, merges, collisions, plan fallbacks ...) with
+:meth:`SimulationLog.add_event`. Metrics, tables and figures read the log afterwards.
+
+Layout (``T`` logging steps x ``N`` vehicle slots):
+
+=========== ========= ======== ======================================= ==============
+array       shape     dtype    meaning                                 unused cell
+=========== ========= ======== ======================================= ==============
+``t``       (T,)      float64  time of the row [s]                     NaN
+``x``       (T, N)    float32  longitudinal position [m]               NaN
+``y``       (T, N)    float32  lateral position [m]                    NaN
+``v``       (T, N)    float32  speed [m/s]                             NaN
+``a``       (T, N)    float32  acceleration [m/s^2]                    NaN
+``heading`` (T, N)    float32  heading angle [rad]                     NaN
+``lane``    (T, N)    int8     lane index (0 = ramp, 1, 2)             -1
+``active``  (T, N)    bool     vehicle is on the road                  False
+``kind``    (N,)      int8     0 = HDV, 1 = CAV                        -
+``length``  (N,)      float32  vehicle length [m]                      -
+``width``   (N,)      float32  vehicle width [m]                       -
+=========== ========= ======== ======================================= ==============
+
+A (step, vehicle) cell costs 22 bytes (float32 states; float32 resolution at
+x = 1500 [m] is about 1e-4 [m]). The 1 GiB budget of DESIGN.md §6 for a 1-hour run with
+2000 vehicle slots therefore needs a logging interval of at least 0.15 [s]
+(3600 / 0.15 * 2000 * 22 B = 0.98 GiB); at 0.1 [s] the arrays take 1.48 GiB.
+
+Files: ``.npz`` (all arrays, events and metadata in one compressed archive) or
+``.parquet`` (the long-format frame of :meth:`SimulationLog.to_frame`, with the run
+metadata in the Parquet schema metadata and the events in a sibling
+``<stem>.events.parquet``). Both are written atomically and read back exactly by
+:meth:`SimulationLog.load`.
+"""
+
+from __future__ import annotations
+
+import base64
+import enum
+import json
+import math
+import os
+import uuid
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.sim.manifest import atomic_paths, json_default
+
+__all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
+
+_FORMAT_VERSION = 1
+_PARQUET_META_KEY = b"hcomc.simulation_log"
+_PARQUET_EVENTS_META_KEY = b"hcomc.simulation_log.events"
+
+_STATE_FIELDS = ("x", "y", "v", "a", "heading")
+_VEHICLE_FIELDS = ("kind", "length", "width")
+_ARRAY_FIELDS = ("t", *_STATE_FIELDS, "lane", "active", *_VEHICLE_FIELDS)
+
+
+class EventKind(enum.IntEnum):
+    """Kinds of discrete events recorded in a :class:`SimulationLog`."""
+
+    INSERTION = 0
+    """A vehicle entered the simulation."""
+    LANE_CHANGE_START = 1
+    """A vehicle started a (quintic) lane change; ``value`` = target lane."""
+    LANE_CHANGE_END = 2
+    """A vehicle completed a lane change; ``value`` = new lane."""
+    MERGE = 3
+    """A ramp vehicle completed its merge into lane 1."""
+    COLLISION = 4
+    """Two vehicles' rectangles overlap; ``vehicle`` and ``other`` are the pair."""
+    RAMP_WAIT = 5
+    """A ramp vehicle stopped at the end of the acceleration lane."""
+    EXIT = 6
+    """A vehicle left the simulated road."""
+    PLAN = 7
+    """A merge controller issued a plan for a ramp vehicle."""
+    FALLBACK = 8
+    """A controller fell back to a safe plan (e.g. all candidates infeasible)."""
+
+
+EVENT_DTYPE = np.dtype(
+    [
+        ("t", "f8"),  # [s]
+        ("kind", "i1"),  # EventKind
+        ("vehicle", "i8"),  # vehicle slot
+        ("other", "i8"),  # second vehicle slot, -1 if none
+        ("x", "f8"),  # position [m], NaN if not given
+        ("value", "f8"),  # kind-specific payload, NaN if not given
+    ]
+)
+"""Structured dtype of :attr:`SimulationLog.events`."""
+
+
+def _b64(arr: np.ndarray, dtype: str) -> str:
+    return base64.b64encode(np.ascontiguousarray(arr, dtype=dtype).tobytes()).decode("ascii")
+
+
+def _unb64(text: str, dtype: str) -> np.ndarray:
+    return np.frombuffer(base64.b64decode(text), dtype=dtype).copy()
+
+
+class SimulationLog:
+    """Preallocated struct-of-arrays log of one simulation run.
+
+    Build it with :meth:`allocate` (or :meth:`load`); the constructor takes ready arrays
+    and is meant for internal use. See the module docstring for the array layout.
+
+    Parameters
+    ----------
+    dt : float
+        Logging interval [s].
+    t : numpy.ndarray
+        (T,) float64 row times [s].
+    x, y, v, a, heading : numpy.ndarray
+        (T, N) float32 position [m], lateral position [m], speed [m/s],
+        acceleration [m/s^2], heading [rad].
+    lane : numpy.ndarray
+        (T, N) int8 lane index, -1 when inactive.
+    active : numpy.ndarray
+        (T, N) bool activity mask.
+    kind : numpy.ndarray
+        (N,) int8 vehicle type, 0 = HDV, 1 = CAV.
+    length, width : numpy.ndarray
+        (N,) float32 vehicle dimensions [m].
+    meta : dict or None
+        JSON-serialisable run metadata (seed, config, version ...).
+    n_recorded : int
+        Number of rows already written.
+    events : numpy.ndarray or None
+        Initial events, :data:`EVENT_DTYPE`.
+    """
+
+    def __init__(
+        self,
+        *,
+        dt: float,
+        t: FloatArray,
+        x: np.ndarray,
+        y: np.ndarray,
+        v: np.ndarray,
+        a: np.ndarray,
+        heading: np.ndarray,
+        lane: np.ndarray,
+        active: BoolArray,
+        kind: np.ndarray,
+        length: np.ndarray,
+        width: np.ndarray,
+        meta: dict[str, Any] | None = None,
+        n_recorded: int = 0,
+        events: np.ndarray | None = None,
+    ) -> None:
+        dt = float(dt)
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt (logging interval) must be finite and > 0 [s], got {dt}")
+        self.dt: float = dt
+        self.t: FloatArray = t
+        self.x = x
+        self.y = y
+        self.v = v
+        self.a = a
+        self.heading = heading
+        self.lane = lane
+        self.active = active
+        self.kind = kind
+        self.length = length
+        self.width = width
+        self.meta: dict[str, Any] = {} if meta is None else meta
+        n_steps, n_vehicles = self.x.shape
+        for name in (*_STATE_FIELDS, "lane", "active"):
+            if getattr(self, name).shape != (n_steps, n_vehicles):
+                raise ValueError(
+                    f"{name} has shape {getattr(self, name).shape}, "
+                    f"expected {(n_steps, n_vehicles)}"
+                )
+        if self.t.shape != (n_steps,):
+            raise ValueError(f"t has shape {self.t.shape}, expected {(n_steps,)}")
+        for name in _VEHICLE_FIELDS:
+            if getattr(self, name).shape != (n_vehicles,):
+                raise ValueError(
+                    f"{name} has shape {getattr(self, name).shape}, expected {(n_vehicles,)}"
+                )
+        if not 0 <= n_recorded <= n_steps:
+            raise ValueError(f"n_recorded must be in [0, {n_steps}], got {n_recorded}")
+        self._n_recorded = int(n_recorded)
+        self._events: list[tuple[float, int, int, int, float, float]] = []
+        if events is not None:
+            self._events.extend(tuple(e.item()) for e in np.asarray(events, EVENT_DTYPE))
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def allocate(
+        cls,
+        n_steps: int,
+        n_vehicles: int,
+        *,
+        dt: float,
+        kind: IntArray,
+        length: FloatArray,
+        width: FloatArray,
+        meta: dict[str, Any] | None = None,
+    ) -> SimulationLog:
+        """Preallocate an empty log.
+
+        Parameters
+        ----------
+        n_steps : int
+            Number of logging rows T (>= 0).
+        n_vehicles : int
+            Number of vehicle slots N (>= 0).
+        dt : float
+            Logging interval [s] (> 0).
+        kind : array_like of int, shape (N,)
+            Vehicle type per slot, 0 = HDV, 1 = CAV.
+        length, width : array_like of float, shape (N,)
+            Vehicle dimensions [m] (finite, > 0).
+        meta : dict or None
+            JSON-serialisable run metadata. Stored by reference.
+
+        Returns
+        -------
+        SimulationLog
+            State arrays filled with NaN, ``lane`` with -1, ``active`` with False,
+            ``t`` with NaN; no rows recorded, no events.
+
+        Raises
+        ------
+        ValueError
+            On negative sizes, a bad ``dt``, wrongly shaped per-vehicle arrays, a kind
+            other than 0/1 or a non-positive dimension.
+        """
+        n_steps, n_vehicles = int(n_steps), int(n_vehicles)
+        if n_steps < 0 or n_vehicles < 0:
+            raise ValueError(f"n_steps and n_vehicles must be >= 0, got {n_steps}, {n_vehicles}")
+        per_vehicle: dict[str, np.ndarray] = {}
+        for name, value in (("kind", kind), ("length", length), ("width", width)):
+            arr = np.asarray(value)
+            if arr.shape != (n_vehicles,):
+                raise ValueError(f"{name} must have shape ({n_vehicles},), got {arr.shape}")
+            per_vehicle[name] = arr
+        kind_arr = per_vehicle["kind"]
+        if kind_arr.size and not np.isin(kind_arr, (0, 1)).all():
+            raise ValueError(f"kind must be 0 (HDV) or 1 (CAV), got values {np.unique(kind_arr)}")
+        for name in ("length", "width"):
+            arr = per_vehicle[name].astype(np.float64)
+            if arr.size and not (np.isfinite(arr).all() and (arr > 0).all()):
+                raise ValueError(f"{name} must be finite and > 0 [m]")
+        shape = (n_steps, n_vehicles)
+        states = {name: np.full(shape, np.nan, dtype=np.float32) for name in _STATE_FIELDS}
+        return cls(
+            dt=dt,
+            t=np.full(n_steps, np.nan, dtype=np.float64),
+            lane=np.full(shape, -1, dtype=np.int8),
+            active=np.zeros(shape, dtype=np.bool_),
+            kind=kind_arr.astype(np.int8),
+            length=per_vehicle["length"].astype(np.float32),
+            width=per_vehicle["width"].astype(np.float32),
+            meta=meta,
+            **states,
+        )
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_steps(self) -> int:
+        """Number of allocated rows T."""
+        return int(self.x.shape[0])
+
+    @property
+    def n_vehicles(self) -> int:
+        """Number of vehicle slots N."""
+        return int(self.x.shape[1])
+
+    @property
+    def n_recorded(self) -> int:
+        """Number of rows written so far (highest recorded row index + 1)."""
+        return self._n_recorded
+
+    @property
+    def vehicle_steps(self) -> int:
+        """Number of active (step, vehicle) cells."""
+        return int(np.count_nonzero(self.active))
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the log's arrays [bytes] (events excluded)."""
+        return int(sum(getattr(self, name).nbytes for name in _ARRAY_FIELDS))
+
+    def __repr__(self) -> str:
+        return (
+            f"SimulationLog(n_steps={self.n_steps}, n_vehicles={self.n_vehicles}, "
+            f"dt={self.dt}, n_recorded={self.n_recorded}, "
+            f"vehicle_steps={self.vehicle_steps}, n_events={len(self._events)})"
+        )
+
+    # ------------------------------------------------------------------ writing
+    def record(
+        self,
+        k: int,
+        t: float,
+        x: FloatArray,
+        y: FloatArray,
+        v: FloatArray,
+        a: FloatArray,
+        heading: FloatArray,
+        lane: IntArray,
+        active: BoolArray,
+    ) -> None:
+        """Write logging row *k*.
+
+        Values of inactive vehicles are replaced by NaN (floats) and -1 (lane), so a row
+        never carries stale state. Rewriting a row overwrites it completely.
+
+        Parameters
+        ----------
+        k : int
+            Row index, 0 <= k < T.
+        t : float
+            Simulation time of the row [s].
+        x, y, v, a, heading : numpy.ndarray, shape (N,)
+            Position [m], lateral position [m], speed [m/s], acceleration [m/s^2],
+            heading [rad] of every slot (any value for inactive slots).
+        lane : numpy.ndarray of int, shape (N,)
+            Lane index of every slot.
+        active : numpy.ndarray of bool, shape (N,)
+            Which slots are on the road.
+
+        Raises
+        ------
+        IndexError
+            If *k* is outside [0, T).
+        """
+        if not 0 <= k < self.x.shape[0]:
+            raise IndexError(f"row {k} outside the log's {self.x.shape[0]} rows")
+        self.t[k] = t
+        self.active[k] = active
+        mask = self.active[k]  # bool view: accepts any truthy input dtype
+        self.x[k] = np.where(mask, x, np.nan)
+        self.y[k] = np.where(mask, y, np.nan)
+        self.v[k] = np.where(mask, v, np.nan)
+        self.a[k] = np.where(mask, a, np.nan)
+        self.heading[k] = np.where(mask, heading, np.nan)
+        self.lane[k] = np.where(mask, lane, -1)
+        if k >= self._n_recorded:
+            self._n_recorded = k + 1
+
+    def add_event(
+        self,
+        t: float,
+        kind: EventKind | int,
+        vehicle: int,
+        other: int = -1,
+        x: float = math.nan,
+        value: float = math.nan,
+    ) -> None:
+        """Append a discrete event.
+
+        Parameters
+        ----------
+        t : float
+            Event time [s].
+        kind : EventKind or int
+            What happened.
+        vehicle : int
+            Vehicle slot concerned, 0 <= vehicle < N.
+        other : int
+            Second vehicle slot (collision partner, cooperating vehicle ...), -1 if none.
+        x : float
+            Longitudinal position of the event [m], NaN if not given.
+        value : float
+            Kind-specific payload (see :class:`EventKind`), NaN if not given.
+
+        Raises
+        ------
+        ValueError
+            On an unknown *kind* or a vehicle index out of range.
+        """
+        kind = EventKind(kind)
+        n = self.x.shape[1]
+        if not 0 <= vehicle < n:
+            raise ValueError(f"event vehicle {vehicle} outside [0, {n})")
+        if not -1 <= other < n:
+            raise ValueError(f"event other vehicle {other} outside [-1, {n})")
+        self._events.append((float(t), int(kind), int(vehicle), int(other), float(x), float(value)))
+
+    def finish(self, n: int | None = None) -> SimulationLog:
+        """Trim the log to its first *n* rows, releasing the memory of the rest.
+
+        Parameters
+        ----------
+        n : int or None
+            Rows to keep; default :attr:`n_recorded`. Must be in [0, T].
+
+        Returns
+        -------
+        SimulationLog
+            ``self``, for chaining.
+        """
+        n = self._n_recorded if n is None else int(n)
+        if not 0 <= n <= self.n_steps:
+            raise ValueError(f"cannot trim to {n} rows, log has {self.n_steps}")
+        if n != self.n_steps:
+            for name in ("t", *_STATE_FIELDS, "lane", "active"):
+                setattr(self, name, getattr(self, name)[:n].copy())
+        self._n_recorded = min(self._n_recorded, n)
+        return self
+
+    truncate = finish
+
+    # ------------------------------------------------------------------ events
+    @property
+    def events(self) -> np.ndarray:
+        """All events as a structured array (:data:`EVENT_DTYPE`), stably sorted by t."""
+        arr = np.array(self._events, dtype=EVENT_DTYPE)
+        return arr[np.argsort(arr["t"], kind="stable")]
+
+    def events_of(self, kind: EventKind | int) -> np.ndarray:
+        """Events of one kind, stably sorted by t."""
+        ev = self.events
+        return ev[ev["kind"] == int(EventKind(kind))]
+
+    def events_frame(self) -> pd.DataFrame:
+        """Events as a DataFrame; ``kind`` is a categorical of :class:`EventKind` names."""
+        ev = self.events
+        names = [k.name for k in EventKind]
+        codes = ev["kind"].astype(np.int64)  # EventKind values are 0..8 == category codes
+        return pd.DataFrame(
+            {
+                "t": ev["t"],
+                "kind": pd.Categorical.from_codes(codes, categories=names),
+                "vehicle": ev["vehicle"],
+                "other": ev["other"],
+                "x": ev["x"],
+                "value": ev["value"],
+            }
+        )
+
+    # ------------------------------------------------------------------ long format
+    def _long_columns(self) -> dict[str, np.ndarray]:
+        steps, vehicles = np.nonzero(self.active)
+        cols: dict[str, np.ndarray] = {
+            "step": steps.astype(np.int64),
+            "t": self.t[steps],
+            "vehicle": vehicles.astype(np.int64),
+            "kind": self.kind[vehicles],
+        }
+        for name in _STATE_FIELDS:
+            cols[name] = getattr(self, name)[steps, vehicles]
+        cols["lane"] = self.lane[steps, vehicles]
+        cols["length"] = self.length[vehicles]
+        cols["width"] = self.width[vehicles]
+        return cols
+
+    def to_frame(self) -> pd.DataFrame:
+        """Long-format trajectories: one row per active (step, vehicle) cell.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``step`` (int64), ``t`` [s] (float64), ``vehicle`` (int64), ``kind``
+            (int8, 0 = HDV, 1 = CAV), ``x`` [m], ``y`` [m], ``v`` [m/s], ``a`` [m/s^2],
+            ``heading`` [rad] (float32), ``lane`` (int8), ``length`` [m], ``width`` [m]
+            (float32), ordered by step then vehicle.
+        """
+        return pd.DataFrame(self._long_columns())
+
+    # ------------------------------------------------------------------ persistence
+    def _header(self) -> dict[str, Any]:
+        return {
+            "format_version": _FORMAT_VERSION,
+            "n_steps": self.n_steps,
+            "n_vehicles": self.n_vehicles,
+            "dt": self.dt,
+            "n_recorded": self.n_recorded,
+            "meta": self.meta,
+        }
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the log to ``.npz`` or ``.parquet``, atomically.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Target file; the suffix selects the format. For Parquet the events go to the
+            sibling ``<stem>.events.parquet``. The directory must exist.
+
+        Returns
+        -------
+        pathlib.Path
+            The target path.
+
+        Raises
+        ------
+        ValueError
+            On an unsupported suffix.
+        TypeError
+            If :attr:`meta` is not JSON-serialisable.
+
+        Notes
+        -----
+        Data are written to temporary files in the target directory and moved into
+        place with :func:`os.replace`; an interrupted save leaves existing files intact
+        and no temporary file behind. For Parquet the two files share a random token,
+        so :meth:`load` detects a log and events file that do not belong together.
+        """
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix == ".npz":
+            self._save_npz(path)
+        elif suffix == ".parquet":
+            self._save_parquet(path)
+        else:
+            raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
+        return path
+
+    def _save_npz(self, path: Path) -> None:
+        header = json.dumps(self._header(), default=json_default)
+        arrays = {name: getattr(self, name) for name in _ARRAY_FIELDS}
+        with atomic_paths(path) as (tmp,), tmp.open("wb") as fh:
+            # A file object, not a name: numpy would append ".npz" to the temp name.
+            np.savez_compressed(fh, header=np.array(header), events=self.events, **arrays)
+
+    @staticmethod
+    def events_path(path: str | os.PathLike[str]) -> Path:
+        """Sibling file holding the events of a Parquet log: ``<stem>.events.parquet``."""
+        path = Path(path)
+        return path.with_name(f"{path.stem}.events.parquet")
+
+    def _save_parquet(self, path: Path) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        token = uuid.uuid4().hex
+        header = self._header()
+        header["token"] = token
+        # Per-step and per-vehicle arrays are kept whole (bit-exact, base64): steps
+        # without active vehicles and never-active vehicles are absent from the frame.
+        header["t"] = _b64(self.t, "<f8")
+        header["kind"] = _b64(self.kind, "<i1")
+        header["length"] = _b64(self.length, "<f4")
+        header["width"] = _b64(self.width, "<f4")
+        header_json = json.dumps(header, default=json_default).encode("utf-8")
+        table = pa.table(self._long_columns())
+        table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
+
+        ev = self.events
+        ev_table = pa.table({name: ev[name] for name in EVENT_DTYPE.names})
+        ev_meta = json.dumps({"format_version": _FORMAT_VERSION, "token": token}).encode()
+        ev_table = ev_table.replace_schema_metadata({_PARQUET_EVENTS_META_KEY: ev_meta})
+
+        # Events first, main file last: the main file's replacement commits the save.
+        with atomic_paths(self.events_path(path), path) as (tmp_ev, tmp_main):
+            pq.write_table(ev_table, tmp_ev)
+            pq.write_table(table, tmp_main)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str]) -> SimulationLog:
+        """Read a log written by :meth:`save` (``.npz`` or ``.parquet``).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            File to read.
+
+        Returns
+        -------
+        SimulationLog
+            Arrays, events, ``dt``, ``n_recorded`` and ``meta`` as saved.
+
+        Raises
+        ------
+        ValueError
+            On an unsupported suffix, an unknown format version, or (Parquet) an events
+            file that does not belong to the log file.
+        """
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix == ".npz":
+            return cls._load_npz(path)
+        if suffix == ".parquet":
+            return cls._load_parquet(path)
+        raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
+
+    @staticmethod
+    def _check_version(header: dict[str, Any], path: Path) -> None:
+        version = header.get("format_version")
+        if version != _FORMAT_VERSION:
+            raise ValueError(f"{path}: unsupported simulation log format version {version!r}")
+
+    @classmethod
+    def _load_npz(cls, path: Path) -> SimulationLog:
+        with np.load(path, allow_pickle=False) as data:
+            header = json.loads(str(data["header"]))
+            cls._check_version(header, path)
+            arrays = {name: data[name] for name in _ARRAY_FIELDS}
+            events = data["events"]
+        return cls(
+            dt=header["dt"],
+            meta=header["meta"],
+            n_recorded=header["n_recorded"],
+            events=events,
+            **arrays,
+        )
+
+    @classmethod
+    def _load_parquet(cls, path: Path) -> SimulationLog:
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        raw = (table.schema.metadata or {}).get(_PARQUET_META_KEY)
+        if raw is None:
+            raise ValueError(f"{path}: not a hcomc simulation log (no {_PARQUET_META_KEY!r})")
+        header = json.loads(raw)
+        cls._check_version(header, path)
+
+        ev_path = cls.events_path(path)
+        ev_table = pq.read_table(ev_path)
+        ev_raw = (ev_table.schema.metadata or {}).get(_PARQUET_EVENTS_META_KEY)
+        ev_token = json.loads(ev_raw).get("token") if ev_raw is not None else None
+        if ev_token != header["token"]:
+            raise ValueError(f"{ev_path} does not belong to {path} (save was interrupted?)")
+        events = np.empty(ev_table.num_rows, dtype=EVENT_DTYPE)
+        for name in EVENT_DTYPE.names or ():
+            events[name] = ev_table.column(name).to_numpy()
+
+        log = cls.allocate(
+            header["n_steps"],
+            header["n_vehicles"],
+            dt=header["dt"],
+            kind=_unb64(header["kind"], "<i1"),
+            length=_unb64(header["length"], "<f4"),
+            width=_unb64(header["width"], "<f4"),
+            meta=header["meta"],
+        )
+        log.t[:] = _unb64(header["t"], "<f8")
+        steps = table.column("step").to_numpy()
+        vehicles = table.column("vehicle").to_numpy()
+        log.active[steps, vehicles] = True
+        for name in (*_STATE_FIELDS, "lane"):
+            getattr(log, name)[steps, vehicles] = table.column(name).to_numpy()
+        log._n_recorded = int(header["n_recorded"])
+        log._events.extend(tuple(e.item()) for e in events)
+        return log
