@@ -124,7 +124,7 @@ class RoadParams(_Frozen):
     the acceleration lane ``[accel_lane_start, accel_lane_end]``, which ends there.
     """
 
-    length: float = Field(1500.0, gt=100, le=100_000, description="mainline length [m]")
+    length: float = Field(1500.0, gt=100, le=1_000_000, description="mainline length [m]")
     lane_width: float = Field(3.75, gt=2, le=6, description="W, lane width [m]")
     accel_lane_start: float = Field(700.0, ge=0, description="start of the acceleration lane [m]")
     accel_lane_end: float = Field(950.0, gt=0, description="end of the acceleration lane [m]")

@@ -1,0 +1,1 @@
+"""Safety geometry: collision detection (Section II-C)."""

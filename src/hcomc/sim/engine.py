@@ -1,0 +1,413 @@
+"""Simulation engine: release -> perceive -> decide -> check -> integrate -> log (DESIGN.md §2).
+
+State is struct-of-arrays over every vehicle of the run (``active`` marks those on the road).
+All vehicles decide from the same snapshot, then all integrate, so update order cannot bias
+results. Only this module writes state.
+
+Lane changes follow the quintic path of Eq. 4-6 parametrised in x: the end point is predicted
+as ``x_f = x_0 + max(v T_lc, 3 L)`` when the change starts and the true x(t) is mapped through
+the fixed polynomial. The vehicle's ``lane`` switches when its centre crosses the lane line
+(xi = 1/2); during the whole manoeuvre its acceleration is the Eq. 14 tanh blend of the
+accelerations behind its origin-lane and target-lane leaders, and it is visible to followers
+in both lanes. The acceleration lane ends at ``accel_lane_end``: ramp vehicles that have not
+started merging stop there (a static obstacle seen exactly), a merge already begun is
+completed.
+
+Integration is ballistic: ``x += v dt + a dt^2 / 2``, ``v += a dt``, stopping exactly at v = 0.
+Every vehicle's deceleration is limited to ``lane_change.emergency_decel``; a collision that
+still happens is logged as an event, never hidden.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from hcomc._typing import FloatArray, IntArray
+from hcomc.config import ScenarioConfig
+from hcomc.models.quintic import lateral_offset
+from hcomc.models.transition import blend_acceleration, transition_weight
+from hcomc.rng import make_rng
+from hcomc.safety.collision import vehicles_collide
+from hcomc.sim.demand import generate_demand
+from hcomc.sim.fleet import Fleet, follow
+from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.manifest import build_manifest
+from hcomc.sim.mobil import Snapshot, decide
+from hcomc.sim.neighbours import LaneIndex, build_lane_index
+from hcomc.sim.perception import Perception
+from hcomc.sim.road import Kind, Lane, lane_centre
+
+_WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
+_WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
+
+
+class Simulation:
+    """One run of a scenario with one seed.
+
+    Parameters
+    ----------
+    config : validated scenario.
+    seed : run seed; defaults to ``config.seed``. All randomness (demand, vehicle kinds,
+        estimation errors) comes from one generator derived from it.
+    """
+
+    def __init__(self, config: ScenarioConfig, seed: int | None = None) -> None:
+        self.config = config
+        self.seed = config.seed if seed is None else seed
+        self.rng = make_rng(self.seed)
+        self.dt = config.dt
+        demand = generate_demand(config, self.rng)
+        self.demand = demand
+        n = demand.n
+        self.fleet = Fleet.build(config, demand.kind, demand.scripted)
+        width = config.road.lane_width
+        self.x = np.zeros(n)
+        self.y = lane_centre(demand.lane, width)
+        self.v = np.zeros(n)
+        self.a = np.zeros(n)
+        self.heading = np.zeros(n)
+        self.lane = demand.lane.copy()
+        self.origin = demand.lane.copy()  # lane a change started from (= lane when keeping)
+        self.target = demand.lane.copy()  # lane a change goes to (= lane when keeping)
+        self.lc_t0 = np.zeros(n)
+        self.lc_x0 = np.zeros(n)
+        self.lc_xf = np.ones(n)
+        self.active = np.zeros(n, dtype=bool)
+        self.waited = np.zeros(n, dtype=bool)
+        self.is_hdv = demand.kind == Kind.HDV
+        self.perception = Perception(config.hdv, self.is_hdv, self.dt, self.rng)
+        hdv = config.hdv
+        self._perceive_hdv = (
+            self.perception.errors
+            or max(hdv.reaction_time_gap, hdv.reaction_time_speed, hdv.reaction_time_approach) > 0
+        )
+        self._queues = [np.flatnonzero(demand.lane == lane) for lane in Lane]
+        self._queue_pos = [0] * len(Lane)
+        self._colliding: set[tuple[int, int]] = set()
+        self.n_warmup = round(config.warmup / self.dt)
+        self.n_steps = round(config.duration / self.dt)
+        self._log_every = round(config.log_interval / self.dt)
+        self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
+        self.step_index = 0
+        self.vehicle_steps = 0
+        meta = build_manifest(
+            seed=self.seed,
+            config=config.model_dump(mode="json"),
+            extra={"dt": self.dt, "log_interval": config.log_interval},
+        )
+        self.log = SimulationLog.allocate(
+            self.n_steps // self._log_every + 1,
+            n,
+            dt=config.log_interval,
+            kind=demand.kind,
+            length=self.fleet.length,
+            width=self.fleet.width,
+            meta=meta,
+        )
+        self._rows = 0
+
+    @property
+    def t(self) -> float:
+        """Current simulation time [s]; logging starts at t = 0 after the warm-up."""
+        return -self.config.warmup + self.step_index * self.dt
+
+    # ------------------------------------------------------------------ run
+    def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
+        """Warm up, then simulate ``duration`` seconds, logging every ``log_interval``."""
+        total = self.n_warmup + self.n_steps
+        for _ in range(self.n_warmup):
+            self.step()
+            if progress is not None and self.step_index % 100 == 0:
+                progress(self.step_index, total)
+        self._release(self.t)  # vehicles due at t = 0 are on the road in the first row
+        self._record()
+        for k in range(1, self.n_steps + 1):
+            self.step()
+            if k % self._log_every == 0:
+                self._record()
+            if progress is not None and self.step_index % 100 == 0:
+                progress(self.step_index, total)
+        self.log.finish(self._rows)
+        self.log.meta["vehicle_steps"] = self.vehicle_steps
+        if progress is not None:
+            progress(total, total)
+        return self.log
+
+    def _record(self) -> None:
+        self.log.record(
+            self._rows,
+            self.t,
+            self.x,
+            self.y,
+            self.v,
+            self.a,
+            self.heading,
+            self.lane,
+            self.active,
+        )
+        self._rows += 1
+
+    # ----------------------------------------------------------------- step
+    def step(self) -> None:
+        """Advance the whole traffic state by one step ``dt``."""
+        t = self.t
+        self._release(t)
+        ids = np.flatnonzero(self.active)
+        if ids.size:
+            self.vehicle_steps += ids.size
+            self._advance(ids, t)
+        self.step_index += 1
+        self.perception.push(self.step_index, self.x, self.v)
+
+    def _advance(self, ids: IntArray, t: float) -> None:
+        changing = self.origin[ids] != self.target[ids]
+        ch = ids[changing]
+        crossed = self.lane[ch] == self.target[ch]
+        other = np.where(crossed, self.origin[ch], self.target[ch])
+        entries = np.concatenate([ids, ch])
+        index = build_lane_index(entries, np.concatenate([self.lane[ids], other]), self.x[entries])
+        leaders = index.leader_of(np.arange(entries.size))
+        lead, lead_other = leaders[: ids.size], leaders[ids.size :]
+        # origin-lane leader drives a_ori, target-lane leader a_new (Eq. 14)
+        lead_ori = lead.copy()
+        lead_ori[changing] = np.where(crossed, lead_other, lead[changing])
+        acc = self._follow(ids, lead_ori)
+        if ch.size:
+            a_new = self._follow(ch, np.where(crossed, lead[changing], lead_other))
+            psi = transition_weight(
+                t - self.lc_t0[ch],
+                self.fleet.lc_duration[ch],
+                self.config.lane_change.transition_tolerance,
+            )
+            acc[changing] = blend_acceleration(acc[changing], a_new, psi)
+        acc = self._stop_line(ids, changing, acc)
+        acc = np.maximum(acc, -self.config.lane_change.emergency_decel)
+        acc = self._scripted(ids, acc, t)  # a scripted profile is followed exactly
+        if self.step_index % self._decide_every == 0:
+            self._lane_changes(ids, changing, index, lead, t)
+        self._check_collisions(index, t)
+        self._integrate(ids, acc)
+        self._lateral(t)
+        self._bookkeeping(ids, t)
+        self.perception.advance_errors(ids[self.is_hdv[ids]], self.rng)
+
+    # ------------------------------------------------------------ perceive
+    def _follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
+        """Car-following acceleration behind ``leader`` (-1: none), HDVs perceiving Eq. 2."""
+        has = leader >= 0
+        lead = np.where(has, leader, ids)
+        lead_len = self.fleet.length[lead]
+        s = np.where(has, self.x[lead] - lead_len - self.x[ids], np.inf)
+        v = self.v[ids]
+        vl = np.where(has, self.v[lead], v)
+        al = np.where(has, self.a[lead], 0.0)
+        if self._perceive_hdv:
+            hdv = self.is_hdv[ids]
+            if hdv.any():
+                s[hdv], v[hdv], vl[hdv] = self.perception.perceive(
+                    self.step_index, ids[hdv], leader[hdv], lead_len[hdv]
+                )
+        return follow(self.fleet, ids, s, v, vl, al)
+
+    def _stop_line(self, ids: IntArray, changing: np.ndarray, acc: FloatArray) -> FloatArray:
+        """Ramp vehicles that have not started merging stop at the acceleration-lane end."""
+        on_ramp = (self.lane[ids] == Lane.RAMP) & ~changing
+        if on_ramp.any():
+            r = ids[on_ramp]
+            s = self.config.road.accel_lane_end - self.x[r]
+            a_stop = follow(self.fleet, r, s, self.v[r], np.zeros(r.size), np.zeros(r.size))
+            acc[on_ramp] = np.minimum(acc[on_ramp], a_stop)
+        return acc
+
+    def _scripted(self, ids: IntArray, acc: FloatArray, t: float) -> FloatArray:
+        """Scripted leaders reach the profile speed at t + dt exactly."""
+        scripted = self.fleet.scripted[ids]
+        if scripted.any():
+            profile = np.asarray(self.config.platoon.profile, dtype=np.float64)
+            target = np.interp(t + self.dt, profile[:, 0], profile[:, 1])
+            acc[scripted] = (target - self.v[ids[scripted]]) / self.dt
+        return acc
+
+    # --------------------------------------------------------------- decide
+    def _lane_changes(
+        self, ids: IntArray, changing: np.ndarray, index: LaneIndex, lead: IntArray, t: float
+    ) -> None:
+        if self.config.scenario == "platoon":
+            return
+        road = self.config.road
+        lane, x = self.lane[ids], self.x[ids]
+        on_accel_lane = (
+            (lane == Lane.RAMP) & (x >= road.accel_lane_start) & (x <= road.accel_lane_end)
+        )
+        sel = ~changing & ~self.fleet.scripted[ids] & ((lane != Lane.RAMP) | on_accel_lane)
+        pos = np.flatnonzero(sel)
+        if pos.size == 0:
+            return
+        cand = ids[pos]
+        snap = Snapshot(x=self.x, v=self.v, a=self.a)
+        chosen, target = decide(
+            self.fleet,
+            snap,
+            index,
+            cand,
+            lane[pos],
+            lead[pos],
+            index.follower_of(pos),
+            self.config.lane_change,
+        )
+        if chosen.size == 0:
+            return
+        self.origin[chosen] = self.lane[chosen]
+        self.target[chosen] = target
+        self.lc_t0[chosen] = t
+        self.lc_x0[chosen] = self.x[chosen]
+        self.lc_xf[chosen] = self.x[chosen] + np.maximum(
+            self.v[chosen] * self.fleet.lc_duration[chosen], 3.0 * self.fleet.length[chosen]
+        )
+        for i, tgt in zip(chosen.tolist(), target.tolist(), strict=True):
+            self.log.add_event(t, EventKind.LANE_CHANGE_START, i, x=self.x[i], value=tgt)
+
+    # ---------------------------------------------------------------- check
+    def _check_collisions(self, index: LaneIndex, t: float) -> None:
+        """Oriented-rectangle test (Eq. 7) of each entry against its next two leaders per lane.
+
+        A 1-D prefilter skips pairs whose x-extents cannot overlap: a rectangle whose front
+        bumper centre is at x lies within ``[x - L - W/2, x + W/2]`` for any heading.
+        """
+        veh, lane = index.vehicle, index.lane
+        f = self.fleet
+        x = self.x[veh]
+        front = x + 0.5 * f.width[veh]
+        rear = x - f.length[veh] - 0.5 * f.width[veh]
+        rows, cols = [], []
+        for k in (1, 2):
+            if veh.size > k:
+                near = (lane[:-k] == lane[k:]) & (front[:-k] >= rear[k:]) & (veh[:-k] != veh[k:])
+                rows.append(veh[:-k][near])
+                cols.append(veh[k:][near])
+        a = np.concatenate(rows) if rows else np.empty(0, dtype=np.int64)
+        b = np.concatenate(cols) if cols else np.empty(0, dtype=np.int64)
+        now: set[tuple[int, int]] = set()
+        if a.size:
+            hit = vehicles_collide(
+                self.x[a],
+                self.y[a],
+                self.heading[a],
+                f.length[a],
+                f.width[a],
+                self.x[b],
+                self.y[b],
+                self.heading[b],
+                f.length[b],
+                f.width[b],
+            )
+            now = {
+                (min(i, j), max(i, j))
+                for i, j in zip(a[hit].tolist(), b[hit].tolist(), strict=True)
+            }
+        for i, j in sorted(now - self._colliding):
+            self.log.add_event(t, EventKind.COLLISION, i, other=j, x=self.x[i])
+        self._colliding = now
+
+    # ------------------------------------------------------------ integrate
+    def _integrate(self, ids: IntArray, acc: FloatArray) -> None:
+        """Ballistic update; a vehicle that would reverse stops exactly at v = 0."""
+        dt = self.dt
+        v0 = self.v[ids]
+        v1 = v0 + acc * dt
+        stops = v1 < 0.0
+        safe_acc = np.where(stops, acc, 1.0)
+        dx = np.where(stops, -(v0 * v0) / (2.0 * safe_acc), v0 * dt + 0.5 * acc * dt * dt)
+        self.x[ids] += dx
+        self.v[ids] = np.maximum(v1, 0.0)
+        self.a[ids] = np.where(stops, -v0 / dt, acc)
+
+    def _lateral(self, t: float) -> None:
+        """Move changing vehicles along their quintic path; switch lane at the lane line."""
+        ch = np.flatnonzero(self.active & (self.origin != self.target))
+        if ch.size == 0:
+            return
+        width = self.config.road.lane_width
+        x0, xf = self.lc_x0[ch], self.lc_xf[ch]
+        y0, y1 = lane_centre(self.origin[ch], width), lane_centre(self.target[ch], width)
+        y, dy_dx, _ = lateral_offset(self.x[ch], x0, xf, y0, y1)
+        self.y[ch] = y
+        self.heading[ch] = np.arctan(dy_dx)
+        xi = (self.x[ch] - x0) / (xf - x0)
+        self.lane[ch] = np.where(xi >= 0.5, self.target[ch], self.origin[ch])
+        done = xi >= 1.0
+        for i in ch[done].tolist():
+            self.log.add_event(t, EventKind.LANE_CHANGE_END, i, x=self.x[i], value=self.target[i])
+            if self.origin[i] == Lane.RAMP:
+                self.log.add_event(t, EventKind.MERGE, i, x=self.x[i])
+        fin = ch[done]
+        self.origin[fin] = self.target[fin]
+        self.y[fin] = lane_centre(self.target[fin], width)
+        self.heading[fin] = 0.0
+
+    def _bookkeeping(self, ids: IntArray, t: float) -> None:
+        """Exits past the road end; ramp vehicles waiting at the acceleration-lane end."""
+        road = self.config.road
+        gone = ids[self.x[ids] - self.fleet.length[ids] > road.length]
+        if gone.size:
+            self.active[gone] = False
+            for i in gone.tolist():
+                self.log.add_event(t, EventKind.EXIT, i, x=self.x[i])
+        waiting = ids[
+            (self.lane[ids] == Lane.RAMP)
+            & (self.origin[ids] == self.target[ids])
+            & (self.v[ids] < _WAIT_SPEED)
+            & (self.x[ids] > road.accel_lane_end - _WAIT_ZONE)
+            & ~self.waited[ids]
+        ]
+        for i in waiting.tolist():
+            self.waited[i] = True
+            self.log.add_event(t, EventKind.RAMP_WAIT, i, x=self.x[i])
+
+    # -------------------------------------------------------------- release
+    def _release(self, t: float) -> None:
+        """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue)."""
+        for lane, queue in enumerate(self._queues):
+            pos = self._queue_pos[lane]
+            while pos < queue.size and self.demand.t[queue[pos]] <= t + 1e-9:
+                if not self._insert(int(queue[pos]), t):
+                    break
+                pos += 1
+            self._queue_pos[lane] = pos
+
+    def _insert(self, i: int, t: float) -> bool:
+        """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
+
+        The release speed is kept if the gap exceeds ``s0 + v T``; otherwise the vehicle is
+        released at the speed of the vehicle ahead if that gap suffices, else it waits.
+        """
+        d, f = self.demand, self.fleet
+        x, v = d.x[i], d.v[i]
+        if d.t[i] > -self.config.warmup + 1e-9:  # arrivals check the gap; the initial fill does not
+            in_lane = self.active & ((self.lane == d.lane[i]) | (self.target == d.lane[i]))
+            ahead = np.flatnonzero(in_lane & (self.x >= x))
+            if ahead.size:
+                j = ahead[np.argmin(self.x[ahead])]
+                gap = self.x[j] - f.length[j] - x
+                if gap < f.s0[i] + v * f.T[i]:
+                    v = min(v, self.v[j])
+                    if gap < f.s0[i] + v * f.T[i]:
+                        return False
+        self.x[i], self.v[i], self.active[i] = x, v, True
+        self.perception.fill(np.array([i]), self.x, self.v)
+        self.log.add_event(t, EventKind.INSERTION, i, x=x, value=t - d.t[i])
+        return True
+
+
+def simulate(
+    config: ScenarioConfig,
+    seed: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SimulationLog:
+    """Run ``config`` with ``seed`` and return its :class:`SimulationLog`."""
+    return Simulation(config, seed).run(progress)
+
+
+__all__ = ["Simulation", "simulate"]

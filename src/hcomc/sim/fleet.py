@@ -1,0 +1,103 @@
+"""Per-vehicle model parameters as arrays, and the car-following dispatch (Eq. 1-3).
+
+The engine gathers each vehicle's parameters from its kind's frozen parameter model into
+``(N,)`` arrays once, so kernels run vectorised over heterogeneous vehicles. HDVs and CAVs
+share one code path: an HDV is an ACC vehicle with coolness c = 0, which makes Eq. 3 collapse
+to the IDM (its human factors live in :mod:`hcomc.sim.perception`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.config import CAVParams, HDVParams, ScenarioConfig
+from hcomc.models.cav import acc_acceleration, cah_acceleration
+from hcomc.models.idm import idm_acceleration, iidm_acceleration
+from hcomc.sim.road import Kind
+
+
+@dataclass(frozen=True, slots=True)
+class Fleet:
+    """Constant per-vehicle parameters, shape (N,) each; symbols as in Eq. 1-3."""
+
+    kind: IntArray
+    v0: FloatArray
+    T: FloatArray
+    s0: FloatArray
+    a: FloatArray
+    b: FloatArray
+    delta: FloatArray
+    coolness: FloatArray
+    iidm: BoolArray
+    lc_duration: FloatArray
+    length: FloatArray
+    width: FloatArray
+    scripted: BoolArray
+
+    @classmethod
+    def build(cls, config: ScenarioConfig, kind: IntArray, scripted: BoolArray) -> Fleet:
+        """Gather the HDV/CAV parameter models of ``config`` by ``kind``."""
+        hdv, cav = config.hdv, config.cav
+        is_cav = kind == Kind.CAV
+
+        def pick(field: str) -> FloatArray:
+            return np.where(is_cav, float(getattr(cav, field)), float(getattr(hdv, field)))
+
+        n = kind.size
+        return cls(
+            kind=kind,
+            v0=pick("desired_speed"),
+            T=pick("time_headway"),
+            s0=pick("min_gap"),
+            a=pick("max_accel"),
+            b=pick("comfort_decel"),
+            delta=pick("exponent"),
+            coolness=np.where(is_cav, cav.coolness, 0.0),
+            iidm=np.where(is_cav, cav.variant == "iidm", hdv.variant == "iidm"),
+            lc_duration=pick("lane_change_duration"),
+            length=np.full(n, config.road.vehicle_length),
+            width=np.full(n, config.road.vehicle_width),
+            scripted=scripted,
+        )
+
+    @property
+    def any_iidm(self) -> bool:
+        """Whether any vehicle uses the improved IDM."""
+        return bool(self.iidm.any())
+
+
+def follow(
+    fleet: Fleet, ids: IntArray, s: FloatArray, v: FloatArray, vl: FloatArray, al: FloatArray
+) -> FloatArray:
+    """Car-following acceleration of vehicles ``ids`` [m/s^2] (Eq. 1 for HDVs, Eq. 3 for CAVs).
+
+    Parameters
+    ----------
+    s : bumper-to-bumper gap to the leader [m], ``inf`` without a leader.
+    v, vl : own and leader speed [m/s].
+    al : leader acceleration [m/s^2] (used by the CAH of CAVs only).
+
+    Without a leader the ACC reduces to the free-road IDM (Kesting 2010 defines the CAH
+    for a leader only).
+    """
+    v0, T, s0 = fleet.v0[ids], fleet.T[ids], fleet.s0[ids]
+    a, b, delta = fleet.a[ids], fleet.b[ids], fleet.delta[ids]
+    dv = np.where(np.isfinite(s), v - vl, 0.0)
+    acc = idm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
+    if fleet.any_iidm:
+        improved = iidm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
+        acc = np.where(fleet.iidm[ids], improved, acc)
+    c = fleet.coolness[ids]
+    cooperative = (c > 0) & np.isfinite(s)
+    if cooperative.any():
+        cah = cah_acceleration(np.where(cooperative, s, 1.0), v, vl, al, a=a)
+        acc = np.where(cooperative, acc_acceleration(acc, cah, b=b, c=c), acc)
+    return acc
+
+
+def params_of(config: ScenarioConfig, kind: int) -> HDVParams | CAVParams:
+    """The parameter model of a vehicle kind."""
+    return config.cav if kind == Kind.CAV else config.hdv

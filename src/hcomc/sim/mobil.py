@@ -1,0 +1,138 @@
+"""Lane-change decisions without a merge controller: MOBIL and ramp gap acceptance (MODELS §8).
+
+Every candidate has exactly one possible target lane: lane 1 -> lane 2 (to the left),
+lane 2 -> lane 1 (to the right) and ramp -> lane 1 on the acceleration lane. For candidate c,
+new follower n and old follower o (a tilde means after the change):
+
+* safety: ``ã_n >= -b_safe`` and ``ã_c >= -b_safe``, bumper gaps to the new leader and new
+  follower ``>= min_gap`` (MovSim); the ramp's gap acceptance is this criterion alone;
+* incentive (discretionary changes only):
+  ``ã_c - a_c + p [(ã_n - a_n) + (ã_o - a_o)] > Delta a_th + bias`` to the left and
+  ``> Delta a_th - bias`` to the right (keep-right rule).
+
+Accelerations are model accelerations with exact perception (the decision, not the control).
+Simultaneous changes that would meet are resolved so at most one enters each gap: a change is
+dropped if its new leader or new follower changes lane in the same round with a higher
+priority (ramp vehicles first, then downstream first), or another change with higher priority
+targets the same gap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.config import LaneChangeParams
+from hcomc.sim.fleet import Fleet, follow
+from hcomc.sim.neighbours import LaneIndex
+from hcomc.sim.road import Lane
+
+
+@dataclass(frozen=True, slots=True)
+class Snapshot:
+    """Read-only kinematic state of all vehicle slots, shape (N,) each."""
+
+    x: FloatArray
+    v: FloatArray
+    a: FloatArray
+
+
+def _gap_accel(
+    fleet: Fleet, snap: Snapshot, ids: IntArray, leader: IntArray
+) -> tuple[FloatArray, FloatArray]:
+    """Gap of ``ids`` to ``leader`` (inf for -1) and their model acceleration behind it."""
+    has = leader >= 0
+    lead = np.where(has, leader, 0)
+    s = np.where(has, snap.x[lead] - fleet.length[lead] - snap.x[ids], np.inf)
+    vl = np.where(has, snap.v[lead], snap.v[ids])
+    al = np.where(has, snap.a[lead], 0.0)
+    return s, follow(fleet, ids, s, snap.v[ids], vl, al)
+
+
+def _change_gain(
+    fleet: Fleet,
+    snap: Snapshot,
+    ids: IntArray,
+    leader: IntArray,
+    new_leader: IntArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Gap, acceleration gain and new acceleration of ``ids`` if their leader became ``new_leader``.
+
+    ``ids`` may contain -1 (no such vehicle): gap inf, gain 0, new acceleration 0.
+    """
+    has = ids >= 0
+    me = np.where(has, ids, 0)
+    s_new, a_new = _gap_accel(fleet, snap, me, new_leader)
+    _, a_old = _gap_accel(fleet, snap, me, leader)
+    return (
+        np.where(has, s_new, np.inf),
+        np.where(has, a_new - a_old, 0.0),
+        np.where(has, a_new, 0.0),
+    )
+
+
+def decide(
+    fleet: Fleet,
+    snap: Snapshot,
+    index: LaneIndex,
+    cand: IntArray,
+    lane: IntArray,
+    leader: IntArray,
+    follower: IntArray,
+    params: LaneChangeParams,
+) -> tuple[IntArray, IntArray]:
+    """Accepted lane changes among candidates ``cand``: ``(vehicles, target lanes)``.
+
+    ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours.
+    """
+    if cand.size == 0:
+        return cand, cand
+    target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
+    new_lead, new_fol = index.lookup(target, snap.x[cand])
+    # the candidate itself: old situation and new situation
+    s_c, gain_c, a_c_new = _change_gain(fleet, snap, cand, leader, new_lead)
+    # new follower: leader new_lead -> candidate
+    s_n, gain_n, a_n_new = _change_gain(fleet, snap, new_fol, new_lead, cand)
+    # old follower: leader candidate -> candidate's leader
+    _, gain_o, _ = _change_gain(fleet, snap, follower, cand, leader)
+    safe = (
+        (s_c >= params.min_gap)
+        & (s_n >= params.min_gap)
+        & (a_n_new >= -params.safe_decel)
+        & (a_c_new >= -params.safe_decel)
+    )
+    gain = gain_c + params.politeness * (gain_n + gain_o)
+    bias = np.where(target == Lane.MAIN_2, params.keep_right_bias, -params.keep_right_bias)
+    mandatory = lane == Lane.RAMP
+    ok = safe & (mandatory | (gain > params.threshold + bias))
+    return _resolve(cand[ok], target[ok], new_lead[ok], new_fol[ok], mandatory[ok], snap.x)
+
+
+def _resolve(
+    ids: IntArray,
+    target: IntArray,
+    new_lead: IntArray,
+    new_fol: IntArray,
+    mandatory: BoolArray,
+    x: FloatArray,
+) -> tuple[IntArray, IntArray]:
+    """Drop changes that conflict with a higher-priority change of the same round."""
+    if ids.size <= 1:
+        return ids, target
+    # priority: ramp vehicles first, then further downstream first
+    priority = np.empty(x.size)
+    priority.fill(-np.inf)
+    priority[ids] = mandatory * 1e9 + x[ids]
+    mine = priority[ids]
+    beaten = (priority[np.where(new_lead >= 0, new_lead, ids)] > mine) | (
+        priority[np.where(new_fol >= 0, new_fol, ids)] > mine
+    )
+    # two changes into the same gap (same target lane and same new follower): keep the best
+    gap_key = target * (x.size + 1) + (new_fol + 1)
+    order = np.lexsort((-mine, gap_key))
+    first = np.ones(ids.size, dtype=bool)
+    first[order[1:]] = gap_key[order[1:]] != gap_key[order[:-1]]
+    keep = ~beaten & first
+    return ids[keep], target[keep]

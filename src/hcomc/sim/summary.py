@@ -1,0 +1,40 @@
+"""Run summary: the figures ``hcomc simulate`` prints, computed from a SimulationLog."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from hcomc.models.fuel import fuel_consumed
+from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.road import Lane
+
+
+def summarise(log: SimulationLog) -> dict[str, Any]:
+    """Vehicles, merges, collisions, ramp waits, mean speed per lane [m/s] and fuel [L].
+
+    Fuel is Eq. 16 summed over all vehicles in the logged window (MODELS.md §6).
+    """
+    events = log.events
+    kinds = events["kind"]
+    seen = log.active.any(axis=0)
+    speed = {}
+    for lane in Lane:
+        cells = log.active & (log.lane == lane)
+        key = "ramp" if lane == Lane.RAMP else f"lane_{int(lane)}"
+        speed[key] = float(np.mean(log.v[cells])) if cells.any() else None
+    return {
+        "vehicles": int(seen.sum()),
+        "cavs": int((seen & (log.kind == 1)).sum()),
+        "merges": int((kinds == EventKind.MERGE).sum()),
+        "collisions": int((kinds == EventKind.COLLISION).sum()),
+        "ramp_waits": int((kinds == EventKind.RAMP_WAIT).sum()),
+        "lane_changes": int((kinds == EventKind.LANE_CHANGE_START).sum()),
+        "mean_speed": speed,
+        "fuel_l": float(
+            fuel_consumed(log.v.astype(np.float64), log.a.astype(np.float64), log.dt, axis=None)
+        ),
+        "vehicle_steps": int(log.meta.get("vehicle_steps", log.vehicle_steps)),
+        "duration_s": float(log.t[-1] - log.t[0]) if log.t.size else 0.0,
+    }

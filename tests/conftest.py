@@ -1,0 +1,37 @@
+"""Shared fixtures."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from hcomc.config import ScenarioConfig, load_config
+
+
+@pytest.fixture
+def platoon_config() -> Any:
+    """Factory for a one-lane scripted-leader platoon config."""
+
+    def make(
+        profile: list[list[float]],
+        *,
+        kind: str = "hdv",
+        followers: int = 1,
+        duration: float = 30.0,
+        initial_speed: float | None = None,
+        hdv: dict[str, Any] | None = None,
+    ) -> ScenarioConfig:
+        return load_config(
+            "platoon",
+            duration=duration,
+            hdv={"estimation_errors": False, **(hdv or {})},
+            platoon={
+                "followers": followers,
+                "kind": kind,
+                "initial_speed": profile[0][1] if initial_speed is None else initial_speed,
+                "profile": profile,
+            },
+        )
+
+    return make
