@@ -5,7 +5,9 @@ lane 2 -> lane 1 (to the right) and ramp -> lane 1 on the acceleration lane. For
 new follower n and old follower o (a tilde means after the change):
 
 * safety: ``ã_n >= -b_safe`` and ``ã_c >= -b_safe``, bumper gaps to the new leader and new
-  follower ``>= min_gap`` (MovSim); the ramp's gap acceptance is this criterion alone;
+  follower ``>= min_gap`` (MovSim), and a clear path: nobody starts a change towards a
+  vehicle standing (< 1 m/s) less than ``3 L + min_gap`` ahead in its own lane, since the
+  change takes at least 3 L of road; the ramp's gap acceptance is this criterion alone;
 * incentive (discretionary changes only):
   ``ã_c - a_c + p [(ã_n - a_n) + (ã_o - a_o)] > Delta a_th + bias`` to the left and
   ``> Delta a_th - bias`` to the right (keep-right rule).
@@ -82,14 +84,19 @@ def decide(
     leader: IntArray,
     follower: IntArray,
     params: LaneChangeParams,
+    target: IntArray | None = None,
+    force: BoolArray | None = None,
 ) -> tuple[IntArray, IntArray]:
     """Accepted lane changes among candidates ``cand``: ``(vehicles, target lanes)``.
 
     ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours.
+    ``target`` defaults to the one possible target of each lane; ``force`` marks changes
+    commanded by a merge plan, which are checked for safety only (like the ramp's).
     """
     if cand.size == 0:
         return cand, cand
-    target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
+    if target is None:
+        target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
     new_lead, new_fol = index.lookup(target, snap.x[cand])
     # the candidate itself: old situation and new situation
     s_c, gain_c, a_c_new = _change_gain(fleet, snap, cand, leader, new_lead)
@@ -97,8 +104,12 @@ def decide(
     s_n, gain_n, a_n_new = _change_gain(fleet, snap, new_fol, new_lead, cand)
     # old follower: leader candidate -> candidate's leader
     _, gain_o, _ = _change_gain(fleet, snap, follower, cand, leader)
+    s_o, _ = _gap_accel(fleet, snap, cand, leader)
+    standing = (leader >= 0) & (snap.v[np.where(leader >= 0, leader, 0)] < 1.0)
+    clear = ~standing | (s_o >= 3.0 * fleet.length[cand] + params.min_gap)
     safe = (
-        (s_c >= params.min_gap)
+        clear
+        & (s_c >= params.min_gap)
         & (s_n >= params.min_gap)
         & (a_n_new >= -params.safe_decel)
         & (a_c_new >= -params.safe_decel)
@@ -106,6 +117,8 @@ def decide(
     gain = gain_c + params.politeness * (gain_n + gain_o)
     bias = np.where(target == Lane.MAIN_2, params.keep_right_bias, -params.keep_right_bias)
     mandatory = lane == Lane.RAMP
+    if force is not None:
+        mandatory = mandatory | force
     ok = safe & (mandatory | (gain > params.threshold + bias))
     return _resolve(cand[ok], target[ok], new_lead[ok], new_fol[ok], mandatory[ok], snap.x)
 
