@@ -23,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 __all__ = [
     "CAVParams",
     "ConfigError",
+    "ControlParams",
     "DemandParams",
     "HDVParams",
     "IDMParams",
@@ -217,6 +218,30 @@ class PlatoonParams(_Frozen):
         return self
 
 
+class ControlParams(_Frozen):
+    """Merge controller and its optimiser (paper Section III; MODELS.md §7, §10, §14)."""
+
+    controller: Literal["none", "hcomc"] = Field(
+        "none", description="merge controller; 'none' = gap acceptance only"
+    )
+    optimizer: Literal["nsga2", "pso", "sa"] = Field("nsga2", description="HCOMC optimiser")
+    budget: int = Field(
+        360, ge=10, le=100_000, description="candidate evaluations per decision (all optimisers)"
+    )
+    pop_size: int = Field(24, ge=4, le=1000, description="population (NSGA-II, PSO)")
+    prediction_dt: float = Field(0.25, gt=0, le=1, description="prediction step [s]")
+    post_merge: float = Field(
+        5.0, ge=0, le=60, description="prediction window after the latest merge end [s]"
+    )
+    virtual_max_decel: float = Field(
+        7.5,
+        gt=0,
+        le=15,
+        description="b_max: a virtual vehicle braking harder is rejected (= a_merg) [m/s^2]",
+    )
+    safety_threshold: float = Field(4.0, gt=0, le=10, description="Eq. 19 gate on U_safe [m/s^2]")
+
+
 class ScenarioConfig(_Frozen):
     """A complete, resolved scenario: road, demand, vehicle models and run control."""
 
@@ -234,6 +259,7 @@ class ScenarioConfig(_Frozen):
     cav: CAVParams = Field(default_factory=CAVParams)
     lane_change: LaneChangeParams = Field(default_factory=LaneChangeParams)
     platoon: PlatoonParams = Field(default_factory=PlatoonParams)
+    control: ControlParams = Field(default_factory=ControlParams)
 
     @model_validator(mode="after")
     def _steps(self) -> ScenarioConfig:

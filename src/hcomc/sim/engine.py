@@ -26,11 +26,13 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
+from hcomc.control.base import MergeController, MergePlan, Mode, TrafficView, find_key_vehicles
 from hcomc.models.quintic import lateral_offset
 from hcomc.models.transition import blend_acceleration, transition_weight
 from hcomc.rng import make_rng
 from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.demand import generate_demand
+from hcomc.sim.execution import ActivePlan, commanded, virtual_leaders
 from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
@@ -53,7 +55,12 @@ class Simulation:
         estimation errors) comes from one generator derived from it.
     """
 
-    def __init__(self, config: ScenarioConfig, seed: int | None = None) -> None:
+    def __init__(
+        self,
+        config: ScenarioConfig,
+        seed: int | None = None,
+        controller: MergeController | None = None,
+    ) -> None:
         self.config = config
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
@@ -76,6 +83,15 @@ class Simulation:
         self.lc_xf = np.ones(n)
         self.active = np.zeros(n, dtype=bool)
         self.waited = np.zeros(n, dtype=bool)
+        self.lc_dur = self.fleet.lc_duration.copy()  # a merge plan may set VR's duration
+        if controller is None:
+            from hcomc.control.registry import make_controller
+
+            controller = make_controller(config)
+        self.controller = controller
+        self.planned = np.zeros(n, dtype=bool)
+        self.plans: list[ActivePlan] = []
+        self.decisions: list[MergePlan] = []
         self.is_hdv = demand.kind == Kind.HDV
         self.perception = Perception(config.hdv, self.is_hdv, self.dt, self.rng)
         hdv = config.hdv
@@ -164,33 +180,49 @@ class Simulation:
     def _advance(self, ids: IntArray, t: float) -> None:
         changing = self.origin[ids] != self.target[ids]
         ch = ids[changing]
+        width = self.config.road.lane_width
+        # followers in the target lane see a changer from its start; in the origin lane while
+        # its body still overlaps that lane (its current lane always qualifies)
+        reach = 0.5 * (width + self.fleet.width[ch])
+        in_ori = np.abs(self.y[ch] - lane_centre(self.origin[ch], width)) < reach
+        in_tgt = np.abs(self.y[ch] - lane_centre(self.target[ch], width)) < reach
         crossed = self.lane[ch] == self.target[ch]
-        other = np.where(crossed, self.origin[ch], self.target[ch])
-        entries = np.concatenate([ids, ch])
+        also = np.where(crossed, in_ori, True)
+        other = np.where(crossed, self.origin[ch], self.target[ch])[also]
+        entries = np.concatenate([ids, ch[also]])
         index = build_lane_index(entries, np.concatenate([self.lane[ids], other]), self.x[entries])
-        leaders = index.leader_of(np.arange(entries.size))
-        lead, lead_other = leaders[: ids.size], leaders[ids.size :]
-        # origin-lane leader drives a_ori, target-lane leader a_new (Eq. 14)
-        lead_ori = lead.copy()
-        lead_ori[changing] = np.where(crossed, lead_other, lead[changing])
-        acc = self._follow(ids, lead_ori)
+        if self.controller is not None:
+            self._plan_new(ids, changing, t)
+        lead = index.leader_of(np.arange(ids.size))
         if ch.size:
-            a_new = self._follow(ch, np.where(crossed, lead[changing], lead_other))
+            # Eq. 14 blends the accelerations behind the origin- and target-lane leaders; on
+            # top, the leader of every lane the body still overlaps must be respected
+            lead[changing], _ = index.lookup(self.origin[ch], self.x[ch])
+            lead_new, _ = index.lookup(self.target[ch], self.x[ch])
+        acc = self._follow(ids, lead)
+        if ch.size:
+            a_ori, a_new = acc[changing], self._follow(ch, lead_new)
             psi = transition_weight(
-                t - self.lc_t0[ch],
-                self.fleet.lc_duration[ch],
-                self.config.lane_change.transition_tolerance,
+                t - self.lc_t0[ch], self.lc_dur[ch], self.config.lane_change.transition_tolerance
             )
-            acc[changing] = blend_acceleration(acc[changing], a_new, psi)
+            blend = blend_acceleration(a_ori, a_new, psi)
+            blend = np.where(in_ori, np.minimum(blend, a_ori), blend)
+            acc[changing] = np.where(in_tgt, np.minimum(blend, a_new), blend)
         acc = self._stop_line(ids, changing, acc)
+        if self.plans:
+            acc = self._virtual_leaders(ids, acc, t)
         acc = np.maximum(acc, -self.config.lane_change.emergency_decel)
         acc = self._scripted(ids, acc, t)  # a scripted profile is followed exactly
+        if self.plans:
+            self._execute_plans(ids, changing, index, lead, t)
         if self.step_index % self._decide_every == 0:
             self._lane_changes(ids, changing, index, lead, t)
         self._check_collisions(index, t)
         self._integrate(ids, acc)
         self._lateral(t)
         self._bookkeeping(ids, t)
+        if self.plans:
+            self._finish_plans()
         self.perception.advance_errors(ids[self.is_hdv[ids]], self.rng)
 
     # ------------------------------------------------------------ perceive
@@ -230,6 +262,117 @@ class Simulation:
             acc[scripted] = (target - self.v[ids[scripted]]) / self.dt
         return acc
 
+    # ---------------------------------------------------------------- plans
+    def _view(self, t: float) -> TrafficView:
+        """Read-only copy of the state for a controller."""
+
+        def frozen(arr: np.ndarray) -> np.ndarray:
+            out = arr.copy()
+            out.flags.writeable = False
+            return out
+
+        return TrafficView(
+            t=t, x=frozen(self.x), v=frozen(self.v), a=frozen(self.a), lane=frozen(self.lane),
+            active=frozen(self.active), changing=frozen(self.origin != self.target),
+            fleet=self.fleet, config=self.config,
+        )  # fmt: skip
+
+    def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
+        """Ask the controller for a plan when a ramp vehicle enters the control zone."""
+        assert self.controller is not None
+        new = ids[
+            (self.lane[ids] == Lane.RAMP)
+            & ~changing
+            & ~self.planned[ids]
+            & (self.x[ids] >= self.config.road.control_zone_start)
+        ]
+        for vr in new.tolist():
+            self.planned[vr] = True
+            view = self._view(t)
+            group = find_key_vehicles(view, vr)
+            plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+            self.decisions.append(plan)
+            self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
+                               value=int(plan.mode))  # fmt: skip
+            if plan.fallback:
+                self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
+            cav = self.fleet.kind == Kind.CAV
+            self.plans.append(
+                ActivePlan(
+                    plan,
+                    vr_commanded=bool(cav[vr]) and bool(np.isfinite(plan.merge_x)),
+                    vmc_commanded=plan.mode != Mode.NONE,
+                    vnr_commanded=plan.vv2 is not None,
+                )
+            )
+
+    def _virtual_leaders(self, ids: IntArray, acc: FloatArray, t: float) -> FloatArray:
+        """Commanded vehicles also follow their virtual vehicle when it is ahead of them."""
+        fol, xv, vv, av, lv = virtual_leaders(
+            self.plans, t, self.x, self.v, self.a, self.fleet.length
+        )
+        ahead = xv > self.x[fol]
+        if ahead.any():
+            fol, xv, vv, av, lv = fol[ahead], xv[ahead], vv[ahead], av[ahead], lv[ahead]
+            pos = np.searchsorted(ids, fol)
+            a_v = follow(self.fleet, fol, xv - lv - self.x[fol], self.v[fol], vv, av)
+            acc[pos] = np.minimum(acc[pos], a_v)
+        return acc
+
+    def _safe_change(
+        self, i: int, target: int, ids: IntArray, index: LaneIndex, lead: IntArray
+    ) -> bool:
+        """MOBIL safety criterion for a commanded change of vehicle i to ``target``."""
+        pos = np.searchsorted(ids, [i])
+        chosen, _ = decide(
+            self.fleet, Snapshot(x=self.x, v=self.v, a=self.a), index, np.array([i]),
+            self.lane[[i]], lead[pos], index.follower_of(pos), self.config.lane_change,
+            target=np.array([target]), force=np.array([True]),
+        )  # fmt: skip
+        return bool(chosen.size)
+
+    def _execute_plans(
+        self, ids: IntArray, changing: np.ndarray, index: LaneIndex, lead: IntArray, t: float
+    ) -> None:
+        """Start the lane changes the live plans command (see :mod:`hcomc.sim.execution`)."""
+        road = self.config.road
+        for p in self.plans:
+            g = p.plan.group
+            if p.plan.mode == Mode.LATERAL and p.vmc_commanded and not p.vmc_started:
+                if self._safe_change(g.vmc, Lane.MAIN_2, ids, index, lead):
+                    self._start_lane_changes(np.array([g.vmc]), np.array([Lane.MAIN_2]), t)
+                    p.vmc_started = True
+                else:
+                    p.vmc_commanded = p.vnr_commanded = False
+                    p.released = True
+                    self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
+            vr = g.vr
+            if (
+                not p.vr_commanded
+                or p.vr_started
+                or p.released
+                or self.origin[vr] != self.target[vr]
+            ):
+                continue
+            if self.x[vr] >= p.plan.merge_x:
+                if self._safe_change(vr, Lane.MAIN_1, ids, index, lead):
+                    self._start_lane_changes(
+                        np.array([vr]), np.array([Lane.MAIN_1]), t, np.array([p.plan.vr_duration])
+                    )
+                    p.vr_started = True
+                elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
+                    p.released = True
+                    self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
+
+    def _finish_plans(self) -> None:
+        """Drop plans whose merge is complete or whose key vehicles left."""
+        for p in self.plans:
+            g = p.plan.group
+            merged = self.lane[g.vr] == Lane.MAIN_1 and self.origin[g.vr] == self.target[g.vr]
+            gone = not self.active[g.vr] or (g.vmc >= 0 and not self.active[g.vmc])
+            p.done = merged or gone
+        self.plans = [p for p in self.plans if not p.done]
+
     # --------------------------------------------------------------- decide
     def _lane_changes(
         self, ids: IntArray, changing: np.ndarray, index: LaneIndex, lead: IntArray, t: float
@@ -242,31 +385,37 @@ class Simulation:
             (lane == Lane.RAMP) & (x >= road.accel_lane_start) & (x <= road.accel_lane_end)
         )
         sel = ~changing & ~self.fleet.scripted[ids] & ((lane != Lane.RAMP) | on_accel_lane)
+        if self.plans:
+            sel &= ~commanded(self.plans, self.x.size)[ids]
         pos = np.flatnonzero(sel)
         if pos.size == 0:
             return
         cand = ids[pos]
         snap = Snapshot(x=self.x, v=self.v, a=self.a)
         chosen, target = decide(
-            self.fleet,
-            snap,
-            index,
-            cand,
-            lane[pos],
-            lead[pos],
-            index.follower_of(pos),
+            self.fleet, snap, index, cand, lane[pos], lead[pos], index.follower_of(pos),
             self.config.lane_change,
-        )
+        )  # fmt: skip
+        self._start_lane_changes(chosen, target, t)
+
+    def _start_lane_changes(
+        self, chosen: IntArray, target: IntArray, t: float, duration: FloatArray | None = None
+    ) -> None:
+        """Begin quintic lane changes (Eq. 4-6); x_f is predicted from the current speed."""
         if chosen.size == 0:
             return
+        if duration is not None:
+            self.lc_dur[chosen] = duration
         self.origin[chosen] = self.lane[chosen]
         self.target[chosen] = target
         self.lc_t0[chosen] = t
         self.lc_x0[chosen] = self.x[chosen]
         self.lc_xf[chosen] = self.x[chosen] + np.maximum(
-            self.v[chosen] * self.fleet.lc_duration[chosen], 3.0 * self.fleet.length[chosen]
+            self.v[chosen] * self.lc_dur[chosen], 3.0 * self.fleet.length[chosen]
         )
-        for i, tgt in zip(chosen.tolist(), target.tolist(), strict=True):
+        for i, tgt in zip(
+            chosen.tolist(), np.broadcast_to(target, chosen.shape).tolist(), strict=True
+        ):
             self.log.add_event(t, EventKind.LANE_CHANGE_START, i, x=self.x[i], value=tgt)
 
     # ---------------------------------------------------------------- check
@@ -343,6 +492,7 @@ class Simulation:
             if self.origin[i] == Lane.RAMP:
                 self.log.add_event(t, EventKind.MERGE, i, x=self.x[i])
         fin = ch[done]
+        self.lc_dur[fin] = self.fleet.lc_duration[fin]
         self.origin[fin] = self.target[fin]
         self.y[fin] = lane_centre(self.target[fin], width)
         self.heading[fin] = 0.0

@@ -1,0 +1,1 @@
+"""Merge controllers: the interface, key vehicles, HCOMC and its building blocks."""

@@ -1,0 +1,1 @@
+"""HCOMC: hierarchical cooperative planning, the merge problem and the controller."""

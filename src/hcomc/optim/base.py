@@ -1,0 +1,75 @@
+"""Optimisation interfaces: a vectorised Problem, the ParetoResult, and the Optimizer protocol.
+
+A problem evaluates a whole population in one call: ``evaluate(X)`` with ``X`` of shape
+``(n, n_var)`` returns objectives ``F`` ``(n, n_obj)`` (all minimised) and inequality
+constraints ``G`` ``(n, n_constr)``, feasible where ``G <= 0`` (pymoo's convention).
+Single-objective optimisers (PSO, SA) minimise ``problem.scalarise(F, G)`` instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from hcomc._typing import BoolArray, FloatArray
+
+
+@runtime_checkable
+class Problem(Protocol):
+    """A box-bounded, vectorised, constrained multi-objective minimisation problem."""
+
+    n_var: int
+    n_obj: int
+    n_constr: int
+    xl: FloatArray
+    xu: FloatArray
+    objective_names: tuple[str, ...]
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Objectives ``F`` (n, n_obj) and constraints ``G`` (n, n_constr) of rows ``X``."""
+        ...
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        """One cost per row (n,) for single-objective optimisers, penalising violations."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class ParetoResult:
+    """What an optimiser returns.
+
+    Attributes
+    ----------
+    X : (p, n_var) decision vectors of the returned set: the feasible non-dominated solutions
+        for a multi-objective optimiser, the best solution for a single-objective one; if no
+        evaluated solution is feasible, the least-violating one(s).
+    F : (p, n_obj) their objectives.
+    G : (p, n_constr) their constraints.
+    feasible : (p,) whether each returned solution satisfies every constraint.
+    n_eval : number of problem evaluations (rows) spent.
+    algorithm : name of the optimiser.
+    """
+
+    X: FloatArray
+    F: FloatArray
+    G: FloatArray
+    feasible: BoolArray
+    n_eval: int
+    algorithm: str
+
+    @property
+    def any_feasible(self) -> bool:
+        """Whether at least one returned solution is feasible."""
+        return bool(np.any(self.feasible))
+
+
+class Optimizer(Protocol):
+    """Minimises a :class:`Problem` within an evaluation budget, deterministically per ``rng``."""
+
+    name: str
+
+    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+        """Optimise ``problem`` using at most about ``budget`` row evaluations."""
+        ...

@@ -1,0 +1,59 @@
+"""Critical acceleration, the HCOMC safety index (paper Eq. 15; MODELS.md §7)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from hcomc._typing import FloatArray
+
+DELAY_CAV = 0.5
+"""Eq. 15 delay T for a CAV follower [s] (MODELS.md §0)."""
+DELAY_HDV = 1.0
+"""Eq. 15 delay T for an HDV follower [s] (MODELS.md §0)."""
+
+
+def critical_acceleration(
+    d: ArrayLike,
+    v_r: ArrayLike,
+    v_f: ArrayLike,
+    *,
+    delay: ArrayLike,
+    min_distance: float = 2.0,
+    emergency_decel: float = 7.5,
+) -> FloatArray:
+    r"""Deceleration the rear vehicle needs if its leader brakes in an emergency [m/s^2].
+
+    .. math::
+       :label: eq-15-critical-acceleration
+
+       U_{safe} = a_{cr} = \frac{v_r^2}{2\left(d_{cri} - D - v_r T
+                  + \frac{v_f^2}{2 a_{merg}}\right)}
+
+    The leader brakes from ``v_f`` at ``a_merg``; the follower reacts after ``T`` and then
+    brakes at constant ``a_cr``, stopping ``D`` behind it. A denominator ``<= 0`` means no
+    deceleration avoids the crash: the result is ``+inf`` (infeasible).
+
+    Parameters
+    ----------
+    d : bumper-to-bumper gap d_cri [m].
+    v_r, v_f : rear (follower) and front (leader) speed [m/s].
+    delay : reaction plus brake build-up T [s] (0.5 CAV, 1.0 HDV follower).
+    min_distance : residual distance D [m].
+    emergency_decel : leader's emergency deceleration a_merg [m/s^2].
+
+    Examples
+    --------
+    >>> round(float(critical_acceleration(50.0, 25.0, 25.0, delay=1.0)), 2)
+    4.84
+    """
+    v_r = np.asarray(v_r, dtype=np.float64)
+    v_f = np.asarray(v_f, dtype=np.float64)
+    denom = 2.0 * (
+        np.asarray(d, dtype=np.float64)
+        - min_distance
+        - v_r * np.asarray(delay, dtype=np.float64)
+        + v_f * v_f / (2.0 * emergency_decel)
+    )
+    ok = denom > 0.0
+    return np.where(ok, v_r * v_r / np.where(ok, denom, 1.0), np.inf)
