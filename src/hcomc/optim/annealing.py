@@ -1,0 +1,131 @@
+"""Simulated annealing: SciPy's ``dual_annealing`` behind our Optimizer interface.
+
+pymoo has no simulated annealing, so the SA baseline wraps SciPy's maintained generalized
+simulated annealing (MODELS.md §14) and minimises ``problem.scalarise(F, G)``.
+
+* ``no_local_search=True``: traditional generalized SA, no L-BFGS-B polishing (the
+  finite-difference local search would spend evaluations on a non-smooth, simulated
+  objective).
+* Budget: ``maxfun=budget`` with ``maxiter=budget``, so the evaluation count, not the
+  iteration count, ends the run (one iteration costs ``2 n_var`` calls). ``maxfun`` is a soft
+  limit in SciPy: a re-annealing restart spends one call before the limit is checked again.
+  The objective wrapper therefore also enforces a hard cap: a call beyond the budget raises a
+  private exception that :meth:`AnnealingOptimizer.minimize` catches, and the best point seen
+  so far is returned. ``n_eval <= budget`` always.
+* Non-finite costs (an infinite penalty, NaN) are passed to SciPy as a large finite value
+  (``1e300``): SciPy would otherwise re-sample its starting point up to 1000 times and then
+  raise. The best point is tracked on the true cost.
+* Seeding: ``dual_annealing`` takes ``rng=`` since SciPy 1.15 (``seed=`` before, still
+  accepted as a legacy alias). A fresh ``numpy.random.Generator`` seeded with
+  ``int(rng.integers(2**31 - 1))`` from the caller's generator is passed through whichever
+  keyword the installed SciPy has.
+* SciPy calls the objective one point at a time, so each call is ``problem.evaluate`` on one
+  row: inherent to SA and slower per row than the population-based optimisers.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import dual_annealing
+
+from hcomc._typing import FloatArray
+from hcomc.optim.base import ParetoResult, Problem
+
+_SEED_HIGH = 2**31 - 1
+_NONFINITE_COST = 1e300
+_RNG_KEYWORD = "rng" if "rng" in inspect.signature(dual_annealing).parameters else "seed"
+
+
+class _BudgetExhaustedError(Exception):
+    """Raised by the objective wrapper when SciPy asks for more calls than the budget."""
+
+
+class _Objective:
+    """Scalar objective for SciPy: one row per call, counted, tracking the best row seen."""
+
+    def __init__(self, problem: Problem, budget: int) -> None:
+        self.problem = problem
+        self.budget = budget
+        self.n_calls = 0
+        self.best_cost = np.inf
+        self.best: tuple[FloatArray, FloatArray, FloatArray] | None = None
+
+    def __call__(self, x: FloatArray) -> float:
+        """Cost of one point for SciPy (non-finite mapped to ``1e300``), counted and tracked."""
+        if self.n_calls >= self.budget:
+            raise _BudgetExhaustedError
+        X = np.array(x, dtype=np.float64, copy=True).reshape(1, -1)
+        F, G = self.problem.evaluate(X)
+        F = np.asarray(F, dtype=np.float64).reshape(1, int(self.problem.n_obj))
+        G = np.asarray(G, dtype=np.float64).reshape(1, int(self.problem.n_constr))
+        self.n_calls += 1
+        cost = float(np.asarray(self.problem.scalarise(F, G), dtype=np.float64).reshape(-1)[0])
+        ranked = np.inf if np.isnan(cost) else cost
+        # strict: the first row seen wins ties; the very first row always sets best
+        if self.best is None or ranked < self.best_cost:
+            self.best_cost = ranked
+            self.best = (X[0], F[0].copy(), G[0].copy())
+        return cost if np.isfinite(cost) else _NONFINITE_COST
+
+
+@dataclass(frozen=True, slots=True)
+class AnnealingOptimizer:
+    """Generalized simulated annealing (SciPy ``dual_annealing``) on the scalarised problem.
+
+    Parameters
+    ----------
+    initial_temp, restart_temp_ratio, visit, accept : SciPy's annealing parameters (SciPy
+        defaults).
+    pop_size : ignored; accepted so that every registered optimiser can be built with the same
+        keywords (SA has no population).
+
+    Notes
+    -----
+    Returns the best-scalarised point over all calls with its true ``F`` and ``G``; see the
+    module docstring for the budget and seeding rules.
+    """
+
+    initial_temp: float = 5230.0
+    restart_temp_ratio: float = 2e-5
+    visit: float = 2.62
+    accept: float = -5.0
+    pop_size: int | None = None
+    name: str = field(default="sa", init=False)
+
+    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+        """Anneal with at most ``budget`` single-row evaluations; return the best row seen."""
+        if budget < 1:
+            raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
+        objective = _Objective(problem, budget)
+        lower = np.array(problem.xl, dtype=np.float64, copy=True)
+        upper = np.array(problem.xu, dtype=np.float64, copy=True)
+        generator = np.random.default_rng(int(rng.integers(_SEED_HIGH)))
+        # past the hard cap the wrapper raises; the best row seen so far is then the answer
+        with contextlib.suppress(_BudgetExhaustedError):
+            dual_annealing(
+                objective,
+                bounds=list(zip(lower, upper, strict=True)),
+                maxiter=budget,
+                maxfun=budget,
+                initial_temp=self.initial_temp,
+                restart_temp_ratio=self.restart_temp_ratio,
+                visit=self.visit,
+                accept=self.accept,
+                no_local_search=True,
+                **{_RNG_KEYWORD: generator},
+            )
+        assert objective.best is not None  # SciPy evaluates its starting point first
+        x, f, g = objective.best
+        G = g[None, :]
+        return ParetoResult(
+            X=x[None, :],
+            F=f[None, :],
+            G=G,
+            feasible=np.all(G <= 0.0, axis=1),
+            n_eval=objective.n_calls,
+            algorithm=self.name,
+        )

@@ -1,0 +1,254 @@
+"""NSGA-II and PSO from pymoo behind our :class:`~hcomc.optim.base.Optimizer` interface.
+
+This is the only module that imports pymoo (STYLE.md §3.4). A private adapter,
+:class:`_PymooProblem`, wraps our vectorised :class:`~hcomc.optim.base.Problem` as a
+``pymoo.core.problem.Problem``: one ``problem.evaluate(X)`` call per population, rows counted.
+
+Budget layout: ``budget`` counts evaluated rows. Both optimisers run
+``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows (the first generation
+is the initial sample), so they spend exactly ``pop_size * n_gen`` rows when ``budget`` is a
+multiple of ``pop_size`` and at least one population when ``budget < pop_size``.
+``ParetoResult.n_eval`` reports the rows actually evaluated (NSGA-II's duplicate elimination
+can, rarely, make a generation smaller).
+
+Seeding: one integer seed ``int(rng.integers(2**31 - 1))`` is drawn from the caller's
+generator and passed to ``pymoo.optimize.minimize(seed=...)``; pymoo derives every random
+number of the run from it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pymoo.algorithms.moo.nsga2 import NSGA2
+from pymoo.algorithms.soo.nonconvex.pso import PSO
+from pymoo.core.problem import Problem as _PymooBaseProblem
+from pymoo.operators.crossover.sbx import SBX
+from pymoo.operators.mutation.pm import PM
+from pymoo.optimize import minimize as _pymoo_minimize
+from pymoo.termination import get_termination
+
+from hcomc._typing import BoolArray, FloatArray
+from hcomc.optim.base import ParetoResult, Problem
+from hcomc.optim.selection import non_dominated
+
+_SEED_HIGH = 2**31 - 1
+
+
+def _seed(rng: np.random.Generator) -> int:
+    """An integer seed for a third-party optimiser, drawn from the run's generator."""
+    return int(rng.integers(_SEED_HIGH))
+
+
+def _check_budget(budget: int) -> None:
+    if budget < 1:
+        raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
+
+
+def _n_gen(budget: int, pop_size: int) -> int:
+    return max(1, budget // pop_size)
+
+
+def _as_2d(a: Any, n_cols: int) -> FloatArray:
+    """``a`` as a float (p, n_cols) array; pymoo gives 1-D arrays for single solutions."""
+    return np.asarray(a, dtype=np.float64).reshape(-1, n_cols)
+
+
+class _PymooProblem(_PymooBaseProblem):
+    """pymoo view of one of our problems: vectorised, counting evaluated rows.
+
+    Parameters
+    ----------
+    problem : our problem; its bounds are copied, never modified.
+    scalar : if True, expose one objective ``problem.scalarise(F, G)`` and no constraints
+        (single-objective optimisers; the penalty is inside ``scalarise``), and remember the
+        best-scalarised row seen with its true ``F`` and ``G``. Otherwise expose ``F`` and
+        ``G`` as they are.
+    """
+
+    def __init__(self, problem: Problem, *, scalar: bool = False) -> None:
+        self.problem = problem
+        self.scalar = scalar
+        self.n_rows = 0
+        self.best_cost = np.inf
+        self.best: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        self.archive: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        super().__init__(
+            n_var=int(problem.n_var),
+            n_obj=1 if scalar else int(problem.n_obj),
+            n_ieq_constr=0 if scalar else int(problem.n_constr),
+            xl=np.array(problem.xl, dtype=np.float64, copy=True),
+            xu=np.array(problem.xu, dtype=np.float64, copy=True),
+        )
+
+    def _evaluate(self, x: FloatArray, out: dict[str, Any], *args: Any, **kwargs: Any) -> None:
+        X = np.asarray(x, dtype=np.float64)
+        F, G = self.problem.evaluate(X)
+        n = X.shape[0]
+        F = np.asarray(F, dtype=np.float64).reshape(n, int(self.problem.n_obj))
+        G = np.asarray(G, dtype=np.float64).reshape(n, int(self.problem.n_constr))
+        self.n_rows += n
+        if not self.scalar:
+            self.archive.append((X.copy(), F, G))
+            out["F"] = F
+            if self.n_ieq_constr > 0:
+                out["G"] = G
+            return
+        cost = np.asarray(self.problem.scalarise(F, G), dtype=np.float64).reshape(-1)
+        ranked = np.where(np.isnan(cost), np.inf, cost)
+        k = int(np.argmin(ranked))
+        # strict: on ties the row seen first is kept; a first all-inf/NaN batch still sets best
+        if self.best is None or ranked[k] < self.best_cost:
+            self.best_cost = float(ranked[k])
+            self.best = (X[k].copy(), F[k].copy(), G[k].copy())
+        out["F"] = cost[:, None]
+
+
+def _feasible(G: FloatArray) -> BoolArray:
+    return np.all(G <= 0.0, axis=1)
+
+
+@dataclass(frozen=True, slots=True)
+class NSGA2Optimizer:
+    """NSGA-II (Deb et al. 2002) from pymoo, returning the non-dominated set of all evaluations.
+
+    Parameters
+    ----------
+    pop_size : population size (rows per generation).
+    crossover_eta, crossover_prob : SBX distribution index and probability (pymoo defaults).
+    mutation_eta : polynomial-mutation distribution index (pymoo default; per-variable
+        probability min(0.5, 1/n_var)).
+    eliminate_duplicates : pymoo's duplicate elimination. Off by default: with continuous
+        variables exact duplicates are vanishingly rare, and the pairwise check costs about
+        1 ms per generation of the 50 ms decision budget (DESIGN §6).
+
+    Notes
+    -----
+    Tournament by domination then crowding, rank-and-crowding survival, duplicate elimination
+    (pymoo defaults otherwise; MODELS.md §14). The returned set is the feasible, mutually
+    non-dominated subset of *every* evaluated row (an archive: with a small population, the
+    final population alone can hold fewer good trade-offs than were found on the way); if no
+    row is feasible it is pymoo's single least-violating row, with ``feasible`` False.
+    """
+
+    pop_size: int = 24
+    crossover_eta: float = 15.0
+    crossover_prob: float = 0.9
+    mutation_eta: float = 20.0
+    eliminate_duplicates: bool = False
+    name: str = field(default="nsga2", init=False)
+
+    def __post_init__(self) -> None:
+        if self.pop_size < 2:
+            raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
+
+    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+        """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
+        _check_budget(budget)
+        adapter = _PymooProblem(problem)
+        algorithm = NSGA2(
+            pop_size=self.pop_size,
+            crossover=SBX(eta=self.crossover_eta, prob=self.crossover_prob),
+            mutation=PM(eta=self.mutation_eta),
+            eliminate_duplicates=self.eliminate_duplicates,
+        )
+        res = _pymoo_minimize(
+            adapter,
+            algorithm,
+            get_termination("n_gen", _n_gen(budget, self.pop_size)),
+            seed=_seed(rng),
+            verbose=False,
+            save_history=False,
+        )
+        X, F, G = (np.concatenate(part) for part in zip(*adapter.archive, strict=True))
+        feasible = _feasible(G)
+        if feasible.any():
+            keep = np.flatnonzero(feasible)
+            keep = keep[non_dominated(F[keep])]
+            # one row per distinct objective vector (duplicates carry no information)
+            _, first = np.unique(F[keep], axis=0, return_index=True)
+            keep = keep[np.sort(first)]
+        else:
+            # pymoo's least-infeasible individual (res.opt is None when nothing is feasible)
+            opt = res.algorithm.opt
+            return ParetoResult(
+                X=_as_2d(opt.get("X"), problem.n_var)[:1],
+                F=_as_2d(opt.get("F"), problem.n_obj)[:1],
+                G=_as_2d(opt.get("G"), problem.n_constr)[:1]
+                if problem.n_constr > 0
+                else np.zeros((1, 0)),
+                feasible=np.zeros(1, dtype=bool),
+                n_eval=adapter.n_rows,
+                algorithm=self.name,
+            )
+        return ParetoResult(
+            X=X[keep],
+            F=F[keep],
+            G=G[keep],
+            feasible=feasible[keep],
+            n_eval=adapter.n_rows,
+            algorithm=self.name,
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class PSOOptimizer:
+    """Particle swarm optimisation from pymoo on the scalarised problem.
+
+    Minimises ``problem.scalarise(F, G)`` as a single unconstrained objective (the constraint
+    penalty is inside ``scalarise``), with pymoo's adaptive PSO (w = 0.9, c1 = c2 = 2.0 as the
+    starting values, fuzzy adaptation, Latin hypercube initialisation; MODELS.md §14).
+
+    Parameters
+    ----------
+    pop_size : swarm size (rows per generation); pymoo's default is 25, 24 shares the budget
+        layout with NSGA-II.
+    w, c1, c2 : inertia and cognitive / social weights (initial values when ``adaptive``).
+    adaptive : pymoo's fuzzy adaptation of ``w``, ``c1``, ``c2``.
+
+    Notes
+    -----
+    The returned solution is the best-scalarised row over every evaluation (tracked by the
+    adapter, so no extra evaluation is spent), with its true ``F`` and ``G``; the first row seen
+    wins ties.
+    """
+
+    pop_size: int = 24
+    w: float = 0.9
+    c1: float = 2.0
+    c2: float = 2.0
+    adaptive: bool = True
+    name: str = field(default="pso", init=False)
+
+    def __post_init__(self) -> None:
+        if self.pop_size < 2:
+            raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
+
+    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+        """Run ``max(1, budget // pop_size)`` generations and return the best row seen."""
+        _check_budget(budget)
+        adapter = _PymooProblem(problem, scalar=True)
+        algorithm = PSO(
+            pop_size=self.pop_size, w=self.w, c1=self.c1, c2=self.c2, adaptive=self.adaptive
+        )
+        _pymoo_minimize(
+            adapter,
+            algorithm,
+            get_termination("n_gen", _n_gen(budget, self.pop_size)),
+            seed=_seed(rng),
+            verbose=False,
+            save_history=False,
+        )
+        assert adapter.best is not None  # at least one population was evaluated
+        x, f, g = adapter.best
+        G = g[None, :]
+        return ParetoResult(
+            X=x[None, :],
+            F=f[None, :],
+            G=G,
+            feasible=_feasible(G),
+            n_eval=adapter.n_rows,
+            algorithm=self.name,
+        )

@@ -1,0 +1,138 @@
+r"""Picking one plan from a Pareto set: the paper's Eq. 19 rule, and a non-dominated filter.
+
+Eq. 19 (paper Section III-C-2; MODELS.md §7):
+
+1. If every candidate has ``U_safe`` above the threshold (4 m/s^2), pick the one with the
+   smallest ``U_safe``.
+2. Otherwise, among the candidates with ``U_safe <= threshold``, min-max normalise the fuel cost
+   ``U_fuel`` and the efficiency cost ``-U_eff`` over that subset and pick the smallest sum
+
+   .. math:: U = \frac{c_{eff} - \min c_{eff}}{\max c_{eff} - \min c_{eff}}
+                 + \frac{U_{fuel} - \min U_{fuel}}{\max U_{fuel} - \min U_{fuel}}.
+
+The paper normalises ``U_eff`` itself as if it were a cost; the problem minimises ``-U_eff``,
+so the ``efficiency`` column is already a cost and the rule is applied to it unchanged (the
+consistent reading, MODELS.md §7).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from hcomc._typing import BoolArray, FloatArray
+
+SAFETY = "safety"
+FUEL = "fuel"
+EFFICIENCY = "efficiency"
+
+
+def non_dominated(F: FloatArray) -> BoolArray:
+    """Mask of the non-dominated rows of ``F`` (all objectives minimised).
+
+    Row ``i`` dominates row ``j`` if it is no worse in every objective and strictly better in
+    at least one. Identical rows do not dominate each other, so duplicates of a non-dominated
+    point are all kept. Comparisons with NaN are false: a row containing NaN neither dominates
+    nor is dominated through that column.
+
+    Parameters
+    ----------
+    F : (n, m) objective values.
+
+    Returns
+    -------
+    (n,) boolean mask, True for rows that no other row dominates.
+
+    Notes
+    -----
+    Pairwise and vectorised: O(n^2 m) time and memory, fine for Pareto sets of a few hundred
+    rows.
+    """
+    F = np.asarray(F, dtype=np.float64)
+    if F.ndim != 2:
+        raise ValueError(f"F must be 2-D (n, m), got shape {F.shape}")
+    if F.shape[0] == 0:
+        return np.zeros(0, dtype=np.bool_)
+    a, b = F[:, None, :], F[None, :, :]
+    # dominates[i, j]: row i dominates row j
+    dominates = np.all(a <= b, axis=2) & np.any(a < b, axis=2)
+    return ~np.any(dominates, axis=0)
+
+
+def _column(names: Sequence[str], name: str) -> int:
+    try:
+        return list(names).index(name)
+    except ValueError:
+        raise ValueError(f"objective '{name}' not found in names {tuple(names)}") from None
+
+
+def _minmax(values: FloatArray) -> FloatArray:
+    """Min-max normalise to [0, 1]; a constant column normalises to 0."""
+    lo, hi = values.min(), values.max()
+    if hi == lo:
+        return np.zeros_like(values)
+    return (values - lo) / (hi - lo)
+
+
+def select_eq19(
+    F: FloatArray,
+    names: Sequence[str],
+    *,
+    feasible: BoolArray | None = None,
+    safety_threshold: float = 4.0,
+) -> int:
+    """Index of the row of ``F`` chosen by the paper's Eq. 19 rule.
+
+    Parameters
+    ----------
+    F : (n, m) objectives of the candidate set, all minimised; the columns named ``"safety"``
+        (U_safe, critical acceleration [m/s^2]), ``"fuel"`` (U_fuel) and ``"efficiency"``
+        (-U_eff, a cost) are used, other columns are ignored.
+    names : the m column names of ``F``.
+    feasible : (n,) optional feasibility mask. If any row is feasible only feasible rows are
+        considered; otherwise (or if None) all rows are.
+    safety_threshold : the U_safe gate [m/s^2] (paper: 4, MOBIL's b_safe).
+
+    Returns
+    -------
+    Index into the rows of ``F``.
+
+    Notes
+    -----
+    * All considered rows above the threshold: minimum ``safety``; ties go to the lower
+      ``fuel``, then to the lower index.
+    * Otherwise, over the rows with ``safety <= safety_threshold``: min-max normalise ``fuel``
+      and ``efficiency`` over that subset (a constant column normalises to 0) and take the
+      minimum sum; ties go to the lower index.
+    * A NaN ``safety`` never passes the gate and sorts last in the first branch; a candidate
+      whose normalised sum is NaN (non-finite cost) ranks after every finite one.
+    """
+    F = np.asarray(F, dtype=np.float64)
+    if F.ndim != 2 or F.shape[1] != len(names):
+        raise ValueError(f"F must have shape (n, {len(names)}), got {F.shape}")
+    n = F.shape[0]
+    if n == 0:
+        raise ValueError("cannot select from an empty set")
+    i_safe, i_fuel, i_eff = (_column(names, c) for c in (SAFETY, FUEL, EFFICIENCY))
+
+    candidates = np.arange(n)
+    if feasible is not None:
+        feasible = np.asarray(feasible, dtype=np.bool_)
+        if feasible.shape != (n,):
+            raise ValueError(f"feasible must have shape ({n},), got {feasible.shape}")
+        if feasible.any():
+            candidates = candidates[feasible]
+
+    safety = F[candidates, i_safe]
+    fuel = F[candidates, i_fuel]
+    gate = safety <= safety_threshold
+    if not gate.any():
+        # lexsort: last key is primary; NaN sorts last
+        order = np.lexsort((candidates, fuel, safety))
+        return int(candidates[order[0]])
+
+    subset = candidates[gate]
+    total = _minmax(F[subset, i_fuel]) + _minmax(F[subset, i_eff])
+    total[np.isnan(total)] = np.inf  # a non-finite cost never wins over a finite one
+    return int(subset[np.argmin(total)])
