@@ -228,8 +228,15 @@ class ControlParams(_Frozen):
     budget: int = Field(
         360, ge=10, le=100_000, description="candidate evaluations per decision (all optimisers)"
     )
-    pop_size: int = Field(24, ge=4, le=1000, description="population (NSGA-II, PSO)")
+    pop_size: int = Field(40, ge=4, le=1000, description="population (NSGA-II, PSO)")
     prediction_dt: float = Field(0.25, gt=0, le=1, description="prediction step [s]")
+    horizon_min: float = Field(4.0, gt=0, le=60, description="lower bound of H = tf' - t0' [s]")
+    horizon_max: float = Field(
+        20.0,
+        gt=0,
+        le=60,
+        description="upper bound of H [s]; VR needs 12-15 s to cross the control zone",
+    )
     post_merge: float = Field(
         5.0, ge=0, le=60, description="prediction window after the latest merge end [s]"
     )

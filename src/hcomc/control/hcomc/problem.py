@@ -7,7 +7,7 @@ col   variable                                                    bounds
 ====  ==========================================================  =====================
 0     VR's lane-change start position on the acceleration lane     [accel start, end - 3L] m
 1     VR's lane-change duration                                     [3, 6] s
-2     planning horizon H = tf' - t0' of the virtual vehicle         [4, 10] s
+2     planning horizon H = tf' - t0' of the virtual vehicle         [4, 20] s (config)
 3     VMC's cooperation mode (< 0.5 longitudinal, >= 0.5 lateral)   [0, 1]
 ====  ==========================================================  =====================
 
@@ -47,6 +47,7 @@ from hcomc.control.hcomc.rollout import (
     N_CONSTS,
     N_ROLES,
     P_LEN,
+    P_WID,
     VMC,
     VR,
     rollout,
@@ -73,8 +74,7 @@ class KeyState:
     a: FloatArray
     present: BoolArray
     cav: BoolArray
-    params: FloatArray  # (6, 8): v0, T, s0, a, b, delta, coolness, length
-    width: FloatArray  # (6,) vehicle widths [m]
+    params: FloatArray  # (6, 9): v0, T, s0, a, b, delta, coolness, length, width
     ids: IntArray  # (6,) vehicle indices in the simulation, -1 for absent or phantom
 
 
@@ -116,6 +116,7 @@ class MergeProblem:
         politeness: float,
         virtual_max_decel: float,
         prediction_dt: float,
+        horizon: tuple[float, float],
         post_merge: float,
         min_distance: float = 2.0,
         emergency_brake: float = 7.5,
@@ -124,8 +125,8 @@ class MergeProblem:
         self.lateral_allowed = lateral_allowed
         start, end = accel_lane
         length = float(state.params[VR, P_LEN])
-        self.xl = np.array([max(start, state.x[VR] + 1.0), 3.0, 4.0, 0.0])
-        self.xu = np.array([max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, 10.0, 1.0])
+        self.xl = np.array([max(start, state.x[VR] + 1.0), 3.0, horizon[0], 0.0])
+        self.xu = np.array([max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, horizon[1], 1.0])
         consts = np.zeros(N_CONSTS)
         consts[C_DT] = prediction_dt
         consts[C_ACCEL_END] = end
@@ -156,13 +157,13 @@ class MergeProblem:
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
         s = self.state
         lateral = X[:, 3] >= 0.5
-        Xt, Yt, Vt, At, Ht, k_merge, u_safe, u_eff, g, vv1, vv2 = rollout(
+        Xt, Yt, Vt, At, Ht, k_merge, u_safe, u_eff, g, vv1, vv2, near = rollout(
             s.x, s.v, s.a, s.present, s.cav, s.params,
             X[:, 0].copy(), X[:, 1].copy(), X[:, 2].copy(), lateral, self.consts, self.n_steps,
         )  # fmt: skip
         G = np.zeros((X.shape[0], self.n_constr))
         G[:, : g.shape[1]] = g
-        G[:, G_COLLISION] = self._collisions(Xt, Yt, Ht)
+        G[:, G_COLLISION] = self._collisions(Xt, Yt, Ht, near)
         G[:, -1] = np.where(lateral & ~self.lateral_allowed, 1.0, 0.0)
         fuel = fuel_rate(Vt[:, :, [VR, VMC]], At[:, :, [VR, VMC]]).sum(axis=(1, 2)) * self.dt
         F = np.column_stack([np.minimum(u_safe, 1e3), fuel / 1000.0, -u_eff])
@@ -186,28 +187,21 @@ class MergeProblem:
         return F[:, 1] / self._fuel_ref + F[:, 2] + penalty
 
     # ----------------------------------------------------------------- helpers
-    def _collisions(self, X: FloatArray, Y: FloatArray, H: FloatArray) -> FloatArray:
+    def _collisions(
+        self, X: FloatArray, Y: FloatArray, H: FloatArray, near: BoolArray
+    ) -> FloatArray:
         """Colliding (pair, step) count per candidate: oriented rectangles (Eq. 7).
 
-        A cheap extent test keeps only pairs whose bounding boxes overlap; the exact test of
-        :func:`hcomc.safety.collision.vehicles_collide` runs on those.
+        The kernel flags pairs whose bounding boxes overlap (``near``); the exact test of
+        :func:`hcomc.safety.collision.vehicles_collide` runs on those only.
         """
-        s = self.state
-        i, j = _PAIRS[:, 0], _PAIRS[:, 1]
-        valid = s.present[i] & s.present[j]
-        i, j = i[valid], j[valid]
-        length, width = s.params[:, P_LEN], s.width
-        reach_y = 0.5 * width + length  # generous lateral extent of a tilted rectangle
-        near = (
-            (np.abs(X[..., i] - X[..., j]) <= length[i] + width[i] + length[j] + width[j])
-            & (np.abs(Y[..., i] - Y[..., j]) <= reach_y[i] * np.abs(np.sin(H[..., i])) +
-               reach_y[j] * np.abs(np.sin(H[..., j])) + 0.5 * (width[i] + width[j]))
-        )  # fmt: skip
         count = np.zeros(X.shape[0])
         if not near.any():
             return count
+        s = self.state
+        length, width = s.params[:, P_LEN], s.params[:, P_WID]
         c, k, p = np.nonzero(near)
-        a, b = i[p], j[p]
+        a, b = _PAIRS[p, 0], _PAIRS[p, 1]
         hit = vehicles_collide(
             X[c, k, a], Y[c, k, a], H[c, k, a], length[a], width[a],
             X[c, k, b], Y[c, k, b], H[c, k, b], length[b], width[b],

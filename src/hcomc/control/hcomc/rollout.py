@@ -38,8 +38,8 @@ VR, VMC, VMF, VMR, VNF, VNR = range(6)
 ROLES = ("VR", "VMC", "VMF", "VMR", "VNF", "VNR")
 N_ROLES = 6
 # params columns
-P_V0, P_T, P_S0, P_A, P_B, P_DELTA, P_C, P_LEN = range(8)
-N_PARAMS = 8
+P_V0, P_T, P_S0, P_A, P_B, P_DELTA, P_C, P_LEN, P_WID = range(9)
+N_PARAMS = 9
 # constants vector layout
 (
     C_DT,
@@ -154,7 +154,11 @@ def _virtual(b: np.ndarray, tau: float) -> tuple[float, float, float]:
 
 @njit(cache=True)
 def _near_pairs(
-    x: np.ndarray, y: np.ndarray, h: np.ndarray, present: np.ndarray, params: np.ndarray,
+    x: np.ndarray,
+    y: np.ndarray,
+    h: np.ndarray,
+    present: np.ndarray,
+    params: np.ndarray,
     out: np.ndarray,
 ) -> None:
     """Axis-aligned bounding-box overlap of every key pair (front-bumper reference point).
@@ -162,17 +166,18 @@ def _near_pairs(
     A rectangle of length L and width W at heading h lies within x in [x - L - W/2, x + W/2]
     and y within W/2 + L |sin h| of its reference point.
     """
+    reach = np.empty(N_ROLES)
+    for r in range(N_ROLES):
+        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(h[r]))
     p = 0
     for i in range(N_ROLES):
         for j in range(i + 1, N_ROLES):
             if present[i] and present[j]:
-                li, lj = params[i, P_LEN], params[j, P_LEN]
-                wi, wj = 0.5 * 1.8, 0.5 * 1.8
-                ry = wi + li * abs(math.sin(h[i])) + wj + lj * abs(math.sin(h[j]))
+                wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
                 out[p] = (
-                    x[i] + wi >= x[j] - lj - wj
-                    and x[j] + wj >= x[i] - li - wi
-                    and abs(y[i] - y[j]) <= ry
+                    abs(y[i] - y[j]) <= reach[i] + reach[j]
+                    and x[i] + wi >= x[j] - params[j, P_LEN] - wj
+                    and x[j] + wj >= x[i] - params[i, P_LEN] - wi
                 )
             p += 1
 
