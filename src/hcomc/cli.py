@@ -111,6 +111,83 @@ def simulate(
         _print_summary(summary)
 
 
+Optimizer = Annotated[
+    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
+]
+
+
+@app.command()
+def plan(
+    config: ConfigArg,
+    seed: Annotated[int | None, typer.Option(help="Random seed (default: the config's).")] = None,
+    optimizer: Optimizer = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the decision as JSON.")] = False,
+) -> None:
+    """Run until the first ramp vehicle enters the control zone and show HCOMC's decision."""
+    from hcomc.control.report import plan_report
+    from hcomc.sim.engine import Simulation
+
+    if seed is not None and seed < 0:
+        raise _fail(f"option '--seed' = {seed}: must be >= 0")
+    base = _load(config)
+    control = {**base.control.model_dump(), "controller": "hcomc"}
+    if optimizer is not None:
+        control["optimizer"] = optimizer
+    cfg = _load(config, seed=seed, control=control)
+    sim = Simulation(cfg)
+    decision = sim.run_until_plan()
+    if decision is None:
+        raise _fail(
+            f"no ramp vehicle entered the control zone within duration = {cfg.duration} s "
+            f"of '{config}'; allowed: a scenario with ramp demand ('single' or 'flow')"
+        )
+    report = plan_report(sim, decision)
+    if as_json:
+        sys.stdout.write(json.dumps(report) + "\n")
+    else:
+        _print_plan(report)
+
+
+def _print_plan(report: dict[str, Any]) -> None:
+    out.print(
+        f"[bold]{report['scenario']}[/] seed {report['seed']} · t = {report['t']:.1f} s · "
+        f"optimiser {report['optimizer']} · {report['n_eval']} evaluations · "
+        f"decision {report['decision_ms']:.1f} ms"
+    )
+    keys = Table(title="key vehicles (Section II-A)")
+    for col in ("role", "id", "kind", "lane", "x [m]", "v [m/s]"):
+        keys.add_column(col, justify="right")
+    for role, k in report["key_vehicles"].items():
+        if k is None:
+            keys.add_row(role, "—", "—", "—", "—", "—")
+        else:
+            keys.add_row(role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}",
+                         f"{k['v']:.2f}")  # fmt: skip
+    out.print(keys)
+    game = report["game"]
+    if game:
+        verdict = "admitted" if game["lateral_allowed"] else "not admitted"
+        out.print(f"lane-change game (VMC vs VNR): {game['reason']}; lateral mode {verdict}")
+    pareto = Table(title="Pareto set (feasible, non-dominated)")
+    cols = ("#", "merge x [m]", "VR T_lc [s]", "H [s]", "mode", "U_safe [m/s²]", "U_fuel [L]",
+            "−U_eff [m/s²]")  # fmt: skip
+    for col in cols:
+        pareto.add_column(col, justify="right")
+    chosen = report["chosen"]
+    for i, p in enumerate(report["pareto"]):
+        mark = "★ " if chosen and i == chosen["index"] else ""
+        pareto.add_row(f"{mark}{i}", f"{p['merge_x']:.1f}", f"{p['vr_duration']:.2f}",
+                       f"{p['horizon']:.2f}", p["mode"][:3], f"{p['safety']:.3f}",
+                       f"{p['fuel']:.4f}", f"{p['efficiency']:.3f}")  # fmt: skip
+    out.print(pareto)
+    if chosen is None:
+        out.print(f"[yellow]fallback:[/] {report['reason']}")
+    else:
+        out.print(f"chosen (Eq. 19): #{chosen['index']} · mode [bold]{report['mode']}[/] · "
+                  f"merge at {chosen['merge_x']:.1f} m, T_lc {chosen['vr_duration']:.2f} s, "
+                  f"H {chosen['horizon']:.2f} s")  # fmt: skip
+
+
 def _print_summary(summary: dict[str, Any]) -> None:
     table = Table(title=f"{summary['scenario']} · seed {summary['seed']}", show_header=False)
     table.add_column("figure")

@@ -26,7 +26,14 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergePlan, Mode, TrafficView, find_key_vehicles
+from hcomc.control.base import (
+    MergeController,
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    find_key_vehicles,
+)
 from hcomc.models.quintic import lateral_offset
 from hcomc.models.transition import blend_acceleration, transition_weight
 from hcomc.rng import make_rng
@@ -92,6 +99,7 @@ class Simulation:
         self.planned = np.zeros(n, dtype=bool)
         self.plans: list[ActivePlan] = []
         self.decisions: list[MergePlan] = []
+        self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
         self.is_hdv = demand.kind == Kind.HDV
         self.perception = Perception(config.hdv, self.is_hdv, self.dt, self.rng)
         hdv = config.hdv
@@ -150,6 +158,12 @@ class Simulation:
         if progress is not None:
             progress(total, total)
         return self.log
+
+    def run_until_plan(self) -> MergePlan | None:
+        """Step (without logging rows) until the first plan; None if the run ends first."""
+        while not self.decisions and self.step_index < self.n_warmup + self.n_steps:
+            self.step()
+        return self.decisions[0] if self.decisions else None
 
     def _record(self) -> None:
         self.log.record(
@@ -291,6 +305,7 @@ class Simulation:
             view = self._view(t)
             group = find_key_vehicles(view, vr)
             plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+            self.requests.append((view, group))
             self.decisions.append(plan)
             self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
                                value=int(plan.mode))  # fmt: skip

@@ -1,0 +1,86 @@
+"""Decision latency of one HCOMC decision, per optimiser, at the default budget, on one core.
+
+Planning instants are captured from Condition 1 runs (the first ramp vehicle entering the
+control zone, seeds 0..S-1); each decision is then repeated R times with fresh generators.
+The whole ``HCOMCController.plan`` call is timed: lane-change game, problem set-up,
+optimisation (360 candidate evaluations by default) and Eq. 19 selection. One warm-up
+decision per optimiser loads the compiled rollout kernel first.
+
+    python benchmarks/decision_latency.py [--json] [--seeds 8] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # one core, as DESIGN §6 asks
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+from throughput import machine  # noqa: E402
+
+from hcomc.config import load_config  # noqa: E402
+from hcomc.control.hcomc.controller import HCOMCController  # noqa: E402
+from hcomc.sim.engine import Simulation  # noqa: E402
+
+
+def planning_instants(n_seeds: int) -> list:
+    """(config, view, group) of the first decision in C1 for seeds 0..n_seeds-1."""
+    found = []
+    for seed in range(n_seeds):
+        config = load_config("C1", control={"controller": "hcomc"})
+        sim = Simulation(config, seed)
+        if sim.run_until_plan() is not None:
+            found.append((config, *sim.requests[0]))
+    return found
+
+
+def measure(optimizer: str, instants: list, repeats: int) -> dict[str, float]:
+    """Median, p95 and max wall time [ms] of the decisions."""
+    times = []
+    for i, (config, view, group) in enumerate(instants):
+        cfg = config.model_copy(update={"control": config.control.model_copy(
+            update={"optimizer": optimizer})})  # fmt: skip
+        controller = HCOMCController(cfg)
+        if i == 0:
+            controller.plan(view, group, np.random.default_rng(0))  # warm-up
+        for r in range(repeats):
+            start = time.perf_counter()
+            controller.plan(view, group, np.random.default_rng(r))
+            times.append((time.perf_counter() - start) * 1e3)
+    ms = np.array(times)
+    return {
+        "optimizer": optimizer,
+        "decisions": int(ms.size),
+        "median_ms": round(float(np.median(ms)), 1),
+        "p95_ms": round(float(np.percentile(ms, 95)), 1),
+        "max_ms": round(float(ms.max()), 1),
+        "budget": instants[0][0].control.budget,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=8)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    instants = planning_instants(args.seeds)
+    rows = [measure(name, instants, args.repeats) for name in ("nsga2", "pso", "sa")]
+    if args.json:
+        print(json.dumps({"machine": machine(), "results": rows}))
+        return
+    print("machine:", ", ".join(f"{k} {v}" for k, v in machine().items()))
+    print(f"{'optimiser':>9} {'decisions':>9} {'budget':>6} {'median ms':>10} {'p95 ms':>8}"
+          f" {'max ms':>8}")
+    for r in rows:
+        print(f"{r['optimizer']:>9} {r['decisions']:>9} {r['budget']:>6} {r['median_ms']:>10}"
+              f" {r['p95_ms']:>8} {r['max_ms']:>8}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,77 @@
+"""Plain-data report of one merge decision (for ``hcomc plan`` and JSON output)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from hcomc.control.base import MergePlan, Mode
+from hcomc.sim.road import Kind
+
+if TYPE_CHECKING:
+    from hcomc.sim.engine import Simulation
+
+
+def _solution(x: np.ndarray, f: np.ndarray) -> dict[str, Any]:
+    return {
+        "merge_x": float(x[0]),
+        "vr_duration": float(x[1]),
+        "horizon": float(x[2]),
+        "mode": "lateral" if x[3] >= 0.5 else "longitudinal",
+        "safety": float(f[0]),
+        "fuel": float(f[1]),
+        "efficiency": float(f[2]),
+    }
+
+
+def plan_report(sim: Simulation, plan: MergePlan) -> dict[str, Any]:
+    """Key vehicles, game outcome, Pareto set and chosen plan as JSON-ready data."""
+    view, group = sim.requests[0]
+    keys: dict[str, Any] = {}
+    for role, i in group.as_dict().items():
+        keys[role] = (
+            None
+            if i < 0
+            else {
+                "id": i,
+                "kind": Kind(int(view.fleet.kind[i])).name,
+                "lane": int(view.lane[i]),
+                "x": float(view.x[i]),
+                "v": float(view.v[i]),
+            }
+        )
+    d = plan.details
+    game = d.get("game")
+    pareto = [
+        _solution(x, f)
+        for x, f, ok in zip(d.get("pareto_X", []), d.get("pareto_F", []), d.get("feasible", []),
+                            strict=True)
+        if ok
+    ]  # fmt: skip
+    chosen = None
+    if "chosen" in d:
+        chosen = {"index": int(d["chosen"]), **_solution(d["pareto_X"][d["chosen"]],
+                                                         d["pareto_F"][d["chosen"]])}  # fmt: skip
+    return {
+        "scenario": sim.config.name,
+        "seed": sim.seed,
+        "t": float(plan.t0),
+        "optimizer": d.get("optimizer", sim.config.control.optimizer),
+        "n_eval": int(d.get("n_eval", 0)),
+        "key_vehicles": keys,
+        "game": None
+        if game is None
+        else {
+            "change": bool(game.change),
+            "change_is_safe": bool(game.change_is_safe),
+            "lateral_allowed": bool(game.change or game.change_is_safe),
+            "reason": game.reason,
+        },
+        "pareto": pareto,
+        "chosen": chosen,
+        "mode": Mode(plan.mode).name.lower(),
+        "fallback": plan.fallback,
+        "reason": plan.reason,
+        "decision_ms": float(plan.decision_ms),
+    }
