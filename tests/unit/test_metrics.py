@@ -1,0 +1,414 @@
+"""Tests of hcomc.metrics on synthetic logs with hand-computed answers."""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Iterable
+from functools import cache
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hcomc.config import load_config
+from hcomc.metrics import (
+    KEY_ROLES,
+    METRICS,
+    MetricWindow,
+    average_acceleration,
+    collisions,
+    compute_metrics,
+    critical_distance,
+    fuel,
+    key_collisions,
+    low_speed_region_volume,
+    max_drac,
+    merge_window,
+    min_ttc,
+    pet_at_merge,
+    reference_speed,
+    speed_field,
+    stabilisation_time,
+)
+from hcomc.models.fuel import fuel_consumed, fuel_rate
+from hcomc.sim.log import EventKind, SimulationLog
+
+LENGTH = 5.0  # vehicle length [m]
+# C1 road: control zone starts at 700 - 300 = 400 m, road length 1500 m.
+
+
+@cache
+def _config() -> dict[str, Any]:
+    return load_config("C1").model_dump(mode="json")
+
+
+def build(
+    x: np.ndarray,
+    v: np.ndarray,
+    lane: np.ndarray,
+    a: np.ndarray | None = None,
+    active: np.ndarray | None = None,
+    *,
+    dt: float = 0.1,
+    n_steps: int | None = None,
+) -> SimulationLog:
+    """A log whose row k is at t = k dt, from (T, N) arrays."""
+    n_rows, n = x.shape
+    log = SimulationLog.allocate(
+        n_rows if n_steps is None else n_steps,
+        n,
+        dt=dt,
+        kind=np.ones(n, dtype=np.int64),
+        length=np.full(n, LENGTH),
+        width=np.full(n, 1.8),
+        meta={"config": copy.deepcopy(_config())},
+    )
+    a = np.zeros_like(x) if a is None else a
+    active = np.ones(x.shape, dtype=bool) if active is None else active
+    zeros = np.zeros(n)
+    for k in range(n_rows):
+        log.record(k, k * dt, x[k], zeros, v[k], a[k], zeros, lane[k], active[k])
+    return log
+
+
+def roles(*idx: int) -> dict[str, int]:
+    """Group dict from slots in role order VR, VMC, VMF, VMR, VNF, VNR (missing -> -1)."""
+    full = list(idx) + [-1] * (len(KEY_ROLES) - len(idx))
+    return dict(zip(KEY_ROLES, full, strict=True))
+
+
+def cruise(x0: list[float], v0: list[float], t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Constant-speed trajectories: x = x0 + v0 t."""
+    x0a, v0a = np.asarray(x0, dtype=float), np.asarray(v0, dtype=float)
+    return x0a + np.outer(t, v0a), np.broadcast_to(v0a, (t.size, v0a.size)).copy()
+
+
+# ------------------------------------------------------------------- scenarios
+PLATOON_X0 = [500.0, 530.0, 570.0, 620.0, 680.0, 750.0]  # bumper gaps 25, 35, 45, 55, 65 m
+PLATOON_GROUP = roles(0, 1, 2, 3, 4, 5)
+
+
+def platoon(n_rows: int = 101) -> SimulationLog:
+    """Six key vehicles in lane 1 at 25 m/s plus two lane-2 vehicles upstream of x = 400."""
+    t = np.arange(n_rows) * 0.1
+    x, v = cruise([*PLATOON_X0, 50.0, 100.0], [25.0] * 8, t)
+    lane = np.array([1] * 6 + [2, 2])[None].repeat(n_rows, axis=0)
+    return build(x, v, lane)
+
+
+def braking(
+    a_rows: Iterable[int] = range(50, 80), n_rows: int = 151, *, slows: bool = True
+) -> SimulationLog:
+    """The platoon over 15 s; vehicle 2 brakes at -1 m/s^2 for t in [5, 8), then cruises.
+
+    ``a_rows`` are the rows logged with a = -1 m/s^2; with ``slows=False`` only the logged
+    acceleration changes, speeds and positions stay those of the cruising platoon.
+    """
+    t = np.arange(n_rows) * 0.1
+    x, v = cruise([*PLATOON_X0, 50.0, 100.0], [25.0] * 8, t)
+    s = np.clip(t - 5.0, 0.0, 3.0) if slows else np.zeros_like(t)
+    v[:, 2] = 25.0 - s
+    x[:, 2] -= s * s / 2 + 3.0 * np.maximum(t - 8.0, 0.0)
+    a = np.zeros_like(x)
+    a[list(a_rows), 2] = -1.0
+    lane = np.array([1] * 6 + [2, 2])[None].repeat(n_rows, axis=0)
+    log = build(x, v, lane, a)
+    log.add_event(5.0, EventKind.MERGE, 0)
+    return log
+
+
+def merge_scene() -> SimulationLog:
+    """VR (0) switches from the ramp to lane 1 at t = 1 s at x_c = 780 m, all at 20 m/s.
+
+    Lane 1: VMR (3) at 700 + 20 t, VMC (1) at 730 + 20 t (VR's new follower), VMF (2) at
+    820 + 20 t. Lane 2: VNR (5) at 720 + 20 t, VNF (4) at 755 + 20 t (nearer to x_c than
+    VMC, but in the wrong lane). Vehicle 6 is an upstream lane-2 vehicle at 25 m/s.
+    """
+    t = np.arange(41) * 0.1
+    x, v = cruise([760.0, 730.0, 820.0, 700.0, 755.0, 720.0, 100.0], [20.0] * 6 + [25.0], t)
+    lane = np.array([1, 1, 1, 1, 2, 2, 2])[None].repeat(t.size, axis=0)
+    lane[:10, 0] = 0
+    log = build(x, v, lane)
+    log.add_event(1.5, EventKind.MERGE, 0, x=790.0)
+    return log
+
+
+# ------------------------------------------------------------------- window
+def test_merge_window_picks_control_zone_entry_and_merge_event() -> None:
+    n_rows = 150
+    t = np.arange(n_rows) * 0.1
+    x, v = cruise([301.0, 200.0], [20.0, 25.0], t)
+    lane = np.array([0, 1])[None].repeat(n_rows, axis=0)
+    active = np.ones((n_rows, 2), dtype=bool)
+    active[:3, 0] = False
+    x[:3, 0] = 1000.0  # ignored: inactive
+    log = build(x, v, lane, active=active, n_steps=200)  # 50 rows never recorded
+    log.add_event(3.0, EventKind.MERGE, 1)
+    log.add_event(12.3, EventKind.MERGE, 0)
+    log.add_event(13.0, EventKind.MERGE, 0)
+    w = merge_window(log, 0, roles(0, 1))
+    # VR at 301 + 20 t reaches the control-zone start 400 m first at row 50 (x = 401 m).
+    assert w.t_start == pytest.approx(5.0)
+    assert w.t_merge == pytest.approx(12.3)
+    assert w.t_end == pytest.approx(14.9)
+    assert w.group == roles(0, 1)
+    assert w.key_vehicles.tolist() == [0, 1]
+    assert w.merged
+
+    log2 = build(x, v, lane, active=active)
+    w2 = merge_window(log2, 0, roles(0, 1))
+    assert math.isnan(w2.t_merge)
+    assert not w2.merged
+
+
+def test_metrics_need_road_geometry() -> None:
+    log = platoon(3)
+    log.meta = {}
+    with pytest.raises(ValueError, match="road"):
+        merge_window(log, 0, PLATOON_GROUP)
+
+
+# ------------------------------------------------------------------- platoon
+def test_constant_speed_platoon() -> None:
+    log = platoon()
+    log.add_event(2.0, EventKind.MERGE, 0)
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert (w.t_start, w.t_merge, w.t_end) == pytest.approx((0.0, 2.0, 10.0))
+    assert reference_speed(log, w) == pytest.approx(25.0)
+    assert average_acceleration(log, w) == 0.0
+    assert low_speed_region_volume(log, w) == 0.0
+    assert critical_distance(log, w) == pytest.approx(25.0, abs=1e-4)
+    assert min_ttc(log, w) == math.inf
+    assert max_drac(log, w) == 0.0
+    assert stabilisation_time(log, w) == pytest.approx(0.0, abs=1e-9)
+    assert collisions(log, w) == 0.0
+    # Fuel: 8 vehicles x 101 rows x 0.1 s at f(25, 0) = 1.23955625 mL/s.
+    assert fuel(log, w) == pytest.approx(8 * 101 * 0.1 * 1.23955625e-3, rel=1e-9)
+
+
+def test_missing_roles_are_ignored() -> None:
+    log = platoon()
+    log.add_event(2.0, EventKind.MERGE, 0)
+    # Without vehicle 1 the consecutive key pair 0 -> 2 has bumper gap 570 - 5 - 500 = 65.
+    w = merge_window(log, 0, roles(0, -1, 2))
+    assert critical_distance(log, w) == pytest.approx(65.0, abs=1e-4)
+
+
+# ------------------------------------------------------------------- braking
+def test_braking_stabilisation_and_average_acceleration() -> None:
+    log = braking()
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert (w.t_start, w.t_merge, w.t_end) == pytest.approx((0.0, 5.0, 15.0))
+    # Braking ends at t = 8 s: first settled row, and settled for >= 2 s afterwards.
+    assert stabilisation_time(log, w) == pytest.approx(8.0 - 5.0, abs=log.dt)
+    assert stabilisation_time(log, w) == pytest.approx(3.0, abs=1e-9)
+    # 30 rows with |a| = 1 among 6 key vehicles x 151 rows.
+    assert average_acceleration(log, w) == pytest.approx(30.0 / (6 * 151), rel=1e-12)
+    # Vehicle 1 (25 m/s) closes on vehicle 2 (22 m/s); the gap 35 - 4.5 - 3 (t - 8)
+    # is smallest at t = 15 s: 9.5 m.
+    assert min_ttc(log, w) == pytest.approx(9.5 / 3.0, rel=1e-4)
+    assert max_drac(log, w) == pytest.approx(3.0**2 / (2 * 9.5), rel=1e-4)
+    assert critical_distance(log, w) == pytest.approx(9.5, abs=1e-3)
+
+
+def test_stabilisation_needs_the_full_hold() -> None:
+    # Speeds constant; |a| = 1 in rows 50-59 and 75-79: settled for 1.5 s (rows 60-74)
+    # only, then from t = 8 s on.
+    log = braking(a_rows=[*range(50, 60), *range(75, 80)], slows=False)
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert stabilisation_time(log, w) == pytest.approx(3.0, abs=1e-9)
+    # A 1 s hold is met at t = 6 s already.
+    assert stabilisation_time(log, w, hold=1.0) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_stabilisation_is_censored_at_window_end() -> None:
+    # Still braking 1.2 s before the end: only 0.8 s of settling is observed.
+    log = braking(a_rows=range(50, 142))
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert stabilisation_time(log, w) == pytest.approx(w.t_end - w.t_merge)
+    assert stabilisation_time(log, w) == pytest.approx(10.0)
+
+
+# ------------------------------------------------------------------- LSRV
+def test_lsrv_crawler_one_cell_per_bin() -> None:
+    """Log interval = time bin: each row of the crawler is one (t, x) bin."""
+    dt, n_rows = 0.5, 21  # t = 0 .. 10 s
+    k = np.arange(n_rows)
+    x = np.stack([500.0 + 7.5 * (k - 2), 50.0 + 12.5 * k], axis=1)
+    v = np.broadcast_to([15.0, 25.0], x.shape).copy()
+    lane = np.broadcast_to([1, 2], x.shape).copy()
+    active = np.ones(x.shape, dtype=bool)
+    active[:, 0] = (k >= 2) & (k <= 11)  # 10 rows
+    log = build(x, v, lane, active=active, dt=dt)
+    w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=10.0)
+    assert reference_speed(log, w) == pytest.approx(25.0)
+    # 10 bins x (25 - 15) m/s x 10 m x 0.5 s
+    assert low_speed_region_volume(log, w) == pytest.approx(10 * 10.0 * 10.0 * 0.5)
+
+    x_edges, t_edges, V = speed_field(log, w, lane=1)
+    np.testing.assert_allclose(x_edges, np.arange(151) * 10.0)
+    np.testing.assert_allclose(t_edges, np.arange(22) * 0.5)  # covers [0, t_end + dt)
+    assert V.shape == (21, 150)
+    filled = np.argwhere(np.isfinite(V))
+    expected = [(kk, int((500.0 + 7.5 * (kk - 2)) // 10)) for kk in range(2, 12)]
+    assert [tuple(p) for p in filled.tolist()] == expected
+    assert np.all(V[np.isfinite(V)] == 15.0)
+
+
+def test_lsrv_crawler_spans_bins() -> None:
+    """15 m/s from x = 500 m at dt = 0.1 s, rows 0-10 (t = 0 .. 1 s).
+
+    Bins [t) x [x): (0-0.5, 500-510) rows 0-4; (0.5-1.0, 500-510) rows 5-6 (507.5, 509);
+    (0.5-1.0, 510-520) rows 7-9; (1.0-1.1, 510-520) row 10 (515), last bin 0.1 s wide.
+    LSRV = (25 - 15) x 10 x (0.5 + 0.5 + 0.5 + 0.1) = 160 m^2.
+    """
+    t = np.arange(11) * 0.1
+    x, v = cruise([500.0, 100.0], [15.0, 25.0], t)
+    lane = np.broadcast_to([1, 2], x.shape).copy()
+    log = build(x, v, lane)
+    w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=1.0)
+    assert reference_speed(log, w) == pytest.approx(25.0)
+    assert low_speed_region_volume(log, w) == pytest.approx(160.0)
+    _, t_edges, V = speed_field(log, w, lane=1)
+    np.testing.assert_allclose(t_edges, [0.0, 0.5, 1.0, 1.1])
+    assert np.argwhere(np.isfinite(V)).tolist() == [[0, 50], [1, 50], [1, 51], [2, 51]]
+
+
+def test_lsrv_bin_speed_is_cell_mean_and_sums_lanes() -> None:
+    # One row: lane 1 cells 15 and 25 m/s share bin 500-510 m (mean 20); lane 2 at 25.
+    x = np.array([[502.0, 509.0, 100.0]])
+    v = np.array([[15.0, 25.0, 25.0]])
+    lane = np.array([[1, 1, 2]])
+    log = build(x, v, lane, dt=0.5)
+    w = MetricWindow(group=roles(0, 1), t_start=0.0, t_merge=math.nan, t_end=0.0)
+    assert reference_speed(log, w) == pytest.approx(25.0)
+    assert speed_field(log, w, lane=1)[2][0, 50] == pytest.approx(20.0)
+    assert low_speed_region_volume(log, w) == pytest.approx(5.0 * 10.0 * 0.5)
+    # v_ref = 30: lane 1 (30 - 20) x 5 m s + lane 2 (30 - 25) x 5 m s
+    assert low_speed_region_volume(log, w, v_ref=30.0) == pytest.approx(75.0)
+
+
+def test_reference_speed_falls_back_to_all_mainline_cells() -> None:
+    x = np.array([[502.0, 900.0, 600.0]])
+    v = np.array([[15.0, 25.0, 10.0]])
+    lane = np.array([[1, 2, 0]])  # the ramp cell does not count
+    log = build(x, v, lane)
+    w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=0.0)
+    assert reference_speed(log, w) == pytest.approx(20.0)
+
+
+# ------------------------------------------------------------------- TTC, DRAC, crit. dist.
+def _pair(v_leader: float, v_follower: float, x_follower: float) -> SimulationLog:
+    """Leader VMF (0) at 600 + v_l t and follower VMC (1) in lane 1; VR (2) on the ramp
+    between them; a non-key lane-1 vehicle (3) between them too; t = 0 .. 4 s."""
+    t = np.arange(41) * 0.1
+    x, v = cruise([600.0, x_follower, 560.0, 575.0], [v_leader, v_follower, 20.0, 21.5], t)
+    lane = np.broadcast_to([1, 1, 0, 1], x.shape).copy()
+    return build(x, v, lane)
+
+
+def test_ttc_drac_on_closing_pair() -> None:
+    # gap = 600 - 5 - (545 + 25 t) + 20 t = 50 - 5 t: smallest at t = 4 s (30 m).
+    log = _pair(20.0, 25.0, 545.0)
+    w = MetricWindow(group=roles(2, 1, 0), t_start=0.0, t_merge=2.0, t_end=4.0)
+    assert min_ttc(log, w) == pytest.approx(30.0 / 5.0, rel=1e-5)
+    assert max_drac(log, w) == pytest.approx(5.0**2 / (2 * 30.0), rel=1e-5)
+    assert critical_distance(log, w) == pytest.approx(30.0, abs=1e-4)
+
+
+def test_critical_distance_starts_at_merge() -> None:
+    # Opening pair: gap = 30 + 5 t, so 30 m at t = 0 but 35 m at the merge (t = 1 s).
+    log = _pair(25.0, 20.0, 565.0)
+    w = MetricWindow(group=roles(2, 1, 0), t_start=0.0, t_merge=1.0, t_end=4.0)
+    assert critical_distance(log, w) == pytest.approx(35.0, abs=1e-4)
+    assert min_ttc(log, w) == math.inf
+    assert max_drac(log, w) == 0.0
+    no_merge = MetricWindow(group=w.group, t_start=0.0, t_merge=math.nan, t_end=4.0)
+    assert math.isnan(critical_distance(log, no_merge))
+
+
+# ------------------------------------------------------------------- PET
+def test_pet_at_merge() -> None:
+    log = merge_scene()
+    group = roles(0, 1, 2, 3, 4, 5)
+    w = merge_window(log, 0, group)
+    # x_c = 780 m at t = 1 s. VR's rear 755 + 20 t reaches 780 at t = 1.25 s; the
+    # follower VMC's front 730 + 20 t at t = 2.5 s.
+    assert pet_at_merge(log, w) == pytest.approx(1.25, abs=1e-9)
+    # The follower does not have to be a key vehicle.
+    assert pet_at_merge(log, merge_window(log, 0, roles(0, -1, 2))) == pytest.approx(1.25)
+    # Window ends before the follower reaches x_c; no merge.
+    early = MetricWindow(group=group, t_start=0.0, t_merge=1.5, t_end=2.0)
+    assert math.isnan(pet_at_merge(log, early))
+    no_merge = MetricWindow(group=group, t_start=0.0, t_merge=math.nan, t_end=4.0)
+    assert math.isnan(pet_at_merge(log, no_merge))
+
+
+# ------------------------------------------------------------------- fuel, collisions
+def test_fuel_equals_fuel_consumed_over_window() -> None:
+    log = braking()
+    log.active[:40, 6] = False  # vehicle 6 enters late: its cells are NaN before
+    log.v[:40, 6] = np.nan
+    log.a[:40, 6] = np.nan
+    log.lane[:40, 6] = -1
+    w = MetricWindow(group=PLATOON_GROUP, t_start=3.0, t_merge=5.0, t_end=12.0)
+    rows = slice(30, 121)
+    expected = float(np.sum(fuel_consumed(log.v[rows], log.a[rows], 0.1, axis=0)))
+    assert fuel(log, w) == pytest.approx(expected, rel=1e-12)
+    rates = fuel_rate(log.v[rows].astype(float), log.a[rows].astype(float))
+    assert fuel(log, w) == pytest.approx(np.nansum(rates) * 0.1 / 1000.0, rel=1e-12)
+
+
+def test_collisions_counted_only_inside_window() -> None:
+    log = platoon()
+    log.add_event(0.5, EventKind.COLLISION, 0, other=1)  # before the window
+    log.add_event(2.0, EventKind.COLLISION, 0, other=1)  # key
+    log.add_event(3.0, EventKind.COLLISION, 6, other=7)  # non-key pair
+    log.add_event(5.0, EventKind.COLLISION, 6, other=2)  # key through `other`
+    log.add_event(9.5, EventKind.COLLISION, 3, other=4)  # after the window
+    log.add_event(4.0, EventKind.MERGE, 0)  # not a collision
+    w = MetricWindow(group=PLATOON_GROUP, t_start=1.0, t_merge=4.0, t_end=9.0)
+    assert collisions(log, w) == 3.0
+    assert key_collisions(log, w) == 2.0
+
+
+# ------------------------------------------------------------------- registry
+def test_registry_specs() -> None:
+    expected = {
+        "critical_distance": ("m", "larger"),
+        "average_acceleration": ("m/s²", "smaller"),
+        "stabilisation_time": ("s", "smaller"),
+        "lsrv": ("m²", "smaller"),
+        "fuel": ("L", "smaller"),
+        "min_ttc": ("s", "larger"),
+        "max_drac": ("m/s²", "smaller"),
+        "pet": ("s", "larger"),
+        "collisions": ("count", "smaller"),
+        "key_collisions": ("count", "smaller"),
+    }
+    assert {name: (s.unit, s.better) for name, s in METRICS.items()} == expected
+    assert all(name == spec.name and spec.description for name, spec in METRICS.items())
+
+
+def test_compute_metrics_floats_and_documented_nans() -> None:
+    log = merge_scene()
+    w = merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
+    values = compute_metrics(log, w)
+    assert list(values) == list(METRICS)
+    assert all(type(val) is float for val in values.values())
+    assert not any(math.isnan(val) for val in values.values())
+    for name, spec in METRICS.items():
+        assert spec.func(log, w) == pytest.approx(values[name])
+    # Lane 1: VMR-VMC and VMC-VR gaps 25 m; lane 2: 30 m.
+    assert values["critical_distance"] == pytest.approx(25.0, abs=1e-4)
+    assert values["pet"] == pytest.approx(1.25)
+    assert values["stabilisation_time"] == pytest.approx(0.0, abs=1e-9)
+    assert values["min_ttc"] == math.inf
+    assert values["collisions"] == 0.0
+
+    no_merge = MetricWindow(group=w.group, t_start=w.t_start, t_merge=math.nan, t_end=w.t_end)
+    values = compute_metrics(log, no_merge)
+    assert all(type(val) is float for val in values.values())
+    nan = {name for name, val in values.items() if math.isnan(val)}
+    assert nan == {"critical_distance", "stabilisation_time", "pet"}
