@@ -36,6 +36,7 @@ class Fleet:
     length: FloatArray
     width: FloatArray
     scripted: BoolArray
+    matrix: FloatArray  # (7, N): v0, T, s0, a, b, delta, coolness — one gather per call
 
     @classmethod
     def build(cls, config: ScenarioConfig, kind: IntArray, scripted: BoolArray) -> Fleet:
@@ -47,15 +48,19 @@ class Fleet:
             return np.where(is_cav, float(getattr(cav, field)), float(getattr(hdv, field)))
 
         n = kind.size
+        columns = {
+            "v0": pick("desired_speed"),
+            "T": pick("time_headway"),
+            "s0": pick("min_gap"),
+            "a": pick("max_accel"),
+            "b": pick("comfort_decel"),
+            "delta": pick("exponent"),
+            "coolness": np.where(is_cav, cav.coolness, 0.0),
+        }
         return cls(
             kind=kind,
-            v0=pick("desired_speed"),
-            T=pick("time_headway"),
-            s0=pick("min_gap"),
-            a=pick("max_accel"),
-            b=pick("comfort_decel"),
-            delta=pick("exponent"),
-            coolness=np.where(is_cav, cav.coolness, 0.0),
+            **columns,
+            matrix=np.vstack(list(columns.values())),
             iidm=np.where(is_cav, cav.variant == "iidm", hdv.variant == "iidm"),
             lc_duration=pick("lane_change_duration"),
             length=np.full(n, config.road.vehicle_length),
@@ -83,14 +88,12 @@ def follow(
     Without a leader the ACC reduces to the free-road IDM (Kesting 2010 defines the CAH
     for a leader only).
     """
-    v0, T, s0 = fleet.v0[ids], fleet.T[ids], fleet.s0[ids]
-    a, b, delta = fleet.a[ids], fleet.b[ids], fleet.delta[ids]
+    v0, T, s0, a, b, delta, c = fleet.matrix[:, ids]
     dv = np.where(np.isfinite(s), v - vl, 0.0)
     acc = idm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
     if fleet.any_iidm:
         improved = iidm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
         acc = np.where(fleet.iidm[ids], improved, acc)
-    c = fleet.coolness[ids]
     cooperative = (c > 0) & np.isfinite(s)
     if cooperative.any():
         cah = cah_acceleration(np.where(cooperative, s, 1.0), v, vl, al, a=a)

@@ -53,28 +53,6 @@ def _gap_accel(
     return s, follow(fleet, ids, s, snap.v[ids], vl, al)
 
 
-def _change_gain(
-    fleet: Fleet,
-    snap: Snapshot,
-    ids: IntArray,
-    leader: IntArray,
-    new_leader: IntArray,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Gap, acceleration gain and new acceleration of ``ids`` if their leader became ``new_leader``.
-
-    ``ids`` may contain -1 (no such vehicle): gap inf, gain 0, new acceleration 0.
-    """
-    has = ids >= 0
-    me = np.where(has, ids, 0)
-    s_new, a_new = _gap_accel(fleet, snap, me, new_leader)
-    _, a_old = _gap_accel(fleet, snap, me, leader)
-    return (
-        np.where(has, s_new, np.inf),
-        np.where(has, a_new - a_old, 0.0),
-        np.where(has, a_new, 0.0),
-    )
-
-
 def decide(
     fleet: Fleet,
     snap: Snapshot,
@@ -98,13 +76,17 @@ def decide(
     if target is None:
         target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
     new_lead, new_fol = index.lookup(target, snap.x[cand])
-    # the candidate itself: old situation and new situation
-    s_c, gain_c, a_c_new = _change_gain(fleet, snap, cand, leader, new_lead)
-    # new follower: leader new_lead -> candidate
-    s_n, gain_n, a_n_new = _change_gain(fleet, snap, new_fol, new_lead, cand)
-    # old follower: leader candidate -> candidate's leader
-    _, gain_o, _ = _change_gain(fleet, snap, follower, cand, leader)
-    s_o, _ = _gap_accel(fleet, snap, cand, leader)
+    # all situations in one vectorised call, rows: candidate before/after, new follower
+    # before/after, old follower before/after (-1 followers are masked afterwards)
+    followers = np.concatenate([cand, cand, new_fol, new_fol, follower, follower])
+    leaders = np.concatenate([leader, new_lead, new_lead, cand, cand, leader])
+    present = followers >= 0
+    s, acc = _gap_accel(fleet, snap, np.where(present, followers, 0), leaders)
+    s = np.where(present, s, np.inf).reshape(6, cand.size)
+    acc = np.where(present, acc, 0.0).reshape(6, cand.size)
+    s_o, s_c, s_n = s[0], s[1], s[3]
+    a_c_new, a_n_new = acc[1], acc[3]
+    gain_c, gain_n, gain_o = acc[1] - acc[0], acc[3] - acc[2], acc[5] - acc[4]
     standing = (leader >= 0) & (snap.v[np.where(leader >= 0, leader, 0)] < 1.0)
     clear = ~standing | (s_o >= 3.0 * fleet.length[cand] + params.min_gap)
     safe = (
