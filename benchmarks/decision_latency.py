@@ -75,11 +75,15 @@ def main() -> None:
         print(json.dumps({"machine": machine(), "results": rows}))
         return
     print("machine:", ", ".join(f"{k} {v}" for k, v in machine().items()))
-    print(f"{'optimiser':>9} {'decisions':>9} {'budget':>6} {'median ms':>10} {'p95 ms':>8}"
-          f" {'max ms':>8}")
+    print(
+        f"{'optimiser':>9} {'decisions':>9} {'budget':>6} {'median ms':>10} {'p95 ms':>8}"
+        f" {'max ms':>8}"
+    )
     for r in rows:
-        print(f"{r['optimizer']:>9} {r['decisions']:>9} {r['budget']:>6} {r['median_ms']:>10}"
-              f" {r['p95_ms']:>8} {r['max_ms']:>8}")
+        print(
+            f"{r['optimizer']:>9} {r['decisions']:>9} {r['budget']:>6} {r['median_ms']:>10}"
+            f" {r['p95_ms']:>8} {r['max_ms']:>8}"
+        )
 
 
 if __name__ == "__main__":

@@ -161,31 +161,180 @@ def _print_plan(report: dict[str, Any]) -> None:
         if k is None:
             keys.add_row(role, "—", "—", "—", "—", "—")
         else:
-            keys.add_row(role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}",
-                         f"{k['v']:.2f}")  # fmt: skip
+            keys.add_row(
+                role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}", f"{k['v']:.2f}"
+            )
     out.print(keys)
     game = report["game"]
     if game:
         verdict = "admitted" if game["lateral_allowed"] else "not admitted"
         out.print(f"lane-change game (VMC vs VNR): {game['reason']}; lateral mode {verdict}")
     pareto = Table(title="Pareto set (feasible, non-dominated)")
-    cols = ("#", "merge x [m]", "VR T_lc [s]", "H [s]", "mode", "U_safe [m/s²]", "U_fuel [L]",
-            "−U_eff [m/s²]")  # fmt: skip
+    cols = (
+        "#",
+        "merge x [m]",
+        "VR T_lc [s]",
+        "H [s]",
+        "mode",
+        "U_safe [m/s²]",
+        "U_fuel [L]",
+        "−U_eff [m/s²]",
+    )
     for col in cols:
         pareto.add_column(col, justify="right")
     chosen = report["chosen"]
     for i, p in enumerate(report["pareto"]):
         mark = "★ " if chosen and i == chosen["index"] else ""
-        pareto.add_row(f"{mark}{i}", f"{p['merge_x']:.1f}", f"{p['vr_duration']:.2f}",
-                       f"{p['horizon']:.2f}", p["mode"][:3], f"{p['safety']:.3f}",
-                       f"{p['fuel']:.4f}", f"{p['efficiency']:.3f}")  # fmt: skip
+        pareto.add_row(
+            f"{mark}{i}",
+            f"{p['merge_x']:.1f}",
+            f"{p['vr_duration']:.2f}",
+            f"{p['horizon']:.2f}",
+            p["mode"][:3],
+            f"{p['safety']:.3f}",
+            f"{p['fuel']:.4f}",
+            f"{p['efficiency']:.3f}",
+        )
     out.print(pareto)
     if chosen is None:
         out.print(f"[yellow]fallback:[/] {report['reason']}")
     else:
-        out.print(f"chosen (Eq. 19): #{chosen['index']} · mode [bold]{report['mode']}[/] · "
-                  f"merge at {chosen['merge_x']:.1f} m, T_lc {chosen['vr_duration']:.2f} s, "
-                  f"H {chosen['horizon']:.2f} s")  # fmt: skip
+        out.print(
+            f"chosen (Eq. 19): #{chosen['index']} · mode [bold]{report['mode']}[/] · "
+            f"merge at {chosen['merge_x']:.1f} m, T_lc {chosen['vr_duration']:.2f} s, "
+            f"H {chosen['horizon']:.2f} s"
+        )
+
+
+CONDITIONS = ("C1", "C2", "C3", "C4", "C5")
+
+
+def _workers(workers: int | None) -> int:
+    import os
+
+    if workers is None:
+        return os.cpu_count() or 1
+    if workers < 1:
+        raise _fail(f"option '--workers' = {workers}: must be >= 1")
+    return workers
+
+
+def _progress_grid(specs: list, workers: int, on_result: Any = None) -> Any:
+    from hcomc.experiments.runner import run_grid
+
+    if not out.is_terminal:
+        return run_grid(specs, workers=workers, on_result=on_result)
+    with Progress(
+        TextColumn("[bold]runs"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+        console=out,
+        transient=True,
+    ) as bar:
+        task = bar.add_task("runs", total=len(specs))
+        return run_grid(
+            specs,
+            workers=workers,
+            on_result=on_result,
+            progress=lambda done, total: bar.update(task, completed=done),
+        )
+
+
+def _frame_table(frame: Any, title: str) -> Table:
+    table = Table(title=title)
+    for col in frame.columns:
+        table.add_column(str(col), justify="right" if col not in ("claim", "Model") else "left")
+    for _, row in frame.iterrows():
+        table.add_row(*(f"{v:.2f}" if isinstance(v, float) else str(v) for v in row))
+    return table
+
+
+@app.command()
+def run(
+    config: ConfigArg,
+    controller: Annotated[str, typer.Option(help="Merge controller: fifo, game or hcomc.")],
+    optimizer: Optimizer = None,
+    seeds: Annotated[int, typer.Option(help="Number of seeds (0 .. N-1).")] = 1,
+    workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,
+) -> None:
+    """Run one scenario with one merge controller over seeds and print the paper's metrics."""
+    from hcomc.experiments.runner import CONFIGURATIONS, grid
+    from hcomc.experiments.tables import LABELS, mean_ci
+
+    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
+    opt = optimizer or "nsga2"
+    if (controller, opt) not in labels:
+        allowed = ", ".join(sorted({c for c, _ in labels}))
+        raise _fail(
+            f"option '--controller' = '{controller}' with '--optimizer' = '{opt}': "
+            f"allowed controllers: {allowed}; optimisers (hcomc): nsga2, pso, sa"
+        )
+    if seeds < 1:
+        raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
+    _load(config)  # validate before anything runs
+    frame = _progress_grid(
+        grid([config], [labels[(controller, opt)]], range(seeds)), _workers(workers)
+    )
+    if as_json:
+        sys.stdout.write(frame.to_json(orient="records") + "\n")
+        return
+    cols = ["seed", "mode", "decision_ms", *LABELS]
+    out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {controller}"))
+    for metric, label in LABELS.items():
+        mean, half, n = mean_ci(frame[metric])
+        out.print(f"{label}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})")
+
+
+@app.command()
+def reproduce(
+    seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 10,
+    workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
+    out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results"),
+) -> None:
+    """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA)."""
+    from hcomc.experiments.runner import CONFIGURATIONS, grid
+    from hcomc.experiments.tables import claims, paper_table, to_markdown
+    from hcomc.sim.manifest import atomic_paths, write_json_atomic
+
+    if seeds < 1:
+        raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    n_workers = _workers(workers)
+    start = time.perf_counter()
+    specs = grid(CONDITIONS, CONFIGURATIONS, range(seeds))
+    (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
+
+    def save_manifest(i: int, row: dict[str, Any], manifest: dict[str, Any]) -> None:
+        name = f"{row['condition']}-{row['configuration']}-seed{row['seed']}.json"
+        write_json_atomic(out_dir / "manifests" / name, manifest)
+
+    runs = _progress_grid(specs, n_workers, on_result=save_manifest)
+    table2, table3, claim_rows = paper_table(runs, "II"), paper_table(runs, "III"), claims(runs)
+    with atomic_paths(
+        out_dir / "runs.csv",
+        out_dir / "runs.parquet",
+        out_dir / "table2.md",
+        out_dir / "table3.md",
+        out_dir / "claims.csv",
+    ) as tmp:
+        runs.to_csv(tmp[0], index=False)
+        runs.to_parquet(tmp[1], index=False)
+        tmp[2].write_text(to_markdown(table2), encoding="utf-8")
+        tmp[3].write_text(to_markdown(table3), encoding="utf-8")
+        claim_rows.to_csv(tmp[4], index=False)
+    note = "ours: mean ± 95 % CI over seeds (paper value)"
+    out.print(_frame_table(table2, f"Table II — optimisers · {note}"))
+    out.print(_frame_table(table3, f"Table III — controllers · {note}"))
+    out.print(_frame_table(claim_rows.drop(columns=["share"]), "Claims of Section IV"))
+    held = int((claim_rows["share"] > 0.5).sum())
+    out.print(
+        f"{held} of {len(claim_rows)} claims hold in a majority of seeds · {len(runs)} runs "
+        f"· {n_workers} workers · {time.perf_counter() - start:.1f} s · written to "
+        f"{out_dir}/"
+    )
 
 
 def _print_summary(summary: dict[str, Any]) -> None:

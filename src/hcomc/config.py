@@ -221,8 +221,12 @@ class PlatoonParams(_Frozen):
 class ControlParams(_Frozen):
     """Merge controller and its optimiser (paper Section III; MODELS.md §7, §10, §14)."""
 
-    controller: Literal["none", "hcomc"] = Field(
-        "none", description="merge controller; 'none' = gap acceptance only"
+    controller: Literal["none", "hcomc", "fifo", "game"] = Field(
+        "none",
+        description=(
+            "merge controller; 'none' = gap acceptance only, 'hcomc' = the paper's controller, "
+            "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game)"
+        ),
     )
     optimizer: Literal["nsga2", "pso", "sa"] = Field("nsga2", description="HCOMC optimiser")
     budget: int = Field(

@@ -14,7 +14,23 @@ def _hcomc(config: ScenarioConfig) -> MergeController:
     return HCOMCController(config)
 
 
-CONTROLLERS: dict[str, Callable[[ScenarioConfig], MergeController]] = {"hcomc": _hcomc}
+def _fifo(config: ScenarioConfig) -> MergeController:
+    from hcomc.control.fifo import FIFOController
+
+    return FIFOController(config)
+
+
+def _game(config: ScenarioConfig) -> MergeController:
+    from hcomc.control.merge_game import GameController
+
+    return GameController(config)
+
+
+CONTROLLERS: dict[str, Callable[[ScenarioConfig], MergeController]] = {
+    "hcomc": _hcomc,
+    "fifo": _fifo,
+    "game": _game,
+}
 
 
 def make_controller(config: ScenarioConfig) -> MergeController | None:

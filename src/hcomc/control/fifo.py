@@ -1,0 +1,322 @@
+"""FIFO merge-sequence baseline (Ntousakis, Nikolos & Papageorgiou 2016; MODELS.md §11).
+
+The FIFO baseline of the paper's Table III orders the ramp vehicle VR and the mainline vehicles
+around its projection first-in-first-out by their predicted arrival time at the merge point,
+and lets the mainline vehicle that must give way yield longitudinally through the virtual
+vehicle VV1 of Eq. 8-10. It never uses lateral cooperation (paper Table III: FIFO and Game are
+longitudinal-only) and never optimises anything.
+
+Sequence (MODELS.md §11). At the planning instant t0 (VR entering the control zone) the
+arrival time of vehicle i at the merge point x_m is predicted at constant speed,
+``t_i = t0 + (x_m - x_i) / v_i``, for VR, VMC and VMF. If VR arrives strictly before VMC, VR
+merges between VMF and VMC and VMC yields; otherwise (also on a tie: the mainline keeps its
+priority) VR merges behind VMC and VMR yields.
+
+Who yields is expressed through the plan's ``group`` only, because the engine
+(:mod:`hcomc.sim.execution`) always makes ``group.vmc`` follow VV1, the cubic from
+``group.vmf``'s state at t0 to VR's predicted state at t0 + H:
+
+* VR ahead of VMC: the usual group of :func:`hcomc.control.base.find_key_vehicles`;
+* VR behind VMC: the *relabelled* group of :func:`behind_group` — the vehicle ahead of VR's
+  slot (the old VMC) takes the ``vmf`` field, the vehicle behind the slot (the old VMR) takes
+  ``vmc`` and yields, the lane-1 vehicle behind that takes ``vmr``, and VNF/VNR are the lane-2
+  neighbours of the new ``vmc`` (same rules as ``find_key_vehicles``).
+
+The plan's mode is :attr:`Mode.LONGITUDINAL` when the yielding vehicle exists and is a CAV,
+:attr:`Mode.NONE` otherwise (an HDV is never commanded).
+
+Shared with :mod:`hcomc.control.merge_game`: the fixed merge position and duration
+(:func:`merge_position`), the virtual-vehicle horizon (:func:`reach_horizon`) and the
+single-candidate prediction (:func:`predict_longitudinal`).
+
+Assumptions (documented; the paper gives no implementation details of its benchmarks):
+
+* **No optimisation of the merge.** VR's lane-change duration is the CAV default
+  ``config.cav.lane_change_duration``; the merge position is ``accel_lane_start + 10 m``,
+  moved upstream if needed so that the predicted change, ending at
+  ``x_f = merge_x + max(v_VR T, 3 L)`` with VR's *current* speed (the engine's rule of
+  :meth:`hcomc.sim.engine.Simulation._start_lane_changes`), ends before ``accel_lane_end``, and
+  never upstream of ``accel_lane_start`` (if even that overruns, the engine completes the change
+  past the lane end, as it does for any change begun on the acceleration lane).
+* **Virtual-vehicle horizon H.** VR's arrival time at ``merge_x``, first at constant speed,
+  then refined once from the prediction of :class:`~hcomc.control.hcomc.problem.MergeProblem`
+  (VR accelerating freely on the ramp), clipped to ``[4 s, horizon_max]``. VV1 therefore ends
+  at VR's predicted state when its lane change starts.
+* **VV1 end state and minimum headway.** VV1 ends exactly at VR's predicted position and speed;
+  Ntousakis et al.'s minimum time headway h = 1.5 s between consecutive arrivals is supplied by
+  the yielding vehicle's own car-following model behind VV1 (it keeps its time gap), not by
+  shifting VV1. The h-respecting FIFO schedule ``t_k = max(t_k, t_{k-1} + h)`` is reported in
+  ``details`` for information only.
+* **Prediction.** VR, VMF and the yielding vehicle are predicted with
+  :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
+  candidate ``[merge_x, vr_duration, H, 0]`` (longitudinal); its ``vv1[0]`` are exactly the
+  coefficients the engine executes. If that VV1 is infeasible (speed < 0 or deceleration beyond
+  ``control.virtual_max_decel``, MODELS.md §10), the plan falls back to gap acceptance
+  (``fallback=True``, mode NONE, ``merge_x`` NaN), like HCOMC's fallback.
+* **Only VMF, VMC and VR are sequenced.** If VR is predicted to arrive even before VMF, it still
+  takes the VMF-VMC slot (VMF's own leader is outside the key group); this is noted in
+  ``details["sequence"]`` and the engine's MOBIL safety check decides the actual gap.
+* Speeds below 0.1 m/s are floored in the arrival-time prediction (no division by zero).
+
+References
+----------
+.. [1] I. A. Ntousakis, I. K. Nikolos, M. Papageorgiou, "Optimal vehicle trajectory planning in
+   the context of cooperative merging on highways", Transportation Research Part C 71 (2016)
+   464-488 (FIFO and linear-speed-prediction sequencing rules).
+.. [2] Wang et al., HCOMC, arXiv:2507.11621, Eq. 8-10 and Table III.
+.. [3] MODELS.md §10-§11.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from hcomc._typing import FloatArray
+from hcomc.config import ScenarioConfig
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, _nearest
+from hcomc.control.hcomc.controller import HCOMCController
+from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
+from hcomc.control.hcomc.rollout import VMC, VR
+from hcomc.sim.road import Kind, Lane
+
+__all__ = [
+    "FIFO_HEADWAY",
+    "MERGE_OFFSET",
+    "MIN_HORIZON",
+    "FIFOController",
+    "arrival_times",
+    "behind_group",
+    "merge_position",
+    "predict_longitudinal",
+    "reach_horizon",
+    "virtual_vehicle_feasible",
+    "with_cooperation",
+]
+
+MERGE_OFFSET = 10.0
+"""VR starts its change this far downstream of the acceleration-lane start [m]."""
+MIN_HORIZON = 4.0
+"""Lower bound of the virtual-vehicle horizon H [s] (MODELS.md §10: roughly 4-10 s)."""
+FIFO_HEADWAY = 1.5
+"""Ntousakis et al.'s minimum time headway between consecutive arrivals [s] (reported only)."""
+_MIN_SPEED = 0.1  # [m/s] floor in the arrival-time prediction
+_G_VIRTUAL = CONSTRAINTS.index("virtual_vehicle")
+
+
+def merge_position(view: TrafficView, vr: int) -> tuple[float, float]:
+    """Fixed merge position and lane-change duration of VR (no optimisation).
+
+    Parameters
+    ----------
+    view : traffic snapshot.
+    vr : VR's vehicle index.
+
+    Returns
+    -------
+    merge_x : ``accel_lane_start + 10 m``, clipped to ``accel_lane_end - max(v T, 3 L)`` so the
+        change predicted at VR's current speed ends on the acceleration lane, and to at least
+        ``accel_lane_start`` [m].
+    vr_duration : ``config.cav.lane_change_duration`` [s].
+    """
+    cfg = view.config
+    road = cfg.road
+    duration = float(cfg.cav.lane_change_duration)
+    span = max(float(view.v[vr]) * duration, 3.0 * float(view.fleet.length[vr]))
+    merge_x = min(road.accel_lane_start + MERGE_OFFSET, road.accel_lane_end - span)
+    return max(merge_x, road.accel_lane_start), duration
+
+
+def arrival_times(view: TrafficView, group: MergeGroup, merge_x: float) -> dict[str, float]:
+    """Predicted arrival time at ``merge_x`` of VR, VMC and VMF, constant speed [s, absolute].
+
+    ``t_i = t0 + (x_m - x_i) / max(v_i, 0.1)`` (Ntousakis et al. 2016, FIFO rule). Missing
+    vehicles are left out; a vehicle already past ``merge_x`` gets a time <= t0.
+    """
+    out: dict[str, float] = {}
+    for role, i in (("VR", group.vr), ("VMC", group.vmc), ("VMF", group.vmf)):
+        if i >= 0:
+            out[role] = view.t + (merge_x - float(view.x[i])) / max(float(view.v[i]), _MIN_SPEED)
+    return out
+
+
+def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
+    """Relabelled key group for "VR merges behind VMC" (the old VMR yields).
+
+    The vehicle ahead of VR's slot (old VMC) becomes ``vmf``, the vehicle behind it (old VMR)
+    becomes ``vmc`` — the vehicle the engine commands to follow VV1 — the lane-1 vehicle behind
+    the old VMR becomes ``vmr`` and VNF/VNR are the lane-2 neighbours of the old VMR, with the
+    rules of :func:`hcomc.control.base.find_key_vehicles`. Without an old VMR only ``vr`` and
+    ``vmf`` are set (nobody to cooperate). Requires ``group.vmc >= 0``.
+    """
+    if group.vmc < 0:
+        raise ValueError("behind_group needs a VMC (the vehicle VR merges behind)")
+    new_vmc = group.vmr
+    if new_vmc < 0:
+        return MergeGroup(vr=group.vr, vmf=group.vmc)
+    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
+    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
+    return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)
+
+
+def reach_horizon(view: TrafficView, vr: int, merge_x: float) -> float:
+    """VR's constant-speed time to reach ``merge_x``, clipped to ``[4 s, horizon_max]`` [s]."""
+    h_max = float(view.config.control.horizon_max)
+    t_reach = (merge_x - float(view.x[vr])) / max(float(view.v[vr]), _MIN_SPEED)
+    return float(np.clip(t_reach, min(MIN_HORIZON, h_max), h_max))
+
+
+def with_cooperation(problem: MergeProblem, cooperates: bool) -> MergeProblem:
+    """Shallow copy of ``problem`` in which the ``vmc`` role does or does not follow VV1.
+
+    The rollout (:func:`hcomc.control.hcomc.rollout.rollout`) makes the VMC role follow VV1
+    iff its ``KeyState.cav`` flag is set, so the flag is overridden on a copy of the key state
+    (the original problem and the simulation are untouched). This idealises an HDV's "yield"
+    as tracking VV1, and models "not yield" of a CAV as plain car following. The flag also
+    selects the Eq. 15 delay inside the rollout's ``F[:, 0]``; callers needing the true
+    kinds recompute U_safe (see :mod:`hcomc.control.merge_game`).
+    """
+    cav = problem.state.cav.copy()
+    cav[VMC] = cooperates
+    out = copy.copy(problem)
+    out.state = replace(problem.state, cav=cav)
+    return out
+
+
+def predict_longitudinal(
+    problem: MergeProblem, merge_x: float, vr_duration: float, horizon: float, h_max: float
+) -> tuple[Prediction, float]:
+    """Predict the candidate ``[merge_x, vr_duration, H, 0]``, refining H once.
+
+    The first prediction uses ``horizon`` (constant-speed estimate); H is then replaced by the
+    predicted time at which VR reaches ``merge_x`` (clipped to ``[4 s, h_max]``) and the
+    candidate is predicted again if that differs by more than one prediction step.
+
+    Returns
+    -------
+    prediction : :class:`~hcomc.control.hcomc.problem.Prediction` of the single row.
+    horizon : the H used [s].
+    """
+    row = np.array([[merge_x, vr_duration, horizon, 0.0]])
+    pred = problem.predict(row)
+    reached = np.flatnonzero(pred.X[0, :, VR] >= merge_x)
+    if reached.size:
+        h_new = float(np.clip(pred.t[reached[0]], min(MIN_HORIZON, h_max), h_max))
+        if abs(h_new - horizon) > problem.dt:
+            horizon = h_new
+            row[0, 2] = horizon
+            pred = problem.predict(row)
+    return pred, float(horizon)
+
+
+def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
+    """Whether VV1 of the prediction's ``row`` meets MODELS.md §10 (v >= 0, a >= -b_max)."""
+    return bool(pred.G[row, _G_VIRTUAL] <= 0.0)
+
+
+def _is_cav(view: TrafficView, i: int) -> bool:
+    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
+
+
+def _ms(start: float) -> float:
+    return (time.perf_counter() - start) * 1000.0
+
+
+def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
+    """FIFO arrival times respecting a minimum headway: ``t_k = max(t_k, t_{k-1} + h)``."""
+    out: dict[str, float] = {}
+    prev = -np.inf
+    for role, t in sorted(arrivals.items(), key=lambda kv: kv[1]):
+        prev = max(t, prev + headway)
+        out[role] = prev
+    return out
+
+
+class FIFOController:
+    """First-in-first-out merge sequencing with longitudinal cooperation (Ntousakis 2016).
+
+    Parameters
+    ----------
+    config : scenario (the controller reads ``road``, ``cav`` and ``control``).
+
+    Notes
+    -----
+    See the module docstring for the rule, the relabelled group and every assumption.
+    ``details`` holds ``arrival`` (predicted arrival times), ``sequence`` (roles in FIFO order),
+    ``schedule`` (h-respecting arrival times, information only), ``slot`` ("ahead"/"behind"),
+    ``yielding`` (vehicle index or -1), ``prediction`` and ``feasible`` (the predicted plan's
+    constraints all <= 0).
+    """
+
+    name = "fifo"
+
+    def __init__(self, config: ScenarioConfig) -> None:
+        self.config = config
+        self._hcomc = HCOMCController(config)
+
+    def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
+        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
+        return self._hcomc.problem(view, group, lateral_allowed=False)
+
+    def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
+        """Order VR, VMC, VMF by predicted arrival and let the follower of VR's slot yield.
+
+        ``rng`` is not used (the rule is deterministic); it is accepted for the protocol.
+        """
+        start = time.perf_counter()
+        vr = group.vr
+        merge_x, vr_duration = merge_position(view, vr)
+        arrivals = arrival_times(view, group, merge_x)
+        sequence = [r for r, _ in sorted(arrivals.items(), key=lambda kv: kv[1])]
+        details: dict[str, object] = {
+            "arrival": arrivals,
+            "sequence": sequence,
+            "schedule": _schedule(arrivals, FIFO_HEADWAY),
+        }
+        if group.vmc < 0:
+            return MergePlan(
+                group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                reason="FIFO: no lane-1 vehicle behind VR, nobody to yield",
+                decision_ms=_ms(start), details={**details, "slot": "ahead", "yielding": -1},
+            )  # fmt: skip
+        ahead = arrivals["VR"] < arrivals["VMC"]
+        slot = "ahead" if ahead else "behind"
+        exec_group = group if ahead else behind_group(view, group)
+        yielding = exec_group.vmc
+        details.update(slot=slot, yielding=yielding)
+        h_max = float(view.config.control.horizon_max)
+        horizon = reach_horizon(view, vr, merge_x)
+        what = "VR before VMC: VMC yields" if ahead else "VMC before VR: VR merges behind VMC"
+        if not _is_cav(view, yielding):
+            who = "no vehicle behind the slot" if yielding < 0 else "the yielding vehicle is an HDV"
+            return MergePlan(
+                exec_group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                horizon=horizon, reason=f"FIFO: {what}; {who}, no cooperation",
+                decision_ms=_ms(start), details=details,
+            )  # fmt: skip
+        problem = self.problem(view, exec_group)
+        pred, horizon = predict_longitudinal(problem, merge_x, vr_duration, horizon, h_max)
+        details.update(prediction=pred, feasible=bool((pred.G[0] <= 0.0).all()))
+        if not virtual_vehicle_feasible(pred):
+            return MergePlan(
+                exec_group, Mode.NONE, view.t, horizon=horizon, fallback=True,
+                reason=f"FIFO: {what}; VV1 infeasible, VR merges by gap acceptance",
+                decision_ms=_ms(start), details=details,
+            )  # fmt: skip
+        return MergePlan(
+            exec_group, Mode.LONGITUDINAL, view.t, merge_x=merge_x, vr_duration=vr_duration,
+            horizon=horizon, vv1=_copy(pred.vv1[0]), reason=f"FIFO: {what}",
+            objectives=_objectives(pred), decision_ms=_ms(start), details=details,
+        )  # fmt: skip
+
+
+def _copy(b: FloatArray) -> FloatArray:
+    return np.array(b, dtype=np.float64)
+
+
+def _objectives(pred: Prediction) -> dict[str, float]:
+    """Predicted HCOMC objectives of the executed candidate (for reporting)."""
+    return dict(zip(OBJECTIVES, map(float, pred.F[0]), strict=True))

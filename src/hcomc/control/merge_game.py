@@ -1,0 +1,461 @@
+r"""Game-theoretic merge baseline (Liao et al. 2022; Kita 1999; MODELS.md §9, §11).
+
+The "Game" benchmark of the paper's Table III is Liao et al.'s two-player game between the ramp
+vehicle and the mainline lag vehicle, which may be an HDV. Only the abstracts are known, so it is
+implemented as the Kita-style 2x2 game recommended by MODELS.md §11, executed longitudinally
+with the virtual vehicle VV1 (Eq. 8-10); no lateral cooperation, no NSGA-II (paper Table III).
+
+Players and actions (row player first; index 0 / 1):
+
+* VR (row): merge **ahead** of VMC / merge **behind** VMC;
+* the lag vehicle (column): **yield** (track VV1, opening a gap for VR) / **not yield** (plain
+  car following).
+
+Joint actions are scored from forward predictions of
+:meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
+longitudinal candidate ``[merge_x, vr_duration, H, 0]`` of :mod:`hcomc.control.fifo` (fixed
+merge position and duration, H = VR's predicted arrival time at ``merge_x``):
+
+====================  ======================================  ==============================
+cell                  key group predicted                     follower of VR's slot
+====================  ======================================  ==============================
+(ahead, yield)        usual group, VMC tracks VV1             VMC
+(ahead, not yield)    usual group, VMC car-follows only       VMC
+(behind, yield)       relabelled group, old VMR tracks VV1    VMR
+(behind, not yield)   relabelled group, old VMR car-follows   VMR
+====================  ======================================  ==============================
+
+The relabelled group is :func:`hcomc.control.fifo.behind_group` (old VMC → ``vmf``, old VMR →
+``vmc``). "Yield" / "not yield" is obtained by overriding the ``cav`` flag of the ``vmc`` role
+in a copy of the prediction's key state (:func:`hcomc.control.fifo.with_cooperation`): the
+rollout makes that role follow VV1 iff the flag is set. The simulation state is never touched.
+
+Payoffs (MODELS.md §9/§11): :math:`U = -J`, :math:`J = w_s J_s + w_e J_e + w_c J_c` per player,
+over the whole prediction window:
+
+* :math:`J_s = \min(1, U_{safe}/a_{th})`, :math:`a_{th}` = ``control.safety_threshold``
+  (4 m/s²), with :math:`U_{safe}` the worst Eq. 15 critical acceleration over consecutive
+  same-lane key pairs at merge completion — the rollout's ``F[:, 0]`` recomputed with the
+  vehicles' *true* kinds for the Eq. 15 delay (0.5 s CAV, 1.0 s HDV), so the cooperation
+  override does not change a vehicle's reaction time. :math:`J_s = 10` when the prediction is
+  infeasible: a predicted collision, an unavoidable crash (:math:`U_{safe} = \infty`), VR not
+  merged in the window, an infeasible VV1 (speed < 0 or deceleration beyond
+  ``control.virtual_max_decel``), or a key vehicle predicted to brake harder than Eq. 15's
+  emergency deceleration :math:`a_{merg}` = 7.5 m/s² (the same rule as
+  :mod:`hcomc.control.lane_change_game`'s :math:`a_{cr} > a_{merg}`: a cut-in that forces
+  emergency braking is a near-crash that U_safe at merge completion alone does not show).
+  :math:`J_s` is shared by both players (a property of the group). Note that at highway
+  speeds U_safe is often above 4 m/s², so :math:`J_s` saturates at 1 and the cells are then
+  separated by efficiency and comfort.
+* :math:`J_e = \operatorname{mean}_k |v_k - v_0| / v_0` of the player.
+* :math:`J_c = \operatorname{mean}_k a_k^2 / a_{max}^2` of the player, :math:`a_{max}` its
+  maximum acceleration parameter (1.4 m/s² CAV, 1.0 m/s² HDV).
+* Weights :math:`(w_s, w_e, w_c)`: VR (0.5, 0.3, 0.2) as a CAV, the "normal" type
+  (0.4, 0.4, 0.2) as an HDV; the lag vehicle always the "normal" type (0.4, 0.4, 0.2).
+
+Solution:
+
+* VMC a CAV: the cooperative (joint-optimal) cell,
+  :func:`hcomc.control.game.solve_cooperative` with SV = VR and FV = the lag vehicle.
+* VMC an HDV: a pure Nash equilibrium by enumeration (:func:`pure_nash`); among several, the
+  one with the largest payoff sum, ties to the first in row-major order. Without a pure
+  equilibrium, Kita's closed-form mixed equilibrium (:func:`kita_mixed`)
+  :math:`q^* = (a_{22} - a_{12})/(a_{11} - a_{12} - a_{21} + a_{22})`,
+  :math:`p^* = (b_{22} - b_{21})/(b_{11} - b_{12} - b_{21} + b_{22})`, and both actions are
+  sampled from it with the ``rng`` passed to :meth:`GameController.plan` (VR first).
+
+Execution:
+
+* **ahead**: the usual group; :attr:`Mode.LONGITUDINAL` with VV1 if VMC is a CAV and its
+  equilibrium action is yield, otherwise :attr:`Mode.NONE` (VR still starts at ``merge_x``
+  if the engine's MOBIL safety check allows; an HDV is never commanded);
+* **behind**: the relabelled group; :attr:`Mode.LONGITUDINAL` if the new follower (old VMR)
+  exists, is a CAV and the equilibrium column action is yield, otherwise :attr:`Mode.NONE`.
+
+Assumptions (beyond those of :mod:`hcomc.control.fifo`, whose merge position, horizon and
+prediction are reused):
+
+* **The column player is the lag vehicle of the row's slot**: VMC in the "ahead" row, the old
+  VMR in the "behind" row (Liao et al.'s "mainline lag vehicle"). Each row's column best
+  response therefore compares the costs of the vehicle that actually decides to yield. Were the
+  column player always VMC, its payoff in the "behind" row would be that of the rollout's VMF
+  role (constant speed) and could not depend on its action. A missing lag vehicle has cost 0.
+* Whether the game is cooperative or non-cooperative is decided by VMC's kind, as MODELS.md §11
+  says; a non-CAV lag vehicle is never commanded, whatever the cell.
+* An HDV's "yield" is predicted as tracking VV1 (an idealised yield), its "not yield" as its
+  IDM car following without delays or noise (the rollout's HDV model).
+* A chosen yield cell whose VV1 is infeasible falls back to gap acceptance (``fallback=True``,
+  mode NONE, ``merge_x`` NaN); its :math:`J_s = 10` makes this rare.
+
+References
+----------
+.. [1] X. Liao et al., "Game Theory-Based Ramp Merging for Mixed Traffic With Unity-SUMO
+   Co-Simulation", IEEE Trans. Syst. Man Cybern.: Systems (2022); X. Liao et al., "Cooperative
+   ramp merging design and field implementation: a digital twin approach based on
+   vehicle-to-cloud communication", IEEE T-ITS (2022) (paper references [17], [18]).
+.. [2] H. Kita, "A merging-giveway interaction model of cars in a merging section: a game
+   theoretic analysis", Transportation Research Part A 33 (1999) 305-312.
+.. [3] P. Hang et al., "Human-like decision making for autonomous driving: a noncooperative
+   game theoretic approach", IEEE T-ITS 22(4) (2021) 2076-2087 (style weights).
+.. [4] MODELS.md §9 (cost terms, weights), §10 (virtual vehicle), §11 (baselines).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from hcomc._typing import FloatArray
+from hcomc.config import ScenarioConfig
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.control.fifo import (
+    behind_group,
+    merge_position,
+    predict_longitudinal,
+    reach_horizon,
+    virtual_vehicle_feasible,
+    with_cooperation,
+)
+from hcomc.control.game import solve_cooperative
+from hcomc.control.hcomc.controller import HCOMCController
+from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
+from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR
+from hcomc.safety.critical import DELAY_CAV, DELAY_HDV, critical_acceleration
+from hcomc.sim.road import Kind
+
+__all__ = [
+    "AHEAD",
+    "BEHIND",
+    "CAV_WEIGHTS",
+    "INFEASIBLE_SAFETY",
+    "NORMAL_WEIGHTS",
+    "NOT_YIELD",
+    "YIELD",
+    "GameController",
+    "GameOutcome",
+    "kita_mixed",
+    "player_cost",
+    "pure_nash",
+    "safety_term",
+    "solve_merge_game",
+    "true_u_safe",
+]
+
+AHEAD, BEHIND = 0, 1
+"""VR's actions (rows): merge ahead of / behind VMC."""
+YIELD, NOT_YIELD = 0, 1
+"""The lag vehicle's actions (columns)."""
+ROW_NAMES = ("ahead", "behind")
+COL_NAMES = ("yield", "not_yield")
+CAV_WEIGHTS = (0.5, 0.3, 0.2)
+"""(w_s, w_e, w_c) of a CAV ramp vehicle (MODELS.md §9)."""
+NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
+"""(w_s, w_e, w_c) of the "normal" driving type (MODELS.md §9; Hang et al. 2021)."""
+INFEASIBLE_SAFETY = 10.0
+"""J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]."""
+_G = {name: i for i, name in enumerate(CONSTRAINTS)}
+_LANE = np.array([1, 1, 1, 1, 2, 2])  # roles VR (merged), VMC, VMF, VMR, VNF, VNR
+
+
+# ----------------------------------------------------------------- equilibrium logic
+@dataclass(frozen=True)
+class GameOutcome:
+    """Solution of the 2x2 merge game.
+
+    Attributes
+    ----------
+    row, col : the played actions (VR: AHEAD/BEHIND; lag vehicle: YIELD/NOT_YIELD).
+    kind : "cooperative", "pure" or "mixed".
+    pure : all pure Nash equilibria (row, col) (empty for the cooperative solution).
+    p, q : Kita's mixed equilibrium, P(row AHEAD) and P(col YIELD) (NaN unless "mixed").
+    """
+
+    row: int
+    col: int
+    kind: str
+    pure: tuple[tuple[int, int], ...] = ()
+    p: float = float("nan")
+    q: float = float("nan")
+
+
+def _matrix(name: str, value: ArrayLike) -> FloatArray:
+    arr = np.array(value, dtype=np.float64)
+    if arr.shape != (2, 2) or np.isnan(arr).any():
+        raise ValueError(f"{name} must be a 2x2 array without NaN, got {arr!r}")
+    return arr
+
+
+def pure_nash(A: ArrayLike, B: ArrayLike) -> list[tuple[int, int]]:
+    """Pure Nash equilibria of the bimatrix game (A row payoffs, B column payoffs; maximised).
+
+    A cell (i, j) is an equilibrium when neither player gains by deviating alone:
+    ``A[i, j] >= A[1 - i, j]`` and ``B[i, j] >= B[i, 1 - j]`` (weak inequalities). Returned in
+    row-major order.
+
+    Examples
+    --------
+    >>> pure_nash([[3, 0], [5, 1]], [[3, 5], [0, 1]])  # prisoner's dilemma
+    [(1, 1)]
+    """
+    a, b = _matrix("A", A), _matrix("B", B)
+    return [
+        (i, j)
+        for i in range(2)
+        for j in range(2)
+        if a[i, j] >= a[1 - i, j] and b[i, j] >= b[i, 1 - j]
+    ]
+
+
+def kita_mixed(A: ArrayLike, B: ArrayLike) -> tuple[float, float]:
+    r"""Kita's closed-form mixed equilibrium of a 2x2 game (MODELS.md §9).
+
+    .. math::
+       q^* = \frac{a_{22} - a_{12}}{a_{11} - a_{12} - a_{21} + a_{22}},\qquad
+       p^* = \frac{b_{22} - b_{21}}{b_{11} - b_{12} - b_{21} + b_{22}}
+
+    :math:`q^*` is the column player's probability of its first action that makes the row
+    player indifferent, :math:`p^*` the row player's probability of its first action that makes
+    the column player indifferent (indices 1-based as in Kita 1999). The values are clipped to
+    [0, 1]; a zero denominator (a player indifferent whatever the other does) gives 0.5.
+
+    Returns
+    -------
+    p, q : P(row 0), P(column 0).
+
+    Examples
+    --------
+    >>> kita_mixed([[1, -1], [-1, 1]], [[-1, 1], [1, -1]])  # matching pennies
+    (0.5, 0.5)
+    """
+    a, b = _matrix("A", A), _matrix("B", B)
+    den_q = a[0, 0] - a[0, 1] - a[1, 0] + a[1, 1]
+    den_p = b[0, 0] - b[0, 1] - b[1, 0] + b[1, 1]
+    q = (a[1, 1] - a[0, 1]) / den_q if den_q != 0.0 else 0.5
+    p = (b[1, 1] - b[1, 0]) / den_p if den_p != 0.0 else 0.5
+    return float(np.clip(p, 0.0, 1.0)), float(np.clip(q, 0.0, 1.0))
+
+
+def solve_merge_game(
+    J_row: ArrayLike, J_col: ArrayLike, *, cooperative: bool, rng: np.random.Generator
+) -> GameOutcome:
+    """Play the 2x2 merge game on costs (payoffs are their negatives).
+
+    Parameters
+    ----------
+    J_row, J_col : (2, 2) costs of VR and of the lag vehicle, rows = VR's action.
+    cooperative : True for a CAV VMC — the joint-optimal cell
+        (:func:`hcomc.control.game.solve_cooperative`); False — a pure Nash equilibrium (largest
+        payoff sum, ties to row-major order) or, if none exists, a draw from Kita's mixed
+        equilibrium (row action first, then column action, two ``rng.random()`` calls).
+    rng : used only for the mixed equilibrium.
+    """
+    jr, jc = _matrix("J_row", J_row), _matrix("J_col", J_col)
+    if cooperative:
+        sol = solve_cooperative(jr, jc)
+        return GameOutcome(sol.sv_action, int(sol.fv_response[sol.sv_action, 0]), "cooperative")
+    A, B = -jr, -jc
+    pure = pure_nash(A, B)
+    if pure:
+        welfare = [A[i, j] + B[i, j] for i, j in pure]
+        row, col = pure[int(np.argmax(welfare))]
+        return GameOutcome(row, col, "pure", tuple(pure))
+    p, q = kita_mixed(A, B)
+    row = AHEAD if rng.random() < p else BEHIND
+    col = YIELD if rng.random() < q else NOT_YIELD
+    return GameOutcome(row, col, "mixed", (), p, q)
+
+
+# ------------------------------------------------------------------------ payoffs
+def true_u_safe(pred: Prediction, problem: MergeProblem, cav: ArrayLike, row: int = 0) -> float:
+    """Worst Eq. 15 critical acceleration at merge completion with the true kinds [m/s^2].
+
+    Same pairs as the rollout's ``F[:, 0]`` for a longitudinal candidate (each present key
+    vehicle behind the nearest present key vehicle ahead in its lane, VR in lane 1 once
+    merged), with the Eq. 15 delay of the follower's actual kind ``cav`` (0.5 s CAV, 1.0 s HDV).
+    ``inf`` when VR has not merged in the window or a crash is unavoidable.
+    """
+    k = int(pred.k_merge[row])
+    if k < 0:
+        return float("inf")
+    s = problem.state
+    x, v = pred.X[row, k], pred.V[row, k]
+    cav = np.asarray(cav, dtype=bool)
+    worst = 0.0
+    for r in range(N_ROLES):
+        if not s.present[r]:
+            continue
+        ahead = [
+            j
+            for j in range(N_ROLES)
+            if j != r and s.present[j] and _LANE[j] == _LANE[r] and x[j] > x[r]
+        ]
+        if not ahead:
+            continue
+        lead = min(ahead, key=lambda j: x[j])
+        d = x[lead] - s.params[lead, P_LEN] - x[r]
+        a_cr = critical_acceleration(
+            d, v[r], v[lead], delay=DELAY_CAV if cav[r] else DELAY_HDV,
+            min_distance=float(problem.consts[C_D]),
+            emergency_decel=float(problem.consts[C_A_MERG]),
+        )  # fmt: skip
+        worst = max(worst, float(a_cr))
+    return worst
+
+
+def player_cost(
+    pred: Prediction,
+    problem: MergeProblem,
+    role: int,
+    weights: tuple[float, float, float],
+    j_s: float,
+    row: int = 0,
+) -> tuple[float, dict[str, float]]:
+    """Cost ``w_s J_s + w_e J_e + w_c J_c`` of the key vehicle in ``role`` (MODELS.md §9).
+
+    ``J_e = mean |v - v0| / v0`` and ``J_c = mean a^2 / a_max^2`` over the prediction window,
+    with the vehicle's desired speed and maximum-acceleration parameters; ``j_s`` is the shared
+    safety term. An absent vehicle costs 0.
+
+    Returns
+    -------
+    cost : J [-].
+    terms : {"J_s", "J_e", "J_c"}.
+    """
+    s = problem.state
+    if not s.present[role]:
+        return 0.0, {"J_s": 0.0, "J_e": 0.0, "J_c": 0.0}
+    v0, a_max = s.params[role, P_V0], s.params[role, P_A]
+    j_e = float(np.mean(np.abs(pred.V[row, :, role] - v0)) / v0)
+    j_c = float(np.mean(pred.A[row, :, role] ** 2) / a_max**2)
+    w_s, w_e, w_c = weights
+    return w_s * j_s + w_e * j_e + w_c * j_c, {"J_s": j_s, "J_e": j_e, "J_c": j_c}
+
+
+def safety_term(
+    pred: Prediction, problem: MergeProblem, u_safe: float, threshold: float, row: int = 0
+) -> float:
+    """Shared safety term ``J_s`` of one predicted joint action (module docstring).
+
+    ``min(1, u_safe / threshold)``, or :data:`INFEASIBLE_SAFETY` when the prediction has a
+    collision, VR not merged, an unavoidable crash (``u_safe`` infinite), an infeasible VV1, or
+    a present key vehicle braking harder than Eq. 15's emergency deceleration ``a_merg``.
+    """
+    g = pred.G[row]
+    present = problem.state.present
+    a_min = float(pred.A[row][:, present].min())
+    infeasible = (
+        g[_G["collision"]] > 0.0
+        or g[_G["not_merged"]] > 0.0
+        or not np.isfinite(u_safe)
+        or not virtual_vehicle_feasible(pred, row)
+        or a_min < -float(problem.consts[C_A_MERG])
+    )
+    return INFEASIBLE_SAFETY if infeasible else float(min(1.0, u_safe / threshold))
+
+
+def _is_cav(view: TrafficView, i: int) -> bool:
+    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
+
+
+def _ms(start: float) -> float:
+    return (time.perf_counter() - start) * 1000.0
+
+
+class GameController:
+    """Kita-style 2x2 ramp-merging game (Liao et al. 2022), longitudinal execution.
+
+    Parameters
+    ----------
+    config : scenario (reads ``road``, ``cav`` and ``control``).
+
+    Notes
+    -----
+    See the module docstring for players, payoffs, solution and every assumption. ``details``
+    holds ``J_vr`` / ``J_lag`` (2x2 costs), ``A`` / ``B`` (payoffs = -costs), ``terms`` (cost
+    terms per cell and player), ``u_safe`` (2x2), ``outcome`` (:class:`GameOutcome`), ``cell``
+    (names of the played actions), ``groups`` (usual and relabelled key groups),
+    ``predictions`` (2x2 nested list of :class:`~hcomc.control.hcomc.problem.Prediction`).
+    """
+
+    name = "game"
+
+    def __init__(self, config: ScenarioConfig) -> None:
+        self.config = config
+        self._hcomc = HCOMCController(config)
+
+    def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
+        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
+        return self._hcomc.problem(view, group, lateral_allowed=False)
+
+    def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
+        """Solve the 2x2 game between VR and the lag vehicle and execute its outcome."""
+        start = time.perf_counter()
+        vr = group.vr
+        merge_x, vr_duration = merge_position(view, vr)
+        if group.vmc < 0:
+            return MergePlan(
+                group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                reason="game: no lane-1 vehicle behind VR, no game to play",
+                decision_ms=_ms(start), details={"outcome": None, "groups": (group,)},
+            )  # fmt: skip
+        h_max = float(view.config.control.horizon_max)
+        threshold = float(view.config.control.safety_threshold)
+        groups = (group, behind_group(view, group))
+        problems = [self.problem(view, g) for g in groups]
+        base = with_cooperation(problems[AHEAD], True)
+        first, horizon = predict_longitudinal(
+            base, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max
+        )
+        row_x = np.array([[merge_x, vr_duration, horizon, 0.0]])
+        preds: list[list[Prediction]] = [[first, first], [first, first]]
+        J_vr, J_lag, u_safe = np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((2, 2))
+        terms: dict[str, dict[str, dict[str, float]]] = {}
+        w_vr = CAV_WEIGHTS if _is_cav(view, vr) else NORMAL_WEIGHTS
+        for i in (AHEAD, BEHIND):
+            true_cav = problems[i].state.cav
+            for j in (YIELD, NOT_YIELD):
+                if not (i == AHEAD and j == YIELD):
+                    preds[i][j] = with_cooperation(problems[i], j == YIELD).predict(row_x)
+                pred = preds[i][j]
+                u_safe[i, j] = true_u_safe(pred, problems[i], true_cav)
+                j_s = safety_term(pred, problems[i], u_safe[i, j], threshold)
+                J_vr[i, j], t_vr = player_cost(pred, problems[i], VR, w_vr, j_s)
+                J_lag[i, j], t_lag = player_cost(pred, problems[i], VMC, NORMAL_WEIGHTS, j_s)
+                terms[f"{ROW_NAMES[i]}/{COL_NAMES[j]}"] = {"VR": t_vr, "lag": t_lag}
+        cooperative = _is_cav(view, group.vmc)
+        outcome = solve_merge_game(J_vr, J_lag, cooperative=cooperative, rng=rng)
+        exec_group = groups[outcome.row]
+        pred = preds[outcome.row][outcome.col]
+        cell = (ROW_NAMES[outcome.row], COL_NAMES[outcome.col])
+        details: dict[str, object] = {
+            "J_vr": J_vr, "J_lag": J_lag, "A": -J_vr, "B": -J_lag, "terms": terms,
+            "u_safe": u_safe, "outcome": outcome, "cell": cell, "groups": groups,
+            "predictions": preds, "feasible": bool((pred.G[0] <= 0.0).all()),
+        }  # fmt: skip
+        what = f"game ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
+        commands = outcome.col == YIELD and _is_cav(view, exec_group.vmc)
+        if not commands:
+            return MergePlan(
+                exec_group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                horizon=horizon, reason=f"{what}; no vehicle commanded",
+                objectives=_objectives(pred), decision_ms=_ms(start), details=details,
+            )  # fmt: skip
+        if not virtual_vehicle_feasible(pred):
+            return MergePlan(
+                exec_group, Mode.NONE, view.t, horizon=horizon, fallback=True,
+                reason=f"{what}; VV1 infeasible, VR merges by gap acceptance",
+                decision_ms=_ms(start), details=details,
+            )  # fmt: skip
+        return MergePlan(
+            exec_group, Mode.LONGITUDINAL, view.t, merge_x=merge_x, vr_duration=vr_duration,
+            horizon=horizon, vv1=np.array(pred.vv1[0], dtype=np.float64), reason=what,
+            objectives=_objectives(pred), decision_ms=_ms(start), details=details,
+        )  # fmt: skip
+
+
+def _objectives(pred: Prediction) -> dict[str, float]:
+    """Predicted HCOMC objectives of the played cell (for reporting)."""
+    return dict(zip(OBJECTIVES, map(float, pred.F[0]), strict=True))

@@ -1,0 +1,1 @@
+"""Experiments: the paper's values, the run grid, summary tables and claims."""

@@ -1,0 +1,280 @@
+"""FIFO and Game baseline merge controllers (MODELS.md §11; paper Table III)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from functools import cache
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hcomc.config import ScenarioConfig, load_config
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, find_key_vehicles
+from hcomc.control.fifo import FIFOController, behind_group, merge_position, with_cooperation
+from hcomc.control.game import solve_cooperative
+from hcomc.control.hcomc.rollout import VMC
+from hcomc.control.merge_game import (
+    AHEAD,
+    BEHIND,
+    NOT_YIELD,
+    YIELD,
+    GameController,
+    kita_mixed,
+    pure_nash,
+    solve_merge_game,
+)
+from hcomc.control.registry import make_controller
+from hcomc.sim.engine import Simulation
+from hcomc.sim.fleet import Fleet
+from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.road import Kind, Lane
+
+CONTROLLERS = ("fifo", "game")
+CONDITIONS = ("C1", "C2", "C3", "C4", "C5")
+SEEDS = range(5)
+LOG_ARRAYS = ("t", "x", "y", "v", "a", "heading", "lane", "active")
+
+
+def _config(name: str, controller: str, **kw: Any) -> ScenarioConfig:
+    return load_config(name, control={"controller": controller}, **kw)
+
+
+@cache
+def _run(controller: str, condition: str, seed: int) -> tuple[Simulation, SimulationLog]:
+    sim = Simulation(_config(condition, controller), seed)
+    return sim, sim.run()
+
+
+def _same_plan(a: MergePlan, b: MergePlan) -> None:
+    """Everything but the wall-clock decision time is identical."""
+    assert a.group == b.group
+    assert (a.mode, a.t0, a.fallback, a.reason) == (b.mode, b.t0, b.fallback, b.reason)
+    np.testing.assert_array_equal([a.merge_x, a.vr_duration, a.horizon],
+                                  [b.merge_x, b.vr_duration, b.horizon])  # fmt: skip
+    assert (a.vv1 is None) == (b.vv1 is None)
+    if a.vv1 is not None:
+        np.testing.assert_array_equal(a.vv1, b.vv1)
+    assert a.vv2 is None
+    assert b.vv2 is None
+    assert a.objectives == b.objectives
+    for key in ("arrival", "sequence", "slot", "yielding", "cell", "J_vr", "J_lag"):
+        if key in a.details:
+            np.testing.assert_array_equal(np.asarray(a.details[key], dtype=object),
+                                          np.asarray(b.details[key], dtype=object))  # fmt: skip
+
+
+# ------------------------------------------------------------------ registry, closed loop
+@pytest.mark.parametrize(("name", "cls"), [("fifo", FIFOController), ("game", GameController)])
+def test_registry_builds_the_baselines(name, cls):
+    controller = make_controller(_config("C1", name))
+    assert isinstance(controller, cls)
+    assert controller.name == name
+
+
+@pytest.mark.parametrize("condition", CONDITIONS)
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_closed_loop_is_safe_longitudinal_and_deterministic_per_request(controller, condition):
+    for seed in SEEDS:
+        sim, log = _run(controller, condition, seed)
+        assert sim.decisions, "every run has one key merge"
+        collisions = log.events_of(EventKind.COLLISION)
+        merged = set(log.events_of(EventKind.MERGE)["vehicle"].tolist())
+        waited = set(log.events_of(EventKind.RAMP_WAIT)["vehicle"].tolist())
+        for plan, (view, group) in zip(sim.decisions, sim.requests, strict=True):
+            assert plan.mode != Mode.LATERAL
+            assert plan.vv2 is None
+            assert plan.decision_ms > 0.0
+            assert plan.reason
+            assert plan.group.vr == group.vr
+            cooperating = plan.group.vmc
+            is_cav = cooperating >= 0 and view.fleet.kind[cooperating] == Kind.CAV
+            if plan.mode == Mode.LONGITUDINAL:
+                assert is_cav
+                assert plan.vv1 is not None
+                assert np.isfinite(plan.horizon)
+            else:
+                assert plan.vv1 is None
+            assert plan.fallback or np.isfinite(plan.merge_x)
+            keys = {int(i) for g in (group, plan.group) for i in g.as_array() if i >= 0}
+            pairs = set(collisions["vehicle"].tolist()) | set(collisions["other"].tolist())
+            assert not keys & pairs, f"collision involving key vehicles, seed {seed}"
+            assert group.vr in merged or group.vr in waited
+            # same request + same rng => same plan; the controller writes nothing
+            before = view.x.copy(), view.v.copy(), view.lane.copy()
+            again = [sim.controller.plan(view, group, np.random.default_rng(11)) for _ in "ab"]
+            _same_plan(*again)
+            for arr, old in zip((view.x, view.v, view.lane), before, strict=True):
+                np.testing.assert_array_equal(arr, old)
+
+
+@pytest.mark.parametrize("controller", CONTROLLERS)
+def test_same_seed_gives_identical_plans_and_logs(controller):
+    for condition, seed in (("C4", 1), ("C5", 3)):
+        sim_a, log_a = _run(controller, condition, seed)
+        sim_b = Simulation(_config(condition, controller), seed)
+        log_b = sim_b.run()
+        for a, b in zip(sim_a.decisions, sim_b.decisions, strict=True):
+            _same_plan(a, b)
+        for name in LOG_ARRAYS:
+            np.testing.assert_array_equal(getattr(log_a, name), getattr(log_b, name))
+        for field in log_a.events.dtype.names:  # NaN-aware, field by field
+            np.testing.assert_array_equal(log_a.events[field], log_b.events[field])
+
+
+# ----------------------------------------------------------------- FIFO on hand-built views
+# vehicle 0 = VR on the ramp; 1-4 lane 1 (VMF, VMC, VMR, behind VMR); 5-6 lane 2
+def _view(vmc_x: float, vmc_v: float, kinds: list[int] | None = None) -> TrafficView:
+    config = _config("C1", "fifo")
+    kind = np.array(kinds or [Kind.CAV] * 7, dtype=np.int64)
+    x = np.array([400.0, 480.0, vmc_x, 250.0, 150.0, 350.0, 200.0])
+    v = np.array([25.0, 30.0, vmc_v, 30.0, 30.0, 31.0, 31.0])
+    lane = np.array([Lane.RAMP, *[Lane.MAIN_1] * 4, Lane.MAIN_2, Lane.MAIN_2], dtype=np.int64)
+    fleet = Fleet.build(config, kind, np.zeros(7, dtype=bool))
+    return TrafficView(t=3.0, x=x, v=v, a=np.zeros(7), lane=lane, active=np.ones(7, dtype=bool),
+                       changing=np.zeros(7, dtype=bool), fleet=fleet, config=config)  # fmt: skip
+
+
+def test_merge_position_is_fixed_and_ends_on_the_acceleration_lane():
+    view = _view(330.0, 30.0)
+    assert merge_position(view, 0) == (710.0, view.config.cav.lane_change_duration)
+    short = _config("C1", "fifo", road={"accel_lane_start": 700.0, "accel_lane_end": 805.0})
+    view = replace(view, config=short)
+    merge_x, duration = merge_position(view, 0)
+    assert merge_x == pytest.approx(805.0 - 25.0 * duration)  # clipped: change ends at 805 m
+    assert merge_x >= 700.0
+
+
+def test_fifo_vr_arriving_first_keeps_the_group_and_vmc_yields():
+    view = _view(vmc_x=330.0, vmc_v=30.0)  # t_VR = 310/25 = 12.4 s < t_VMC = 380/30 = 12.7 s
+    group = find_key_vehicles(view, 0)
+    assert (group.vmf, group.vmc, group.vmr) == (1, 2, 3)
+    plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
+    assert plan.group == group
+    assert plan.mode == Mode.LONGITUDINAL
+    assert plan.details["sequence"] == ["VMF", "VR", "VMC"]
+    assert plan.details["arrival"]["VR"] == pytest.approx(3.0 + 310.0 / 25.0)
+    assert plan.details["slot"] == "ahead"
+    assert plan.details["yielding"] == 2
+    # VV1 starts at VMF's state (Eq. 8-10) and is the prediction's cubic
+    np.testing.assert_allclose(plan.vv1[:2], [480.0, 30.0])
+    np.testing.assert_array_equal(plan.vv1, plan.details["prediction"].vv1[0])
+    assert 4.0 <= plan.horizon <= view.config.control.horizon_max
+
+
+def test_fifo_vmc_arriving_first_relabels_the_group_so_vmr_yields():
+    view = _view(vmc_x=390.0, vmc_v=32.0)  # t_VMC = 320/32 = 10 s < t_VR = 12.4 s
+    group = find_key_vehicles(view, 0)
+    plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
+    assert plan.details["sequence"] == ["VMF", "VMC", "VR"]
+    assert plan.group == MergeGroup(vr=0, vmc=3, vmf=2, vmr=4, vnf=5, vnr=6)
+    assert plan.group == behind_group(view, group)
+    assert plan.mode == Mode.LONGITUDINAL
+    np.testing.assert_allclose(plan.vv1[:2], [390.0, 32.0])  # from the old VMC's state
+    # an HDV behind the slot is never commanded
+    kinds = [Kind.CAV, Kind.CAV, Kind.CAV, Kind.HDV, Kind.CAV, Kind.CAV, Kind.CAV]
+    view = _view(vmc_x=390.0, vmc_v=32.0, kinds=kinds)
+    plan = FIFOController(view.config).plan(
+        view, find_key_vehicles(view, 0), np.random.default_rng()
+    )
+    assert plan.group.vmc == 3
+    assert plan.mode == Mode.NONE
+    assert plan.vv1 is None
+
+
+def test_fifo_without_vmc_or_vmr():
+    view = _view(vmc_x=390.0, vmc_v=32.0)
+    alone = MergeGroup(vr=0, vmf=1)
+    plan = FIFOController(view.config).plan(view, alone, np.random.default_rng(0))
+    assert plan.mode == Mode.NONE
+    assert plan.group == alone
+    assert np.isfinite(plan.merge_x)
+    tail = MergeGroup(vr=0, vmc=2, vmf=1)  # VMC is the last lane-1 vehicle
+    assert behind_group(view, tail) == MergeGroup(vr=0, vmf=2)
+
+
+def test_with_cooperation_copies_and_switches_only_the_vmc_flag():
+    view = _view(vmc_x=330.0, vmc_v=30.0)
+    problem = FIFOController(view.config).problem(view, find_key_vehicles(view, 0))
+    off = with_cooperation(problem, False)
+    assert problem.state.cav[VMC]
+    assert not off.state.cav[VMC]
+    np.testing.assert_array_equal(off.state.cav[:VMC], problem.state.cav[:VMC])
+    row = np.array([[710.0, 4.0, 11.0, 0.0]])
+    yield_, keep = problem.predict(row), off.predict(row)
+    np.testing.assert_array_equal(yield_.vv1, keep.vv1)  # VV1 is fixed before the joint pass
+    np.testing.assert_array_equal(yield_.X[0, :, 0], keep.X[0, :, 0])  # VR ignores VMC's choice
+    assert yield_.A[0, :, VMC].min() > keep.A[0, :, VMC].min()  # yielding early brakes softer
+
+
+# ----------------------------------------------------------------------- game equilibria
+def test_pure_nash_enumeration_and_selection():
+    # prisoner's dilemma in payoffs: the unique equilibrium is (1, 1)
+    A, B = np.array([[3.0, 0.0], [5.0, 1.0]]), np.array([[3.0, 5.0], [0.0, 1.0]])
+    assert pure_nash(A, B) == [(1, 1)]
+    out = solve_merge_game(-A, -B, cooperative=False, rng=np.random.default_rng(0))
+    assert (out.row, out.col, out.kind, out.pure) == (1, 1, "pure", ((1, 1),))
+    # coordination game: two equilibria, the larger payoff sum wins
+    A, B = np.array([[2.0, 0.0], [0.0, 1.0]]), np.array([[2.0, 0.0], [0.0, 1.0]])
+    assert pure_nash(A, B) == [(0, 0), (1, 1)]
+    out = solve_merge_game(-A, -B, cooperative=False, rng=np.random.default_rng(0))
+    assert (out.row, out.col) == (AHEAD, YIELD)
+    out = solve_merge_game(-A[::-1, ::-1], -B[::-1, ::-1], cooperative=False, rng=None)
+    assert (out.row, out.col) == (BEHIND, NOT_YIELD)
+
+
+def test_kita_mixed_equilibrium_by_hand():
+    A = np.array([[4.0, 0.0], [1.0, 2.0]])  # row player (VR) payoffs
+    B = np.array([[0.0, 3.0], [2.0, 1.0]])  # column player payoffs
+    assert pure_nash(A, B) == []
+    # q* = (a22 - a12) / (a11 - a12 - a21 + a22) = (2 - 0) / (4 - 0 - 1 + 2) = 0.4
+    # p* = (b22 - b21) / (b11 - b12 - b21 + b22) = (1 - 2) / (0 - 3 - 2 + 1) = 0.25
+    p, q = kita_mixed(A, B)
+    assert (p, q) == pytest.approx((0.25, 0.4))
+    # indifference: each player's mix equalises the other's payoffs
+    assert q * A[0, 0] + (1 - q) * A[0, 1] == pytest.approx(q * A[1, 0] + (1 - q) * A[1, 1])
+    assert p * B[0, 0] + (1 - p) * B[1, 0] == pytest.approx(p * B[0, 1] + (1 - p) * B[1, 1])
+    # the played actions are drawn from (p*, q*) with the given rng: VR first, then the lag
+    out = solve_merge_game(-A, -B, cooperative=False, rng=np.random.default_rng(5))
+    u = np.random.default_rng(5).random(2)
+    assert out.kind == "mixed"
+    assert (out.p, out.q) == pytest.approx((0.25, 0.4))
+    assert (out.row, out.col) == (AHEAD if u[0] < 0.25 else BEHIND, YIELD if u[1] < 0.4 else 1)
+    rng = np.random.default_rng(1)
+    rows = [solve_merge_game(-A, -B, cooperative=False, rng=rng).row for _ in range(4000)]
+    assert np.mean(np.array(rows) == AHEAD) == pytest.approx(0.25, abs=0.03)
+
+
+def test_cooperative_solution_is_the_joint_argmin():
+    J_row, J_col = np.array([[1.0, 3.0], [2.0, 2.5]]), np.array([[0.9, 0.1], [0.0, 0.2]])
+    out = solve_merge_game(J_row, J_col, cooperative=True, rng=None)
+    assert (out.row, out.col, out.kind) == (AHEAD, YIELD, "cooperative")  # 1.9 < 2.0 < 2.7
+    sol = solve_cooperative(J_row, J_col)
+    assert (out.row, out.col) == (sol.sv_action, int(sol.fv_response[sol.sv_action, 0]))
+
+
+def test_game_cav_vmc_plays_the_cooperative_cell_and_yields():
+    seen_yield = False
+    for condition in ("C1", "C2", "C3"):
+        for seed in SEEDS:
+            sim, _ = _run("game", condition, seed)
+            for plan, (view, group) in zip(sim.decisions, sim.requests, strict=True):
+                if group.vmc < 0 or view.fleet.kind[group.vmc] != Kind.CAV:
+                    continue
+                d = plan.details
+                out = d["outcome"]
+                joint = d["J_vr"] + d["J_lag"]
+                assert out.kind == "cooperative"
+                assert joint[out.row, out.col] == joint.min()
+                expected = group if out.row == AHEAD else behind_group(view, group)
+                assert plan.group == expected
+                if out.row == AHEAD and out.col == YIELD and not plan.fallback:
+                    seen_yield = True
+                    assert plan.mode == Mode.LONGITUDINAL
+                    assert plan.group.vmc == group.vmc
+                    pred = d["predictions"][AHEAD][YIELD]
+                    np.testing.assert_array_equal(plan.vv1, pred.vv1[0])
+                if out.col == NOT_YIELD:
+                    assert plan.mode == Mode.NONE
+                    assert np.isfinite(plan.merge_x)
+    assert seen_yield, "some CAV VMC should yield in the cooperative cell"
