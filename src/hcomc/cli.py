@@ -14,6 +14,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
@@ -29,8 +30,9 @@ app = typer.Typer(
 config_app = typer.Typer(help="Inspect scenario configs.", no_args_is_help=True)
 app.add_typer(config_app, name="config")
 
-out = Console()
-err = Console(stderr=True)
+# piped output (files, CI logs) gets wide tables instead of rich's 80-column default
+out = Console(width=None if sys.stdout.isatty() else 200)
+err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
 ConfigArg = Annotated[
     str,
@@ -242,11 +244,11 @@ def _progress_grid(specs: list, workers: int, on_result: Any = None) -> Any:
 
 
 def _frame_table(frame: Any, title: str) -> Table:
-    table = Table(title=title)
+    table = Table(title=escape(title))
     for col in frame.columns:
-        table.add_column(str(col), justify="right" if col not in ("claim", "Model") else "left")
+        table.add_column(escape(str(col)), justify="left" if col in ("claim", "Model") else "right")
     for _, row in frame.iterrows():
-        table.add_row(*(f"{v:.2f}" if isinstance(v, float) else str(v) for v in row))
+        table.add_row(*(escape(f"{v:.2f}" if isinstance(v, float) else str(v)) for v in row))
     return table
 
 
@@ -284,7 +286,7 @@ def run(
     out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {controller}"))
     for metric, label in LABELS.items():
         mean, half, n = mean_ci(frame[metric])
-        out.print(f"{label}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})")
+        out.print(escape(f"{label}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
 
 
 @app.command()

@@ -80,7 +80,7 @@ from hcomc.config import ScenarioConfig
 from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, _nearest
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import VMC, VR
+from hcomc.control.hcomc.rollout import VMC, VR, warm_up
 from hcomc.sim.road import Kind, Lane
 
 __all__ = [
@@ -254,6 +254,7 @@ class FIFOController:
     name = "fifo"
 
     def __init__(self, config: ScenarioConfig) -> None:
+        warm_up()  # load the compiled rollout now, not inside a timed decision
         self.config = config
         self._hcomc = HCOMCController(config)
 

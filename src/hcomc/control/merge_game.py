@@ -122,7 +122,7 @@ from hcomc.control.fifo import (
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR
+from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR, warm_up
 from hcomc.safety.critical import DELAY_CAV, DELAY_HDV, critical_acceleration
 from hcomc.sim.road import Kind
 
@@ -383,6 +383,7 @@ class GameController:
     name = "game"
 
     def __init__(self, config: ScenarioConfig) -> None:
+        warm_up()  # load the compiled rollout now, not inside a timed decision
         self.config = config
         self._hcomc = HCOMCController(config)
 

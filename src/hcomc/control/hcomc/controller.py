@@ -24,7 +24,7 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.control.hcomc.problem import OBJECTIVES, KeyState, MergeProblem
-from hcomc.control.hcomc.rollout import VMC, VMF, VNF, VR
+from hcomc.control.hcomc.rollout import VMC, VMF, VNF, VR, warm_up
 from hcomc.control.lane_change_game import GameVehicle, LaneChangeDecision, lane_change_game
 from hcomc.optim.base import Optimizer
 from hcomc.optim.registry import make_optimizer
@@ -75,6 +75,7 @@ class HCOMCController:
     name = "hcomc"
 
     def __init__(self, config: ScenarioConfig, optimizer: Optimizer | None = None) -> None:
+        warm_up()  # load the compiled rollout now, not inside a timed decision
         self.config = config
         self.optimizer = optimizer or make_optimizer(
             config.control.optimizer, pop_size=config.control.pop_size

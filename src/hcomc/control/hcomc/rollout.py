@@ -445,3 +445,24 @@ def rollout(
             others -= _gain_term(VNR, VNF, xs, vs, as_, params, floor)
         u_eff[c] = gain_vr + consts[C_POLITENESS] * others
     return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv1, vv2, near
+
+
+_WARM = False
+
+
+def warm_up() -> None:
+    """Load (or compile) the kernel once per process, so decision times exclude it."""
+    global _WARM
+    if _WARM:
+        return
+    params = np.tile(np.array([33.3, 1.0, 2.0, 1.4, 2.0, 4.0, 0.99, 5.0, 1.8]), (N_ROLES, 1))
+    consts = np.zeros(N_CONSTS)
+    consts[C_DT], consts[C_ACCEL_END], consts[C_WIDTH], consts[C_VMC_DUR] = 0.5, 950, 3.75, 4
+    consts[C_GAMMA], consts[C_EMERGENCY], consts[C_VV_DECEL] = 2.3, 9.0, 7.5
+    consts[C_D], consts[C_A_MERG] = 2.0, 7.5
+    x = np.array([400.0, 380.0, 480.0, 300.0, 450.0, 330.0])
+    one = np.ones(1)
+    rollout(x, np.full(N_ROLES, 25.0), np.zeros(N_ROLES), np.ones(N_ROLES, dtype=np.bool_),
+            np.ones(N_ROLES, dtype=np.bool_), params, one * 800.0, one * 4.0, one * 6.0,
+            np.zeros(1, dtype=np.bool_), consts, 4)  # fmt: skip
+    _WARM = True
