@@ -60,6 +60,11 @@ def config_show(config: ConfigArg) -> None:
     sys.stdout.write(config_to_toml(_load(config)))
 
 
+Optimizer = Annotated[
+    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
+]
+
+
 @app.command()
 def simulate(
     config: ConfigArg,
@@ -71,15 +76,22 @@ def simulate(
         Path | None, typer.Option("--out", help="Write log.npz, manifest.json, summary.json here.")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    controller: Annotated[
+        str | None,
+        typer.Option(help="Merge controller: none, fifo, game, hcomc (default: config)."),
+    ] = None,
+    optimizer: Optimizer = None,
 ) -> None:
-    """Simulate a scenario without a merge controller and print a summary."""
+    """Simulate a scenario (merge controller from the config or --controller) and summarise."""
     from hcomc.sim.engine import Simulation
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
     if seed is not None and seed < 0:
         raise _fail(f"option '--seed' = {seed}: must be >= 0")
-    cfg = _load(config, duration=duration, seed=seed)
+    control = _load(config).control.model_dump()
+    control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})
+    cfg = _load(config, duration=duration, seed=seed, control=control)
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
     sim = Simulation(cfg)
@@ -111,11 +123,6 @@ def simulate(
         sys.stdout.write(json.dumps(summary) + "\n")
     else:
         _print_summary(summary)
-
-
-Optimizer = Annotated[
-    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
-]
 
 
 @app.command()

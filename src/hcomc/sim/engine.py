@@ -39,7 +39,7 @@ from hcomc.models.transition import blend_acceleration, transition_weight
 from hcomc.rng import make_rng
 from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.demand import generate_demand
-from hcomc.sim.execution import ActivePlan, commanded, virtual_leaders
+from hcomc.sim.execution import ActivePlan, commanded, plan_record, virtual_leaders
 from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
@@ -307,6 +307,7 @@ class Simulation:
             plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
             self.requests.append((view, group))
             self.decisions.append(plan)
+            self.log.meta.setdefault("plans", []).append(plan_record(plan))
             self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
                                value=int(plan.mode))  # fmt: skip
             if plan.fallback:

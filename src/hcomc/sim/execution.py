@@ -18,6 +18,7 @@ commanded vehicles make no discretionary (MOBIL) lane changes of their own.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -86,3 +87,25 @@ def virtual_leaders(
         return np.empty(0, dtype=np.int64), empty, empty, empty, empty
     cols = list(zip(*rows, strict=True))
     return (np.array(cols[0], dtype=np.int64), *(np.array(c, dtype=np.float64) for c in cols[1:]))
+
+
+def plan_record(plan: MergePlan) -> dict[str, Any]:
+    """JSON-ready summary of a plan, stored in ``SimulationLog.meta["plans"]`` for plots."""
+
+    def floats(values: FloatArray | None) -> list[float] | None:
+        return None if values is None else [float(v) for v in values]
+
+    return {
+        "group": plan.group.as_dict(),
+        "mode": Mode(plan.mode).name.lower(),
+        "t0": float(plan.t0),
+        "merge_x": float(plan.merge_x),
+        "vr_duration": float(plan.vr_duration),
+        "horizon": float(plan.horizon),
+        "vv1": floats(plan.vv1),
+        "vv2": floats(plan.vv2),
+        "fallback": bool(plan.fallback),
+        "reason": plan.reason,
+        "objectives": dict(plan.objectives),
+        "decision_ms": float(plan.decision_ms),
+    }
