@@ -346,6 +346,61 @@ def reproduce(
     )
 
 
+@app.command()
+def sweep(
+    spec: Annotated[Path, typer.Argument(metavar="SPEC", help="Sweep spec (TOML).")],
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler address (default: local processes).")
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option(help="Local processes (default: all cores).")
+    ] = None,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", help="Results store (default: sweeps/NAME).")
+    ] = None,
+) -> None:
+    """Run a density x penetration x configuration x seed grid; rerun to resume."""
+    from hcomc.experiments.sweep import connect, expand, load_sweep, run_key, run_sweep
+
+    try:
+        plan = load_sweep(spec)
+        if scheduler is not None:
+            connect(scheduler).close()  # reachable before anything runs
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
+    n_workers = _workers(workers)
+    target = out_dir or Path("sweeps") / plan.name
+    if target.exists() and not target.is_dir():
+        raise _fail(f"option '--out' = '{target}': exists and is not a directory")
+    runs = expand(plan)
+    skipped = sum((target / "parts" / f"{run_key(r)}.parquet").exists() for r in runs)
+    start = time.perf_counter()
+    if out.is_terminal:
+        with Progress(
+            TextColumn("[bold]sweep"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total}"),
+            TimeRemainingColumn(),
+            console=out,
+            transient=True,
+        ) as bar:
+            task = bar.add_task("sweep", total=len(runs))
+            table = run_sweep(
+                plan,
+                target,
+                workers=n_workers,
+                scheduler=scheduler,
+                progress=lambda done, total: bar.update(task, completed=done),
+            )
+    else:
+        table = run_sweep(plan, target, workers=n_workers, scheduler=scheduler)
+    backend = scheduler or f"{n_workers} local processes"
+    out.print(
+        f"{len(table)} runs ({len(runs) - skipped} new, {skipped} already done) on {backend} in "
+        f"{time.perf_counter() - start:.1f} s · {target}/sweep.parquet, summary.csv"
+    )
+
+
 def _print_summary(summary: dict[str, Any]) -> None:
     table = Table(title=f"{summary['scenario']} · seed {summary['seed']}", show_header=False)
     table.add_column("figure")
@@ -372,8 +427,3 @@ def _print_summary(summary: dict[str, Any]) -> None:
     for row in rows:
         table.add_row(*row)
     out.print(table)
-
-
-def main() -> None:  # pragma: no cover - console entry point alias
-    """Entry point."""
-    app()

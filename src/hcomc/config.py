@@ -317,7 +317,7 @@ def _read_toml(source: str | Path) -> tuple[dict[str, Any], str]:
         raise ConfigError(f"{origin}: invalid TOML: {exc}") from None
 
 
-def _describe(error: ValidationError, origin: str) -> str:
+def describe_error(error: ValidationError, origin: str) -> str:
     """One line per problem: dotted key, offending value, what is allowed."""
     lines = []
     for item in error.errors():
@@ -337,18 +337,31 @@ def validate_config(data: dict[str, Any], origin: str = "config") -> ScenarioCon
     try:
         return ScenarioConfig.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(_describe(exc, origin)) from None
+        raise ConfigError(describe_error(exc, origin)) from None
 
 
 def load_config(source: str | Path, **overrides: Any) -> ScenarioConfig:
     """Load a preset name (``C1``, ``platoon`` …) or a TOML file into a validated config.
 
-    Top-level ``overrides`` (e.g. ``duration=600``) are applied before validation, so they are
-    checked like file values. Raises :class:`ConfigError` with a one-line message.
+    ``overrides`` (e.g. ``duration=600`` or ``demand={"cav_penetration": 0.6}``; nested tables
+    merge key by key) are applied before validation, so they are checked like file values.
+    Raises :class:`ConfigError` with a one-line message.
     """
     data, origin = _read_toml(source)
-    data.update({k: v for k, v in overrides.items() if v is not None})
-    return validate_config(data, origin)
+    return validate_config(
+        _merge(data, {k: v for k, v in overrides.items() if v is not None}), origin
+    )
+
+
+def _merge(base: dict[str, Any], update: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with ``update`` applied; nested tables are merged key by key."""
+    out = dict(base)
+    for key, value in update.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
 
 
 def config_to_toml(config: ScenarioConfig) -> str:

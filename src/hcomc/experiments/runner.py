@@ -102,6 +102,10 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
             vmc_kind="" if group.vmc < 0 else "CAV" if kinds[group.vmc] else "HDV",
         )
         row.update(compute_metrics(log, merge_window(log, group.vr, group.as_dict())))
+    if config.demand.ramp == "flow":
+        from hcomc.metrics.flow import ramp_delay, throughput
+
+        row.update(throughput=throughput(log), ramp_delay=ramp_delay(log), plans=len(sim.decisions))
     row["wall_s"] = time.perf_counter() - start
     manifest = {
         **log.meta,

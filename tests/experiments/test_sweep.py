@@ -1,0 +1,149 @@
+"""Sweeps: identical tables on any backend, resumable after a kill, clear errors (issue 6)."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from hcomc.cli import app
+from hcomc.experiments import sweep as sweep_mod
+from hcomc.experiments.sweep import expand, load_sweep, run_key, run_sweep
+
+SPEC = """
+name = "tiny"
+base = "C1"
+configurations = ["FIFO", "HCOMC"]
+seeds = 2
+duration = 30.0
+[grid]
+mean_headway_main_1 = [5.0]
+mean_headway_main_2 = [3.0, 5.0]
+cav_penetration = [0.9]
+"""
+
+
+@pytest.fixture
+def spec_file(tmp_path: Path) -> Path:
+    path = tmp_path / "tiny.toml"
+    path.write_text(SPEC)
+    return path
+
+
+def test_expand_is_the_grid_product(spec_file):
+    runs = expand(load_sweep(spec_file))
+    assert len(runs) == 2 * 2 * 2
+    assert [r.overrides["demand"]["mean_headway_main_2"] for r in runs[::4]] == [3.0, 5.0]
+    assert len({run_key(r) for r in runs}) == len(runs)
+
+
+def test_local_pool_and_dask_cluster_give_identical_tables(spec_file, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    spec = load_sweep(spec_file)
+    local = run_sweep(spec, tmp_path / "local", workers=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:  # fmt: skip
+        remote = run_sweep(spec, tmp_path / "dask", scheduler=cluster.scheduler_address)
+    serial = run_sweep(spec, tmp_path / "serial", workers=1)
+    pd.testing.assert_frame_equal(local, remote)
+    pd.testing.assert_frame_equal(local, serial)
+    assert len(local) == 8
+    assert (tmp_path / "dask" / "summary.csv").stat().st_size > 0
+
+
+_RUN_ONE = sweep_mod.run_one
+
+
+def _dying_run_one(run):
+    """Kill the worker process the first time it is called (marker file), then behave."""
+    marker = Path(os.environ["HCOMC_TEST_MARKER"])
+    if not marker.exists():
+        marker.write_text("died once")
+        os._exit(13)
+    return _RUN_ONE(run)
+
+
+def test_a_dying_worker_has_its_runs_retried(spec_file, tmp_path, monkeypatch):
+    monkeypatch.setenv("HCOMC_TEST_MARKER", str(tmp_path / "marker"))
+    monkeypatch.setattr(sweep_mod, "run_one", _dying_run_one)
+    table = run_sweep(load_sweep(spec_file), tmp_path / "out", workers=2)
+    assert (tmp_path / "marker").exists()
+    assert len(table) == 8
+    assert len(list((tmp_path / "out" / "parts").glob("*.parquet"))) == 8
+
+
+def test_killed_sweep_resumes_without_losing_or_repeating_runs(spec_file, tmp_path):
+    out = tmp_path / "store"
+    cmd = [sys.executable, "-m", "hcomc", "sweep", str(spec_file), "--out", str(out),
+           "--workers", "1"]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)  # fmt: skip
+    parts = out / "parts"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list(parts.glob("*.parquet"))) < 2:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    before = {p.name: (p.stat().st_mtime_ns, p.read_bytes()) for p in parts.glob("*.parquet")}
+    assert 2 <= len(before) < 8
+    assert not list(parts.glob("*.tmp*"))  # no half-written part survives
+    result = CliRunner().invoke(app, ["sweep", str(spec_file), "--out", str(out),
+                                      "--workers", "2"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert f"{8 - len(before)} new, {len(before)} already done" in result.stdout
+    after = {p.name: (p.stat().st_mtime_ns, p.read_bytes()) for p in parts.glob("*.parquet")}
+    assert len(after) == 8
+    for name, stamp in before.items():
+        assert after[name] == stamp  # not recomputed
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert len(table) == 8
+    assert not table.duplicated(["mean_headway_main_2", "configuration", "seed"]).any()
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        (SPEC + "colour = 'red'\n", "unknown key 'grid.colour'"),
+        (SPEC.replace("cav_penetration = [0.9]", "cav_penetration = []"), "grid.cav_penetration"),
+        (
+            SPEC.replace("cav_penetration = [0.9]", "cav_penetration = [1.5]"),
+            "demand.cav_penetration",
+        ),
+        (SPEC.replace('"FIFO", ', '"LIFO", '), "configurations"),
+    ],
+)
+def test_bad_spec_is_rejected_before_any_run(tmp_path, text, fragment):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    result = CliRunner().invoke(app, ["sweep", str(path), "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert fragment in result.stderr
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "o").exists()
+
+
+def test_unreachable_scheduler_is_a_clear_error(spec_file, tmp_path):
+    args = ["sweep", str(spec_file), "--scheduler", "tcp://127.0.0.1:9"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert "no Dask scheduler reachable" in result.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_flow_sweep_reports_throughput_and_delay(tmp_path):
+    path = tmp_path / "flow.toml"
+    path.write_text(SPEC.replace('seeds = 2', 'seeds = 1\nramp = "flow"\nramp_mean_headway = 8.0')
+                    .replace("duration = 30.0", "duration = 120.0")
+                    .replace("[3.0, 5.0]", "[5.0]").replace('"FIFO", ', ""))  # fmt: skip
+    table = run_sweep(load_sweep(path), tmp_path / "o", workers=1)
+    row = table.iloc[0]
+    assert row["plans"] >= 5  # every ramp vehicle entering the control zone is planned
+    assert 500 < row["throughput"] < 5000
+    assert row["ramp_delay"] > -5.0
