@@ -296,6 +296,22 @@ def run(
         out.print(escape(f"{label}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
 
 
+def _write_report(out_dir: Path, runs: Any) -> Path:
+    """results/report.html with the tables, claims, Fig. 2 for C2 and the metric plots."""
+    from hcomc.viz.figures import contour_figure, metrics_figure
+    from hcomc.viz.inputs import controller_logs
+    from hcomc.viz.report import figure_png, write_report
+
+    seed = int(runs["seed"].min())
+    figures = {
+        f"Fig. 2 — speed contour map of both lanes, Condition 2, seed {seed} (FIFO, Game, HCOMC)":
+            figure_png(contour_figure(controller_logs("C2", seed=seed))),
+        "Paper metrics by condition and configuration (mean, 95 % CI over seeds)":
+            figure_png(metrics_figure(runs)),
+    }  # fmt: skip
+    return write_report(out_dir, runs, figures=figures)
+
+
 @app.command()
 def reproduce(
     seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 10,
@@ -334,11 +350,13 @@ def reproduce(
         tmp[2].write_text(to_markdown(table2), encoding="utf-8")
         tmp[3].write_text(to_markdown(table3), encoding="utf-8")
         claim_rows.to_csv(tmp[4], index=False)
+    report = _write_report(out_dir, runs)
     note = "ours: mean ± 95 % CI over seeds (paper value)"
     out.print(_frame_table(table2, f"Table II — optimisers · {note}"))
     out.print(_frame_table(table3, f"Table III — controllers · {note}"))
     out.print(_frame_table(claim_rows.drop(columns=["share"]), "Claims of Section IV"))
     held = int((claim_rows["share"] > 0.5).sum())
+    out.print(f"report: {report}")
     out.print(
         f"{held} of {len(claim_rows)} claims hold in a majority of seeds · {len(runs)} runs "
         f"· {n_workers} workers · {time.perf_counter() - start:.1f} s · written to "
@@ -399,6 +417,75 @@ def sweep(
         f"{len(table)} runs ({len(runs) - skipped} new, {skipped} already done) on {backend} in "
         f"{time.perf_counter() - start:.1f} s · {target}/sweep.parquet, summary.csv"
     )
+
+
+@app.command()
+def plot(
+    sources: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="LOG_OR_RESULTS...",
+            help="Logs (.npz/.parquet or a simulate --out directory), runs.parquet, plan JSON, "
+            "a sweep directory, or a preset name to simulate (see --kind).",
+        ),
+    ],
+    kind: Annotated[
+        str,
+        typer.Option(help="contour, timespace, trajectories, pareto, metrics or heatmap."),
+    ],
+    out_file: Annotated[
+        Path | None, typer.Option("--out", help="Output file: .png, .svg or .pdf.")
+    ] = None,
+    seed: Annotated[int | None, typer.Option(help="Seed when simulating a preset.")] = None,
+    metric: Annotated[str, typer.Option(help="Metric of a sweep heatmap.")] = "lsrv",
+    raw: Annotated[bool, typer.Option(help="contour: raw bins instead of smoothing.")] = False,
+) -> None:
+    """Draw a figure of a run, a decision, a results table or a sweep."""
+    from hcomc.viz.common import save_figure
+    from hcomc.viz.inputs import FIGURE_KINDS, make_figure
+
+    target = out_file or Path(f"{kind}.png")
+    try:
+        if kind == "heatmap":
+            import pandas as pd
+
+            from hcomc.viz.sweep import heatmap_figure
+
+            if len(sources) != 1:
+                raise ValueError(f"--kind heatmap takes one sweep directory, got {len(sources)}")
+            path = Path(sources[0])
+            table_path = path / "sweep.parquet" if path.is_dir() else path
+            if not table_path.is_file():
+                raise ValueError(f"'{sources[0]}' is not a sweep directory or sweep.parquet")
+            fig = heatmap_figure(pd.read_parquet(table_path), metric)
+        elif kind in FIGURE_KINDS:
+            options = {"smooth": False} if raw and kind == "contour" else {}
+            fig = make_figure(kind, sources, seed=seed, **options)
+        else:
+            allowed = ", ".join([*FIGURE_KINDS, "heatmap"])
+            raise ValueError(f"option '--kind' = '{kind}': allowed: {allowed}")
+        written = save_figure(fig, target)
+    except (ValueError, ConfigError) as exc:
+        raise _fail(str(exc)) from None
+    out.print(f"wrote {written}")
+
+
+@app.command()
+def animate(
+    log_path: Annotated[Path, typer.Argument(metavar="LOG", help="A saved log (.npz/.parquet).")],
+    out_file: Annotated[Path, typer.Option("--out", help="Output .gif or .mp4.")] = Path("run.gif"),
+    fps: Annotated[int, typer.Option(help="Frames per second.")] = 10,
+    speedup: Annotated[float, typer.Option(help="Simulated seconds per real second.")] = 5.0,
+) -> None:
+    """Top-down animation of a run: vehicles by kind, key vehicles, virtual vehicles, clock."""
+    from hcomc.viz.animation import animate as render
+    from hcomc.viz.inputs import load_log
+
+    try:
+        written = render(load_log(log_path), out_file, fps=fps, speedup=speedup)
+    except (ValueError, ConfigError, OSError) as exc:
+        raise _fail(str(exc)) from None
+    out.print(f"wrote {written}")
 
 
 def _print_summary(summary: dict[str, Any]) -> None:

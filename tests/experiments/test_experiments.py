@@ -111,7 +111,7 @@ def test_reproduce_writes_every_output(tmp_path):
     result = CliRunner().invoke(app, ["reproduce", "--seeds", "1", "--workers", "2",
                                       "--out", str(tmp_path)])  # fmt: skip
     assert result.exit_code == 0, result.output
-    for name in ("runs.csv", "runs.parquet", "table2.md", "table3.md", "claims.csv"):
+    for name in ("runs.csv", "runs.parquet", "table2.md", "table3.md", "claims.csv", "report.html"):
         assert (tmp_path / name).stat().st_size > 100, name
     runs = pd.read_parquet(tmp_path / "runs.parquet")
     assert len(runs) == 5 * len(CONFIGURATIONS)

@@ -1,0 +1,342 @@
+"""Figure inputs from files or scenarios, and :func:`make_figure`, the entry point of
+``hcomc plot``.
+
+==============  ===============================================================================
+kind            inputs (``sources``)
+==============  ===============================================================================
+contour         simulation logs (``log.npz`` / ``.parquet`` or the ``--out`` directory of
+                ``hcomc simulate``), one column each; or one scenario (preset name or TOML
+                file), simulated with FIFO, Game and HCOMC
+timespace       one simulation log, or one scenario (simulated with HCOMC)
+trajectories    one simulation log, or one scenario (simulated with HCOMC)
+pareto          plan reports (JSON of ``hcomc plan --json``; a file may also hold a mapping
+                optimiser -> report), or one scenario (decided by NSGA-II, PSO and SA)
+metrics         one runs table (``runs.parquet`` / ``runs.csv`` or a results directory
+                holding one)
+==============  ===============================================================================
+
+Bad input raises :class:`ValueError` with a one-line message naming the source and what is
+allowed (the CLI prints it and exits with status 2).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from hcomc.sim.log import SimulationLog
+
+__all__ = [
+    "CONTOUR_CONFIGURATIONS",
+    "FIGURE_KINDS",
+    "PARETO_OPTIMIZERS",
+    "controller_logs",
+    "decision_reports",
+    "load_log",
+    "load_reports",
+    "load_runs",
+    "make_figure",
+]
+
+FIGURE_KINDS: dict[str, str] = {
+    "contour": "speed contour maps of both main lanes per controller (paper Fig. 2)",
+    "timespace": "time-space diagram per lane, coloured by speed",
+    "trajectories": "merge paths of VR and VMC; v(t), a(t) of the six key vehicles",
+    "pareto": "Pareto set of one merge decision with the chosen plans of each optimiser",
+    "metrics": "the paper's five metrics per condition and configuration, 95 % CI",
+}
+"""Figure kind -> one-line description (the choices of ``hcomc plot --kind``)."""
+
+CONTOUR_CONFIGURATIONS: tuple[str, ...] = ("FIFO", "Game", "HCOMC")
+"""Configurations simulated when a contour map is asked for a scenario."""
+
+PARETO_OPTIMIZERS: tuple[str, ...] = ("nsga2", "pso", "sa")
+"""Optimisers run when a Pareto figure is asked for a scenario."""
+
+_LOG_SUFFIXES = (".npz", ".parquet")
+_RUNS_NAMES = ("runs.parquet", "runs.csv")
+
+Source = str | os.PathLike[str]
+
+
+# --------------------------------------------------------------------------- loading
+def load_log(source: Source) -> SimulationLog:
+    """A simulation log from a ``.npz``/``.parquet`` file or a ``hcomc simulate --out`` dir.
+
+    Raises
+    ------
+    ValueError
+        If the source does not exist, is a directory without ``log.npz``/``log.parquet``,
+        or has another suffix.
+    """
+    from hcomc.sim.log import SimulationLog
+
+    path = Path(source)
+    if path.is_dir():
+        for name in ("log.npz", "log.parquet"):
+            if (path / name).is_file():
+                return SimulationLog.load(path / name)
+        raise ValueError(f"directory '{path}' holds no log.npz or log.parquet")
+    if not path.is_file():
+        raise ValueError(f"log file '{path}' does not exist")
+    if path.suffix.lower() not in _LOG_SUFFIXES:
+        raise ValueError(
+            f"log file '{path}' has suffix '{path.suffix}'; allowed: {', '.join(_LOG_SUFFIXES)}"
+        )
+    return SimulationLog.load(path)
+
+
+def load_runs(source: Source) -> pd.DataFrame:
+    """A runs table from ``.parquet``/``.csv`` or a directory holding ``runs.parquet``/``.csv``.
+
+    Raises
+    ------
+    ValueError
+        If no such file exists or the suffix is another one.
+    """
+    import pandas as pd
+
+    path = Path(source)
+    if path.is_dir():
+        found = [path / name for name in _RUNS_NAMES if (path / name).is_file()]
+        if not found:
+            raise ValueError(f"directory '{path}' holds no {' or '.join(_RUNS_NAMES)}")
+        path = found[0]
+    if not path.is_file():
+        raise ValueError(f"runs table '{path}' does not exist")
+    suffix = path.suffix.lower()
+    if suffix == ".parquet":
+        return pd.read_parquet(path)
+    if suffix == ".csv":
+        return pd.read_csv(path)
+    raise ValueError(f"runs table '{path}' has suffix '{path.suffix}'; allowed: .parquet, .csv")
+
+
+def load_reports(sources: Sequence[Source]) -> dict[str, dict[str, Any]]:
+    """Plan reports from JSON files, keyed by optimiser.
+
+    A file holds one report (``hcomc plan --json``; keyed by its ``optimizer``) or a
+    mapping name -> report.
+
+    Raises
+    ------
+    ValueError
+        If a file is missing, is not JSON, or holds no plan report.
+    """
+    reports: dict[str, dict[str, Any]] = {}
+    for source in sources:
+        path = Path(source)
+        if not path.is_file():
+            raise ValueError(f"plan report '{path}' does not exist")
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"plan report '{path}' is not JSON: {exc}") from None
+        if isinstance(data, dict) and "pareto" in data:
+            items = {str(data.get("optimizer") or path.stem): data}
+        elif (
+            isinstance(data, dict)
+            and data
+            and all(isinstance(v, dict) and "pareto" in v for v in data.values())
+        ):
+            items = {str(k): v for k, v in data.items()}
+        else:
+            raise ValueError(
+                f"'{path}' holds no plan report (expected the JSON of 'hcomc plan --json' or "
+                "a mapping optimiser -> report)"
+            )
+        for key, rep in items.items():
+            name, k = key, 2
+            while name in reports:
+                name, k = f"{key}-{k}", k + 1
+            reports[name] = rep
+    return reports
+
+
+# --------------------------------------------------------------------------- scenarios
+def controller_logs(
+    scenario: Source,
+    *,
+    seed: int | None = None,
+    configurations: Sequence[str] = CONTOUR_CONFIGURATIONS,
+    duration: float | None = None,
+) -> dict[str, SimulationLog]:
+    """Simulate one scenario and seed with several configurations (common random numbers).
+
+    Parameters
+    ----------
+    scenario : str or os.PathLike
+        Preset name (``C1`` ... ``C5``) or TOML file.
+    seed : int or None
+        Run seed; default the config's.
+    configurations : sequence of str
+        Labels of :data:`hcomc.experiments.runner.CONFIGURATIONS`.
+    duration : float or None
+        Measured duration [s]; default the config's.
+
+    Returns
+    -------
+    dict of str to SimulationLog
+        Configuration label -> log, in the given order.
+
+    Raises
+    ------
+    hcomc.config.ConfigError
+        On a bad scenario.
+    ValueError
+        On an unknown configuration label.
+    """
+    from hcomc.config import load_config
+    from hcomc.experiments.runner import CONFIGURATIONS
+    from hcomc.sim.engine import simulate
+
+    unknown = [c for c in configurations if c not in CONFIGURATIONS]
+    if unknown:
+        raise ValueError(
+            f"unknown configuration(s) {unknown}; allowed: {', '.join(CONFIGURATIONS)}"
+        )
+    logs: dict[str, SimulationLog] = {}
+    for label in configurations:
+        controller, optimizer = CONFIGURATIONS[label]
+        config = load_config(
+            scenario,
+            duration=duration,
+            control={"controller": controller, "optimizer": optimizer},
+        )
+        logs[label] = simulate(config, seed)
+    return logs
+
+
+def decision_reports(
+    scenario: Source,
+    *,
+    seed: int | None = None,
+    optimizers: Sequence[str] = PARETO_OPTIMIZERS,
+) -> dict[str, dict[str, Any]]:
+    """Plan reports of the first HCOMC decision of a scenario, one per optimiser.
+
+    Raises
+    ------
+    hcomc.config.ConfigError
+        On a bad scenario or optimiser.
+    ValueError
+        If no ramp vehicle reaches the control zone within the run.
+    """
+    from hcomc.config import load_config
+    from hcomc.control.report import plan_report
+    from hcomc.sim.engine import Simulation
+
+    reports: dict[str, dict[str, Any]] = {}
+    for opt in optimizers:
+        config = load_config(scenario, control={"controller": "hcomc", "optimizer": opt})
+        sim = Simulation(config, seed)
+        plan = sim.run_until_plan()
+        if plan is None:
+            raise ValueError(
+                f"no ramp vehicle entered the control zone within duration = {config.duration} s "
+                f"of '{scenario}'; allowed: a scenario with ramp demand"
+            )
+        reports[opt] = plan_report(sim, plan)
+    return reports
+
+
+def _is_scenario(source: Source) -> bool:
+    """A preset name or a TOML file (as opposed to a data file or directory)."""
+    path = Path(source)
+    if path.suffix.lower() == ".toml":
+        return True
+    if path.exists():
+        return False
+    from hcomc.config import preset_names
+
+    return str(source) in preset_names()
+
+
+def _labelled(logs: Sequence[SimulationLog]) -> dict[str, SimulationLog]:
+    from hcomc.viz.common import configuration_label
+
+    out: dict[str, SimulationLog] = {}
+    for log in logs:
+        label = base = configuration_label(log)
+        k = 2
+        while label in out:
+            label, k = f"{base} ({k})", k + 1
+        out[label] = log
+    return out
+
+
+# --------------------------------------------------------------------------- dispatch
+def make_figure(
+    kind: str,
+    sources: Sequence[Source],
+    *,
+    seed: int | None = None,
+    **options: Any,
+) -> Figure:
+    """Build one figure of *kind* from files or a scenario (module docstring table).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`FIGURE_KINDS`.
+    sources : sequence of str or os.PathLike
+        Input files/directories, or one scenario (preset name or TOML file).
+    seed : int or None
+        Seed when a scenario is simulated; default the config's. Ignored for files.
+    **options
+        Passed to the figure function (e.g. ``dx``, ``dt_bin``, ``smooth`` for contour,
+        ``safety_threshold`` for pareto, ``metrics`` for metrics).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure; write it with :func:`hcomc.viz.common.save_figure`.
+
+    Raises
+    ------
+    ValueError
+        On an unknown kind, a wrong number of sources or unusable input.
+    hcomc.config.ConfigError
+        On a bad scenario.
+    """
+    from hcomc.viz import figures
+
+    if kind not in FIGURE_KINDS:
+        raise ValueError(f"unknown figure kind '{kind}'; allowed: {', '.join(FIGURE_KINDS)}")
+    sources = list(sources)
+    if not sources:
+        raise ValueError(f"figure kind '{kind}' needs at least one input")
+    scenario = len(sources) == 1 and _is_scenario(sources[0])
+    if kind != "contour" and kind != "pareto" and len(sources) != 1:
+        raise ValueError(f"figure kind '{kind}' takes exactly one input, got {len(sources)}")
+
+    if kind == "contour":
+        logs = (
+            controller_logs(sources[0], seed=seed)
+            if scenario
+            else _labelled([load_log(s) for s in sources])
+        )
+        return figures.contour_figure(logs, **options)
+    if kind in ("timespace", "trajectories"):
+        if scenario:
+            log = controller_logs(sources[0], seed=seed, configurations=("HCOMC",))["HCOMC"]
+        else:
+            log = load_log(sources[0])
+        fn = figures.timespace_figure if kind == "timespace" else figures.trajectories_figure
+        return fn(log, **options)
+    if kind == "pareto":
+        reports = decision_reports(sources[0], seed=seed) if scenario else load_reports(sources)
+        return figures.pareto_figure(reports, **options)
+    if scenario:
+        raise ValueError(
+            f"figure kind 'metrics' needs a runs table (runs.parquet/.csv or a results "
+            f"directory), got scenario '{sources[0]}'"
+        )
+    return figures.metrics_figure(load_runs(sources[0]), **options)

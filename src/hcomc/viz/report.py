@@ -1,0 +1,318 @@
+"""Self-contained HTML report of a reproduction run (DESIGN.md §1 item 6).
+
+:func:`write_report` writes one HTML page holding everything: the paper's Tables II and III
+side by side with ours, the per-seed claims table, and the figures as base64 ``data:`` URIs.
+The page loads nothing from anywhere (no CDN, no external CSS, JavaScript or fonts, no
+links), so it can be mailed, archived or opened offline. :func:`figure_png` turns a
+matplotlib figure into the PNG bytes the report embeds.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from hcomc.experiments.paper import PAPER_METRICS
+from hcomc.experiments.tables import claims, paper_table
+from hcomc.sim.manifest import atomic_paths, build_manifest
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["REQUIRED_COLUMNS", "figure_png", "write_report"]
+
+#: Columns a results frame needs for the report's tables.
+REQUIRED_COLUMNS = ("condition", "configuration", "seed", "mode", *PAPER_METRICS)
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_FIGURE_DPI = 120
+
+_CSS = """
+:root { color-scheme: light; }
+body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", Arial,
+       sans-serif; margin: 0; background: #f6f7f9; color: #1d2330; line-height: 1.45; }
+main { max-width: 1180px; margin: 0 auto; padding: 1.5rem 2rem 2.5rem; background: #fff;
+       box-shadow: 0 0 12px rgba(0, 0, 0, 0.06); }
+header { border-bottom: 2px solid #2a4d69; margin-bottom: 1.2rem; padding-bottom: 0.6rem; }
+h1 { margin: 0 0 0.3rem; font-size: 1.7rem; color: #2a4d69; }
+h2 { margin-top: 2rem; font-size: 1.25rem; color: #2a4d69;
+     border-bottom: 1px solid #d5dbe3; padding-bottom: 0.2rem; }
+.meta { margin: 0; font-size: 0.85rem; color: #555; }
+.meta code, p code { background: #eef1f5; padding: 0 0.25em; border-radius: 3px; }
+.note { background: #f2f6fa; border-left: 4px solid #4b86b4; padding: 0.6rem 1rem;
+        font-size: 0.92rem; }
+table { border-collapse: collapse; margin: 0.6rem 0 0.4rem; font-size: 0.82rem; width: 100%; }
+caption { caption-side: top; text-align: left; font-size: 0.85rem; color: #555;
+          padding-bottom: 0.3rem; }
+th, td { border: 1px solid #d5dbe3; padding: 0.25rem 0.5rem; text-align: left;
+         vertical-align: top; }
+th { background: #e8edf3; font-weight: 600; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+tbody tr:nth-child(even) td { background: #fafbfc; }
+tr.holds td { background: #e3f4e1 !important; }
+tr.fails td { background: #f9e0e0 !important; }
+.legend-holds { background: #e3f4e1; padding: 0 0.3em; }
+.legend-fails { background: #f9e0e0; padding: 0 0.3em; }
+figure { margin: 1.2rem 0; text-align: center; }
+figure img { max-width: 100%; height: auto; border: 1px solid #e1e5ea; }
+figcaption { font-size: 0.88rem; color: #444; margin-top: 0.3rem; }
+.empty { color: #888; font-style: italic; }
+footer { margin-top: 2.5rem; border-top: 1px solid #d5dbe3; padding-top: 0.6rem;
+         font-size: 0.8rem; color: #666; }
+"""
+
+
+def figure_png(fig: Figure) -> bytes:
+    """PNG bytes of a matplotlib figure, for :func:`write_report`.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; it is saved as it is (no layout change), at 120 dpi.
+
+    Returns
+    -------
+    bytes
+        The PNG file content.
+    """
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=_FIGURE_DPI)
+    return buffer.getvalue()
+
+
+def _e(value: Any) -> str:
+    """HTML-escaped text of *value* (quotes too)."""
+    return html.escape(str(value), quote=True)
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, bool):
+        return f"<td>{_e(value)}</td>"
+    if isinstance(value, int):
+        return f'<td class="num">{value}</td>'
+    if isinstance(value, float):
+        text = "—" if not math.isfinite(value) else f"{value:.4g}"
+        return f'<td class="num">{_e(text)}</td>'
+    return f"<td>{_e(value)}</td>"
+
+
+def _html_table(frame: pd.DataFrame, caption: str, *, table_id: str) -> str:
+    """A plain HTML table of *frame* (every header and cell escaped)."""
+    if frame.empty:
+        return f'<p class="empty" id="{_e(table_id)}">No runs for this table.</p>'
+    head = "".join(f"<th>{_e(col)}</th>" for col in frame.columns)
+    rows = []
+    for record in frame.itertuples(index=False):
+        cells = "".join(_cell(_plain(v)) for v in record)
+        rows.append(f"<tr>{cells}</tr>")
+    return (
+        f'<table id="{_e(table_id)}">\n<caption>{_e(caption)}</caption>\n'
+        f"<thead><tr>{head}</tr></thead>\n<tbody>\n" + "\n".join(rows) + "\n</tbody>\n</table>"
+    )
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars as Python scalars, so :func:`_cell` can tell ints from floats."""
+    item = getattr(value, "item", None)
+    return item() if callable(item) and not isinstance(value, str | bytes) else value
+
+
+def _claims_table(frame: pd.DataFrame) -> str:
+    if frame.empty:
+        return '<p class="empty" id="claims">No claim can be evaluated from these runs.</p>'
+    rows = []
+    for rec in frame.to_dict("records"):
+        k, n, share = int(rec["holds"]), int(rec["n"]), float(rec["share"])
+        css = "holds" if math.isfinite(share) and share > 0.5 else "fails"
+        rows.append(
+            f'<tr class="{css}"><td>{_e(rec["claim"])}</td><td>{_e(rec["condition"])}</td>'
+            f'<td class="num">{k} of {n}</td><td>{_e(rec["ours_mean"])}</td>'
+            f"<td>{_e(rec['paper'])}</td></tr>"
+        )
+    majority = int(((frame["share"] > 0.5) & frame["share"].notna()).sum())
+    return (
+        f"<p>{majority} of {len(frame)} claims hold in a majority of seeds "
+        '(<span class="legend-holds">green</span>: more than half of the seeds; '
+        '<span class="legend-fails">red</span>: half or fewer).</p>\n'
+        '<table id="claims">\n<caption>Comparative claims of the paper\'s Section IV, '
+        "evaluated per seed on paired runs (same condition and seed).</caption>\n"
+        "<thead><tr><th>Claim</th><th>Condition</th><th>Holds (k of n seeds)</th>"
+        "<th>Ours (mean)</th><th>Paper</th></tr></thead>\n<tbody>\n"
+        + "\n".join(rows)
+        + "\n</tbody>\n</table>"
+    )
+
+
+def _figure_block(index: int, name: str, png: bytes) -> str:
+    data = base64.b64encode(png).decode("ascii")
+    caption = f"Figure {index}. {name}"
+    return (
+        f'<figure id="figure-{index}">\n<img src="data:image/png;base64,{data}" '
+        f'alt="{_e(name)}">\n<figcaption>{_e(caption)}</figcaption>\n</figure>'
+    )
+
+
+def _run_summary(runs: pd.DataFrame) -> str:
+    def listing(column: str) -> str:
+        values = sorted({str(v) for v in runs[column].dropna()})
+        return ", ".join(values) if values else "none"
+
+    return (
+        f"{len(runs)} runs · conditions: {listing('condition')} · configurations: "
+        f"{listing('configuration')} · {runs['seed'].nunique()} seeds"
+    )
+
+
+def write_report(
+    out_dir: str | os.PathLike[str],
+    runs: pd.DataFrame,
+    *,
+    figures: Mapping[str, bytes] | None = None,
+    title: str = "hcomc reproduction",
+) -> Path:
+    """Write ``out_dir/report.html``, a self-contained report of a results table.
+
+    The page has a header (title, package version, git revision, date), a short "how to
+    read this" note, Table II (optimisers) and Table III (controllers) as built by
+    :func:`hcomc.experiments.tables.paper_table` ("ours ± 95 % CI (paper)"), the claims
+    table of :func:`hcomc.experiments.tables.claims` (rows green when the claim holds in
+    more than half of the seeds, red otherwise), every figure of *figures* with a caption,
+    and a footer. It references no external resource: styles are inline, there is no
+    script, and images are embedded as ``data:image/png;base64`` URIs. All text coming
+    from the data is HTML-escaped.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        Output directory; created if missing.
+    runs : pandas.DataFrame
+        One row per run, as written by the experiment runner (``runs.parquet``); needs the
+        columns of :data:`REQUIRED_COLUMNS`.
+    figures : mapping of str to bytes or None
+        Figure caption → PNG file content (e.g. from :func:`figure_png`), shown in order.
+    title : str
+        Page title and heading.
+
+    Returns
+    -------
+    pathlib.Path
+        Path of the written ``report.html`` (written atomically).
+
+    Raises
+    ------
+    ValueError
+        If *runs* lacks a required column or a figure is not PNG data.
+    """
+    missing = [col for col in REQUIRED_COLUMNS if col not in runs.columns]
+    if missing:
+        raise ValueError(
+            f"runs lacks the column(s) {missing} needed for the report; "
+            f"expected at least {list(REQUIRED_COLUMNS)}"
+        )
+    figures = dict(figures or {})
+    for name, png in figures.items():
+        if not isinstance(png, bytes | bytearray) or not bytes(png).startswith(_PNG_SIGNATURE):
+            raise ValueError(f"figure {name!r} is not PNG data (use figure_png(fig))")
+
+    manifest = build_manifest(seed=0, config={})
+    version = manifest["hcomc_version"]
+    revision = manifest["git_revision"]
+    created = manifest["created_utc"]
+
+    table_ii = paper_table(runs, "II")
+    table_iii = paper_table(runs, "III")
+    claim_frame = claims(runs)
+
+    figure_html = "\n".join(
+        _figure_block(i, name, bytes(png)) for i, (name, png) in enumerate(figures.items(), 1)
+    )
+    if not figure_html:
+        figure_html = '<p class="empty">No figures were included.</p>'
+
+    body = f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="hcomc {_e(version)}">
+<title>{_e(title)}</title>
+<style>{_CSS}</style>
+</head>
+<body>
+<main>
+<header>
+<h1>{_e(title)}</h1>
+<p class="meta">hcomc <code>{_e(version)}</code> · git revision <code>{_e(revision)}</code>
+· generated {_e(created)} (UTC) · Python {_e(manifest["python"])}
+· {_e(manifest["platform"])}</p>
+<p class="meta">{_e(_run_summary(runs))}</p>
+</header>
+
+<section id="how-to-read">
+<h2>How to read this</h2>
+<div class="note">
+<p>Each table cell reads <em>ours ± half-width of the 95&nbsp;% confidence interval over the
+seeds (paper value)</em>; <em>n</em> is the number of seeds with a defined value. Our metric
+definitions differ from the paper's, which does not give its own (see
+<code>docs/reproduction.md</code> in the source tree): the absolute numbers are not
+comparable, and the reproduction is judged on the paper's comparative claims (orderings and
+directions), each evaluated per seed on paired runs and reported as "holds in k of n
+seeds".</p>
+<p>Better is larger for the critical distance and smaller for the average acceleration, the
+stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.</p>
+</div>
+</section>
+
+<section id="table-ii-section">
+<h2>Table II — optimisers</h2>
+{
+        _html_table(
+            table_ii,
+            "HCOMC with PSO, SA and NSGA-II, Conditions C1–C3: ours (paper).",
+            table_id="table-ii",
+        )
+    }
+</section>
+
+<section id="table-iii-section">
+<h2>Table III — controllers</h2>
+{
+        _html_table(
+            table_iii, "FIFO, Game and HCOMC, Conditions C1–C5: ours (paper).", table_id="table-iii"
+        )
+    }
+</section>
+
+<section id="claims-section">
+<h2>Claims of Section IV, per seed</h2>
+{_claims_table(claim_frame)}
+</section>
+
+<section id="figures">
+<h2>Figures</h2>
+{figure_html}
+</section>
+
+<footer>
+<p>Generated by hcomc {_e(version)} (git revision {_e(revision)}) on {_e(created)} UTC.
+Every number on this page is computed from the runs table; nothing is written by hand.
+This page is self-contained: it loads no external resources.</p>
+</footer>
+</main>
+</body>
+</html>
+"""
+    target_dir = Path(out_dir)
+    target_dir.mkdir(parents=True, exist_ok=True)
+    target = target_dir / "report.html"
+    with atomic_paths(target) as (tmp,):
+        tmp.write_text(body, encoding="utf-8")
+    return target
