@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -40,6 +42,24 @@ ConfigArg = Annotated[
         metavar="CONFIG", help="Preset name (C1..C5, platoon) or path to a TOML config file."
     ),
 ]
+
+
+@contextmanager
+def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | None]:
+    """A progress-bar callback ``(done, total)`` on a terminal; None when output is piped."""
+    if not out.is_terminal:
+        yield None
+        return
+    with Progress(
+        TextColumn(f"[bold]{escape(label)}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+        console=out,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(label, total=total)
+        yield lambda done, _total: bar.update(task, completed=done)
 
 
 def _fail(message: str) -> typer.Exit:
@@ -96,19 +116,8 @@ def simulate(
         raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
     sim = Simulation(cfg)
     start = time.perf_counter()
-    if as_json or not out.is_terminal:
-        log = sim.run()
-    else:
-        with Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TimeRemainingColumn(),
-            console=out,
-            transient=True,
-        ) as bar:
-            task = bar.add_task(f"{cfg.name} seed {sim.seed}", total=sim.n_warmup + sim.n_steps)
-            log = sim.run(lambda done, total: bar.update(task, completed=done))
+    with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
+        log = sim.run(None if as_json else update)
     wall = time.perf_counter() - start
     summary: dict[str, Any] = {"scenario": cfg.name, "seed": sim.seed, **summarise(log)}
     summary["wall_s"] = round(wall, 4)
@@ -231,23 +240,8 @@ def _workers(workers: int | None) -> int:
 def _progress_grid(specs: list, workers: int, on_result: Any = None) -> Any:
     from hcomc.experiments.runner import run_grid
 
-    if not out.is_terminal:
-        return run_grid(specs, workers=workers, on_result=on_result)
-    with Progress(
-        TextColumn("[bold]runs"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total}"),
-        TimeRemainingColumn(),
-        console=out,
-        transient=True,
-    ) as bar:
-        task = bar.add_task("runs", total=len(specs))
-        return run_grid(
-            specs,
-            workers=workers,
-            on_result=on_result,
-            progress=lambda done, total: bar.update(task, completed=done),
-        )
+    with _progress("runs", len(specs)) as update:
+        return run_grid(specs, workers=workers, on_result=on_result, progress=update)
 
 
 def _frame_table(frame: Any, title: str) -> Table:
@@ -393,25 +387,8 @@ def sweep(
     runs = expand(plan)
     skipped = sum((target / "parts" / f"{run_key(r)}.parquet").exists() for r in runs)
     start = time.perf_counter()
-    if out.is_terminal:
-        with Progress(
-            TextColumn("[bold]sweep"),
-            BarColumn(),
-            TextColumn("{task.completed}/{task.total}"),
-            TimeRemainingColumn(),
-            console=out,
-            transient=True,
-        ) as bar:
-            task = bar.add_task("sweep", total=len(runs))
-            table = run_sweep(
-                plan,
-                target,
-                workers=n_workers,
-                scheduler=scheduler,
-                progress=lambda done, total: bar.update(task, completed=done),
-            )
-    else:
-        table = run_sweep(plan, target, workers=n_workers, scheduler=scheduler)
+    with _progress("sweep", len(runs)) as update:
+        table = run_sweep(plan, target, workers=n_workers, scheduler=scheduler, progress=update)
     backend = scheduler or f"{n_workers} local processes"
     out.print(
         f"{len(table)} runs ({len(runs) - skipped} new, {skipped} already done) on {backend} in "

@@ -80,7 +80,7 @@ from hcomc.config import ScenarioConfig
 from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, _nearest
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import VMC, VR, warm_up
+from hcomc.control.hcomc.rollout import VMC, VR
 from hcomc.sim.road import Kind, Lane
 
 __all__ = [
@@ -235,7 +235,19 @@ def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
     return out
 
 
-class FIFOController:
+class PredictingBaseline:
+    """Shared part of the baselines: HCOMC's longitudinal merge problem used as a predictor."""
+
+    def __init__(self, config: ScenarioConfig) -> None:
+        self.config = config
+        self._hcomc = HCOMCController(config)  # also loads the compiled rollout
+
+    def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
+        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
+        return self._hcomc.problem(view, group, lateral_allowed=False)
+
+
+class FIFOController(PredictingBaseline):
     """First-in-first-out merge sequencing with longitudinal cooperation (Ntousakis 2016).
 
     Parameters
@@ -252,15 +264,6 @@ class FIFOController:
     """
 
     name = "fifo"
-
-    def __init__(self, config: ScenarioConfig) -> None:
-        warm_up()  # load the compiled rollout now, not inside a timed decision
-        self.config = config
-        self._hcomc = HCOMCController(config)
-
-    def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
-        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
-        return self._hcomc.problem(view, group, lateral_allowed=False)
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
         """Order VR, VMC, VMF by predicted arrival and let the follower of VR's slot yield.

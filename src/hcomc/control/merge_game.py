@@ -109,9 +109,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
-from hcomc.config import ScenarioConfig
 from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.control.fifo import (
+    PredictingBaseline,
     behind_group,
     merge_position,
     predict_longitudinal,
@@ -120,9 +120,8 @@ from hcomc.control.fifo import (
     with_cooperation,
 )
 from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR, warm_up
+from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR
 from hcomc.safety.critical import DELAY_CAV, DELAY_HDV, critical_acceleration
 from hcomc.sim.road import Kind
 
@@ -364,7 +363,7 @@ def _ms(start: float) -> float:
     return (time.perf_counter() - start) * 1000.0
 
 
-class GameController:
+class GameController(PredictingBaseline):
     """Kita-style 2x2 ramp-merging game (Liao et al. 2022), longitudinal execution.
 
     Parameters
@@ -381,15 +380,6 @@ class GameController:
     """
 
     name = "game"
-
-    def __init__(self, config: ScenarioConfig) -> None:
-        warm_up()  # load the compiled rollout now, not inside a timed decision
-        self.config = config
-        self._hcomc = HCOMCController(config)
-
-    def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
-        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
-        return self._hcomc.problem(view, group, lateral_allowed=False)
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
         """Solve the 2x2 game between VR and the lag vehicle and execute its outcome."""
