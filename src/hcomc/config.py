@@ -115,6 +115,11 @@ class LaneChangeParams(_Frozen):
     emergency_decel: float = Field(
         9.0, gt=0, le=15, description="physical braking limit applied to every vehicle [m/s^2]"
     )
+    cav_game: bool = Field(
+        False,
+        description="CAV discretionary changes accepted by MOBIL must also be the SV's "
+        "equilibrium action of the Section III-B Stackelberg/Harsanyi game",
+    )
 
 
 class RoadParams(_Frozen):

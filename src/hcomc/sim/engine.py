@@ -412,7 +412,42 @@ class Simulation:
             self.fleet, snap, index, cand, lane[pos], lead[pos], index.follower_of(pos),
             self.config.lane_change,
         )  # fmt: skip
+        if self.config.lane_change.cav_game and chosen.size:
+            keep = self._game_confirms(chosen, target, ids, lead, index)
+            chosen, target = chosen[keep], target[keep]
         self._start_lane_changes(chosen, target, t)
+
+    def _game_confirms(
+        self, chosen: IntArray, target: IntArray, ids: IntArray, lead: IntArray, index: LaneIndex
+    ) -> np.ndarray:
+        """Section III-B: a CAV's discretionary change must be its game equilibrium action
+        (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected."""
+        from hcomc.control.lane_change_game import GameVehicle, lane_change_game
+
+        def vehicle(i: int) -> GameVehicle | None:
+            if i < 0:
+                return None
+            return GameVehicle(
+                x=float(self.x[i]), v=float(self.v[i]), length=float(self.fleet.length[i]),
+                desired_speed=float(self.fleet.v0[i]),
+                is_cav=bool(self.fleet.kind[i] == Kind.CAV),
+            )  # fmt: skip
+
+        keep = np.ones(chosen.size, dtype=bool)
+        new_lead, new_fol = index.lookup(target, self.x[chosen])
+        old_lead = lead[np.searchsorted(ids, chosen)]
+        cfg = self.config
+        for k, i in enumerate(chosen.tolist()):
+            if self.fleet.kind[i] != Kind.CAV or self.lane[i] == Lane.RAMP:
+                continue
+            fol = int(new_fol[k])
+            fv_idm = cfg.cav if fol >= 0 and self.fleet.kind[fol] == Kind.CAV else cfg.hdv
+            decision = lane_change_game(
+                vehicle(i), vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
+                sv_idm=cfg.cav, fv_idm=fv_idm,
+            )  # fmt: skip
+            keep[k] = decision.change
+        return keep
 
     def _start_lane_changes(
         self, chosen: IntArray, target: IntArray, t: float, duration: FloatArray | None = None
