@@ -90,6 +90,7 @@ class Simulation:
         self.lc_xf = np.ones(n)
         self.active = np.zeros(n, dtype=bool)
         self.waited = np.zeros(n, dtype=bool)
+        self._profile = np.asarray(config.platoon.profile, dtype=np.float64)  # scripted leader
         self.lc_dur = self.fleet.lc_duration.copy()  # a merge plan may set VR's duration
         if controller is None:
             from hcomc.control.registry import make_controller
@@ -271,8 +272,7 @@ class Simulation:
         """Scripted leaders reach the profile speed at t + dt exactly."""
         scripted = self.fleet.scripted[ids]
         if scripted.any():
-            profile = np.asarray(self.config.platoon.profile, dtype=np.float64)
-            target = np.interp(t + self.dt, profile[:, 0], profile[:, 1])
+            target = np.interp(t + self.dt, self._profile[:, 0], self._profile[:, 1])
             acc[scripted] = (target - self.v[ids[scripted]]) / self.dt
         return acc
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import CAVParams, HDVParams, ScenarioConfig
+from hcomc.config import ScenarioConfig
 from hcomc.models.cav import acc_acceleration, cah_acceleration
 from hcomc.models.idm import idm_acceleration, iidm_acceleration
 from hcomc.sim.road import Kind
@@ -24,19 +24,21 @@ class Fleet:
     """Constant per-vehicle parameters, shape (N,) each; symbols as in Eq. 1-3."""
 
     kind: IntArray
-    v0: FloatArray
-    T: FloatArray
-    s0: FloatArray
-    a: FloatArray
-    b: FloatArray
-    delta: FloatArray
-    coolness: FloatArray
+    matrix: FloatArray  # (7, N): v0, T, s0, a, b, delta, coolness — one gather per call
     iidm: BoolArray
     lc_duration: FloatArray
     length: FloatArray
     width: FloatArray
     scripted: BoolArray
-    matrix: FloatArray  # (7, N): v0, T, s0, a, b, delta, coolness — one gather per call
+
+    # the Eq. 1-3 parameters, by symbol: rows (views) of ``matrix``
+    v0 = property(lambda self: self.matrix[0], doc="desired speed v0 [m/s]")
+    T = property(lambda self: self.matrix[1], doc="time headway T [s]")
+    s0 = property(lambda self: self.matrix[2], doc="jam distance s0 [m]")
+    a = property(lambda self: self.matrix[3], doc="maximum acceleration a [m/s^2]")
+    b = property(lambda self: self.matrix[4], doc="comfortable deceleration b [m/s^2]")
+    delta = property(lambda self: self.matrix[5], doc="acceleration exponent delta [-]")
+    coolness = property(lambda self: self.matrix[6], doc="coolness c (0 for HDVs) [-]")
 
     @classmethod
     def build(cls, config: ScenarioConfig, kind: IntArray, scripted: BoolArray) -> Fleet:
@@ -48,19 +50,12 @@ class Fleet:
             return np.where(is_cav, float(getattr(cav, field)), float(getattr(hdv, field)))
 
         n = kind.size
-        columns = {
-            "v0": pick("desired_speed"),
-            "T": pick("time_headway"),
-            "s0": pick("min_gap"),
-            "a": pick("max_accel"),
-            "b": pick("comfort_decel"),
-            "delta": pick("exponent"),
-            "coolness": np.where(is_cav, cav.coolness, 0.0),
-        }
+        fields = ("desired_speed", "time_headway", "min_gap", "max_accel", "comfort_decel",
+                  "exponent")  # fmt: skip
+        matrix = np.vstack([*(pick(f) for f in fields), np.where(is_cav, cav.coolness, 0.0)])
         return cls(
             kind=kind,
-            **columns,
-            matrix=np.vstack(list(columns.values())),
+            matrix=matrix,
             iidm=np.where(is_cav, cav.variant == "iidm", hdv.variant == "iidm"),
             lc_duration=pick("lane_change_duration"),
             length=np.full(n, config.road.vehicle_length),
@@ -99,8 +94,3 @@ def follow(
         cah = cah_acceleration(np.where(cooperative, s, 1.0), v, vl, al, a=a)
         acc = np.where(cooperative, acc_acceleration(acc, cah, b=b, c=c), acc)
     return acc
-
-
-def params_of(config: ScenarioConfig, kind: int) -> HDVParams | CAVParams:
-    """The parameter model of a vehicle kind."""
-    return config.cav if kind == Kind.CAV else config.hdv
