@@ -20,6 +20,7 @@ acceptance); without VMF or VNF the road ahead is free (planners use a phantom f
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import TYPE_CHECKING, Any, Protocol
@@ -113,6 +114,11 @@ class MergePlan:
     objectives: dict[str, float] = field(default_factory=dict)
     decision_ms: float = 0.0
     details: dict[str, Any] = field(default_factory=dict)
+
+
+def elapsed_ms(start: float) -> float:
+    """Milliseconds since ``start`` (a :func:`time.perf_counter` value): a decision's time."""
+    return (time.perf_counter() - start) * 1000.0
 
 
 class MergeController(Protocol):

@@ -75,9 +75,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, _nearest
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    _nearest,
+    elapsed_ms,
+)
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
 from hcomc.control.hcomc.rollout import VMC, VR
@@ -221,10 +227,6 @@ def _is_cav(view: TrafficView, i: int) -> bool:
     return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
 
 
-def _ms(start: float) -> float:
-    return (time.perf_counter() - start) * 1000.0
-
-
 def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
     """FIFO arrival times respecting a minimum headway: ``t_k = max(t_k, t_{k-1} + h)``."""
     out: dict[str, float] = {}
@@ -282,10 +284,15 @@ class FIFOController(PredictingBaseline):
         }
         if group.vmc < 0:
             return MergePlan(
-                group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                group,
+                Mode.NONE,
+                view.t,
+                merge_x=merge_x,
+                vr_duration=vr_duration,
                 reason="FIFO: no lane-1 vehicle behind VR, nobody to yield",
-                decision_ms=_ms(start), details={**details, "slot": "ahead", "yielding": -1},
-            )  # fmt: skip
+                decision_ms=elapsed_ms(start),
+                details={**details, "slot": "ahead", "yielding": -1},
+            )
         ahead = arrivals["VR"] < arrivals["VMC"]
         slot = "ahead" if ahead else "behind"
         exec_group = group if ahead else behind_group(view, group)
@@ -297,30 +304,72 @@ class FIFOController(PredictingBaseline):
         if not _is_cav(view, yielding):
             who = "no vehicle behind the slot" if yielding < 0 else "the yielding vehicle is an HDV"
             return MergePlan(
-                exec_group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
-                horizon=horizon, reason=f"FIFO: {what}; {who}, no cooperation",
-                decision_ms=_ms(start), details=details,
-            )  # fmt: skip
+                exec_group,
+                Mode.NONE,
+                view.t,
+                merge_x=merge_x,
+                vr_duration=vr_duration,
+                horizon=horizon,
+                reason=f"FIFO: {what}; {who}, no cooperation",
+                decision_ms=elapsed_ms(start),
+                details=details,
+            )
         problem = self.problem(view, exec_group)
         pred, horizon = predict_longitudinal(problem, merge_x, vr_duration, horizon, h_max)
         details.update(prediction=pred, feasible=bool((pred.G[0] <= 0.0).all()))
-        if not virtual_vehicle_feasible(pred):
-            return MergePlan(
-                exec_group, Mode.NONE, view.t, horizon=horizon, fallback=True,
-                reason=f"FIFO: {what}; VV1 infeasible, VR merges by gap acceptance",
-                decision_ms=_ms(start), details=details,
-            )  # fmt: skip
-        return MergePlan(
-            exec_group, Mode.LONGITUDINAL, view.t, merge_x=merge_x, vr_duration=vr_duration,
-            horizon=horizon, vv1=_copy(pred.vv1[0]), reason=f"FIFO: {what}",
-            objectives=_objectives(pred), decision_ms=_ms(start), details=details,
-        )  # fmt: skip
+        return longitudinal_plan(
+            exec_group,
+            view.t,
+            pred,
+            merge_x=merge_x,
+            vr_duration=vr_duration,
+            horizon=horizon,
+            reason=f"FIFO: {what}",
+            start=start,
+            details=details,
+        )
 
 
-def _copy(b: FloatArray) -> FloatArray:
-    return np.array(b, dtype=np.float64)
-
-
-def _objectives(pred: Prediction) -> dict[str, float]:
+def predicted_objectives(pred: Prediction) -> dict[str, float]:
     """Predicted HCOMC objectives of the executed candidate (for reporting)."""
     return dict(zip(OBJECTIVES, map(float, pred.F[0]), strict=True))
+
+
+def longitudinal_plan(
+    group: MergeGroup,
+    t0: float,
+    pred: Prediction,
+    *,
+    merge_x: float,
+    vr_duration: float,
+    horizon: float,
+    reason: str,
+    start: float,
+    details: dict,
+) -> MergePlan:
+    """The yielding vehicle follows the predicted VV1, or, if that virtual vehicle is
+    infeasible, the safe fallback (VR merges by gap acceptance, nobody commanded)."""
+    if not virtual_vehicle_feasible(pred):
+        return MergePlan(
+            group,
+            Mode.NONE,
+            t0,
+            horizon=horizon,
+            fallback=True,
+            reason=f"{reason}; VV1 infeasible, VR merges by gap acceptance",
+            decision_ms=elapsed_ms(start),
+            details=details,
+        )
+    return MergePlan(
+        group,
+        Mode.LONGITUDINAL,
+        t0,
+        merge_x=merge_x,
+        vr_duration=vr_duration,
+        horizon=horizon,
+        vv1=np.array(pred.vv1[0], dtype=np.float64),
+        reason=reason,
+        objectives=predicted_objectives(pred),
+        decision_ms=elapsed_ms(start),
+        details=details,
+    )

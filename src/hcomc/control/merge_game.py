@@ -109,18 +109,20 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
 from hcomc.control.fifo import (
     PredictingBaseline,
     behind_group,
+    longitudinal_plan,
     merge_position,
     predict_longitudinal,
+    predicted_objectives,
     reach_horizon,
     virtual_vehicle_feasible,
     with_cooperation,
 )
 from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
+from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
 from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR
 from hcomc.safety.critical import DELAY_CAV, DELAY_HDV, critical_acceleration
 from hcomc.sim.road import Kind
@@ -296,10 +298,13 @@ def true_u_safe(pred: Prediction, problem: MergeProblem, cav: ArrayLike, row: in
         lead = min(ahead, key=lambda j: x[j])
         d = x[lead] - s.params[lead, P_LEN] - x[r]
         a_cr = critical_acceleration(
-            d, v[r], v[lead], delay=DELAY_CAV if cav[r] else DELAY_HDV,
+            d,
+            v[r],
+            v[lead],
+            delay=DELAY_CAV if cav[r] else DELAY_HDV,
             min_distance=float(problem.consts[C_D]),
             emergency_decel=float(problem.consts[C_A_MERG]),
-        )  # fmt: skip
+        )
         worst = max(worst, float(a_cr))
     return worst
 
@@ -359,10 +364,6 @@ def _is_cav(view: TrafficView, i: int) -> bool:
     return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
 
 
-def _ms(start: float) -> float:
-    return (time.perf_counter() - start) * 1000.0
-
-
 class GameController(PredictingBaseline):
     """Kita-style 2x2 ramp-merging game (Liao et al. 2022), longitudinal execution.
 
@@ -388,10 +389,15 @@ class GameController(PredictingBaseline):
         merge_x, vr_duration = merge_position(view, vr)
         if group.vmc < 0:
             return MergePlan(
-                group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
+                group,
+                Mode.NONE,
+                view.t,
+                merge_x=merge_x,
+                vr_duration=vr_duration,
                 reason="game: no lane-1 vehicle behind VR, no game to play",
-                decision_ms=_ms(start), details={"outcome": None, "groups": (group,)},
-            )  # fmt: skip
+                decision_ms=elapsed_ms(start),
+                details={"outcome": None, "groups": (group,)},
+            )
         h_max = float(view.config.control.horizon_max)
         threshold = float(view.config.control.safety_threshold)
         groups = (group, behind_group(view, group))
@@ -430,23 +436,25 @@ class GameController(PredictingBaseline):
         commands = outcome.col == YIELD and _is_cav(view, exec_group.vmc)
         if not commands:
             return MergePlan(
-                exec_group, Mode.NONE, view.t, merge_x=merge_x, vr_duration=vr_duration,
-                horizon=horizon, reason=f"{what}; no vehicle commanded",
-                objectives=_objectives(pred), decision_ms=_ms(start), details=details,
-            )  # fmt: skip
-        if not virtual_vehicle_feasible(pred):
-            return MergePlan(
-                exec_group, Mode.NONE, view.t, horizon=horizon, fallback=True,
-                reason=f"{what}; VV1 infeasible, VR merges by gap acceptance",
-                decision_ms=_ms(start), details=details,
-            )  # fmt: skip
-        return MergePlan(
-            exec_group, Mode.LONGITUDINAL, view.t, merge_x=merge_x, vr_duration=vr_duration,
-            horizon=horizon, vv1=np.array(pred.vv1[0], dtype=np.float64), reason=what,
-            objectives=_objectives(pred), decision_ms=_ms(start), details=details,
-        )  # fmt: skip
-
-
-def _objectives(pred: Prediction) -> dict[str, float]:
-    """Predicted HCOMC objectives of the played cell (for reporting)."""
-    return dict(zip(OBJECTIVES, map(float, pred.F[0]), strict=True))
+                exec_group,
+                Mode.NONE,
+                view.t,
+                merge_x=merge_x,
+                vr_duration=vr_duration,
+                horizon=horizon,
+                reason=f"{what}; no vehicle commanded",
+                objectives=predicted_objectives(pred),
+                decision_ms=elapsed_ms(start),
+                details=details,
+            )
+        return longitudinal_plan(
+            exec_group,
+            view.t,
+            pred,
+            merge_x=merge_x,
+            vr_duration=vr_duration,
+            horizon=horizon,
+            reason=what,
+            start=start,
+            details=details,
+        )

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
 from hcomc.control.hcomc.problem import OBJECTIVES, KeyState, MergeProblem
 from hcomc.control.hcomc.rollout import VMC, VMF, VNF, VR, warm_up
 from hcomc.control.lane_change_game import GameVehicle, LaneChangeDecision, lane_change_game
@@ -54,9 +54,15 @@ def key_state(view: TrafficView, group: MergeGroup) -> KeyState:
             present[role] = True
     x[~present] = -1e9  # absent followers never interact
     return KeyState(
-        t0=view.t, x=x, v=v, a=a, present=present, cav=cav, params=params,
+        t0=view.t,
+        x=x,
+        v=v,
+        a=a,
+        present=present,
+        cav=cav,
+        params=params,
         ids=np.where(ids >= 0, ids, -1),
-    )  # fmt: skip
+    )
 
 
 def _game_vehicle(view: TrafficView, i: int) -> GameVehicle | None:
@@ -64,9 +70,12 @@ def _game_vehicle(view: TrafficView, i: int) -> GameVehicle | None:
         return None
     f = view.fleet
     return GameVehicle(
-        x=float(view.x[i]), v=float(view.v[i]), length=float(f.length[i]),
-        desired_speed=float(f.v0[i]), is_cav=bool(f.kind[i] == Kind.CAV),
-    )  # fmt: skip
+        x=float(view.x[i]),
+        v=float(view.v[i]),
+        length=float(f.length[i]),
+        desired_speed=float(f.v0[i]),
+        is_cav=bool(f.kind[i] == Kind.CAV),
+    )
 
 
 class HCOMCController:
@@ -116,8 +125,13 @@ class HCOMCController:
         """Plan VR's merge and the key vehicles' cooperation."""
         start = time.perf_counter()
         if group.vmc < 0:
-            return MergePlan(group, Mode.NONE, view.t, reason="no lane-1 vehicle behind VR",
-                             decision_ms=_ms(start))  # fmt: skip
+            return MergePlan(
+                group,
+                Mode.NONE,
+                view.t,
+                reason="no lane-1 vehicle behind VR",
+                decision_ms=elapsed_ms(start),
+            )
         vmc_cav = bool(view.fleet.kind[group.vmc] == Kind.CAV)
         game = self.lateral_game(view, group) if vmc_cav else None
         lateral_allowed = game is not None and (game.change or game.change_is_safe)
@@ -128,12 +142,20 @@ class HCOMCController:
                    "optimizer": result.algorithm, "game": game}  # fmt: skip
         if not result.any_feasible:
             return MergePlan(
-                group, Mode.NONE, view.t, fallback=True, decision_ms=_ms(start),
+                group,
+                Mode.NONE,
+                view.t,
+                fallback=True,
+                decision_ms=elapsed_ms(start),
                 reason="no feasible candidate: VR merges by gap acceptance behind VMC",
                 details=details,
-            )  # fmt: skip
-        k = select_eq19(result.F, OBJECTIVES, feasible=result.feasible,
-                        safety_threshold=self.config.control.safety_threshold)  # fmt: skip
+            )
+        k = select_eq19(
+            result.F,
+            OBJECTIVES,
+            feasible=result.feasible,
+            safety_threshold=self.config.control.safety_threshold,
+        )
         x = result.X[k]
         chosen = problem.predict(x[None, :])
         lateral = bool(x[3] >= 0.5)
@@ -141,18 +163,19 @@ class HCOMCController:
         details.update(chosen=k, prediction=chosen)
         vnr_cav = group.vnr >= 0 and view.fleet.kind[group.vnr] == Kind.CAV
         return MergePlan(
-            group, mode, view.t,
-            merge_x=float(x[0]), vr_duration=float(x[1]), horizon=float(x[2]),
+            group,
+            mode,
+            view.t,
+            merge_x=float(x[0]),
+            vr_duration=float(x[1]),
+            horizon=float(x[2]),
             vv1=chosen.vv1[0] if mode == Mode.LONGITUDINAL else None,
             vv2=chosen.vv2[0] if mode == Mode.LATERAL and vnr_cav else None,
             reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}",
             objectives=dict(zip(OBJECTIVES, map(float, result.F[k]), strict=True)),
-            decision_ms=_ms(start), details=details,
-        )  # fmt: skip
-
-
-def _ms(start: float) -> float:
-    return (time.perf_counter() - start) * 1000.0
+            decision_ms=elapsed_ms(start),
+            details=details,
+        )
 
 
 __all__ = ["HCOMCController", "key_state"]
