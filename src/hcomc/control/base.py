@@ -99,6 +99,8 @@ class MergePlan:
     objectives : objective values of the chosen plan (safety, fuel, efficiency).
     decision_ms : wall time of the decision [ms].
     details : controller-specific extras (Pareto set, game outcome, …) for reporting.
+    sequence : merge sequence, "ahead" (VR between VMF and VMC) or "behind" (VR between VMC
+        and VMR), with the roles of the key group found at planning time.
     """
 
     group: MergeGroup
@@ -114,6 +116,7 @@ class MergePlan:
     objectives: dict[str, float] = field(default_factory=dict)
     decision_ms: float = 0.0
     details: dict[str, Any] = field(default_factory=dict)
+    sequence: str = "ahead"
 
 
 def elapsed_ms(start: float) -> float:

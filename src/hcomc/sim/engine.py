@@ -67,8 +67,11 @@ class Simulation:
         config: ScenarioConfig,
         seed: int | None = None,
         controller: MergeController | None = None,
+        *,
+        counterfactual: bool = False,
     ) -> None:
         self.config = config
+        self.counterfactual = counterfactual
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
         self.dt = config.dt
@@ -98,6 +101,7 @@ class Simulation:
             controller = make_controller(config)
         self.controller = controller
         self.planned = np.zeros(n, dtype=bool)
+        self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
         self.plans: list[ActivePlan] = []
         self.decisions: list[MergePlan] = []
         self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
@@ -108,7 +112,14 @@ class Simulation:
             self.perception.errors
             or max(hdv.reaction_time_gap, hdv.reaction_time_speed, hdv.reaction_time_approach) > 0
         )
-        self._queues = [np.flatnonzero(demand.lane == lane) for lane in Lane]
+        # the undisturbed counterfactual: the same demand and random streams, but ramp
+        # vehicles are never released (nothing merges)
+        self._queues = [
+            np.flatnonzero(demand.lane == lane)
+            if not (counterfactual and lane == Lane.RAMP)
+            else np.empty(0, dtype=np.int64)
+            for lane in Lane
+        ]
         self._queue_pos = [0] * len(Lane)
         self._colliding: set[tuple[int, int]] = set()
         self.n_warmup = round(config.warmup / self.dt)
@@ -206,6 +217,7 @@ class Simulation:
         other = np.where(crossed, self.origin[ch], self.target[ch])[also]
         entries = np.concatenate([ids, ch[also]])
         index = build_lane_index(entries, np.concatenate([self.lane[ids], other]), self.x[entries])
+        self._identify_key_vehicles(ids, changing, t)
         if self.controller is not None:
             self._plan_new(ids, changing, t)
         lead = index.leader_of(np.arange(ids.size))
@@ -290,6 +302,29 @@ class Simulation:
             active=frozen(self.active), changing=frozen(self.origin != self.target),
             fleet=self.fleet, config=self.config,
         )  # fmt: skip
+
+    def _identify_key_vehicles(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
+        """Record each ramp vehicle's key vehicles when it enters the control zone.
+
+        This happens for every run, with or without a controller and before any control
+        acts, so metrics compare the same physical vehicles across controllers.
+        """
+        new = ids[
+            (self.lane[ids] == Lane.RAMP)
+            & ~changing
+            & (self.x[ids] >= self.config.road.control_zone_start)
+        ]
+        for vr in new.tolist():
+            if vr in self.key_groups:
+                continue
+            group = find_key_vehicles(self._view(t), vr)
+            self.key_groups[vr] = group
+            self.log.meta.setdefault("key_groups", []).append({"t": float(t), **group.as_dict()})
+
+    @property
+    def key_group(self) -> MergeGroup | None:
+        """Key vehicles of the first ramp vehicle that entered the control zone (or None)."""
+        return next(iter(self.key_groups.values()), None)
 
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Ask the controller for a plan when a ramp vehicle enters the control zone."""
