@@ -255,7 +255,28 @@ class ControlParams(_Frozen):
         le=15,
         description="b_max: a virtual vehicle braking harder is rejected (= a_merg) [m/s^2]",
     )
-    safety_threshold: float = Field(4.0, gt=0, le=10, description="Eq. 19 gate on U_safe [m/s^2]")
+    safety_threshold: float = Field(
+        4.0, gt=0, le=10, description="Eq. 19 gate on U_safe (= MOBIL b_safe) [m/s^2]"
+    )
+    safety_delay_cav: float = Field(
+        0.5, ge=0, le=5, description="Eq. 15 delay T of a CAV follower [s]"
+    )
+    safety_delay_hdv: float = Field(
+        1.0, ge=0, le=5, description="Eq. 15 delay T of an HDV follower (reaction + brake) [s]"
+    )
+    safety_min_distance: float = Field(
+        2.0, ge=0, le=50, description="Eq. 15 residual distance D (= s0) [m]"
+    )
+    safety_emergency_decel: float = Field(
+        7.5, gt=0, le=15, description="Eq. 15 a_merg, leader's emergency deceleration [m/s^2]"
+    )
+    replan_period: float = Field(
+        1.0,
+        ge=0,
+        le=60,
+        description="receding horizon: re-identify the key vehicles and replan every this many "
+        "seconds until VR starts its lane change; 0 = plan once at control-zone entry [s]",
+    )
 
 
 class ScenarioConfig(_Frozen):

@@ -10,8 +10,15 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, find_key_vehicles
-from hcomc.control.fifo import FIFOController, behind_group, merge_position, with_cooperation
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    behind_group,
+    find_key_vehicles,
+)
+from hcomc.control.fifo import FIFOController, merge_position, with_cooperation
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.rollout import VMC
 from hcomc.control.merge_game import (
@@ -25,10 +32,10 @@ from hcomc.control.merge_game import (
     solve_merge_game,
 )
 from hcomc.control.registry import make_controller
+from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.road import Kind, Lane
 
 CONTROLLERS = ("fifo", "game")
 CONDITIONS = ("C1", "C2", "C3", "C4", "C5")
@@ -152,9 +159,9 @@ def test_fifo_vr_arriving_first_keeps_the_group_and_vmc_yields():
     plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
     assert plan.group == group
     assert plan.mode == Mode.LONGITUDINAL
-    assert plan.details["sequence"] == ["VMF", "VR", "VMC"]
+    assert plan.details["order"] == ["VMF", "VR", "VMC"]
     assert plan.details["arrival"]["VR"] == pytest.approx(3.0 + 310.0 / 25.0)
-    assert plan.details["slot"] == "ahead"
+    assert plan.sequence == "ahead"
     assert plan.details["yielding"] == 2
     # VV1 starts at VMF's state (Eq. 8-10) and is the prediction's cubic
     np.testing.assert_allclose(plan.vv1[:2], [480.0, 30.0])
@@ -166,7 +173,8 @@ def test_fifo_vmc_arriving_first_relabels_the_group_so_vmr_yields():
     view = _view(vmc_x=390.0, vmc_v=32.0)  # t_VMC = 320/32 = 10 s < t_VR = 12.4 s
     group = find_key_vehicles(view, 0)
     plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
-    assert plan.details["sequence"] == ["VMF", "VMC", "VR"]
+    assert plan.details["order"] == ["VMF", "VMC", "VR"]
+    assert plan.sequence == "behind"
     assert plan.group == MergeGroup(vr=0, vmc=3, vmf=2, vmr=4, vnf=5, vnr=6)
     assert plan.group == behind_group(view, group)
     assert plan.mode == Mode.LONGITUDINAL
@@ -197,10 +205,12 @@ def test_with_cooperation_copies_and_switches_only_the_vmc_flag():
     view = _view(vmc_x=330.0, vmc_v=30.0)
     problem = FIFOController(view.config).problem(view, find_key_vehicles(view, 0))
     off = with_cooperation(problem, False)
-    assert problem.state.cav[VMC]
-    assert not off.state.cav[VMC]
-    np.testing.assert_array_equal(off.state.cav[:VMC], problem.state.cav[:VMC])
-    row = np.array([[710.0, 4.0, 11.0, 0.0]])
+    assert problem.state.coop[VMC]
+    assert not off.state.coop[VMC]
+    assert not off.states[1].coop[VMC]  # both sequences
+    np.testing.assert_array_equal(off.state.coop[:VMC], problem.state.coop[:VMC])
+    np.testing.assert_array_equal(off.state.cav, problem.state.cav)  # kinds are untouched
+    row = np.array([[710.0, 4.0, 11.0, 0.0, 0.0]])
     yield_, keep = problem.predict(row), off.predict(row)
     np.testing.assert_array_equal(yield_.vv1, keep.vv1)  # VV1 is fixed before the joint pass
     np.testing.assert_array_equal(yield_.X[0, :, 0], keep.X[0, :, 0])  # VR ignores VMC's choice

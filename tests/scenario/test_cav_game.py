@@ -8,9 +8,9 @@ import numpy as np
 
 import hcomc.control.lane_change_game as game_module
 from hcomc.config import load_config
+from hcomc.road import Kind, Lane
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import EventKind
-from hcomc.sim.road import Kind, Lane
 
 
 def _config(cav_game: bool):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
+from hcomc.road import Kind, Lane
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import EventKind
-from hcomc.sim.road import Kind, Lane
 
 CONDITIONS = ["C1", "C2", "C3", "C4", "C5"]
 

@@ -17,9 +17,9 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.models.quintic import lateral_offset
 from hcomc.models.transition import transition_weight
+from hcomc.road import Lane, lane_centre
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.road import Lane, lane_centre
 
 SEEDS = [1, 2, 3]
 TOL_Y = 1e-4  # [m], float32 log of |y| <= 3.75 m is good to ~5e-7

@@ -159,7 +159,9 @@ def test_expected_cost_equals_sigma_weighted_cost(
     prior[-1] = 1.0 - prior[:-1].sum()
     sol = solve_stackelberg_harsanyi(sv, fv, prior)
     # With a type-independent SV cost, E(s) = Σ_f σ(f|s) J_SV(s, f) (MODELS §9 step 3).
-    np.testing.assert_allclose(sol.expected_cost, (sol.fv_mixed * sv).sum(axis=1), rtol=1e-12)
+    np.testing.assert_allclose(
+        sol.expected_cost, (sol.fv_mixed * sv).sum(axis=1), rtol=1e-12, atol=1e-12
+    )
     np.testing.assert_allclose(sol.fv_mixed.sum(axis=1), 1.0, rtol=1e-12)
     for s in range(2):
         for th in range(3):

@@ -17,10 +17,10 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from hcomc.config import LaneChangeParams, load_config
+from hcomc.road import Kind, Lane
 from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.mobil import Snapshot, _resolve, decide
 from hcomc.sim.neighbours import LaneIndex, build_lane_index
-from hcomc.sim.road import Kind, Lane
 
 CFG = load_config("C1")
 LC: LaneChangeParams = CFG.lane_change

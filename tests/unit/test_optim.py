@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -17,6 +19,8 @@ from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, make_optimizer
 from hcomc.optim.selection import non_dominated, select_eq19
 
+PAPER_THRESHOLD = 4.0  # the paper's Eq. 19 gate on U_safe [m/s^2]
+eq19 = partial(select_eq19, safety_threshold=PAPER_THRESHOLD)
 NAMES = ("safety", "fuel", "efficiency")
 
 
@@ -130,52 +134,52 @@ def test_select_eq19_safe_branch_normalised_sums() -> None:
     )
     # subset {0, 1, 3}: fuel 10, 14, 11 -> 0, 1, 0.25; efficiency -1, -3, -2 -> 1, 0, 0.5
     # sums 1.0, 1.0, 0.75 -> row 3
-    assert select_eq19(F, NAMES) == 3
+    assert eq19(F, NAMES) == 3
 
 
 def test_select_eq19_ties_in_sum_go_to_lower_index() -> None:
     F = np.array([[3.0, 10.0, -1.0], [2.0, 14.0, -3.0], [4.0, 12.0, -2.0]])
     # fuel 0, 1, 0.5; efficiency 1, 0, 0.5 -> sums all 1.0
-    assert select_eq19(F, NAMES) == 0
+    assert eq19(F, NAMES) == 0
 
 
 def test_select_eq19_unsafe_branch_min_safety_then_fuel_then_index() -> None:
     F = np.array([[6.0, 1.0, 0.0], [5.0, 3.0, -5.0], [5.0, 2.0, 0.0], [7.0, 0.0, -9.0]])
-    assert select_eq19(F, NAMES) == 2  # safety 5 twice; lower fuel wins
+    assert eq19(F, NAMES) == 2  # safety 5 twice; lower fuel wins
     F2 = np.array([[6.0, 1.0, 0.0], [5.0, 2.0, 0.0], [5.0, 2.0, -1.0]])
-    assert select_eq19(F2, NAMES) == 1  # full tie on safety and fuel: lower index
+    assert eq19(F2, NAMES) == 1  # full tie on safety and fuel: lower index
 
 
 def test_select_eq19_threshold_is_a_parameter() -> None:
     F = np.array([[4.5, 1.0, 0.0], [3.0, 5.0, 0.0]])
-    assert select_eq19(F, NAMES) == 1
-    assert select_eq19(F, NAMES, safety_threshold=5.0) == 0
-    assert select_eq19(F, NAMES, safety_threshold=2.0) == 1  # both unsafe: min safety
+    assert eq19(F, NAMES) == 1
+    assert eq19(F, NAMES, safety_threshold=5.0) == 0
+    assert eq19(F, NAMES, safety_threshold=2.0) == 1  # both unsafe: min safety
 
 
 def test_select_eq19_ignores_infeasible_rows() -> None:
     F = np.array([[1.0, 0.0, -10.0], [2.0, 5.0, -1.0], [3.0, 4.0, -2.0]])
-    assert select_eq19(F, NAMES) == 0
+    assert eq19(F, NAMES) == 0
     feasible = np.array([False, True, True])
     # rows 1, 2: fuel 1, 0; efficiency 1, 0 -> row 2
-    assert select_eq19(F, NAMES, feasible=feasible) == 2
+    assert eq19(F, NAMES, feasible=feasible) == 2
     # infeasible safe row does not trigger the safe branch for feasible unsafe rows
     F3 = np.array([[1.0, 0.0, 0.0], [6.0, 1.0, 0.0], [5.0, 2.0, 0.0]])
-    assert select_eq19(F3, NAMES, feasible=np.array([False, True, True])) == 2
+    assert eq19(F3, NAMES, feasible=np.array([False, True, True])) == 2
 
 
 def test_select_eq19_no_feasible_row_considers_all() -> None:
     F = np.array([[1.0, 0.0, -10.0], [2.0, 5.0, -1.0]])
-    assert select_eq19(F, NAMES, feasible=np.zeros(2, dtype=bool)) == select_eq19(F, NAMES) == 0
+    assert eq19(F, NAMES, feasible=np.zeros(2, dtype=bool)) == eq19(F, NAMES) == 0
 
 
 def test_select_eq19_constant_column_normalises_to_zero() -> None:
     F = np.array([[1.0, 5.0, -1.0], [2.0, 5.0, -4.0], [3.0, 5.0, -2.0]])
     # fuel constant -> 0; efficiency 1, 0, 2/3 -> row 1
-    assert select_eq19(F, NAMES) == 1
+    assert eq19(F, NAMES) == 1
     both_constant = np.array([[9.0, 5.0, -1.0], [2.0, 5.0, -1.0], [3.0, 5.0, -1.0]])
-    assert select_eq19(both_constant, NAMES) == 1  # all sums 0: lowest safe index
-    assert select_eq19(np.array([[9.0, 1.0, 1.0], [3.0, 7.0, 7.0]]), NAMES) == 1  # singleton
+    assert eq19(both_constant, NAMES) == 1  # all sums 0: lowest safe index
+    assert eq19(np.array([[9.0, 1.0, 1.0], [3.0, 7.0, 7.0]]), NAMES) == 1  # singleton
 
 
 def test_select_eq19_finds_columns_by_name() -> None:
@@ -183,19 +187,19 @@ def test_select_eq19_finds_columns_by_name() -> None:
     order = [2, 0, 1]
     names = tuple(NAMES[i] for i in order)
     extra = np.column_stack([F[:, order], np.arange(4.0)])
-    assert select_eq19(extra, (*names, "other")) == 3
+    assert eq19(extra, (*names, "other")) == 3
 
 
 def test_select_eq19_rejects_bad_input() -> None:
     F = np.ones((2, 3))
     with pytest.raises(ValueError, match="'fuel' not found"):
-        select_eq19(F, ("safety", "cost", "efficiency"))
+        eq19(F, ("safety", "cost", "efficiency"))
     with pytest.raises(ValueError, match="shape"):
-        select_eq19(F, ("safety", "fuel"))
+        eq19(F, ("safety", "fuel"))
     with pytest.raises(ValueError, match="empty"):
-        select_eq19(np.zeros((0, 3)), NAMES)
+        eq19(np.zeros((0, 3)), NAMES)
     with pytest.raises(ValueError, match="feasible"):
-        select_eq19(F, NAMES, feasible=np.ones(3, dtype=bool))
+        eq19(F, NAMES, feasible=np.ones(3, dtype=bool))
 
 
 # --------------------------------------------------------------------------------------------

@@ -11,8 +11,8 @@ from hcomc.config import load_config
 from hcomc.control.hcomc.rollout import accel, psi, quintic
 from hcomc.models.quintic import quintic_shape
 from hcomc.models.transition import transition_weight
+from hcomc.road import Kind
 from hcomc.sim.fleet import Fleet, follow
-from hcomc.sim.road import Kind
 
 FLEET = Fleet.build(load_config("C1"), np.array([Kind.HDV, Kind.CAV]), np.zeros(2, dtype=bool))
 

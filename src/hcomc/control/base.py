@@ -1,10 +1,13 @@
 """Merge-controller interface: read-only traffic view, key vehicles, MergePlan.
 
 When a ramp vehicle (VR) enters the cooperative control zone, the engine identifies the six
-key vehicles of Section II-A and calls ``controller.plan(view, group, rng)`` once (the replanning
-policy: one plan per VR; the engine falls back to gap acceptance if the plan cannot be executed
-safely, see :mod:`hcomc.sim.execution`). Controllers read the view and return a
-:class:`MergePlan`; they never write simulation state.
+key vehicles of Section II-A and calls ``controller.plan(view, group, rng)``; it replans in a
+receding horizon — key vehicles re-identified, ``plan`` called again — every
+``control.replan_period`` seconds until VR starts its lane change (or a lateral cooperation
+has begun), and falls back to gap acceptance if the plan cannot be executed safely (see
+:mod:`hcomc.sim.execution`). The plans being executed are in ``view.plans``, so a controller
+can continue them. Controllers read the view and return a :class:`MergePlan`; they never write
+simulation state.
 
 Key vehicles (Section II-A), with VR's position projected onto lane 1 (virtual-vehicle
 mapping at the same x, Uno et al. 1999):
@@ -28,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.sim.road import Lane
+from hcomc.road import Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -78,6 +81,11 @@ class TrafficView:
     changing: BoolArray
     fleet: Fleet
     config: ScenarioConfig
+    plans: tuple[MergePlan, ...] = ()
+
+    def live_plan(self, vr: int) -> MergePlan | None:
+        """The plan being executed for ramp vehicle ``vr``, if any."""
+        return next((p for p in self.plans if p.group.vr == vr), None)
 
 
 @dataclass(frozen=True)
@@ -92,6 +100,8 @@ class MergePlan:
     merge_x : position where a CAV VR starts its lane change [m] (NaN: gap acceptance).
     vr_duration : VR's lane-change duration [s].
     horizon : virtual-vehicle horizon H = tf' - t0' [s].
+    vv0 : (4,) cubic coefficients of VV0, VR's virtual leader on the ramp (a CAV VR follows it
+        towards its target gap, then its future leader's projection), or None.
     vv1 : (4,) cubic coefficients of VV1 in τ = t - t0 (Eq. 9-10), or None.
     vv2 : (4,) cubic coefficients of VV2 (Eq. 12-13), or None.
     fallback : True when no feasible plan was found and the safe default applies.
@@ -99,8 +109,10 @@ class MergePlan:
     objectives : objective values of the chosen plan (safety, fuel, efficiency).
     decision_ms : wall time of the decision [ms].
     details : controller-specific extras (Pareto set, game outcome, …) for reporting.
-    sequence : merge sequence, "ahead" (VR between VMF and VMC) or "behind" (VR between VMC
-        and VMR), with the roles of the key group found at planning time.
+    sequence : merge sequence, "ahead" (VR in front of the vehicle that was VMC when the
+        key vehicles were identified) or "behind" (VR between that VMC and VMR). ``group`` is
+        the group the plan executes: for "behind" it is :func:`behind_group`, in which the
+        vehicle behind VR's slot plays VMC (it cooperates) and the one ahead plays VMF.
     """
 
     group: MergeGroup
@@ -109,6 +121,7 @@ class MergePlan:
     merge_x: float = float("nan")
     vr_duration: float = float("nan")
     horizon: float = float("nan")
+    vv0: FloatArray | None = None
     vv1: FloatArray | None = None
     vv2: FloatArray | None = None
     fallback: bool = False
@@ -156,3 +169,47 @@ def find_key_vehicles(view: TrafficView, vr: int) -> MergeGroup:
     _, vmr = _nearest(view, Lane.MAIN_1, view.x[vmc] - 1e-9, vmc)
     vnf, vnr = _nearest(view, Lane.MAIN_2, view.x[vmc], vmc)
     return MergeGroup(vr=vr, vmc=vmc, vmf=vmf, vmr=vmr, vnf=vnf, vnr=vnr)
+
+
+def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
+    """Relabelled key group for "VR merges behind VMC" (the old VMR cooperates).
+
+    The vehicle ahead of VR's slot (old VMC) becomes ``vmf``, the vehicle behind it (old VMR)
+    becomes ``vmc``, the lane-1 vehicle behind the old VMR becomes ``vmr`` and VNF/VNR are the
+    lane-2 neighbours of the old VMR (the rules of :func:`find_key_vehicles`). Without an old
+    VMR only ``vr`` and ``vmf`` are set (nobody to cooperate). Requires ``group.vmc >= 0``.
+    """
+    if group.vmc < 0:
+        raise ValueError("behind_group needs a VMC (the vehicle VR merges behind)")
+    new_vmc = group.vmr
+    if new_vmc < 0:
+        return MergeGroup(vr=group.vr, vmf=group.vmc)
+    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
+    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
+    return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)
+
+
+def virtual_states(
+    plan: MergePlan, t: float, x: FloatArray, v: FloatArray, a: FloatArray
+) -> dict[str, tuple[float, float, float]]:
+    """State (x, v, a) at time t of each virtual vehicle ``plan`` has ("vv0", "vv1", "vv2").
+
+    Within the horizon a virtual vehicle is its cubic; after it, VV0 is the projection of VR's
+    future leader (``group.vmf``, if any) and VV1 that of VR; VV2 ends at the horizon. The
+    engine executes exactly these, and a replanning controller continues them.
+    """
+    from hcomc.control.virtual_vehicle import cubic_state
+
+    g, tau = plan.group, t - plan.t0
+    out: dict[str, tuple[float, float, float]] = {}
+    after = {"vv0": g.vmf, "vv1": g.vr, "vv2": -1}
+    for name, coeffs in (("vv0", plan.vv0), ("vv1", plan.vv1), ("vv2", plan.vv2)):
+        if coeffs is None:
+            continue
+        if tau <= plan.horizon:
+            xv, vv, av = cubic_state(coeffs, tau)
+            out[name] = (float(xv), float(vv), float(av))
+        elif after[name] >= 0:
+            j = after[name]
+            out[name] = (float(x[j]), float(v[j]), float(a[j]))
+    return out

@@ -1,4 +1,4 @@
-"""FIFO merge-sequence baseline (Ntousakis, Nikolos & Papageorgiou 2016; MODELS.md §11).
+"""FIFO merge-sequence baseline (Ntousakis, Nikolos & Papageorgiou 2016).
 
 The FIFO baseline of the paper's Table III orders the ramp vehicle VR and the mainline vehicles
 around its projection first-in-first-out by their predicted arrival time at the merge point,
@@ -6,24 +6,19 @@ and lets the mainline vehicle that must give way yield longitudinally through th
 vehicle VV1 of Eq. 8-10. It never uses lateral cooperation (paper Table III: FIFO and Game are
 longitudinal-only) and never optimises anything.
 
-Sequence (MODELS.md §11). At the planning instant t0 (VR entering the control zone) the
+Sequence. At the planning instant t0 (VR entering the control zone) the
 arrival time of vehicle i at the merge point x_m is predicted at constant speed,
 ``t_i = t0 + (x_m - x_i) / v_i``, for VR, VMC and VMF. If VR arrives strictly before VMC, VR
 merges between VMF and VMC and VMC yields; otherwise (also on a tie: the mainline keeps its
 priority) VR merges behind VMC and VMR yields.
 
-Who yields is expressed through the plan's ``group`` only, because the engine
-(:mod:`hcomc.sim.execution`) always makes ``group.vmc`` follow VV1, the cubic from
-``group.vmf``'s state at t0 to VR's predicted state at t0 + H:
-
-* VR ahead of VMC: the usual group of :func:`hcomc.control.base.find_key_vehicles`;
-* VR behind VMC: the *relabelled* group of :func:`behind_group` — the vehicle ahead of VR's
-  slot (the old VMC) takes the ``vmf`` field, the vehicle behind the slot (the old VMR) takes
-  ``vmc`` and yields, the lane-1 vehicle behind that takes ``vmr``, and VNF/VNR are the lane-2
-  neighbours of the new ``vmc`` (same rules as ``find_key_vehicles``).
-
-The plan's mode is :attr:`Mode.LONGITUDINAL` when the yielding vehicle exists and is a CAV,
-:attr:`Mode.NONE` otherwise (an HDV is never commanded).
+The plan records the sequence (``"ahead"``/``"behind"``) and executes the group of that
+sequence (:func:`hcomc.control.base.behind_group` for "behind": the vehicle behind VR's slot
+plays VMC and follows VV1). The plan's mode is :attr:`Mode.LONGITUDINAL` when the yielding
+vehicle exists and is a CAV, :attr:`Mode.NONE` otherwise (an HDV is never commanded). A CAV VR
+follows its virtual leader VV0 towards its slot, as under every controller, and the engine
+replans every ``control.replan_period`` seconds when that is set (the "as published"
+configuration plans once).
 
 Shared with :mod:`hcomc.control.merge_game`: the fixed merge position and duration
 (:func:`merge_position`), the virtual-vehicle horizon (:func:`reach_horizon`) and the
@@ -49,13 +44,13 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   ``details`` for information only.
 * **Prediction.** VR, VMF and the yielding vehicle are predicted with
   :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
-  candidate ``[merge_x, vr_duration, H, 0]`` (longitudinal); its ``vv1[0]`` are exactly the
-  coefficients the engine executes. If that VV1 is infeasible (speed < 0 or deceleration beyond
-  ``control.virtual_max_decel``, MODELS.md §10), the plan falls back to gap acceptance
-  (``fallback=True``, mode NONE, ``merge_x`` NaN), like HCOMC's fallback.
+  candidate ``[merge_x, vr_duration, H, 0, sequence]`` (longitudinal); its ``vv0[0]`` and
+  ``vv1[0]`` are exactly the coefficients the engine executes. If a virtual vehicle is
+  infeasible (speed < 0 or deceleration beyond ``control.virtual_max_decel``), the plan falls
+  back to gap acceptance (``fallback=True``, mode NONE, ``merge_x`` NaN), like HCOMC's.
 * **Only VMF, VMC and VR are sequenced.** If VR is predicted to arrive even before VMF, it still
-  takes the VMF-VMC slot (VMF's own leader is outside the key group); this is noted in
-  ``details["sequence"]`` and the engine's MOBIL safety check decides the actual gap.
+  takes the VMF-VMC slot (VMF's own leader is outside the key group); ``details["order"]``
+  shows the predicted order and the engine's MOBIL safety check decides the actual gap.
 * Speeds below 0.1 m/s are floored in the arrival-time prediction (no division by zero).
 
 References
@@ -64,7 +59,6 @@ References
    the context of cooperative merging on highways", Transportation Research Part C 71 (2016)
    464-488 (FIFO and linear-speed-prediction sequencing rules).
 .. [2] Wang et al., HCOMC, arXiv:2507.11621, Eq. 8-10 and Table III.
-.. [3] MODELS.md §10-§11.
 """
 
 from __future__ import annotations
@@ -76,18 +70,20 @@ from dataclasses import replace
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeGroup,
-    MergePlan,
-    Mode,
-    TrafficView,
-    _nearest,
-    elapsed_ms,
+from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
+from hcomc.control.hcomc.controller import merge_problem, sequence_groups
+from hcomc.control.hcomc.problem import (
+    AHEAD,
+    BEHIND,
+    CONSTRAINTS,
+    OBJECTIVES,
+    SEQUENCES,
+    KeyState,
+    MergeProblem,
+    Prediction,
 )
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import CONSTRAINTS, OBJECTIVES, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import VMC, VR
-from hcomc.sim.road import Kind, Lane
+from hcomc.control.hcomc.rollout import VMC, VR, warm_up
+from hcomc.road import Kind
 
 __all__ = [
     "FIFO_HEADWAY",
@@ -95,7 +91,6 @@ __all__ = [
     "MIN_HORIZON",
     "FIFOController",
     "arrival_times",
-    "behind_group",
     "merge_position",
     "predict_longitudinal",
     "reach_horizon",
@@ -149,25 +144,6 @@ def arrival_times(view: TrafficView, group: MergeGroup, merge_x: float) -> dict[
     return out
 
 
-def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
-    """Relabelled key group for "VR merges behind VMC" (the old VMR yields).
-
-    The vehicle ahead of VR's slot (old VMC) becomes ``vmf``, the vehicle behind it (old VMR)
-    becomes ``vmc`` — the vehicle the engine commands to follow VV1 — the lane-1 vehicle behind
-    the old VMR becomes ``vmr`` and VNF/VNR are the lane-2 neighbours of the old VMR, with the
-    rules of :func:`hcomc.control.base.find_key_vehicles`. Without an old VMR only ``vr`` and
-    ``vmf`` are set (nobody to cooperate). Requires ``group.vmc >= 0``.
-    """
-    if group.vmc < 0:
-        raise ValueError("behind_group needs a VMC (the vehicle VR merges behind)")
-    new_vmc = group.vmr
-    if new_vmc < 0:
-        return MergeGroup(vr=group.vr, vmf=group.vmc)
-    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
-    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
-    return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)
-
-
 def reach_horizon(view: TrafficView, vr: int, merge_x: float) -> float:
     """VR's constant-speed time to reach ``merge_x``, clipped to ``[4 s, horizon_max]`` [s]."""
     h_max = float(view.config.control.horizon_max)
@@ -176,26 +152,37 @@ def reach_horizon(view: TrafficView, vr: int, merge_x: float) -> float:
 
 
 def with_cooperation(problem: MergeProblem, cooperates: bool) -> MergeProblem:
-    """Shallow copy of ``problem`` in which the ``vmc`` role does or does not follow VV1.
+    """Copy of ``problem`` in which the ``vmc`` role (the vehicle behind VR's slot) does or does
+    not cooperate (follow VV1), in both sequences.
 
-    The rollout (:func:`hcomc.control.hcomc.rollout.rollout`) makes the VMC role follow VV1
-    iff its ``KeyState.cav`` flag is set, so the flag is overridden on a copy of the key state
-    (the original problem and the simulation are untouched). This idealises an HDV's "yield"
-    as tracking VV1, and models "not yield" of a CAV as plain car following. The flag also
-    selects the Eq. 15 delay inside the rollout's ``F[:, 0]``; callers needing the true
-    kinds recompute U_safe (see :mod:`hcomc.control.merge_game`).
+    The rollout (:func:`hcomc.control.hcomc.rollout.rollout`) makes the VMC role follow VV1 iff
+    its ``KeyState.coop`` flag is set, so the flag is overridden on copies of the key states
+    (the original problem and the simulation are untouched); the Eq. 15 delays still follow the
+    vehicles' true kinds. This idealises an HDV's "yield" as tracking VV1, and models "not
+    yield" of a CAV as plain car following.
     """
-    cav = problem.state.cav.copy()
-    cav[VMC] = cooperates
+
+    def flagged(state: KeyState) -> KeyState:
+        coop = state.coop.copy()
+        coop[VMC] = cooperates
+        return replace(state, coop=coop)
+
+    ahead, behind = problem.states
     out = copy.copy(problem)
-    out.state = replace(problem.state, cav=cav)
+    out.states = (flagged(ahead), None if behind is None else flagged(behind))
+    out.state = out.states[AHEAD]
     return out
 
 
 def predict_longitudinal(
-    problem: MergeProblem, merge_x: float, vr_duration: float, horizon: float, h_max: float
+    problem: MergeProblem,
+    merge_x: float,
+    vr_duration: float,
+    horizon: float,
+    h_max: float,
+    sequence: int = AHEAD,
 ) -> tuple[Prediction, float]:
-    """Predict the candidate ``[merge_x, vr_duration, H, 0]``, refining H once.
+    """Predict the candidate ``[merge_x, vr_duration, H, 0, sequence]``, refining H once.
 
     The first prediction uses ``horizon`` (constant-speed estimate); H is then replaced by the
     predicted time at which VR reaches ``merge_x`` (clipped to ``[4 s, h_max]``) and the
@@ -206,7 +193,7 @@ def predict_longitudinal(
     prediction : :class:`~hcomc.control.hcomc.problem.Prediction` of the single row.
     horizon : the H used [s].
     """
-    row = np.array([[merge_x, vr_duration, horizon, 0.0]])
+    row = np.array([[merge_x, vr_duration, horizon, 0.0, float(sequence)]])
     pred = problem.predict(row)
     reached = np.flatnonzero(pred.X[0, :, VR] >= merge_x)
     if reached.size:
@@ -238,15 +225,16 @@ def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
 
 
 class PredictingBaseline:
-    """Shared part of the baselines: HCOMC's longitudinal merge problem used as a predictor."""
+    """Shared part of the baselines: HCOMC's merge problem (both sequences, longitudinal only)
+    used as a predictor of the one candidate the baseline's rule picks."""
 
     def __init__(self, config: ScenarioConfig) -> None:
+        warm_up()  # load the compiled rollout now, not inside a timed decision
         self.config = config
-        self._hcomc = HCOMCController(config)  # also loads the compiled rollout
 
     def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:
-        """The longitudinal-only HCOMC merge problem of ``group`` (used for prediction)."""
-        return self._hcomc.problem(view, group, lateral_allowed=False)
+        """The longitudinal-only merge problem of ``group`` and of its "behind" group."""
+        return merge_problem(view, group)
 
 
 class FIFOController(PredictingBaseline):
@@ -258,11 +246,10 @@ class FIFOController(PredictingBaseline):
 
     Notes
     -----
-    See the module docstring for the rule, the relabelled group and every assumption.
-    ``details`` holds ``arrival`` (predicted arrival times), ``sequence`` (roles in FIFO order),
-    ``schedule`` (h-respecting arrival times, information only), ``slot`` ("ahead"/"behind"),
-    ``yielding`` (vehicle index or -1), ``prediction`` and ``feasible`` (the predicted plan's
-    constraints all <= 0).
+    See the module docstring for the rule and every assumption. ``details`` holds ``arrival``
+    (predicted arrival times), ``order`` (roles in FIFO order), ``schedule`` (h-respecting
+    arrival times, information only), ``yielding`` (vehicle index or -1), ``prediction`` and
+    ``feasible`` (the predicted plan's constraints all <= 0).
     """
 
     name = "fifo"
@@ -276,10 +263,9 @@ class FIFOController(PredictingBaseline):
         vr = group.vr
         merge_x, vr_duration = merge_position(view, vr)
         arrivals = arrival_times(view, group, merge_x)
-        sequence = [r for r, _ in sorted(arrivals.items(), key=lambda kv: kv[1])]
         details: dict[str, object] = {
             "arrival": arrivals,
-            "sequence": sequence,
+            "order": [r for r, _ in sorted(arrivals.items(), key=lambda kv: kv[1])],
             "schedule": _schedule(arrivals, FIFO_HEADWAY),
         }
         if group.vmc < 0:
@@ -291,35 +277,21 @@ class FIFOController(PredictingBaseline):
                 vr_duration=vr_duration,
                 reason="FIFO: no lane-1 vehicle behind VR, nobody to yield",
                 decision_ms=elapsed_ms(start),
-                details={**details, "slot": "ahead", "yielding": -1},
+                details={**details, "yielding": -1},
             )
-        ahead = arrivals["VR"] < arrivals["VMC"]
-        slot = "ahead" if ahead else "behind"
-        exec_group = group if ahead else behind_group(view, group)
-        yielding = exec_group.vmc
-        details.update(slot=slot, yielding=yielding)
+        seq = AHEAD if arrivals["VR"] < arrivals["VMC"] else BEHIND
+        exec_group = sequence_groups(view, group)[seq]
+        details.update(yielding=exec_group.vmc)
         h_max = float(view.config.control.horizon_max)
-        horizon = reach_horizon(view, vr, merge_x)
-        what = "VR before VMC: VMC yields" if ahead else "VMC before VR: VR merges behind VMC"
-        if not _is_cav(view, yielding):
-            who = "no vehicle behind the slot" if yielding < 0 else "the yielding vehicle is an HDV"
-            return MergePlan(
-                exec_group,
-                Mode.NONE,
-                view.t,
-                merge_x=merge_x,
-                vr_duration=vr_duration,
-                horizon=horizon,
-                reason=f"FIFO: {what}; {who}, no cooperation",
-                decision_ms=elapsed_ms(start),
-                details=details,
-            )
-        problem = self.problem(view, exec_group)
-        pred, horizon = predict_longitudinal(problem, merge_x, vr_duration, horizon, h_max)
+        problem = self.problem(view, group)
+        pred, horizon = predict_longitudinal(
+            problem, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max, seq
+        )
         details.update(prediction=pred, feasible=bool((pred.G[0] <= 0.0).all()))
+        what = "VR before VMC: VMC yields" if seq == AHEAD else "VMC before VR: VR merges behind"
         return longitudinal_plan(
+            view,
             exec_group,
-            view.t,
             pred,
             merge_x=merge_x,
             vr_duration=vr_duration,
@@ -327,6 +299,8 @@ class FIFOController(PredictingBaseline):
             reason=f"FIFO: {what}",
             start=start,
             details=details,
+            sequence=seq,
+            commands=_is_cav(view, exec_group.vmc),
         )
 
 
@@ -336,8 +310,8 @@ def predicted_objectives(pred: Prediction) -> dict[str, float]:
 
 
 def longitudinal_plan(
+    view: TrafficView,
     group: MergeGroup,
-    t0: float,
     pred: Prediction,
     *,
     merge_x: float,
@@ -346,30 +320,40 @@ def longitudinal_plan(
     reason: str,
     start: float,
     details: dict,
+    sequence: int,
+    commands: bool,
 ) -> MergePlan:
-    """The yielding vehicle follows the predicted VV1, or, if that virtual vehicle is
-    infeasible, the safe fallback (VR merges by gap acceptance, nobody commanded)."""
+    """The plan of a baseline's single predicted candidate.
+
+    A CAV VR follows VV0 towards its slot; the yielding vehicle (``group.vmc``) follows VV1
+    when ``commands`` (it is a CAV and the rule asks it to yield). If a commanded virtual
+    vehicle is infeasible, the safe fallback applies (VR merges by gap acceptance, nobody
+    commanded).
+    """
     if not virtual_vehicle_feasible(pred):
         return MergePlan(
             group,
             Mode.NONE,
-            t0,
+            view.t,
             horizon=horizon,
             fallback=True,
-            reason=f"{reason}; VV1 infeasible, VR merges by gap acceptance",
+            reason=f"{reason}; virtual vehicle infeasible, VR merges by gap acceptance",
             decision_ms=elapsed_ms(start),
             details=details,
+            sequence=SEQUENCES[sequence],
         )
     return MergePlan(
         group,
-        Mode.LONGITUDINAL,
-        t0,
+        Mode.LONGITUDINAL if commands else Mode.NONE,
+        view.t,
         merge_x=merge_x,
         vr_duration=vr_duration,
         horizon=horizon,
-        vv1=np.array(pred.vv1[0], dtype=np.float64),
-        reason=reason,
+        vv0=np.array(pred.vv0[0], dtype=np.float64) if _is_cav(view, group.vr) else None,
+        vv1=np.array(pred.vv1[0], dtype=np.float64) if commands else None,
+        reason=reason if commands else f"{reason}; no vehicle commanded",
         objectives=predicted_objectives(pred),
         decision_ms=elapsed_ms(start),
         details=details,
+        sequence=SEQUENCES[sequence],
     )

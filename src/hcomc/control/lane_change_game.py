@@ -75,6 +75,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -85,7 +86,12 @@ from hcomc.control.game import GameSolution, solve_cooperative, solve_stackelber
 from hcomc.models.idm import idm_acceleration, iidm_acceleration
 from hcomc.models.quintic import quintic_shape
 from hcomc.models.transition import blend_acceleration, transition_weight
+from hcomc.road import Kind
 from hcomc.safety.critical import critical_acceleration
+
+if TYPE_CHECKING:
+    from hcomc.config import ScenarioConfig
+    from hcomc.sim.fleet import Fleet
 
 __all__ = [
     "FV_AC",
@@ -102,6 +108,8 @@ __all__ = [
     "GameParams",
     "GameVehicle",
     "LaneChangeDecision",
+    "game_params",
+    "game_vehicle",
     "lane_change_game",
 ]
 
@@ -251,6 +259,28 @@ class GameParams(_Frozen):
 
 
 GAME_DEFAULT: GameParams = GameParams()
+
+
+def game_params(config: ScenarioConfig) -> GameParams:
+    """The default game with the Eq. 15 parameters and threshold of ``config.control``.
+
+    Every consumer of the game (the HCOMC controller, the engine's CAV lane changes) builds its
+    parameters here, so the Eq. 15 values have one home: the config.
+    """
+    c = config.control
+    return GAME_DEFAULT.model_copy(
+        update={
+            "safety_threshold": c.safety_threshold,
+            "delay_cav": c.safety_delay_cav,
+            "delay_hdv": c.safety_delay_hdv,
+            "min_distance": c.safety_min_distance,
+            "emergency_decel": c.safety_emergency_decel,
+            "lane_width": config.road.lane_width,
+            "transition_tolerance": config.lane_change.transition_tolerance,
+        }
+    )
+
+
 """Default game parameters (MODELS.md §9 suggestions)."""
 
 
@@ -468,6 +498,19 @@ def _comfort_cost(
     ref = np.where(a_lon >= 0.0, a_max, b_comf)
     mean_sq = np.mean(np.square(a_lon / ref) + np.square(a_lat / a_max), axis=-1)
     return np.asarray(jerk / params.jerk_max + mean_sq, dtype=np.float64)
+
+
+def game_vehicle(x: FloatArray, v: FloatArray, fleet: Fleet, i: int) -> GameVehicle | None:
+    """The :class:`GameVehicle` of vehicle ``i`` (None for -1, a missing vehicle)."""
+    if i < 0:
+        return None
+    return GameVehicle(
+        x=float(x[i]),
+        v=float(v[i]),
+        length=float(fleet.length[i]),
+        desired_speed=float(fleet.v0[i]),
+        is_cav=bool(fleet.kind[i] == Kind.CAV),
+    )
 
 
 def lane_change_game(

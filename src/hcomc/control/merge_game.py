@@ -112,20 +112,19 @@ from hcomc._typing import FloatArray
 from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
 from hcomc.control.fifo import (
     PredictingBaseline,
-    behind_group,
     longitudinal_plan,
     merge_position,
     predict_longitudinal,
-    predicted_objectives,
     reach_horizon,
     virtual_vehicle_feasible,
     with_cooperation,
 )
 from hcomc.control.game import solve_cooperative
+from hcomc.control.hcomc.controller import sequence_groups
 from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import C_A_MERG, C_D, N_ROLES, P_A, P_LEN, P_V0, VMC, VR
-from hcomc.safety.critical import DELAY_CAV, DELAY_HDV, critical_acceleration
-from hcomc.sim.road import Kind
+from hcomc.control.hcomc.rollout import C_A_MERG, P_A, P_V0, VMC, VR
+from hcomc.control.lane_change_game import INFEASIBLE_SAFETY_COST
+from hcomc.road import Kind
 
 __all__ = [
     "AHEAD",
@@ -142,7 +141,6 @@ __all__ = [
     "pure_nash",
     "safety_term",
     "solve_merge_game",
-    "true_u_safe",
 ]
 
 AHEAD, BEHIND = 0, 1
@@ -155,10 +153,10 @@ CAV_WEIGHTS = (0.5, 0.3, 0.2)
 """(w_s, w_e, w_c) of a CAV ramp vehicle (MODELS.md §9)."""
 NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
 """(w_s, w_e, w_c) of the "normal" driving type (MODELS.md §9; Hang et al. 2021)."""
-INFEASIBLE_SAFETY = 10.0
-"""J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]."""
+INFEASIBLE_SAFETY = INFEASIBLE_SAFETY_COST
+"""J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]; the
+same cost the lane-change game gives an infeasible action."""
 _G = {name: i for i, name in enumerate(CONSTRAINTS)}
-_LANE = np.array([1, 1, 1, 1, 2, 2])  # roles VR (merged), VMC, VMF, VMR, VNF, VNR
 
 
 # ----------------------------------------------------------------- equilibrium logic
@@ -270,45 +268,6 @@ def solve_merge_game(
 
 
 # ------------------------------------------------------------------------ payoffs
-def true_u_safe(pred: Prediction, problem: MergeProblem, cav: ArrayLike, row: int = 0) -> float:
-    """Worst Eq. 15 critical acceleration at merge completion with the true kinds [m/s^2].
-
-    Same pairs as the rollout's ``F[:, 0]`` for a longitudinal candidate (each present key
-    vehicle behind the nearest present key vehicle ahead in its lane, VR in lane 1 once
-    merged), with the Eq. 15 delay of the follower's actual kind ``cav`` (0.5 s CAV, 1.0 s HDV).
-    ``inf`` when VR has not merged in the window or a crash is unavoidable.
-    """
-    k = int(pred.k_merge[row])
-    if k < 0:
-        return float("inf")
-    s = problem.state
-    x, v = pred.X[row, k], pred.V[row, k]
-    cav = np.asarray(cav, dtype=bool)
-    worst = 0.0
-    for r in range(N_ROLES):
-        if not s.present[r]:
-            continue
-        ahead = [
-            j
-            for j in range(N_ROLES)
-            if j != r and s.present[j] and _LANE[j] == _LANE[r] and x[j] > x[r]
-        ]
-        if not ahead:
-            continue
-        lead = min(ahead, key=lambda j: x[j])
-        d = x[lead] - s.params[lead, P_LEN] - x[r]
-        a_cr = critical_acceleration(
-            d,
-            v[r],
-            v[lead],
-            delay=DELAY_CAV if cav[r] else DELAY_HDV,
-            min_distance=float(problem.consts[C_D]),
-            emergency_decel=float(problem.consts[C_A_MERG]),
-        )
-        worst = max(worst, float(a_cr))
-    return worst
-
-
 def player_cost(
     pred: Prediction,
     problem: MergeProblem,
@@ -328,7 +287,7 @@ def player_cost(
     cost : J [-].
     terms : {"J_s", "J_e", "J_c"}.
     """
-    s = problem.state
+    s = problem.states[int(pred.sequence[row])] or problem.state
     if not s.present[role]:
         return 0.0, {"J_s": 0.0, "J_e": 0.0, "J_c": 0.0}
     v0, a_max = s.params[role, P_V0], s.params[role, P_A]
@@ -348,7 +307,7 @@ def safety_term(
     a present key vehicle braking harder than Eq. 15's emergency deceleration ``a_merg``.
     """
     g = pred.G[row]
-    present = problem.state.present
+    present = (problem.states[int(pred.sequence[row])] or problem.state).present
     a_min = float(pred.A[row][:, present].min())
     infeasible = (
         g[_G["collision"]] > 0.0
@@ -400,27 +359,26 @@ class GameController(PredictingBaseline):
             )
         h_max = float(view.config.control.horizon_max)
         threshold = float(view.config.control.safety_threshold)
-        groups = (group, behind_group(view, group))
-        problems = [self.problem(view, g) for g in groups]
-        base = with_cooperation(problems[AHEAD], True)
+        groups = sequence_groups(view, group)
+        problem = self.problem(view, group)
+        variants = (with_cooperation(problem, True), with_cooperation(problem, False))
         first, horizon = predict_longitudinal(
-            base, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max
+            variants[YIELD], merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max
         )
-        row_x = np.array([[merge_x, vr_duration, horizon, 0.0]])
         preds: list[list[Prediction]] = [[first, first], [first, first]]
         J_vr, J_lag, u_safe = np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((2, 2))
         terms: dict[str, dict[str, dict[str, float]]] = {}
         w_vr = CAV_WEIGHTS if _is_cav(view, vr) else NORMAL_WEIGHTS
         for i in (AHEAD, BEHIND):
-            true_cav = problems[i].state.cav
             for j in (YIELD, NOT_YIELD):
                 if not (i == AHEAD and j == YIELD):
-                    preds[i][j] = with_cooperation(problems[i], j == YIELD).predict(row_x)
+                    row_x = np.array([[merge_x, vr_duration, horizon, 0.0, float(i)]])
+                    preds[i][j] = variants[j].predict(row_x)
                 pred = preds[i][j]
-                u_safe[i, j] = true_u_safe(pred, problems[i], true_cav)
-                j_s = safety_term(pred, problems[i], u_safe[i, j], threshold)
-                J_vr[i, j], t_vr = player_cost(pred, problems[i], VR, w_vr, j_s)
-                J_lag[i, j], t_lag = player_cost(pred, problems[i], VMC, NORMAL_WEIGHTS, j_s)
+                u_safe[i, j] = float(pred.F[0, 0]) if pred.k_merge[0] >= 0 else np.inf
+                j_s = safety_term(pred, problem, u_safe[i, j], threshold)
+                J_vr[i, j], t_vr = player_cost(pred, problem, VR, w_vr, j_s)
+                J_lag[i, j], t_lag = player_cost(pred, problem, VMC, NORMAL_WEIGHTS, j_s)
                 terms[f"{ROW_NAMES[i]}/{COL_NAMES[j]}"] = {"VR": t_vr, "lag": t_lag}
         cooperative = _is_cav(view, group.vmc)
         outcome = solve_merge_game(J_vr, J_lag, cooperative=cooperative, rng=rng)
@@ -433,23 +391,9 @@ class GameController(PredictingBaseline):
             "predictions": preds, "feasible": bool((pred.G[0] <= 0.0).all()),
         }  # fmt: skip
         what = f"game ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
-        commands = outcome.col == YIELD and _is_cav(view, exec_group.vmc)
-        if not commands:
-            return MergePlan(
-                exec_group,
-                Mode.NONE,
-                view.t,
-                merge_x=merge_x,
-                vr_duration=vr_duration,
-                horizon=horizon,
-                reason=f"{what}; no vehicle commanded",
-                objectives=predicted_objectives(pred),
-                decision_ms=elapsed_ms(start),
-                details=details,
-            )
         return longitudinal_plan(
+            view,
             exec_group,
-            view.t,
             pred,
             merge_x=merge_x,
             vr_duration=vr_duration,
@@ -457,4 +401,6 @@ class GameController(PredictingBaseline):
             reason=what,
             start=start,
             details=details,
+            sequence=outcome.row,
+            commands=outcome.col == YIELD and _is_cav(view, exec_group.vmc),
         )

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from hcomc.control.base import MergePlan, Mode
-from hcomc.sim.road import Kind
+from hcomc.road import Kind
 
 if TYPE_CHECKING:
     from hcomc.sim.engine import Simulation

@@ -96,8 +96,18 @@ class AnnealingOptimizer:
     pop_size: int | None = None
     name: str = field(default="sa", init=False)
 
-    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
-        """Anneal with at most ``budget`` single-row evaluations; return the best row seen."""
+    def minimize(
+        self,
+        problem: Problem,
+        *,
+        budget: int,
+        rng: np.random.Generator,
+        initial: FloatArray | None = None,
+    ) -> ParetoResult:
+        """Anneal with at most ``budget`` single-row evaluations; return the best row seen.
+
+        With ``initial``, the annealing starts from its first row (clipped to the bounds).
+        """
         if budget < 1:
             raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
         objective = _Objective(problem, budget)
@@ -116,6 +126,9 @@ class AnnealingOptimizer:
                 visit=self.visit,
                 accept=self.accept,
                 no_local_search=True,
+                x0=None
+                if initial is None or len(initial) == 0
+                else np.clip(initial[0], lower, upper),
                 **{_RNG_KEYWORD: generator},
             )
         assert objective.best is not None  # SciPy evaluates its starting point first

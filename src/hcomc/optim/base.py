@@ -70,6 +70,31 @@ class Optimizer(Protocol):
 
     name: str
 
-    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
-        """Optimise ``problem`` using at most about ``budget`` row evaluations."""
+    def minimize(
+        self,
+        problem: Problem,
+        *,
+        budget: int,
+        rng: np.random.Generator,
+        initial: FloatArray | None = None,
+    ) -> ParetoResult:
+        """Optimise ``problem`` using at most about ``budget`` row evaluations.
+
+        ``initial`` (k, n_var): decision vectors to start from (a warm start, e.g. the previous
+        Pareto set of a replanned decision), clipped to the bounds; the rest of the first
+        population is sampled as usual.
+        """
         ...
+
+
+def initial_rows(
+    problem: Problem, initial: FloatArray | None, size: int, rng: np.random.Generator
+) -> FloatArray | None:
+    """A first population of ``size`` rows: ``initial`` (clipped, at most ``size``) topped up
+    with uniform samples in the bounds; None when there is no warm start."""
+    if initial is None or len(initial) == 0:
+        return None
+    xl, xu = np.asarray(problem.xl, dtype=np.float64), np.asarray(problem.xu, dtype=np.float64)
+    seeds = np.clip(np.atleast_2d(np.asarray(initial, dtype=np.float64))[:size], xl, xu)
+    rest = xl + rng.random((size - seeds.shape[0], xl.size)) * (xu - xl)
+    return np.vstack([seeds, rest])

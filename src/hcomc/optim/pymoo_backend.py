@@ -27,11 +27,12 @@ from pymoo.algorithms.soo.nonconvex.pso import PSO
 from pymoo.core.problem import Problem as _PymooBaseProblem
 from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
+from pymoo.operators.sampling.rnd import FloatRandomSampling
 from pymoo.optimize import minimize as _pymoo_minimize
 from pymoo.termination import get_termination
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.optim.base import ParetoResult, Problem
+from hcomc.optim.base import ParetoResult, Problem, initial_rows
 from hcomc.optim.selection import non_dominated
 
 _SEED_HIGH = 2**31 - 1
@@ -144,12 +145,21 @@ class NSGA2Optimizer:
         if self.pop_size < 2:
             raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
 
-    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+    def minimize(
+        self,
+        problem: Problem,
+        *,
+        budget: int,
+        rng: np.random.Generator,
+        initial: FloatArray | None = None,
+    ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
         _check_budget(budget)
         adapter = _PymooProblem(problem)
+        first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = NSGA2(
             pop_size=self.pop_size,
+            sampling=FloatRandomSampling() if first is None else first,
             crossover=SBX(eta=self.crossover_eta, prob=self.crossover_prob),
             mutation=PM(eta=self.mutation_eta),
             eliminate_duplicates=self.eliminate_duplicates,
@@ -226,12 +236,25 @@ class PSOOptimizer:
         if self.pop_size < 2:
             raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
 
-    def minimize(self, problem: Problem, *, budget: int, rng: np.random.Generator) -> ParetoResult:
+    def minimize(
+        self,
+        problem: Problem,
+        *,
+        budget: int,
+        rng: np.random.Generator,
+        initial: FloatArray | None = None,
+    ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the best row seen."""
         _check_budget(budget)
         adapter = _PymooProblem(problem, scalar=True)
+        first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = PSO(
-            pop_size=self.pop_size, w=self.w, c1=self.c1, c2=self.c2, adaptive=self.adaptive
+            pop_size=self.pop_size,
+            w=self.w,
+            c1=self.c1,
+            c2=self.c2,
+            adaptive=self.adaptive,
+            **({} if first is None else {"sampling": first}),
         )
         _pymoo_minimize(
             adapter,

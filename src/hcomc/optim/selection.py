@@ -80,7 +80,7 @@ def select_eq19(
     names: Sequence[str],
     *,
     feasible: BoolArray | None = None,
-    safety_threshold: float = 4.0,
+    safety_threshold: float,
 ) -> int:
     """Index of the row of ``F`` chosen by the paper's Eq. 19 rule.
 
@@ -92,7 +92,8 @@ def select_eq19(
     names : the m column names of ``F``.
     feasible : (n,) optional feasibility mask. If any row is feasible only feasible rows are
         considered; otherwise (or if None) all rows are.
-    safety_threshold : the U_safe gate [m/s^2] (paper: 4, MOBIL's b_safe).
+    safety_threshold : the U_safe gate [m/s^2] (paper: 4, MOBIL's b_safe;
+        ``config.control.safety_threshold``).
 
     Returns
     -------
@@ -136,3 +137,19 @@ def select_eq19(
     total = _minmax(F[subset, i_fuel]) + _minmax(F[subset, i_eff])
     total[np.isnan(total)] = np.inf  # a non-finite cost never wins over a finite one
     return int(subset[np.argmin(total)])
+
+
+def eq19_branch(
+    F: FloatArray, names: Sequence[str], feasible: BoolArray | None, safety_threshold: float
+) -> str:
+    """Which branch of Eq. 19 :func:`select_eq19` takes on this set.
+
+    ``"gate"``: some considered row has U_safe <= threshold (normalised fuel + efficiency);
+    ``"min_safety"``: every considered row is above the threshold (smallest U_safe).
+    """
+    F = np.asarray(F, dtype=np.float64)
+    rows = np.ones(F.shape[0], dtype=bool)
+    if feasible is not None and np.any(feasible):
+        rows = np.asarray(feasible, dtype=bool)
+    safety = F[rows, _column(names, SAFETY)]
+    return "gate" if bool(np.any(safety <= safety_threshold)) else "min_safety"

@@ -17,7 +17,7 @@ import numpy as np
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.models.idm import equilibrium_gap
-from hcomc.sim.road import Kind, Lane
+from hcomc.road import Kind, Lane
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,8 +29,8 @@ class Demand:
     t : release time [s]; vehicles of the initial fill have ``t = -warmup``.
     x : release position of the front bumper [m].
     v : release speed [m/s].
-    lane : release lane (:class:`~hcomc.sim.road.Lane`).
-    kind : :class:`~hcomc.sim.road.Kind` per vehicle.
+    lane : release lane (:class:`~hcomc.road.Lane`).
+    kind : :class:`~hcomc.road.Kind` per vehicle.
     scripted : True for a platoon leader that follows the configured speed profile.
     """
 

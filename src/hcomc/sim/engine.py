@@ -37,6 +37,7 @@ from hcomc.control.base import (
 from hcomc.models.quintic import lateral_offset
 from hcomc.models.transition import blend_acceleration, transition_weight
 from hcomc.rng import make_rng
+from hcomc.road import Kind, Lane, lane_centre
 from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.demand import generate_demand
 from hcomc.sim.execution import ActivePlan, commanded, plan_record, virtual_leaders
@@ -46,7 +47,6 @@ from hcomc.sim.manifest import build_manifest
 from hcomc.sim.mobil import Snapshot, decide
 from hcomc.sim.neighbours import LaneIndex, build_lane_index
 from hcomc.sim.perception import Perception
-from hcomc.sim.road import Kind, Lane, lane_centre
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -271,8 +271,12 @@ class Simulation:
         return follow(self.fleet, ids, s, v, vl, al)
 
     def _stop_line(self, ids: IntArray, changing: np.ndarray, acc: FloatArray) -> FloatArray:
-        """Ramp vehicles that have not started merging stop at the acceleration-lane end."""
+        """Ramp vehicles that have not started merging stop at the acceleration-lane end,
+        unless they follow a live merge plan (they brake for the end only if it fails)."""
         on_ramp = (self.lane[ids] == Lane.RAMP) & ~changing
+        if self.plans:
+            following = [p.vr for p in self.plans if p.vr_following]
+            on_ramp &= ~np.isin(ids, following)
         if on_ramp.any():
             r = ids[on_ramp]
             s = self.config.road.accel_lane_end - self.x[r]
@@ -300,7 +304,7 @@ class Simulation:
         return TrafficView(
             t=t, x=frozen(self.x), v=frozen(self.v), a=frozen(self.a), lane=frozen(self.lane),
             active=frozen(self.active), changing=frozen(self.origin != self.target),
-            fleet=self.fleet, config=self.config,
+            fleet=self.fleet, config=self.config, plans=tuple(p.plan for p in self.plans),
         )  # fmt: skip
 
     def _identify_key_vehicles(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
@@ -327,7 +331,9 @@ class Simulation:
         return next(iter(self.key_groups.values()), None)
 
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
-        """Ask the controller for a plan when a ramp vehicle enters the control zone."""
+        """Ask the controller for a plan when a ramp vehicle enters the control zone, and again
+        every ``control.replan_period`` seconds while its plan may still change (receding
+        horizon, key vehicles re-identified)."""
         assert self.controller is not None
         new = ids[
             (self.lane[ids] == Lane.RAMP)
@@ -335,7 +341,10 @@ class Simulation:
             & ~self.planned[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
-        for vr in new.tolist():
+        period = self.config.control.replan_period
+        on_ramp = (self.lane == Lane.RAMP) & (self.origin == self.target) & self.active
+        due = [p.vr for p in self.plans if p.may_replan(t, period) and on_ramp[p.vr]]
+        for vr in [*new.tolist(), *due]:
             self.planned[vr] = True
             view = self._view(t)
             group = find_key_vehicles(view, vr)
@@ -348,6 +357,7 @@ class Simulation:
             if plan.fallback:
                 self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
             cav = self.fleet.kind == Kind.CAV
+            self.plans = [p for p in self.plans if p.vr != vr]
             self.plans.append(
                 ActivePlan(
                     plan,
@@ -411,9 +421,14 @@ class Simulation:
                         np.array([vr]), np.array([Lane.MAIN_1]), t, np.array([p.plan.vr_duration])
                     )
                     p.vr_started = True
-                elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
+                elif self.x[vr] >= road.accel_lane_end - self._stopping_distance(vr):
                     p.released = True
                     self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
+
+    def _stopping_distance(self, i: int) -> float:
+        """Distance vehicle i needs to stop at the MOBIL safe deceleration, plus s0 [m]."""
+        b_safe = self.config.lane_change.safe_decel
+        return float(self.v[i] ** 2 / (2.0 * b_safe) + self.fleet.s0[i])
 
     def _finish_plans(self) -> None:
         """Drop plans whose merge is complete or whose key vehicles left."""
@@ -457,16 +472,10 @@ class Simulation:
     ) -> np.ndarray:
         """Section III-B: a CAV's discretionary change must be its game equilibrium action
         (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected."""
-        from hcomc.control.lane_change_game import GameVehicle, lane_change_game
+        from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
 
-        def vehicle(i: int) -> GameVehicle | None:
-            if i < 0:
-                return None
-            return GameVehicle(
-                x=float(self.x[i]), v=float(self.v[i]), length=float(self.fleet.length[i]),
-                desired_speed=float(self.fleet.v0[i]),
-                is_cav=bool(self.fleet.kind[i] == Kind.CAV),
-            )  # fmt: skip
+        def vehicle(i: int):  # type: ignore[no-untyped-def]
+            return game_vehicle(self.x, self.v, self.fleet, i)
 
         keep = np.ones(chosen.size, dtype=bool)
         new_lead, new_fol = index.lookup(target, self.x[chosen])
@@ -479,7 +488,7 @@ class Simulation:
             fv_idm = cfg.cav if fol >= 0 and self.fleet.kind[fol] == Kind.CAV else cfg.hdv
             decision = lane_change_game(
                 vehicle(i), vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
-                sv_idm=cfg.cav, fv_idm=fv_idm,
+                params=game_params(cfg), sv_idm=cfg.cav, fv_idm=fv_idm,
             )  # fmt: skip
             keep[k] = decision.change
         return keep

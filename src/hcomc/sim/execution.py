@@ -2,17 +2,22 @@
 
 The engine owns all state; this module only reads it and tells the engine what to do:
 
-* a CAV VR starts its lane change at the plan's merge position with the plan's duration, if
-  the MOBIL safety criterion holds then; otherwise it keeps trying until 3 vehicle lengths
-  before the acceleration-lane end and then falls back to gap acceptance (logged);
+* a CAV VR on the ramp follows its virtual leader VV0 (the plan's speed profile towards its
+  target gap: a cubic to its future leader's state at t0 + H, then that leader's projection)
+  and does not brake for the lane end; it starts its lane change at the plan's merge position
+  with the plan's duration if the MOBIL safety criterion holds then; otherwise it keeps trying
+  while it can still stop before the lane end at the MOBIL safe deceleration, and then falls
+  back to gap acceptance with the lane end as a standing obstacle (logged);
 * longitudinal mode: a CAV VMC follows the nearer of its real leader and VV1 (Eq. 8-10),
   which is the cubic for t - t0 <= H and VR's projection onto lane 1 after that;
 * lateral mode: a CAV VMC changes to lane 2 at the planning time if that is safe (else the
   plan falls back to VR's gap acceptance, logged); a CAV VNR follows the nearer of its real
   leader and VV2 (Eq. 11-13) for t - t0 <= H.
 
-A plan ends when VR's merge completes or a key vehicle leaves the road. While it is active,
-commanded vehicles make no discretionary (MOBIL) lane changes of their own.
+A plan ends when VR's merge completes or a key vehicle leaves the road, and is replaced by a
+new plan when the engine replans (every ``control.replan_period`` seconds until VR starts its
+lane change or a lateral cooperation has begun). While it is active, commanded vehicles make no
+discretionary (MOBIL) lane changes of their own.
 """
 
 from __future__ import annotations
@@ -23,8 +28,7 @@ from typing import Any
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.control.base import MergePlan, Mode
-from hcomc.control.virtual_vehicle import cubic_state
+from hcomc.control.base import MergePlan, Mode, virtual_states
 
 
 @dataclass
@@ -44,6 +48,21 @@ class ActivePlan:
     def vr(self) -> int:
         """VR's vehicle index."""
         return self.plan.group.vr
+
+    @property
+    def vr_following(self) -> bool:
+        """Whether VR is on the ramp following the plan (VV0, no lane-end braking)."""
+        return self.vr_commanded and not self.vr_started and not self.released
+
+    def may_replan(self, t: float, period: float) -> bool:
+        """Receding horizon: replan every ``period`` s until a commanded lane change began."""
+        return (
+            period > 0.0
+            and not self.vr_started
+            and not self.vmc_started
+            and not self.released
+            and t - self.plan.t0 >= period - 1e-9
+        )
 
 
 def commanded(plans: list[ActivePlan], n: int) -> BoolArray:
@@ -68,20 +87,22 @@ def virtual_leaders(
     a: FloatArray,
     length: FloatArray,
 ) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """``(followers, x_vv, v_vv, a_vv, length_vv)`` of every virtual vehicle in force at t."""
+    """``(followers, x_vv, v_vv, a_vv, length_vv)`` of every virtual vehicle in force at t.
+
+    VV0 leads a CAV VR that follows its plan on the ramp, VV1 a cooperating VMC in
+    longitudinal mode (until VR's merge is complete), VV2 a CAV VNR in lateral mode (within
+    the horizon); their states are those of :func:`hcomc.control.base.virtual_states`.
+    """
     rows: list[tuple[int, float, float, float, float]] = []
     for p in plans:
         plan, g = p.plan, p.plan.group
-        tau = t - plan.t0
-        if p.vmc_commanded and plan.mode == Mode.LONGITUDINAL and plan.vv1 is not None:
-            if tau <= plan.horizon:
-                xv, vv, av = (float(q) for q in cubic_state(plan.vv1, tau))
-            else:
-                xv, vv, av = float(x[g.vr]), float(v[g.vr]), float(a[g.vr])
-            rows.append((g.vmc, xv, vv, av, float(length[g.vr])))
-        if p.vnr_commanded and plan.vv2 is not None and tau <= plan.horizon:
-            xv, vv, av = (float(q) for q in cubic_state(plan.vv2, tau))
-            rows.append((g.vnr, xv, vv, av, float(length[g.vmc])))
+        states = virtual_states(plan, t, x, v, a)
+        if p.vr_following and "vv0" in states and g.vmf >= 0:
+            rows.append((g.vr, *states["vv0"], float(length[g.vmf])))
+        if p.vmc_commanded and plan.mode == Mode.LONGITUDINAL and "vv1" in states:
+            rows.append((g.vmc, *states["vv1"], float(length[g.vr])))
+        if p.vnr_commanded and "vv2" in states:
+            rows.append((g.vnr, *states["vv2"], float(length[g.vmc])))
     if not rows:
         empty = np.empty(0)
         return np.empty(0, dtype=np.int64), empty, empty, empty, empty
@@ -104,7 +125,10 @@ def plan_record(plan: MergePlan) -> dict[str, Any]:
         "horizon": float(plan.horizon),
         "vv1": floats(plan.vv1),
         "vv2": floats(plan.vv2),
+        "sequence": plan.sequence,
+        "vv0": floats(plan.vv0),
         "fallback": bool(plan.fallback),
+        "eq19_branch": str(plan.details.get("eq19_branch", "")),
         "reason": plan.reason,
         "objectives": dict(plan.objectives),
         "decision_ms": float(plan.decision_ms),

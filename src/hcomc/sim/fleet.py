@@ -16,7 +16,7 @@ from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.models.cav import acc_acceleration, cah_acceleration
 from hcomc.models.idm import idm_acceleration, iidm_acceleration
-from hcomc.sim.road import Kind
+from hcomc.road import Kind
 
 
 @dataclass(frozen=True, slots=True)

@@ -27,9 +27,9 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
+from hcomc.road import Lane
 from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.neighbours import LaneIndex
-from hcomc.sim.road import Lane
 
 
 @dataclass(frozen=True, slots=True)

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from hcomc.models.fuel import fuel_consumed
+from hcomc.road import Lane
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.road import Lane
 
 
 def summarise(log: SimulationLog) -> dict[str, Any]:

@@ -1,18 +1,21 @@
 """HCOMC merge controller (paper Section III): game -> multi-objective optimisation -> Eq. 19.
 
-1. The six key vehicles are taken from the view (:func:`hcomc.control.base.find_key_vehicles`).
-2. If VMC is a CAV, the Stackelberg/Harsanyi lane-change game (Section III-B) between VMC (SV)
-   and VNR (FV) decides whether lateral cooperation is admissible: when VMC's equilibrium
-   action is to change lane, or when its change keeps the Eq. 15 critical acceleration below
-   the threshold against every response VNR plays with positive probability. (VMC's own
-   payoff cannot see that its change makes room for VR, so "keep" would otherwise always
-   win on comfort; the merge objectives then decide between the modes.) An HDV VMC is
-   predicted, never commanded, so only VR's own plan is optimised.
+1. The six key vehicles are taken from the view (:func:`hcomc.control.base.find_key_vehicles`);
+   the "behind" sequence uses the relabelled group of :func:`hcomc.control.base.behind_group`.
+2. For each sequence whose cooperating vehicle is a CAV, the Stackelberg/Harsanyi lane-change
+   game (Section III-B) between that vehicle (SV) and its lane-2 follower (FV) decides whether
+   lateral cooperation is admissible: when SV's equilibrium action is to change lane, or when
+   its change keeps the Eq. 15 critical acceleration below the threshold against every
+   response FV plays with positive probability. (SV's own payoff cannot see that its change
+   makes room for VR, so "keep" would otherwise always win on comfort; the merge objectives
+   then decide between the modes.) An HDV is predicted, never commanded.
 3. The optimiser (NSGA-II by default; PSO or SA) searches merge position, VR's lane-change
-   duration, the virtual-vehicle horizon and the cooperation mode, evaluating whole
-   populations with :class:`~hcomc.control.hcomc.problem.MergeProblem`.
+   duration, the virtual-vehicle horizon, the cooperation mode and the merge sequence,
+   evaluating whole populations with :class:`~hcomc.control.hcomc.problem.MergeProblem`. When
+   the engine replans (receding horizon), the previous Pareto set of the same VR seeds the
+   search and the live virtual vehicles are continued, so the commanded motion stays smooth.
 4. Eq. 19 picks one plan from the Pareto set; without any feasible candidate the safe fallback
-   applies: VR merges by gap acceptance behind VMC and VMC is not commanded.
+   applies: VR merges by gap acceptance and nobody is commanded.
 """
 
 from __future__ import annotations
@@ -22,19 +25,45 @@ import time
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
-from hcomc.control.hcomc.problem import OBJECTIVES, KeyState, MergeProblem
-from hcomc.control.hcomc.rollout import VMC, VMF, VNF, VR, warm_up
-from hcomc.control.lane_change_game import GameVehicle, LaneChangeDecision, lane_change_game
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    behind_group,
+    elapsed_ms,
+    virtual_states,
+)
+from hcomc.control.hcomc.problem import (
+    AHEAD,
+    OBJECTIVES,
+    SEQUENCES,
+    KeyState,
+    MergeProblem,
+    default_starts,
+)
+from hcomc.control.hcomc.rollout import (
+    S_VV0_V,
+    S_VV0_X,
+    S_VV1_V,
+    S_VV1_X,
+    VMC,
+    VMF,
+    VNF,
+    VR,
+    warm_up,
+)
+from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
+from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
 from hcomc.optim.base import Optimizer
 from hcomc.optim.registry import make_optimizer
-from hcomc.optim.selection import select_eq19
-from hcomc.sim.road import Kind
+from hcomc.optim.selection import eq19_branch, select_eq19
+from hcomc.road import Kind
 
 _PHANTOM_AHEAD = 1000.0  # [m] a missing VMF/VNF is a free-road phantom this far ahead
 
 
-def key_state(view: TrafficView, group: MergeGroup) -> KeyState:
+def key_state(view: TrafficView, group: MergeGroup, starts: np.ndarray | None = None) -> KeyState:
     """Key-vehicle states and parameters in role order, with phantoms for missing leaders."""
     f = view.fleet
     ids = group.as_array()
@@ -60,22 +89,47 @@ def key_state(view: TrafficView, group: MergeGroup) -> KeyState:
         a=a,
         present=present,
         cav=cav,
+        coop=cav.copy(),
         params=params,
         ids=np.where(ids >= 0, ids, -1),
+        starts=default_starts() if starts is None else starts,
     )
 
 
-def _game_vehicle(view: TrafficView, i: int) -> GameVehicle | None:
-    if i < 0:
-        return None
-    f = view.fleet
-    return GameVehicle(
-        x=float(view.x[i]),
-        v=float(view.v[i]),
-        length=float(f.length[i]),
-        desired_speed=float(f.v0[i]),
-        is_cav=bool(f.kind[i] == Kind.CAV),
-    )
+def continuation_starts(view: TrafficView, group: MergeGroup) -> np.ndarray:
+    """Start states of VV0 and VV1 that continue the live plan of ``group.vr`` (NaN: none).
+
+    VV0 (VR's virtual leader) is continued whenever a plan is live; VV1 only when the same
+    vehicle keeps cooperating, i.e. the live plan's cooperating vehicle is ``group.vmc``.
+    """
+    starts = default_starts()
+    live = view.live_plan(group.vr)
+    if live is None:
+        return starts
+    states = virtual_states(live, view.t, view.x, view.v, view.a)
+    if "vv0" in states:
+        starts[S_VV0_X], starts[S_VV0_V] = states["vv0"][:2]
+    if "vv1" in states and live.group.vmc == group.vmc:
+        starts[S_VV1_X], starts[S_VV1_V] = states["vv1"][:2]
+    return starts
+
+
+def sequence_groups(view: TrafficView, group: MergeGroup) -> tuple[MergeGroup, MergeGroup]:
+    """The executed key groups of the two merge sequences, ("ahead", "behind")."""
+    return group, behind_group(view, group)
+
+
+def merge_problem(
+    view: TrafficView, group: MergeGroup, lateral_allowed: tuple[bool, bool] = (False, False)
+) -> MergeProblem:
+    """The merge problem of both sequences at this planning instant (live plans continued)."""
+    groups = sequence_groups(view, group)
+    states = tuple(key_state(view, g, continuation_starts(view, g)) for g in groups)
+    return MergeProblem((states[0], states[1]), view.config, lateral_allowed)
+
+
+def _is_cav(view: TrafficView, i: int) -> bool:
+    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
 
 
 class HCOMCController:
@@ -89,37 +143,32 @@ class HCOMCController:
         self.optimizer = optimizer or make_optimizer(
             config.control.optimizer, pop_size=config.control.pop_size
         )
+        self._pareto: dict[int, np.ndarray] = {}  # last Pareto set per VR (warm start)
 
-    def lateral_game(self, view: TrafficView, group: MergeGroup) -> LaneChangeDecision:
-        """Section III-B game: may VMC (SV) move to lane 2 in front of VNR (FV)?"""
+    def lateral_game(self, view: TrafficView, group: MergeGroup) -> LaneChangeDecision | None:
+        """Section III-B game: may the cooperating vehicle (SV) move to lane 2 before VNR?"""
+        if not _is_cav(view, group.vmc):
+            return None
         cfg = view.config
-        kinds = view.fleet.kind
-        return lane_change_game(
-            _game_vehicle(view, group.vmc),
-            _game_vehicle(view, group.vnr),
-            _game_vehicle(view, group.vmf),
-            _game_vehicle(view, group.vnf),
+        fv_cav = _is_cav(view, group.vnr)
+        return play_lane_change_game(
+            game_vehicle(view.x, view.v, view.fleet, group.vmc),
+            game_vehicle(view.x, view.v, view.fleet, group.vnr),
+            game_vehicle(view.x, view.v, view.fleet, group.vmf),
+            game_vehicle(view.x, view.v, view.fleet, group.vnf),
+            params=game_params(cfg),
             sv_idm=cfg.cav,
-            fv_idm=cfg.cav if group.vnr >= 0 and kinds[group.vnr] == Kind.CAV else cfg.hdv,
+            fv_idm=cfg.cav if fv_cav else cfg.hdv,
         )
 
-    def problem(self, view: TrafficView, group: MergeGroup, lateral_allowed: bool) -> MergeProblem:
-        """The merge problem of this planning instant."""
-        cfg = view.config
-        return MergeProblem(
-            key_state(view, group),
-            accel_lane=(cfg.road.accel_lane_start, cfg.road.accel_lane_end),
-            lane_width=cfg.road.lane_width,
-            lateral_allowed=lateral_allowed,
-            vmc_duration=cfg.cav.lane_change_duration,
-            transition_tolerance=cfg.lane_change.transition_tolerance,
-            emergency_decel=cfg.lane_change.emergency_decel,
-            politeness=cfg.lane_change.politeness,
-            virtual_max_decel=cfg.control.virtual_max_decel,
-            prediction_dt=cfg.control.prediction_dt,
-            horizon=(cfg.control.horizon_min, cfg.control.horizon_max),
-            post_merge=cfg.control.post_merge,
-        )
+    def problem(
+        self, view: TrafficView, group: MergeGroup
+    ) -> tuple[MergeProblem, tuple[LaneChangeDecision | None, LaneChangeDecision | None]]:
+        """The merge problem of this planning instant and the lateral games per sequence."""
+        games = tuple(self.lateral_game(view, g) for g in sequence_groups(view, group))
+        allowed = tuple(bool(g is not None and (g.change or g.change_is_safe)) for g in games)
+        problem = merge_problem(view, group, (allowed[0], allowed[1]))
+        return problem, (games[0], games[1])
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
         """Plan VR's merge and the key vehicles' cooperation."""
@@ -132,50 +181,69 @@ class HCOMCController:
                 reason="no lane-1 vehicle behind VR",
                 decision_ms=elapsed_ms(start),
             )
-        vmc_cav = bool(view.fleet.kind[group.vmc] == Kind.CAV)
-        game = self.lateral_game(view, group) if vmc_cav else None
-        lateral_allowed = game is not None and (game.change or game.change_is_safe)
-        problem = self.problem(view, group, lateral_allowed=lateral_allowed)
-        result = self.optimizer.minimize(problem, budget=self.config.control.budget, rng=rng)
+        problem, games = self.problem(view, group)
+        budget = self.config.control.budget
+        result = self.optimizer.minimize(
+            problem, budget=budget, rng=rng, initial=self._pareto.get(group.vr)
+        )
         details = {"pareto_X": result.X, "pareto_F": result.F, "pareto_G": result.G,
                    "feasible": result.feasible, "n_eval": result.n_eval,
-                   "optimizer": result.algorithm, "game": game}  # fmt: skip
+                   "optimizer": result.algorithm, "game": games[AHEAD], "games": games}  # fmt: skip
         if not result.any_feasible:
+            self._pareto.pop(group.vr, None)
             return MergePlan(
                 group,
                 Mode.NONE,
                 view.t,
                 fallback=True,
                 decision_ms=elapsed_ms(start),
-                reason="no feasible candidate: VR merges by gap acceptance behind VMC",
+                reason="no feasible candidate: VR merges by gap acceptance",
                 details=details,
             )
-        k = select_eq19(
-            result.F,
-            OBJECTIVES,
-            feasible=result.feasible,
-            safety_threshold=self.config.control.safety_threshold,
-        )
+        self._pareto[group.vr] = result.X[result.feasible]
+        threshold = problem.safety.threshold
+        k = select_eq19(result.F, OBJECTIVES, feasible=result.feasible, safety_threshold=threshold)
         x = result.X[k]
         chosen = problem.predict(x[None, :])
+        seq = int(chosen.sequence[0])
+        exec_group = sequence_groups(view, group)[seq]
         lateral = bool(x[3] >= 0.5)
-        mode = Mode.NONE if not vmc_cav else Mode.LATERAL if lateral else Mode.LONGITUDINAL
-        details.update(chosen=k, prediction=chosen)
-        vnr_cav = group.vnr >= 0 and view.fleet.kind[group.vnr] == Kind.CAV
+        mode = (
+            Mode.NONE
+            if not _is_cav(view, exec_group.vmc)
+            else Mode.LATERAL
+            if lateral
+            else Mode.LONGITUDINAL
+        )
+        details.update(
+            chosen=k,
+            prediction=chosen,
+            eq19_branch=eq19_branch(result.F, OBJECTIVES, result.feasible, threshold),
+        )
         return MergePlan(
-            group,
+            exec_group,
             mode,
             view.t,
             merge_x=float(x[0]),
             vr_duration=float(x[1]),
             horizon=float(x[2]),
-            vv1=chosen.vv1[0] if mode == Mode.LONGITUDINAL else None,
-            vv2=chosen.vv2[0] if mode == Mode.LATERAL and vnr_cav else None,
+            vv0=chosen.vv0[0].copy() if _is_cav(view, group.vr) else None,
+            vv1=chosen.vv1[0].copy() if mode == Mode.LONGITUDINAL else None,
+            vv2=chosen.vv2[0].copy()
+            if mode == Mode.LATERAL and _is_cav(view, exec_group.vnr)
+            else None,
             reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}",
             objectives=dict(zip(OBJECTIVES, map(float, result.F[k]), strict=True)),
             decision_ms=elapsed_ms(start),
             details=details,
+            sequence=SEQUENCES[seq],
         )
 
 
-__all__ = ["HCOMCController", "key_state"]
+__all__ = [
+    "HCOMCController",
+    "continuation_starts",
+    "key_state",
+    "merge_problem",
+    "sequence_groups",
+]

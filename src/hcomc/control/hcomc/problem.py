@@ -1,4 +1,4 @@
-"""The HCOMC multi-objective merge problem (paper Eq. 15-18; MODELS.md §7, §8, §14).
+"""The HCOMC multi-objective merge problem (paper Section III-C, Eq. 15-18).
 
 Decision vector (one row per candidate plan):
 
@@ -7,22 +7,37 @@ col   variable                                                    bounds
 ====  ==========================================================  =====================
 0     VR's lane-change start position on the acceleration lane     [accel start, end - 3L] m
 1     VR's lane-change duration                                     [3, 6] s
-2     planning horizon H = tf' - t0' of the virtual vehicle         [4, 20] s (config)
-3     VMC's cooperation mode (< 0.5 longitudinal, >= 0.5 lateral)   [0, 1]
+2     planning horizon H = tf' - t0' of the virtual vehicles        [horizon_min, max] s
+3     cooperation mode (< 0.5 longitudinal, >= 0.5 lateral)         [0, 1]
+4     merge sequence (< 0.5 VR ahead of VMC, >= 0.5 VR behind VMC)  [0, 1]
 ====  ==========================================================  =====================
+
+The merge sequence (Section II-C) is a decision, not a rule: "ahead" puts VR between VMF and
+VMC, and VMC cooperates; "behind" puts VR between VMC and VMR, and VMR cooperates. Both are
+rolled out with the same kernel on their own key group: for "behind" the group is relabelled
+so that the vehicle ahead of VR's slot (VMC) plays the VMF role and the one behind it (VMR)
+the VMC role (:func:`hcomc.control.base.behind_group`). In lateral mode the cooperating
+vehicle moves to lane 2 and VR takes its place in front of the next lane-1 vehicle.
 
 Objectives, all minimised (columns named for :func:`hcomc.optim.selection.select_eq19`):
 
-* ``safety`` — U_safe, the worst Eq. 15 critical acceleration over consecutive same-lane pairs
-  of the key vehicles at merge completion [m/s^2];
-* ``fuel`` — U_fuel, Eq. 16 fuel of VR and VMC over the prediction window [L];
-* ``efficiency`` — −U_eff, Eq. 17 with politeness eta over VMC, VMR and VNR [m/s^2].
+* ``safety`` — U_safe, Eq. 15 at merge completion over the follower-leader pairs the merge
+  creates (VR behind its new leader, VR's new follower behind VR; lateral mode also the
+  cooperating vehicle behind its lane-2 leader and the lane-2 follower behind it), the largest
+  [m/s^2]; T, D and a_merg from ``config.control``;
+* ``fuel`` — U_fuel, Eq. 16 over a **common distance**: VR's fuel to cover the distance it
+  would cover without the merge, plus the extra fuel the merge costs the cooperating vehicle
+  over its own counterfactual distance [L] (a fixed time window would favour slow plans, and
+  comparing a different cooperating vehicle's total fuel would favour one sequence by
+  background);
+* ``efficiency`` — −U_eff, Eq. 17 accumulated over the window against the no-merge
+  counterfactual (VR: a free road, no lane end), politeness eta over VMC, VMR, VNR [m/s^2].
 
 Constraints (feasible when <= 0): predicted rectangle collisions among the key vehicles
 (count of colliding pair-steps), merge not completed in the window, an unavoidable crash in
 Eq. 15 (infinite U_safe), an infeasible virtual vehicle (v < 0 or a < -b_max), a lane change
 that would end beyond the acceleration lane [m], lateral mode not admitted by the lane-change
-game (or VMC not a CAV).
+game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to merge behind.
 """
 
 from __future__ import annotations
@@ -32,10 +47,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.config import ScenarioConfig
 from hcomc.control.hcomc.rollout import (
     C_A_MERG,
     C_ACCEL_END,
     C_D,
+    C_DELAY_CAV,
+    C_DELAY_HDV,
     C_DT,
     C_EMERGENCY,
     C_GAMMA,
@@ -46,6 +64,7 @@ from hcomc.control.hcomc.rollout import (
     G_COLLISION,
     N_CONSTS,
     N_ROLES,
+    N_STARTS,
     P_LEN,
     P_WID,
     VMC,
@@ -54,10 +73,22 @@ from hcomc.control.hcomc.rollout import (
 )
 from hcomc.models.fuel import fuel_rate
 from hcomc.safety.collision import vehicles_collide
+from hcomc.safety.critical import SafetyIndex
 
 OBJECTIVES = ("safety", "fuel", "efficiency")
-CONSTRAINTS = ("collision", "not_merged", "unsafe", "virtual_vehicle", "overrun", "lateral")
+CONSTRAINTS = (
+    "collision",
+    "not_merged",
+    "unsafe",
+    "virtual_vehicle",
+    "overrun",
+    "lateral",
+    "sequence",
+)
+SEQUENCES = ("ahead", "behind")
+AHEAD, BEHIND = 0, 1
 _PAIRS = np.array([(i, j) for i in range(N_ROLES) for j in range(i + 1, N_ROLES)])
+_G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,7 +96,9 @@ class KeyState:
     """State and parameters of the six key vehicles at planning time (roles VR … VNR).
 
     Missing VMF/VNF are replaced by a phantom far ahead at VMC's speed (free road); missing
-    VMR/VNR are absent (``present`` False).
+    VMR/VNR are absent (``present`` False). ``coop`` says which roles cooperate when their
+    mode asks it (normally the CAVs); ``starts`` are the start states of VV0 and VV1 (NaN:
+    the paper's Eq. 8 start; a replanning controller continues the live virtual vehicles).
     """
 
     t0: float
@@ -74,8 +107,10 @@ class KeyState:
     a: FloatArray
     present: BoolArray
     cav: BoolArray
+    coop: BoolArray
     params: FloatArray  # (6, 9): v0, T, s0, a, b, delta, coolness, length, width
     ids: IntArray  # (6,) vehicle indices in the simulation, -1 for absent or phantom
+    starts: FloatArray  # (4,) VV0 x, v and VV1 x, v (NaN = default)
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,104 +126,159 @@ class Prediction:
     k_merge: IntArray
     F: FloatArray
     G: FloatArray
+    vv0: FloatArray
     vv1: FloatArray
     vv2: FloatArray
+    sequence: IntArray  # (C,) AHEAD or BEHIND
+
+
+def problem_constants(config: ScenarioConfig) -> FloatArray:
+    """The rollout's constants vector, every value read from ``config``."""
+    safety = SafetyIndex.from_config(config.control)
+    consts = np.zeros(N_CONSTS)
+    consts[C_DT] = config.control.prediction_dt
+    consts[C_ACCEL_END] = config.road.accel_lane_end
+    consts[C_WIDTH] = config.road.lane_width
+    consts[C_VMC_DUR] = config.cav.lane_change_duration
+    consts[C_GAMMA] = np.arctanh(1.0 - 2.0 * config.lane_change.transition_tolerance)
+    consts[C_EMERGENCY] = config.lane_change.emergency_decel
+    consts[C_VV_DECEL] = config.control.virtual_max_decel
+    consts[C_POLITENESS] = config.lane_change.politeness
+    consts[C_D] = safety.min_distance
+    consts[C_A_MERG] = safety.emergency_decel
+    consts[C_DELAY_CAV] = safety.delay_cav
+    consts[C_DELAY_HDV] = safety.delay_hdv
+    return consts
 
 
 class MergeProblem:
-    """Vectorised HCOMC problem for one planning instant (implements ``optim.base.Problem``)."""
+    """Vectorised HCOMC problem for one planning instant (implements ``optim.base.Problem``).
 
-    n_var = 4
+    Parameters
+    ----------
+    states : key states of the "ahead" group and of the "behind" group (None when there is
+        no vehicle to merge behind).
+    config : the scenario; every parameter is read from it.
+    lateral_allowed : per sequence, whether the lane-change game admits lateral cooperation.
+    """
+
+    n_var = 5
     n_obj = 3
     n_constr = len(CONSTRAINTS)
     objective_names = OBJECTIVES
 
     def __init__(
         self,
-        state: KeyState,
-        *,
-        accel_lane: tuple[float, float],
-        lane_width: float,
-        lateral_allowed: bool,
-        vmc_duration: float,
-        transition_tolerance: float,
-        emergency_decel: float,
-        politeness: float,
-        virtual_max_decel: float,
-        prediction_dt: float,
-        horizon: tuple[float, float],
-        post_merge: float,
-        min_distance: float = 2.0,
-        emergency_brake: float = 7.5,
+        states: tuple[KeyState, KeyState | None],
+        config: ScenarioConfig,
+        lateral_allowed: tuple[bool, bool] = (False, False),
     ) -> None:
-        self.state = state
+        self.states = states
+        self.state = states[AHEAD]
+        self.config = config
         self.lateral_allowed = lateral_allowed
-        start, end = accel_lane
-        length = float(state.params[VR, P_LEN])
-        self.xl = np.array([max(start, state.x[VR] + 1.0), 3.0, horizon[0], 0.0])
-        self.xu = np.array([max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, horizon[1], 1.0])
-        consts = np.zeros(N_CONSTS)
-        consts[C_DT] = prediction_dt
-        consts[C_ACCEL_END] = end
-        consts[C_WIDTH] = lane_width
-        consts[C_VMC_DUR] = vmc_duration
-        consts[C_GAMMA] = np.arctanh(1.0 - 2.0 * transition_tolerance)
-        consts[C_EMERGENCY] = emergency_decel
-        consts[C_VV_DECEL] = virtual_max_decel
-        consts[C_POLITENESS] = politeness
-        consts[C_D] = min_distance
-        consts[C_A_MERG] = emergency_brake
-        self.consts = consts
-        # window: VR reaches the lane end at its current speed, changes lane, then settles
-        reach = (end - state.x[VR]) / max(state.v[VR], 5.0)
-        self.n_steps = int(np.ceil((reach + self.xu[1] + post_merge) / prediction_dt))
-        self.dt = prediction_dt
-        self._fuel_ref = self._reference_fuel()
-
-    def _reference_fuel(self) -> float:
-        """Cruise fuel of VR and VMC at their current speeds over the window [L] (scaling)."""
+        self.safety = SafetyIndex.from_config(config.control)
+        road, control = config.road, config.control
+        start, end = road.accel_lane_start, road.accel_lane_end
         s = self.state
-        v = np.array([s.v[VR], s.v[VMC] if s.present[VMC] else 0.0])
-        return float(fuel_rate(v, 0.0).sum() * self.n_steps * self.dt / 1000.0)
+        length = float(s.params[VR, P_LEN])
+        self.xl = np.array([max(start, s.x[VR] + 1.0), 3.0, control.horizon_min, 0.0, 0.0])
+        self.xu = np.array(
+            [max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, control.horizon_max, 1.0, 1.0]
+        )
+        self.consts = problem_constants(config)
+        # window: VR reaches the lane end at its current speed, changes lane, then settles
+        reach = (end - s.x[VR]) / max(s.v[VR], 5.0)
+        self.dt = control.prediction_dt
+        self.n_steps = int(np.ceil((reach + self.xu[1] + control.post_merge) / self.dt))
+        self._fuel_ref = float(fuel_rate(s.v[VR], 0.0) * self.n_steps * self.dt / 1000.0)
 
     # ------------------------------------------------------------------ evaluate
     def predict(self, X: FloatArray) -> Prediction:
         """Roll out every candidate row of ``X`` and compute its objectives and constraints."""
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
-        s = self.state
+        seq = np.where(X[:, 4] >= 0.5, BEHIND, AHEAD)
         lateral = X[:, 3] >= 0.5
-        Xt, Yt, Vt, At, Ht, k_merge, u_safe, u_eff, g, vv1, vv2, near = rollout(
-            s.x, s.v, s.a, s.present, s.cav, s.params,
-            X[:, 0].copy(), X[:, 1].copy(), X[:, 2].copy(), lateral, self.consts, self.n_steps,
-        )  # fmt: skip
-        G = np.zeros((X.shape[0], self.n_constr))
-        G[:, : g.shape[1]] = g
-        G[:, G_COLLISION] = self._collisions(Xt, Yt, Ht, near)
-        G[:, -1] = np.where(lateral & ~self.lateral_allowed, 1.0, 0.0)
-        fuel = fuel_rate(Vt[:, :, [VR, VMC]], At[:, :, [VR, VMC]]).sum(axis=(1, 2)) * self.dt
-        F = np.column_stack([np.minimum(u_safe, 1e3), fuel / 1000.0, -u_eff])
-        t = np.arange(self.n_steps + 1) * self.dt
-        return Prediction(t, Xt, Yt, Vt, At, Ht, k_merge, F, G, vv1, vv2)
+        seq[lateral] = AHEAD  # lateral: the cooperating vehicle leaves; VR takes its slot
+        no_behind = (seq == BEHIND) & (self.states[BEHIND] is None)
+        seq[no_behind] = AHEAD
+        n, K = X.shape[0], self.n_steps
+        shape = (n, K + 1, N_ROLES)
+        Xt, Yt, Vt, At, Ht = (np.zeros(shape) for _ in range(5))
+        k_merge = np.full(n, -1, dtype=np.int64)
+        F = np.zeros((n, self.n_obj))
+        G = np.zeros((n, self.n_constr))
+        vv = [np.zeros((n, 4)) for _ in range(3)]
+        for which in (AHEAD, BEHIND):
+            rows = np.flatnonzero(seq == which)
+            state = self.states[which]
+            if rows.size == 0 or state is None:
+                continue
+            out = rollout(
+                state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
+                state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
+                lateral[rows], self.consts, K,
+            )  # fmt: skip
+            xs, ys, vs, as_, hs, km, u_safe, u_eff, g, v0_, v1_, v2_, near, cf = out
+            Xt[rows], Yt[rows], Vt[rows], At[rows], Ht[rows] = xs, ys, vs, as_, hs
+            k_merge[rows] = km
+            for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):
+                dst[rows] = src
+            G[rows, : g.shape[1]] = g
+            G[rows, G_COLLISION] = self._collisions(state, xs, ys, hs, near)
+            allowed = self.lateral_allowed[which]
+            G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
+            fuel = self._fuel(xs, vs, as_, cf, state)
+            F[rows] = np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff])
+        G[no_behind, _G_SEQUENCE] = 1.0
+        t = np.arange(K + 1) * self.dt
+        return Prediction(t, Xt, Yt, Vt, At, Ht, k_merge, F, G, *vv, seq)
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Objectives (n, 3) and constraints (n, 6) of candidate rows ``X`` (n, 4)."""
+        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5)."""
         p = self.predict(X)
         return p.F, p.G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
-        """Eq. 19 as one cost for PSO and SA, with the U_safe <= 4 gate as a penalty.
+        """Eq. 19 as one cost for PSO and SA, with the U_safe gate as a penalty.
 
-        ``U = U_fuel / U_fuel,ref + (-U_eff) / (1 m/s^2) + 10 max(0, U_safe - 4)
+        ``U = U_fuel / U_fuel,ref + (-U_eff) / (1 m/s^2) + 10 max(0, U_safe - threshold)
         + 1000 sum(max(G, 0))``: Eq. 19's sum of the two normalised costs with fixed scales
         (a single-objective optimiser has no Pareto set to min-max normalise over); the
-        reference fuel is VR's and VMC's cruise fuel over the window.
+        reference fuel is VR's cruise fuel over the window, the threshold
+        ``control.safety_threshold``.
         """
-        penalty = 10.0 * np.maximum(F[:, 0] - 4.0, 0.0) + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
+        gate = 10.0 * np.maximum(F[:, 0] - self.safety.threshold, 0.0)
+        penalty = gate + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
         return F[:, 1] / self._fuel_ref + F[:, 2] + penalty
 
     # ----------------------------------------------------------------- helpers
+    def _fuel(
+        self, X: FloatArray, V: FloatArray, A: FloatArray, cf: FloatArray, state: KeyState
+    ) -> FloatArray:
+        """U_fuel over a common distance [L] (module docstring).
+
+        Each vehicle's fuel over the window is completed to the distance it covers in the
+        counterfactual at its end speed's cruise rate (a negative completion when it went
+        further): ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``.
+        """
+        dt = self.dt
+
+        def to_distance(r: int, x: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
+            burnt = fuel_rate(v[..., 1:, r], a[..., 1:, r]).sum(axis=-1) * dt
+            v_end = np.maximum(v[..., -1, r], 1.0)
+            rest = (cf[0, -1, r] - cf[0, 0, r]) - (x[..., -1, r] - x[..., 0, r])
+            return burnt + fuel_rate(v_end, 0.0) * rest / v_end
+
+        total = to_distance(VR, X, V, A)
+        if state.present[VMC]:
+            baseline = to_distance(VMC, cf[0], cf[1], cf[2])
+            total = total + to_distance(VMC, X, V, A) - baseline
+        return total / 1000.0
+
+    @staticmethod
     def _collisions(
-        self, X: FloatArray, Y: FloatArray, H: FloatArray, near: BoolArray
+        state: KeyState, X: FloatArray, Y: FloatArray, H: FloatArray, near: BoolArray
     ) -> FloatArray:
         """Colliding (pair, step) count per candidate: oriented rectangles (Eq. 7).
 
@@ -198,8 +288,7 @@ class MergeProblem:
         count = np.zeros(X.shape[0])
         if not near.any():
             return count
-        s = self.state
-        length, width = s.params[:, P_LEN], s.params[:, P_WID]
+        length, width = state.params[:, P_LEN], state.params[:, P_WID]
         c, k, p = np.nonzero(near)
         a, b = _PAIRS[p, 0], _PAIRS[p, 1]
         hit = vehicles_collide(
@@ -208,3 +297,8 @@ class MergeProblem:
         )  # fmt: skip
         np.add.at(count, c[hit], 1.0)
         return count
+
+
+def default_starts() -> FloatArray:
+    """Start states of VV0 and VV1 for a first plan: the Eq. 8 defaults (all NaN)."""
+    return np.full(N_STARTS, np.nan)

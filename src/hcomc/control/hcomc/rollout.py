@@ -9,21 +9,31 @@ Eq. 14 tanh blend, the virtual vehicles of Eq. 8-13 — under these prediction a
 * perception is exact (HDVs are predicted with their IDM, without delays or noise);
 * every vehicle follows the nearest key vehicle ahead in the lane(s) it occupies; a vehicle
   that changes lane occupies both lanes until the change ends (as in the engine);
-* VR starts its change when it reaches the merge position (candidate variable 0) and takes
-  the candidate's duration (variable 1); before that it drives on the ramp towards the
-  acceleration-lane end, which it treats as a stationary obstacle;
-* longitudinal mode: VMC (a CAV) also follows VV1, the cubic from VMF's state now to VR's
-  predicted state at the horizon H (variable 2), and VR's projection after H;
-* lateral mode: VMC (a CAV) changes to lane 2 now, blending from VMF to VNF (Eq. 14), and a
-  CAV VNR follows VV2, the cubic from VNF's state now to VMC's predicted state at H.
+* a CAV VR on the ramp follows its plan: VV0, a cubic virtual leader from its start state to
+  the state of its future leader (the VMF role) at the horizon H, then that leader's
+  projection onto the ramp; it does not brake for the lane end (the engine brakes for it only
+  if the plan fails). An HDV VR keeps its IDM with the lane end as a standing obstacle.
+  VR starts its change at the merge position (candidate variable 0) with the candidate's
+  duration (variable 1);
+* longitudinal mode: a cooperating VMC also follows VV1, the cubic from its start state to
+  VR's predicted state at the horizon H (variable 2), and VR's projection after H;
+* lateral mode: a cooperating VMC changes to lane 2 now, blending from VMF to VNF (Eq. 14),
+  and a CAV VNR follows VV2, the cubic from VNF's state now to VMC's predicted state at H.
 
-VV1 and VV2 end states come from a first pass in which VR follows only VMF and VMC only VMF
-and VNF, so the cubics are fixed before the joint pass, exactly as the engine executes them.
+Three passes per candidate population:
 
-The kernel is compiled with numba: a population is evaluated per optimiser generation and
-the decision-latency target (DESIGN §6: median <= 50 ms) leaves about 1 ms per generation,
-which a numpy time-stepping loop (~45 array operations x ~100 steps) cannot meet. The scalar
-forms of Eq. 1, 3, 4 and 14 below are cross-checked against the vectorised kernels of
+0. the **no-merge counterfactual** (candidate-independent): VR alone on a free road, the
+   mainline key vehicles without VR and without cooperation; it is the reference of the
+   accumulated Eq. 17 gains and of the common distance of Eq. 16;
+1. a **pre-pass** in which VR follows only VV0 and VMF, VMC only VMF and VNF, which fixes the
+   end states of VV1 and VV2 at H exactly as the engine executes them (the cubics are fixed
+   when the plan is made);
+2. the **joint pass** of every key vehicle, from which trajectories, constraints, Eq. 15 and
+   Eq. 17 are taken.
+
+The kernel is compiled with numba: a population is evaluated per optimiser generation, which a
+numpy time-stepping loop cannot do within the decision-time budget. The scalar forms of
+Eq. 1, 3, 4 and 14 below are cross-checked against the vectorised kernels of
 :mod:`hcomc.models` in the tests.
 """
 
@@ -52,10 +62,18 @@ N_PARAMS = 9
     C_POLITENESS,
     C_D,
     C_A_MERG,
-) = range(10)
-N_CONSTS = 10
+    C_DELAY_CAV,
+    C_DELAY_HDV,
+) = range(12)
+N_CONSTS = 12
+# start states of the virtual vehicles (NaN: the Eq. 8 default), see ``rollout``
+S_VV0_X, S_VV0_V, S_VV1_X, S_VV1_V = range(4)
+N_STARTS = 4
 # constraint columns
 G_COLLISION, G_NOT_MERGED, G_UNSAFE, G_VIRTUAL, G_OVERRUN = range(5)
+# passes
+_COUNTERFACTUAL, _PRE, _JOINT = range(3)
+_LANE0 = np.array([0, 1, 1, 1, 2, 2])  # lanes of the roles at planning time (0 = ramp)
 
 
 @njit(cache=True)
@@ -104,6 +122,13 @@ def quintic(xi: float) -> tuple[float, float]:
 
 
 @njit(cache=True)
+def equilibrium_gap(p: np.ndarray, v: float) -> float:
+    """IDM steady-state gap s_e(v) = (s0 + v T) / sqrt(1 - (v/v0)^delta) [m] (v < v0)."""
+    free = 1.0 - (min(v, 0.999 * p[P_V0]) / p[P_V0]) ** p[P_DELTA]
+    return (p[P_S0] + v * p[P_T]) / math.sqrt(free)
+
+
+@njit(cache=True)
 def _leader(
     r: int, lane: int, x: np.ndarray, in1: np.ndarray, in2: np.ndarray, present: np.ndarray
 ) -> int:
@@ -129,14 +154,6 @@ def _behind(
 
 
 @njit(cache=True)
-def _gain_term(
-    r: int, j: int, x: np.ndarray, v: np.ndarray, a: np.ndarray, params: np.ndarray, floor: float
-) -> float:
-    """Eq. 17 acceleration of r behind j, bounded below by the emergency deceleration."""
-    return max(_behind(r, j, x, v, a, params), -floor)
-
-
-@njit(cache=True)
 def _cubic(h: float, x0: float, v0: float, xf: float, vf: float, out: np.ndarray) -> None:
     """Eq. 10 with t0 = 0 (see :func:`hcomc.control.virtual_vehicle.cubic_coefficients`)."""
     dx = xf - x0
@@ -150,6 +167,18 @@ def _virtual(b: np.ndarray, tau: float) -> tuple[float, float, float]:
     x = b[0] + tau * (b[1] + tau * (b[2] + tau * b[3]))
     v = b[1] + tau * (2.0 * b[2] + 3.0 * tau * b[3])
     return x, v, 2.0 * b[2] + 6.0 * tau * b[3]
+
+
+@njit(cache=True)
+def _cubic_violation(b: np.ndarray, h: float, max_decel: float) -> float:
+    """How far a cubic virtual vehicle leaves v >= 0 and a >= -b_max on [0, H] (<= 0: ok)."""
+    a_min = min(2.0 * b[2], 2.0 * b[2] + 6.0 * h * b[3])
+    v_min = min(b[1], b[1] + h * (2.0 * b[2] + 3.0 * h * b[3]))
+    if b[3] > 0.0:
+        tau = -b[2] / (3.0 * b[3])
+        if 0.0 < tau < h:
+            v_min = min(v_min, b[1] + tau * (2.0 * b[2] + 3.0 * tau * b[3]))
+    return max(-v_min, -a_min - max_decel)
 
 
 @njit(cache=True)
@@ -189,13 +218,78 @@ def _critical(d: float, v_r: float, v_f: float, delay: float, D: float, a_merg: 
 
 
 @njit(cache=True)
+def _integrate(
+    x: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+    acc: np.ndarray,
+    present: np.ndarray,
+    dt: float,
+    emergency: float,
+) -> None:
+    """Ballistic step of every present role, stopping exactly at v = 0 (as the engine)."""
+    for r in range(N_ROLES):
+        if not present[r]:
+            continue
+        ar = max(acc[r], -emergency)
+        v1 = v[r] + ar * dt
+        if v1 < 0.0:
+            x[r] += -v[r] * v[r] / (2.0 * ar) if ar < 0.0 else 0.0
+            a[r] = -v[r] / dt
+            v[r] = 0.0
+        else:
+            x[r] += v[r] * dt + 0.5 * ar * dt * dt
+            v[r] = v1
+            a[r] = ar
+
+
+@njit(cache=True)
+def counterfactual(
+    x0: np.ndarray,
+    v0: np.ndarray,
+    a0: np.ndarray,
+    present: np.ndarray,
+    params: np.ndarray,
+    consts: np.ndarray,
+    n_steps: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pass 0: the key vehicles without the merge, (n_steps + 1, 6) each of x, v, a.
+
+    VR drives alone on a free road (no lane end); every mainline key vehicle follows the
+    nearest key vehicle ahead in its own lane, nobody cooperates or changes lane.
+    """
+    dt, emergency = consts[C_DT], consts[C_EMERGENCY]
+    X = np.empty((n_steps + 1, N_ROLES))
+    V = np.empty((n_steps + 1, N_ROLES))
+    A = np.empty((n_steps + 1, N_ROLES))
+    x, v, a = x0.copy(), v0.copy(), a0.copy()
+    acc = np.zeros(N_ROLES)
+    in1 = _LANE0 == 1
+    in2 = _LANE0 == 2
+    for k in range(n_steps + 1):
+        X[k], V[k], A[k] = x, v, a
+        if k == n_steps:
+            break
+        acc[VR] = accel(params[VR], np.inf, v[VR], v[VR], 0.0)
+        acc[VMF] = 0.0
+        acc[VNF] = 0.0
+        for r in (VMC, VMR, VNR):
+            if present[r]:
+                acc[r] = _behind(r, _leader(r, _LANE0[r], x, in1, in2, present), x, v, a, params)
+        _integrate(x, v, a, acc, present, dt, emergency)
+    return X, V, A
+
+
+@njit(cache=True)
 def rollout(
     x0: np.ndarray,
     v0: np.ndarray,
     a0: np.ndarray,
     present: np.ndarray,
     cav: np.ndarray,
+    coop: np.ndarray,
     params: np.ndarray,
+    starts: np.ndarray,
     merge_x: np.ndarray,
     vr_dur: np.ndarray,
     horizon: np.ndarray,
@@ -205,21 +299,42 @@ def rollout(
 ):
     """Simulate every candidate; return trajectories, objectives and constraint parts.
 
+    Parameters
+    ----------
+    x0, v0, a0 : (6,) key-vehicle states at planning time, role order VR … VNR.
+    present : (6,) whether each role exists.
+    cav : (6,) whether each role is a CAV (selects the Eq. 15 delay; a CAV VR follows VV0).
+    coop : (6,) whether the role cooperates when its mode asks it to (VMC: VV1 or lateral
+        change; VNR: VV2); normally equal to ``cav``.
+    params : (6, 9) model parameters (columns ``P_*``).
+    starts : (4,) start states of VV0 and VV1 (``S_*``); NaN selects the paper's Eq. 8 start
+        (VV1 at VMF's state) and, for VV0, a leader at VR's equilibrium gap at VR's speed.
+        A replanning controller passes the live virtual vehicles' states for continuity.
+    merge_x, vr_dur, horizon, lateral : (C,) candidate variables.
+    consts : (12,) constants (``C_*``).
+    n_steps : prediction steps K.
+
     Returns
     -------
-    X, Y, V, A, HEAD : (C, n_steps + 1, 6) trajectories [m, m, m/s, m/s^2, rad].
+    X, Y, V, A, HEAD : (C, K + 1, 6) trajectories [m, m, m/s, m/s^2, rad].
     k_merge : (C,) step at which VR's lane change ends, -1 if it does not within the window.
-    u_safe : (C,) max Eq. 15 critical acceleration over same-lane key pairs at k_merge.
-    u_eff : (C,) Eq. 17 acceleration gain at k_merge.
+    u_safe : (C,) Eq. 15 at k_merge, the largest over the follower-leader pairs the merge
+        creates (VR behind its new leader, VR's new follower; lateral mode also VMC behind its
+        lane-2 leader and VNR behind VMC).
+    u_eff : (C,) Eq. 17 gain accumulated over the window against the no-merge counterfactual:
+        mean over the K steps of (a_VR − a_VR,cf) + eta Σ_{VMC, VMR, VNR} (a_i − a_i,cf)
+        [m/s^2].
     g : (C, 5) constraint parts (collision column left 0 for the caller).
-    vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
-    near : (C, n_steps + 1, 15) key-vehicle pairs (i < j, row-major) whose bounding boxes
-        overlap; only these can collide (the exact Eq. 7 test is left to the caller).
+    vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
+    near : (C, K + 1, 15) key-vehicle pairs (i < j, row-major) whose bounding boxes overlap;
+        only these can collide (the exact Eq. 7 test is left to the caller).
+    cf : (3, K + 1, 6) the counterfactual's x, v and a.
     """
     n_c = merge_x.size
     dt, accel_end, width = consts[C_DT], consts[C_ACCEL_END], consts[C_WIDTH]
     vmc_dur, gamma, emergency = consts[C_VMC_DUR], consts[C_GAMMA], consts[C_EMERGENCY]
     K = n_steps
+    Xc, Vc, Ac = counterfactual(x0, v0, a0, present, params, consts, K)
     X = np.empty((n_c, K + 1, N_ROLES))
     Y = np.zeros((n_c, K + 1, N_ROLES))
     V = np.empty((n_c, K + 1, N_ROLES))
@@ -229,22 +344,34 @@ def rollout(
     u_safe = np.full(n_c, np.inf)
     u_eff = np.zeros(n_c)
     g = np.zeros((n_c, 5))
+    vv0 = np.zeros((n_c, 4))
     vv1 = np.zeros((n_c, 4))
     vv2 = np.zeros((n_c, 4))
     near = np.zeros((n_c, K + 1, N_ROLES * (N_ROLES - 1) // 2), dtype=np.bool_)
-    lane0 = np.array([0, 1, 1, 1, 2, 2])
     x = np.empty(N_ROLES)
     v = np.empty(N_ROLES)
     a = np.empty(N_ROLES)
-    acc = np.empty(N_ROLES)
+    acc = np.zeros(N_ROLES)
     in1 = np.empty(N_ROLES, dtype=np.bool_)
     in2 = np.empty(N_ROLES, dtype=np.bool_)
-    coop_vmc = cav[VMC] and present[VMC]
+    coop_vmc = coop[VMC] and present[VMC]
+    controlled_vr = cav[VR]
+    # VV0 and VV1 start states (Eq. 8 defaults unless a live plan is continued)
+    vv0_x, vv0_v = starts[S_VV0_X], starts[S_VV0_V]
+    if math.isnan(vv0_x):
+        vv0_x = x0[VR] + params[VMF, P_LEN] + equilibrium_gap(params[VR], v0[VR])
+        vv0_v = v0[VR]
+    vv1_x, vv1_v = starts[S_VV1_X], starts[S_VV1_V]
+    if math.isnan(vv1_x):
+        vv1_x, vv1_v = x0[VMF], v0[VMF]
     for c in range(n_c):
         H = horizon[c]
         lat = lateral[c] and coop_vmc
         lon = (not lateral[c]) and coop_vmc
-        for pass_no in range(2):
+        # VV0 ends at VR's future leader (the VMF role) at H, as predicted without the merge
+        kh = min(int(round(H / dt)), K)  # noqa: RUF046 (numba typing)
+        _cubic(H, vv0_x, vv0_v, Xc[kh, VMF] + Vc[kh, VMF] * (H - kh * dt), Vc[kh, VMF], vv0[c])
+        for pass_no in (_PRE, _JOINT):
             x[:] = x0
             v[:] = v0
             a[:] = a0
@@ -256,15 +383,15 @@ def rollout(
                 t = k * dt
                 # lane membership (a changing vehicle occupies both lanes)
                 for r in range(N_ROLES):
-                    in1[r] = lane0[r] == 1
-                    in2[r] = lane0[r] == 2
+                    in1[r] = _LANE0[r] == 1
+                    in2[r] = _LANE0[r] == 2
                 if vr_started:
                     in1[VR] = True
                 if lat:
                     in2[VMC] = True
                     if vmc_done:
                         in1[VMC] = False
-                if pass_no == 1:
+                if pass_no == _JOINT:
                     for r in range(N_ROLES):
                         X[c, k, r], V[c, k, r], A[c, k, r] = x[r], v[r], a[r]
                     if vr_started and not vr_done:
@@ -283,9 +410,9 @@ def rollout(
                     Y[c, k, VNF] = width
                     Y[c, k, VNR] = width
                     _near_pairs(X[c, k], Y[c, k], HEAD[c, k], present, params, near[c, k])
-                if pass_no == 0 and k * dt >= H:
+                if pass_no == _PRE and k * dt >= H:
                     # virtual-vehicle end states at the horizon (Eq. 8, 11)
-                    _cubic(H, x0[VMF], v0[VMF], x[VR], v[VR], vv1[c])
+                    _cubic(H, vv1_x, vv1_v, x[VR], v[VR], vv1[c])
                     _cubic(H, x0[VNF], v0[VNF], x[VMC], v[VMC], vv2[c])
                     break
                 if k == K:
@@ -295,12 +422,20 @@ def rollout(
                 acc[VNF] = 0.0
                 # VR
                 if not vr_started:
-                    acc[VR] = min(
-                        accel(params[VR], np.inf, v[VR], v[VR], 0.0),
-                        accel(params[VR], accel_end - x[VR], v[VR], 0.0, 0.0),
-                    )
+                    acc[VR] = accel(params[VR], np.inf, v[VR], v[VR], 0.0)
+                    if controlled_vr:
+                        if t <= H:
+                            xv, vv, av = _virtual(vv0[c], t)
+                        else:
+                            xv, vv, av = x[VMF], v[VMF], a[VMF]
+                        gap = xv - params[VMF, P_LEN] - x[VR]
+                        acc[VR] = min(acc[VR], accel(params[VR], gap, v[VR], vv, av))
+                    else:
+                        acc[VR] = min(
+                            acc[VR], accel(params[VR], accel_end - x[VR], v[VR], 0.0, 0.0)
+                        )
                 else:
-                    lead = VMF if pass_no == 0 else _leader(VR, 1, x, in1, in2, present)
+                    lead = VMF if pass_no == _PRE else _leader(VR, 1, x, in1, in2, present)
                     a_new = _behind(VR, lead, x, v, a, params)
                     if vr_done:
                         acc[VR] = a_new
@@ -310,7 +445,7 @@ def rollout(
                         acc[VR] = w * a_new + (1.0 - w) * a_ori
                 # VMC
                 if present[VMC]:
-                    if pass_no == 0:
+                    if pass_no == _PRE:
                         lead1 = VMF
                         lead2 = VNF
                     else:
@@ -325,7 +460,7 @@ def rollout(
                             acc[VMC] = w * a_new + (1.0 - w) * _behind(VMC, lead1, x, v, a, params)
                     else:
                         acc[VMC] = _behind(VMC, lead1, x, v, a, params)
-                        if lon and pass_no == 1 and not vr_done:
+                        if lon and pass_no == _JOINT and not vr_done:
                             if t <= H:
                                 xv, vv, av = _virtual(vv1[c], t)
                             else:
@@ -337,114 +472,105 @@ def rollout(
                     acc[VMR] = _behind(VMR, _leader(VMR, 1, x, in1, in2, present), x, v, a, params)
                 if present[VNR]:
                     acc[VNR] = _behind(VNR, _leader(VNR, 2, x, in1, in2, present), x, v, a, params)
-                    if lat and cav[VNR] and pass_no == 1 and t <= H:
+                    if lat and coop[VNR] and pass_no == _JOINT and t <= H:
                         xv, vv, av = _virtual(vv2[c], t)
                         gap = xv - params[VMC, P_LEN] - x[VNR]
                         acc[VNR] = min(acc[VNR], accel(params[VNR], gap, v[VNR], vv, av))
-                # ---- integrate (ballistic, stop exactly at v = 0)
-                for r in range(N_ROLES):
-                    if not present[r]:
-                        continue
-                    ar = max(acc[r], -emergency)
-                    v1 = v[r] + ar * dt
-                    if v1 < 0.0:
-                        x[r] += -v[r] * v[r] / (2.0 * ar) if ar < 0.0 else 0.0
-                        a[r] = -v[r] / dt
-                        v[r] = 0.0
-                    else:
-                        x[r] += v[r] * dt + 0.5 * ar * dt * dt
-                        v[r] = v1
-                        a[r] = ar
+                _integrate(x, v, a, acc, present, dt, emergency)
                 # ---- lane-change progress
                 if not vr_started and x[VR] >= merge_x[c]:
                     vr_started = True
                     vr_t0, vr_x0 = t + dt, x[VR]
                     vr_xf = x[VR] + max(v[VR] * vr_dur[c], 3.0 * params[VR, P_LEN])
-                    if pass_no == 1:
+                    if pass_no == _JOINT:
                         g[c, G_OVERRUN] = vr_xf - accel_end
                 if vr_started and not vr_done and x[VR] >= vr_xf:
                     vr_done = True
-                    if pass_no == 1:
+                    if pass_no == _JOINT:
                         k_merge[c] = k + 1
                 if lat and not vmc_done and x[VMC] >= vmc_xf:
                     vmc_done = True
-            if pass_no == 0 and k * dt < H:
+            if pass_no == _PRE and k * dt < H:
                 # window shorter than the horizon: end states at the window's end
-                _cubic(H, x0[VMF], v0[VMF], x[VR], v[VR], vv1[c])
+                _cubic(H, vv1_x, vv1_v, x[VR], v[VR], vv1[c])
                 _cubic(H, x0[VNF], v0[VNF], x[VMC], v[VMC], vv2[c])
         if not vr_started:
             g[c, G_OVERRUN] = merge_x[c] - accel_end
-        # ---- virtual-vehicle feasibility (MODELS §10): v >= 0 and a >= -b_max on [0, H]
-        if lon or (lat and cav[VNR] and present[VNR]):
-            b = vv1[c] if lon else vv2[c]
-            a_min = min(2.0 * b[2], 2.0 * b[2] + 6.0 * H * b[3])
-            v_min = min(b[1], b[1] + H * (2.0 * b[2] + 3.0 * H * b[3]))
-            if b[3] > 0.0:
-                tau = -b[2] / (3.0 * b[3])
-                if 0.0 < tau < H:
-                    v_min = min(v_min, b[1] + tau * (2.0 * b[2] + 3.0 * tau * b[3]))
-            g[c, G_VIRTUAL] = max(-v_min, -a_min - consts[C_VV_DECEL])
+        # ---- virtual-vehicle feasibility: v >= 0 and a >= -b_max on [0, H]
+        worst_vv = -np.inf
+        if controlled_vr:
+            worst_vv = _cubic_violation(vv0[c], H, consts[C_VV_DECEL])
+        if lon:
+            worst_vv = max(worst_vv, _cubic_violation(vv1[c], H, consts[C_VV_DECEL]))
+        if lat and coop[VNR] and present[VNR]:
+            worst_vv = max(worst_vv, _cubic_violation(vv2[c], H, consts[C_VV_DECEL]))
+        g[c, G_VIRTUAL] = max(worst_vv, 0.0) if worst_vv > -np.inf else 0.0
+        # ---- Eq. 17 accumulated against the counterfactual (every step of the window)
+        gain_vr, others = 0.0, 0.0
+        for k in range(1, K + 1):
+            gain_vr += A[c, k, VR] - Ac[k, VR]
+            for r in (VMC, VMR, VNR):
+                if present[r]:
+                    others += A[c, k, r] - Ac[k, r]
+        u_eff[c] = (gain_vr + consts[C_POLITENESS] * others) / K
         km = k_merge[c]
         if km < 0:
             g[c, G_NOT_MERGED] = 1.0
             continue
-        # ---- Eq. 15 over consecutive same-lane key pairs at merge completion, and Eq. 17
-        lane_at = np.empty(N_ROLES, dtype=np.int64)
-        for r in range(N_ROLES):
-            lane_at[r] = lane0[r]
-        lane_at[VR] = 1
-        if lat:
-            lane_at[VMC] = 2 if Y[c, km, VMC] >= 0.5 * width else 1
-        worst = 0.0
-        for r in range(N_ROLES):
-            if not present[r]:
-                continue
-            lead = -1
-            best = np.inf
-            for j in range(N_ROLES):
-                same = j != r and present[j] and lane_at[j] == lane_at[r]
-                if same and X[c, km, r] < X[c, km, j] < best:
-                    lead, best = j, X[c, km, j]
-            if lead >= 0:
-                d = X[c, km, lead] - params[lead, P_LEN] - X[c, km, r]
-                delay = 0.5 if cav[r] else 1.0
-                worst = max(
-                    worst,
-                    _critical(d, V[c, km, r], V[c, km, lead], delay, consts[C_D], consts[C_A_MERG]),
-                )
-        u_safe[c] = worst
-        if worst == np.inf:
+        u_safe[c] = _created_pairs_safety(X[c, km], V[c, km], Y[c, km], present, cav, params,
+                                          lat, consts)  # fmt: skip
+        if u_safe[c] == np.inf:
             g[c, G_UNSAFE] = 1.0
-        # Eq. 17: "new" = behind the leader after the merge, "ori" = behind the leader before
-        xs, vs, as_ = X[c, km], V[c, km], A[c, km]
-        in1[:] = False
-        in2[:] = False
-        for r in range(N_ROLES):
-            in1[r] = present[r] and lane_at[r] == 1
-            in2[r] = present[r] and lane_at[r] == 2
-        floor = emergency
-        ramp_ori = min(
-            accel(params[VR], np.inf, vs[VR], vs[VR], 0.0),
-            accel(params[VR], max(accel_end - xs[VR], 0.0), vs[VR], 0.0, 0.0),
-        )
-        lead = _leader(VR, 1, xs, in1, in2, present)
-        gain_vr = _gain_term(VR, lead, xs, vs, as_, params, floor) - max(ramp_ori, -floor)
-        others = 0.0
-        if present[VMC]:
-            lead = _leader(VMC, lane_at[VMC], xs, in1, in2, present)
-            others += _gain_term(VMC, lead, xs, vs, as_, params, floor)
-            others -= _gain_term(VMC, VMF, xs, vs, as_, params, floor)
-        if present[VMR]:
-            lead = _leader(VMR, 1, xs, in1, in2, present)
-            ori = VMC if present[VMC] and xs[VMC] > xs[VMR] else VMF
-            others += _gain_term(VMR, lead, xs, vs, as_, params, floor)
-            others -= _gain_term(VMR, ori, xs, vs, as_, params, floor)
-        if present[VNR]:
-            lead = _leader(VNR, 2, xs, in1, in2, present)
-            others += _gain_term(VNR, lead, xs, vs, as_, params, floor)
-            others -= _gain_term(VNR, VNF, xs, vs, as_, params, floor)
-        u_eff[c] = gain_vr + consts[C_POLITENESS] * others
-    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv1, vv2, near
+    cf = np.empty((3, K + 1, N_ROLES))
+    cf[0], cf[1], cf[2] = Xc, Vc, Ac
+    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2, near, cf
+
+
+@njit(cache=True)
+def _created_pairs_safety(
+    x: np.ndarray,
+    v: np.ndarray,
+    y: np.ndarray,
+    present: np.ndarray,
+    cav: np.ndarray,
+    params: np.ndarray,
+    lat: bool,
+    consts: np.ndarray,
+) -> float:
+    """Eq. 15 over the follower-leader pairs the merge creates, the largest [m/s^2].
+
+    Followers: VR (behind its new leader) and VR's new follower; in lateral mode also VMC
+    (behind its lane-2 leader) and VNR (behind VMC). Each follower's leader is the nearest key
+    vehicle ahead in its lane at merge completion (VMC counts in lane 2 once its centre has
+    crossed the lane line). Pairs the plan does not change do not enter.
+    """
+    width = consts[C_WIDTH]
+    lane_at = np.empty(N_ROLES, dtype=np.int64)
+    for r in range(N_ROLES):
+        lane_at[r] = _LANE0[r]
+    lane_at[VR] = 1
+    if lat and y[VMC] >= 0.5 * width:
+        lane_at[VMC] = 2
+    # VR's new follower: the nearest lane-1 key vehicle behind VR
+    new_follower, best = -1, -np.inf
+    for r in range(N_ROLES):
+        if r != VR and present[r] and lane_at[r] == 1 and best < x[r] < x[VR]:
+            new_follower, best = r, x[r]
+    followers = np.array([VR, new_follower, VMC if lat else -1, VNR if lat else -1])
+    worst = 0.0
+    for r in followers:
+        if r < 0 or not present[r]:
+            continue
+        lead, lead_x = -1, np.inf
+        for j in range(N_ROLES):
+            if j != r and present[j] and lane_at[j] == lane_at[r] and x[r] < x[j] < lead_x:
+                lead, lead_x = j, x[j]
+        if lead < 0:
+            continue
+        d = x[lead] - params[lead, P_LEN] - x[r]
+        delay = consts[C_DELAY_CAV] if cav[r] else consts[C_DELAY_HDV]
+        worst = max(worst, _critical(d, v[r], v[lead], delay, consts[C_D], consts[C_A_MERG]))
+    return worst
 
 
 _WARM = False
@@ -459,10 +585,11 @@ def warm_up() -> None:
     consts = np.zeros(N_CONSTS)
     consts[C_DT], consts[C_ACCEL_END], consts[C_WIDTH], consts[C_VMC_DUR] = 0.5, 950, 3.75, 4
     consts[C_GAMMA], consts[C_EMERGENCY], consts[C_VV_DECEL] = 2.3, 9.0, 7.5
-    consts[C_D], consts[C_A_MERG] = 2.0, 7.5
+    consts[C_D], consts[C_A_MERG], consts[C_DELAY_CAV], consts[C_DELAY_HDV] = 2.0, 7.5, 0.5, 1.0
     x = np.array([400.0, 380.0, 480.0, 300.0, 450.0, 330.0])
     one = np.ones(1)
-    rollout(x, np.full(N_ROLES, 25.0), np.zeros(N_ROLES), np.ones(N_ROLES, dtype=np.bool_),
-            np.ones(N_ROLES, dtype=np.bool_), params, one * 800.0, one * 4.0, one * 6.0,
+    flags = np.ones(N_ROLES, dtype=np.bool_)
+    rollout(x, np.full(N_ROLES, 25.0), np.zeros(N_ROLES), flags, flags, flags, params,
+            np.full(N_STARTS, np.nan), one * 800.0, one * 4.0, one * 6.0,
             np.zeros(1, dtype=np.bool_), consts, 4)  # fmt: skip
     _WARM = True
