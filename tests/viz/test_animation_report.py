@@ -74,7 +74,7 @@ def test_animator_draws_key_vehicles_and_ghosts(c2_log: SimulationLog) -> None:
     row_in = int(np.argmin(np.abs(c2_log.t - (plan["t0"] + 1.0))))
     animator.update(row_in)
     assert len(animator.ghost_patches.get_paths()) == sum(
-        plan[k] is not None for k in ("vv1", "vv2")
+        plan[k] is not None for k in ("vv0", "vv1", "vv2")
     )
     assert len(animator.vehicles.get_paths()) > 5
     assert animator.labels["VR"].get_visible()

@@ -85,20 +85,22 @@ class _Road:
 
 @dataclass(frozen=True)
 class _Ghost:
-    """One virtual vehicle of a plan: cubic x(τ) in a fixed lane while the plan is in force."""
+    """One virtual vehicle of a plan: cubic x(τ) in a fixed lane while the plan is in force
+    (from its t0 until its horizon ends or a replan of the same VR replaces it)."""
 
     label: str
     coefficients: tuple[float, float, float, float]
     t0: float
     horizon: float
+    until: float
     y: float
     length: float
     width: float
 
     def x_at(self, t: float) -> float | None:
-        """Position [m] at time *t* [s], or None outside ``[t0, t0 + horizon]``."""
+        """Position [m] at time *t* [s], or None outside ``[t0, min(t0 + horizon, until))``."""
         tau = t - self.t0
-        if not (0.0 <= tau <= self.horizon):
+        if not (0.0 <= tau <= self.horizon and t < self.until):
             return None
         b1, b2, b3, b4 = self.coefficients
         return b1 + tau * (b2 + tau * (b3 + tau * b4))
@@ -169,11 +171,19 @@ def _frame_rows(t: np.ndarray, step: float, t_range: tuple[float, float] | None)
 def _ghosts(
     meta: Mapping[str, Any], lengths: np.ndarray, widths: np.ndarray, road: _Road
 ) -> list[_Ghost]:
-    """Virtual vehicles of every plan in ``meta["plans"]``."""
+    """Virtual vehicles of every plan in ``meta["plans"]``, each until the next plan of its VR."""
     ghosts: list[_Ghost] = []
-    for plan in meta.get("plans") or []:
+    plans = list(meta.get("plans") or [])
+    for i, plan in enumerate(plans):
         group = plan.get("group") or {}
+        later = [
+            float(p["t0"])
+            for p in plans[i + 1 :]
+            if (p.get("group") or {}).get("VR") == group.get("VR") and p.get("t0") is not None
+        ]
+        until = min(later, default=math.inf)
         for label, key, lane_y, owner in (
+            ("VV0", "vv0", -road.lane_width, "VMF"),
             ("VV1", "vv1", 0.0, "VR"),
             ("VV2", "vv2", road.lane_width, "VMC"),
         ):
@@ -188,6 +198,7 @@ def _ghosts(
                     coefficients=tuple(float(c) for c in coefficients),
                     t0=float(plan["t0"]),
                     horizon=float(plan["horizon"]),
+                    until=until,
                     y=lane_y,
                     length=float(lengths[int(k)]) if valid else road.vehicle_length,
                     width=float(widths[int(k)]) if valid else road.vehicle_width,
@@ -507,8 +518,9 @@ def animate(
     the reference point at the front bumper, coloured by kind (HDV / CAV). The six key
     vehicles of the first merge plan (``log.meta["plans"][0]``) are outlined and labelled
     (VR, VMC, VMF, VMR, VNF, VNR); the virtual vehicles of every plan are drawn as dashed,
-    transparent ghost rectangles while the plan is in force (``t0 <= t <= t0 + horizon``):
-    VV1 in lane 1 (y = 0), VV2 in lane 2 (y = W). A clock shows the simulation time and a
+    transparent ghost rectangles while the plan is in force (from ``t0`` until ``t0 + horizon``
+    or until a replan replaces it): VV0 on the ramp (y = -W), VV1 in lane 1 (y = 0), VV2 in
+    lane 2 (y = W). A clock shows the simulation time and a
     status line the plan (mode, planned merge position, marked with a triangle).
 
     **The lateral (y) scale is exaggerated** so that the three lanes remain readable in a
