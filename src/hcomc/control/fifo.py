@@ -169,8 +169,8 @@ def with_cooperation(problem: MergeProblem, cooperates: bool) -> MergeProblem:
 
     ahead, behind = problem.states
     out = copy.copy(problem)
-    out.states = (flagged(ahead), None if behind is None else flagged(behind))
-    out.state = out.states[AHEAD]
+    out.state = flagged(ahead)
+    out.states = (out.state, None if behind is None else flagged(behind))
     return out
 
 

@@ -401,7 +401,7 @@ def _simulate_sv(
     each step, τ = t_{k-1}); row K follows ``old``. The loop runs over the N time steps only.
     """
     n, dt = params.n_steps, params.dt
-    t_start = dt * np.arange(n)
+    t_start: FloatArray = dt * np.arange(n, dtype=np.float64)
     old_rear, old_v = _leader_track(old, t_start)
     new_rear, new_v = _leader_track(new, t_start)
     psi = transition_weight(t_start, params.horizon, params.transition_tolerance)
@@ -567,7 +567,9 @@ def lane_change_game(
     Pure: inputs are not modified; the result depends only on the arguments.
     """
     n = params.n_steps
-    t = params.dt * np.arange(1, n + 1)  # evaluation grid t_k = k dt, k = 1..N
+    t: FloatArray = params.dt * np.arange(
+        1, n + 1, dtype=np.float64
+    )  # evaluation grid t_k = k dt, k = 1..N
     lat = _lateral_accel(t, params)
     sv_delay = params.delay_cav if sv.is_cav else params.delay_hdv
 

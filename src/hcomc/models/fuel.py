@@ -128,7 +128,7 @@ def fuel_consumed(
     a: FloatArray | float,
     dt: float,
     params: FuelParams = FUEL_DEFAULT,
-    axis: int = -1,
+    axis: int | None = -1,
 ) -> FloatArray:
     r"""Total fuel over sampled trajectories, paper Eq. (16) (:math:`U_\mathrm{fuel}`).
 

@@ -68,7 +68,10 @@ class ParetoResult:
 class Optimizer(Protocol):
     """Minimises a :class:`Problem` within an evaluation budget, deterministically per ``rng``."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """Registry name of the optimiser (``"nsga2"``, ``"pso"``, ``"sa"``)."""
+        ...
 
     def minimize(
         self,

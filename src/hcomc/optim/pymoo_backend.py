@@ -175,11 +175,11 @@ class NSGA2Optimizer:
         X, F, G = (np.concatenate(part) for part in zip(*adapter.archive, strict=True))
         feasible = _feasible(G)
         if feasible.any():
-            keep = np.flatnonzero(feasible)
-            keep = keep[non_dominated(F[keep])]
+            rows = np.flatnonzero(feasible)
+            rows = rows[non_dominated(F[rows])]
             # one row per distinct objective vector (duplicates carry no information)
-            _, first = np.unique(F[keep], axis=0, return_index=True)
-            keep = keep[np.sort(first)]
+            _, distinct = np.unique(F[rows], axis=0, return_index=True)
+            keep = rows[np.sort(distinct)]
         else:
             # pymoo's least-infeasible individual (res.opt is None when nothing is feasible)
             opt = res.algorithm.opt

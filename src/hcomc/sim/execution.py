@@ -106,8 +106,9 @@ def virtual_leaders(
     if not rows:
         empty = np.empty(0)
         return np.empty(0, dtype=np.int64), empty, empty, empty, empty
-    cols = list(zip(*rows, strict=True))
-    return (np.array(cols[0], dtype=np.int64), *(np.array(c, dtype=np.float64) for c in cols[1:]))
+    table = np.array([r[1:] for r in rows], dtype=np.float64)
+    followers = np.array([r[0] for r in rows], dtype=np.int64)
+    return followers, table[:, 0], table[:, 1], table[:, 2], table[:, 3]
 
 
 def plan_record(plan: MergePlan) -> dict[str, Any]:

@@ -263,7 +263,11 @@ class SimulationLog:
             length=per_vehicle["length"].astype(np.float32),
             width=per_vehicle["width"].astype(np.float32),
             meta=meta,
-            **states,
+            x=states["x"],
+            y=states["y"],
+            v=states["v"],
+            a=states["a"],
+            heading=states["heading"],
         )
 
     # ------------------------------------------------------------------ sizes
@@ -550,7 +554,7 @@ class SimulationLog:
         table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
 
         ev = self.events
-        ev_table = pa.table({name: ev[name] for name in EVENT_DTYPE.names})
+        ev_table = pa.table({name: ev[name] for name in EVENT_DTYPE.names or ()})
         ev_meta = json.dumps({"format_version": _FORMAT_VERSION, "token": token}).encode()
         ev_table = ev_table.replace_schema_metadata({_PARQUET_EVENTS_META_KEY: ev_meta})
 

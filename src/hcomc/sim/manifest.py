@@ -191,9 +191,9 @@ def atomic_paths(*paths: str | os.PathLike[str]) -> Iterator[list[Path]]:
     temps: list[Path] = []
     try:
         for target in targets:
-            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+            fd, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
             os.close(fd)
-            temps.append(Path(tmp))
+            temps.append(Path(name))
         yield temps
         for target, tmp in zip(targets, temps, strict=True):
             _fsync_path(tmp)
@@ -301,7 +301,7 @@ def build_manifest(
     entropy = np.random.SeedSequence(seed).entropy
     manifest: dict[str, Any] = {
         "seed": seed,
-        "seed_entropy": int(entropy) if entropy is not None else None,
+        "seed_entropy": int(entropy) if isinstance(entropy, int) else None,
         "config": _jsonable(dict(config)),
         "hcomc_version": hcomc.__version__,
         "git_revision": git_revision(),

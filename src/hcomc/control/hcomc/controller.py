@@ -151,8 +151,10 @@ class HCOMCController:
             return None
         cfg = view.config
         fv_cav = _is_cav(view, group.vnr)
+        sv = game_vehicle(view.x, view.v, view.fleet, group.vmc)
+        assert sv is not None  # a CAV is present
         return play_lane_change_game(
-            game_vehicle(view.x, view.v, view.fleet, group.vmc),
+            sv,
             game_vehicle(view.x, view.v, view.fleet, group.vnr),
             game_vehicle(view.x, view.v, view.fleet, group.vmf),
             game_vehicle(view.x, view.v, view.fleet, group.vnf),

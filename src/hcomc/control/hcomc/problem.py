@@ -75,7 +75,7 @@ from hcomc.models.fuel import fuel_rate
 from hcomc.safety.collision import vehicles_collide
 from hcomc.safety.critical import SafetyIndex
 
-OBJECTIVES = ("safety", "fuel", "efficiency")
+OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
 CONSTRAINTS = (
     "collision",
     "not_merged",
@@ -174,7 +174,7 @@ class MergeProblem:
         lateral_allowed: tuple[bool, bool] = (False, False),
     ) -> None:
         self.states = states
-        self.state = states[AHEAD]
+        self.state: KeyState = states[0]  # the "ahead" group always exists
         self.config = config
         self.lateral_allowed = lateral_allowed
         self.safety = SafetyIndex.from_config(config.control)
@@ -231,8 +231,10 @@ class MergeProblem:
             fuel = self._fuel(xs, vs, as_, cf, state)
             F[rows] = np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff])
         G[no_behind, _G_SEQUENCE] = 1.0
-        t = np.arange(K + 1) * self.dt
-        return Prediction(t, Xt, Yt, Vt, At, Ht, k_merge, F, G, *vv, seq)
+        t: FloatArray = np.arange(K + 1, dtype=np.float64) * self.dt
+        return Prediction(
+            t, Xt, Yt, Vt, At, Ht, k_merge, F, G, vv0=vv[0], vv1=vv[1], vv2=vv[2], sequence=seq
+        )
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5)."""
