@@ -567,9 +567,8 @@ def lane_change_game(
     Pure: inputs are not modified; the result depends only on the arguments.
     """
     n = params.n_steps
-    t: FloatArray = params.dt * np.arange(
-        1, n + 1, dtype=np.float64
-    )  # evaluation grid t_k = k dt, k = 1..N
+    # evaluation grid t_k = k dt, k = 1..N
+    t: FloatArray = params.dt * np.arange(1, n + 1, dtype=np.float64)
     lat = _lateral_accel(t, params)
     sv_delay = params.delay_cav if sv.is_cav else params.delay_hdv
 
