@@ -20,7 +20,7 @@ from hcomc.control.base import (
 )
 from hcomc.control.fifo import FIFOController, merge_position, with_cooperation
 from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.rollout import VMC
+from hcomc.control.hcomc.rollout import VMC, VR
 from hcomc.control.merge_game import (
     AHEAD,
     BEHIND,
@@ -32,6 +32,7 @@ from hcomc.control.merge_game import (
     solve_merge_game,
 )
 from hcomc.control.registry import make_controller
+from hcomc.control.virtual_vehicle import cubic_state
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.fleet import Fleet
@@ -165,7 +166,13 @@ def test_fifo_vr_arriving_first_keeps_the_group_and_vmc_yields():
     assert plan.details["yielding"] == 2
     # VV1 starts at VMF's state (Eq. 8-10) and is the prediction's cubic
     np.testing.assert_allclose(plan.vv1[:2], [480.0, 30.0])
-    np.testing.assert_array_equal(plan.vv1, plan.details["prediction"].vv1[0])
+    # ... and ends at VR's predicted state at the horizon (Eq. 8: x_VV1(tf') = x_VR(tf'))
+    pred = plan.details["prediction"]
+    at_h = int(np.argmin(np.abs(pred.t - plan.horizon)))
+    x_end, v_end, _ = cubic_state(plan.vv1, plan.horizon)
+    dt_off = plan.horizon - pred.t[at_h]
+    assert x_end == pytest.approx(pred.X[0, at_h, VR] + pred.V[0, at_h, VR] * dt_off, abs=1.0)
+    assert v_end == pytest.approx(pred.V[0, at_h, VR], abs=0.2)
     assert 4.0 <= plan.horizon <= view.config.control.horizon_max
 
 
@@ -183,7 +190,7 @@ def test_fifo_vmc_arriving_first_relabels_the_group_so_vmr_yields():
     kinds = [Kind.CAV, Kind.CAV, Kind.CAV, Kind.HDV, Kind.CAV, Kind.CAV, Kind.CAV]
     view = _view(vmc_x=390.0, vmc_v=32.0, kinds=kinds)
     plan = FIFOController(view.config).plan(
-        view, find_key_vehicles(view, 0), np.random.default_rng()
+        view, find_key_vehicles(view, 0), np.random.default_rng(0)
     )
     assert plan.group.vmc == 3
     assert plan.mode == Mode.NONE

@@ -8,6 +8,7 @@ import pytest
 from hcomc.config import RoadParams
 from hcomc.models.idm import equilibrium_gap
 from hcomc.sim.engine import simulate
+from hcomc.sim.log import EventKind
 
 LONG_ROAD = RoadParams(
     length=50_000.0, accel_lane_start=40_000.0, accel_lane_end=40_500.0, ramp_start=39_000.0
@@ -56,7 +57,7 @@ def test_stop_behind_stopped_leader_at_jam_distance(platoon_config, kind):
     np.testing.assert_allclose(gaps, 1.9, atol=0.1)
     np.testing.assert_allclose(log.v[-1], 0.0, atol=1e-3)
     assert (log.v >= 0).all()
-    assert not (log.events["kind"] == 4).any()
+    assert not (log.events["kind"] == EventKind.COLLISION).any()
 
 
 @pytest.mark.parametrize("kind", ["hdv", "cav"])

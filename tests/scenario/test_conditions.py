@@ -1,4 +1,5 @@
-"""Every Table I condition for 10 minutes without a merge controller (issue 2 must-show)."""
+"""Every Table I condition for 10 minutes without a merge controller: no NaN, no negative
+speed, no collision of any kind, and every ramp vehicle merges or waits."""
 
 from __future__ import annotations
 
@@ -21,8 +22,7 @@ def _check_run(log, accel_lane_end: float) -> None:
     assert (log.v[finite] >= 0).all()
     ev = log.events
     collisions = ev[ev["kind"] == EventKind.COLLISION]
-    cav = log.kind == Kind.CAV
-    assert not (cav[collisions["vehicle"]] & cav[collisions["other"]]).any()
+    assert collisions.size == 0, collisions
     # every ramp vehicle merges, or is still on the ramp: waiting at the end (logged) or not
     # yet there
     ramp = np.flatnonzero(((log.lane == Lane.RAMP) & log.active).any(axis=0))

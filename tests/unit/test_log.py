@@ -15,6 +15,7 @@ import pytest
 
 import hcomc
 from hcomc.sim import log as log_module
+from hcomc.sim import manifest as manifest_module
 from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
 from hcomc.sim.manifest import (
     atomic_paths,
@@ -438,9 +439,17 @@ def test_build_manifest_rejects_bad_input() -> None:
 
 
 def test_git_revision_outside_repo_is_unknown(tmp_path: Path) -> None:
-    rev = git_revision(tmp_path)
-    assert isinstance(rev, str)
-    assert rev == "unknown" or len(rev.removesuffix("-dirty")) == 40  # tmp_path inside a repo?
+    outside = tmp_path / "not-a-repo"
+    outside.mkdir()
+    env_ceiling = os.environ.get("GIT_CEILING_DIRECTORIES")
+    os.environ["GIT_CEILING_DIRECTORIES"] = str(tmp_path)  # git must not look further up
+    try:
+        assert git_revision(outside) == "unknown"
+    finally:
+        if env_ceiling is None:
+            del os.environ["GIT_CEILING_DIRECTORIES"]
+        else:
+            os.environ["GIT_CEILING_DIRECTORIES"] = env_ceiling
     assert git_revision(tmp_path / "does-not-exist") == "unknown"
 
 
@@ -452,7 +461,17 @@ def test_git_revision_default_never_raises() -> None:
 
 def test_git_revision_without_git(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("PATH", str(tmp_path))  # no git executable on PATH
-    assert git_revision() == "unknown"
+    manifest_module._revision_of.cache_clear()  # computed once per process: forget it
+    try:
+        assert git_revision() == "unknown"
+    finally:
+        manifest_module._revision_of.cache_clear()
+
+
+def test_git_revision_is_computed_once_per_process(monkeypatch: pytest.MonkeyPatch) -> None:
+    first = git_revision()
+    monkeypatch.setenv("PATH", "")  # git is gone, but the answer is remembered
+    assert git_revision() == first
 
 
 def test_write_json_atomic_handles_numpy(tmp_path: Path) -> None:

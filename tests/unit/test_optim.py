@@ -48,6 +48,7 @@ class ConstrainedDTLZ2:
         self.xl.flags.writeable = False  # any in-place change by an optimiser would raise
         self.xu.flags.writeable = False
         self.n_rows = 0
+        self.evaluated: list[FloatArray] = []  # the populations, in call order
 
     def objectives(self, X: FloatArray) -> FloatArray:
         g = 10.0 * ((X[:, 2:] - 0.5) ** 2).sum(axis=1)
@@ -60,6 +61,7 @@ class ConstrainedDTLZ2:
         return (X[:, 0] + X[:, 1] - 1.5)[:, None]
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
         self.n_rows += X.shape[0]
         return self.objectives(X), self.constraints(X)
 
@@ -289,8 +291,23 @@ def test_nsga2_operator_parameters_are_used() -> None:
     assert (opt.pop_size, opt.crossover_eta, opt.mutation_eta) == (10, 5.0, 5.0)
     res = opt.minimize(ConstrainedDTLZ2(), budget=50, rng=np.random.default_rng(0))
     assert res.n_eval == 50
+    # the operators really receive them: other distribution indices, other search, same seed
+    other = make_optimizer("nsga2", pop_size=10, crossover_eta=30.0, mutation_eta=40.0)
+    res2 = other.minimize(ConstrainedDTLZ2(), budget=50, rng=np.random.default_rng(0))
+    assert res.X.shape != res2.X.shape or not np.array_equal(res.X, res2.X)
     with pytest.raises(ValueError, match="pop_size"):
         NSGA2Optimizer(pop_size=1)
+
+
+def test_warm_start_rows_open_the_first_population() -> None:
+    """With ``initial``, NSGA-II's first generation contains those rows (clipped)."""
+    problem = ConstrainedDTLZ2()
+    start = np.clip(np.full((3, problem.n_var), 0.25), problem.xl, problem.xu)
+    opt = make_optimizer("nsga2", pop_size=10)
+    opt.minimize(problem, budget=10, rng=np.random.default_rng(1), initial=start)
+    first = problem.evaluated[0]
+    for row in start:
+        assert np.isclose(first, row).all(axis=1).any()
 
 
 # --------------------------------------------------------------------------------------------
@@ -386,7 +403,7 @@ def test_optimizer_contract(name: str, problem_cls: type[ConstrainedDTLZ2]) -> N
     problem = problem_cls()
     xl, xu = problem.xl.copy(), problem.xu.copy()
     global_state = np.random.get_state()  # noqa: NPY002
-    optimizer = make_optimizer(name, pop_size=12)
+    optimizer = make_optimizer(name, **({"pop_size": 12} if name != "sa" else {}))
     budget = 60
     res = optimizer.minimize(problem, budget=budget, rng=np.random.default_rng(0))
 
@@ -431,7 +448,9 @@ def test_optimizer_consumes_only_the_given_rng(name: str) -> None:
 def test_registry() -> None:
     assert set(OPTIMIZERS) == {"nsga2", "pso", "sa"}
     assert isinstance(make_optimizer("pso", pop_size=8), PSOOptimizer)
-    assert isinstance(make_optimizer("sa", pop_size=8), AnnealingOptimizer)  # pop_size ignored
+    assert isinstance(make_optimizer("sa"), AnnealingOptimizer)
+    with pytest.raises(ValueError, match=r"option 'pop_size' does not apply to optimizer 'sa'"):
+        make_optimizer("sa", pop_size=8)  # SA has no population: never silently ignored
     with pytest.raises(ValueError, match=r"^unknown optimizer 'nope'; allowed: nsga2, pso, sa$"):
         make_optimizer("nope")
 

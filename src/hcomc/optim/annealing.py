@@ -79,9 +79,7 @@ class AnnealingOptimizer:
     Parameters
     ----------
     initial_temp, restart_temp_ratio, visit, accept : SciPy's annealing parameters (SciPy
-        defaults).
-    pop_size : ignored; accepted so that every registered optimiser can be built with the same
-        keywords (SA has no population).
+        defaults). SA has no population: ``pop_size`` is not an option (it is rejected).
 
     Notes
     -----
@@ -93,7 +91,6 @@ class AnnealingOptimizer:
     restart_temp_ratio: float = 2e-5
     visit: float = 2.62
     accept: float = -5.0
-    pop_size: int | None = None
     name: str = field(default="sa", init=False)
 
     def minimize(

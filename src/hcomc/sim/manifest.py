@@ -78,6 +78,7 @@ def git_revision(path: Path | None = None) -> str:
         ``git status --porcelain`` reports any change (untracked files included), or
         ``"unknown"`` when git is not installed, *path* is not inside a repository, the
         repository has no commit yet, or git takes longer than 5 [s]. Never raises.
+        Computed once per process and directory (every run of a sweep shares it).
     """
     try:
         cwd = Path(__file__).resolve().parent if path is None else Path(path)
@@ -87,6 +88,11 @@ def git_revision(path: Path | None = None) -> str:
             return _UNKNOWN
     except OSError:
         return _UNKNOWN
+    return _revision_of(cwd)
+
+
+@functools.cache
+def _revision_of(cwd: Path) -> str:
     head = _run_git(["rev-parse", "HEAD"], cwd)
     if not head:
         return _UNKNOWN

@@ -56,7 +56,7 @@ from hcomc.control.hcomc.rollout import (
 from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
 from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
 from hcomc.optim.base import Optimizer
-from hcomc.optim.registry import make_optimizer
+from hcomc.optim.registry import optimizer_from_config
 from hcomc.optim.selection import eq19_branch, select_eq19
 from hcomc.road import Kind
 
@@ -140,9 +140,7 @@ class HCOMCController:
     def __init__(self, config: ScenarioConfig, optimizer: Optimizer | None = None) -> None:
         warm_up()  # load the compiled rollout now, not inside a timed decision
         self.config = config
-        self.optimizer = optimizer or make_optimizer(
-            config.control.optimizer, pop_size=config.control.pop_size
-        )
+        self.optimizer = optimizer or optimizer_from_config(config.control)
         self._pareto: dict[int, np.ndarray] = {}  # last Pareto set per VR (warm start)
 
     def lateral_game(self, view: TrafficView, group: MergeGroup) -> LaneChangeDecision | None:
