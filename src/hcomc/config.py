@@ -290,6 +290,12 @@ class ScenarioConfig(_Frozen):
     duration: float = Field(120.0, gt=0, le=86_400, description="measured duration [s]")
     warmup: float = Field(30.0, ge=0, le=3600, description="unlogged warm-up before t = 0 [s]")
     log_interval: float = Field(0.1, gt=0, le=60, description="logging interval [s]")
+    log_memory_limit: float = Field(
+        8.0,
+        gt=0,
+        le=1024,
+        description="a run whose log would need more memory than this is refused [GiB]",
+    )
     road: RoadParams = Field(default_factory=RoadParams)
     demand: DemandParams = Field(default_factory=DemandParams)
     hdv: HDVParams = Field(default_factory=HDVParams)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hcomc.config import load_config
+from hcomc.config import ConfigError, load_config
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import EventKind
@@ -75,3 +75,14 @@ def test_demand_matches_condition_headways_and_penetration():
         assert headways.min() >= config.demand.min_headway
         assert headways.mean() == pytest.approx(mean, rel=0.03)
     assert (demand.kind == Kind.CAV).mean() == pytest.approx(0.9, abs=0.01)
+
+
+def test_a_platoon_that_does_not_fit_is_a_config_error():
+    with pytest.raises(ConfigError, match=r"platoon\.followers' = 100000.*allowed: platoon"):
+        simulate(load_config("platoon", platoon={"followers": 100_000}))
+
+
+def test_a_log_over_the_memory_limit_is_refused_with_its_estimate():
+    config = load_config("C1", duration=3600.0, log_memory_limit=0.01)
+    with pytest.raises(ConfigError, match=r"log_memory_limit' = 0.01 GiB: .* needs \d+\.\d\d GiB \(36001 rows"):
+        simulate(config)

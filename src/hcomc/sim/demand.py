@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import IDMParams, ScenarioConfig
+from hcomc.config import ConfigError, IDMParams, ScenarioConfig
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind, Lane
 
@@ -107,9 +107,11 @@ def _platoon_demand(config: ScenarioConfig) -> Demand:
     spacing = _equilibrium_spacing(p.initial_speed, params, road.vehicle_length)
     x = 0.75 * road.length - spacing * np.arange(n)
     if x[-1] < 0:
-        raise ValueError(
-            f"platoon of {n} vehicles at spacing {spacing:.1f} m does not fit on road.length = "
-            f"{road.length} m; allowed: road.length >= {4 / 3 * spacing * n:.0f}"
+        fits = int(0.75 * road.length // spacing)
+        raise ConfigError(
+            f"key 'platoon.followers' = {p.followers}: {n} vehicles at their equilibrium "
+            f"spacing {spacing:.1f} m do not fit on road.length = {road.length} m; allowed: "
+            f"platoon.followers <= {fits}, or road.length >= {4 / 3 * spacing * n:.0f}"
         )
     kind = np.full(n, Kind.HDV if p.kind == "hdv" else Kind.CAV, dtype=np.int64)
     kind[0] = Kind.CAV  # the scripted leader has exact perception; its model is not used

@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
-from hcomc.config import ScenarioConfig
+from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.control.base import (
     MergeController,
     MergeGroup,
@@ -133,8 +133,16 @@ class Simulation:
             config=config.model_dump(mode="json"),
             extra={"dt": self.dt, "log_interval": config.log_interval},
         )
+        rows = self.n_steps // self._log_every + 1
+        need = SimulationLog.bytes_needed(rows, n) / 2**30
+        if need > config.log_memory_limit:
+            raise ConfigError(
+                f"key 'log_memory_limit' = {config.log_memory_limit} GiB: this run's log needs "
+                f"{need:.2f} GiB ({rows} rows x {n} vehicles); allowed: a larger "
+                "log_memory_limit, a coarser log_interval or a shorter duration"
+            )
         self.log = SimulationLog.allocate(
-            self.n_steps // self._log_every + 1,
+            rows,
             n,
             dt=config.log_interval,
             kind=demand.kind,

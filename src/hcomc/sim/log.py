@@ -195,6 +195,12 @@ class SimulationLog:
             self._events.extend(tuple(e.item()) for e in np.asarray(events, EVENT_DTYPE))
 
     # ------------------------------------------------------------------ construction
+    @staticmethod
+    def bytes_needed(n_steps: int, n_vehicles: int) -> int:
+        """Memory of the (T x N) arrays of a log [bytes]: five float32 states, int8 lane and
+        bool active per cell (events and per-vehicle arrays are negligible)."""
+        return n_steps * n_vehicles * (len(_STATE_FIELDS) * 4 + 1 + 1)
+
     @classmethod
     def allocate(
         cls,
