@@ -84,5 +84,6 @@ def test_a_platoon_that_does_not_fit_is_a_config_error():
 
 def test_a_log_over_the_memory_limit_is_refused_with_its_estimate():
     config = load_config("C1", duration=3600.0, log_memory_limit=0.01)
-    with pytest.raises(ConfigError, match=r"log_memory_limit' = 0.01 GiB: .* needs \d+\.\d\d GiB \(36001 rows"):
+    expected = r"log_memory_limit' = 0.01 GiB: .* needs \d+\.\d\d GiB \(36001 rows"
+    with pytest.raises(ConfigError, match=expected):
         simulate(config)
