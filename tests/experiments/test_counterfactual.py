@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
+from hcomc.metrics import compute_metrics, key_window
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 
@@ -47,3 +48,33 @@ def test_counterfactual_differs_only_where_the_merge_reaches(condition: str, see
     # and the merge does disturb somebody (the test can fail)
     others = np.setdiff1d(np.arange(f_log.x.shape[1]), [vr])
     assert not _same(f_log, c_log, slice(0, n), others)
+
+
+def _pair(condition: str, seed: int, **overrides: object) -> tuple[SimulationLog, SimulationLog]:
+    config = load_config(condition, **overrides)
+    return (
+        Simulation(config, seed).run(),
+        Simulation(config, seed, counterfactual=True).run(),
+    )
+
+
+def test_run_without_ramp_vehicle_scores_no_disturbance() -> None:
+    log, reference = _pair("C5", 3, duration=40.0, demand={"ramp": "none"})
+    values = compute_metrics(log, reference=reference)
+    assert values["stabilisation_time"] <= 1.0
+    assert values["average_acceleration"] == pytest.approx(0.0, abs=1e-12)
+    assert values["lsrv"] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_factual_equal_to_counterfactual_scores_no_disturbance() -> None:
+    log, reference = _pair("C1", 0)
+    window = key_window(log)  # the merge's window and key vehicles, applied to the no-merge run
+    assert window.merged
+    values = compute_metrics(reference, window, reference=reference)
+    assert values["stabilisation_time"] <= 1.0
+    assert values["average_acceleration"] == 0.0
+    assert values["lsrv"] == 0.0
+    merged = compute_metrics(log, reference=reference)  # the merge itself does disturb
+    assert merged["lsrv"] > 100.0
+    assert merged["average_acceleration"] > 0.005
+    assert merged["stabilisation_time"] > 2.0
