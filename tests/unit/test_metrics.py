@@ -389,7 +389,8 @@ def test_lsrv_interpolates_between_vehicles_and_sums_lanes() -> None:
     free = _static([100.0, 390.0], [1, 1], np.array([[26.0, 26.0]]), 0.5)
     assert low_speed_region_volume(upstream, w, reference=free) == 0.0
     x_edges, t_edges, V = lane_speed_field(log, w, lane=2, x_min=400.0)
-    assert x_edges[0] == 400.0 and x_edges[-1] == 1500.0
+    assert x_edges[0] == 400.0
+    assert x_edges[-1] == 1500.0
     np.testing.assert_allclose(t_edges, [0.0, 0.5])
     assert np.isfinite(V[0]).sum() == 20
 
@@ -530,7 +531,9 @@ def test_key_window_reads_the_engine_key_group() -> None:
 def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
     log = platoon()  # no key group recorded: nothing merges
     w = key_window(log)
-    assert w.group == {} and (w.t_start, w.t_end) == (0.0, 10.0) and not w.merged
+    assert w.group == {}
+    assert (w.t_start, w.t_end) == (0.0, 10.0)
+    assert not w.merged
     values = compute_metrics(log, reference=log)
     assert values["average_acceleration"] == 0.0
     assert values["stabilisation_time"] == 0.0
