@@ -52,6 +52,7 @@ def test_claims_count_paired_seeds():
     table = claims(_synthetic_runs()).set_index("claim")
     row = table.loc["HCOMC critical distance higher than FIFO"]
     assert (row["holds"], row["n"]) == (2, 3)
+    assert row["median_diff"] == 20.0  # paired differences 20, -20, 30
     tie = table.loc["HCOMC fuel lower than FIFO"]
     assert (tie["holds"], tie["n"]) == (0, 3)  # equal values do not count as better
     mode = table.loc["HCOMC chooses longitudinal cooperation"]
