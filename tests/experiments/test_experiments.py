@@ -11,7 +11,7 @@ from scipy import stats
 from typer.testing import CliRunner
 
 from hcomc.cli import app
-from hcomc.experiments.runner import CONFIGURATIONS, RunSpec, grid, run_grid
+from hcomc.experiments.runner import ALL_CONFIGURATIONS, RunSpec, grid, run_grid
 from hcomc.experiments.tables import claims, mean_ci, paper_table, summary
 
 SHORT = {"duration": 60.0}
@@ -112,13 +112,18 @@ def test_reproduce_writes_every_output(tmp_path):
     result = CliRunner().invoke(app, ["reproduce", "--seeds", "1", "--workers", "2",
                                       "--out", str(tmp_path)])  # fmt: skip
     assert result.exit_code == 0, result.output
-    for name in ("runs.csv", "runs.parquet", "table2.md", "table3.md", "claims.csv", "report.html"):
+    for name in ("runs.csv", "runs.parquet", "table2.md", "table3.md", "claims.csv",
+                 "paper_scenario.csv", "report.html"):  # fmt: skip
         assert (tmp_path / name).stat().st_size > 100, name
     runs = pd.read_parquet(tmp_path / "runs.parquet")
-    assert len(runs) == 5 * len(CONFIGURATIONS)
+    assert len(runs) == 5 * len(ALL_CONFIGURATIONS)
     assert (pd.read_csv(tmp_path / "runs.csv")["seed"] == 0).all()
-    assert len(list((tmp_path / "manifests").glob("*.json"))) == len(runs)
+    scenario = pd.read_csv(tmp_path / "paper_scenario.csv")
+    assert len(scenario) == 5 * len(ALL_CONFIGURATIONS)  # one per condition x configuration
+    assert len(list((tmp_path / "manifests").glob("*.json"))) == len(runs) + len(scenario)
     claims_csv = pd.read_csv(tmp_path / "claims.csv")
     assert (claims_csv["n"] <= 1).all()
-    for title in ("Table II", "Table III", "Claims"):
+    for col in ("median_diff", "ci_low", "ci_high", "paper", "uniform"):
+        assert col in claims_csv
+    for title in ("Table II", "Table III", "Paper scenario", "Claims"):
         assert title in result.stdout
