@@ -180,7 +180,7 @@ def paper_claims() -> list[Claim | ModeClaim]:
       cooperation, where the text says NSGA-II is best) and on LSRV in C2 (the text: "NSGA-II
       also performs the best in this case").
     """
-    out: list[Claim | ModeClaim] = []
+    out: list[Claim | ModeClaim | None] = []
     for cond in ("C1", "C2", "C3", "C4", "C5"):
         for metric in PAPER_METRICS:
             for base in ("FIFO", "Game"):

@@ -66,7 +66,9 @@ def _t_edges(log: SimulationLog, window: MetricWindow, dt_bin: float) -> FloatAr
     return edges
 
 
-def _time_bin(log: SimulationLog, window: MetricWindow, rows: slice, n_t: int, dt_bin: float):
+def _time_bin(
+    log: SimulationLog, window: MetricWindow, rows: slice, n_t: int, dt_bin: float
+) -> np.ndarray:
     it = np.floor((times(log)[rows] - window.t_start) / dt_bin + _EPS_BIN)
     return np.clip(it, 0, n_t - 1).astype(np.int64)
 

@@ -128,7 +128,7 @@ def _offsets(
     """Arrival offsets in ``[0, total)``: random (shifted exponential) or uniform."""
     d = config.demand
     if d.pattern == "uniform":
-        return mean * np.arange(1, int(np.floor(total / mean - 1e-9)) + 1)
+        return mean * np.arange(1, int(np.floor(total / mean - 1e-9)) + 1, dtype=np.float64)
     return shifted_exponential(rng, mean, d.min_headway, total)
 
 
@@ -157,7 +157,7 @@ def _merge_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
     v_parts.append(np.full(ramp_t.size, d.ramp_speed))
     lane_parts.append(np.full(ramp_t.size, Lane.RAMP))
     t = np.concatenate(t_parts)
-    x = np.concatenate(x_parts)
+    x = np.concatenate(x_parts).astype(np.float64)
     lanes = np.concatenate(lane_parts).astype(np.int64)
     if d.pattern == "uniform":
         kind = np.empty(t.size, dtype=np.int64)
