@@ -74,7 +74,9 @@ def test_results_identical_with_one_and_two_workers():
     two = run_grid(specs, workers=2).drop(columns=["wall_s", "decision_ms"])
     pd.testing.assert_frame_equal(one, two)
     assert set(one["configuration"]) == {"FIFO", "HCOMC"}
-    assert one["critical_distance"].notna().all()
+    assert one.groupby("seed")["key_vehicles"].nunique().eq(1).all()  # same vehicles
+    # (HCOMC, seed 1) leaves VR waiting at the acceleration-lane end within these 60 s
+    assert one.loc[one["configuration"] == "FIFO", "critical_distance"].notna().all()
 
 
 def test_run_command_json():

@@ -26,7 +26,9 @@ on average. A number sets a fixed insertion speed instead.
 the kinds follow an evenly spread pattern with the exact share: the k-th vehicle of a lane
 (k = 0, 1, ... in order of travel, downstream first) is a CAV iff
 ``floor((k + 1) p + 1/2) - floor(k p + 1/2) = 1``, so a lone ramp vehicle takes the more
-likely kind. No random number is drawn.
+likely kind. No random number is drawn for the demand. ``hcomc reproduce`` runs this
+scenario with ``hdv.estimation_errors = false`` (reaction delays stay), so the traffic is
+fully deterministic; only the HCOMC optimisers draw from the run's seed.
 """
 
 from __future__ import annotations
