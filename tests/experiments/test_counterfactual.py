@@ -19,10 +19,16 @@ def _same(a: SimulationLog, b: SimulationLog, rows: slice, cols: np.ndarray | sl
     )
 
 
-@pytest.mark.parametrize("condition", ["C1", "C2", "C3", "C4", "C5"])
-@pytest.mark.parametrize("seed", [0, 1])
-def test_counterfactual_differs_only_where_the_merge_reaches(condition: str, seed: int) -> None:
-    config = load_config(condition)
+@pytest.mark.parametrize(
+    ("condition", "seed", "controller"),
+    [(c, s, "none") for c in ("C1", "C2", "C3", "C4", "C5") for s in (0, 1)]
+    + [("C5", 1, "fifo"), ("C5", 1, "game"), ("C5", 1, "hcomc")],
+)
+def test_counterfactual_differs_only_where_the_merge_reaches(
+    condition: str, seed: int, controller: str
+) -> None:
+    """Planning draws no number from the run's stream, so controllers keep this too."""
+    config = load_config(condition, control={"controller": controller})
     factual = Simulation(config, seed)
     f_log = factual.run()
     counter = Simulation(config, seed, counterfactual=True)
