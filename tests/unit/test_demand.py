@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hcomc.config import ConfigError, load_config
+from hcomc.config import load_config
 from hcomc.models.idm import equilibrium_gap
 from hcomc.rng import make_rng
 from hcomc.sim.demand import evenly_spread, generate_demand, lane_speed
@@ -46,13 +46,19 @@ def test_equilibrium_speed_mixes_kinds_by_share() -> None:
     assert v_hdv < lane_speed(load_config("C1"), 5.0) < v_cav  # T_HDV = 1.5 s > T_CAV = 1 s
 
 
-def test_fixed_and_iidm_speeds_and_too_short_headways() -> None:
+def test_fixed_and_iidm_speeds_and_over_capacity_headways() -> None:
     assert lane_speed(load_config("C1", demand={"main_speed": 30.0}), 5.0) == 30.0
     iidm = load_config("C1", cav={"variant": "iidm"}, hdv={"variant": "iidm"})
     assert lane_speed(iidm, 5.0) == pytest.approx(33.3)  # IIDM steady state at v0
-    short = load_config("C1", demand={"mean_headway_main_1": 1.2})
-    with pytest.raises(ConfigError, match=r"mean headway 1\.2 s is too short"):
-        lane_speed(short, 1.2)
+    # 1.2 s is below every steady-state time headway of the C5 mix: no free-flow state,
+    # so the capacity speed, where the steady-state headway spacing(v)/v is shortest
+    config = load_config("C5")
+    v_c = lane_speed(config, 1.2)
+    headway = [_needed_spacing(config, v) / v for v in (v_c - 0.5, v_c, v_c + 0.5)]
+    assert headway[1] > 1.2
+    assert headway[1] < min(headway[0], headway[2])
+    assert 10.0 < v_c < lane_speed(config, 5.0)
+    assert lane_speed(config, 1.2) == lane_speed(config, 1.5)  # both over capacity
 
 
 def test_demand_inserts_at_the_lane_speed() -> None:

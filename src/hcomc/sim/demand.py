@@ -19,8 +19,10 @@ with ``s_K(v)`` the IDM equilibrium gap of kind K (Eq. 1 with v' = 0, Δv = 0:
 ``(s0 + v T) / sqrt(1 - (v/v0)^δ)``; ``s0 + v T`` for the IIDM), i.e. each vehicle keeps
 its own steady-state gap behind a leader at the common speed. Of the two roots the
 free-flow one (the larger, just below v0) is used; for the IIDM, whose free-flow steady
-state is v0 itself, v0. Inserted there, undisturbed traffic neither accelerates nor brakes
-on average. A number sets a fixed insertion speed instead.
+state is v0 itself, v0. A headway below the lane's capacity headway (demand above capacity,
+e.g. under about 2 s for HDVs with T = 1.5 s) has no free-flow state: vehicles then enter at
+the capacity speed and the entry meters them. Inserted at v*, undisturbed traffic neither
+accelerates nor brakes on average. A number sets a fixed insertion speed instead.
 
 **Paper scenario** (``pattern = "uniform"``): every headway equals the mean exactly and
 the kinds follow an evenly spread pattern with the exact share: the k-th vehicle of a lane
@@ -36,10 +38,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ConfigError, IDMParams, ScenarioConfig
+from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.models.idm import equilibrium_gap
 from hcomc.sim.road import Kind, Lane
 
@@ -87,8 +89,10 @@ def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
     """Insertion speed of a mainline lane with the given mean headway [m/s].
 
     ``demand.main_speed`` if it is a number, else the free-flow steady-state speed ``v*``
-    of the module docstring. Raises ConfigError (naming the key) if the headway is too short
-    for any free-flow steady state.
+    of the module docstring. A headway shorter than the lane's capacity headway has no
+    free-flow steady state (the demand exceeds capacity): then the capacity speed ``v_c``,
+    at which the steady-state time headway ``spacing(v) / v`` is shortest, is used and the
+    entry meters the vehicles (an arrival waits until its gap allows it in).
     """
     d = config.demand
     if not isinstance(d.main_speed, str):
@@ -98,19 +102,21 @@ def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
     kinds = [(w, params) for w, params in ((p, config.cav), (1.0 - p, config.hdv)) if w > 0]
     v_max = min(params.desired_speed for _, params in kinds)
 
+    def needed(v: float) -> float:  # steady-state front-to-front spacing of the mix [m]
+        return sum(w * _equilibrium_spacing(v, params, length) for w, params in kinds)
+
     def excess(v: float) -> float:  # needed minus available spacing [m]
-        need = sum(w * _equilibrium_spacing(v, params, length) for w, params in kinds)
-        return need - mean_headway * v
+        return needed(v) - mean_headway * v
 
     # scan up to just below v_max (the IDM gap is infinite at v0), then refine the last
     # change of sign from "available spacing suffices" to "does not"
     grid = v_max * np.append(np.arange(1, 1000) / 1000.0, 1.0 - 1e-9)
     ok = np.flatnonzero([excess(float(v)) < 0.0 for v in grid])
-    if ok.size == 0:
-        raise ConfigError(
-            f"demand.main_speed = 'equilibrium': mean headway {mean_headway} s is too short "
-            "for a free-flow steady state; allowed: a longer headway or a fixed main_speed"
-        )
+    if ok.size == 0:  # over capacity: the speed of the shortest steady-state headway
+        k = int(np.argmin([needed(float(v)) / v for v in grid]))
+        lo, hi = float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)])
+        best = minimize_scalar(lambda v: needed(v) / v, bounds=(lo, hi), method="bounded")
+        return float(best.x)
     k = int(ok[-1])
     if k == grid.size - 1:
         return float(v_max)  # IIDM: its free-flow steady state is v0 itself
