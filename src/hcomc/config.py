@@ -18,7 +18,14 @@ from pathlib import Path
 from typing import Any, Literal
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 __all__ = [
     "CAVParams",
@@ -158,19 +165,32 @@ class RoadParams(_Frozen):
 
 
 class DemandParams(_Frozen):
-    """Traffic demand (DESIGN.md §3): shifted exponential headways per lane, CAV share.
+    """Traffic demand (DESIGN.md §3): headways per lane, CAV share, insertion speeds.
 
-    Headways are ``min_headway + Exp(mean - min_headway)``, so the mean is exactly the
-    condition's average time headway. Each vehicle is a CAV with probability
-    ``cav_penetration``. The ramp either releases one key merging vehicle
-    (``ramp = "single"``, the paper's setting) or a continuous flow.
+    ``pattern = "random"``: headways are ``min_headway + Exp(mean - min_headway)``, so the
+    mean is exactly the condition's average time headway, and each vehicle is a CAV with
+    probability ``cav_penetration``. ``pattern = "uniform"`` (the deterministic paper
+    scenario): every headway equals the mean and CAVs are spread evenly with the exact
+    share. The ramp either releases one key merging vehicle (``ramp = "single"``, the
+    paper's setting) or a continuous flow. Mainline vehicles enter at ``main_speed``: a
+    fixed speed [m/s], or ``"equilibrium"``, the lane's IDM steady-state speed for its
+    mean headway (see :mod:`hcomc.sim.demand`).
     """
 
     mean_headway_main_1: float = Field(5.0, gt=0, le=3600, description="lane 1 mean headway [s]")
     mean_headway_main_2: float = Field(5.0, gt=0, le=3600, description="lane 2 mean headway [s]")
     min_headway: float = Field(1.0, gt=0, le=60, description="minimum (shift) headway [s]")
     cav_penetration: float = Field(0.9, ge=0, le=1, description="share of CAVs [-]")
-    main_speed: float = Field(30.0, gt=0, le=70, description="insertion speed, mainline [m/s]")
+    main_speed: float | Literal["equilibrium"] = Field(
+        "equilibrium",
+        description="mainline insertion speed: a fixed speed [m/s] (0 < v <= 70) or "
+        "'equilibrium' (each lane's IDM steady state for its mean headway)",
+    )
+    pattern: Literal["random", "uniform"] = Field(
+        "random",
+        description="'random' = shifted exponential headways and random CAV assignment; "
+        "'uniform' = every headway equal to the mean, CAVs spread evenly (no randomness)",
+    )
     ramp: Literal["single", "flow", "none"] = Field(
         "single", description="'single' key merge, 'flow' continuous ramp demand, 'none'"
     )
@@ -179,6 +199,15 @@ class DemandParams(_Frozen):
     )
     ramp_mean_headway: float = Field(20.0, gt=0, le=3600, description="'flow': ramp headway [s]")
     ramp_speed: float = Field(22.0, gt=0, le=70, description="insertion speed, ramp [m/s]")
+
+    @field_validator("main_speed", mode="before")
+    @classmethod
+    def _main_speed(cls, value: Any) -> Any:
+        if value == "equilibrium":
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value <= 70:
+            raise ValueError("allowed: a speed in (0, 70] m/s or 'equilibrium'")
+        return value
 
     @model_validator(mode="after")
     def _headways(self) -> DemandParams:

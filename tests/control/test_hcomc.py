@@ -27,8 +27,8 @@ def _config(name: str = "C1", **control: object) -> ScenarioConfig:
 
 @cache
 def _instant(seed: int) -> tuple[ScenarioConfig, object, object]:
-    """The first planning request of C1 with ``seed``."""
-    config = _config()
+    """The first planning request of C1 with ``seed`` (mainline inserted at 30 m/s)."""
+    config = load_config("C1", control={"controller": "hcomc"}, demand={"main_speed": 30.0})
     sim = Simulation(config, seed)
     assert sim.run_until_plan() is not None
     return (config, *sim.requests[0])

@@ -252,7 +252,7 @@ def test_changing_vehicles_apply_the_eq14_blend():
     a_ori (origin-lane leader) and a_new (target-lane leader) with ``sim._follow`` and
     check the applied acceleration is Psi a_new + (1 - Psi) a_ori, capped by a_ori while
     the body overlaps the origin lane and by a_new while it overlaps the target lane."""
-    config = _config(duration=60.0)
+    config = _config(duration=60.0, main_speed=30.0)  # traffic with HDV lane changes
     sim = Simulation(config, seed=5)
     tol = config.lane_change.transition_tolerance
     checked, kinds, psis = 0, set(), []

@@ -20,8 +20,11 @@ from hcomc.metrics import (
     collisions,
     compute_metrics,
     critical_distance,
+    deviations,
     fuel,
     key_collisions,
+    key_window,
+    lane_speed_field,
     low_speed_region_volume,
     max_drac,
     merge_window,
@@ -176,12 +179,17 @@ def test_constant_speed_platoon() -> None:
     w = merge_window(log, 0, PLATOON_GROUP)
     assert (w.t_start, w.t_merge, w.t_end) == pytest.approx((0.0, 2.0, 10.0))
     assert reference_speed(log, w) == pytest.approx(25.0)
-    assert average_acceleration(log, w) == 0.0
-    assert low_speed_region_volume(log, w) == 0.0
+    # compared with itself (no disturbance) every disturbance metric is exactly 0
+    assert average_acceleration(log, w, reference=log) == 0.0
+    assert low_speed_region_volume(log, w, reference=log) == 0.0
+    assert stabilisation_time(log, w, reference=log) == pytest.approx(0.0, abs=1e-9)
+    # without the undisturbed run they are undefined
+    assert math.isnan(average_acceleration(log, w))
+    assert math.isnan(low_speed_region_volume(log, w))
+    assert math.isnan(stabilisation_time(log, w))
     assert critical_distance(log, w) == pytest.approx(25.0, abs=1e-4)
     assert min_ttc(log, w) == math.inf
     assert max_drac(log, w) == 0.0
-    assert stabilisation_time(log, w) == pytest.approx(0.0, abs=1e-9)
     assert collisions(log, w) == 0.0
     # Fuel: 8 vehicles x 101 rows x 0.1 s at f(25, 0) = 1.23955625 mL/s.
     assert fuel(log, w) == pytest.approx(8 * 101 * 0.1 * 1.23955625e-3, rel=1e-9)
@@ -196,15 +204,21 @@ def test_missing_roles_are_ignored() -> None:
 
 
 # ------------------------------------------------------------------- braking
-def test_braking_stabilisation_and_average_acceleration() -> None:
-    log = braking()
+def cruising(n_rows: int = 151) -> SimulationLog:
+    """The undisturbed run of :func:`braking`: the same platoon, nobody brakes."""
+    return braking(a_rows=[], n_rows=n_rows, slows=False)
+
+
+def test_braking_against_the_undisturbed_platoon() -> None:
+    log, ref = braking(), cruising()
     w = merge_window(log, 0, PLATOON_GROUP)
     assert (w.t_start, w.t_merge, w.t_end) == pytest.approx((0.0, 5.0, 15.0))
-    # Braking ends at t = 8 s: first settled row, and settled for >= 2 s afterwards.
-    assert stabilisation_time(log, w) == pytest.approx(8.0 - 5.0, abs=log.dt)
-    assert stabilisation_time(log, w) == pytest.approx(3.0, abs=1e-9)
-    # 30 rows with |a| = 1 among 6 key vehicles x 151 rows.
-    assert average_acceleration(log, w) == pytest.approx(30.0 / (6 * 151), rel=1e-12)
+    # Vehicle 2 ends 3 m/s below its undisturbed 25 m/s: never back within 0.5 m/s, so the
+    # stabilisation time is censored at the window end.
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(10.0)
+    # 30 cells with |a - 0| = 1. Cells: VMC..VNR 5 x 151 rows, VR (0) only from its merge
+    # at t = 5 s: rows 50..150 = 101 cells.
+    assert average_acceleration(log, w, reference=ref) == pytest.approx(30.0 / (755 + 101))
     # Vehicle 1 (25 m/s) closes on vehicle 2 (22 m/s); the gap 35 - 4.5 - 3 (t - 8)
     # is smallest at t = 15 s: 9.5 m.
     assert min_ttc(log, w) == pytest.approx(9.5 / 3.0, rel=1e-4)
@@ -213,25 +227,76 @@ def test_braking_stabilisation_and_average_acceleration() -> None:
 
 
 def test_stabilisation_needs_the_full_hold() -> None:
-    # Speeds constant; |a| = 1 in rows 50-59 and 75-79: settled for 1.5 s (rows 60-74)
+    # Speeds undisturbed; |a| = 1 in rows 50-59 and 75-79: settled for 1.5 s (rows 60-74)
     # only, then from t = 8 s on.
-    log = braking(a_rows=[*range(50, 60), *range(75, 80)], slows=False)
+    log, ref = braking(a_rows=[*range(50, 60), *range(75, 80)], slows=False), cruising()
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w) == pytest.approx(3.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(3.0, abs=1e-9)
     # A 1 s hold is met at t = 6 s already.
-    assert stabilisation_time(log, w, hold=1.0) == pytest.approx(1.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref, hold=1.0) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_stabilisation_speed_criterion() -> None:
+    # Vehicle 3 drives 1 m/s slower than undisturbed for t in [5, 9), then 0.4 m/s slower
+    # (inside the 0.5 m/s tolerance); accelerations stay undisturbed.
+    log, ref = cruising(), cruising()
+    t = np.arange(151) * 0.1
+    log.v[:, 3] = np.where(t < 9.0 - 1e-9, 24.0, 24.6)
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(4.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref, v_tol=1.5) == pytest.approx(0.0, abs=1e-9)
+    assert average_acceleration(log, w, reference=ref) == 0.0
 
 
 def test_stabilisation_is_censored_at_window_end() -> None:
     # Still braking 1.2 s before the end: only 0.8 s of settling is observed.
-    log = braking(a_rows=range(50, 142))
+    log = braking(a_rows=range(50, 142), slows=False)
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w) == pytest.approx(w.t_end - w.t_merge)
-    assert stabilisation_time(log, w) == pytest.approx(10.0)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(10.0)
 
 
-# ------------------------------------------------------------------- LSRV
-def test_lsrv_crawler_one_cell_per_bin() -> None:
+def test_vr_counterpart_is_the_undisturbed_lane_at_its_position() -> None:
+    """VR (0) merges into lane 1 at t = 1 s; the undisturbed run has no VR. Its counterpart
+    is the reference's lane-1 traffic interpolated at VR's x (clamped beyond the ends)."""
+    t = np.arange(31) * 0.1
+    x, v = cruise([600.0, 500.0, 700.0], [20.0, 20.0, 30.0], t)
+    a = np.zeros_like(x)
+    a[:, 0] = 0.3
+    lane = np.broadcast_to([1, 1, 1], x.shape).copy()
+    lane[:10, 0] = 0
+    log = build(x, v, lane, a)
+    log.add_event(1.0, EventKind.MERGE, 0)
+    ref_x, ref_v = cruise([500.0, 700.0], [20.0, 30.0], t)
+    ref_x = np.concatenate([np.zeros((t.size, 1)), ref_x], axis=1)
+    ref_v = np.concatenate([np.zeros((t.size, 1)), ref_v], axis=1)
+    ref_a = np.zeros_like(ref_x)
+    ref_a[:, 2] = 0.1
+    active = np.ones(ref_x.shape, dtype=bool)
+    active[:, 0] = False  # no VR in the undisturbed run
+    ref = build(ref_x, ref_v, lane, ref_a, active=active)
+    w = merge_window(log, 0, roles(0, 1, 2))
+    da, dv, valid = deviations(log, w, ref, slice(0, 31))
+    assert valid[:, 0].tolist() == [False] * 10 + [True] * 21  # VR from its merge on
+    assert valid[:, 1:].all()
+    # VR at 600 + 20 t between 500 + 20 t (20 m/s) and 700 + 30 t (30 m/s): weight
+    # (100) / (200 + 10 t) of the leader.
+    w_lead = 100.0 / (200.0 + 10.0 * t[10:])
+    np.testing.assert_allclose(dv[10:, 0], 20.0 - (20.0 + 10.0 * w_lead), rtol=1e-5)
+    np.testing.assert_allclose(da[10:, 0], 0.3 - 0.1 * w_lead, rtol=1e-5)
+    np.testing.assert_allclose(da[:, 2], -0.1)
+    expected = (np.abs(0.3 - 0.1 * w_lead).sum() + 31 * 0.1) / (21 + 2 * 31)
+    assert average_acceleration(log, w, reference=ref) == pytest.approx(expected, rel=1e-5)
+
+
+def test_reference_must_match_the_log() -> None:
+    log = platoon()
+    w = merge_window(log, 0, PLATOON_GROUP)
+    with pytest.raises(ValueError, match="reference log has 51 rows"):
+        average_acceleration(log, w, reference=platoon(51))
+
+
+# ------------------------------------------------------------------- speed field (plots)
+def test_speed_field_crawler_one_cell_per_bin() -> None:
     """Log interval = time bin: each row of the crawler is one (t, x) bin."""
     dt, n_rows = 0.5, 21  # t = 0 .. 10 s
     k = np.arange(n_rows)
@@ -243,9 +308,6 @@ def test_lsrv_crawler_one_cell_per_bin() -> None:
     log = build(x, v, lane, active=active, dt=dt)
     w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=10.0)
     assert reference_speed(log, w) == pytest.approx(25.0)
-    # 10 bins x (25 - 15) m/s x 10 m x 0.5 s
-    assert low_speed_region_volume(log, w) == pytest.approx(10 * 10.0 * 10.0 * 0.5)
-
     x_edges, t_edges, V = speed_field(log, w, lane=1)
     np.testing.assert_allclose(x_edges, np.arange(151) * 10.0)
     np.testing.assert_allclose(t_edges, np.arange(22) * 0.5)  # covers [0, t_end + dt)
@@ -256,37 +318,27 @@ def test_lsrv_crawler_one_cell_per_bin() -> None:
     assert np.all(V[np.isfinite(V)] == 15.0)
 
 
-def test_lsrv_crawler_spans_bins() -> None:
-    """15 m/s from x = 500 m at dt = 0.1 s, rows 0-10 (t = 0 .. 1 s).
-
-    Bins [t) x [x): (0-0.5, 500-510) rows 0-4; (0.5-1.0, 500-510) rows 5-6 (507.5, 509);
-    (0.5-1.0, 510-520) rows 7-9; (1.0-1.1, 510-520) row 10 (515), last bin 0.1 s wide.
-    LSRV = (25 - 15) x 10 x (0.5 + 0.5 + 0.5 + 0.1) = 160 m^2.
-    """
+def test_speed_field_crawler_spans_bins() -> None:
+    """15 m/s from x = 500 m at dt = 0.1 s, rows 0-10 (t = 0 .. 1 s): bins (t, x)
+    (0-0.5, 500-510) rows 0-4; (0.5-1.0, 500-510) rows 5-6; (0.5-1.0, 510-520) rows 7-9;
+    (1.0-1.1, 510-520) row 10, the last time bin 0.1 s wide."""
     t = np.arange(11) * 0.1
     x, v = cruise([500.0, 100.0], [15.0, 25.0], t)
     lane = np.broadcast_to([1, 2], x.shape).copy()
     log = build(x, v, lane)
     w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=1.0)
-    assert reference_speed(log, w) == pytest.approx(25.0)
-    assert low_speed_region_volume(log, w) == pytest.approx(160.0)
     _, t_edges, V = speed_field(log, w, lane=1)
     np.testing.assert_allclose(t_edges, [0.0, 0.5, 1.0, 1.1])
     assert np.argwhere(np.isfinite(V)).tolist() == [[0, 50], [1, 50], [1, 51], [2, 51]]
 
 
-def test_lsrv_bin_speed_is_cell_mean_and_sums_lanes() -> None:
-    # One row: lane 1 cells 15 and 25 m/s share bin 500-510 m (mean 20); lane 2 at 25.
+def test_speed_field_bin_speed_is_cell_mean() -> None:
     x = np.array([[502.0, 509.0, 100.0]])
     v = np.array([[15.0, 25.0, 25.0]])
     lane = np.array([[1, 1, 2]])
     log = build(x, v, lane, dt=0.5)
     w = MetricWindow(group=roles(0, 1), t_start=0.0, t_merge=math.nan, t_end=0.0)
-    assert reference_speed(log, w) == pytest.approx(25.0)
     assert speed_field(log, w, lane=1)[2][0, 50] == pytest.approx(20.0)
-    assert low_speed_region_volume(log, w) == pytest.approx(5.0 * 10.0 * 0.5)
-    # v_ref = 30: lane 1 (30 - 20) x 5 m s + lane 2 (30 - 25) x 5 m s
-    assert low_speed_region_volume(log, w, v_ref=30.0) == pytest.approx(75.0)
 
 
 def test_reference_speed_falls_back_to_all_mainline_cells() -> None:
@@ -296,6 +348,51 @@ def test_reference_speed_falls_back_to_all_mainline_cells() -> None:
     log = build(x, v, lane)
     w = MetricWindow(group=roles(0), t_start=0.0, t_merge=math.nan, t_end=0.0)
     assert reference_speed(log, w) == pytest.approx(20.0)
+
+
+# ------------------------------------------------------------------- LSRV
+def _static(xs: list[float], lanes: list[int], speeds: np.ndarray, dt: float) -> SimulationLog:
+    """Vehicles standing at ``xs`` whose logged speeds are the rows of ``speeds``."""
+    x = np.broadcast_to(np.asarray(xs, dtype=float), speeds.shape).copy()
+    lane = np.broadcast_to(np.asarray(lanes), speeds.shape).copy()
+    return build(x, speeds.astype(float), lane, dt=dt)
+
+
+def test_lsrv_slow_second_on_the_control_zone() -> None:
+    """Lane-1 vehicles at 450 and 1050 m, 5 m/s below the undisturbed 25 m/s for 1 s.
+
+    The field is defined between them: centres 455 .. 1045 m, 60 bins of 10 m; two 0.5 s
+    bins of deficit 5 m/s: LSRV = 5 x 10 x 0.5 x 60 x 2 = 3000 m^2."""
+    speeds = np.full((41, 2), 25.0)
+    speeds[10:20] = 20.0  # t in [1, 2)
+    log = _static([450.0, 1050.0], [1, 1], speeds, 0.1)
+    ref = _static([450.0, 1050.0], [1, 1], np.full((41, 2), 25.0), 0.1)
+    w = MetricWindow(group=roles(0, 1), t_start=0.0, t_merge=1.0, t_end=4.0)
+    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(3000.0)
+    assert low_speed_region_volume(ref, w, reference=ref) == 0.0
+    # faster than undisturbed counts 0
+    assert low_speed_region_volume(ref, w, reference=log) == 0.0
+
+
+def test_lsrv_interpolates_between_vehicles_and_sums_lanes() -> None:
+    """One 0.5 s row. Lane 1: 450 m at 20 m/s, 1050 m at 26 m/s (undisturbed: both 26):
+    deficit 6 (1050 - x) / 600 at the centres 455 .. 1045 sums to 180 m/s, x 10 m x 0.5 s
+    = 900 m^2. Lane 2: 500 and 700 m at 20 instead of 25 m/s: 20 bins x 5 x 10 x 0.5 =
+    500 m^2. Traffic upstream of the control zone (x < 400 m) does not count."""
+    xs = [450.0, 1050.0, 500.0, 700.0]
+    lanes = [1, 1, 2, 2]
+    log = _static(xs, lanes, np.array([[20.0, 26.0, 20.0, 20.0]]), 0.5)
+    ref = _static(xs, lanes, np.array([[26.0, 26.0, 25.0, 25.0]]), 0.5)
+    w = MetricWindow(group=roles(0), t_start=0.0, t_merge=0.0, t_end=0.0)
+    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(1400.0)
+    upstream = _static([100.0, 390.0], [1, 1], np.array([[1.0, 1.0]]), 0.5)
+    free = _static([100.0, 390.0], [1, 1], np.array([[26.0, 26.0]]), 0.5)
+    assert low_speed_region_volume(upstream, w, reference=free) == 0.0
+    x_edges, t_edges, V = lane_speed_field(log, w, lane=2, x_min=400.0)
+    assert x_edges[0] == 400.0
+    assert x_edges[-1] == 1500.0
+    np.testing.assert_allclose(t_edges, [0.0, 0.5])
+    assert np.isfinite(V[0]).sum() == 20
 
 
 # ------------------------------------------------------------------- TTC, DRAC, crit. dist.
@@ -394,21 +491,50 @@ def test_registry_specs() -> None:
 def test_compute_metrics_floats_and_documented_nans() -> None:
     log = merge_scene()
     w = merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
-    values = compute_metrics(log, w)
+    values = compute_metrics(log, w, reference=log)
     assert list(values) == list(METRICS)
     assert all(type(val) is float for val in values.values())
     assert not any(math.isnan(val) for val in values.values())
     for name, spec in METRICS.items():
-        assert spec.func(log, w) == pytest.approx(values[name])
+        kwargs = {"reference": log} if spec.needs_reference else {}
+        assert spec.func(log, w, **kwargs) == pytest.approx(values[name])
     # Lane 1: VMR-VMC and VMC-VR gaps 25 m; lane 2: 30 m.
     assert values["critical_distance"] == pytest.approx(25.0, abs=1e-4)
     assert values["pet"] == pytest.approx(1.25)
+    # compared with itself: no disturbance
     assert values["stabilisation_time"] == pytest.approx(0.0, abs=1e-9)
+    assert values["average_acceleration"] == 0.0
+    assert values["lsrv"] == 0.0
     assert values["min_ttc"] == math.inf
     assert values["collisions"] == 0.0
+    # without the undisturbed run the three disturbance metrics are NaN
+    nan = {name for name, val in compute_metrics(log, w).items() if math.isnan(val)}
+    assert nan == {"average_acceleration", "stabilisation_time", "lsrv"}
 
     no_merge = MetricWindow(group=w.group, t_start=w.t_start, t_merge=math.nan, t_end=w.t_end)
-    values = compute_metrics(log, no_merge)
+    values = compute_metrics(log, no_merge, reference=log)
     assert all(type(val) is float for val in values.values())
     nan = {name for name, val in values.items() if math.isnan(val)}
     assert nan == {"critical_distance", "stabilisation_time", "pet"}
+
+
+def test_key_window_reads_the_engine_key_group() -> None:
+    log = merge_scene()
+    log.meta["key_groups"] = [{"t": 0.0, **roles(0, 1, 2, 3, 4, 5)}]
+    w = key_window(log)
+    assert w == merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
+    assert compute_metrics(log, reference=log) == pytest.approx(
+        compute_metrics(log, w, reference=log)
+    )
+
+
+def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
+    log = platoon()  # no key group recorded: nothing merges
+    w = key_window(log)
+    assert w.group == {}
+    assert (w.t_start, w.t_end) == (0.0, 10.0)
+    assert not w.merged
+    values = compute_metrics(log, reference=log)
+    assert values["average_acceleration"] == 0.0
+    assert values["stabilisation_time"] == 0.0
+    assert values["lsrv"] == 0.0

@@ -184,14 +184,14 @@ def test_gap_and_inverse_ttc_errors_are_applied_exactly():
 
 
 def test_ou_step_is_the_models_update():
-    """w <- exp(-dt/tau~) w + sqrt(2 dt/tau~) xi with xi drawn as (2, n) from the generator."""
+    """w <- exp(-dt/tau~) w + sqrt(2 dt/tau~) xi with xi drawn as (2, N) for all N vehicles."""
     dt, corr = 0.1, 20.0
     params = _params(0.6, 0.6, 0.6, estimation_errors=True, error_correlation_time=corr)
     perception = Perception(params, np.ones(6, dtype=bool), dt, make_rng(3))
     w_gap, w_ttc = perception.w_gap.copy(), perception.w_ttc.copy()
     ids = np.array([1, 2, 4])
     perception.advance_errors(ids, np.random.default_rng(99))
-    xi = np.random.default_rng(99).standard_normal((2, ids.size))
+    xi = np.random.default_rng(99).standard_normal((2, 6))[:, ids]
     decay, kick = np.exp(-dt / corr), np.sqrt(2.0 * dt / corr)
     np.testing.assert_allclose(perception.w_gap[ids], decay * w_gap[ids] + kick * xi[0], rtol=1e-14)
     np.testing.assert_allclose(perception.w_ttc[ids], decay * w_ttc[ids] + kick * xi[1], rtol=1e-14)
@@ -255,3 +255,28 @@ def test_same_seed_same_errors_different_seed_differs():
     np.testing.assert_array_equal(a[1], b[1])
     assert not np.allclose(a[0], c[0])
     assert not np.allclose(a[1], c[1])
+
+
+def test_error_paths_do_not_depend_on_which_vehicles_are_active():
+    """Vehicle 0's error path is the same whether vehicle 1 is active, inactive or absent
+    from the active set on some steps; the stream advances by 2N normals every step."""
+    params = _params(0.6, 0.6, 0.6, estimation_errors=True)
+
+    def run(active_sets: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        rng = make_rng(11)
+        perception = Perception(params, np.ones(3, dtype=bool), 0.1, rng)
+        for ids in active_sets:
+            perception.advance_errors(ids, rng)
+        return perception.w_gap.copy(), rng.standard_normal()
+
+    both = [np.array([0, 1, 2])] * 30
+    alone = [np.array([0, 2])] * 30
+    mixed = [np.array([0, 2])] * 10 + [np.array([0, 1, 2])] * 10 + [np.array([0, 2])] * 10
+    (w_both, next_both), (w_alone, next_alone) = run(both), run(alone)
+    w_mixed, next_mixed = run(mixed)
+    np.testing.assert_array_equal(w_both[[0, 2]], w_alone[[0, 2]])
+    np.testing.assert_array_equal(w_both[[0, 2]], w_mixed[[0, 2]])
+    assert w_both[1] != w_alone[1]  # vehicle 1 only moves while it is active
+    assert next_both == next_alone == next_mixed  # the stream position is the same
+    empty = run([np.array([], dtype=int)] * 30)
+    assert empty[1] == next_both  # a step with no active HDV still consumes its draws

@@ -1,26 +1,37 @@
 """Run grids of conditions x configurations x seeds, locally in parallel, into one table.
 
-A *configuration* is a merge controller with its optimiser (the paper's five: FIFO, Game,
-HCOMC with NSGA-II, PSO or SA). Every run is ``run_one(spec)``: a pure function of its spec
-(condition preset or TOML file, configuration, seed, overrides) that returns one results row
-and the run's manifest. Seeds are shared across configurations within a condition (common
-random numbers: the same traffic for every controller), so comparisons are paired by seed.
-The row order follows the spec order, whatever the number of workers, so tables are identical
-for 1 or N workers.
+A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
+HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published) and two baseline
+variants that replan every second ("FIFO-R", "Game-R"). Every run is ``run_one(spec)``: a
+pure function of its spec (condition preset or TOML file, configuration, seed, overrides)
+that returns one results row and the run's manifest. Seeds are shared across configurations
+within a condition (common random numbers: the same traffic for every controller), so
+comparisons are paired by seed.
+
+Every run is measured against its undisturbed counterpart: the same condition, overrides and
+seed simulated without releasing the ramp vehicle (:mod:`hcomc.metrics`). That run does not
+depend on the controller, so it is simulated once per (condition, seed, non-control
+overrides) and cached in the worker process. Metrics use the key vehicles the engine fixed
+when VR entered the control zone, before any control acted, so every configuration is
+measured on the same vehicles. The row order follows the spec order, whatever the number of
+workers, so tables are identical for 1 or N workers.
 """
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from hcomc.config import load_config
+from hcomc.config import ControlParams, load_config
+from hcomc.sim.log import SimulationLog
 
 CONFIGURATIONS: dict[str, tuple[str, str]] = {
     "FIFO": ("fifo", "nsga2"),
@@ -29,7 +40,28 @@ CONFIGURATIONS: dict[str, tuple[str, str]] = {
     "HCOMC-PSO": ("hcomc", "pso"),
     "HCOMC-SA": ("hcomc", "sa"),
 }
-"""Configuration label -> (controller, optimiser); the optimiser only matters for HCOMC."""
+"""The paper's configurations: label -> (controller, optimiser); the optimiser only matters
+for HCOMC."""
+
+REPLANNING_BASELINES: dict[str, tuple[str, str]] = {
+    "FIFO-R": ("fifo", "nsga2"),
+    "Game-R": ("game", "nsga2"),
+}
+"""FIFO and Game replanning every ``REPLAN_PERIOD[label]`` seconds (not in the paper)."""
+
+ALL_CONFIGURATIONS: dict[str, tuple[str, str]] = {**CONFIGURATIONS, **REPLANNING_BASELINES}
+"""Every configuration label ``run_one`` accepts."""
+
+REPLAN_PERIOD: dict[str, float] = {"FIFO": 0.0, "Game": 0.0, "FIFO-R": 1.0, "Game-R": 1.0}
+"""``control.replan_period`` [s] per configuration (0 = plan once, as published); the HCOMC
+configurations use the config's value."""
+
+
+def _replan_override(label: str) -> dict[str, float]:
+    """The replanning override of a configuration, if the config knows the key."""
+    if label in REPLAN_PERIOD and "replan_period" in ControlParams.model_fields:
+        return {"replan_period": REPLAN_PERIOD[label]}
+    return {}
 
 
 @dataclass(frozen=True)
@@ -43,13 +75,19 @@ class RunSpec:
 
     def config_overrides(self) -> dict[str, Any]:
         """Top-level config overrides, with the configuration's controller and optimiser."""
-        controller, optimizer = CONFIGURATIONS[self.configuration]
+        controller, optimizer = ALL_CONFIGURATIONS[self.configuration]
         control = {
             **self.overrides.get("control", {}),
+            **_replan_override(self.configuration),
             "controller": controller,
             "optimizer": optimizer,
         }
         return {**self.overrides, "control": control}
+
+    def reference_key(self) -> tuple[str, int, str]:
+        """What the undisturbed run depends on: condition, seed, non-control overrides."""
+        rest = {k: v for k, v in self.overrides.items() if k != "control"}
+        return self.condition, self.seed, json.dumps(rest, sort_keys=True, default=str)
 
 
 def grid(
@@ -68,16 +106,46 @@ def grid(
     ]
 
 
+@lru_cache(maxsize=64)
+def _undisturbed(condition: str, seed: int, overrides_json: str) -> SimulationLog:
+    """The run without its ramp vehicle (cached per worker process)."""
+    from hcomc.sim.engine import Simulation
+
+    config = load_config(condition, **json.loads(overrides_json))
+    return Simulation(config, seed, counterfactual=True).run()
+
+
+def undisturbed_log(spec: RunSpec) -> SimulationLog:
+    """The undisturbed counterpart of ``spec``'s run (same condition, seed, overrides)."""
+    return _undisturbed(*spec.reference_key())
+
+
+def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
+    """Columns of VR's plans: the last plan's mode, sequence and fallback; the number of
+    replans (plans for VR minus one); the mean decision time."""
+    plans = [p for p in sim.decisions if p.group.vr == vr]
+    if not plans:
+        return {}
+    last = plans[-1]
+    return {
+        "mode": last.mode.name.lower(),
+        "sequence": last.sequence,
+        "fallback": bool(last.fallback),
+        "replans": len(plans) - 1,
+        "decision_ms": float(np.mean([p.decision_ms for p in plans])),
+    }
+
+
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
     """Simulate one run and compute its metrics: ``(row, manifest)``."""
-    from hcomc.metrics import compute_metrics, merge_window
+    from hcomc.metrics import compute_metrics, key_window
     from hcomc.sim.engine import Simulation
 
     config = load_config(spec.condition, **spec.config_overrides())
     start = time.perf_counter()
     sim = Simulation(config, spec.seed)
     log = sim.run()
-    controller, optimizer = CONFIGURATIONS[spec.configuration]
+    controller, optimizer = ALL_CONFIGURATIONS[spec.configuration]
     row: dict[str, Any] = {
         "condition": config.name,
         "configuration": spec.configuration,
@@ -85,23 +153,26 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
         "optimizer": optimizer if controller == "hcomc" else "",
         "seed": spec.seed,
         "mode": "",
+        "sequence": "",
+        "replans": 0,
         "fallback": False,
         "decision_ms": np.nan,
+        "vr": -1,
         "vr_kind": "",
         "vmc_kind": "",
     }
-    if sim.decisions:
-        plan = sim.decisions[0]
-        group = plan.group
+    group = sim.key_group
+    if group is not None:
         kinds = sim.fleet.kind
         row.update(
-            mode=plan.mode.name.lower(),
-            fallback=bool(plan.fallback),
-            decision_ms=float(plan.decision_ms),
+            vr=group.vr,
             vr_kind="CAV" if kinds[group.vr] else "HDV",
             vmc_kind="" if group.vmc < 0 else "CAV" if kinds[group.vmc] else "HDV",
         )
-        row.update(compute_metrics(log, merge_window(log, group.vr, group.as_dict())))
+        row.update(_plan_columns(sim, group.vr))
+    window = key_window(log)
+    row["key_vehicles"] = " ".join(str(i) for i in window.key_vehicles.tolist())
+    row.update(compute_metrics(log, window, reference=undisturbed_log(spec)))
     if config.demand.ramp == "flow":
         from hcomc.metrics.flow import ramp_delay, throughput
 
@@ -113,6 +184,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
             "condition": spec.condition,
             "configuration": spec.configuration,
             "seed": spec.seed,
+            "overrides": spec.overrides,
         },
     }
     return row, manifest

@@ -1,40 +1,62 @@
-"""Evaluation metrics of a simulation log (DESIGN.md §5, MODELS.md §12, paper Tables II-III).
+"""Evaluation metrics of a simulation log (paper Tables II-III).
 
-Every metric is a pure function ``metric(log, window) -> float`` of a
-:class:`~hcomc.sim.log.SimulationLog` and the :class:`MetricWindow` of one merge, built by
-:func:`merge_window`; :func:`compute_metrics` evaluates the whole :data:`METRICS` registry.
+One call evaluates a run against its undisturbed counterpart::
+
+    log = Simulation(config, seed).run()
+    reference = Simulation(config, seed, counterfactual=True).run()
+    values = compute_metrics(log, reference=reference)
+
+Lower level: every metric is a function ``metric(log, window, ...) -> float`` of a
+:class:`~hcomc.sim.log.SimulationLog` and the :class:`MetricWindow` of one merge (built by
+:func:`key_window` or :func:`merge_window`). Modules: :mod:`~hcomc.metrics.window` (window,
+key vehicles, tolerances), :mod:`~hcomc.metrics.paper` (critical distance, average
+acceleration, stabilisation time, fuel), :mod:`~hcomc.metrics.speed_field` (speed fields,
+LSRV), :mod:`~hcomc.metrics.surrogate` (TTC, DRAC, PET, collisions),
+:mod:`~hcomc.metrics.core` (registry).
 """
 
 from __future__ import annotations
 
-from hcomc.metrics.core import (
-    A_TOL,
-    CLOSING_SPEED,
-    HOLD,
-    KEY_ROLES,
-    METRICS,
-    V_TOL,
-    MetricSpec,
-    MetricWindow,
+from hcomc.metrics.core import METRICS, MetricSpec, compute_metrics
+from hcomc.metrics.paper import (
     average_acceleration,
-    collisions,
-    compute_metrics,
     critical_distance,
+    deviations,
     fuel,
-    key_collisions,
+    stabilisation_time,
+)
+from hcomc.metrics.speed_field import (
+    DT_BIN,
+    DX_BIN,
+    lane_profile_at,
+    lane_speed_field,
     low_speed_region_volume,
-    max_drac,
-    merge_window,
-    min_ttc,
-    pet_at_merge,
     reference_speed,
     speed_field,
-    stabilisation_time,
+)
+from hcomc.metrics.surrogate import (
+    CLOSING_SPEED,
+    collisions,
+    key_collisions,
+    max_drac,
+    min_ttc,
+    pet_at_merge,
+)
+from hcomc.metrics.window import (
+    A_TOL,
+    HOLD,
+    KEY_ROLES,
+    V_TOL,
+    MetricWindow,
+    key_window,
+    merge_window,
 )
 
 __all__ = [
     "A_TOL",
     "CLOSING_SPEED",
+    "DT_BIN",
+    "DX_BIN",
     "HOLD",
     "KEY_ROLES",
     "METRICS",
@@ -45,8 +67,12 @@ __all__ = [
     "collisions",
     "compute_metrics",
     "critical_distance",
+    "deviations",
     "fuel",
     "key_collisions",
+    "key_window",
+    "lane_profile_at",
+    "lane_speed_field",
     "low_speed_region_volume",
     "max_drac",
     "merge_window",

@@ -6,6 +6,31 @@ the condition's average time headway (paper Table I). The mainline is pre-filled
 until the end of the run, so traffic is developed when logging starts at t = 0. Each vehicle
 is a CAV with probability ``cav_penetration``. All draws come from the run's one generator,
 in a fixed order (lane 1, lane 2, ramp, kinds), so the same seed gives the same demand.
+
+**Insertion speed.** With ``main_speed = "equilibrium"`` each mainline lane's vehicles enter
+at the lane's steady-state speed ``v*``: the speed at which the mean front-to-front spacing
+the traffic needs in steady state equals the spacing the lane's demand gives, ``h v``
+(mean headway h, every vehicle at the same speed). The needed spacing mixes the kinds by
+their share p = ``cav_penetration``:
+
+    p (s_CAV(v) + L) + (1 - p) (s_HDV(v) + L) = h v,
+
+with ``s_K(v)`` the IDM equilibrium gap of kind K (Eq. 1 with v' = 0, Δv = 0:
+``(s0 + v T) / sqrt(1 - (v/v0)^δ)``; ``s0 + v T`` for the IIDM), i.e. each vehicle keeps
+its own steady-state gap behind a leader at the common speed. Of the two roots the
+free-flow one (the larger, just below v0) is used; for the IIDM, whose free-flow steady
+state is v0 itself, v0. A headway below the lane's capacity headway (demand above capacity,
+e.g. under about 2 s for HDVs with T = 1.5 s) has no free-flow state: vehicles then enter at
+the capacity speed and the entry meters them. Inserted at v*, undisturbed traffic neither
+accelerates nor brakes on average. A number sets a fixed insertion speed instead.
+
+**Paper scenario** (``pattern = "uniform"``): every headway equals the mean exactly and
+the kinds follow an evenly spread pattern with the exact share: the k-th vehicle of a lane
+(k = 0, 1, ... in order of travel, downstream first) is a CAV iff
+``floor((k + 1) p + 1/2) - floor(k p + 1/2) = 1``, so a lone ramp vehicle takes the more
+likely kind. No random number is drawn for the demand. ``hcomc reproduce`` runs this
+scenario with ``hdv.estimation_errors = false`` (reaction delays stay), so the traffic is
+fully deterministic; only the HCOMC optimisers draw from the run's seed.
 """
 
 from __future__ import annotations
@@ -13,6 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq, minimize_scalar
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ConfigError, IDMParams, ScenarioConfig
@@ -59,27 +85,79 @@ def shifted_exponential(
         n *= 2  # pragma: no cover - astronomically rare with the 1.5 safety factor
 
 
+def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
+    """Insertion speed of a mainline lane with the given mean headway [m/s].
+
+    ``demand.main_speed`` if it is a number, else the free-flow steady-state speed ``v*``
+    of the module docstring. A headway shorter than the lane's capacity headway has no
+    free-flow steady state (the demand exceeds capacity): then the capacity speed ``v_c``,
+    at which the steady-state time headway ``spacing(v) / v`` is shortest, is used and the
+    entry meters the vehicles (an arrival waits until its gap allows it in).
+    """
+    d = config.demand
+    if not isinstance(d.main_speed, str):
+        return float(d.main_speed)
+    p = d.cav_penetration
+    length = config.road.vehicle_length
+    kinds = [(w, params) for w, params in ((p, config.cav), (1.0 - p, config.hdv)) if w > 0]
+    v_max = min(params.desired_speed for _, params in kinds)
+
+    def needed(v: float) -> float:  # steady-state front-to-front spacing of the mix [m]
+        return sum(w * _equilibrium_spacing(v, params, length) for w, params in kinds)
+
+    def excess(v: float) -> float:  # needed minus available spacing [m]
+        return needed(v) - mean_headway * v
+
+    # scan up to just below v_max (the IDM gap is infinite at v0), then refine the last
+    # change of sign from "available spacing suffices" to "does not"
+    grid = v_max * np.append(np.arange(1, 1000) / 1000.0, 1.0 - 1e-9)
+    ok = np.flatnonzero([excess(float(v)) < 0.0 for v in grid])
+    if ok.size == 0:  # over capacity: the speed of the shortest steady-state headway
+        k = int(np.argmin([needed(float(v)) / v for v in grid]))
+        lo, hi = float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)])
+        best = minimize_scalar(lambda v: needed(v) / v, bounds=(lo, hi), method="bounded")
+        return float(best.x)
+    k = int(ok[-1])
+    if k == grid.size - 1:
+        return float(v_max)  # IIDM: its free-flow steady state is v0 itself
+    return float(brentq(excess, float(grid[k]), float(grid[k + 1]), xtol=1e-10))
+
+
+def evenly_spread(n: int, share: float) -> np.ndarray:
+    """Kinds of n vehicles in order: CAV where ``floor((k+1) p + 1/2) > floor(k p + 1/2)``."""
+    k = np.arange(n)
+    cav = np.floor((k + 1) * share + 0.5) > np.floor(k * share + 0.5)
+    return np.where(cav, Kind.CAV, Kind.HDV)
+
+
+def _offsets(
+    config: ScenarioConfig, rng: np.random.Generator, mean: float, total: float
+) -> FloatArray:
+    """Arrival offsets in ``[0, total)``: random (shifted exponential) or uniform."""
+    d = config.demand
+    if d.pattern == "uniform":
+        return mean * np.arange(1, int(np.floor(total / mean - 1e-9)) + 1, dtype=np.float64)
+    return shifted_exponential(rng, mean, d.min_headway, total)
+
+
 def _merge_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
     d, road = config.demand, config.road
     start, end = -config.warmup, config.duration
     t_parts, x_parts, v_parts, lane_parts = [], [], [], []
     for lane, mean in ((Lane.MAIN_1, d.mean_headway_main_1), (Lane.MAIN_2, d.mean_headway_main_2)):
+        speed = lane_speed(config, mean)
         # initial fill: spacings headway * speed downstream from x = 0
-        fill = (
-            road.length
-            - shifted_exponential(rng, mean, d.min_headway, road.length / d.main_speed)[::-1]
-            * d.main_speed
-        )
+        fill = road.length - _offsets(config, rng, mean, road.length / speed)[::-1] * speed
         fill = fill[fill > 0]
-        arrivals = start + shifted_exponential(rng, mean, d.min_headway, end - start)
+        arrivals = start + _offsets(config, rng, mean, end - start)
         t_parts += [np.full(fill.size, start), arrivals]
         x_parts += [fill, np.zeros(arrivals.size)]
-        v_parts += [np.full(fill.size + arrivals.size, d.main_speed)]
+        v_parts += [np.full(fill.size + arrivals.size, speed)]
         lane_parts += [np.full(fill.size + arrivals.size, lane)]
     if d.ramp == "single":
         ramp_t = np.array([d.ramp_entry_time]) if d.ramp_entry_time < end else np.empty(0)
     elif d.ramp == "flow":
-        ramp_t = start + shifted_exponential(rng, d.ramp_mean_headway, d.min_headway, end - start)
+        ramp_t = start + _offsets(config, rng, d.ramp_mean_headway, end - start)
     else:
         ramp_t = np.empty(0)
     t_parts.append(ramp_t)
@@ -87,13 +165,22 @@ def _merge_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
     v_parts.append(np.full(ramp_t.size, d.ramp_speed))
     lane_parts.append(np.full(ramp_t.size, Lane.RAMP))
     t = np.concatenate(t_parts)
-    kind = np.where(rng.random(t.size) < d.cav_penetration, Kind.CAV, Kind.HDV)
-    order = np.lexsort((-np.concatenate(x_parts), t))  # by time, downstream first
+    x = np.concatenate(x_parts).astype(np.float64)
+    lanes = np.concatenate(lane_parts).astype(np.int64)
+    if d.pattern == "uniform":
+        kind = np.empty(t.size, dtype=np.int64)
+        for lane in np.unique(lanes):
+            ids = np.flatnonzero(lanes == lane)
+            travel = ids[np.lexsort((-x[ids], t[ids]))]  # order of travel, downstream first
+            kind[travel] = evenly_spread(ids.size, d.cav_penetration)
+    else:
+        kind = np.where(rng.random(t.size) < d.cav_penetration, Kind.CAV, Kind.HDV)
+    order = np.lexsort((-x, t))  # by time, downstream first
     return Demand(
         t=t[order],
-        x=np.concatenate(x_parts)[order],
+        x=x[order],
         v=np.concatenate(v_parts)[order],
-        lane=np.concatenate(lane_parts).astype(np.int64)[order],
+        lane=lanes[order],
         kind=kind.astype(np.int64)[order],
         scripted=np.zeros(t.size, dtype=bool),
     )

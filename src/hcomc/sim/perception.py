@@ -12,6 +12,13 @@ HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
   sqrt(2 dt/tau~) xi`` (the MODELS.md update, stationary variance ~1), independent per driver
   for the gap (``s_est = s exp(V_s w_s)``) and the inverse TTC
   (``dv_est = dv + s sigma_r w_l``); ``w(0) ~ N(0, 1)``.
+* **Independent of who is on the road**: every step draws the innovations ``xi`` for *all* N
+  vehicles of the run (column i always belongs to vehicle i) and applies them to the active
+  HDVs only. A vehicle's error path therefore depends on the seed and on the steps it is
+  active, never on which other vehicles exist, so a run without the ramp vehicle (the
+  undisturbed counterfactual) gives bit-identical trajectories to every vehicle the merge
+  does not touch. (The engine advances the errors on every step with at least one active
+  vehicle.)
 
 A vehicle's buffer column is filled with its release state, so before K steps of history
 exist the current values are used.
@@ -63,12 +70,16 @@ class Perception:
         self.v_hist[row] = v
 
     def advance_errors(self, ids: IntArray, rng: np.random.Generator) -> None:
-        """One OU step of both error processes for the active HDVs ``ids``."""
-        if not self.errors or ids.size == 0:
+        """One OU step of both error processes for the active HDVs ``ids``.
+
+        Innovations are drawn for all N vehicles (even when ``ids`` is empty) so the random
+        stream does not depend on which vehicles are active.
+        """
+        if not self.errors:
             return
-        xi = rng.standard_normal((2, ids.size))
-        self.w_gap[ids] = self._decay * self.w_gap[ids] + self._kick * xi[0]
-        self.w_ttc[ids] = self._decay * self.w_ttc[ids] + self._kick * xi[1]
+        xi = rng.standard_normal((2, self.is_hdv.size))
+        self.w_gap[ids] = self._decay * self.w_gap[ids] + self._kick * xi[0, ids]
+        self.w_ttc[ids] = self._decay * self.w_ttc[ids] + self._kick * xi[1, ids]
 
     def _delayed(self, hist: FloatArray, step: int, cols: IntArray, tau: float) -> FloatArray:
         lag = tau / self.dt

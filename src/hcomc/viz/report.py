@@ -132,10 +132,12 @@ def _claims_table(frame: pd.DataFrame) -> str:
     for rec in frame.to_dict("records"):
         k, n, share = int(rec["holds"]), int(rec["n"]), float(rec["share"])
         css = "holds" if math.isfinite(share) and share > 0.5 else "fails"
+        median, low, high = (float(rec[c]) for c in ("median_diff", "ci_low", "ci_high"))
+        effect = f"{median:.4g} [{low:.4g}, {high:.4g}]" if math.isfinite(median) else "—"
         rows.append(
             f'<tr class="{css}"><td>{_e(rec["claim"])}</td><td>{_e(rec["condition"])}</td>'
-            f'<td class="num">{k} of {n}</td><td>{_e(rec["ours_mean"])}</td>'
-            f"<td>{_e(rec['paper'])}</td></tr>"
+            f'<td class="num">{k} of {n}</td><td class="num">{_e(effect)}</td>'
+            f"<td>{_e(rec['ours'])}</td><td>{_e(rec['paper'])}</td></tr>"
         )
     majority = int(((frame["share"] > 0.5) & frame["share"].notna()).sum())
     return (
@@ -143,11 +145,11 @@ def _claims_table(frame: pd.DataFrame) -> str:
         '(<span class="legend-holds">green</span>: more than half of the seeds; '
         '<span class="legend-fails">red</span>: half or fewer).</p>\n'
         '<table id="claims">\n<caption>Comparative claims of the paper\'s Section IV, '
-        "evaluated per seed on paired runs (same condition and seed).</caption>\n"
+        "evaluated on paired runs (same seed): median paired difference A - B with its 95 % "
+        "bootstrap CI.</caption>\n"
         "<thead><tr><th>Claim</th><th>Condition</th><th>Holds (k of n seeds)</th>"
-        "<th>Ours (mean)</th><th>Paper</th></tr></thead>\n<tbody>\n"
-        + "\n".join(rows)
-        + "\n</tbody>\n</table>"
+        "<th>Median A - B [95 % CI]</th><th>Ours (mean A vs B)</th><th>Paper</th></tr>"
+        "</thead>\n<tbody>\n" + "\n".join(rows) + "\n</tbody>\n</table>"
     )
 
 

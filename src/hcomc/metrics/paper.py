@@ -1,0 +1,196 @@
+r"""The paper's merge metrics (Tables II-III): critical distance, average acceleration,
+stabilisation time and fuel.
+
+The paper names these metrics but does not define them precisely. Average acceleration and
+stabilisation time measure the **disturbance caused by the merge**: each key vehicle is
+compared with its own undisturbed counterpart, the same vehicle in the same run without the
+merge (the ``reference`` log, see :mod:`hcomc.metrics.window`). Without that comparison a
+vehicle that simply accelerates towards its desired speed would count as disturbed.
+
+**VR's counterpart.** VR does not exist in the undisturbed run. It enters these two metrics
+from its merge completion ``t_merge`` on (before that it drives on the ramp and acceleration
+lane, which is its own approach, not a disturbance of the traffic), and its undisturbed
+speed and acceleration are those of the undisturbed traffic of its current lane at its
+position: the linear interpolation, in x, between the reference run's vehicles of that lane
+around VR (the nearest one beyond the ends; see
+:func:`hcomc.metrics.speed_field.lane_profile_at`).
+
+A **deviation cell** (row, key vehicle) is *valid* if the row lies in the window, the vehicle
+is active in the factual run and its counterpart exists (another key vehicle: active in the
+reference in that row; VR: ``t >= t_merge`` and its logged lane is 1 or 2 with at least one
+reference vehicle in it). Its deviations are ``da = a - a_u`` [m/s²] and ``dv = v - v_u``
+[m/s].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hcomc._typing import FloatArray
+from hcomc.metrics.speed_field import lane_profile_at
+from hcomc.metrics.window import (
+    A_TOL,
+    EPS_T,
+    HOLD,
+    V_TOL,
+    MetricWindow,
+    check_reference,
+    key_pairs,
+    post_merge_rows,
+    times,
+    window_rows,
+)
+from hcomc.models.fuel import FUEL_DEFAULT, FuelParams, fuel_consumed
+from hcomc.sim.log import SimulationLog
+
+__all__ = [
+    "average_acceleration",
+    "critical_distance",
+    "deviations",
+    "fuel",
+    "stabilisation_time",
+]
+
+
+def critical_distance(log: SimulationLog, window: MetricWindow) -> float:
+    """Critical distance [m] (paper "Crit. Dist."; larger is better).
+
+    Definition: the minimum bumper gap ``x_l - L_l - x_f`` over all consecutive same-lane
+    pairs of present, active key vehicles (consecutive in x among key vehicles only, same
+    logged lane) and all logged rows with ``max(t_merge, t_start) <= t <= t_end``.
+
+    Returns
+    -------
+    float
+        Critical distance [m]; NaN if VR did not merge or no two key vehicles share a
+        lane in those rows.
+    """
+    if not window.merged:
+        return math.nan
+    gap, _, valid = key_pairs(log, window, post_merge_rows(log, window))
+    return float(gap[valid].min()) if valid.any() else math.nan
+
+
+def deviations(
+    log: SimulationLog, window: MetricWindow, reference: SimulationLog, rows: slice
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """``(da, dv, valid)`` of the present key vehicles over ``rows``, each shaped (R, K).
+
+    Columns follow ``window.key_vehicles``; see the module docstring for validity.
+    """
+    check_reference(log, reference)
+    keys = window.key_vehicles
+    a = log.a[rows][:, keys].astype(np.float64)
+    v = log.v[rows][:, keys].astype(np.float64)
+    a_u = reference.a[rows][:, keys].astype(np.float64)
+    v_u = reference.v[rows][:, keys].astype(np.float64)
+    valid = log.active[rows][:, keys] & reference.active[rows][:, keys]
+    vr = window.vr
+    if vr >= 0 and vr in keys:
+        col = int(np.searchsorted(keys, vr))
+        valid[:, col] = False
+        row_ids = np.arange(*rows.indices(log.n_steps))
+        t = times(log)[rows]
+        after = log.active[rows, vr] & (t >= window.t_merge - EPS_T)  # NaN t_merge: never
+        for k in np.flatnonzero(after):
+            lane = int(log.lane[row_ids[k], vr])
+            if lane not in (1, 2):
+                continue
+            x_vr = np.array([float(log.x[row_ids[k], vr])])
+            v_lane, a_lane = lane_profile_at(reference, int(row_ids[k]), lane, x_vr, clamp=True)
+            if np.isfinite(v_lane[0]):
+                v_u[k, col], a_u[k, col] = v_lane[0], a_lane[0]
+                valid[k, col] = True
+    with np.errstate(invalid="ignore"):
+        return a - a_u, v - v_u, valid & np.isfinite(a - a_u) & np.isfinite(v - v_u)
+
+
+def average_acceleration(
+    log: SimulationLog, window: MetricWindow, *, reference: SimulationLog | None = None
+) -> float:
+    """Average acceleration disturbance of the key vehicles [m/s²] (paper "Aver. Acc.").
+
+    Definition: the mean of ``abs(a - a_u)`` over all valid deviation cells of the window
+    rows ``[t_start, t_end]`` (pooled over vehicles and rows, every cell weighted equally).
+
+    Returns
+    -------
+    float
+        Mean ``abs(a - a_u)`` [m/s²]. 0 if the run has no ramp vehicle (empty group:
+        nothing merges, nothing is disturbed). NaN without a reference, or if no cell is
+        valid.
+    """
+    if not window.group:
+        return 0.0
+    if reference is None:
+        return math.nan
+    da, _, valid = deviations(log, window, reference, window_rows(log, window))
+    return float(np.abs(da[valid]).mean()) if valid.any() else math.nan
+
+
+def stabilisation_time(
+    log: SimulationLog,
+    window: MetricWindow,
+    *,
+    reference: SimulationLog | None = None,
+    a_tol: float = A_TOL,
+    v_tol: float = V_TOL,
+    hold: float = HOLD,
+) -> float:
+    """Time the key vehicles need to return to their undisturbed motion [s] (paper "Stab.
+    Time"; smaller is better).
+
+    Definition: a logged row is *settled* if every valid deviation cell in it has
+    ``abs(a - a_u) < a_tol`` (0.05 m/s²) and ``abs(v - v_u) < v_tol`` (0.5 m/s); rows without
+    a valid cell are settled. The result is ``t_s - t_merge`` for the earliest row time
+    ``t_s >= max(t_merge, t_start)`` such that every logged row with
+    ``t_s <= t <= t_s + hold`` (hold = 2 s) is settled and ``t_s + hold <= t_end``. Since
+    rows are discrete, a merge between rows adds up to one logging interval.
+
+    Returns
+    -------
+    float
+        Stabilisation time [s]. 0 if the run has no ramp vehicle (empty group). **Censored**:
+        if no hold interval fits before ``t_end``, ``t_end - t_merge`` (a lower bound). NaN
+        without a reference, if VR did not merge, or merged after the last logged row.
+    """
+    if not window.group:
+        return 0.0
+    if reference is None or not window.merged:
+        return math.nan
+    rows = post_merge_rows(log, window)
+    if rows.stop <= rows.start:
+        return math.nan
+    t = times(log)[rows]
+    da, dv, valid = deviations(log, window, reference, rows)
+    with np.errstate(invalid="ignore"):
+        ok_cell = (np.abs(da) < a_tol) & (np.abs(dv) < v_tol)
+    settled = np.all(~valid | ok_cell, axis=1)
+    # rows r .. end[r] - 1 cover [t_r, t_r + hold]; all settled <=> count == length.
+    end = np.searchsorted(t, t + hold + EPS_T, side="right")
+    csum = np.concatenate(([0], np.cumsum(settled, dtype=np.int64)))
+    start = np.arange(t.size)
+    fits = t + hold <= window.t_end + EPS_T
+    good = fits & settled & (csum[end] - csum[start] == end - start)
+    if good.any():
+        return float(t[int(np.argmax(good))] - window.t_merge)
+    return float(window.t_end - window.t_merge)
+
+
+def fuel(log: SimulationLog, window: MetricWindow, *, params: FuelParams = FUEL_DEFAULT) -> float:
+    """Total fuel consumption of all vehicles in the window [L] (paper "Fuel Cons.").
+
+    Definition: paper Eq. (16) via :func:`hcomc.models.fuel.fuel_consumed` over every
+    vehicle slot and the window rows, rectangle rule with the logging interval:
+    ``F = log.dt / 1000 * Σ_rows Σ_vehicles fdot(v, a)``; inactive cells count as 0.
+
+    Returns
+    -------
+    float
+        Fuel [L].
+    """
+    rows = window_rows(log, window)
+    per_vehicle = fuel_consumed(log.v[rows], log.a[rows], log.dt, params, axis=0)
+    return float(np.sum(per_vehicle))
