@@ -8,9 +8,9 @@ import pytest
 from hcomc.config import load_config
 from hcomc.models.idm import equilibrium_gap
 from hcomc.rng import make_rng
+from hcomc.road import Kind, Lane
 from hcomc.sim.demand import evenly_spread, generate_demand, lane_speed
 from hcomc.sim.engine import Simulation
-from hcomc.sim.road import Kind, Lane
 
 
 def _needed_spacing(config, v: float) -> float:

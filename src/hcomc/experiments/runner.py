@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from hcomc.config import ControlParams, load_config
-from hcomc.sim.log import SimulationLog
+from hcomc.config import load_config
+from hcomc.sim.log import EventKind, SimulationLog
 
 CONFIGURATIONS: dict[str, tuple[str, str]] = {
     "FIFO": ("fifo", "nsga2"),
@@ -58,10 +58,8 @@ configurations use the config's value."""
 
 
 def _replan_override(label: str) -> dict[str, float]:
-    """The replanning override of a configuration, if the config knows the key."""
-    if label in REPLAN_PERIOD and "replan_period" in ControlParams.model_fields:
-        return {"replan_period": REPLAN_PERIOD[label]}
-    return {}
+    """The replanning override of a configuration (none: the config's value)."""
+    return {"replan_period": REPLAN_PERIOD[label]} if label in REPLAN_PERIOD else {}
 
 
 @dataclass(frozen=True)
@@ -121,7 +119,7 @@ def undisturbed_log(spec: RunSpec) -> SimulationLog:
 
 
 def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
-    """Columns of VR's plans: the last plan's mode, sequence and fallback; the number of
+    """Columns of VR's plans: the last plan's mode, fallback and Eq. 19 branch; the number of
     replans (plans for VR minus one); the mean decision time."""
     plans = [p for p in sim.decisions if p.group.vr == vr]
     if not plans:
@@ -129,11 +127,24 @@ def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
     last = plans[-1]
     return {
         "mode": last.mode.name.lower(),
-        "sequence": last.sequence,
         "fallback": bool(last.fallback),
+        "eq19_branch": str(last.details.get("eq19_branch", "")),
         "replans": len(plans) - 1,
         "decision_ms": float(np.mean([p.decision_ms for p in plans])),
     }
+
+
+def realised_sequence(log: SimulationLog, vr: int, vmc: int) -> str:
+    """Where VR merged relative to the VMC identified at control-zone entry: "ahead" or
+    "behind" (its position at VR's merge completion), "" without a merge or a VMC."""
+    merges = log.events_of(EventKind.MERGE)
+    t = merges["t"][merges["vehicle"] == vr]
+    if vmc < 0 or t.size == 0:
+        return ""
+    row = int(np.argmin(np.abs(log.t - t[0])))
+    if not log.active[row, vmc]:
+        return ""
+    return "ahead" if log.x[row, vr] > log.x[row, vmc] else "behind"
 
 
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -154,6 +165,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
         "seed": spec.seed,
         "mode": "",
         "sequence": "",
+        "eq19_branch": "",
         "replans": 0,
         "fallback": False,
         "decision_ms": np.nan,
@@ -170,6 +182,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
             vmc_kind="" if group.vmc < 0 else "CAV" if kinds[group.vmc] else "HDV",
         )
         row.update(_plan_columns(sim, group.vr))
+        row["sequence"] = realised_sequence(log, group.vr, group.vmc)
     window = key_window(log)
     row["key_vehicles"] = " ".join(str(i) for i in window.key_vehicles.tolist())
     row.update(compute_metrics(log, window, reference=undisturbed_log(spec)))
