@@ -47,6 +47,7 @@ from hcomc.viz.common import (
     ROLE_COLORS,
     first_plan,
     key_group,
+    key_time,
     log_window,
     merge_time,
     new_figure,
@@ -475,18 +476,20 @@ def _draw_road(ax: Axes, road: RoadParams) -> None:
 
 
 def trajectories_figure(log: SimulationLog) -> Figure:
-    """Merge trajectories of the first plan's key vehicles.
+    """Merge trajectories of the first merge's key vehicles.
 
     Panels: (1) lateral position y [m] over x [m] of VR and VMC over the whole run, on the
     drawn road (lane lines at y = +-W/2; the quintic lane changes are visible), with the
-    control zone, the acceleration lane and the planned merge position marked; (2) speed
-    v(t) and (3) acceleration a(t) of the six key vehicles, with the planning time t0 and
-    VR's merge time marked.
+    control zone, the acceleration lane and, for a controlled run, the planned merge position
+    marked; (2) speed v(t) and (3) acceleration a(t) of the six key vehicles, with the
+    planning time t0 (or, without a merge controller, the time VR entered the control zone)
+    and VR's merge time marked.
 
     Parameters
     ----------
     log : SimulationLog
-        A finished run with at least one plan in ``log.meta["plans"]``.
+        A finished run whose first ramp vehicle reached the control zone (a plan in
+        ``log.meta["plans"]`` or key vehicles in ``log.meta["key_groups"]``).
 
     Returns
     -------
@@ -496,18 +499,21 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     Raises
     ------
     ValueError
-        If the run has no merge plan.
+        If no ramp vehicle reached the control zone (no key vehicles).
     """
     plan = first_plan(log)
-    if plan is None:
+    group = key_group(log)
+    if group.get("VR", -1) < 0:
         raise ValueError(
-            "trajectories_figure needs a run with a merge plan (log.meta['plans'] is empty)"
+            "the trajectories figure needs a run in which a ramp vehicle reached the control "
+            "zone (no merge plan and no key vehicles in this log); allowed: a merge scenario "
+            "run long enough for the ramp vehicle to arrive"
         )
     road = road_geometry(log)
-    group = key_group(log)
     times = _times(log)
     n = log.n_recorded
-    t0 = float(plan["t0"])
+    t0 = key_time(log)
+    t0_label = "planning $t_0$" if plan is not None else "VR enters control zone"
     t_merge, _ = _merge_of(log)
 
     fig = new_figure(9.5, 9.0)
@@ -537,13 +543,14 @@ def trajectories_figure(log: SimulationLog) -> Figure:
             for t, _, _, _ in _lane_events(log, kind, [i]):
                 k = _row_of(log, t)
                 ax_path.plot([log.x[k, i]], [log.y[k, i]], linestyle="none", zorder=4, **style)
-    ax_path.axvline(
-        float(plan["merge_x"]),
-        color=ROLE_COLORS["VR"],
-        linewidth=1.0,
-        linestyle=(0, (2, 2)),
-        label=f"planned merge x = {plan['merge_x']:.0f} m",
-    )
+    if plan is not None:
+        ax_path.axvline(
+            float(plan["merge_x"]),
+            color=ROLE_COLORS["VR"],
+            linewidth=1.0,
+            linestyle=(0, (2, 2)),
+            label=f"planned merge x = {plan['merge_x']:.0f} m",
+        )
     if math.isfinite(t_merge):
         vr = group["VR"]
         k = _row_of(log, t_merge)
@@ -594,7 +601,7 @@ def trajectories_figure(log: SimulationLog) -> Figure:
                 linewidth=0,
                 label="VR lane change",
             )
-        ax.axvline(t0, color="0.2", linewidth=1.0, linestyle=(0, (4, 2)), label="planning $t_0$")
+        ax.axvline(t0, color="0.2", linewidth=1.0, linestyle=(0, (4, 2)), label=t0_label)
         if math.isfinite(t_merge):
             ax.axvline(
                 t_merge,
@@ -614,8 +621,11 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     ax_v.tick_params(labelbottom=False)
     ax_v.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
     title = run_title(log)
-    mode = str(plan.get("mode", "none"))
-    coop = "no cooperation by VMC" if mode == "none" else f"{mode} cooperation"
+    if plan is None:
+        coop = "no merge controller (gap acceptance)"
+    else:
+        mode = str(plan.get("mode", "none"))
+        coop = "no cooperation by VMC" if mode == "none" else f"{mode} cooperation"
     fig.suptitle(
         f"Merge trajectories — {title} · {coop}" if title else f"Merge trajectories · {coop}"
     )

@@ -133,6 +133,11 @@ def load_reports(sources: Sequence[Source]) -> dict[str, dict[str, Any]]:
     reports: dict[str, dict[str, Any]] = {}
     for source in sources:
         path = Path(source)
+        if path.is_dir():
+            raise ValueError(
+                f"'{path}' is a directory, but a Pareto figure needs a plan report: the JSON "
+                "of 'hcomc plan CONFIG --json > plan.json', or a preset name to decide"
+            )
         if not path.is_file():
             raise ValueError(f"plan report '{path}' does not exist")
         try:
