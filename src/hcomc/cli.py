@@ -420,9 +420,11 @@ def _write_report(out_dir: Path, runs: Any) -> Path:
 
     seed = int(runs["seed"].min())
     figures = {
-        f"Fig. 2 — speed contour map of both lanes, Condition 2, seed {seed} (FIFO, Game, HCOMC)":
+        f"Speed contour maps of both lanes as in the paper's Fig. 2: Condition 2, seed {seed}, "
+        "FIFO, Game and HCOMC":
             figure_png(contour_figure(controller_logs("C2", seed=seed))),
-        "Paper metrics by condition and configuration (mean, 95 % CI over seeds)":
+        "The paper's metrics by condition and configuration (mean, 95 % CI over seeds; a "
+        "bar marked n=k rests on the k seeds that give a value)":
             figure_png(metrics_figure(runs)),
     }  # fmt: skip
     return write_report(out_dir, runs, figures=figures)

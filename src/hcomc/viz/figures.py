@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import textwrap
 import warnings
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -334,7 +335,9 @@ def timespace_figure(log: SimulationLog) -> Figure:
     """Time-space diagram x(t) of every vehicle, one panel per lane, coloured by speed.
 
     Panels (top to bottom, sharing t and x): lane 2, lane 1, ramp (with the acceleration
-    lane). A vehicle's line breaks where it is not in the panel's lane (a lane change
+    lane); a lane no vehicle used (the ramp and lane 2 of a platoon run) gets no panel, and
+    the control zone and acceleration lane are shaded only in merge scenarios. A vehicle's
+    line breaks where it is not in the panel's lane (a lane change
     switches lane at its lateral midpoint). The six key vehicles of the first plan are
     drawn thicker with a black outline and labelled with their role at the planning time;
     lane-change starts (open circles, in the origin lane), ends (filled circles, in the
@@ -348,7 +351,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        3 axes and a speed colour bar [m/s].
+        One axes per used lane and a speed colour bar [m/s].
     """
     road = road_geometry(log)
     times = _times(log)
@@ -358,12 +361,17 @@ def timespace_figure(log: SimulationLog) -> Figure:
     n = log.n_recorded
     vmin, vmax = _speed_limits([log.v[:n][log.active[:n]].astype(np.float64)])
     norm, cmap = Normalize(vmin, vmax), speed_cmap()
+    used = log.active[:n] & np.isin(log.lane[:n], _ALL_LANES)
+    lanes = [lane for lane in _ALL_LANES if (used & (log.lane[:n] == lane)).any()] or [1]
+    config = log.meta.get("config")
+    merge = not isinstance(config, Mapping) or config.get("scenario", "merge") == "merge"
 
-    fig = new_figure(9.0, 8.6)
-    axes = fig.subplots(3, 1, sharex=True, sharey=True)
+    fig = new_figure(9.0, 1.0 + 2.5 * len(lanes))
+    axes = list(fig.subplots(len(lanes), 1, sharex=True, sharey=True, squeeze=False)[:, 0])
     collection = None
-    for ax, lane in zip(axes, _ALL_LANES, strict=True):
-        shade_zones(ax, road, orientation="y", label=lane == 2)
+    for ax, lane in zip(axes, lanes, strict=True):
+        if merge:
+            shade_zones(ax, road, orientation="y", label=ax is axes[0])
         segs, speed = _lane_segments(log, lane)
         collection = LineCollection(
             segs,
@@ -401,9 +409,9 @@ def timespace_figure(log: SimulationLog) -> Figure:
             if i >= 0 and log.active[k0, i]:
                 per_lane.setdefault(int(log.lane[k0, i]), []).append((float(log.x[k0, i]), role))
         for lane, items in per_lane.items():
-            if lane not in _ALL_LANES:
+            if lane not in lanes:
                 continue
-            ax = axes[_ALL_LANES.index(lane)]
+            ax = axes[lanes.index(lane)]
             items.sort(reverse=True)
             for j, (x, role) in enumerate(items):
                 ax.annotate(
@@ -424,36 +432,46 @@ def timespace_figure(log: SimulationLog) -> Figure:
                     },
                     arrowprops={"arrowstyle": "-", "color": ROLE_COLORS[role], "lw": 0.9},
                 )
+    drawn: set[str] = set()
     for kind, style in (
         (EventKind.LANE_CHANGE_START, _LC_START),
         (EventKind.LANE_CHANGE_END, _LC_END),
     ):
         for t, x, _, lane in _lane_events(log, kind):
-            if lane in _ALL_LANES:
-                axes[_ALL_LANES.index(lane)].plot([t], [x], linestyle="none", zorder=5, **style)
+            if lane in lanes:
+                axes[lanes.index(lane)].plot([t], [x], linestyle="none", zorder=5, **style)
+                drawn.add(kind.name)
     t_merge, x_merge = _merge_of(log)
-    if math.isfinite(t_merge):
-        axes[1].plot([t_merge], [x_merge], linestyle="none", zorder=7, **_MERGE)
+    if math.isfinite(t_merge) and 1 in lanes:
+        axes[lanes.index(1)].plot([t_merge], [x_merge], linestyle="none", zorder=7, **_MERGE)
+        drawn.add("merge")
     if plan is not None:
         for ax in axes:
             ax.axvline(float(plan["t0"]), color="0.3", linewidth=0.8, linestyle=(0, (1, 2)))
     axes[-1].set_xlabel("time t [s]")
     axes[-1].set_xlim(times[0], times[-1])
-    axes[-1].set_ylim(0.0, road.length)
+    x_seen = log.x[:n][used]
+    x_lo = 0.0 if merge or not x_seen.size else max(0.0, float(x_seen.min()) - 50.0)
+    axes[-1].set_ylim(x_lo, road.length)
     assert collection is not None
     fig.colorbar(collection, ax=axes, label="speed v [m/s]", shrink=0.85, pad=0.02)
     handles, _ = axes[0].get_legend_handles_labels()
     handles = [h for h in handles if not isinstance(h, LineCollection)]
-    handles += [
-        Line2D([], [], color="0.3", linewidth=2.4, path_effects=_OUTLINE, label="key vehicle"),
-        Line2D([], [], linestyle="none", label="lane change start", **_LC_START),
-        Line2D([], [], linestyle="none", label="lane change end", **_LC_END),
-        Line2D([], [], linestyle="none", label="VR merge", **_MERGE),
-        Line2D(
-            [], [], color="0.3", linewidth=0.8, linestyle=(0, (1, 2)), label="planning time $t_0$"
-        ),
-    ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
+    # only what the figure shows: a platoon run has no key vehicles, merges or plans
+    candidates = [
+        (keys.size > 0, Line2D([], [], color="0.3", linewidth=2.4, path_effects=_OUTLINE,
+                               label="key vehicle")),
+        ("LANE_CHANGE_START" in drawn,
+         Line2D([], [], linestyle="none", label="lane change start", **_LC_START)),
+        ("LANE_CHANGE_END" in drawn,
+         Line2D([], [], linestyle="none", label="lane change end", **_LC_END)),
+        ("merge" in drawn, Line2D([], [], linestyle="none", label="VR merge", **_MERGE)),
+        (plan is not None, Line2D([], [], color="0.3", linewidth=0.8, linestyle=(0, (1, 2)),
+                                  label="planning time $t_0$")),
+    ]  # fmt: skip
+    handles += [handle for shown, handle in candidates if shown]
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
     title = run_title(log)
     plan_note = f" · plan: {plan['mode']}" if plan is not None else ""
     fig.suptitle(f"Time-space diagram — {title}{plan_note}" if title else "Time-space diagram")
@@ -837,6 +855,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
     centres = np.arange(len(conditions), dtype=np.float64)
     grouped = runs.groupby(["condition", "configuration"], sort=False)
     axes = []
+    short: dict[str, int] = {}  # metric -> runs without a value
     for m_index, metric in enumerate(metrics):
         ax = fig.add_subplot(grid[m_index // n_cols, m_index % n_cols])
         axes.append(ax)
@@ -848,7 +867,8 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
                     if (cond, conf) in grouped.groups
                     else pd.Series(dtype=float)
                 )
-                stats.append(mean_ci(part)[:2])
+                mean_c, half_c, n_c = mean_ci(part)
+                stats.append((mean_c, half_c, n_c, len(part)))
             mean = np.array([s[0] for s in stats])
             half = np.array([s[1] for s in stats])
             x = centres + (j - (len(configs) - 1) / 2) * width
@@ -874,6 +894,12 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
                     capsize=2.0,
                     zorder=3,
                 )
+            for xi, (m_c, h_c, n_c, rows) in zip(x, stats, strict=True):
+                if rows > 0 and n_c < rows:  # a mean over fewer seeds than were run
+                    short[metric] = short.get(metric, 0) + rows - n_c
+                    top = np.nan_to_num(m_c) + (h_c if np.isfinite(h_c) else 0.0)
+                    ax.annotate(f"n={n_c}", (xi, top), xytext=(0, 2), textcoords="offset points",
+                                ha="center", va="bottom", fontsize=7)  # fmt: skip
         ax.set_xticks(centres, [str(c) for c in conditions])
         ax.set_ylabel(LABELS.get(metric, metric))
         better = BETTER.get(metric)
@@ -888,6 +914,14 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
     seeds = (
         f"{n_seeds.min()}" if n_seeds.min() == n_seeds.max() else f"{n_seeds.min()}–{n_seeds.max()}"
     )
+    note = f"bars: mean over {seeds} seeds; whiskers: 95 % CI"
+    if short:
+        note += "; 'n=k': only k seeds give a value"
+    if "critical_distance" in short:
+        note += (
+            "; Crit. Dist. has no value in a run where VR did not merge or no two key "
+            "vehicles share a lane after the merge"
+        )
     free = len(metrics) % n_cols
     if n_rows > 1 and free:
         slot = fig.add_subplot(grid[n_rows - 1, free:])
@@ -903,7 +937,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
         slot.text(
             0.5,
             0.02,
-            f"bars: mean over {seeds} seeds; whiskers: 95 % CI",
+            textwrap.fill(note, 70),
             transform=slot.transAxes,
             ha="center",
             va="bottom",
@@ -916,7 +950,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
             loc="outside lower center",
             ncols=len(labels),
             frameon=False,
-            title=f"mean over {seeds} seeds, 95 % CI",
+            title=textwrap.fill(note, 110),
         )
     fig.suptitle("Merge metrics by condition and configuration")
     return fig
