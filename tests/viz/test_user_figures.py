@@ -122,3 +122,13 @@ def test_report_captions_are_numbered_once(tmp_path):
     assert "Figure 1. Fig." not in html
     assert "<figcaption>Fig. 2 — contour</figcaption>" in html
     assert "<figcaption>Figure 2. Plain</figcaption>" in html
+
+
+def test_platoon_contour_is_one_uncontrolled_lane_without_merge_zones():
+    from hcomc.viz.inputs import make_figure
+
+    fig = make_figure("contour", ["platoon"], seed=0)
+    panels = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title() for ax in panels] == ["no controller · lane 1"]
+    assert not panels[0].patches  # no control-zone / acceleration-lane band
+    assert "of lane 1" in fig._suptitle.get_text()

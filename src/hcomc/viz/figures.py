@@ -161,6 +161,12 @@ def _merge_of(log: SimulationLog) -> tuple[float, float]:
     return merge_time(log, vr) if vr >= 0 else (math.nan, math.nan)
 
 
+def _is_merge(log: SimulationLog) -> bool:
+    """Whether the run is a merge scenario (road zones mean something); True if unknown."""
+    config = log.meta.get("config")
+    return not isinstance(config, Mapping) or config.get("scenario", "merge") == "merge"
+
+
 # --------------------------------------------------------------------------- contour (Fig. 2)
 def contour_figure(
     logs: Mapping[str, SimulationLog],
@@ -225,16 +231,22 @@ def contour_figure(
     vmin, vmax = _speed_limits([f[2] for f in fields.values()])
     norm = Normalize(vmin, vmax)
     cmap = speed_cmap()
+    # a lane nobody drove on (lane 2 of a platoon run) gets no row of empty panels
+    lanes = [
+        lane for lane in _MAIN_LANES
+        if any(np.isfinite(fields[label, lane][2]).any() for label in labels)
+    ] or list(_MAIN_LANES)  # fmt: skip
+    merge = all(_is_merge(log) for log in logs.values())
 
-    fig = new_figure(max(3.3 * n + 1.2, 7.5), 6.4)
-    axes = fig.subplots(2, n, sharex=True, sharey=True, squeeze=False)
+    fig = new_figure(max(3.3 * n + 1.2, 7.5), 1.4 + 2.5 * len(lanes))
+    axes = fig.subplots(len(lanes), n, sharex=True, sharey=True, squeeze=False)
     mesh = None
     for col, label in enumerate(labels):
         log = logs[label]
         road = road_geometry(log)
         level = v_refs[label] - LOW_SPEED_MARGIN
         t_merge, x_merge = _merge_of(log)
-        for row, lane in enumerate(_MAIN_LANES):
+        for row, lane in enumerate(lanes):
             ax: Axes = axes[row, col]
             x_edges, t_edges, V = fields[label, lane]
             mesh = ax.pcolormesh(
@@ -259,7 +271,8 @@ def contour_figure(
                         colors="black",
                         linewidths=0.9,
                     )
-            shade_zones(ax, road, orientation="x", band=0.035, label=(row == 0 and col == 0))
+            if merge:
+                shade_zones(ax, road, orientation="x", band=0.035, label=row == col == 0)
             if lane == 1 and math.isfinite(t_merge):
                 ax.plot([x_merge], [t_merge], linestyle="none", zorder=5, **_MERGE)
             ax.set_title(f"{label} · {LANE_NAMES[lane]}")
@@ -280,14 +293,14 @@ def contour_figure(
             )
             ax.set_xlim(0.0, road.length)
             ax.set_ylim(t_edges[0], t_edges[-1])
-            if row == 1:
+            if row == len(lanes) - 1:
                 ax.set_xlabel("position x [m]")
             if col == 0:
                 ax.set_ylabel("time t [s]")
     assert mesh is not None
     what = "adaptive smoothing of" if smooth else "mean of"
     bins = f"{what} {dx:g} m × {dt_bin:g} s bins"
-    fig.colorbar(mesh, ax=axes, label=f"speed v [m/s] ({bins})", shrink=0.9, pad=0.02)
+    fig.colorbar(mesh, ax=axes, label=f"speed v [m/s]\n({bins})", shrink=0.9, pad=0.02)
     handles, _ = axes[0, 0].get_legend_handles_labels()
     handles += [
         Line2D([], [], color="black", linewidth=0.9, label=r"$v = v_{ref} - 1$ m/s"),
@@ -304,7 +317,8 @@ def contour_figure(
     )
     titles = sorted({run_title(log) for log in logs.values()} - {""})
     suffix = f" — {'; '.join(titles)}" if titles else ""
-    fig.suptitle(f"Speed contour maps v(x, t) of both main lanes{suffix}")
+    where = "both main lanes" if len(lanes) == 2 else LANE_NAMES[lanes[0]]
+    fig.suptitle(f"Speed contour maps v(x, t) of {where}{suffix}")
     return fig
 
 
@@ -363,8 +377,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
     norm, cmap = Normalize(vmin, vmax), speed_cmap()
     used = log.active[:n] & np.isin(log.lane[:n], _ALL_LANES)
     lanes = [lane for lane in _ALL_LANES if (used & (log.lane[:n] == lane)).any()] or [1]
-    config = log.meta.get("config")
-    merge = not isinstance(config, Mapping) or config.get("scenario", "merge") == "merge"
+    merge = _is_merge(log)
 
     fig = new_figure(9.0, 1.0 + 2.5 * len(lanes))
     axes = list(fig.subplots(len(lanes), 1, sharex=True, sharey=True, squeeze=False)[:, 0])

@@ -6,7 +6,8 @@ kind            inputs (``sources``)
 ==============  ===============================================================================
 contour         simulation logs (``log.npz`` / ``.parquet`` or the ``--out`` directory of
                 ``hcomc simulate``), one column each; or one scenario (preset name or TOML
-                file), simulated with FIFO, Game and HCOMC
+                file), simulated with FIFO, Game and HCOMC (without a controller when the
+                scenario has no merge, e.g. ``platoon``)
 timespace       one simulation log, or one scenario (simulated with HCOMC)
 trajectories    one simulation log, or one scenario (simulated with HCOMC)
 pareto          plan reports (JSON of ``hcomc plan --json``; a file may also hold a mapping
@@ -264,6 +265,14 @@ def _is_scenario(source: Source) -> bool:
     return str(source) in preset_names()
 
 
+def _has_merge(scenario: Source) -> bool:
+    """Whether a scenario has ramp vehicles that merge (so controllers can be compared)."""
+    from hcomc.config import load_config
+
+    config = load_config(scenario)
+    return config.scenario == "merge" and config.demand.ramp != "none"
+
+
 def _labelled(logs: Sequence[SimulationLog]) -> dict[str, SimulationLog]:
     from hcomc.viz.common import configuration_label
 
@@ -323,11 +332,15 @@ def make_figure(
         raise ValueError(f"figure kind '{kind}' takes exactly one input, got {len(sources)}")
 
     if kind == "contour":
-        logs = (
-            controller_logs(sources[0], seed=seed)
-            if scenario
-            else _labelled([load_log(s) for s in sources])
-        )
+        if scenario and not _has_merge(sources[0]):  # no merge: nothing for controllers to do
+            from hcomc.config import load_config
+            from hcomc.sim.engine import simulate
+
+            logs = {"no controller": simulate(load_config(sources[0]), seed)}
+        elif scenario:
+            logs = controller_logs(sources[0], seed=seed)
+        else:
+            logs = _labelled([load_log(s) for s in sources])
         return figures.contour_figure(logs, **options)
     if kind in ("timespace", "trajectories"):
         if scenario:
