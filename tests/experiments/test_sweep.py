@@ -1,4 +1,4 @@
-"""Sweeps: identical tables on any backend, resumable after a kill, clear errors (issue 6)."""
+"""Sweeps: the same table on any backend, resumable, values from base, clear errors."""
 
 from __future__ import annotations
 
@@ -165,14 +165,15 @@ def _spec(tmp_path: Path, text: str) -> Path:
     ],
 )
 def test_keys_left_out_of_the_grid_come_from_base(tmp_path, base, expected):
-    spec = load_sweep(_spec(tmp_path, f"""
+    text = f"""
 base = "{base}"
 configurations = ["FIFO"]
 seeds = 1
 duration = 15.0
 [grid]
 mean_headway_main_1 = [4.0]
-"""))
+"""
+    spec = load_sweep(_spec(tmp_path, text))
     table = run_sweep(spec, tmp_path / "o", workers=1)
     row = table.iloc[0]
     assert row["base"] == base
@@ -192,13 +193,14 @@ def test_ramp_and_duration_come_from_a_base_file(tmp_path):
     base = tmp_path / "flowbase.toml"
     base.write_text('base = "C1"\nduration = 25.0\n[demand]\nramp = "flow"\n'
                     "ramp_mean_headway = 9.0\ncav_penetration = 0.6\n")  # fmt: skip
-    spec = load_sweep(_spec(tmp_path, """
+    text = """
 base = "flowbase.toml"
 configurations = ["FIFO"]
 seeds = 1
 [grid]
 mean_headway_main_2 = [6.0]
-"""))
+"""
+    spec = load_sweep(_spec(tmp_path, text))
     runs = expand(spec)
     assert len(runs) == 1
     config = sweep_mod.resolved_config(runs[0])
@@ -214,14 +216,15 @@ mean_headway_main_2 = [6.0]
 def test_resumed_sweep_recomputes_runs_whose_config_or_version_changed(tmp_path, monkeypatch):
     base = tmp_path / "mybase.toml"
     base.write_text('base = "C1"\n')
-    spec_path = _spec(tmp_path, """
+    text = """
 base = "mybase.toml"
 configurations = ["FIFO"]
 seeds = 2
 duration = 15.0
 [grid]
 cav_penetration = [0.5]
-""")
+"""
+    spec_path = _spec(tmp_path, text)
     out = tmp_path / "store"
     args = ["sweep", str(spec_path), "--out", str(out), "--workers", "1"]
     first = CliRunner().invoke(app, args)

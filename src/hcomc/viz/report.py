@@ -1,4 +1,4 @@
-"""Self-contained HTML report of a reproduction run (DESIGN.md §1 item 6).
+"""Self-contained HTML report of a reproduction run.
 
 :func:`write_report` writes one HTML page holding everything: the paper's Tables II and III
 side by side with ours, the per-seed claims table, and the figures as base64 ``data:`` URIs.
