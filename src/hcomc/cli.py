@@ -384,7 +384,9 @@ def run(
     from hcomc.experiments.runner import CONFIGURATIONS, grid
     from hcomc.experiments.tables import LABELS, mean_ci
 
-    controller = _choice("--controller", controller, CONTROLLERS[1:])
+    chosen = _choice("--controller", controller, CONTROLLERS[1:])
+    assert chosen is not None  # a required option
+    controller = chosen
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     overrides = _settings(settings)

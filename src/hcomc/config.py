@@ -11,6 +11,7 @@ platoon), see :func:`load_config`.
 
 from __future__ import annotations
 
+import os
 import tomllib
 from difflib import get_close_matches
 from importlib.resources import files
@@ -349,7 +350,7 @@ def suggest(key: str, model: type[BaseModel] | None = None) -> str:
 
 
 # --------------------------------------------------------------------------- reading
-def _read_toml(source: str | Path) -> tuple[dict[str, Any], str]:
+def _read_toml(source: str | os.PathLike[str]) -> tuple[dict[str, Any], str]:
     """Return the raw TOML mapping of a preset name or file path, and its origin."""
     path = Path(source)
     if path.suffix == ".toml" or path.exists():
@@ -372,7 +373,7 @@ def _read_toml(source: str | Path) -> tuple[dict[str, Any], str]:
 
 
 def _resolve_base(
-    source: str | Path, seen: tuple[str, ...] = ()
+    source: str | os.PathLike[str], seen: tuple[str, ...] = ()
 ) -> tuple[dict[str, Any], dict[str, Any] | None, str]:
     """``(data, base data or None, origin)`` of a config, with its ``base = ...`` applied.
 
@@ -490,7 +491,7 @@ def _note_changes(config: ScenarioConfig, reference: ScenarioConfig) -> Scenario
     return config.model_copy(update={"description": text})
 
 
-def load_config(source: str | Path, **overrides: Any) -> ScenarioConfig:
+def load_config(source: str | os.PathLike[str], **overrides: Any) -> ScenarioConfig:
     """Load a preset name (``C1``, ``platoon`` …) or a TOML file into a validated config.
 
     A file may start from another config with ``base = "C2"`` (or a path); it then sets only

@@ -113,7 +113,7 @@ def expand(spec: SweepSpec) -> list[RunSpec]:
         k: v for k, v in (("ramp", spec.ramp), ("ramp_mean_headway", spec.ramp_mean_headway))
         if v is not None
     }  # fmt: skip
-    runs = []
+    runs: list[RunSpec] = []
     for cell in spec.grid.cells():
         overrides: dict[str, Any] = {"demand": {**cell, **demand_extra}}
         if spec.duration is not None:
