@@ -332,21 +332,42 @@ def leaf_paths(model: type[BaseModel] | None = None) -> dict[str, FieldInfo]:
 def suggest(key: str, model: type[BaseModel] | None = None) -> str:
     """``"; did you mean 'x.y'?"`` for an unknown dotted ``key``, or ``""`` if nothing is close.
 
-    A key in the wrong table (``demand.time_headway``) is pointed to its homes; otherwise the
-    closest spelling in the same table, then anywhere, is offered.
+    A key in the wrong table (``demand.time_headway``) is pointed to its homes; a misspelt
+    table or key to the closest spelling (``demnd`` -> ``demand``, ``cav.coolnes`` ->
+    ``cav.coolness``, ``controler`` -> ``control.controller``).
     """
+    model = model or ScenarioConfig
     paths = list(leaf_paths(model))
     *table, leaf = key.split(".")
     prefix = ".".join(table)
-    homes = [p for p in paths if p.rsplit(".", 1)[-1] == leaf]
+    homes = [p for p in paths if p.rsplit(".", 1)[-1] == leaf and p != key]
     if not homes:
-        siblings = [p for p in paths if p.rsplit(".", 1)[0] == prefix] if prefix else paths
-        homes = get_close_matches(key, siblings, n=1, cutoff=0.6) or get_close_matches(
-            key, paths, n=1, cutoff=0.6
-        )
+        homes = _closest(prefix, leaf, model, paths)
     if not homes:
         return ""
     return "; did you mean " + " or ".join(f"'{h}'" for h in homes) + "?"
+
+
+def _closest(prefix: str, leaf: str, model: type[BaseModel], paths: list[str]) -> list[str]:
+    """The closest spelling of ``prefix.leaf`` among tables and keys (at most one)."""
+    tables = {p.rsplit(".", 1)[0] for p in paths if "." in p}
+    if not prefix:  # a top-level key, a table name, or a flat key with one home
+        leaves: dict[str, list[str]] = {}
+        for p in paths:
+            leaves.setdefault(p.rsplit(".", 1)[-1], []).append(p)
+        names = {n: n for n in model.model_fields}
+        names.update({n: ps[0] for n, ps in leaves.items() if len(ps) == 1 and n not in names})
+        match = get_close_matches(leaf, list(names), n=1, cutoff=0.6)
+        return [names[match[0]]] if match else []
+    if prefix not in tables:  # a misspelt table: fix it, keep the key if it lives there
+        match = get_close_matches(prefix, sorted(tables), n=1, cutoff=0.6)
+        if not match:
+            return []
+        fixed = f"{match[0]}.{leaf}"
+        return [fixed] if fixed in paths else [match[0]]
+    siblings = {p.rsplit(".", 1)[-1]: p for p in paths if p.rsplit(".", 1)[0] == prefix}
+    match = get_close_matches(leaf, list(siblings), n=1, cutoff=0.6)
+    return [siblings[match[0]]] if match else []
 
 
 # --------------------------------------------------------------------------- reading

@@ -114,6 +114,9 @@ def test_ambiguous_flat_override_names_its_homes():
         ({"demand.cav_penetraton": 0.5}, "'demand.cav_penetration'"),
         ({"demand.politeness": 0.3}, "'lane_change.politeness'"),
         ({"durration": 60.0}, "'duration'"),
+        ({"demnd.cav_penetration": 0.5}, "'demand.cav_penetration'"),
+        ({"controler": "fifo"}, "'control.controller'"),
+        ({"cav.coolnes": 0.5}, "'cav.coolness'"),
     ],
 )
 def test_unknown_key_suggests_the_closest_valid_one(overrides, suggestion):
@@ -128,6 +131,15 @@ def test_unknown_key_in_a_file_suggests_too(tmp_path):
     path.write_text("[lane_change]\npolitenes = 0.3\n")
     with pytest.raises(ConfigError, match=r"did you mean 'lane_change.politeness'\?"):
         load_config(path)
+    path.write_text("[demnd]\nramp = 'flow'\n")
+    with pytest.raises(ConfigError, match=r"unknown key 'demnd'.*did you mean 'demand'\?"):
+        load_config(path)
+
+
+def test_nothing_close_means_no_suggestion():
+    with pytest.raises(ConfigError, match="not a config key") as info:
+        load_config("C1", zzz=1)
+    assert "did you mean" not in str(info.value)
 
 
 def test_partial_file_inherits_the_preset_defaults(tmp_path):
