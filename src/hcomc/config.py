@@ -465,6 +465,10 @@ def nest_overrides(overrides: dict[str, Any]) -> dict[str, Any]:
     for key, value in overrides.items():
         if value is None:
             continue
+        if "." in key and key not in paths:
+            raise ConfigError(
+                f"unknown override '{key}' = {value!r}{suggest(key) or '; not a config key'}"
+            )
         if "." in key or key in top:
             path = key.split(".")
         else:
