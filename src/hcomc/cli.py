@@ -133,7 +133,8 @@ def _choice(option: str, value: str | None, allowed: tuple[str, ...]) -> str | N
     """``value`` lower-cased if it is one of ``allowed`` (names are case-insensitive)."""
     if value is None or value.lower() in allowed:
         return None if value is None else value.lower()
-    raise _fail(f"option '{option}' = '{value}': allowed: {', '.join(allowed)}")
+    key = f"control.{option.removeprefix('--')}"  # the config key the option sets
+    raise _fail(f"option '{option}' = '{value}' ({key}): allowed: {', '.join(allowed)}")
 
 
 def _check_seed(seed: int | None) -> None:
@@ -244,9 +245,10 @@ def _require_merge(cfg: ScenarioConfig, source: str, command: str) -> None:
     if cfg.scenario != "merge" or cfg.demand.ramp == "none":
         what = f"scenario = '{cfg.scenario}'" if cfg.scenario != "merge" else "demand.ramp = 'none'"
         raise _fail(
-            f"'{source}' has {what}, so no ramp vehicle merges and '{command}' has nothing to "
-            "control; allowed: a merge scenario with ramp demand (C1..C5, or scenario = "
-            "'merge' with demand.ramp = 'single' or 'flow'); use 'hcomc simulate' otherwise"
+            f"no ramp vehicle entered the control zone: '{source}' has {what}, so '{command}' "
+            "has no merge to control; allowed: a merge scenario with ramp demand (C1..C5, or "
+            "scenario = 'merge' with demand.ramp = 'single' or 'flow'); use 'hcomc simulate' "
+            "otherwise"
         )
 
 
