@@ -547,15 +547,28 @@ def plot(
         Path | None, typer.Option("--out", help="Output file: .png, .svg or .pdf.")
     ] = None,
     seed: Annotated[int | None, typer.Option(help="Seed when simulating a preset.")] = None,
-    metric: Annotated[str, typer.Option(help="Metric of a sweep heatmap.")] = "lsrv",
+    metric: Annotated[
+        str | None, typer.Option(help="Metric of a sweep heatmap (default: lsrv).")
+    ] = None,
     raw: Annotated[bool, typer.Option(help="contour: raw bins instead of smoothing.")] = False,
 ) -> None:
     """Draw a figure of a run, a decision, a results table or a sweep."""
     from hcomc.viz.common import save_figure
-    from hcomc.viz.inputs import FIGURE_KINDS, make_figure
+    from hcomc.viz.inputs import FIGURE_KINDS, is_scenario, make_figure
 
     kind = kind.lower()
     target = out_file or Path(f"{kind}.png")
+    _check_seed(seed)
+    # an option that does not apply to this figure is an error, not silently ignored
+    if metric is not None and kind != "heatmap":
+        raise _fail(f"option '--metric' = '{metric}' applies to --kind heatmap only")
+    if raw and kind != "contour":
+        raise _fail(f"option '--raw' applies to --kind contour only, not '{kind}'")
+    if seed is not None and not (len(sources) == 1 and is_scenario(sources[0])):
+        raise _fail(
+            f"option '--seed' = {seed} applies only when a preset or TOML scenario is "
+            "simulated; saved logs and tables already have their seed"
+        )
     try:
         if kind == "heatmap":
             import pandas as pd
@@ -568,7 +581,7 @@ def plot(
             table_path = path / "sweep.parquet" if path.is_dir() else path
             if not table_path.is_file():
                 raise ValueError(f"'{sources[0]}' is not a sweep directory or sweep.parquet")
-            fig = heatmap_figure(pd.read_parquet(table_path), metric)
+            fig = heatmap_figure(pd.read_parquet(table_path), metric or "lsrv")
         elif kind in FIGURE_KINDS:
             options = {"smooth": False} if raw and kind == "contour" else {}
             fig = make_figure(kind, sources, seed=seed, **options)

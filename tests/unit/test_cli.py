@@ -251,3 +251,19 @@ def test_config_show_applies_settings_and_documents_keys(tmp_path):
     path.write_text(result.stdout)
     loaded = load_config(path)
     assert (loaded.demand.cav_penetration, loaded.demand.mean_headway_main_1) == (0.5, 4.0)
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["plot", "C2", "--kind", "timespace", "--metric", "fuel"], "'--metric' = 'fuel' applies"),
+        (["plot", "C2", "--kind", "timespace", "--raw"], "'--raw' applies to --kind contour"),
+        (["plot", "results/runs.parquet", "--kind", "metrics", "--seed", "3"],
+         "'--seed' = 3 applies only when"),
+    ],
+)  # fmt: skip
+def test_plot_options_that_do_not_apply_are_errors(args, fragment, tmp_path):
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "f.png")])
+    assert result.exit_code == 2
+    assert fragment in result.stderr
+    assert not (tmp_path / "f.png").exists()

@@ -40,6 +40,7 @@ __all__ = [
     "PARETO_OPTIMIZERS",
     "controller_logs",
     "decision_reports",
+    "is_scenario",
     "load_log",
     "load_reports",
     "load_runs",
@@ -253,7 +254,7 @@ def decision_reports(
     return reports
 
 
-def _is_scenario(source: Source) -> bool:
+def is_scenario(source: Source) -> bool:
     """A preset name or a TOML file (as opposed to a data file or directory)."""
     path = Path(source)
     if path.suffix.lower() == ".toml":
@@ -262,7 +263,7 @@ def _is_scenario(source: Source) -> bool:
         return False
     from hcomc.config import preset_names
 
-    return str(source) in preset_names()
+    return str(source).lower() in {name.lower() for name in preset_names()}
 
 
 def _has_merge(scenario: Source) -> bool:
@@ -327,7 +328,7 @@ def make_figure(
     sources = list(sources)
     if not sources:
         raise ValueError(f"figure kind '{kind}' needs at least one input")
-    scenario = len(sources) == 1 and _is_scenario(sources[0])
+    scenario = len(sources) == 1 and is_scenario(sources[0])
     if kind != "contour" and kind != "pareto" and len(sources) != 1:
         raise ValueError(f"figure kind '{kind}' takes exactly one input, got {len(sources)}")
 
