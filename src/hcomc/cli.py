@@ -502,6 +502,11 @@ def sweep(
     """Run a density x penetration x configuration x seed grid; rerun to resume."""
     from hcomc.experiments.sweep import connect, load_sweep, run_sweep, sweep_status
 
+    if scheduler is not None and workers is not None:
+        raise _fail(
+            f"option '--workers' = {workers} does not apply with '--scheduler': the Dask "
+            "cluster's workers run the sweep"
+        )
     try:
         plan = load_sweep(spec)
         if scheduler is not None:

@@ -248,3 +248,11 @@ cav_penetration = [0.5]
     monkeypatch.setattr(sweep_mod.hcomc, "__version__", "99.0")  # the code changes
     status = sweep_mod.sweep_status(load_sweep(spec_path), out)
     assert (status.done, status.new, status.changed) == (0, 0, 2)
+
+
+def test_workers_with_a_scheduler_is_an_error(spec_file, tmp_path):
+    args = ["sweep", str(spec_file), "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert "'--workers' = 2 does not apply with '--scheduler'" in result.stderr
+    assert not (tmp_path / "o").exists()
