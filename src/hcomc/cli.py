@@ -129,6 +129,18 @@ def _settings(pairs: list[str] | None) -> dict[str, Any]:
     return settings
 
 
+def _with(overrides: dict[str, Any], **options: Any) -> dict[str, Any]:
+    """``--set`` overrides plus the command's own options (None = not given)."""
+    given = {k: v for k, v in options.items() if v is not None}
+    for key, value in given.items():
+        if key in overrides and key != "control" and overrides[key] != value:
+            raise _fail(
+                f"option '--{key}' = {value} conflicts with '--set {key}={overrides[key]}'; "
+                "allowed: one of them"
+            )
+    return {**overrides, **given}
+
+
 def _choice(option: str, value: str | None, allowed: tuple[str, ...]) -> str | None:
     """``value`` lower-cased if it is one of ``allowed`` (names are case-insensitive)."""
     if value is None or value.lower() in allowed:
@@ -212,7 +224,7 @@ def simulate(
     _check_seed(seed)
     overrides = _settings(settings)
     control = _control(_load(config, **overrides), controller, optimizer)
-    cfg = _load(config, **overrides, duration=duration, seed=seed, control=control)
+    cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
     sim = Simulation(cfg)
     start = time.perf_counter()
@@ -269,7 +281,7 @@ def plan(
     base = _load(config, **overrides)
     _require_merge(base, config, "plan")
     control = _control(base, "hcomc", optimizer)
-    cfg = _load(config, **overrides, seed=seed, control=control)
+    cfg = _load(config, **_with(overrides, seed=seed, control=control))
     sim = Simulation(cfg)
     decision = sim.run_until_plan()
     if decision is None:

@@ -267,3 +267,14 @@ def test_plot_options_that_do_not_apply_are_errors(args, fragment, tmp_path):
     assert result.exit_code == 2
     assert fragment in result.stderr
     assert not (tmp_path / "f.png").exists()
+
+
+def test_set_values_reach_the_run_and_conflicts_with_options_are_errors():
+    result = runner.invoke(app, ["simulate", "C1", "--set", "duration=5", "--set",
+                                 "seed=2", "--json"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert (summary["seed"], summary["duration_s"]) == (2, 5.0)
+    clash = runner.invoke(app, ["simulate", "C1", "--set", "duration=5", "--duration", "6"])
+    assert clash.exit_code == 2
+    assert "conflicts with '--set duration=5'" in clash.stderr
