@@ -410,12 +410,13 @@ def _resolve_base(
             f"{origin}: key 'base' = {base!r}: must be a preset name "
             f"({', '.join(preset_names())}) or a path to a .toml file"
         )
-    if origin in seen:
+    identity = str(Path(source).resolve())  # one spelling per file, so cycles are seen
+    if identity in seen:
         raise ConfigError(f"{origin}: key 'base' = '{base}': circular ({' -> '.join(seen)})")
     nearby = Path(source).parent / base
     target = nearby if Path(origin).is_file() and nearby.is_file() else base
     try:
-        base_data, _, _ = _resolve_base(target, (*seen, origin))
+        base_data, _, _ = _resolve_base(target, (*seen, identity))
     except ConfigError as exc:
         raise ConfigError(f"{origin}: key 'base' = '{base}': {exc}") from None
     data.setdefault("name", Path(source).stem)

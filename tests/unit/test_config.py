@@ -174,10 +174,12 @@ def test_base_in_a_scenario_file(tmp_path):
         ("base = 3\n", "key 'base' = 3"),
         ('base = "C9"\n', "unknown preset 'C9'"),
         ('base = "loop.toml"\n', "circular"),
+        ('base = "../sub/loop.toml"\n', "circular"),
     ],
 )
 def test_bad_base_is_one_line(tmp_path, text, fragment):
-    path = tmp_path / "loop.toml"
+    (tmp_path / "sub").mkdir()
+    path = tmp_path / "sub" / "loop.toml"
     path.write_text(text)
     with pytest.raises(ConfigError) as info:
         load_config(path)
