@@ -28,6 +28,8 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # plain help: flags shown as flags, "[s]" units kept literally
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 config_app = typer.Typer(help="Inspect scenario configs.", no_args_is_help=True)
 app.add_typer(config_app, name="config")
@@ -36,12 +38,48 @@ app.add_typer(config_app, name="config")
 out = Console(width=None if sys.stdout.isatty() else 200)
 err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
+CONTROLLERS = ("none", "fifo", "game", "hcomc")
+OPTIMIZERS = ("nsga2", "pso", "sa")
+
 ConfigArg = Annotated[
     str,
     typer.Argument(
         metavar="CONFIG", help="Preset name (C1..C5, platoon) or path to a TOML config file."
     ),
 ]
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set",
+        metavar="KEY=VALUE",
+        help="Override a config value, e.g. --set cav_penetration=0.5 or "
+        "--set demand.mean_headway_main_2=7 (repeatable; VALUE is read as TOML).",
+    ),
+]
+SeedOption = Annotated[int | None, typer.Option(help="Random seed (default: the config's).")]
+Optimizer = Annotated[
+    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
+]
+
+
+def _show_version(value: bool) -> None:
+    if value:
+        from hcomc import __version__
+
+        out.print(f"hcomc {__version__}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_show_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Cooperative on-ramp merging (HCOMC) in mixed traffic on two-lane highways."""
 
 
 @contextmanager
@@ -63,7 +101,7 @@ def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | N
 
 
 def _fail(message: str) -> typer.Exit:
-    err.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code=2)
 
 
@@ -74,52 +112,132 @@ def _load(source: str, **overrides: Any) -> ScenarioConfig:
         raise _fail(str(exc)) from None
 
 
+def _settings(pairs: list[str] | None) -> dict[str, Any]:
+    """``--set KEY=VALUE`` pairs as overrides; VALUE is TOML (a bare word is a string)."""
+    import tomllib
+
+    settings: dict[str, Any] = {}
+    for pair in pairs or []:
+        key, sep, text = pair.partition("=")
+        if not sep or not key.strip():
+            raise _fail(f"option '--set' = '{pair}': allowed: KEY=VALUE, e.g. duration=60")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        settings[key.strip()] = value
+    return settings
+
+
+def _with(overrides: dict[str, Any], **options: Any) -> dict[str, Any]:
+    """``--set`` overrides plus the command's own options (None = not given)."""
+    given = {k: v for k, v in options.items() if v is not None}
+    for key, value in given.items():
+        if key in overrides and key != "control" and overrides[key] != value:
+            raise _fail(
+                f"option '--{key}' = {value} conflicts with '--set {key}={overrides[key]}'; "
+                "allowed: one of them"
+            )
+    return {**overrides, **given}
+
+
+def _choice(option: str, value: str | None, allowed: tuple[str, ...]) -> str | None:
+    """``value`` lower-cased if it is one of ``allowed`` (names are case-insensitive)."""
+    if value is None or value.lower() in allowed:
+        return None if value is None else value.lower()
+    key = f"control.{option.removeprefix('--')}"  # the config key the option sets
+    raise _fail(f"option '{option}' = '{value}' ({key}): allowed: {', '.join(allowed)}")
+
+
+def _check_seed(seed: int | None) -> None:
+    if seed is not None and seed < 0:
+        raise _fail(f"option '--seed' = {seed}: must be >= 0")
+
+
+def _control(base: ScenarioConfig, controller: str | None, optimizer: str | None) -> dict:
+    """The ``[control]`` table with the command's controller/optimiser; an optimiser only
+    applies to HCOMC, so passing one to another controller is an error, not ignored."""
+    controller = _choice("--controller", controller, CONTROLLERS)
+    optimizer = _choice("--optimizer", optimizer, OPTIMIZERS)
+    control = base.control.model_dump()
+    control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})
+    if optimizer is not None and control["controller"] != "hcomc":
+        raise _fail(
+            f"option '--optimizer' = '{optimizer}' does not apply to controller "
+            f"'{control['controller']}'; allowed: only with --controller hcomc"
+        )
+    return control
+
+
 @config_app.command("show")
-def config_show(config: ConfigArg) -> None:
-    """Print the fully resolved config as TOML (loadable by every command)."""
-    sys.stdout.write(config_to_toml(_load(config)))
+def config_show(config: ConfigArg, settings: SetOption = None) -> None:
+    """Print the fully resolved config as TOML, each key with its meaning and unit.
+
+    The output is loadable by every command: hcomc config show C2 > my.toml.
+    """
+    sys.stdout.write(config_to_toml(_load(config, **_settings(settings)), annotate=True))
 
 
-Optimizer = Annotated[
-    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
-]
+def _refuse_overwrite(out_dir: Path | None, names: tuple[str, ...], force: bool) -> None:
+    """Stop before a run if ``out_dir`` is a file or already holds a run (unless --force)."""
+    if out_dir is None:
+        return
+    if out_dir.exists() and not out_dir.is_dir():
+        raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    existing = [n for n in names if (out_dir / n).exists()]
+    if existing and not force:
+        raise _fail(
+            f"option '--out' = '{out_dir}' already holds a run ({', '.join(existing)}); "
+            "allowed: a new directory, or --force to overwrite it"
+        )
+
+
+SIMULATE_FILES = ("log.npz", "manifest.json", "summary.json")
 
 
 @app.command()
 def simulate(
     config: ConfigArg,
-    seed: Annotated[int | None, typer.Option(help="Random seed (default: the config's).")] = None,
+    seed: SeedOption = None,
     duration: Annotated[
         float | None, typer.Option(help="Measured duration [s] (default: the config's).")
     ] = None,
     out_dir: Annotated[
         Path | None, typer.Option("--out", help="Write log.npz, manifest.json, summary.json here.")
     ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Overwrite a run already in the --out directory.")
+    ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
     controller: Annotated[
         str | None,
-        typer.Option(help="Merge controller: none, fifo, game, hcomc (default: config)."),
+        typer.Option(help="Merge controller: none, fifo, game, hcomc (default: the config's)."),
     ] = None,
     optimizer: Optimizer = None,
+    settings: SetOption = None,
 ) -> None:
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
     from hcomc.sim.engine import Simulation
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
-    if seed is not None and seed < 0:
-        raise _fail(f"option '--seed' = {seed}: must be >= 0")
-    control = _load(config).control.model_dump()
-    control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})
-    cfg = _load(config, duration=duration, seed=seed, control=control)
-    if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
-        raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    _check_seed(seed)
+    overrides = _settings(settings)
+    control = _control(_load(config, **overrides), controller, optimizer)
+    cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
+    _refuse_overwrite(out_dir, SIMULATE_FILES, force)
     sim = Simulation(cfg)
     start = time.perf_counter()
     with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
         log = sim.run(None if as_json else update)
     wall = time.perf_counter() - start
-    summary: dict[str, Any] = {"scenario": cfg.name, "seed": sim.seed, **summarise(log)}
+    summary: dict[str, Any] = {
+        "scenario": cfg.name,
+        "seed": sim.seed,
+        "controller": cfg.control.controller,
+        "optimizer": cfg.control.optimizer if cfg.control.controller == "hcomc" else None,
+        **summarise(log),
+    }
     summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
     if out_dir is not None:
@@ -134,30 +252,42 @@ def simulate(
         _print_summary(summary)
 
 
+def _require_merge(cfg: ScenarioConfig, source: str, command: str) -> None:
+    """Merge-controller commands need a merge scenario with ramp demand."""
+    if cfg.scenario != "merge" or cfg.demand.ramp == "none":
+        what = f"scenario = '{cfg.scenario}'" if cfg.scenario != "merge" else "demand.ramp = 'none'"
+        raise _fail(
+            f"no ramp vehicle entered the control zone: '{source}' has {what}, so '{command}' "
+            "has no merge to control; allowed: a merge scenario with ramp demand (C1..C5, or "
+            "scenario = 'merge' with demand.ramp = 'single' or 'flow'); use 'hcomc simulate' "
+            "otherwise"
+        )
+
+
 @app.command()
 def plan(
     config: ConfigArg,
-    seed: Annotated[int | None, typer.Option(help="Random seed (default: the config's).")] = None,
+    seed: SeedOption = None,
     optimizer: Optimizer = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the decision as JSON.")] = False,
+    settings: SetOption = None,
 ) -> None:
     """Run until the first ramp vehicle enters the control zone and show HCOMC's decision."""
     from hcomc.control.report import plan_report
     from hcomc.sim.engine import Simulation
 
-    if seed is not None and seed < 0:
-        raise _fail(f"option '--seed' = {seed}: must be >= 0")
-    base = _load(config)
-    control = {**base.control.model_dump(), "controller": "hcomc"}
-    if optimizer is not None:
-        control["optimizer"] = optimizer
-    cfg = _load(config, seed=seed, control=control)
+    _check_seed(seed)
+    overrides = _settings(settings)
+    base = _load(config, **overrides)
+    _require_merge(base, config, "plan")
+    control = _control(base, "hcomc", optimizer)
+    cfg = _load(config, **_with(overrides, seed=seed, control=control))
     sim = Simulation(cfg)
     decision = sim.run_until_plan()
     if decision is None:
         raise _fail(
             f"no ramp vehicle entered the control zone within duration = {cfg.duration} s "
-            f"of '{config}'; allowed: a scenario with ramp demand ('single' or 'flow')"
+            f"of '{config}'; allowed: a longer --set duration=... or an earlier ramp release"
         )
     report = plan_report(sim, decision)
     if as_json:
@@ -261,33 +391,41 @@ def run(
     seeds: Annotated[int, typer.Option(help="Number of seeds (0 .. N-1).")] = 1,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,
+    settings: SetOption = None,
 ) -> None:
     """Run one scenario with one merge controller over seeds and print the paper's metrics."""
+    from hcomc.config import nest_overrides
     from hcomc.experiments.runner import CONFIGURATIONS, grid
     from hcomc.experiments.tables import LABELS, mean_ci
 
-    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
-    opt = optimizer or "nsga2"
-    if (controller, opt) not in labels:
-        allowed = ", ".join(sorted({c for c, _ in labels}))
-        raise _fail(
-            f"option '--controller' = '{controller}' with '--optimizer' = '{opt}': "
-            f"allowed controllers: {allowed}; optimisers (hcomc): nsga2, pso, sa"
-        )
+    chosen = _choice("--controller", controller, CONTROLLERS[1:])
+    assert chosen is not None  # a required option
+    controller = chosen
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
-    _load(config)  # validate before anything runs
-    frame = _progress_grid(
-        grid([config], [labels[(controller, opt)]], range(seeds)), _workers(workers)
-    )
+    overrides = _settings(settings)
+    base = _load(config, **overrides)  # validate before anything runs
+    _require_merge(base, config, "run")
+    control = _control(base, controller, optimizer)
+    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
+    label = labels[(controller, control["optimizer"] if controller == "hcomc" else "nsga2")]
+    specs = grid([config], [label], range(seeds), nest_overrides(overrides))
+    frame = _progress_grid(specs, _workers(workers))
     if as_json:
         sys.stdout.write(frame.to_json(orient="records") + "\n")
         return
+    frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
     cols = ["seed", "mode", "decision_ms", *LABELS]
-    out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {controller}"))
-    for metric, label in LABELS.items():
-        mean, half, n = mean_ci(frame[metric])
-        out.print(escape(f"{label}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
+    out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {label}"))
+    unplanned = frame.loc[frame["mode"] == "", "seed"].tolist()
+    if unplanned:
+        out.print(
+            f"no merge planned in seed(s) {unplanned}: no ramp vehicle entered the control "
+            f"zone within duration = {base.duration} s, so these seeds have no metrics"
+        )
+    for metric, name in LABELS.items():
+        mean, half, n = mean_ci(frame[metric].dropna())
+        out.print(escape(f"{name}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
 
 
 def _write_report(out_dir: Path, runs: Any) -> Path:
@@ -298,9 +436,11 @@ def _write_report(out_dir: Path, runs: Any) -> Path:
 
     seed = int(runs["seed"].min())
     figures = {
-        f"Fig. 2 — speed contour map of both lanes, Condition 2, seed {seed} (FIFO, Game, HCOMC)":
+        f"Speed contour maps of both lanes as in the paper's Fig. 2: Condition 2, seed {seed}, "
+        "FIFO, Game and HCOMC":
             figure_png(contour_figure(controller_logs("C2", seed=seed))),
-        "Paper metrics by condition and configuration (mean, 95 % CI over seeds)":
+        "The paper's metrics by condition and configuration (mean, 95 % CI over seeds; a "
+        "bar marked n=k rests on the k seeds that give a value)":
             figure_png(metrics_figure(runs)),
     }  # fmt: skip
     return write_report(out_dir, runs, figures=figures)
@@ -401,8 +541,13 @@ def sweep(
     ] = None,
 ) -> None:
     """Run a density x penetration x configuration x seed grid; rerun to resume."""
-    from hcomc.experiments.sweep import connect, expand, load_sweep, run_key, run_sweep
+    from hcomc.experiments.sweep import connect, load_sweep, run_sweep, sweep_status
 
+    if scheduler is not None and workers is not None:
+        raise _fail(
+            f"option '--workers' = {workers} does not apply with '--scheduler': the Dask "
+            "cluster's workers run the sweep"
+        )
     try:
         plan = load_sweep(spec)
         if scheduler is not None:
@@ -413,15 +558,20 @@ def sweep(
     target = out_dir or Path("sweeps") / plan.name
     if target.exists() and not target.is_dir():
         raise _fail(f"option '--out' = '{target}': exists and is not a directory")
-    runs = expand(plan)
-    skipped = sum((target / "parts" / f"{run_key(r)}.parquet").exists() for r in runs)
+    status = sweep_status(plan, target)
     start = time.perf_counter()
-    with _progress("sweep", len(runs)) as update:
+    with _progress("sweep", status.total) as update:
         table = run_sweep(plan, target, workers=n_workers, scheduler=scheduler, progress=update)
     backend = scheduler or f"{n_workers} local processes"
+    notes = [f"{status.new} new", f"{status.done} already done"]
+    if status.changed:
+        notes.append(f"{status.changed} recomputed because the config or hcomc version changed")
+    if status.stale:
+        notes.append(f"{status.stale} stored parts of other configs ignored (kept)")
     out.print(
-        f"{len(table)} runs ({len(runs) - skipped} new, {skipped} already done) on {backend} in "
-        f"{time.perf_counter() - start:.1f} s · {target}/sweep.parquet, summary.csv"
+        f"{len(table)} runs ({', '.join(notes)}) on {backend} in "
+        f"{time.perf_counter() - start:.1f} s · {target}/sweep.parquet, summary.csv",
+        highlight=False,
     )
 
 
@@ -443,14 +593,28 @@ def plot(
         Path | None, typer.Option("--out", help="Output file: .png, .svg or .pdf.")
     ] = None,
     seed: Annotated[int | None, typer.Option(help="Seed when simulating a preset.")] = None,
-    metric: Annotated[str, typer.Option(help="Metric of a sweep heatmap.")] = "lsrv",
+    metric: Annotated[
+        str | None, typer.Option(help="Metric of a sweep heatmap (default: lsrv).")
+    ] = None,
     raw: Annotated[bool, typer.Option(help="contour: raw bins instead of smoothing.")] = False,
 ) -> None:
     """Draw a figure of a run, a decision, a results table or a sweep."""
     from hcomc.viz.common import save_figure
-    from hcomc.viz.inputs import FIGURE_KINDS, make_figure
+    from hcomc.viz.inputs import FIGURE_KINDS, is_scenario, make_figure
 
+    kind = kind.lower()
     target = out_file or Path(f"{kind}.png")
+    _check_seed(seed)
+    # an option that does not apply to this figure is an error, not silently ignored
+    if metric is not None and kind != "heatmap":
+        raise _fail(f"option '--metric' = '{metric}' applies to --kind heatmap only")
+    if raw and kind != "contour":
+        raise _fail(f"option '--raw' applies to --kind contour only, not '{kind}'")
+    if seed is not None and not (len(sources) == 1 and is_scenario(sources[0])):
+        raise _fail(
+            f"option '--seed' = {seed} applies only when a preset or TOML scenario is "
+            "simulated; saved logs and tables already have their seed"
+        )
     try:
         if kind == "heatmap":
             import pandas as pd
@@ -463,7 +627,7 @@ def plot(
             table_path = path / "sweep.parquet" if path.is_dir() else path
             if not table_path.is_file():
                 raise ValueError(f"'{sources[0]}' is not a sweep directory or sweep.parquet")
-            fig = heatmap_figure(pd.read_parquet(table_path), metric)
+            fig = heatmap_figure(pd.read_parquet(table_path), metric or "lsrv")
         elif kind in FIGURE_KINDS:
             options = {"smooth": False} if raw and kind == "contour" else {}
             fig = make_figure(kind, sources, seed=seed, **options)
@@ -495,15 +659,21 @@ def animate(
 
 
 def _print_summary(summary: dict[str, Any]) -> None:
-    table = Table(title=f"{summary['scenario']} · seed {summary['seed']}", show_header=False)
+    controller = summary["controller"]
+    if summary.get("optimizer"):
+        controller += f" ({summary['optimizer']})"
+    title = f"{summary['scenario']} · seed {summary['seed']} · controller {controller}"
+    table = Table(title=escape(title), show_header=False)
     table.add_column("figure")
     table.add_column("value", justify="right")
     rows = [
-        ("vehicles (CAVs)", f"{summary['vehicles']} ({summary['cavs']})"),
-        ("merges", str(summary["merges"])),
-        ("ramp vehicles waiting at lane end", str(summary["ramp_waits"])),
-        ("lane changes", str(summary["lane_changes"])),
-        ("collisions", str(summary["collisions"])),
+        ("merge controller", controller),
+        ("measured duration [s]", f"{summary['duration_s']:.1f}"),
+        ("vehicles [count] (CAVs)", f"{summary['vehicles']} ({summary['cavs']})"),
+        ("merges [count]", str(summary["merges"])),
+        ("ramp vehicles waiting at lane end [count]", str(summary["ramp_waits"])),
+        ("lane changes [count]", str(summary["lane_changes"])),
+        ("collisions [count]", str(summary["collisions"])),
     ]
     for lane, speed in summary["mean_speed"].items():
         rows.append(
@@ -511,12 +681,12 @@ def _print_summary(summary: dict[str, Any]) -> None:
         )
     rows += [
         ("fuel, all vehicles [L]", f"{summary['fuel_l']:.3f}"),
-        ("vehicle-steps", f"{summary['vehicle_steps']:,}"),
+        ("vehicle-steps [count]", f"{summary['vehicle_steps']:,}"),
         ("wall time [s]", f"{summary['wall_s']:.2f}"),
-        ("vehicle-steps per second", f"{summary['vehicle_steps_per_s']:,}"),
+        ("vehicle-steps per second [1/s]", f"{summary['vehicle_steps_per_s']:,}"),
     ]
     if "out" in summary:
         rows.append(("written to", summary["out"]))
     for row in rows:
-        table.add_row(*row)
+        table.add_row(*(escape(cell) for cell in row))
     out.print(table)

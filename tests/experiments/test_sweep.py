@@ -1,7 +1,8 @@
-"""Sweeps: identical tables on any backend, resumable after a kill, clear errors (issue 6)."""
+"""Sweeps: the same table on any backend, resumable, values from base, clear errors."""
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -147,3 +148,111 @@ def test_flow_sweep_reports_throughput_and_delay(tmp_path):
     assert row["plans"] >= 5  # every ramp vehicle entering the control zone is planned
     assert 500 < row["throughput"] < 5000
     assert row["ramp_delay"] > -5.0
+
+
+# --------------------------------------------------------------------------- resolved values
+def _spec(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "spec.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    ("base", "expected"),
+    [
+        ("C5", {"mean_headway_main_2": 5.0, "cav_penetration": 0.3}),
+        ("C2", {"mean_headway_main_2": 7.0, "cav_penetration": 0.9}),
+    ],
+)
+def test_keys_left_out_of_the_grid_come_from_base(tmp_path, base, expected):
+    text = f"""
+base = "{base}"
+configurations = ["FIFO"]
+seeds = 1
+duration = 15.0
+[grid]
+mean_headway_main_1 = [4.0]
+"""
+    spec = load_sweep(_spec(tmp_path, text))
+    table = run_sweep(spec, tmp_path / "o", workers=1)
+    row = table.iloc[0]
+    assert row["base"] == base
+    assert row["condition"] == base
+    assert row["mean_headway_main_1"] == 4.0
+    for key, value in expected.items():
+        assert row[key] == value
+    assert row["ramp"] == "single"  # the base's, not a sweep default
+    assert row["duration"] == 15.0
+    manifest = json.loads(next((tmp_path / "o" / "manifests").glob("*.json")).read_text())
+    demand = manifest["config"]["demand"]
+    assert demand["cav_penetration"] == expected["cav_penetration"]  # what really ran
+    assert demand["mean_headway_main_2"] == expected["mean_headway_main_2"]
+
+
+def test_ramp_and_duration_come_from_a_base_file(tmp_path):
+    base = tmp_path / "flowbase.toml"
+    base.write_text('base = "C1"\nduration = 25.0\n[demand]\nramp = "flow"\n'
+                    "ramp_mean_headway = 9.0\ncav_penetration = 0.6\n")  # fmt: skip
+    text = """
+base = "flowbase.toml"
+configurations = ["FIFO"]
+seeds = 1
+[grid]
+mean_headway_main_2 = [6.0]
+"""
+    spec = load_sweep(_spec(tmp_path, text))
+    runs = expand(spec)
+    assert len(runs) == 1
+    config = sweep_mod.resolved_config(runs[0])
+    assert (config.demand.ramp, config.demand.ramp_mean_headway) == ("flow", 9.0)
+    assert (config.duration, config.demand.cav_penetration) == (25.0, 0.6)
+    assert config.demand.mean_headway_main_2 == 6.0
+    row = sweep_mod._row(runs[0], {"seed": 0, "wall_s": 1.0}).iloc[0]
+    assert (row["ramp"], row["ramp_mean_headway"], row["duration"]) == ("flow", 9.0, 25.0)
+    assert (row["cav_penetration"], row["mean_headway_main_1"]) == (0.6, 5.0)
+    assert "wall_s" not in row
+
+
+def test_resumed_sweep_recomputes_runs_whose_config_or_version_changed(tmp_path, monkeypatch):
+    base = tmp_path / "mybase.toml"
+    base.write_text('base = "C1"\n')
+    text = """
+base = "mybase.toml"
+configurations = ["FIFO"]
+seeds = 2
+duration = 15.0
+[grid]
+cav_penetration = [0.5]
+"""
+    spec_path = _spec(tmp_path, text)
+    out = tmp_path / "store"
+    args = ["sweep", str(spec_path), "--out", str(out), "--workers", "1"]
+    first = CliRunner().invoke(app, args)
+    assert first.exit_code == 0, first.output
+    assert "2 new, 0 already done" in first.stdout
+    again = CliRunner().invoke(app, args)
+    assert "0 new, 2 already done" in again.stdout
+
+    base.write_text('base = "C1"\n[hdv]\nmax_accel = 1.3\n')  # the base changes
+    changed = CliRunner().invoke(app, args)
+    assert changed.exit_code == 0, changed.output
+    assert "0 new, 0 already done, 2 recomputed because the config" in changed.stdout
+    assert "2 stored parts of other configs ignored" in changed.stdout
+    assert len(list((out / "parts").glob("*.parquet"))) == 4  # old results kept, not mixed
+    assert len(pd.read_parquet(out / "sweep.parquet")) == 2
+    keys = [sweep_mod.run_key(r) for r in expand(load_sweep(spec_path))]
+    for key in keys:
+        manifest = json.loads((out / "manifests" / f"{key}.json").read_text())
+        assert manifest["config"]["hdv"]["max_accel"] == 1.3
+
+    monkeypatch.setattr(sweep_mod.hcomc, "__version__", "99.0")  # the code changes
+    status = sweep_mod.sweep_status(load_sweep(spec_path), out)
+    assert (status.done, status.new, status.changed) == (0, 0, 2)
+
+
+def test_workers_with_a_scheduler_is_an_error(spec_file, tmp_path):
+    args = ["sweep", str(spec_file), "--scheduler", "tcp://127.0.0.1:9", "--workers", "2"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2
+    assert "'--workers' = 2 does not apply with '--scheduler'" in result.stderr
+    assert not (tmp_path / "o").exists()

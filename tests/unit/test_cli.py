@@ -113,3 +113,168 @@ def test_wrong_option_type_is_a_usage_error():
     assert "Traceback" not in result.output
     assert "Invalid value for '--seed'" in result.output
     assert "valid integer" in result.output
+
+
+# --------------------------------------------------------------------------- a new user's path
+def test_simulate_refuses_to_overwrite_a_run_unless_forced(tmp_path):
+    out = tmp_path / "run"
+    first = runner.invoke(app, ["simulate", "C1", "--duration", "5", "--out", str(out), "--json"])
+    assert first.exit_code == 0, first.output
+    stamp = (out / "log.npz").read_bytes()
+    again = runner.invoke(
+        app, ["simulate", "C1", "--duration", "6", "--seed", "2", "--out", str(out)]
+    )
+    assert again.exit_code == 2
+    assert "--force" in again.stderr
+    assert "already holds a run" in again.stderr
+    assert again.stderr.strip().count("\n") == 0
+    assert (out / "log.npz").read_bytes() == stamp  # nothing lost
+    forced = runner.invoke(
+        app, ["simulate", "C1", "--duration", "6", "--seed", "2", "--out", str(out), "--force"]
+    )
+    assert forced.exit_code == 0, forced.output
+    assert json.loads((out / "summary.json").read_text())["seed"] == 2
+
+
+@pytest.mark.parametrize("command", ["run", "plan"])
+def test_merge_commands_on_the_platoon_preset_say_why_not(command):
+    args = [command, "platoon"] + (["--controller", "fifo"] if command == "run" else [])
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    assert "Traceback" not in result.output
+    message = result.stderr.strip()
+    assert message.count("\n") == 0
+    assert "scenario = 'platoon'" in message
+    assert "hcomc simulate" in message
+
+
+def test_every_command_works_on_the_platoon_preset(tmp_path):
+    for args in (
+        ["simulate", "platoon", "--duration", "5", "--json"],
+        ["config", "show", "platoon"],
+    ):
+        result = runner.invoke(app, args)
+        assert result.exit_code == 0, (args, result.output)
+
+
+def test_run_without_a_merge_in_time_reports_it_instead_of_crashing():
+    result = runner.invoke(app, ["run", "C1", "--controller", "fifo", "--set", "duration=3",
+                                 "--workers", "1"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "no merge planned in seed(s) [0]" in result.stdout
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["simulate", "C2", "--duration", "5", "--controller", "HCOMC", "--optimizer", "PSO"],
+        ["simulate", "C2", "--duration", "5", "--controller", "Fifo"],
+    ],
+)
+def test_controller_and_optimizer_names_are_case_insensitive(args):
+    result = runner.invoke(app, [*args, "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["controller"] == args[args.index("--controller") + 1].lower()
+    if "--optimizer" in args:
+        assert summary["optimizer"] == "pso"
+
+
+def test_run_accepts_the_table_spelling_of_a_controller():
+    result = runner.invoke(
+        app, ["run", "C1", "--controller", "FIFO", "--seeds", "1", "--workers", "1", "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)[0]["configuration"] == "FIFO"
+
+
+@pytest.mark.parametrize(
+    ("args", "fragments", "absent"),
+    [
+        (["run", "C1", "--controller", "lifo"], ["'--controller' = 'lifo'", "fifo, game, hcomc"],
+         "--optimizer"),
+        (["run", "C1", "--controller", "fifo", "--optimizer", "pso"],
+         ["'--optimizer' = 'pso' does not apply", "'fifo'"], None),
+        (["simulate", "C1", "--controller", "game", "--optimizer", "sa"],
+         ["'--optimizer' = 'sa' does not apply", "'game'"], None),
+        (["simulate", "C1", "--optimizer", "ga"], ["'--optimizer' = 'ga'", "nsga2, pso, sa"],
+         None),
+        (["simulate", "C1", "--set", "cav_penetraton=0.5"],
+         ["did you mean 'demand.cav_penetration'?"], None),
+        (["simulate", "C1", "--set", "time_headway=1.0"], ["ambiguous", "'hdv.time_headway'"],
+         None),
+        (["simulate", "C1", "--set", "novalue"], ["'--set' = 'novalue'", "KEY=VALUE"], None),
+    ],
+)  # fmt: skip
+def test_option_errors_name_only_what_the_user_passed(args, fragments, absent):
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    message = result.stderr.strip()
+    assert message.count("\n") == 0, message
+    for fragment in fragments:
+        assert fragment in message
+    if absent:
+        assert absent not in message
+
+
+def test_version_and_short_help():
+    from hcomc import __version__
+
+    version = runner.invoke(app, ["--version"])
+    assert version.exit_code == 0
+    assert version.stdout.strip() == f"hcomc {__version__}"
+    short = runner.invoke(app, ["simulate", "-h"])
+    assert short.exit_code == 0
+    assert short.stdout == runner.invoke(app, ["simulate", "--help"]).stdout
+    assert "<bool>" not in short.stdout  # flags are shown as flags
+    assert "--json " in short.stdout
+    assert "Measured duration [s]" in short.stdout  # units are not eaten as markup
+
+
+def test_simulate_summary_names_the_controller_and_units():
+    result = runner.invoke(app, ["simulate", "C2", "--duration", "5", "--controller", "fifo"])
+    assert result.exit_code == 0, result.output
+    assert "controller fifo" in result.stdout
+    for label in ("mean speed lane 1 [m/s]", "fuel, all vehicles [L]", "wall time [s]",
+                  "measured duration [s]"):  # fmt: skip
+        assert label in result.stdout
+
+
+def test_config_show_applies_settings_and_documents_keys(tmp_path):
+    result = runner.invoke(app, ["config", "show", "C2", "--set", "cav_penetration=0.5",
+                                 "--set", "demand.mean_headway_main_1=4"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert "cav_penetration = 0.5  # share of CAVs [-]" in result.stdout
+    assert "demand.cav_penetration 0.9 -> 0.5" in result.stdout  # description follows
+    path = tmp_path / "shown.toml"
+    path.write_text(result.stdout)
+    loaded = load_config(path)
+    assert (loaded.demand.cav_penetration, loaded.demand.mean_headway_main_1) == (0.5, 4.0)
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["plot", "C2", "--kind", "timespace", "--metric", "fuel"], "'--metric' = 'fuel' applies"),
+        (["plot", "C2", "--kind", "timespace", "--raw"], "'--raw' applies to --kind contour"),
+        (["plot", "results/runs.parquet", "--kind", "metrics", "--seed", "3"],
+         "'--seed' = 3 applies only when"),
+    ],
+)  # fmt: skip
+def test_plot_options_that_do_not_apply_are_errors(args, fragment, tmp_path):
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "f.png")])
+    assert result.exit_code == 2
+    assert fragment in result.stderr
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_set_values_reach_the_run_and_conflicts_with_options_are_errors():
+    result = runner.invoke(app, ["simulate", "C1", "--set", "duration=5", "--set",
+                                 "seed=2", "--json"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert (summary["seed"], summary["duration_s"]) == (2, 5.0)
+    clash = runner.invoke(app, ["simulate", "C1", "--set", "duration=5", "--duration", "6"])
+    assert clash.exit_code == 2
+    assert "conflicts with '--set duration=5'" in clash.stderr

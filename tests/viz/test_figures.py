@@ -168,7 +168,7 @@ def test_trajectories_figure_needs_a_plan() -> None:
     log = simulate(load_config("C2", duration=2.0), seed=1)
     with pytest.raises(ValueError, match="merge plan"):
         trajectories_figure(log)
-    assert len(timespace_figure(log).axes) == 4  # no plan: still drawable
+    assert len(timespace_figure(log).axes) == 3  # no plan: still drawable; no ramp vehicle yet
 
 
 def test_pareto_figure(reports: dict[str, dict[str, Any]], tmp_path: Path) -> None:

@@ -2,9 +2,12 @@
 
 A sweep spec (TOML, validated like scenario configs) names a base scenario, the grid values of
 the per-lane mean headways and the CAV penetration, the configurations, the number of seeds
-and optionally a continuous ramp flow. Every run is identified by a key hashed from its full
-specification; each finished run is written atomically as ``parts/<key>.parquet`` (one row)
-plus ``manifests/<key>.json``, so a killed sweep rerun skips finished runs and loses nothing.
+and optionally a continuous ramp flow; every value the spec leaves out comes from the base,
+and each result row starts with the values the run actually used (:data:`RESOLVED`). Every
+run is identified by a key hashed from its place in the grid, its fully resolved config and
+the hcomc version; each finished run is written atomically as ``parts/<key>.parquet`` (one
+row) plus ``manifests/<key>.json``, so a killed sweep rerun skips finished runs and loses
+nothing, and a rerun after the base or the code changed recomputes instead of mixing.
 Runs execute on local processes (a pool that dies is rebuilt and its unfinished runs
 resubmitted) or, with a scheduler address, on a Dask cluster (whose workers' tasks are retried
 by Dask when a worker dies). The final table is assembled from the parts in grid order, so it
@@ -13,6 +16,7 @@ is identical for any backend and worker count; run timings live in the manifests
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -20,54 +24,70 @@ import tomllib
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from hcomc.config import ConfigError, describe_error, load_config
+import hcomc
+from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
 from hcomc.experiments.runner import CONFIGURATIONS, RunSpec, run_one
 from hcomc.experiments.tables import mean_ci
 from hcomc.sim.manifest import atomic_paths, write_json_atomic
 
 GRID_KEYS = ("mean_headway_main_1", "mean_headway_main_2", "cav_penetration")
+RESOLVED = ("base", *GRID_KEYS, "ramp", "ramp_mean_headway", "duration")
+"""Columns every result row starts with: the values the run actually used."""
 TIMING = ("wall_s", "decision_ms")
 Configuration = Literal["FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA"]
 
 
 class SweepGrid(BaseModel):
-    """Grid values (each a non-empty list) of the demand parameters."""
+    """Grid values of the demand parameters; a key left out keeps the base's value."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
-    mean_headway_main_1: list[float] = Field([5.0], description="lane 1 mean headways [s]")
-    mean_headway_main_2: list[float] = Field([5.0], description="lane 2 mean headways [s]")
-    cav_penetration: list[float] = Field([0.9], description="CAV shares [-]")
+    mean_headway_main_1: list[float] | None = Field(None, description="lane 1 mean headways [s]")
+    mean_headway_main_2: list[float] | None = Field(None, description="lane 2 mean headways [s]")
+    cav_penetration: list[float] | None = Field(None, description="CAV shares [-]")
 
     @field_validator(*GRID_KEYS)
     @classmethod
-    def _non_empty(cls, values: list[float]) -> list[float]:
-        if not values:
-            raise ValueError("must list at least one value")
+    def _non_empty(cls, values: list[float] | None) -> list[float] | None:
+        if values is not None and not values:
+            raise ValueError("must list at least one value (or leave the key out)")
         return values
+
+    def cells(self) -> list[dict[str, float]]:
+        """Every combination of the given keys, in grid order (one empty cell if none)."""
+        keys = [k for k in GRID_KEYS if getattr(self, k) is not None]
+        values = itertools.product(*(getattr(self, k) for k in keys))
+        return [dict(zip(keys, combo, strict=True)) for combo in values]
 
 
 class SweepSpec(BaseModel):
-    """A sweep: base scenario, grid, configurations, seeds and ramp demand."""
+    """A sweep: base scenario, grid, configurations, seeds and ramp demand.
+
+    Everything the spec leaves out (grid keys, ramp, ramp headway, duration) is the base's.
+    """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
     name: str = Field("sweep", description="sweep name")
     base: str = Field("C1", description="preset or TOML file for everything not swept")
     configurations: list[Configuration] = Field(["FIFO", "Game", "HCOMC"], min_length=1)
     seeds: int = Field(3, ge=1, le=10_000, description="seeds 0 .. seeds-1 per cell")
-    ramp: Literal["single", "flow"] = Field("single", description="one key merge or a flow")
+    ramp: Literal["single", "flow"] | None = Field(None, description="one key merge or a flow")
     ramp_mean_headway: float | None = Field(None, gt=0, description="'flow': ramp headway [s]")
     duration: float | None = Field(None, gt=0, description="measured duration [s]")
     grid: SweepGrid = Field(default_factory=SweepGrid)
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep spec, raising :class:`ConfigError` with a one-line message."""
+    """Read and validate a sweep spec, raising :class:`ConfigError` with a one-line message.
+
+    A relative ``base`` path is looked up next to the spec first.
+    """
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"sweep spec '{path}' does not exist")
@@ -78,20 +98,24 @@ def load_sweep(path: str | Path) -> SweepSpec:
     try:
         spec = SweepSpec.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(describe_error(exc, str(path))) from None
+        raise ConfigError(describe_error(exc, str(path), SweepSpec)) from None
+    nearby = path.parent / spec.base
+    if spec.base.endswith(".toml") and not Path(spec.base).is_file() and nearby.is_file():
+        spec = spec.model_copy(update={"base": str(nearby)})
     expand(spec)  # every cell must be a valid scenario before anything runs
     return spec
 
 
 def expand(spec: SweepSpec) -> list[RunSpec]:
     """Runs in grid order (cell, configuration, seed); validates every cell's scenario."""
-    demand_extra: dict[str, Any] = {"ramp": spec.ramp}
-    if spec.ramp_mean_headway is not None:
-        demand_extra["ramp_mean_headway"] = spec.ramp_mean_headway
-    runs = []
-    for cell in itertools.product(*(getattr(spec.grid, k) for k in GRID_KEYS)):
-        overrides: dict[str, Any] = {"demand": {**dict(zip(GRID_KEYS, cell, strict=True)),
-                                                **demand_extra}}  # fmt: skip
+    _resolved.cache_clear()  # base files may have changed since the last expansion
+    demand_extra = {
+        k: v for k, v in (("ramp", spec.ramp), ("ramp_mean_headway", spec.ramp_mean_headway))
+        if v is not None
+    }  # fmt: skip
+    runs: list[RunSpec] = []
+    for cell in spec.grid.cells():
+        overrides: dict[str, Any] = {"demand": {**cell, **demand_extra}}
         if spec.duration is not None:
             overrides["duration"] = spec.duration
         load_config(spec.base, **overrides)  # raises ConfigError naming the bad value
@@ -100,16 +124,74 @@ def expand(spec: SweepSpec) -> list[RunSpec]:
     return runs
 
 
-def run_key(run: RunSpec) -> str:
-    """Stable identity of a run (hash of its full specification)."""
+@functools.lru_cache(maxsize=4096)  # one load per cell and configuration, not per seed
+def _resolved(condition: str, configuration: str, overrides: str) -> ScenarioConfig:
+    run = RunSpec(condition, configuration, 0, json.loads(overrides))
+    return load_config(condition, **run.config_overrides())
+
+
+def resolved_config(run: RunSpec) -> ScenarioConfig:
+    """The config ``run`` simulates (base + cell + its configuration's controller)."""
+    return _resolved(run.condition, run.configuration, json.dumps(run.overrides, sort_keys=True))
+
+
+def _identity(run: RunSpec) -> str:
+    """What a run is in the grid (base, cell, configuration, seed), whatever its inputs say."""
     text = json.dumps([run.condition, run.configuration, run.seed, run.overrides], sort_keys=True)
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
+def run_key(run: RunSpec) -> str:
+    """Stable key of a run's result: its identity, resolved config and hcomc version.
+
+    A changed preset or base file, or another package version, gives new keys, so a resumed
+    sweep recomputes those runs instead of mixing stale results into the table.
+    """
+    text = json.dumps(
+        [_identity(run), resolved_config(run).model_dump(mode="json"), hcomc.__version__],
+        sort_keys=True,
+    )
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class SweepStatus:
+    """What a (re)run of a sweep into a store will do."""
+
+    total: int
+    done: int  # stored with the current config and version: skipped
+    new: int  # never run
+    changed: int  # stored under an older config or version: recomputed
+    stale: int  # stored parts that no run of this spec uses (kept, ignored)
+
+
+def sweep_status(spec: SweepSpec, out: Path) -> SweepStatus:
+    """Count the runs of ``spec`` already done in ``out``, new, and to recompute."""
+    runs = expand(spec)
+    keys = {run_key(r) for r in runs}
+    stored = {p.stem for p in (out / "parts").glob("*.parquet")}
+    done = sum(run_key(r) in stored for r in runs)
+    old = set()
+    for key in stored - keys:
+        manifest = out / "manifests" / f"{key}.json"
+        if manifest.is_file():
+            old.add(json.loads(manifest.read_text(encoding="utf-8")).get("sweep_identity"))
+    changed = sum(run_key(r) not in stored and _identity(r) in old for r in runs)
+    return SweepStatus(len(runs), done, len(runs) - done - changed, changed, len(stored - keys))
+
+
 def _row(run: RunSpec, row: dict[str, Any]) -> pd.DataFrame:
-    cell = {k: run.overrides["demand"][k] for k in GRID_KEYS}
+    config = resolved_config(run)
+    demand = config.demand
+    used = {
+        "base": run.condition,
+        **{k: getattr(demand, k) for k in GRID_KEYS},
+        "ramp": demand.ramp,
+        "ramp_mean_headway": demand.ramp_mean_headway if demand.ramp == "flow" else float("nan"),
+        "duration": config.duration,
+    }
     clean = {k: v for k, v in row.items() if k not in TIMING}
-    return pd.DataFrame([{**cell, **clean}])
+    return pd.DataFrame([{**used, **clean}])
 
 
 def run_sweep(
@@ -135,7 +217,8 @@ def run_sweep(
     def store(i: int, result: tuple[dict[str, Any], dict[str, Any]]) -> None:
         nonlocal done
         row, manifest = result
-        manifest = {**manifest, "timing": {k: row.get(k) for k in TIMING}}
+        timing = {k: row.get(k) for k in TIMING}
+        manifest = {**manifest, "timing": timing, "sweep_identity": _identity(runs[i])}
         write_json_atomic(manifests / f"{keys[i]}.json", manifest)
         with atomic_paths(parts / f"{keys[i]}.parquet") as (tmp,):  # the part commits the run
             _row(runs[i], row).to_parquet(tmp, index=False)
@@ -227,4 +310,14 @@ def summarise(table: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(records)
 
 
-__all__ = ["CONFIGURATIONS", "SweepSpec", "assemble", "expand", "load_sweep", "run_sweep"]
+__all__ = [
+    "CONFIGURATIONS",
+    "SweepSpec",
+    "SweepStatus",
+    "assemble",
+    "expand",
+    "load_sweep",
+    "resolved_config",
+    "run_sweep",
+    "sweep_status",
+]

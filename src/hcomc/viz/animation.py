@@ -1,4 +1,4 @@
-"""Top-down animation of a simulation run (DESIGN.md §1 item 6).
+"""Top-down animation of a simulation run.
 
 :func:`animate` turns a :class:`~hcomc.sim.log.SimulationLog` into a GIF (matplotlib's
 :class:`~matplotlib.animation.PillowWriter`) or an MP4 (:class:`~matplotlib.animation.FFMpegWriter`,

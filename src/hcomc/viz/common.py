@@ -40,6 +40,7 @@ __all__ = [
     "configuration_label",
     "first_plan",
     "key_group",
+    "key_time",
     "log_window",
     "merge_time",
     "new_figure",
@@ -209,16 +210,31 @@ def first_plan(log: SimulationLog) -> dict[str, Any] | None:
 
 
 def key_group(log: SimulationLog) -> dict[str, int]:
-    """Role -> vehicle slot of the first plan's key vehicles (-1 = missing); {} if no plan."""
+    """Role -> vehicle slot of the first merge's key vehicles (-1 = missing).
+
+    From the first plan, or, in a run without a merge controller, from the key vehicles the
+    engine records when the first ramp vehicle enters the control zone
+    (``log.meta["key_groups"]``); {} if no ramp vehicle got that far.
+    """
     plan = first_plan(log)
-    if plan is None:
+    groups = log.meta.get("key_groups") or []
+    group = plan.get("group", {}) if plan is not None else groups[0] if groups else None
+    if group is None:
         return {}
-    group = plan.get("group", {})
     return {role: int(group.get(role, -1)) for role in KEY_ROLES}
 
 
+def key_time(log: SimulationLog) -> float:
+    """Time [s] the first merge's key vehicles were found (planning time t0); NaN if never."""
+    plan = first_plan(log)
+    groups = log.meta.get("key_groups") or []
+    if plan is not None:
+        return float(plan["t0"])
+    return float(groups[0]["t"]) if groups else math.nan
+
+
 def log_window(log: SimulationLog) -> MetricWindow:
-    """Evaluation window of the first plan's merge, or the whole logged run if no plan.
+    """Evaluation window of the first merge (see :func:`key_group`), or the whole run if none.
 
     Parameters
     ----------

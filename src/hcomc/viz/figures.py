@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import textwrap
 import warnings
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -47,6 +48,7 @@ from hcomc.viz.common import (
     ROLE_COLORS,
     first_plan,
     key_group,
+    key_time,
     log_window,
     merge_time,
     new_figure,
@@ -159,6 +161,12 @@ def _merge_of(log: SimulationLog) -> tuple[float, float]:
     return merge_time(log, vr) if vr >= 0 else (math.nan, math.nan)
 
 
+def _is_merge(log: SimulationLog) -> bool:
+    """Whether the run is a merge scenario (road zones mean something); True if unknown."""
+    config = log.meta.get("config")
+    return not isinstance(config, Mapping) or config.get("scenario", "merge") == "merge"
+
+
 # --------------------------------------------------------------------------- contour (Fig. 2)
 def contour_figure(
     logs: Mapping[str, SimulationLog],
@@ -223,16 +231,22 @@ def contour_figure(
     vmin, vmax = _speed_limits([f[2] for f in fields.values()])
     norm = Normalize(vmin, vmax)
     cmap = speed_cmap()
+    # a lane nobody drove on (lane 2 of a platoon run) gets no row of empty panels
+    lanes = [
+        lane for lane in _MAIN_LANES
+        if any(np.isfinite(fields[label, lane][2]).any() for label in labels)
+    ] or list(_MAIN_LANES)  # fmt: skip
+    merge = all(_is_merge(log) for log in logs.values())
 
-    fig = new_figure(max(3.3 * n + 1.2, 7.5), 6.4)
-    axes = fig.subplots(2, n, sharex=True, sharey=True, squeeze=False)
+    fig = new_figure(max(3.3 * n + 1.2, 7.5), 1.4 + 2.5 * len(lanes))
+    axes = fig.subplots(len(lanes), n, sharex=True, sharey=True, squeeze=False)
     mesh = None
     for col, label in enumerate(labels):
         log = logs[label]
         road = road_geometry(log)
         level = v_refs[label] - LOW_SPEED_MARGIN
         t_merge, x_merge = _merge_of(log)
-        for row, lane in enumerate(_MAIN_LANES):
+        for row, lane in enumerate(lanes):
             ax: Axes = axes[row, col]
             x_edges, t_edges, V = fields[label, lane]
             mesh = ax.pcolormesh(
@@ -257,7 +271,8 @@ def contour_figure(
                         colors="black",
                         linewidths=0.9,
                     )
-            shade_zones(ax, road, orientation="x", band=0.035, label=(row == 0 and col == 0))
+            if merge:
+                shade_zones(ax, road, orientation="x", band=0.035, label=row == col == 0)
             if lane == 1 and math.isfinite(t_merge):
                 ax.plot([x_merge], [t_merge], linestyle="none", zorder=5, **_MERGE)
             ax.set_title(f"{label} · {LANE_NAMES[lane]}")
@@ -278,14 +293,14 @@ def contour_figure(
             )
             ax.set_xlim(0.0, road.length)
             ax.set_ylim(t_edges[0], t_edges[-1])
-            if row == 1:
+            if row == len(lanes) - 1:
                 ax.set_xlabel("position x [m]")
             if col == 0:
                 ax.set_ylabel("time t [s]")
     assert mesh is not None
     what = "adaptive smoothing of" if smooth else "mean of"
     bins = f"{what} {dx:g} m × {dt_bin:g} s bins"
-    fig.colorbar(mesh, ax=axes, label=f"speed v [m/s] ({bins})", shrink=0.9, pad=0.02)
+    fig.colorbar(mesh, ax=axes, label=f"speed v [m/s]\n({bins})", shrink=0.9, pad=0.02)
     handles, _ = axes[0, 0].get_legend_handles_labels()
     handles += [
         Line2D([], [], color="black", linewidth=0.9, label=r"$v = v_{ref} - 1$ m/s"),
@@ -302,7 +317,8 @@ def contour_figure(
     )
     titles = sorted({run_title(log) for log in logs.values()} - {""})
     suffix = f" — {'; '.join(titles)}" if titles else ""
-    fig.suptitle(f"Speed contour maps v(x, t) of both main lanes{suffix}")
+    where = "both main lanes" if len(lanes) == 2 else LANE_NAMES[lanes[0]]
+    fig.suptitle(f"Speed contour maps v(x, t) of {where}{suffix}")
     return fig
 
 
@@ -333,7 +349,9 @@ def timespace_figure(log: SimulationLog) -> Figure:
     """Time-space diagram x(t) of every vehicle, one panel per lane, coloured by speed.
 
     Panels (top to bottom, sharing t and x): lane 2, lane 1, ramp (with the acceleration
-    lane). A vehicle's line breaks where it is not in the panel's lane (a lane change
+    lane); a lane no vehicle used (the ramp and lane 2 of a platoon run) gets no panel, and
+    the control zone and acceleration lane are shaded only in merge scenarios. A vehicle's
+    line breaks where it is not in the panel's lane (a lane change
     switches lane at its lateral midpoint). The six key vehicles of the first plan are
     drawn thicker with a black outline and labelled with their role at the planning time;
     lane-change starts (open circles, in the origin lane), ends (filled circles, in the
@@ -347,7 +365,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        3 axes and a speed colour bar [m/s].
+        One axes per used lane and a speed colour bar [m/s].
     """
     road = road_geometry(log)
     times = _times(log)
@@ -357,12 +375,16 @@ def timespace_figure(log: SimulationLog) -> Figure:
     n = log.n_recorded
     vmin, vmax = _speed_limits([log.v[:n][log.active[:n]].astype(np.float64)])
     norm, cmap = Normalize(vmin, vmax), speed_cmap()
+    used = log.active[:n] & np.isin(log.lane[:n], _ALL_LANES)
+    lanes = [lane for lane in _ALL_LANES if (used & (log.lane[:n] == lane)).any()] or [1]
+    merge = _is_merge(log)
 
-    fig = new_figure(9.0, 8.6)
-    axes = fig.subplots(3, 1, sharex=True, sharey=True)
+    fig = new_figure(9.0, 1.0 + 2.5 * len(lanes))
+    axes = list(fig.subplots(len(lanes), 1, sharex=True, sharey=True, squeeze=False)[:, 0])
     collection = None
-    for ax, lane in zip(axes, _ALL_LANES, strict=True):
-        shade_zones(ax, road, orientation="y", label=lane == 2)
+    for ax, lane in zip(axes, lanes, strict=True):
+        if merge:
+            shade_zones(ax, road, orientation="y", label=ax is axes[0])
         segs, speed = _lane_segments(log, lane)
         collection = LineCollection(
             segs,
@@ -400,9 +422,9 @@ def timespace_figure(log: SimulationLog) -> Figure:
             if i >= 0 and log.active[k0, i]:
                 per_lane.setdefault(int(log.lane[k0, i]), []).append((float(log.x[k0, i]), role))
         for lane, items in per_lane.items():
-            if lane not in _ALL_LANES:
+            if lane not in lanes:
                 continue
-            ax = axes[_ALL_LANES.index(lane)]
+            ax = axes[lanes.index(lane)]
             items.sort(reverse=True)
             for j, (x, role) in enumerate(items):
                 ax.annotate(
@@ -423,36 +445,46 @@ def timespace_figure(log: SimulationLog) -> Figure:
                     },
                     arrowprops={"arrowstyle": "-", "color": ROLE_COLORS[role], "lw": 0.9},
                 )
+    drawn: set[str] = set()
     for kind, style in (
         (EventKind.LANE_CHANGE_START, _LC_START),
         (EventKind.LANE_CHANGE_END, _LC_END),
     ):
         for t, x, _, lane in _lane_events(log, kind):
-            if lane in _ALL_LANES:
-                axes[_ALL_LANES.index(lane)].plot([t], [x], linestyle="none", zorder=5, **style)
+            if lane in lanes:
+                axes[lanes.index(lane)].plot([t], [x], linestyle="none", zorder=5, **style)
+                drawn.add(kind.name)
     t_merge, x_merge = _merge_of(log)
-    if math.isfinite(t_merge):
-        axes[1].plot([t_merge], [x_merge], linestyle="none", zorder=7, **_MERGE)
+    if math.isfinite(t_merge) and 1 in lanes:
+        axes[lanes.index(1)].plot([t_merge], [x_merge], linestyle="none", zorder=7, **_MERGE)
+        drawn.add("merge")
     if plan is not None:
         for ax in axes:
             ax.axvline(float(plan["t0"]), color="0.3", linewidth=0.8, linestyle=(0, (1, 2)))
     axes[-1].set_xlabel("time t [s]")
     axes[-1].set_xlim(times[0], times[-1])
-    axes[-1].set_ylim(0.0, road.length)
+    x_seen = log.x[:n][used]
+    x_lo = 0.0 if merge or not x_seen.size else max(0.0, float(x_seen.min()) - 50.0)
+    axes[-1].set_ylim(x_lo, road.length)
     assert collection is not None
     fig.colorbar(collection, ax=axes, label="speed v [m/s]", shrink=0.85, pad=0.02)
     handles, _ = axes[0].get_legend_handles_labels()
     handles = [h for h in handles if not isinstance(h, LineCollection)]
-    handles += [
-        Line2D([], [], color="0.3", linewidth=2.4, path_effects=_OUTLINE, label="key vehicle"),
-        Line2D([], [], linestyle="none", label="lane change start", **_LC_START),
-        Line2D([], [], linestyle="none", label="lane change end", **_LC_END),
-        Line2D([], [], linestyle="none", label="VR merge", **_MERGE),
-        Line2D(
-            [], [], color="0.3", linewidth=0.8, linestyle=(0, (1, 2)), label="planning time $t_0$"
-        ),
-    ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
+    # only what the figure shows: a platoon run has no key vehicles, merges or plans
+    candidates = [
+        (keys.size > 0, Line2D([], [], color="0.3", linewidth=2.4, path_effects=_OUTLINE,
+                               label="key vehicle")),
+        ("LANE_CHANGE_START" in drawn,
+         Line2D([], [], linestyle="none", label="lane change start", **_LC_START)),
+        ("LANE_CHANGE_END" in drawn,
+         Line2D([], [], linestyle="none", label="lane change end", **_LC_END)),
+        ("merge" in drawn, Line2D([], [], linestyle="none", label="VR merge", **_MERGE)),
+        (plan is not None, Line2D([], [], color="0.3", linewidth=0.8, linestyle=(0, (1, 2)),
+                                  label="planning time $t_0$")),
+    ]  # fmt: skip
+    handles += [handle for shown, handle in candidates if shown]
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
     title = run_title(log)
     plan_note = f" · plan: {plan['mode']}" if plan is not None else ""
     fig.suptitle(f"Time-space diagram — {title}{plan_note}" if title else "Time-space diagram")
@@ -475,18 +507,20 @@ def _draw_road(ax: Axes, road: RoadParams) -> None:
 
 
 def trajectories_figure(log: SimulationLog) -> Figure:
-    """Merge trajectories of the first plan's key vehicles.
+    """Merge trajectories of the first merge's key vehicles.
 
     Panels: (1) lateral position y [m] over x [m] of VR and VMC over the whole run, on the
     drawn road (lane lines at y = +-W/2; the quintic lane changes are visible), with the
-    control zone, the acceleration lane and the planned merge position marked; (2) speed
-    v(t) and (3) acceleration a(t) of the six key vehicles, with the planning time t0 and
-    VR's merge time marked.
+    control zone, the acceleration lane and, for a controlled run, the planned merge position
+    marked; (2) speed v(t) and (3) acceleration a(t) of the six key vehicles, with the
+    planning time t0 (or, without a merge controller, the time VR entered the control zone)
+    and VR's merge time marked.
 
     Parameters
     ----------
     log : SimulationLog
-        A finished run with at least one plan in ``log.meta["plans"]``.
+        A finished run whose first ramp vehicle reached the control zone (a plan in
+        ``log.meta["plans"]`` or key vehicles in ``log.meta["key_groups"]``).
 
     Returns
     -------
@@ -496,18 +530,21 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     Raises
     ------
     ValueError
-        If the run has no merge plan.
+        If no ramp vehicle reached the control zone (no key vehicles).
     """
     plan = first_plan(log)
-    if plan is None:
+    group = key_group(log)
+    if group.get("VR", -1) < 0:
         raise ValueError(
-            "trajectories_figure needs a run with a merge plan (log.meta['plans'] is empty)"
+            "the trajectories figure needs a run in which a ramp vehicle reached the control "
+            "zone (no merge plan and no key vehicles in this log); allowed: a merge scenario "
+            "run long enough for the ramp vehicle to arrive"
         )
     road = road_geometry(log)
-    group = key_group(log)
     times = _times(log)
     n = log.n_recorded
-    t0 = float(plan["t0"])
+    t0 = key_time(log)
+    t0_label = "planning $t_0$" if plan is not None else "VR enters control zone"
     t_merge, _ = _merge_of(log)
 
     fig = new_figure(9.5, 9.0)
@@ -537,13 +574,14 @@ def trajectories_figure(log: SimulationLog) -> Figure:
             for t, _, _, _ in _lane_events(log, kind, [i]):
                 k = _row_of(log, t)
                 ax_path.plot([log.x[k, i]], [log.y[k, i]], linestyle="none", zorder=4, **style)
-    ax_path.axvline(
-        float(plan["merge_x"]),
-        color=ROLE_COLORS["VR"],
-        linewidth=1.0,
-        linestyle=(0, (2, 2)),
-        label=f"planned merge x = {plan['merge_x']:.0f} m",
-    )
+    if plan is not None:
+        ax_path.axvline(
+            float(plan["merge_x"]),
+            color=ROLE_COLORS["VR"],
+            linewidth=1.0,
+            linestyle=(0, (2, 2)),
+            label=f"planned merge x = {plan['merge_x']:.0f} m",
+        )
     if math.isfinite(t_merge):
         vr = group["VR"]
         k = _row_of(log, t_merge)
@@ -594,7 +632,7 @@ def trajectories_figure(log: SimulationLog) -> Figure:
                 linewidth=0,
                 label="VR lane change",
             )
-        ax.axvline(t0, color="0.2", linewidth=1.0, linestyle=(0, (4, 2)), label="planning $t_0$")
+        ax.axvline(t0, color="0.2", linewidth=1.0, linestyle=(0, (4, 2)), label=t0_label)
         if math.isfinite(t_merge):
             ax.axvline(
                 t_merge,
@@ -614,8 +652,11 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     ax_v.tick_params(labelbottom=False)
     ax_v.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
     title = run_title(log)
-    mode = str(plan.get("mode", "none"))
-    coop = "no cooperation by VMC" if mode == "none" else f"{mode} cooperation"
+    if plan is None:
+        coop = "no merge controller (gap acceptance)"
+    else:
+        mode = str(plan.get("mode", "none"))
+        coop = "no cooperation by VMC" if mode == "none" else f"{mode} cooperation"
     fig.suptitle(
         f"Merge trajectories — {title} · {coop}" if title else f"Merge trajectories · {coop}"
     )
@@ -827,6 +868,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
     centres = np.arange(len(conditions), dtype=np.float64)
     grouped = runs.groupby(["condition", "configuration"], sort=False)
     axes = []
+    short: dict[str, int] = {}  # metric -> runs without a value
     for m_index, metric in enumerate(metrics):
         ax = fig.add_subplot(grid[m_index // n_cols, m_index % n_cols])
         axes.append(ax)
@@ -838,7 +880,8 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
                     if (cond, conf) in grouped.groups
                     else pd.Series(dtype=float)
                 )
-                stats.append(mean_ci(part)[:2])
+                mean_c, half_c, n_c = mean_ci(part)
+                stats.append((mean_c, half_c, n_c, len(part)))
             mean = np.array([s[0] for s in stats])
             half = np.array([s[1] for s in stats])
             x = centres + (j - (len(configs) - 1) / 2) * width
@@ -864,6 +907,12 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
                     capsize=2.0,
                     zorder=3,
                 )
+            for xi, (m_c, h_c, n_c, rows) in zip(x, stats, strict=True):
+                if rows > 0 and n_c < rows:  # a mean over fewer seeds than were run
+                    short[metric] = short.get(metric, 0) + rows - n_c
+                    top = np.nan_to_num(m_c) + (h_c if np.isfinite(h_c) else 0.0)
+                    ax.annotate(f"n={n_c}", (xi, top), xytext=(0, 2), textcoords="offset points",
+                                ha="center", va="bottom", fontsize=7)  # fmt: skip
         ax.set_xticks(centres, [str(c) for c in conditions])
         ax.set_ylabel(LABELS.get(metric, metric))
         better = BETTER.get(metric)
@@ -878,6 +927,14 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
     seeds = (
         f"{n_seeds.min()}" if n_seeds.min() == n_seeds.max() else f"{n_seeds.min()}–{n_seeds.max()}"
     )
+    note = f"bars: mean over {seeds} seeds; whiskers: 95 % CI"
+    if short:
+        note += "; 'n=k': only k seeds give a value"
+    if "critical_distance" in short:
+        note += (
+            "; Crit. Dist. has no value in a run where VR did not merge or no two key "
+            "vehicles share a lane after the merge"
+        )
     free = len(metrics) % n_cols
     if n_rows > 1 and free:
         slot = fig.add_subplot(grid[n_rows - 1, free:])
@@ -893,7 +950,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
         slot.text(
             0.5,
             0.02,
-            f"bars: mean over {seeds} seeds; whiskers: 95 % CI",
+            textwrap.fill(note, 70),
             transform=slot.transAxes,
             ha="center",
             va="bottom",
@@ -906,7 +963,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
             loc="outside lower center",
             ncols=len(labels),
             frameon=False,
-            title=f"mean over {seeds} seeds, 95 % CI",
+            title=textwrap.fill(note, 110),
         )
     fig.suptitle("Merge metrics by condition and configuration")
     return fig

@@ -6,7 +6,8 @@ kind            inputs (``sources``)
 ==============  ===============================================================================
 contour         simulation logs (``log.npz`` / ``.parquet`` or the ``--out`` directory of
                 ``hcomc simulate``), one column each; or one scenario (preset name or TOML
-                file), simulated with FIFO, Game and HCOMC
+                file), simulated with FIFO, Game and HCOMC (without a controller when the
+                scenario has no merge, e.g. ``platoon``)
 timespace       one simulation log, or one scenario (simulated with HCOMC)
 trajectories    one simulation log, or one scenario (simulated with HCOMC)
 pareto          plan reports (JSON of ``hcomc plan --json``; a file may also hold a mapping
@@ -39,6 +40,7 @@ __all__ = [
     "PARETO_OPTIMIZERS",
     "controller_logs",
     "decision_reports",
+    "is_scenario",
     "load_log",
     "load_reports",
     "load_runs",
@@ -133,6 +135,11 @@ def load_reports(sources: Sequence[Source]) -> dict[str, dict[str, Any]]:
     reports: dict[str, dict[str, Any]] = {}
     for source in sources:
         path = Path(source)
+        if path.is_dir():
+            raise ValueError(
+                f"'{path}' is a directory, but a Pareto figure needs a plan report: the JSON "
+                "of 'hcomc plan CONFIG --json > plan.json', or a preset name to decide"
+            )
         if not path.is_file():
             raise ValueError(f"plan report '{path}' does not exist")
         try:
@@ -247,7 +254,7 @@ def decision_reports(
     return reports
 
 
-def _is_scenario(source: Source) -> bool:
+def is_scenario(source: Source) -> bool:
     """A preset name or a TOML file (as opposed to a data file or directory)."""
     path = Path(source)
     if path.suffix.lower() == ".toml":
@@ -256,7 +263,15 @@ def _is_scenario(source: Source) -> bool:
         return False
     from hcomc.config import preset_names
 
-    return str(source) in preset_names()
+    return str(source).lower() in {name.lower() for name in preset_names()}
+
+
+def _has_merge(scenario: Source) -> bool:
+    """Whether a scenario has ramp vehicles that merge (so controllers can be compared)."""
+    from hcomc.config import load_config
+
+    config = load_config(scenario)
+    return config.scenario == "merge" and config.demand.ramp != "none"
 
 
 def _labelled(logs: Sequence[SimulationLog]) -> dict[str, SimulationLog]:
@@ -313,16 +328,20 @@ def make_figure(
     sources = list(sources)
     if not sources:
         raise ValueError(f"figure kind '{kind}' needs at least one input")
-    scenario = len(sources) == 1 and _is_scenario(sources[0])
+    scenario = len(sources) == 1 and is_scenario(sources[0])
     if kind != "contour" and kind != "pareto" and len(sources) != 1:
         raise ValueError(f"figure kind '{kind}' takes exactly one input, got {len(sources)}")
 
     if kind == "contour":
-        logs = (
-            controller_logs(sources[0], seed=seed)
-            if scenario
-            else _labelled([load_log(s) for s in sources])
-        )
+        if scenario and not _has_merge(sources[0]):  # no merge: nothing for controllers to do
+            from hcomc.config import load_config
+            from hcomc.sim.engine import simulate
+
+            logs = {"no controller": simulate(load_config(sources[0]), seed)}
+        elif scenario:
+            logs = controller_logs(sources[0], seed=seed)
+        else:
+            logs = _labelled([load_log(s) for s in sources])
         return figures.contour_figure(logs, **options)
     if kind in ("timespace", "trajectories"):
         if scenario:

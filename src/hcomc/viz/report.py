@@ -1,4 +1,4 @@
-"""Self-contained HTML report of a reproduction run (DESIGN.md §1 item 6).
+"""Self-contained HTML report of a reproduction run.
 
 :func:`write_report` writes one HTML page holding everything: the paper's Tables II and III
 side by side with ours, the per-seed claims table, and the figures as base64 ``data:`` URIs.
@@ -14,6 +14,7 @@ import html
 import io
 import math
 import os
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -155,7 +156,9 @@ def _claims_table(frame: pd.DataFrame) -> str:
 
 def _figure_block(index: int, name: str, png: bytes) -> str:
     data = base64.b64encode(png).decode("ascii")
-    caption = f"Figure {index}. {name}"
+    # a caption that is already numbered ("Fig. 2 — …") is not numbered twice
+    numbered = re.match(r"(Fig\.|Figure)\s*\d", name) is not None
+    caption = name if numbered else f"Figure {index}. {name}"
     return (
         f'<figure id="figure-{index}">\n<img src="data:image/png;base64,{data}" '
         f'alt="{_e(name)}">\n<figcaption>{_e(caption)}</figcaption>\n</figure>'

@@ -1,0 +1,54 @@
+"""The example notebook script runs as documented and its results are the library's."""
+
+from __future__ import annotations
+
+import runpy
+from pathlib import Path
+
+import pytest
+
+from hcomc.metrics import METRICS
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "notebook_api.py"
+
+
+@pytest.fixture(scope="module")
+def cells() -> dict:
+    return runpy.run_path(str(EXAMPLE), run_name="__main__")
+
+
+def test_overrides_resolve_to_their_homes(cells):
+    config = cells["config"]
+    assert config.demand.cav_penetration == 0.5
+    assert config.demand.mean_headway_main_2 == 7.0  # the rest of C2 is kept
+    assert config.duration == 60.0
+    assert "demand.cav_penetration 0.9 -> 0.5" in config.description
+
+
+def test_metrics_cell_gives_every_paper_metric_for_the_logged_merge(cells):
+    metrics, log, group = cells["metrics"], cells["log"], cells["group"]
+    assert list(metrics) == list(METRICS)
+    assert group["VR"] >= 0
+    assert metrics["fuel"] > 0
+    assert metrics["collisions"] == 0
+    merges = cells["events"].query("kind == 'MERGE'")
+    assert group["VR"] in set(merges["vehicle"])  # the window is the recorded VR's merge
+    assert log.n_recorded == round(60.0 / 0.1) + 1
+
+
+def test_frames_match_the_log(cells):
+    log, frame = cells["log"], cells["frame"]
+    assert len(frame) == int(log.active[: log.n_recorded].sum())
+
+
+def test_custom_controller_is_called_once_per_ramp_vehicle(cells):
+    custom, controller = cells["custom"], cells["controller"]
+    assert len(controller.seen) == len(custom.decisions) == len(custom.key_groups) == 1
+    plans = cells["custom_log"].meta["plans"]
+    assert plans[0]["mode"] == "none"
+    assert plans[0]["reason"].startswith("lane-1 gap")
+
+
+def test_example_is_deterministic(cells):
+    again = runpy.run_path(str(EXAMPLE), run_name="__main__")
+    assert again["metrics"] == cells["metrics"]
