@@ -5,6 +5,7 @@ from __future__ import annotations
 import runpy
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from hcomc.metrics import METRICS
@@ -31,6 +32,9 @@ def test_metrics_cell_gives_every_paper_metric_for_the_logged_merge(cells):
     assert group["VR"] >= 0
     assert metrics["fuel"] > 0
     assert metrics["collisions"] == 0
+    for name in ("average_acceleration", "stabilisation_time", "lsrv"):  # vs the reference
+        assert np.isfinite(metrics[name]), name
+        assert metrics[name] >= 0.0, name
     merges = cells["events"].query("kind == 'MERGE'")
     assert group["VR"] in set(merges["vehicle"])  # the window is the recorded VR's merge
     assert log.n_recorded == round(60.0 / 0.1) + 1

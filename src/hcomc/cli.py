@@ -460,15 +460,23 @@ def _claims_view(frame: Any) -> Any:
     return view.drop(columns=["n"])
 
 
+REPRODUCE_FILES = ("runs.csv", "claims.csv", "table2.md", "table3.md")
+
+
 @app.command()
 def reproduce(
     seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 10,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results"),
+    force: Annotated[
+        bool, typer.Option("--force", help="Overwrite results already in the --out directory.")
+    ] = False,
+    settings: SetOption = None,
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA,
     and the replanning baselines FIFO-R, Game-R), seeded runs plus the deterministic paper
-    scenario."""
+    scenario. --set changes a config value for every run (e.g. a sensitivity check)."""
+    from hcomc.config import nest_overrides
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, grid
     from hcomc.experiments.tables import claims, paper_table, to_markdown
@@ -476,12 +484,17 @@ def reproduce(
 
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
-    if out_dir.exists() and not out_dir.is_dir():
-        raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    _refuse_overwrite(out_dir, REPRODUCE_FILES, force)
+    overrides = nest_overrides(_settings(settings))
+    for condition in CONDITIONS:  # validate before anything runs
+        _load(condition, **overrides)
     n_workers = _workers(workers)
     start = time.perf_counter()
-    seeded = grid(CONDITIONS, ALL_CONFIGURATIONS, range(seeds))
-    uniform = grid(CONDITIONS, ALL_CONFIGURATIONS, [0], PAPER_SCENARIO)
+    seeded = grid(CONDITIONS, ALL_CONFIGURATIONS, range(seeds), overrides)
+    paper = {**overrides}
+    for table, values in PAPER_SCENARIO.items():
+        paper[table] = {**overrides.get(table, {}), **values}
+    uniform = grid(CONDITIONS, ALL_CONFIGURATIONS, [0], paper)
     (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
 
     def save_manifest(i: int, row: dict[str, Any], manifest: dict[str, Any]) -> None:

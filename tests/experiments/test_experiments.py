@@ -129,3 +129,22 @@ def test_reproduce_writes_every_output(tmp_path):
         assert col in claims_csv
     for title in ("Table II", "Table III", "Paper scenario", "Claims"):
         assert title in result.stdout
+    for col in ("sequence", "replans", "eq19_branch"):
+        assert col in runs
+    assert set(runs["sequence"]) <= {"ahead", "behind", ""}
+    assert (runs.loc[runs["configuration"].isin(["FIFO", "Game"]), "replans"] == 0).all()
+    # a second run into the same directory is refused before anything runs
+    before = (tmp_path / "runs.csv").read_bytes()
+    again = CliRunner().invoke(app, ["reproduce", "--seeds", "1", "--out", str(tmp_path)])
+    assert again.exit_code == 2
+    assert "--force" in again.stderr
+    assert (tmp_path / "runs.csv").read_bytes() == before
+
+
+def test_reproduce_set_is_validated_before_anything_runs(tmp_path):
+    bad = CliRunner().invoke(
+        app, ["reproduce", "--out", str(tmp_path), "--set", "control.safety_emergency_decel=99"]
+    )
+    assert bad.exit_code == 2
+    assert "control.safety_emergency_decel" in bad.stderr
+    assert not (tmp_path / "runs.csv").exists()

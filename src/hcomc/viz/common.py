@@ -212,13 +212,13 @@ def first_plan(log: SimulationLog) -> dict[str, Any] | None:
 def key_group(log: SimulationLog) -> dict[str, int]:
     """Role -> vehicle slot of the first merge's key vehicles (-1 = missing).
 
-    From the first plan, or, in a run without a merge controller, from the key vehicles the
-    engine records when the first ramp vehicle enters the control zone
-    (``log.meta["key_groups"]``); {} if no ramp vehicle got that far.
+    The key vehicles the engine records when the first ramp vehicle enters the control zone,
+    before any control acts (``log.meta["key_groups"]``, the vehicles the metrics measure);
+    for a log without them, the first plan's group; {} if no ramp vehicle got that far.
     """
     plan = first_plan(log)
     groups = log.meta.get("key_groups") or []
-    group = plan.get("group", {}) if plan is not None else groups[0] if groups else None
+    group = groups[0] if groups else plan.get("group", {}) if plan is not None else None
     if group is None:
         return {}
     return {role: int(group.get(role, -1)) for role in KEY_ROLES}
