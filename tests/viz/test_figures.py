@@ -188,6 +188,19 @@ def test_pareto_figure(reports: dict[str, dict[str, Any]], tmp_path: Path) -> No
     check_files(fig, tmp_path, "pareto")
 
 
+def test_pareto_figure_draws_the_configured_safety_gate(reports: dict[str, dict[str, Any]]):
+    """The gate comes from the report's config (one home: control.safety_threshold)."""
+    assert reports["nsga2"]["safety_threshold"] == 4.0
+    moved = {k: {**r, "safety_threshold": 2.5} for k, r in reports.items()}
+    gate = [ln for ln in pareto_figure(moved).axes[0].lines if "safety gate" in ln.get_label()]
+    assert "2.5" in gate[0].get_label()
+    old = {
+        k: {key: v for key, v in r.items() if key != "safety_threshold"} for k, r in reports.items()
+    }
+    with pytest.raises(ValueError, match="safety_threshold"):
+        pareto_figure(old)
+
+
 def test_metrics_figure(runs: pd.DataFrame, tmp_path: Path) -> None:
     fig = metrics_figure(runs)
     axes = [ax for ax in fig.axes if ax.axison]

@@ -69,7 +69,6 @@ if TYPE_CHECKING:
 __all__ = [
     "LOW_SPEED_MARGIN",
     "METRIC_TITLES",
-    "SAFETY_THRESHOLD",
     "contour_figure",
     "metrics_figure",
     "pareto_figure",
@@ -79,10 +78,6 @@ __all__ = [
 
 LOW_SPEED_MARGIN = 1.0
 """The contour map outlines the low-speed region v < v_ref - LOW_SPEED_MARGIN [m/s]."""
-
-SAFETY_THRESHOLD = 4.0
-"""Default Eq. 19 gate on U_safe drawn in the Pareto figure [m/s^2]
-(``control.safety_threshold``)."""
 
 METRIC_TITLES = {
     "critical_distance": "Critical distance",
@@ -684,7 +679,7 @@ def _pick_front(reports: Mapping[str, Mapping[str, Any]]) -> str:
 
 
 def pareto_figure(
-    reports: Mapping[str, Mapping[str, Any]], *, safety_threshold: float = SAFETY_THRESHOLD
+    reports: Mapping[str, Mapping[str, Any]], *, safety_threshold: float | None = None
 ) -> Figure:
     """Pairwise projections of the Pareto set of one merge decision.
 
@@ -699,8 +694,9 @@ def pareto_figure(
         Optimiser name (``"nsga2"``, ``"pso"``, ``"sa"`` ...) -> plan report of
         :func:`hcomc.control.report.plan_report` for the same decision (same scenario and
         seed).
-    safety_threshold : float
-        U_safe gate of Eq. 19 [m/s^2], default 4 (``control.safety_threshold``).
+    safety_threshold : float or None
+        U_safe gate of Eq. 19 [m/s^2]; default: the ``control.safety_threshold`` the
+        decision ran with, recorded in its report.
 
     Returns
     -------
@@ -710,12 +706,19 @@ def pareto_figure(
     Raises
     ------
     ValueError
-        If *reports* is empty.
+        If *reports* is empty, or no threshold is given and a report does not record one.
     """
     if not reports:
         raise ValueError("pareto_figure needs at least one plan report, got none")
     front_key = _pick_front(reports)
     front = reports[front_key]
+    if safety_threshold is None:
+        if "safety_threshold" not in front:
+            raise ValueError(
+                f"plan report '{front_key}' does not record its safety_threshold "
+                "(written by an older hcomc): pass safety_threshold=..."
+            )
+        safety_threshold = float(front["safety_threshold"])
     pareto = list(front.get("pareto") or [])
     fig = new_figure(13.0, 4.6)
     axes = fig.subplots(1, 3)
