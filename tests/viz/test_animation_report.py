@@ -70,8 +70,8 @@ def test_gif_is_valid_and_animated(gif: Path) -> None:
 
 def test_animator_draws_key_vehicles_and_ghosts(c2_log: SimulationLog) -> None:
     plan = c2_log.meta["plans"][0]
-    animator = anim_mod._RoadAnimator(c2_log, (350.0, 1100.0))
-    row_in = int(np.argmin(np.abs(c2_log.t - (plan["t0"] + 1.0))))
+    animator = anim_mod._RoadAnimator(c2_log, (250.0, 1100.0))
+    row_in = int(np.argmin(np.abs(c2_log.t - (plan["t0"] + 0.5))))  # before the first replan
     animator.update(row_in)
     assert len(animator.ghost_patches.get_paths()) == sum(
         plan[k] is not None for k in ("vv0", "vv1", "vv2")
