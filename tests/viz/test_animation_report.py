@@ -79,7 +79,10 @@ def test_animator_draws_key_vehicles_and_ghosts(c2_log: SimulationLog) -> None:
     assert len(animator.vehicles.get_paths()) > 5
     assert animator.labels["VR"].get_visible()
     assert animator.clock.get_text() == f"t = {c2_log.t[row_in]:.1f} s"
-    row_after = int(np.argmin(np.abs(c2_log.t - (plan["t0"] + plan["horizon"] + 1.0))))
+    # once every plan's horizon is over (replans included), no virtual vehicle is left
+    horizons = [p["t0"] + p["horizon"] for p in c2_log.meta["plans"] if np.isfinite(p["horizon"])]
+    row_after = int(np.argmin(np.abs(c2_log.t - (max(horizons) + 1.0))))
+    assert c2_log.t[row_after] > max(horizons)
     animator.update(row_after)
     assert len(animator.ghost_patches.get_paths()) == 0
 
