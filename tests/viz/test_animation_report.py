@@ -79,12 +79,13 @@ def test_animator_draws_key_vehicles_and_ghosts(c2_log: SimulationLog) -> None:
     assert len(animator.vehicles.get_paths()) > 5
     assert animator.labels["VR"].get_visible()
     assert animator.clock.get_text() == f"t = {c2_log.t[row_in]:.1f} s"
-    # once every plan's horizon is over (replans included), no virtual vehicle is left
-    horizons = [p["t0"] + p["horizon"] for p in c2_log.meta["plans"] if np.isfinite(p["horizon"])]
-    row_after = int(np.argmin(np.abs(c2_log.t - (max(horizons) + 1.0))))
-    assert c2_log.t[row_after] > max(horizons)
-    animator.update(row_after)
-    assert len(animator.ghost_patches.get_paths()) == 0
+    # the ghosts are the first plan's cubics at that time (front bumper = max x of the patch)
+    tau = c2_log.t[row_in] - plan["t0"]
+    fronts = sorted(float(path.vertices[:, 0].max()) for path in animator.ghost_patches.get_paths())
+    expected = sorted(
+        float(np.polyval(plan[k][::-1], tau)) for k in ("vv0", "vv1", "vv2") if plan[k]
+    )
+    np.testing.assert_allclose(fronts, expected, atol=1e-6)
 
 
 def test_mp4_without_ffmpeg_is_a_clear_error(
