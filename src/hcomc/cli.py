@@ -491,3 +491,13 @@ def _print_summary(summary: dict[str, Any]) -> None:
     for row in rows:
         table.add_row(*row)
     out.print(table)
+
+
+def _register_sumo() -> None:
+    """SUMO interoperability commands (need the optional extra only when they run)."""
+    from hcomc.sumo.cli import export_app
+
+    app.add_typer(export_app, name="export")
+
+
+_register_sumo()
