@@ -495,9 +495,10 @@ def _print_summary(summary: dict[str, Any]) -> None:
 
 def _register_sumo() -> None:
     """SUMO interoperability commands (need the optional extra only when they run)."""
-    from hcomc.sumo.cli import export_app
+    from hcomc.sumo.cli import export_app, metrics
 
     app.add_typer(export_app, name="export")
+    app.command("metrics")(metrics)
 
 
 _register_sumo()

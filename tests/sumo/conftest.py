@@ -22,3 +22,17 @@ def c1_scenario(c1: ScenarioConfig, tmp_path_factory: pytest.TempPathFactory) ->
     from hcomc.sumo.export import export_scenario
 
     return export_scenario(c1, 0, tmp_path_factory.mktemp("c1")).sumocfg
+
+
+@pytest.fixture(scope="session")
+def c1_run(c1: ScenarioConfig, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A `hcomc simulate --out` directory of C1 (our engine, no controller, seed 0)."""
+    from typer.testing import CliRunner
+
+    from hcomc.cli import app
+
+    out = tmp_path_factory.mktemp("run") / "c1"
+    done = CliRunner().invoke(app, ["simulate", "C1", "--duration", str(c1.duration),
+                                    "--seed", "0", "--out", str(out), "--json"])  # fmt: skip
+    assert done.exit_code == 0, done.output
+    return out

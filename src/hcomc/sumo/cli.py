@@ -6,6 +6,7 @@ works without the ``sumo`` extra. Errors print one line and exit with status 2.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 from typing import Annotated, Any
@@ -73,3 +74,174 @@ def export_sumo(
     except (SumoMissingError, SumoFormatError, ValueError) as exc:
         raise fail(str(exc)) from None
     _out.print(f"wrote {scenario.directory}/ · run it with: sumo -c {scenario.sumocfg}")
+
+
+def _run_log(run_dir: Path) -> tuple[Any, ScenarioConfig]:
+    """The log of a `hcomc simulate --out` directory (or a log file) and its config."""
+    from hcomc.config import ConfigError, validate_config
+    from hcomc.viz.inputs import load_log
+
+    try:
+        log = load_log(run_dir)
+        config = validate_config(log.meta["config"], f"{run_dir} (config in the log)")
+    except (ValueError, ConfigError, KeyError, OSError) as exc:
+        raise fail(f"RUN_DIR = '{run_dir}': {exc}") from None
+    return log, config
+
+
+@export_app.command("trajectories")
+def export_trajectories(
+    run_dir: Annotated[
+        Path, typer.Argument(metavar="RUN_DIR", help="A `hcomc simulate --out` directory or log.")
+    ],
+    fmt: Annotated[str, typer.Option("--format", help="highd, fcd or csv.")],
+    out: Annotated[
+        Path, typer.Option("--out", help="Output file (fcd, csv) or directory (highd).")
+    ],
+    force: Annotated[bool, typer.Option(help="Overwrite existing output.")] = False,
+) -> None:
+    """Write a run's trajectories as highD-style tracks, SUMO FCD XML or long CSV."""
+    from hcomc.sumo.trajectories import FORMATS, write_csv, write_fcd, write_highd
+
+    if fmt not in FORMATS:
+        raise fail(f"option '--format' = '{fmt}': allowed: {', '.join(FORMATS)}")
+    _fresh_target(out, "--out", force)
+    log, config = _run_log(run_dir)
+    if fmt == "fcd":
+        written = write_fcd(log, out, config)
+    elif fmt == "csv":
+        written = write_csv(log, out)
+    else:
+        if out.exists() and not out.is_dir():
+            raise fail(f"option '--out' = '{out}': --format highd writes a directory")
+        written = write_highd(log, out, config)
+    _out.print(f"wrote {written}")
+
+
+def _file_config(path: Path, source: str | None) -> ScenarioConfig:
+    """--config, else the scenario.toml / manifest.json / log beside the file."""
+    from hcomc.config import validate_config
+
+    if source is not None:
+        return _config(source)
+    folder = path if path.is_dir() else path.parent
+    if (folder / "scenario.toml").is_file():
+        return _config(str(folder / "scenario.toml"))
+    manifest = folder / "manifest.json"
+    if manifest.is_file():
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+        if "config" in data:
+            try:
+                return validate_config(data["config"], str(manifest))
+            except ConfigError as exc:
+                raise fail(str(exc)) from None
+    raise fail(
+        f"FILE = '{path}': no road geometry found (no scenario.toml or manifest.json beside "
+        "it); allowed: --config with a preset name (C1..C5) or TOML file"
+    )
+
+
+def _role_ids(values: dict[str, str | None], ids: dict[str, int]) -> dict[str, int]:
+    out = {}
+    for role, value in values.items():
+        if value is None:
+            continue
+        if value not in ids:
+            shown = ", ".join(list(ids)[:5])
+            raise fail(
+                f"option '--{role.lower()}' = '{value}': no such vehicle in the file; "
+                f"allowed: its vehicle ids (e.g. {shown})"
+            )
+        out[role] = ids[value]
+    return out
+
+
+def metrics(
+    file: Annotated[
+        Path, typer.Argument(metavar="FILE", help="SUMO FCD XML, or a highD-style directory.")
+    ],
+    config: Annotated[
+        str | None,
+        typer.Option(help="Road geometry: preset or TOML (default: scenario.toml beside FILE)."),
+    ] = None,
+    vr: Annotated[str | None, typer.Option(help="Id of the merging vehicle VR.")] = None,
+    vmc: Annotated[str | None, typer.Option(help="Id of VMC (default: found).")] = None,
+    vmf: Annotated[str | None, typer.Option(help="Id of VMF (default: found).")] = None,
+    vmr: Annotated[str | None, typer.Option(help="Id of VMR (default: found).")] = None,
+    vnf: Annotated[str | None, typer.Option(help="Id of VNF (default: found).")] = None,
+    vnr: Annotated[str | None, typer.Option(help="Id of VNR (default: found).")] = None,
+    log_out: Annotated[
+        Path | None,
+        typer.Option("--log-out", help="Also save the trajectories as a log (.npz) for plot."),
+    ] = None,
+    figures: Annotated[
+        Path | None, typer.Option(help="Write timespace and contour figures (PNG) here.")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,
+) -> None:
+    """Our merge metrics from an external FCD or highD-style trajectory file."""
+    from hcomc.sumo import SumoFormatError
+    from hcomc.sumo.external import derive_events, score_merges
+    from hcomc.sumo.trajectories import read_fcd, read_highd
+
+    if not file.exists():
+        raise fail(f"FILE = '{file}': does not exist")
+    cfg = _file_config(file, config)
+    try:
+        if file.is_dir() or file.suffix.lower() == ".csv":
+            log, ids = read_highd(file, cfg)
+        elif file.suffix.lower() == ".xml":
+            log, ids = read_fcd(file, cfg)
+        else:
+            raise SumoFormatError(
+                f"{file}: unknown trajectory format; allowed: SUMO FCD (.xml) or a highD-style "
+                "directory / tracks.csv"
+            )
+    except SumoFormatError as exc:
+        raise fail(str(exc)) from None
+    derive_events(log, cfg)
+    roles = {"VMC": vmc, "VMF": vmf, "VMR": vmr, "VNF": vnf, "VNR": vnr}
+    if vr is None and any(roles.values()):
+        raise fail("options '--vmc' ... '--vnr' need '--vr' (the merging vehicle they belong to)")
+    groups = None
+    if vr is not None:
+        groups = {_role_ids({"VR": vr}, ids)["VR"]: _role_ids(roles, ids)}
+    scores = score_merges(log, cfg, groups)
+    names = {slot: vid for vid, slot in ids.items()}
+    rows = []
+    for s in scores:
+        log.meta.setdefault("key_groups", []).append(s.group.as_dict())
+        keys = {r: names.get(i, "") for r, i in s.group.as_dict().items()}
+        rows.append({**{f"{r.lower()}": k for r, k in keys.items()}, **s.metrics})
+    if log_out is not None:
+        log.save(log_out)
+    if figures is not None:
+        _figures(log, figures)
+    if as_json:
+        sys.stdout.write(json.dumps(rows, default=float) + "\n")
+        return
+    _print_rows(rows, file)
+
+
+def _figures(log: Any, folder: Path) -> None:
+    from hcomc.viz.common import save_figure
+    from hcomc.viz.figures import contour_figure, timespace_figure
+
+    folder.mkdir(parents=True, exist_ok=True)
+    save_figure(timespace_figure(log), folder / "timespace.png")
+    save_figure(contour_figure({"external": log}), folder / "contour.png")
+    _err.print(f"wrote {folder}/timespace.png, contour.png")  # stdout may carry --json
+
+
+def _print_rows(rows: list[dict[str, Any]], file: Path) -> None:
+    from rich.table import Table
+
+    if not rows:
+        _out.print(f"{file}: no ramp vehicle (first seen on the ramp lane) to score")
+        return
+    table = Table(title=f"merge metrics · {file}")
+    for col in rows[0]:
+        table.add_column(col, justify="right")
+    for row in rows:
+        table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row.values()))
+    _out.print(table)
