@@ -102,7 +102,8 @@ def test_metrics_of_an_fcd_file_sumo_wrote(c1_scenario: Path, tmp_path: Path) ->
     assert 'departLane="0"' in routes.split(f'id="{row["vr"]}"')[1].split("/>")[0]
     assert row["collisions"] == 0
     for name in ("critical_distance", "average_acceleration", "lsrv", "fuel", "pet"):
-        assert np.isfinite(row[name]) and row[name] > 0, name
+        assert np.isfinite(row[name]), name
+        assert row[name] > 0, name
     # the saved log is a regular SimulationLog that plot / animate accept
     assert SimulationLog.load(tmp_path / "sumo.npz").n_recorded > 0
 

@@ -16,8 +16,9 @@ reads back directly.
   down: ``y_highD = -y``), ``width`` the vehicle length and ``height`` its width, frames are
   1-based, driving direction 2 (towards +x). ``laneId`` counts from the top: 1 = lane 2,
   2 = lane 1, 3 = ramp / acceleration lane. tracksMeta carries an extra ``vehicleKind``
-  column (HDV/CAV) and the directory the resolved config (``scenario.toml``, road geometry). ``dhw`` is front-to-front, ``thw = dhw / v``, ``ttc`` = bumper gap /
-  closing speed; 0 where undefined, as in highD.
+  column (HDV/CAV), and the directory the resolved config (``scenario.toml``: road geometry).
+  ``dhw`` is front-to-front, ``thw = dhw / v``, ``ttc`` = bumper gap / closing speed; 0 where
+  undefined, as in highD.
 * **CSV**: :meth:`SimulationLog.to_frame`, one row per active (step, vehicle) cell.
 """
 
