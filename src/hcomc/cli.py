@@ -11,6 +11,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -83,6 +84,19 @@ def config_show(config: ConfigArg) -> None:
 Optimizer = Annotated[
     str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
 ]
+Engine = Annotated[
+    str, typer.Option(help="Simulation engine: hcomc, or sumo (SUMO co-simulation, hcomc[sumo]).")
+]
+
+
+def _engine(engine: str) -> str:
+    """Validate --engine (and that SUMO is installed when asked for)."""
+    from hcomc.sumo.cli import engine_error
+
+    problem = engine_error(engine)
+    if problem is not None:
+        raise _fail(problem)
+    return engine
 
 
 @app.command()
@@ -101,9 +115,10 @@ def simulate(
         typer.Option(help="Merge controller: none, fifo, game, hcomc (default: config)."),
     ] = None,
     optimizer: Optimizer = None,
+    engine: Engine = "hcomc",
 ) -> None:
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
-    from hcomc.sim.engine import Simulation
+    from hcomc.experiments.runner import make_simulation
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
@@ -114,7 +129,7 @@ def simulate(
     cfg = _load(config, duration=duration, seed=seed, control=control)
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
-    sim = Simulation(cfg)
+    sim = make_simulation(cfg, None, _engine(engine))
     start = time.perf_counter()
     with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
         log = sim.run(None if as_json else update)
@@ -261,6 +276,7 @@ def run(
     seeds: Annotated[int, typer.Option(help="Number of seeds (0 .. N-1).")] = 1,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,
+    engine: Engine = "hcomc",
 ) -> None:
     """Run one scenario with one merge controller over seeds and print the paper's metrics."""
     from hcomc.experiments.runner import CONFIGURATIONS, grid
@@ -277,9 +293,11 @@ def run(
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     _load(config)  # validate before anything runs
-    frame = _progress_grid(
-        grid([config], [labels[(controller, opt)]], range(seeds)), _workers(workers)
-    )
+    engine = _engine(engine)
+    specs = [
+        replace(s, engine=engine) for s in grid([config], [labels[(controller, opt)]], range(seeds))
+    ]
+    frame = _progress_grid(specs, _workers(workers))
     if as_json:
         sys.stdout.write(frame.to_json(orient="records") + "\n")
         return
@@ -311,6 +329,7 @@ def reproduce(
     seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 10,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results"),
+    engine: Engine = "hcomc",
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA)."""
     from hcomc.experiments.runner import CONFIGURATIONS, grid
@@ -321,9 +340,9 @@ def reproduce(
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     if out_dir.exists() and not out_dir.is_dir():
         raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
-    n_workers = _workers(workers)
+    n_workers, engine = _workers(workers), _engine(engine)
     start = time.perf_counter()
-    specs = grid(CONDITIONS, CONFIGURATIONS, range(seeds))
+    specs = [replace(s, engine=engine) for s in grid(CONDITIONS, CONFIGURATIONS, range(seeds))]
     (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
 
     def save_manifest(i: int, row: dict[str, Any], manifest: dict[str, Any]) -> None:

@@ -32,14 +32,19 @@ CONFIGURATIONS: dict[str, tuple[str, str]] = {
 """Configuration label -> (controller, optimiser); the optimiser only matters for HCOMC."""
 
 
+ENGINES = ("hcomc", "sumo")
+"""Simulation engines: our own, or SUMO co-simulation (optional extra ``hcomc[sumo]``)."""
+
+
 @dataclass(frozen=True)
 class RunSpec:
-    """One run: a condition (preset or TOML path), a configuration and a seed."""
+    """One run: a condition (preset or TOML path), a configuration, a seed and an engine."""
 
     condition: str
     configuration: str
     seed: int
     overrides: dict[str, Any] = field(default_factory=dict, hash=False)
+    engine: str = "hcomc"
 
     def config_overrides(self) -> dict[str, Any]:
         """Top-level config overrides, with the configuration's controller and optimiser."""
@@ -68,14 +73,26 @@ def grid(
     ]
 
 
+def make_simulation(config: Any, seed: int | None = None, engine: str = "hcomc") -> Any:
+    """A run of ``config`` on the named engine (SUMO is imported only when asked for)."""
+    if engine == "sumo":
+        from hcomc.sumo.cosim import SumoSimulation
+
+        return SumoSimulation(config, seed)
+    if engine != "hcomc":
+        raise ValueError(f"engine '{engine}'; allowed: {', '.join(ENGINES)}")
+    from hcomc.sim.engine import Simulation
+
+    return Simulation(config, seed)
+
+
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
     """Simulate one run and compute its metrics: ``(row, manifest)``."""
     from hcomc.metrics import compute_metrics, merge_window
-    from hcomc.sim.engine import Simulation
 
     config = load_config(spec.condition, **spec.config_overrides())
     start = time.perf_counter()
-    sim = Simulation(config, spec.seed)
+    sim = make_simulation(config, spec.seed, spec.engine)
     log = sim.run()
     controller, optimizer = CONFIGURATIONS[spec.configuration]
     row: dict[str, Any] = {
@@ -113,6 +130,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
             "condition": spec.condition,
             "configuration": spec.configuration,
             "seed": spec.seed,
+            "engine": spec.engine,
         },
     }
     return row, manifest

@@ -245,3 +245,20 @@ def _print_rows(rows: list[dict[str, Any]], file: Path) -> None:
     for row in rows:
         table.add_row(*(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row.values()))
     _out.print(table)
+
+
+def engine_error(engine: str) -> str | None:
+    """Why ``--engine`` cannot run here (one line), or None when it can."""
+    from hcomc.experiments.runner import ENGINES
+
+    if engine not in ENGINES:
+        return f"option '--engine' = '{engine}': allowed: {', '.join(ENGINES)}"
+    if engine == "sumo":
+        from hcomc.sumo import SumoMissingError, import_libsumo, sumo_binary
+
+        try:
+            import_libsumo()
+            sumo_binary("netconvert")
+        except SumoMissingError as exc:
+            return f"option '--engine' = 'sumo': {exc}"
+    return None

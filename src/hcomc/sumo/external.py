@@ -25,7 +25,14 @@ from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.road import Lane, lane_centre
 
-__all__ = ["MergeScore", "derive_events", "key_group_at_entry", "ramp_vehicles", "score_merges"]
+__all__ = [
+    "MergeScore",
+    "collision_events",
+    "derive_events",
+    "key_group_at_entry",
+    "ramp_vehicles",
+    "score_merges",
+]
 
 _SETTLED = 1e-3  # lateral offset [lane widths] below which a lane change is complete
 
@@ -51,10 +58,13 @@ def derive_events(log: SimulationLog, config: ScenarioConfig) -> None:
             if merged.any():
                 r = int(rows[int(np.argmax(merged))])
                 log.add_event(log.t[r], EventKind.MERGE, i, x=float(log.x[r, i]))
-    _collisions(log)
+    for t, kind, i, j, x in collision_events(log):
+        log.add_event(t, kind, i, other=j, x=x)
 
 
-def _collisions(log: SimulationLog) -> None:
+def collision_events(log: SimulationLog) -> list[tuple[float, EventKind, int, int, float]]:
+    """``(t, COLLISION, i, j, x_i)`` when the rectangles of i and j start to overlap (Eq. 7)."""
+    events: list[tuple[float, EventKind, int, int, float]] = []
     overlapping: set[tuple[int, int]] = set()
     for k in range(log.n_recorded):
         ids = np.flatnonzero(log.active[k])
@@ -72,8 +82,9 @@ def _collisions(log: SimulationLog) -> None:
             )  # fmt: skip
             now = set(zip(a[hit].tolist(), b[hit].tolist(), strict=True))
         for i, j in sorted(now - overlapping):
-            log.add_event(log.t[k], EventKind.COLLISION, i, other=j, x=float(log.x[k, i]))
+            events.append((float(log.t[k]), EventKind.COLLISION, i, j, float(log.x[k, i])))
         overlapping = now
+    return events
 
 
 def ramp_vehicles(log: SimulationLog) -> list[int]:
