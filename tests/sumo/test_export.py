@@ -65,6 +65,23 @@ def test_vtypes_and_vehicles_come_from_config_and_seeded_demand(
     assert np.all(np.diff(depart) >= 0)  # SUMO needs departures sorted
 
 
+def test_departures_keep_our_release_positions(c1: ScenarioConfig) -> None:
+    from hcomc.sumo.network import road_edges
+    from hcomc.sumo.routes import departures
+
+    demand = generate_demand(c1, make_rng(0))
+    start = {f"from_{e.id}": e.x0 for e in road_edges(c1)}
+    for d in departures(c1, demand):
+        x = float(demand.x[d.slot])
+        front = start[d.route] + d.pos
+        if x - start[d.route] >= c1.road.vehicle_length:
+            assert front == pytest.approx(x)  # SUMO's x is ours
+        else:  # a front within one length of an edge start moves forward to one length
+            assert front - x == pytest.approx(c1.road.vehicle_length - (x - start[d.route]))
+        assert d.speed == demand.v[d.slot]
+        assert d.depart == pytest.approx(demand.t[d.slot] + c1.warmup)
+
+
 def test_sumo_runs_the_export_unchanged_without_warnings(c1_scenario: Path, tmp_path: Path) -> None:
     from hcomc.sumo import sumo_binary
 

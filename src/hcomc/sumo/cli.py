@@ -13,6 +13,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from hcomc.config import ConfigError, ScenarioConfig, load_config
 
@@ -27,7 +28,7 @@ _err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
 def fail(message: str) -> typer.Exit:
     """Print a one-line error and return the exit (status 2) to raise."""
-    _err.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True, markup=True)
+    _err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code=2)
 
 

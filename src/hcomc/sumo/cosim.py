@@ -17,8 +17,10 @@ options), run in process through libsumo. Every step:
    whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
    (:func:`hcomc.sim.fleet.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
    pass our MOBIL safety criterion and are executed by ``changeLane`` with the plan's duration
-   (lateral speed = lane width / duration). Commanded vehicles make no lane changes of their
-   own while their plan lasts (SUMO lane-change mode 512).
+   (lateral speed = lane width / duration) once SUMO's own safety check admits them too.
+   Commanded vehicles make no lane changes of their own while their plan lasts (SUMO
+   lane-change mode 512); a VR whose change has not begun three vehicle lengths before the
+   acceleration-lane end is handed back to SUMO's own merging (logged as a fallback).
 
 Collisions are found with our oriented-rectangle test (Eq. 7) on every logged row, as for any
 external trajectory; SUMO's own collision count is kept in the log's metadata.
@@ -349,16 +351,20 @@ class SumoSimulation:
                     p.released = True
                     self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
             vr = g.vr
-            if not p.vr_commanded or p.vr_started or p.released or changing[vr]:
+            if not p.vr_commanded or p.vr_started or p.released:
                 continue
-            if self.x[vr] >= p.plan.merge_x:
-                if self._safe_change(vr, Lane.MAIN_1, ids):
-                    self._change_lane(vr, Lane.MAIN_1, float(p.plan.vr_duration))
-                    p.vr_started = True
-                elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
-                    p.released = True
-                    self._release(vr)
-                    self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
+            if changing[vr]:  # SUMO is executing the commanded change
+                p.vr_started = True
+            elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
+                # not begun 3 lengths before the lane end (our safety criterion or SUMO's
+                # refused it): VR falls back to SUMO's own merging, as to gap acceptance
+                p.released = True
+                self._release(vr)
+                self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
+            elif self.x[vr] >= p.plan.merge_x and self._safe_change(vr, Lane.MAIN_1, ids):
+                # requested again every step until SUMO, whose own safety check also
+                # applies, starts it
+                self._change_lane(vr, Lane.MAIN_1, float(p.plan.vr_duration))
 
     def _release(self, i: int) -> None:
         """Hand vehicle i back to SUMO: own lane changes, own speed, its type's lateral speed."""
