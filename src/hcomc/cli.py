@@ -89,11 +89,11 @@ Engine = Annotated[
 ]
 
 
-def _engine(engine: str) -> str:
-    """Validate --engine (and that SUMO is installed when asked for)."""
+def _engine(engine: str, config: ScenarioConfig | None = None) -> str:
+    """Validate --engine (SUMO installed and able to run ``config`` when asked for)."""
     from hcomc.sumo.cli import engine_error
 
-    problem = engine_error(engine)
+    problem = engine_error(engine, config)
     if problem is not None:
         raise _fail(problem)
     return engine
@@ -129,7 +129,7 @@ def simulate(
     cfg = _load(config, duration=duration, seed=seed, control=control)
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
-    sim = make_simulation(cfg, None, _engine(engine))
+    sim = make_simulation(cfg, None, _engine(engine, cfg))
     start = time.perf_counter()
     with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
         log = sim.run(None if as_json else update)
@@ -292,8 +292,7 @@ def run(
         )
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
-    _load(config)  # validate before anything runs
-    engine = _engine(engine)
+    engine = _engine(engine, _load(config))  # validate before anything runs
     specs = [
         replace(s, engine=engine) for s in grid([config], [labels[(controller, opt)]], range(seeds))
     ]

@@ -125,3 +125,20 @@ def test_missing_sumo_is_one_line_with_the_install_hint(monkeypatch: pytest.Monk
     assert done.exit_code == 2
     assert 'pip install "hcomc[sumo]"' in done.output
     assert "Traceback" not in done.output
+
+
+def test_side_by_side_reports_sumo_relative_to_ours() -> None:
+    import pandas as pd
+
+    from hcomc.sumo.crossval import side_by_side
+
+    runs = pd.DataFrame(
+        {
+            "configuration": ["FIFO"] * 4,
+            "engine": ["hcomc", "sumo", "hcomc", "sumo"],
+            "fuel": [2.0, 3.0, 4.0, 3.0],
+        }
+    )
+    (row,) = side_by_side(runs, ["fuel"]).to_dict("records")
+    assert (row["hcomc"], row["sumo"]) == (3.0, 3.0)
+    assert row["difference"] == 0.0

@@ -248,18 +248,21 @@ def _print_rows(rows: list[dict[str, Any]], file: Path) -> None:
     _out.print(table)
 
 
-def engine_error(engine: str) -> str | None:
-    """Why ``--engine`` cannot run here (one line), or None when it can."""
+def engine_error(engine: str, config: ScenarioConfig | None = None) -> str | None:
+    """Why ``--engine`` cannot run here or cannot run ``config`` (one line), or None."""
     from hcomc.experiments.runner import ENGINES
 
     if engine not in ENGINES:
         return f"option '--engine' = '{engine}': allowed: {', '.join(ENGINES)}"
     if engine == "sumo":
         from hcomc.sumo import SumoMissingError, import_libsumo, sumo_binary
+        from hcomc.sumo.routes import check_exportable
 
         try:
             import_libsumo()
             sumo_binary("netconvert")
-        except SumoMissingError as exc:
+            if config is not None:
+                check_exportable(config)
+        except (SumoMissingError, ValueError) as exc:
             return f"option '--engine' = 'sumo': {exc}"
     return None

@@ -69,6 +69,15 @@ def side_by_side(runs: pd.DataFrame, metrics: Iterable[str]) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def _markdown(table: pd.DataFrame) -> str:
+    lines = ["| configuration | metric | hcomc | sumo | difference |", "|---|---|---|---|---|"]
+    for row in table.itertuples(index=False):
+        diff = "—" if not np.isfinite(row.difference) else f"{100 * row.difference:+.1f} %"
+        lines.append(f"| {row.configuration} | {row.metric} | {row.hcomc:.4g} | {row.sumo:.4g} "
+                     f"| {diff} |")  # fmt: skip
+    return "\n".join(lines)
+
+
 def _main() -> None:  # pragma: no cover - documentation helper
     from hcomc.metrics import METRICS
 
@@ -76,10 +85,12 @@ def _main() -> None:  # pragma: no cover - documentation helper
     parser.add_argument("condition")
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--configurations", default="FIFO,Game,HCOMC")
+    parser.add_argument("--out", help="also write every run's row to this CSV file")
     args = parser.parse_args()
     runs = cross_validate(args.condition, range(args.seeds), args.configurations.split(","))
-    table = side_by_side(runs, [m for m in METRICS if m in runs.columns])
-    print(table.to_markdown(index=False, floatfmt=".4g"))
+    if args.out:
+        runs.to_csv(args.out, index=False)
+    print(_markdown(side_by_side(runs, [m for m in METRICS if m in runs.columns])))
 
 
 if __name__ == "__main__":  # pragma: no cover

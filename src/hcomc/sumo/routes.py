@@ -41,7 +41,7 @@ def vtype_attributes(config: ScenarioConfig, kind: Kind) -> dict[str, str]:
     road, lc = config.road, config.lane_change
     if params.variant != "idm":
         raise ValueError(
-            f"{'cav' if kind == Kind.CAV else 'hdv'}.variant = '{params.variant}': SUMO export "
+            f"key '{'cav' if kind == Kind.CAV else 'hdv'}.variant' = '{params.variant}': SUMO "
             "supports only 'idm' (SUMO's IDM; the improved IDM has no SUMO counterpart)"
         )
     attrs = {
@@ -112,10 +112,17 @@ def departures(config: ScenarioConfig, demand: Demand) -> list[Departure]:
     return out
 
 
+def check_exportable(config: ScenarioConfig) -> None:
+    """Raise ValueError (key, value, what is allowed) if SUMO cannot represent ``config``."""
+    if config.scenario != "merge":
+        raise ValueError(f"key 'scenario' = '{config.scenario}': SUMO supports only 'merge'")
+    for kind in (Kind.HDV, Kind.CAV):
+        vtype_attributes(config, kind)
+
+
 def routes_xml(config: ScenarioConfig, seed: int) -> str:
     """The ``.rou.xml`` text: vTypes, one route per starting edge, every demand vehicle."""
-    if config.scenario != "merge":
-        raise ValueError(f"scenario = '{config.scenario}': SUMO export supports only 'merge'")
+    check_exportable(config)
     demand = generate_demand(config, make_rng(seed))
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', "<routes>"]
     for kind in (Kind.HDV, Kind.CAV):

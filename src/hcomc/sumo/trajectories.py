@@ -368,9 +368,10 @@ def _fill(
     if bad.any():
         k = int(np.argmax(bad))
         raise SumoFormatError(
-            f"{path}: vehicle slot {int(col[k])} at y = {y[k]:.2f} m is off the road; expected "
-            f"y within the lane centres +-{config.road.lane_width / 2:.2f} m of "
-            f"{-config.road.lane_width:.2f}, 0, {config.road.lane_width:.2f} (our road's frame)"
+            f"{path}: vehicle slot {int(col[k])} at x = {x[k]:.2f} m, y = {y[k]:.2f} m is off "
+            f"the road (lane {int(lane[k])}); expected the lanes of our road: centres at y = "
+            f"{-config.road.lane_width:.2f} (ramp), 0 (lane 1), {config.road.lane_width:.2f} "
+            "(lane 2), each one lane width wide"
         )
     log.active[row, col] = True
     log.x[row, col], log.y[row, col], log.v[row, col] = x, y, v
