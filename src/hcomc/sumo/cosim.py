@@ -16,11 +16,13 @@ options), run in process through libsumo. Every step:
 4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.execution`): a commanded CAV
    whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
    (:func:`hcomc.sim.fleet.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
-   pass our MOBIL safety criterion and are executed by ``changeLane`` with the plan's duration
-   (lateral speed = lane width / duration) once SUMO's own safety check admits them too.
-   Commanded vehicles make no lane changes of their own while their plan lasts (SUMO
-   lane-change mode 512); a VR whose change has not begun three vehicle lengths before the
-   acceleration-lane end is handed back to SUMO's own merging (logged as a fallback).
+   pass our MOBIL safety criterion (b_safe, as in our engine) and are executed by
+   ``changeLane`` with the plan's duration (lateral speed = lane width / duration); SUMO only
+   rules out immediate collisions (lane-change mode 256), since its own check, built on the
+   comfortable deceleration b, is stricter than the model the plans are made with.
+   Commanded vehicles make no lane changes of their own while their plan lasts; a VR whose
+   change has not begun three vehicle lengths before the acceleration-lane end is handed back
+   to SUMO's own merging (logged as a fallback).
 
 Collisions are found with our oriented-rectangle test (Eq. 7) on every logged row, as for any
 external trajectory; SUMO's own collision count is kept in the log's metadata.
@@ -61,7 +63,9 @@ from hcomc.sumo.routes import vehicle_id
 __all__ = ["SumoSimulation"]
 
 _DEFAULT_LC_MODE = 1621  # SUMO's default lane-change mode
-_COMMANDED_LC_MODE = 512  # no own lane changes; TraCI requests still respect safety
+# no own lane changes; a commanded change (already passed by our MOBIL safety criterion, as in
+# our engine) only has to avoid immediate collisions, not SUMO's stricter comfort-gap check
+_COMMANDED_LC_MODE = 256
 _SETTLED = 1e-3  # lateral offset [lane widths] below which a vehicle keeps its lane
 
 
