@@ -4,7 +4,9 @@ Vehicle types map our parameters one to one onto SUMO's IDM (``carFollowModel="I
 v0 -> ``maxSpeed`` (with ``speedFactor`` 1 and an edge limit above every v0, SUMO's IDM desired
 speed is exactly v0), T -> ``tau``, s0 -> ``minGap``, a -> ``accel``, b -> ``decel``, delta ->
 ``delta``, the physical braking limit -> ``emergencyDecel``, length and width from the road.
-Lane changes use SUMO's LC2013 model with the politeness as ``lcCooperative``; a change takes
+Lane changes use SUMO's LC2013 model with the politeness as ``lcCooperative`` and overtaking
+on the right allowed (``lcOvertakeRight`` 1, as in our model, where car-following sees only
+the own lane); a change takes
 ``lane_change_duration`` seconds (``maxSpeedLat`` = lane width / duration, continuous lane
 changes). What SUMO's IDM does not have: the human driver model's reaction delays and
 estimation errors (Eq. 2) and the CAVs' constant-acceleration heuristic (Eq. 3).
@@ -61,6 +63,9 @@ def vtype_attributes(config: ScenarioConfig, kind: Kind) -> dict[str, str]:
         "width": road.vehicle_width,
         "laneChangeModel": "LC2013",
         "lcCooperative": lc.politeness,
+        # our car-following sees only the own lane: no ban on overtaking on the right (SUMO's
+        # default ban couples the lanes and makes lane-1 vehicles' accelerations chatter)
+        "lcOvertakeRight": 1.0,
         "maxSpeedLat": road.lane_width / params.lane_change_duration,
         "color": "0,160,255" if kind == Kind.CAV else "200,200,200",
     }
