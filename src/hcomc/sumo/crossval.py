@@ -19,7 +19,13 @@ from hcomc.metrics.flow import throughput
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.road import Lane
 
-__all__ = ["TrafficStats", "cross_validate", "side_by_side", "traffic_stats"]
+__all__ = [
+    "TrafficStats",
+    "cross_validate",
+    "markdown_table",
+    "side_by_side",
+    "traffic_stats",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,12 +75,17 @@ def side_by_side(runs: pd.DataFrame, metrics: Iterable[str]) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def _markdown(table: pd.DataFrame) -> str:
-    lines = ["| configuration | metric | hcomc | sumo | difference |", "|---|---|---|---|---|"]
-    for row in table.itertuples(index=False):
-        diff = "—" if not np.isfinite(row.difference) else f"{100 * row.difference:+.1f} %"
-        lines.append(f"| {row.configuration} | {row.metric} | {row.hcomc:.4g} | {row.sumo:.4g} "
-                     f"| {diff} |")  # fmt: skip
+def markdown_table(runs: pd.DataFrame, metrics: Iterable[str]) -> str:
+    """Metric rows x configuration columns, ``ours / SUMO`` means over seeds (docs/sumo.md)."""
+    table = side_by_side(runs, list(metrics))
+    configurations = list(dict.fromkeys(table["configuration"]))
+    lines = [
+        "| metric | " + " | ".join(f"{c} ours | {c} SUMO" for c in configurations) + " |",
+        "|---|" + "---|---|" * len(configurations),
+    ]
+    for metric, rows in table.groupby("metric", sort=False):
+        cells = [f"{v:.4g}" for _, r in rows.iterrows() for v in (r["hcomc"], r["sumo"])]
+        lines.append(f"| {metric} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -90,7 +101,7 @@ def _main() -> None:  # pragma: no cover - documentation helper
     runs = cross_validate(args.condition, range(args.seeds), args.configurations.split(","))
     if args.out:
         runs.to_csv(args.out, index=False)
-    print(_markdown(side_by_side(runs, [m for m in METRICS if m in runs.columns])))
+    print(markdown_table(runs, [m for m in METRICS if m in runs.columns]))
 
 
 if __name__ == "__main__":  # pragma: no cover
