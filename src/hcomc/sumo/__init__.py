@@ -57,8 +57,9 @@ def import_libsumo():  # type: ignore[no-untyped-def]
     try:
         with contextlib.redirect_stdout(notice):
             import libsumo
-    except ImportError:
+    except ImportError as exc:
+        # the wheel also needs the system's libGL / libX11 (e.g. Debian's libgl1)
         raise SumoMissingError(
-            f"the SUMO Python binding 'libsumo' is missing; {INSTALL_HINT}"
+            f"the SUMO Python binding 'libsumo' cannot be imported ({exc}); {INSTALL_HINT}"
         ) from None
     return libsumo

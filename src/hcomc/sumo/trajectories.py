@@ -400,10 +400,14 @@ def read_highd(source: Path, config: ScenarioConfig) -> tuple[SimulationLog, dic
             f"{tracks_path}: missing column(s) {', '.join(missing)}; expected highD tracks "
             f"columns {', '.join(need)}"
         )
-    rate = 25.0  # highD's frame rate, unless recordingMeta.csv says otherwise
+    rate, start, duration = 25.0, 0.0, 0.0  # highD's frame rate unless recordingMeta says
     recording = directory / "recordingMeta.csv"
     if recording.is_file():
-        rate = float(pd.read_csv(recording)["frameRate"].iloc[0])
+        meta_row = pd.read_csv(recording).iloc[0]
+        rate = float(meta_row.get("frameRate", rate))
+        duration = float(meta_row.get("duration", 0.0))
+        start = pd.to_numeric(meta_row.get("startTime"), errors="coerce")  # highD: clock time
+        start = float(start) if np.isfinite(start) else 0.0
     kind_of: dict[int, int] = {}
     meta_path = directory / "tracksMeta.csv"
     if meta_path.is_file():
@@ -414,9 +418,10 @@ def read_highd(source: Path, config: ScenarioConfig) -> tuple[SimulationLog, dic
                 for i, k in zip(meta["id"], meta["vehicleKind"], strict=True)
             }
     frames = tracks["frame"].to_numpy(dtype=np.int64)
-    first, last = int(frames.min()), int(frames.max())
+    first = int(frames.min())
+    last = max(int(frames.max()), round(duration * rate))  # trailing empty frames too
     dt = 1.0 / rate
-    t = (np.arange(first, last + 1) - 1) * dt
+    t = start + (np.arange(first, last + 1) - 1) * dt
     ids = sorted(int(i) for i in tracks["id"].unique())
     if ids[0] < 1:
         raise SumoFormatError(f"{tracks_path}: column 'id' = {ids[0]}; highD ids start at 1")
