@@ -67,6 +67,7 @@ def test_controllers_run_collision_free_and_execute_their_plans(controller: str,
     log = sim.run()
     assert log.events_of(EventKind.COLLISION).size == 0
     assert log.meta["sumo_collisions"] == 0
+    assert log.meta["sumo_teleports"] == 0
     (plan,) = sim.decisions
     vr = plan.group.vr
     merges = log.events_of(EventKind.MERGE)

@@ -144,3 +144,26 @@ def test_bad_fcd_is_one_line_exit_2(text: str, expected: str, tmp_path: Path) ->
     assert expected in done.output
     assert str(path) in done.output.replace("\n", "")
     assert "Traceback" not in done.output
+
+
+def test_export_trajectories_rejects_bad_input(c1_run: Path, tmp_path: Path) -> None:
+    runner = CliRunner()
+    bad_format = runner.invoke(app, ["export", "trajectories", str(c1_run), "--format", "kml",
+                                     "--out", str(tmp_path / "x")])  # fmt: skip
+    assert bad_format.exit_code == 2
+    assert "'--format' = 'kml'" in bad_format.output
+    missing = runner.invoke(app, ["export", "trajectories", str(tmp_path / "nope"), "--format",
+                                  "csv", "--out", str(tmp_path / "y.csv")])  # fmt: skip
+    assert missing.exit_code == 2
+    assert "RUN_DIR" in missing.output
+    out = tmp_path / "t.csv"
+    assert runner.invoke(app, ["export", "trajectories", str(c1_run), "--format", "csv",
+                               "--out", str(out)]).exit_code == 0  # fmt: skip
+    again = runner.invoke(app, ["export", "trajectories", str(c1_run), "--format", "csv",
+                                "--out", str(out)])  # fmt: skip
+    assert again.exit_code == 2  # nothing written is silently overwritten
+    import pandas as pd
+
+    frame = pd.read_csv(out)
+    log = SimulationLog.load(c1_run / "log.npz")
+    assert len(frame) == int(log.active.sum())

@@ -108,6 +108,7 @@ class SumoSimulation:
         self.step_index = 0
         self.vehicle_steps = 0
         self.sumo_collisions = 0
+        self.sumo_teleports = 0
         self._speed_set: set[int] = set()  # vehicles whose speed we impose this step
         self._lc_start: dict[int, float] = {}  # vehicle -> start of its running lane change
         meta = build_manifest(
@@ -167,6 +168,7 @@ class SumoSimulation:
             self.log.add_event(t, kind, i, other=j, x=x)
         self.log.meta["vehicle_steps"] = self.vehicle_steps
         self.log.meta["sumo_collisions"] = self.sumo_collisions
+        self.log.meta["sumo_teleports"] = self.sumo_teleports
         if progress is not None:
             progress(total, total)
         return self.log
@@ -198,13 +200,14 @@ class SumoSimulation:
         width = self.config.road.lane_width
         for name in sim.getDepartedIDList():
             i = int(name[1:])
-            self.active[i] = True
             self.log.add_event(t, EventKind.INSERTION, i, x=float(self.demand.x[i]),
                                value=t - float(self.demand.t[i]))  # fmt: skip
         for name in sim.getArrivedIDList():
-            i = int(name[1:])
-            self.active[i] = False
-            self.log.add_event(t, EventKind.EXIT, i, x=float(self.x[i]))
+            self.log.add_event(t, EventKind.EXIT, int(name[1:]), x=float(self.x[int(name[1:])]))
+        self.sumo_teleports += sim.getStartingTeleportNumber()
+        # on the road = in SUMO's network now (a vehicle being teleported is not)
+        self.active[:] = False
+        self.active[[int(name[1:]) for name in veh.getIDList()]] = True
         for i in np.flatnonzero(self.active).tolist():
             name = vehicle_id(i)
             self.x[i], self.y[i] = veh.getPosition(name)
