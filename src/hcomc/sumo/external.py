@@ -75,10 +75,11 @@ def collision_events(log: SimulationLog) -> list[tuple[float, EventKind, int, in
         a, b = ids[a[near]], ids[b[near]]
         now: set[tuple[int, int]] = set()
         if a.size:
-            row = (log.x[k], log.y[k], log.heading[k])
+            x_k, y_k = log.x[k].astype(np.float64), log.y[k].astype(np.float64)
+            h_k, length, width = log.heading[k].astype(np.float64), log.length, log.width
             hit = vehicles_collide(
-                *(q[a].astype(np.float64) for q in row), log.length[a], log.width[a],
-                *(q[b].astype(np.float64) for q in row), log.length[b], log.width[b],
+                x_k[a], y_k[a], h_k[a], length[a], width[a],
+                x_k[b], y_k[b], h_k[b], length[b], width[b],
             )  # fmt: skip
             now = set(zip(a[hit].tolist(), b[hit].tolist(), strict=True))
         for i, j in sorted(now - overlapping):
