@@ -46,15 +46,17 @@ def logs(draw: st.DrawFn) -> SimulationLog:
 
 
 def _check(log: SimulationLog, back: SimulationLog) -> None:
-    n, m = log.n_recorded, log.n_vehicles  # row 0 always holds a vehicle: rows align
-    act = log.active[:n]
+    n, m = log.n_recorded, back.n_vehicles  # row 0 always holds a vehicle: rows align
+    assert not log.active[:, m:].any()  # a file knows only the vehicles it shows
+    act = log.active[:n, :m]
     assert back.n_recorded == n
     np.testing.assert_array_equal(back.active[:, :m], act)
-    np.testing.assert_array_equal(back.lane[:, :m][act], log.lane[:n][act])
+    np.testing.assert_array_equal(back.lane[:, :m][act], log.lane[:n, :m][act])
     np.testing.assert_allclose(back.t, log.t[:n], atol=1e-9)
     for name in ("x", "y", "v", "a", "heading"):
         got = getattr(back, name)[:, :m][act]
-        np.testing.assert_allclose(got, getattr(log, name)[:n][act], atol=2e-4, err_msg=name)
+        np.testing.assert_allclose(got, getattr(log, name)[:n, :m][act], atol=2e-4,
+                                   err_msg=name)  # fmt: skip
 
 
 @settings(max_examples=25, deadline=None)
