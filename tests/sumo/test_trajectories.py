@@ -93,8 +93,9 @@ def test_metrics_of_an_fcd_file_sumo_wrote(c1_scenario: Path, tmp_path: Path) ->
     fcd = c1_scenario.parent / "sumo-fcd.xml"
     subprocess.run([sumo_binary("sumo"), "-c", str(c1_scenario), "--no-step-log", "true",
                     "--fcd-output", str(fcd)], check=True, capture_output=True)  # fmt: skip
-    done = CliRunner().invoke(app, ["metrics", str(fcd), "--json",
-                                    "--log-out", str(tmp_path / "sumo.npz")])  # fmt: skip
+    done = CliRunner().invoke(app, ["metrics", str(fcd), "--json", "--log-out",
+                                    str(tmp_path / "sumo.npz"), "--figures",
+                                    str(tmp_path / "figs")])  # fmt: skip
     assert done.exit_code == 0, done.output
     (row,) = json.loads(done.stdout)
     routes = (c1_scenario.parent / "vehicles.rou.xml").read_text()
@@ -106,6 +107,8 @@ def test_metrics_of_an_fcd_file_sumo_wrote(c1_scenario: Path, tmp_path: Path) ->
         assert row[name] > 0, name
     # the saved log is a regular SimulationLog that plot / animate accept
     assert SimulationLog.load(tmp_path / "sumo.npz").n_recorded > 0
+    for png in ("timespace.png", "contour.png"):
+        assert (tmp_path / "figs" / png).stat().st_size > 10_000
 
 
 def test_given_key_vehicles_override_found_ones(c1_run: Path, tmp_path: Path) -> None:
