@@ -85,6 +85,15 @@ def test_highd_neighbours_and_headways(c1: ScenarioConfig, c1_run: Path, tmp_pat
     between = log.active[k] & (log.lane[k] == log.lane[k, i])
     between &= (log.x[k] > log.x[k, i]) & (log.x[k] < log.x[k, p])
     assert not between.any()  # nobody between a vehicle and its preceding vehicle
+    # neighbours in the lane to the left (our lane + 1) are entirely ahead / behind
+    for column, ahead in (("leftPrecedingId", True), ("leftFollowingId", False)):
+        row = tracks[tracks[column] > 0].iloc[0]
+        k, i, n = int(row["frame"]) - 1, int(row["id"]) - 1, int(row[column]) - 1
+        assert log.lane[k, n] == log.lane[k, i] + 1
+        if ahead:
+            assert log.x[k, n] - log.length[n] > log.x[k, i]
+        else:
+            assert log.x[k, n] < log.x[k, i] - log.length[i]
 
 
 def test_metrics_of_an_fcd_file_sumo_wrote(c1_scenario: Path, tmp_path: Path) -> None:

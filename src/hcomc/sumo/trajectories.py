@@ -92,8 +92,21 @@ def write_fcd(log: SimulationLog, path: Path, config: ScenarioConfig) -> Path:
     return path
 
 
+# (preceding, following, alongside) columns and lane offset: own lane, left (+1), right (-1)
+_SIDES = (
+    ("precedingId", "followingId", None, 0),
+    ("leftPrecedingId", "leftFollowingId", "leftAlongsideId", 1),
+    ("rightPrecedingId", "rightFollowingId", "rightAlongsideId", -1),
+)
+
+
 def _neighbours(log: SimulationLog, k: int) -> dict[str, np.ndarray]:
-    """highD neighbour ids (0 = none) and headways of the active vehicles of row k."""
+    """highD neighbour ids (0 = none) and headways of the active vehicles of row k.
+
+    In the own lane the preceding vehicle is the nearest one ahead; in a neighbouring lane it
+    is the nearest one entirely ahead, the following one the nearest entirely behind, and the
+    alongside one any vehicle overlapping in x.
+    """
     ids = np.flatnonzero(log.active[k])
     x = log.x[k, ids].astype(np.float64)
     v = log.v[k, ids].astype(np.float64)
@@ -103,28 +116,25 @@ def _neighbours(log: SimulationLog, k: int) -> dict[str, np.ndarray]:
     out = {name: np.zeros(ids.size, dtype=np.int64) for name in _NEIGHBOUR_COLUMNS}
     dhw, thw, ttc = np.zeros(ids.size), np.zeros(ids.size), np.zeros(ids.size)
     for j in range(ids.size):
-        for side, dlane in (("", 0), ("left", 1), ("right", -1)):
-            same = np.flatnonzero(lane == lane[j] + dlane)
-            same = same[same != j]
-            ahead = same[rear[same] > x[j]] if side else same[x[same] > x[j]]
-            behind = same[x[same] < rear[j]] if side else same[x[same] <= x[j]]
-            prefix = side + ("P" if side else "p")
+        for preceding, following, alongside, offset in _SIDES:
+            other = np.flatnonzero((lane == lane[j] + offset) & (np.arange(ids.size) != j))
+            if offset == 0:
+                ahead, behind = other[x[other] > x[j]], other[x[other] <= x[j]]
+            else:
+                ahead, behind = other[rear[other] > x[j]], other[x[other] < rear[j]]
+                along = other[(x[other] >= rear[j]) & (rear[other] <= x[j])]
+                if along.size and alongside is not None:
+                    out[alongside][j] = ids[along[0]] + 1
+            if behind.size:
+                out[following][j] = ids[behind[np.argmax(x[behind])]] + 1
             if ahead.size:
                 p = ahead[np.argmin(x[ahead])]
-                out[f"{prefix}recedingId"][j] = ids[p] + 1
-                if not side:
+                out[preceding][j] = ids[p] + 1
+                if offset == 0:
                     dhw[j] = x[p] - x[j]
                     thw[j] = dhw[j] / v[j] if v[j] > 0 else 0.0
                     closing = v[j] - v[p]
                     ttc[j] = (x[p] - length[p] - x[j]) / closing if closing > 0 else 0.0
-            if behind.size:
-                out[f"{side + ('F' if side else 'f')}ollowingId"][j] = (
-                    ids[behind[np.argmax(x[behind])]] + 1
-                )
-            if side:
-                along = same[(x[same] >= rear[j]) & (rear[same] <= x[j])]
-                if along.size:
-                    out[f"{side}AlongsideId"][j] = ids[along[0]] + 1
     return {**out, "dhw": dhw, "thw": thw, "ttc": ttc}
 
 
