@@ -11,6 +11,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -193,6 +194,19 @@ def _refuse_overwrite(out_dir: Path | None, names: tuple[str, ...], force: bool)
 
 
 SIMULATE_FILES = ("log.npz", "manifest.json", "summary.json")
+Engine = Annotated[
+    str, typer.Option(help="Simulation engine: hcomc, or sumo (SUMO co-simulation, hcomc[sumo]).")
+]
+
+
+def _engine(engine: str, config: ScenarioConfig | None = None) -> str:
+    """Validate --engine (SUMO installed and able to run ``config`` when asked for)."""
+    from hcomc.sumo.cli import engine_error
+
+    problem = engine_error(engine, config)
+    if problem is not None:
+        raise _fail(problem)
+    return engine
 
 
 @app.command()
@@ -215,9 +229,10 @@ def simulate(
     ] = None,
     optimizer: Optimizer = None,
     settings: SetOption = None,
+    engine: Engine = "hcomc",
 ) -> None:
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
-    from hcomc.sim.engine import Simulation
+    from hcomc.experiments.runner import make_simulation
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
@@ -226,7 +241,7 @@ def simulate(
     control = _control(_load(config, **overrides), controller, optimizer)
     cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
-    sim = Simulation(cfg)
+    sim = make_simulation(cfg, None, _engine(engine, cfg))
     start = time.perf_counter()
     with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
         log = sim.run(None if as_json else update)
@@ -392,6 +407,7 @@ def run(
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,
     settings: SetOption = None,
+    engine: Engine = "hcomc",
 ) -> None:
     """Run one scenario with one merge controller over seeds and print the paper's metrics."""
     from hcomc.config import nest_overrides
@@ -406,10 +422,14 @@ def run(
     overrides = _settings(settings)
     base = _load(config, **overrides)  # validate before anything runs
     _require_merge(base, config, "run")
+    engine = _engine(engine, base)
     control = _control(base, controller, optimizer)
     labels = {pair: label for label, pair in CONFIGURATIONS.items()}
     label = labels[(controller, control["optimizer"] if controller == "hcomc" else "nsga2")]
-    specs = grid([config], [label], range(seeds), nest_overrides(overrides))
+    specs = [
+        replace(s, engine=engine)
+        for s in grid([config], [label], range(seeds), nest_overrides(overrides))
+    ]
     frame = _progress_grid(specs, _workers(workers))
     if as_json:
         sys.stdout.write(frame.to_json(orient="records") + "\n")
@@ -472,6 +492,7 @@ def reproduce(
         bool, typer.Option("--force", help="Overwrite results already in the --out directory.")
     ] = False,
     settings: SetOption = None,
+    engine: Engine = "hcomc",
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA,
     and the replanning baselines FIFO-R, Game-R), seeded runs plus the deterministic paper
@@ -488,13 +509,16 @@ def reproduce(
     overrides = nest_overrides(_settings(settings))
     for condition in CONDITIONS:  # validate before anything runs
         _load(condition, **overrides)
-    n_workers = _workers(workers)
+    n_workers, engine = _workers(workers), _engine(engine)
     start = time.perf_counter()
-    seeded = grid(CONDITIONS, ALL_CONFIGURATIONS, range(seeds), overrides)
+    seeded = [
+        replace(s, engine=engine)
+        for s in grid(CONDITIONS, ALL_CONFIGURATIONS, range(seeds), overrides)
+    ]
     paper = {**overrides}
     for table, values in PAPER_SCENARIO.items():
         paper[table] = {**overrides.get(table, {}), **values}
-    uniform = grid(CONDITIONS, ALL_CONFIGURATIONS, [0], paper)
+    uniform = [replace(s, engine=engine) for s in grid(CONDITIONS, ALL_CONFIGURATIONS, [0], paper)]
     (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
 
     def save_manifest(i: int, row: dict[str, Any], manifest: dict[str, Any]) -> None:
@@ -703,3 +727,14 @@ def _print_summary(summary: dict[str, Any]) -> None:
     for row in rows:
         table.add_row(*(escape(cell) for cell in row))
     out.print(table)
+
+
+def _register_sumo() -> None:
+    """SUMO interoperability commands (need the optional extra only when they run)."""
+    from hcomc.sumo.cli import export_app, metrics
+
+    app.add_typer(export_app, name="export")
+    app.command("metrics")(metrics)
+
+
+_register_sumo()

@@ -62,14 +62,19 @@ def _replan_override(label: str) -> dict[str, float]:
     return {"replan_period": REPLAN_PERIOD[label]} if label in REPLAN_PERIOD else {}
 
 
+ENGINES = ("hcomc", "sumo")
+"""Simulation engines: our own, or SUMO co-simulation (optional extra ``hcomc[sumo]``)."""
+
+
 @dataclass(frozen=True)
 class RunSpec:
-    """One run: a condition (preset or TOML path), a configuration and a seed."""
+    """One run: a condition (preset or TOML path), a configuration, a seed and an engine."""
 
     condition: str
     configuration: str
     seed: int
     overrides: dict[str, Any] = field(default_factory=dict, hash=False)
+    engine: str = "hcomc"
 
     def config_overrides(self) -> dict[str, Any]:
         """Top-level config overrides, with the configuration's controller and optimiser."""
@@ -104,18 +109,33 @@ def grid(
     ]
 
 
-@lru_cache(maxsize=64)
-def _undisturbed(condition: str, seed: int, overrides_json: str) -> SimulationLog:
-    """The run without its ramp vehicle (cached per worker process)."""
+def make_simulation(
+    config: Any, seed: int | None = None, engine: str = "hcomc", *, counterfactual: bool = False
+) -> Any:
+    """A run of ``config`` on the named engine (SUMO is imported only when asked for);
+    ``counterfactual``: the undisturbed run, the ramp vehicle never released."""
+    if engine == "sumo":
+        from hcomc.sumo.cosim import SumoSimulation
+
+        return SumoSimulation(config, seed, counterfactual=counterfactual)
+    if engine != "hcomc":
+        raise ValueError(f"engine '{engine}'; allowed: {', '.join(ENGINES)}")
     from hcomc.sim.engine import Simulation
 
+    return Simulation(config, seed, counterfactual=counterfactual)
+
+
+@lru_cache(maxsize=64)
+def _undisturbed(condition: str, seed: int, overrides_json: str, engine: str) -> SimulationLog:
+    """The run without its ramp vehicle (cached per worker process)."""
     config = load_config(condition, **json.loads(overrides_json))
-    return Simulation(config, seed, counterfactual=True).run()
+    return make_simulation(config, seed, engine, counterfactual=True).run()  # type: ignore[no-any-return]
 
 
 def undisturbed_log(spec: RunSpec) -> SimulationLog:
-    """The undisturbed counterpart of ``spec``'s run (same condition, seed, overrides)."""
-    return _undisturbed(*spec.reference_key())
+    """The undisturbed counterpart of ``spec``'s run (same condition, seed, overrides and
+    engine)."""
+    return _undisturbed(*spec.reference_key(), spec.engine)
 
 
 def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
@@ -150,11 +170,10 @@ def realised_sequence(log: SimulationLog, vr: int, vmc: int) -> str:
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
     """Simulate one run and compute its metrics: ``(row, manifest)``."""
     from hcomc.metrics import compute_metrics, key_window
-    from hcomc.sim.engine import Simulation
 
     config = load_config(spec.condition, **spec.config_overrides())
     start = time.perf_counter()
-    sim = Simulation(config, spec.seed)
+    sim = make_simulation(config, spec.seed, spec.engine)
     log = sim.run()
     controller, optimizer = ALL_CONFIGURATIONS[spec.configuration]
     row: dict[str, Any] = {
@@ -198,6 +217,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
             "configuration": spec.configuration,
             "seed": spec.seed,
             "overrides": spec.overrides,
+            "engine": spec.engine,
         },
     }
     return row, manifest

@@ -1,0 +1,418 @@
+"""Co-simulation: SUMO moves every vehicle, our controllers command the key CAVs.
+
+:class:`SumoSimulation` has the surface of :class:`hcomc.sim.engine.Simulation` (``run() ->
+SimulationLog``, ``decisions``, ``key_group``, ``key_groups``, ``fleet``, ``config``,
+``seed``), so the runner, metrics, figures and reports work unchanged.
+
+The scenario is the one ``hcomc export sumo`` writes (same road, vTypes, seeded demand, SUMO
+options), run in process through libsumo. Every step:
+
+1. SUMO advances one ``dt``; HDVs and uncommanded CAVs drive SUMO's IDM and LC2013.
+2. The state is read back in our frame (the network's x, y are ours; the lane is the one the
+   vehicle's centre is in, so it switches mid-manoeuvre as in our engine).
+3. As in our engine, a ramp vehicle entering the control zone gets its key vehicles
+   (:func:`hcomc.control.base.find_key_vehicles`) and the controller is asked for a plan on a
+   read-only :class:`~hcomc.control.base.TrafficView`.
+4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.execution`): a commanded CAV
+   whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
+   (:func:`hcomc.sim.fleet.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
+   pass our MOBIL safety criterion (b_safe, as in our engine) and are executed by
+   ``changeLane`` with the plan's duration (lateral speed = lane width / duration); SUMO only
+   rules out immediate collisions (lane-change mode 256), since its own check, built on the
+   comfortable deceleration b, is stricter than the model the plans are made with.
+   Commanded vehicles make no lane changes of their own while their plan lasts; a VR whose
+   change has not begun three vehicle lengths before the acceleration-lane end is handed back
+   to SUMO's own merging (logged as a fallback).
+
+Collisions are found with our oriented-rectangle test (Eq. 7) on every logged row, as for any
+external trajectory; SUMO's own collision count is kept in the log's metadata.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from hcomc.config import ScenarioConfig
+from hcomc.control.base import (
+    MergeController,
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    find_key_vehicles,
+)
+from hcomc.rng import make_rng
+from hcomc.road import Kind, Lane, lane_centre
+from hcomc.sim.demand import generate_demand
+from hcomc.sim.execution import ActivePlan, commanded, plan_record, virtual_leaders
+from hcomc.sim.fleet import Fleet, follow
+from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.manifest import build_manifest
+from hcomc.sim.mobil import Snapshot, decide
+from hcomc.sim.neighbours import build_lane_index
+from hcomc.sumo import import_libsumo
+from hcomc.sumo.export import export_scenario
+from hcomc.sumo.external import collision_events
+from hcomc.sumo.network import edge_at, sumo_lane_of
+from hcomc.sumo.routes import vehicle_id
+
+__all__ = ["SumoSimulation"]
+
+_DEFAULT_LC_MODE = 1621  # SUMO's default lane-change mode
+# no own lane changes; a commanded change (already passed by our MOBIL safety criterion, as in
+# our engine) only has to avoid immediate collisions, not SUMO's stricter comfort-gap check
+_COMMANDED_LC_MODE = 256
+_SETTLED = 1e-3  # lateral offset [lane widths] below which a vehicle keeps its lane
+
+
+class SumoSimulation:
+    """One run of a merge scenario in SUMO (libsumo), controlled by our merge controller."""
+
+    def __init__(
+        self,
+        config: ScenarioConfig,
+        seed: int | None = None,
+        controller: MergeController | None = None,
+        *,
+        counterfactual: bool = False,
+    ) -> None:
+        self.counterfactual = counterfactual  # the undisturbed run: ramp vehicles removed
+        if config.scenario != "merge":
+            raise ValueError(f"scenario = '{config.scenario}': the SUMO engine runs 'merge' only")
+        self.sumo = import_libsumo()
+        self.config = config
+        self.seed = config.seed if seed is None else seed
+        self.rng = make_rng(self.seed)
+        self.dt = config.dt
+        self.demand = generate_demand(config, self.rng)  # same draws as our engine
+        n = self.demand.n
+        self.fleet = Fleet.build(config, self.demand.kind, self.demand.scripted)
+        if controller is None:
+            from hcomc.control.registry import make_controller
+
+            controller = make_controller(config)
+        self.controller = controller
+        self.x, self.y, self.v = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.a, self.heading = np.zeros(n), np.zeros(n)
+        self.lane = self.demand.lane.copy()
+        self.origin = self.demand.lane.copy()  # lane a manoeuvre started from
+        self.active = np.zeros(n, dtype=bool)
+        self.planned = np.zeros(n, dtype=bool)
+        self.key_groups: dict[int, MergeGroup] = {}
+        self.plans: list[ActivePlan] = []
+        self.decisions: list[MergePlan] = []
+        self.n_warmup = round(config.warmup / self.dt)
+        self.n_steps = round(config.duration / self.dt)
+        self._log_every = round(config.log_interval / self.dt)
+        self.step_index = 0
+        self.vehicle_steps = 0
+        self.sumo_collisions = 0
+        self.sumo_teleports = 0
+        self._speed_set: set[int] = set()  # vehicles whose speed we impose this step
+        self._lc_start: dict[int, float] = {}  # vehicle -> start of its running lane change
+        meta = build_manifest(
+            seed=self.seed,
+            config=config.model_dump(mode="json"),
+            extra={"dt": self.dt, "log_interval": config.log_interval, "engine": "sumo",
+                   "sumo_version": self._sumo_version()},
+        )  # fmt: skip
+        self.log = SimulationLog.allocate(
+            self.n_steps // self._log_every + 1, n, dt=config.log_interval,
+            kind=self.demand.kind, length=self.fleet.length, width=self.fleet.width, meta=meta,
+        )  # fmt: skip
+        self._rows = 0
+
+    @staticmethod
+    def _sumo_version() -> str:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            return version("eclipse-sumo")
+        except PackageNotFoundError:  # pragma: no cover - SUMO from elsewhere
+            return "unknown"
+
+    @property
+    def t(self) -> float:
+        """Current time [s]; t = 0 after the warm-up (SUMO time = t + warmup)."""
+        return -self.config.warmup + self.step_index * self.dt
+
+    @property
+    def key_group(self) -> MergeGroup | None:
+        """Key vehicles of the first ramp vehicle that entered the control zone (or None)."""
+        return next(iter(self.key_groups.values()), None)
+
+    # ------------------------------------------------------------------ run
+    def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
+        """Warm up, then simulate ``duration`` seconds in SUMO, logging every interval."""
+        total = self.n_warmup + self.n_steps
+        with tempfile.TemporaryDirectory(prefix="hcomc-sumo-") as tmp:
+            scenario = export_scenario(self.config, self.seed, Path(tmp))
+            quiet = ["--no-step-log", "true", "--no-warnings", "true",
+                     "--duration-log.disable", "true"]  # fmt: skip
+            self.sumo.start(["sumo", "-c", str(scenario.sumocfg), *quiet])
+            try:
+                for _ in range(self.n_warmup):
+                    self.step()
+                self._record()
+                for k in range(1, self.n_steps + 1):
+                    self.step()
+                    if k % self._log_every == 0:
+                        self._record()
+                    if progress is not None and self.step_index % 100 == 0:
+                        progress(self.step_index, total)
+            finally:
+                self.sumo.close()
+        self.log.finish(self._rows)
+        for t, kind, i, j, x in collision_events(self.log):
+            self.log.add_event(t, kind, i, other=j, x=x)
+        self.log.meta["vehicle_steps"] = self.vehicle_steps
+        self.log.meta["sumo_collisions"] = self.sumo_collisions
+        self.log.meta["sumo_teleports"] = self.sumo_teleports
+        if progress is not None:
+            progress(total, total)
+        return self.log
+
+    def _record(self) -> None:
+        self.log.record(self._rows, self.t, self.x, self.y, self.v, self.a, self.heading,
+                        self.lane, self.active)  # fmt: skip
+        self._rows += 1
+
+    # ----------------------------------------------------------------- step
+    def step(self) -> None:
+        """Command the key CAVs, advance SUMO by ``dt`` and read the new state back."""
+        if self.plans or self._speed_set:
+            self._command_speeds()
+        self.sumo.simulationStep()
+        self.step_index += 1
+        t = self.t
+        self._read_state(t)
+        ids = np.flatnonzero(self.active)
+        self.vehicle_steps += ids.size
+        self.sumo_collisions += len(self.sumo.simulation.getCollisions())
+        self._key_vehicles(ids, t)
+        if self.plans:
+            self._execute_plans(ids, t)
+            self._finish_plans()
+
+    def _read_state(self, t: float) -> None:
+        sim, veh = self.sumo.simulation, self.sumo.vehicle
+        width = self.config.road.lane_width
+        ramp = self.demand.lane == Lane.RAMP
+        for name in sim.getDepartedIDList():
+            i = int(name[1:])
+            if self.counterfactual and ramp[i]:
+                veh.remove(name)  # the undisturbed run: nothing merges
+                continue
+            self.log.add_event(t, EventKind.INSERTION, i, x=float(self.demand.x[i]),
+                               value=t - float(self.demand.t[i]))  # fmt: skip
+        for name in sim.getArrivedIDList():
+            if self.counterfactual and ramp[int(name[1:])]:
+                continue
+            self.log.add_event(t, EventKind.EXIT, int(name[1:]), x=float(self.x[int(name[1:])]))
+        self.sumo_teleports += sim.getStartingTeleportNumber()
+        # on the road = in SUMO's network now (a vehicle being teleported is not)
+        self.active[:] = False
+        self.active[[int(name[1:]) for name in veh.getIDList()]] = True
+        for i in np.flatnonzero(self.active).tolist():
+            name = vehicle_id(i)
+            self.x[i], self.y[i] = veh.getPosition(name)
+            self.v[i] = veh.getSpeed(name)
+            self.a[i] = veh.getAcceleration(name)
+            self.heading[i] = np.radians(90.0 - veh.getAngle(name))
+        ids = np.flatnonzero(self.active)
+        lane = np.clip(np.rint(self.y[ids] / width).astype(np.int64) + 1, Lane.RAMP, Lane.MAIN_2)
+        self.lane[ids] = lane
+        settled = np.abs(self.y[ids] - lane_centre(lane, width)) < _SETTLED * width
+        for i, s in zip(ids.tolist(), settled.tolist(), strict=True):
+            if self.origin[i] == self.lane[i] and not s and i not in self._lc_start:
+                self._lc_start[i] = t
+                target = self.lane[i] + int(np.sign(self.y[i] - lane_centre(self.lane[i], width)))
+                self.log.add_event(t, EventKind.LANE_CHANGE_START, i, x=self.x[i], value=target)
+            elif s and self.origin[i] != self.lane[i]:
+                self.log.add_event(t, EventKind.LANE_CHANGE_END, i, x=self.x[i],
+                                   value=int(self.lane[i]))  # fmt: skip
+                if self.origin[i] == Lane.RAMP:
+                    self.log.add_event(t, EventKind.MERGE, i, x=self.x[i])
+                self.origin[i] = self.lane[i]
+                self._lc_start.pop(i, None)
+            elif s:
+                self._lc_start.pop(i, None)
+
+    def changing(self) -> np.ndarray:
+        """Vehicles in a lane-change manoeuvre (off their lane centre)."""
+        mask = self.active & (self.origin != self.lane)
+        mask[list(self._lc_start)] = True
+        return mask
+
+    # ---------------------------------------------------------------- plans
+    def _view(self, t: float) -> TrafficView:
+        def frozen(arr: np.ndarray) -> np.ndarray:
+            out = arr.copy()
+            out.flags.writeable = False
+            return out
+
+        return TrafficView(
+            t=t, x=frozen(self.x), v=frozen(self.v), a=frozen(self.a), lane=frozen(self.lane),
+            active=frozen(self.active), changing=frozen(self.changing()), fleet=self.fleet,
+            config=self.config, plans=tuple(p.plan for p in self.plans),
+        )  # fmt: skip
+
+    def _key_vehicles(self, ids: np.ndarray, t: float) -> None:
+        """Key vehicles and (with a controller) a plan when a ramp vehicle enters the zone."""
+        changing = self.changing()
+        new = ids[
+            (self.lane[ids] == Lane.RAMP)
+            & ~changing[ids]
+            & (self.x[ids] >= self.config.road.control_zone_start)
+        ]
+        for vr in new.tolist():
+            if vr not in self.key_groups:
+                group = find_key_vehicles(self._view(t), vr)
+                self.key_groups[vr] = group
+                self.log.meta.setdefault("key_groups", []).append({"t": float(t),
+                                                                   **group.as_dict()})  # fmt: skip
+            if self.controller is not None and not self.planned[vr]:
+                self._plan(vr, t)
+        if self.controller is None or not self.plans:
+            return
+        # receding horizon, as in the engine: replan until VR starts its lane change
+        period = self.config.control.replan_period
+        on_ramp = (self.lane == Lane.RAMP) & ~changing & self.active
+        for p in list(self.plans):
+            if p.may_replan(t, period) and on_ramp[p.vr]:
+                self._plan(p.vr, t)
+
+    def _plan(self, vr: int, t: float) -> None:
+        assert self.controller is not None
+        self.planned[vr] = True
+        view = self._view(t)
+        group = find_key_vehicles(view, vr)
+        plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+        self.decisions.append(plan)
+        self.log.meta.setdefault("plans", []).append(plan_record(plan))
+        self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
+                           value=int(plan.mode))  # fmt: skip
+        if plan.fallback:
+            self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
+        cav = self.fleet.kind == Kind.CAV
+        active = ActivePlan(
+            plan,
+            vr_commanded=bool(cav[vr]) and bool(np.isfinite(plan.merge_x)),
+            vmc_commanded=plan.mode != Mode.NONE,
+            vnr_commanded=plan.vv2 is not None,
+        )
+        previous = [p for p in self.plans if p.vr == vr]  # a replan replaces the live plan
+        self.plans = [p for p in self.plans if p.vr != vr]
+        self.plans.append(active)
+        now = commanded(self.plans, self.x.size)
+        for i in np.flatnonzero(commanded(previous, self.x.size) & ~now).tolist():
+            self._release(i)  # no longer commanded: back to SUMO's own driving
+        for i in np.flatnonzero(commanded([active], self.x.size)).tolist():
+            self.sumo.vehicle.setLaneChangeMode(vehicle_id(i), _COMMANDED_LC_MODE)
+
+    def _command_speeds(self) -> None:
+        """Commanded CAVs follow min(real leader, virtual leader) with our model (Eq. 1-3)."""
+        t = self.t
+        fol, xv, vv, av, lv = virtual_leaders(self.plans, t, self.x, self.v, self.a,
+                                              self.fleet.length)  # fmt: skip
+        ahead = (xv > self.x[fol]) & self.active[fol]
+        constrained: set[int] = set()
+        if ahead.any():
+            fol, xv, vv, av, lv = fol[ahead], xv[ahead], vv[ahead], av[ahead], lv[ahead]
+            a_virtual = follow(self.fleet, fol, xv - lv - self.x[fol], self.v[fol], vv, av)
+            a_real = self._follow_real(fol)
+            acc = np.maximum(np.minimum(a_virtual, a_real),
+                             -self.config.lane_change.emergency_decel)  # fmt: skip
+            for i, a in zip(fol.tolist(), acc.tolist(), strict=True):
+                target = max(0.0, float(self.v[i]) + a * self.dt)
+                self.sumo.vehicle.setSpeed(vehicle_id(i), target)
+                constrained.add(i)
+        for i in self._speed_set - constrained:  # hand back to SUMO's IDM
+            if self.active[i]:
+                self.sumo.vehicle.setSpeed(vehicle_id(i), -1.0)
+        self._speed_set = constrained
+
+    def _follow_real(self, ids: np.ndarray) -> np.ndarray:
+        """Our model's acceleration behind each vehicle's real leader in its lane."""
+        act = np.flatnonzero(self.active)
+        index = build_lane_index(act, self.lane[act], self.x[act])
+        lead = index.leader_of(np.searchsorted(act, ids))
+        has = lead >= 0
+        safe = np.where(has, lead, ids)
+        s = np.where(has, self.x[safe] - self.fleet.length[safe] - self.x[ids], np.inf)
+        vl = np.where(has, self.v[safe], self.v[ids])
+        al = np.where(has, self.a[safe], 0.0)
+        return follow(self.fleet, ids, s, self.v[ids], vl, al)
+
+    def _safe_change(self, i: int, target: int, ids: np.ndarray) -> bool:
+        """Our MOBIL safety criterion for a commanded change of vehicle i to ``target``."""
+        index = build_lane_index(ids, self.lane[ids], self.x[ids])
+        pos = np.searchsorted(ids, [i])
+        chosen, _ = decide(
+            self.fleet, Snapshot(x=self.x, v=self.v, a=self.a), index, np.array([i]),
+            self.lane[[i]], index.leader_of(pos), index.follower_of(pos),
+            self.config.lane_change, target=np.array([target]), force=np.array([True]),
+        )  # fmt: skip
+        return bool(chosen.size)
+
+    def _change_lane(self, i: int, target: int, duration: float) -> None:
+        edge = edge_at(self.config, float(self.x[i]), int(self.lane[i]))
+        name = vehicle_id(i)
+        self.sumo.vehicle.setMaxSpeedLat(name, self.config.road.lane_width / duration)
+        self.sumo.vehicle.changeLane(name, sumo_lane_of(edge, target), duration)
+
+    def _execute_plans(self, ids: np.ndarray, t: float) -> None:
+        """Start the lane changes the live plans command (as :mod:`hcomc.sim.execution`)."""
+        road = self.config.road
+        changing = self.changing()
+        for p in self.plans:
+            g = p.plan.group
+            if p.plan.mode == Mode.LATERAL and p.vmc_commanded and not p.vmc_started:
+                if self._safe_change(g.vmc, Lane.MAIN_2, ids):
+                    self._change_lane(g.vmc, Lane.MAIN_2, float(self.fleet.lc_duration[g.vmc]))
+                    p.vmc_started = True
+                else:
+                    p.vmc_commanded = p.vnr_commanded = False
+                    p.released = True
+                    self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
+            vr = g.vr
+            if not p.vr_commanded or p.vr_started or p.released:
+                continue
+            if changing[vr]:  # SUMO is executing the commanded change
+                p.vr_started = True
+            elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
+                # not begun 3 lengths before the lane end (our safety criterion or SUMO's
+                # refused it): VR falls back to SUMO's own merging, as to gap acceptance
+                p.released = True
+                self._release(vr)
+                self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
+            elif self.x[vr] >= p.plan.merge_x and self._safe_change(vr, Lane.MAIN_1, ids):
+                # requested again every step until SUMO, whose own safety check also
+                # applies, starts it
+                self._change_lane(vr, Lane.MAIN_1, float(p.plan.vr_duration))
+
+    def _release(self, i: int) -> None:
+        """Hand vehicle i back to SUMO: own lane changes, own speed, its type's lateral speed."""
+        if not self.active[i]:
+            return
+        name = vehicle_id(i)
+        self.sumo.vehicle.setLaneChangeMode(name, _DEFAULT_LC_MODE)
+        self.sumo.vehicle.setMaxSpeedLat(
+            name, self.config.road.lane_width / float(self.fleet.lc_duration[i])
+        )
+
+    def _finish_plans(self) -> None:
+        for p in self.plans:
+            g = p.plan.group
+            merged = self.lane[g.vr] == Lane.MAIN_1 and self.origin[g.vr] == Lane.MAIN_1
+            gone = not self.active[g.vr] or (g.vmc >= 0 and not self.active[g.vmc])
+            p.done = merged or gone
+            if p.done:
+                for i in (g.vr, g.vmc, g.vnr):
+                    if i >= 0:
+                        self._release(i)
+        self.plans = [p for p in self.plans if not p.done]

@@ -1,0 +1,108 @@
+"""Cross-validation of our engine against SUMO: same condition, same seeds, both engines.
+
+:func:`traffic_stats` gives the uncontrolled traffic figures that must agree (mean speed per
+main lane, flow past the merge); :func:`cross_validate` runs every configuration on both
+engines through the experiment runner, so the rows are those of ``hcomc run``.
+``python -m hcomc.sumo.crossval C1 --seeds 5`` prints the side-by-side table of docs/sumo.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from hcomc.metrics.flow import throughput
+from hcomc.road import Lane
+from hcomc.sim.log import SimulationLog
+
+__all__ = [
+    "TrafficStats",
+    "cross_validate",
+    "markdown_table",
+    "side_by_side",
+    "traffic_stats",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class TrafficStats:
+    """Uncontrolled traffic figures of one run."""
+
+    speed_lane_1: float  # mean speed of all logged lane-1 cells [m/s]
+    speed_lane_2: float  # mean speed of all logged lane-2 cells [m/s]
+    flow: float  # vehicles past accel_lane_end + 50 m per hour [veh/h]
+
+
+def traffic_stats(log: SimulationLog) -> TrafficStats:
+    """Mean speed per main lane and flow of a log."""
+
+    def mean_speed(lane: Lane) -> float:
+        cells = log.active & (log.lane == lane)
+        return float(log.v[cells].astype(np.float64).mean())
+
+    return TrafficStats(mean_speed(Lane.MAIN_1), mean_speed(Lane.MAIN_2), throughput(log))
+
+
+def cross_validate(
+    condition: str, seeds: Iterable[int], configurations: Iterable[str]
+) -> pd.DataFrame:
+    """Runner rows of every configuration and seed on both engines (column ``engine``)."""
+    from hcomc.experiments.runner import RunSpec, run_one
+
+    rows = []
+    for configuration in configurations:
+        for seed in seeds:
+            for engine in ("hcomc", "sumo"):
+                row, _ = run_one(RunSpec(condition, configuration, seed, engine=engine))
+                rows.append({**row, "engine": engine})
+    return pd.DataFrame(rows)
+
+
+def side_by_side(runs: pd.DataFrame, metrics: Iterable[str]) -> pd.DataFrame:
+    """Mean of each metric per configuration and engine, with SUMO's relative difference."""
+    means = runs.groupby(["configuration", "engine"], sort=False)[list(metrics)].mean()
+    out = []
+    for configuration in dict.fromkeys(runs["configuration"]):
+        ours, sumo = means.loc[(configuration, "hcomc")], means.loc[(configuration, "sumo")]
+        for metric in metrics:
+            diff = (sumo[metric] - ours[metric]) / abs(ours[metric]) if ours[metric] else np.nan
+            out.append({"configuration": configuration, "metric": metric, "hcomc": ours[metric],
+                        "sumo": sumo[metric], "difference": diff})  # fmt: skip
+    return pd.DataFrame(out)
+
+
+def markdown_table(runs: pd.DataFrame, metrics: Iterable[str]) -> str:
+    """Metric rows x configuration columns, ``ours / SUMO`` means over seeds (docs/sumo.md)."""
+    table = side_by_side(runs, list(metrics))
+    configurations = list(dict.fromkeys(table["configuration"]))
+    lines = [
+        "| metric | " + " | ".join(f"{c} ours | {c} SUMO" for c in configurations) + " |",
+        "|---|" + "---|---|" * len(configurations),
+    ]
+    for metric, rows in table.groupby("metric", sort=False):
+        cells = [f"{v:.4g}" for _, r in rows.iterrows() for v in (r["hcomc"], r["sumo"])]
+        lines.append(f"| {metric} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _main() -> None:  # pragma: no cover - documentation helper
+    from hcomc.metrics import METRICS
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("condition")
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--configurations", default="FIFO,Game,HCOMC")
+    parser.add_argument("--out", help="also write every run's row to this CSV file")
+    args = parser.parse_args()
+    runs = cross_validate(args.condition, range(args.seeds), args.configurations.split(","))
+    if args.out:
+        runs.to_csv(args.out, index=False)
+    print(markdown_table(runs, [m for m in METRICS if m in runs.columns]))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    _main()
