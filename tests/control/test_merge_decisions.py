@@ -81,9 +81,13 @@ def test_receding_horizon_replans_until_vr_starts_its_change(period):
         assert times.size == 1
     else:
         assert times.size >= 5
-        np.testing.assert_allclose(np.diff(times), period, atol=1e-6)
+        gaps = np.diff(times)  # one period apart, or more after a commitment window
+        assert (gaps >= period - 1e-6).all()
+        assert np.median(gaps) == pytest.approx(period)
         assert times.max() <= t_start
-        assert times.max() > t_start - period - 1e-6  # it kept replanning up to the change
+        # it kept replanning up to the change, but kept the last plan during the final period
+        # before the planned merge position (commitment)
+        assert t_start - 2 * period - 1e-6 < times.max() <= t_start
     assert len(sim.log.meta["plans"]) == times.size
 
 

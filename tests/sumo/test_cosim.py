@@ -75,7 +75,8 @@ def test_controllers_run_collision_free_and_execute_their_plans(controller: str,
     start = starts[starts["vehicle"] == vr][0]
     # receding horizon as in the engine: plans every replan period until the change starts
     times = np.array([p.t0 for p in sim.decisions])
-    np.testing.assert_allclose(np.diff(times), config.control.replan_period, atol=1e-6)
+    gaps = np.diff(times)  # one period apart, or more after a commitment window
+    assert (gaps >= config.control.replan_period - 1e-6).all()
     assert times.max() <= start["t"]
     plan = sim.decisions[-1]  # the plan in force when VR's change started
     executed = sim.fleet.kind[vr] == Kind.CAV and np.isfinite(plan.merge_x)

@@ -40,7 +40,7 @@ from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.demand import generate_demand
-from hcomc.sim.execution import ActivePlan, commanded, plan_record, virtual_leaders
+from hcomc.sim.execution import ActivePlan, holding_lane, plan_record, virtual_leaders
 from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
@@ -351,7 +351,11 @@ class Simulation:
         ]
         period = self.config.control.replan_period
         on_ramp = (self.lane == Lane.RAMP) & (self.origin == self.target) & self.active
-        due = [p.vr for p in self.plans if p.may_replan(t, period) and on_ramp[p.vr]]
+        due = [
+            p.vr
+            for p in self.plans
+            if on_ramp[p.vr] and p.may_replan(t, period, self.x[p.vr], self.v[p.vr])
+        ]
         for vr in [*new.tolist(), *due]:
             self.planned[vr] = True
             view = self._view(t)
@@ -460,7 +464,7 @@ class Simulation:
         )
         sel = ~changing & ~self.fleet.scripted[ids] & ((lane != Lane.RAMP) | on_accel_lane)
         if self.plans:
-            sel &= ~commanded(self.plans, self.x.size)[ids]
+            sel &= ~holding_lane(self.plans, self.fleet.kind == Kind.CAV)[ids]
         pos = np.flatnonzero(sel)
         if pos.size == 0:
             return

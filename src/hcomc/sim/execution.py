@@ -16,8 +16,8 @@ The engine owns all state; this module only reads it and tells the engine what t
 
 A plan ends when VR's merge completes or a key vehicle leaves the road, and is replaced by a
 new plan when the engine replans (every ``control.replan_period`` seconds until VR starts its
-lane change or a lateral cooperation has begun). While it is active, commanded vehicles make no
-discretionary (MOBIL) lane changes of their own.
+lane change or a lateral cooperation has begun). While it is active, commanded vehicles and
+the connected (CAV) key vehicles make no discretionary (MOBIL) lane changes of their own.
 """
 
 from __future__ import annotations
@@ -54,10 +54,19 @@ class ActivePlan:
         """Whether VR is on the ramp following the plan (VV0, no lane-end braking)."""
         return self.vr_commanded and not self.vr_started and not self.released
 
-    def may_replan(self, t: float, period: float) -> bool:
-        """Receding horizon: replan every ``period`` s until a commanded lane change began."""
+    def may_replan(self, t: float, period: float, x_vr: float, v_vr: float) -> bool:
+        """Receding horizon: replan every ``period`` s until a commanded lane change began.
+
+        Within one period before its merge position VR keeps the plan it is about to execute
+        (a replan cannot move the merge away at the last moment); if the change cannot start
+        there (the MOBIL safety criterion fails), the plan has failed and replanning resumes
+        until VR is released to gap acceptance.
+        """
+        merge_x = self.plan.merge_x
+        committed = self.vr_commanded and merge_x - v_vr * period <= x_vr < merge_x
         return (
             period > 0.0
+            and not committed
             and not self.vr_started
             and not self.vmc_started
             and not self.released
@@ -76,6 +85,18 @@ def commanded(plans: list[ActivePlan], n: int) -> BoolArray:
             mask[g.vmc] = True
         if p.vnr_commanded:
             mask[g.vnr] = True
+    return mask
+
+
+def holding_lane(plans: list[ActivePlan], is_cav: BoolArray) -> BoolArray:
+    """Vehicles that make no discretionary (MOBIL) lane change now: those a live plan
+    commands, and every connected (CAV) key vehicle of a live plan, which keeps its lane so
+    that it does not cut into the gap the plan opens (an HDV key vehicle cannot be told)."""
+    mask = commanded(plans, is_cav.size)
+    for p in plans:
+        keys = p.plan.group.as_array()
+        keys = keys[keys >= 0]
+        mask[keys[is_cav[keys]]] = True
     return mask
 
 

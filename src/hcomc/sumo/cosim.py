@@ -283,7 +283,7 @@ class SumoSimulation:
         period = self.config.control.replan_period
         on_ramp = (self.lane == Lane.RAMP) & ~changing & self.active
         for p in list(self.plans):
-            if p.may_replan(t, period) and on_ramp[p.vr]:
+            if on_ramp[p.vr] and p.may_replan(t, period, self.x[p.vr], self.v[p.vr]):
                 self._plan(p.vr, t)
 
     def _plan(self, vr: int, t: float) -> None:
