@@ -80,6 +80,12 @@ def test_claims_report_paired_effects() -> None:
     assert row["ours"] == "112.8 vs 102.8"
     tie = c1.loc["HCOMC fuel lower than FIFO"]
     assert (tie["holds"], tie["n"], tie["median_diff"]) == (0, 4, 0.0)
+    runs = _runs()
+    hcomc = runs["configuration"] == "HCOMC"
+    runs.loc[hcomc, "stabilisation_time"] = 10.0 - 2e-15  # round-off, not an improvement
+    noise = claims(runs).set_index(["condition", "claim"])
+    row = noise.loc[("C1", "HCOMC stabilisation time lower than FIFO")]
+    assert (row["holds"], row["median_diff"]) == (0, 0.0)
     mode = table[(table["claim"] == "HCOMC chooses lateral cooperation")].iloc[0]
     assert (mode["condition"], mode["holds"], mode["n"]) == ("C2", 3, 4)
     assert "uniform" not in table
