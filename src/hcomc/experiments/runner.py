@@ -106,9 +106,10 @@ def grid(
     ]
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=16)  # grids run condition, configuration, seed: one entry per seed suffices
 def _undisturbed(condition: str, seed: int, overrides_json: str) -> SimulationLog:
-    """The run without its ramp vehicle (cached per worker process)."""
+    """The run without its ramp vehicle (cached per worker process; a long run's log can
+    take ~100 MB, hence the small cache)."""
     from hcomc.sim.engine import Simulation
 
     config = load_config(condition, **json.loads(overrides_json))
