@@ -106,10 +106,9 @@ def grid(
     ]
 
 
-@lru_cache(maxsize=16)  # grids run condition, configuration, seed: one entry per seed suffices
+@lru_cache(maxsize=64)
 def _undisturbed(condition: str, seed: int, overrides_json: str) -> SimulationLog:
-    """The run without its ramp vehicle (cached per worker process; a long run's log can
-    take ~100 MB, hence the small cache)."""
+    """The run without its ramp vehicle (cached per worker process)."""
     from hcomc.sim.engine import Simulation
 
     config = load_config(condition, **json.loads(overrides_json))
