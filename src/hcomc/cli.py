@@ -485,7 +485,7 @@ REPRODUCE_FILES = ("runs.csv", "claims.csv", "table2.md", "table3.md")
 
 @app.command()
 def reproduce(
-    seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 10,
+    seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 30,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
     out_dir: Annotated[Path, typer.Option("--out", help="Output directory.")] = Path("results"),
     force: Annotated[

@@ -1,0 +1,25 @@
+"""The house style is part of the test suite: ruff's lint rules and formatting (pyproject.toml)."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+TREES = ["src", "tests", "benchmarks", "examples"]
+
+
+def _ruff(*args: str) -> subprocess.CompletedProcess[str]:
+    exe = shutil.which("ruff")
+    cmd = [exe] if exe else [sys.executable, "-m", "ruff"]
+    return subprocess.run([*cmd, *args, *TREES], cwd=ROOT, capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("args", [("check",), ("format", "--check")])
+def test_ruff_is_clean(args: tuple[str, ...]) -> None:
+    done = _ruff(*args)
+    assert done.returncode == 0, done.stdout + done.stderr
