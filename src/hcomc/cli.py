@@ -576,6 +576,10 @@ def sweep(
     out_dir: Annotated[
         Path | None, typer.Option("--out", help="Results store (default: sweeps/NAME).")
     ] = None,
+    engine: Annotated[
+        str | None,
+        typer.Option(help="Simulation engine: hcomc or sumo (default: the spec's, hcomc)."),
+    ] = None,
 ) -> None:
     """Run a density x penetration x configuration x seed grid; rerun to resume."""
     from hcomc.experiments.sweep import connect, load_sweep, run_sweep, sweep_status
@@ -587,6 +591,8 @@ def sweep(
         )
     try:
         plan = load_sweep(spec)
+        if engine is not None:
+            plan = plan.model_copy(update={"engine": _engine(engine)})
         if scheduler is not None:
             connect(scheduler).close()  # reachable before anything runs
     except ConfigError as exc:

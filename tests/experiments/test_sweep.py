@@ -256,3 +256,13 @@ def test_workers_with_a_scheduler_is_an_error(spec_file, tmp_path):
     assert result.exit_code == 2
     assert "'--workers' = 2 does not apply with '--scheduler'" in result.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_sweep_engine_is_part_of_each_run_and_of_its_key(tmp_path):
+    spec_file = tmp_path / "engine.toml"
+    spec_file.write_text('base = "C1"\nseeds = 1\nconfigurations = ["FIFO"]\nengine = "sumo"\n')
+    spec = load_sweep(spec_file)
+    runs = expand(spec)
+    assert {r.engine for r in runs} == {"sumo"}
+    ours = expand(spec.model_copy(update={"engine": "hcomc"}))
+    assert [run_key(a) for a in runs] != [run_key(b) for b in ours]  # never mixed on resume

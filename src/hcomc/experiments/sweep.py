@@ -80,6 +80,9 @@ class SweepSpec(BaseModel):
     ramp: Literal["single", "flow"] | None = Field(None, description="one key merge or a flow")
     ramp_mean_headway: float | None = Field(None, gt=0, description="'flow': ramp headway [s]")
     duration: float | None = Field(None, gt=0, description="measured duration [s]")
+    engine: Literal["hcomc", "sumo"] = Field(
+        "hcomc", description="simulation engine: hcomc, or sumo (co-simulation, hcomc[sumo])"
+    )
     grid: SweepGrid = Field(default_factory=SweepGrid)
 
 
@@ -120,7 +123,10 @@ def expand(spec: SweepSpec) -> list[RunSpec]:
             overrides["duration"] = spec.duration
         load_config(spec.base, **overrides)  # raises ConfigError naming the bad value
         for conf in spec.configurations:
-            runs.extend(RunSpec(spec.base, conf, seed, overrides) for seed in range(spec.seeds))
+            runs.extend(
+                RunSpec(spec.base, conf, seed, overrides, engine=spec.engine)
+                for seed in range(spec.seeds)
+            )
     return runs
 
 
@@ -137,7 +143,9 @@ def resolved_config(run: RunSpec) -> ScenarioConfig:
 
 def _identity(run: RunSpec) -> str:
     """What a run is in the grid (base, cell, configuration, seed), whatever its inputs say."""
-    text = json.dumps([run.condition, run.configuration, run.seed, run.overrides], sort_keys=True)
+    text = json.dumps(
+        [run.condition, run.configuration, run.seed, run.overrides, run.engine], sort_keys=True
+    )
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
