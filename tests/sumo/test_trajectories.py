@@ -153,6 +153,35 @@ def test_given_key_vehicles_override_found_ones(c1_run: Path, tmp_path: Path) ->
     assert "'--vr' = 'nobody'" in bad.output
 
 
+def test_metrics_cli_reference_gives_the_disturbance_metrics(
+    c1: ScenarioConfig, c1_run: Path, tmp_path: Path
+) -> None:
+    """``--reference`` (the undisturbed run, same format) gives average acceleration,
+    stabilisation time and LSRV, equal to the engine's within the derived merge time."""
+    log = SimulationLog.load(c1_run / "log.npz")
+    undisturbed = Simulation(c1, 0, counterfactual=True).run()
+    fcd, ref = (
+        write_fcd(log, tmp_path / "run.xml", c1),
+        write_fcd(undisturbed, tmp_path / "u.xml", c1),
+    )
+    runner = CliRunner()
+    alone = json.loads(runner.invoke(app, ["metrics", str(fcd), "--json", "--config", "C1"]).stdout)
+    done = runner.invoke(
+        app, ["metrics", str(fcd), "--json", "--config", "C1", "--reference", str(ref)]
+    )
+    assert done.exit_code == 0, done.output
+    (row,) = json.loads(done.stdout)
+    _, expected = _engine_metrics(log, undisturbed)
+    for name in ("average_acceleration", "stabilisation_time", "lsrv"):
+        assert alone[0][name] is None or not np.isfinite(alone[0][name]), name
+        assert row[name] == pytest.approx(expected[name], rel=1e-2, abs=1e-4), name
+    missing = runner.invoke(
+        app, ["metrics", str(fcd), "--config", "C1", "--reference", str(tmp_path / "no.xml")]
+    )
+    assert missing.exit_code == 2
+    assert "'--reference'" in missing.output
+
+
 @pytest.mark.parametrize(
     ("text", "expected"),
     [
