@@ -27,7 +27,7 @@ import math
 import textwrap
 import warnings
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import pandas as pd
@@ -91,9 +91,24 @@ METRIC_TITLES = {
 _MAIN_LANES = (2, 1)  # top to bottom
 _ALL_LANES = (2, 1, 0)
 _OUTLINE = [patheffects.Stroke(linewidth=4.2, foreground="black"), patheffects.Normal()]
-_LC_START = {"marker": "o", "markersize": 5, "markerfacecolor": "white", "markeredgecolor": "k"}
-_LC_END = {"marker": "o", "markersize": 4, "markerfacecolor": "black", "markeredgecolor": "k"}
-_MERGE = {"marker": "*", "markersize": 13, "markerfacecolor": "gold", "markeredgecolor": "k"}
+_LC_START: dict[str, Any] = {
+    "marker": "o",
+    "markersize": 5,
+    "markerfacecolor": "white",
+    "markeredgecolor": "k",
+}
+_LC_END: dict[str, Any] = {
+    "marker": "o",
+    "markersize": 4,
+    "markerfacecolor": "black",
+    "markeredgecolor": "k",
+}
+_MERGE: dict[str, Any] = {
+    "marker": "*",
+    "markersize": 13,
+    "markerfacecolor": "gold",
+    "markeredgecolor": "k",
+}
 
 
 # --------------------------------------------------------------------------- helpers
@@ -382,7 +397,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
             shade_zones(ax, road, orientation="y", label=ax is axes[0])
         segs, speed = _lane_segments(log, lane)
         collection = LineCollection(
-            segs,
+            cast(Any, segs),  # an (n, 2, 2) array; the stubs only name sequences
             cmap=cmap,
             norm=norm,
             linewidths=0.9,
@@ -396,7 +411,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
             ksegs, kspeed = _lane_segments(log, lane, keys)
             if len(ksegs):
                 highlight = LineCollection(
-                    ksegs,
+                    cast(Any, ksegs),
                     cmap=cmap,
                     norm=norm,
                     linewidths=2.4,
@@ -490,8 +505,13 @@ def timespace_figure(log: SimulationLog) -> Figure:
 def _draw_road(ax: Axes, road: RoadParams) -> None:
     """Lane markings of the two-lane road with the ramp / acceleration lane (y up = lane 2)."""
     W, L = road.lane_width, road.length
-    solid = {"color": "0.35", "linewidth": 1.0, "zorder": 1}
-    dashed = {"color": "0.5", "linewidth": 0.8, "linestyle": (0, (6, 4)), "zorder": 1}
+    solid: dict[str, Any] = {"color": "0.35", "linewidth": 1.0, "zorder": 1}
+    dashed: dict[str, Any] = {
+        "color": "0.5",
+        "linewidth": 0.8,
+        "linestyle": (0, (6, 4)),
+        "zorder": 1,
+    }
     ax.plot([0, L], [1.5 * W] * 2, **solid)
     ax.plot([0, L], [0.5 * W] * 2, **dashed)
     ax.plot([0, road.accel_lane_start], [-0.5 * W] * 2, **solid)
@@ -552,7 +572,7 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     shade_zones(ax_path, road, orientation="x")
     _draw_road(ax_path, road)
     W = road.lane_width
-    x_lo = road.length
+    x_lo = float(road.length)
     for role in ("VR", "VMC"):
         i = group.get(role, -1)
         if i < 0:
@@ -586,10 +606,10 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     ax_path.set_xlim(max(0.0, min(x_lo, road.control_zone_start) - 20.0), road.length)
     ax_path.set_ylim(-1.5 * W - 0.6, 1.5 * W + 0.6)
     ax_path.set_yticks([-W, 0.0, W])
-    for y, lane in ((W, 2), (0.0, 1), (-W, 0)):
+    for y_lane, lane in ((W, 2), (0.0, 1), (-W, 0)):
         ax_path.annotate(
             LANE_NAMES[lane],
-            xy=(1.0, y),
+            xy=(1.0, y_lane),
             xycoords=("axes fraction", "data"),
             xytext=(4, 0),
             textcoords="offset points",
@@ -602,7 +622,7 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     ax_path.legend(loc="center left", bbox_to_anchor=(1.06, 0.5), fontsize=8, frameon=False)
 
     # (2) v(t), (3) a(t)
-    t_lo, t_hi = times[-1], times[0]
+    t_lo, t_hi = float(times[-1]), float(times[0])
     for role in KEY_ROLES:
         i = group.get(role, -1)
         if i < 0:
@@ -610,11 +630,14 @@ def trajectories_figure(log: SimulationLog) -> Figure:
         act = log.active[:n, i]
         if not act.any():
             continue
-        t = np.where(act, times, np.nan)
-        t_lo, t_hi = min(t_lo, float(np.nanmin(t))), max(t_hi, float(np.nanmax(t)))
-        style = {"color": ROLE_COLORS[role], "linewidth": 2.2 if role in ("VR", "VMC") else 1.3}
-        ax_v.plot(t, np.where(act, log.v[:n, i], np.nan), label=role, **style)
-        ax_a.plot(t, np.where(act, log.a[:n, i], np.nan), label=role, **style)
+        t_role = np.where(act, times, np.nan)
+        t_lo, t_hi = min(t_lo, float(np.nanmin(t_role))), max(t_hi, float(np.nanmax(t_role)))
+        line: dict[str, Any] = {
+            "color": ROLE_COLORS[role],
+            "linewidth": 2.2 if role in ("VR", "VMC") else 1.3,
+        }
+        ax_v.plot(t_role, np.where(act, log.v[:n, i], np.nan), label=role, **line)
+        ax_a.plot(t_role, np.where(act, log.a[:n, i], np.nan), label=role, **line)
     lc = _lane_events(log, EventKind.LANE_CHANGE_START, [group["VR"]])
     lc_end = _lane_events(log, EventKind.LANE_CHANGE_END, [group["VR"]])
     for ax in (ax_v, ax_a):
@@ -918,7 +941,7 @@ def metrics_figure(runs: pd.DataFrame, *, metrics: Sequence[str] | None = None) 
                                 ha="center", va="bottom", fontsize=7)  # fmt: skip
         ax.set_xticks(centres, [str(c) for c in conditions])
         ax.set_ylabel(LABELS.get(metric, metric))
-        better = BETTER.get(metric)
+        better = BETTER.get(metric, "")
         note = {"larger": " (higher is better)", "smaller": " (lower is better)"}.get(better, "")
         ax.set_title(METRIC_TITLES.get(metric, metric) + note, fontsize=10)
         ax.grid(True, axis="y", color="0.88", linewidth=0.5, zorder=0)
