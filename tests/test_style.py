@@ -1,4 +1,5 @@
-"""The house style is part of the test suite: ruff's lint rules and formatting (pyproject.toml)."""
+"""The house style is part of the test suite: ruff's lint rules and formatting, and mypy's
+type check of src/ (configuration in pyproject.toml)."""
 
 from __future__ import annotations
 
@@ -16,10 +17,20 @@ TREES = ["src", "tests", "benchmarks", "examples"]
 def _ruff(*args: str) -> subprocess.CompletedProcess[str]:
     exe = shutil.which("ruff")
     cmd = [exe] if exe else [sys.executable, "-m", "ruff"]
-    return subprocess.run([*cmd, *args, *TREES], cwd=ROOT, capture_output=True, text=True)
+    return subprocess.run(
+        [*cmd, *args, *TREES], cwd=ROOT, capture_output=True, text=True, check=False
+    )
 
 
 @pytest.mark.parametrize("args", [("check",), ("format", "--check")])
 def test_ruff_is_clean(args: tuple[str, ...]) -> None:
     done = _ruff(*args)
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_mypy_is_clean() -> None:
+    """``mypy`` (with the pydantic plugin, see [tool.mypy]) finds no error in src/."""
+    exe = shutil.which("mypy")
+    cmd = [exe] if exe else [sys.executable, "-m", "mypy"]
+    done = subprocess.run([*cmd, "src"], cwd=ROOT, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stdout + done.stderr

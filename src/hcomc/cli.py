@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, cast
 
 import typer
 from rich.console import Console
@@ -466,7 +466,10 @@ def _write_report(out_dir: Path, runs: Any) -> Path:
     return write_report(out_dir, runs, figures=figures)
 
 
-PAPER_SCENARIO = {"demand": {"pattern": "uniform"}, "hdv": {"estimation_errors": False}}
+PAPER_SCENARIO: dict[str, dict[str, Any]] = {
+    "demand": {"pattern": "uniform"},
+    "hdv": {"estimation_errors": False},
+}
 """Overrides of the deterministic paper scenario: every headway equal to its mean, CAVs
 spread evenly, no HDV estimation errors (reaction delays stay); seed 0 seeds the optimisers."""
 
@@ -517,7 +520,7 @@ def reproduce(
     ]
     paper = {**overrides}
     for table, values in PAPER_SCENARIO.items():
-        paper[table] = {**overrides.get(table, {}), **values}
+        paper[table] = {**cast(dict[str, Any], overrides.get(table, {})), **values}
     uniform = [replace(s, engine=engine) for s in grid(CONDITIONS, ALL_CONFIGURATIONS, [0], paper)]
     (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
 

@@ -540,9 +540,10 @@ def nest_overrides(overrides: dict[str, Any]) -> dict[str, Any]:
                     f"unknown override '{key}' = {value!r}{suggest(key) or '; not a config key'}"
                 )
             path = homes[0].split(".")
+        leaf: Any = value
         for part in reversed(path[1:]):
-            value = {part: value}
-        nested = _merge(nested, {path[0]: value})
+            leaf = {part: leaf}
+        nested = _merge(nested, {path[0]: leaf})
     return nested
 
 

@@ -114,8 +114,8 @@ def test_every_change_follows_the_quintic_path_and_switches_lane_once(seed):
     assert len(changes) >= 20
     assert any(ch.target == Lane.MAIN_2 for ch, _, _ in changes)
     assert any(ch.target == Lane.MAIN_1 and log.lane[k0, ch.vehicle] == 0 for ch, k0, _ in changes)
-    for ch, k0, k1 in changes:
-        i = ch.vehicle
+    for ch, k_start, k1 in changes:
+        i, k0 = ch.vehicle, k_start
         if log.active[k0, i]:
             origin = int(log.lane[k0, i])
             v0 = float(log.v[k0, i])

@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 
 import hcomc
-from hcomc.sim import log as log_module
+from hcomc.sim import log_io
 from hcomc.sim import manifest as manifest_module
 from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
 from hcomc.sim.manifest import (
@@ -300,9 +300,7 @@ def test_parquet_is_the_long_frame_with_metadata(tmp_path: Path) -> None:
     log = _filled()
     log.save(tmp_path / "run.parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "run.parquet"), log.to_frame())
-    header = json.loads(
-        pq.read_schema(tmp_path / "run.parquet").metadata[log_module._PARQUET_META_KEY]
-    )
+    header = json.loads(pq.read_schema(tmp_path / "run.parquet").metadata[log_io._PARQUET_META_KEY])
     assert (header["n_steps"], header["n_vehicles"]) == (T, N)
     assert header["meta"] == log.meta
     assert len(pq.read_table(tmp_path / "run.events.parquet")) == 4

@@ -73,25 +73,37 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from hcomc._typing import BoolArray, FloatArray
+from hcomc._typing import FloatArray
 from hcomc.config import IDMParams
 from hcomc.control.game import GameSolution, solve_cooperative, solve_stackelberg_harsanyi
-from hcomc.models.idm import idm_acceleration, iidm_acceleration
-from hcomc.models.quintic import quintic_shape
-from hcomc.models.transition import blend_acceleration, transition_weight
-from hcomc.road import Kind
-from hcomc.safety.critical import critical_acceleration
-
-if TYPE_CHECKING:
-    from hcomc.config import ScenarioConfig
-    from hcomc.sim.fleet import Fleet
+from hcomc.control.lane_change_cost import (
+    FV_AC,
+    FV_ACTIONS,
+    FV_CS,
+    FV_DC,
+    FV_LC,
+    GAME_DEFAULT,
+    INFEASIBLE_SAFETY_COST,
+    SV_ACTIONS,
+    SV_K,
+    SV_LC,
+    DriverType,
+    GameParams,
+    GameVehicle,
+    comfort_cost,
+    efficiency_cost,
+    fv_kinematics,
+    game_params,
+    game_vehicle,
+    lateral_accel,
+    leader_track,
+    safety_cost,
+    simulate_sv,
+)
 
 __all__ = [
     "FV_AC",
@@ -112,211 +124,6 @@ __all__ = [
     "game_vehicle",
     "lane_change_game",
 ]
-
-SV_LC: int = 0
-"""SV action index: change lane."""
-SV_K: int = 1
-"""SV action index: keep following in the current lane."""
-SV_ACTIONS: tuple[str, ...] = ("LC", "K")
-"""Names of the SV actions, by index."""
-
-FV_LC: int = 0
-"""FV action index: change lane (leave the target lane)."""
-FV_CS: int = 1
-"""FV action index: constant speed."""
-FV_AC: int = 2
-"""FV action index: accelerate at ``+fv_accel``."""
-FV_DC: int = 3
-"""FV action index: decelerate at ``-fv_accel``."""
-FV_ACTIONS: tuple[str, ...] = ("LC", "CS", "AC", "DC")
-"""Names of the FV actions, by index."""
-
-INFEASIBLE_SAFETY_COST: float = 10.0
-"""J_s of an overlapping gap or an unavoidable crash (a_cr = inf or > a_merg) [-]."""
-
-
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class DriverType(_Frozen):
-    """A Harsanyi driver type (driving style) of the follower, MODELS.md §9.
-
-    The IDM parameters and cost weights are MODELS.md §9's *suggestions*; the paper gives none.
-    """
-
-    name: str = Field(min_length=1, description="type name, e.g. 'normal' [-]")
-    time_headway: float = Field(gt=0, le=10, description="T, IDM desired time gap [s]")
-    max_accel: float = Field(gt=0, le=10, description="a, maximum acceleration [m/s^2]")
-    comfort_decel: float = Field(gt=0, le=10, description="b, comfortable deceleration [m/s^2]")
-    w_safety: float = Field(ge=0, le=10, description="w_s, weight of the safety cost [-]")
-    w_efficiency: float = Field(ge=0, le=10, description="w_e, weight of the efficiency cost [-]")
-    w_comfort: float = Field(ge=0, le=10, description="w_c, weight of the comfort cost [-]")
-
-
-AGGRESSIVE = DriverType(
-    name="aggressive",
-    time_headway=1.0,
-    max_accel=2.0,
-    comfort_decel=3.0,
-    w_safety=0.2,
-    w_efficiency=0.6,
-    w_comfort=0.2,
-)
-"""Aggressive style (MODELS.md §9, suggested values)."""
-NORMAL = DriverType(
-    name="normal",
-    time_headway=1.5,
-    max_accel=1.4,
-    comfort_decel=2.0,
-    w_safety=0.4,
-    w_efficiency=0.4,
-    w_comfort=0.2,
-)
-"""Normal style (MODELS.md §9, suggested values)."""
-CONSERVATIVE = DriverType(
-    name="conservative",
-    time_headway=2.0,
-    max_accel=1.0,
-    comfort_decel=1.5,
-    w_safety=0.6,
-    w_efficiency=0.2,
-    w_comfort=0.2,
-)
-"""Conservative style (MODELS.md §9, suggested values)."""
-
-
-class GameParams(_Frozen):
-    """Parameters of the discretionary lane-change game (paper §III-B; MODELS.md §7, §9).
-
-    The paper states none of the weights, priors or type parameters; the defaults are the
-    MODELS.md §9 suggestions (prior 0.25/0.5/0.25, SV weights 0.5/0.3/0.2) and the Eq. 15
-    defaults of MODELS.md §0. ``lane_width`` and ``transition_tolerance`` are additions used by
-    the lateral comfort term and the Eq. 14 transition.
-    """
-
-    types: tuple[DriverType, ...] = Field(
-        (AGGRESSIVE, NORMAL, CONSERVATIVE),
-        min_length=1,
-        description="Harsanyi types of an HDV follower (unique names) [-]",
-    )
-    prior: tuple[float, ...] = Field(
-        (0.25, 0.5, 0.25), description="prior probability of each type, sums to 1 [-]"
-    )
-    sv_weights: tuple[float, float, float] = Field(
-        (0.5, 0.3, 0.2), description="SV cost weights (w_s, w_e, w_c), non-negative [-]"
-    )
-    fv_accel: float = Field(1.0, gt=0, le=10, description="magnitude of FV's AC/DC [m/s^2]")
-    horizon: float = Field(4.0, gt=0, le=30, description="H = T_lc, simulation horizon [s]")
-    dt: float = Field(0.25, gt=0, le=2, description="prediction step, divides horizon [s]")
-    safety_threshold: float = Field(
-        4.0, gt=0, le=20, description="a_th, critical acceleration mapped to J_s = 1 [m/s^2]"
-    )
-    jerk_max: float = Field(5.0, gt=0, le=100, description="j_max, jerk normaliser [m/s^3]")
-    delay_cav: float = Field(0.5, ge=0, le=5, description="Eq. 15 delay T, CAV follower [s]")
-    delay_hdv: float = Field(1.0, ge=0, le=5, description="Eq. 15 delay T, HDV follower [s]")
-    min_distance: float = Field(2.0, ge=0, le=50, description="Eq. 15 residual distance D [m]")
-    emergency_decel: float = Field(
-        7.5, gt=0, le=15, description="Eq. 15 a_merg, emergency deceleration [m/s^2]"
-    )
-    lane_width: float = Field(3.75, gt=0, le=10, description="W, lateral lane-change offset [m]")
-    transition_tolerance: float = Field(
-        0.01, gt=0, lt=0.5, description="epsilon of the Eq. 14 transition, Psi(0) = eps [-]"
-    )
-
-    @model_validator(mode="after")
-    def _consistent(self) -> GameParams:
-        names = [t.name for t in self.types]
-        if len(set(names)) != len(names):
-            raise ValueError(f"type names must be unique, got {names}")
-        if len(self.prior) != len(self.types):
-            raise ValueError(
-                f"prior has {len(self.prior)} entries for {len(self.types)} types: {self.prior}"
-            )
-        if any(not np.isfinite(p) or p < 0.0 for p in self.prior):
-            raise ValueError(f"prior entries must be finite and >= 0, got {self.prior}")
-        if abs(sum(self.prior) - 1.0) > 1e-9:
-            raise ValueError(f"prior must sum to 1, got {sum(self.prior)!r} for {self.prior}")
-        if any(not np.isfinite(w) or w < 0.0 for w in self.sv_weights):
-            raise ValueError(f"sv_weights must be finite and >= 0, got {self.sv_weights}")
-        ratio = self.horizon / self.dt
-        if abs(ratio - round(ratio)) > 1e-9:
-            raise ValueError(f"horizon = {self.horizon} must be a multiple of dt = {self.dt}")
-        return self
-
-    @property
-    def n_steps(self) -> int:
-        """Number N of prediction steps, ``horizon / dt``."""
-        return round(self.horizon / self.dt)
-
-    @property
-    def reference_type(self) -> int:
-        """Index of the type whose weights a CAV follower uses: 'normal', else the modal type."""
-        for i, t in enumerate(self.types):
-            if t.name == "normal":
-                return i
-        return int(np.argmax(self.prior))
-
-
-GAME_DEFAULT: GameParams = GameParams()
-
-
-def game_params(config: ScenarioConfig) -> GameParams:
-    """The default game with the Eq. 15 parameters and threshold of ``config.control``.
-
-    Every consumer of the game (the HCOMC controller, the engine's CAV lane changes) builds its
-    parameters here, so the Eq. 15 values have one home: the config.
-    """
-    c = config.control
-    return GAME_DEFAULT.model_copy(
-        update={
-            "safety_threshold": c.safety_threshold,
-            "delay_cav": c.safety_delay_cav,
-            "delay_hdv": c.safety_delay_hdv,
-            "min_distance": c.safety_min_distance,
-            "emergency_decel": c.safety_emergency_decel,
-            "lane_width": config.road.lane_width,
-            "transition_tolerance": config.lane_change.transition_tolerance,
-        }
-    )
-
-
-"""Default game parameters (MODELS.md §9 suggestions)."""
-
-
-@dataclass(frozen=True)
-class GameVehicle:
-    """Longitudinal state of one vehicle taking part in the game.
-
-    Attributes
-    ----------
-    x : float
-        Front-bumper position along the road [m].
-    v : float
-        Speed [m/s], ``>= 0``.
-    length : float
-        Vehicle length [m], ``> 0``.
-    desired_speed : float
-        Desired speed v0 [m/s], ``> 0`` (IDM v0 for SV, reference of the efficiency cost).
-    is_cav : bool
-        True for a CAV (Eq. 15 delay ``delay_cav``), False for an HDV.
-    """
-
-    x: float
-    v: float
-    length: float
-    desired_speed: float
-    is_cav: bool
-
-    def __post_init__(self) -> None:
-        if not np.isfinite(self.x):
-            raise ValueError(f"x must be finite, got {self.x!r}")
-        if not (np.isfinite(self.v) and self.v >= 0.0):
-            raise ValueError(f"v must be finite and >= 0, got {self.v!r}")
-        if not (np.isfinite(self.length) and self.length > 0.0):
-            raise ValueError(f"length must be finite and > 0, got {self.length!r}")
-        if not (np.isfinite(self.desired_speed) and self.desired_speed > 0.0):
-            raise ValueError(f"desired_speed must be finite and > 0, got {self.desired_speed!r}")
 
 
 @dataclass(frozen=True)
@@ -353,164 +160,6 @@ class LaneChangeDecision:
         response FV plays with positive probability in the equilibrium."""
         support = self.solution.fv_mixed[SV_LC] > 0.0
         return bool(np.all(self.sv_safety[SV_LC][support] < 1.0))
-
-
-def _leader_track(leader: GameVehicle | None, t: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Rear-bumper position (N,) [m] and speed (N,) [m/s] of a constant-speed leader at ``t``.
-
-    An absent leader is at ``+inf`` with speed 0, so every gap to it is ``+inf`` (IDM free road,
-    Eq. 15 gives 0).
-    """
-    if leader is None:
-        return np.full(t.shape, np.inf), np.zeros(t.shape)
-    rear = leader.x - leader.length + leader.v * t
-    return rear, np.full(t.shape, float(leader.v))
-
-
-def _car_following(idm: IDMParams, v0: float) -> Callable[..., FloatArray]:
-    """IDM (or IIDM, per ``idm.variant``) acceleration as a function of (s, v, dv)."""
-    kernel = iidm_acceleration if idm.variant == "iidm" else idm_acceleration
-
-    def accel(s: FloatArray, v: FloatArray, dv: FloatArray) -> FloatArray:
-        return kernel(
-            s,
-            v,
-            dv,
-            v0=v0,
-            T=idm.time_headway,
-            a=idm.max_accel,
-            b=idm.comfort_decel,
-            s0=idm.min_gap,
-            delta=idm.exponent,
-        )
-
-    return accel
-
-
-def _simulate_sv(
-    sv: GameVehicle,
-    old: GameVehicle | None,
-    new: GameVehicle | None,
-    idm: IDMParams,
-    params: GameParams,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Positions, speeds and applied accelerations (2, N) of SV for actions (LC, K).
-
-    Ballistic update with a stop at v = 0; the IDM output is floored at ``-emergency_decel``.
-    Row LC blends the accelerations towards ``old`` and ``new`` with Eq. 14 (Ψ at the start of
-    each step, τ = t_{k-1}); row K follows ``old``. The loop runs over the N time steps only.
-    """
-    n, dt = params.n_steps, params.dt
-    t_start: FloatArray = dt * np.arange(n, dtype=np.float64)
-    old_rear, old_v = _leader_track(old, t_start)
-    new_rear, new_v = _leader_track(new, t_start)
-    psi = transition_weight(t_start, params.horizon, params.transition_tolerance)
-    weights = np.stack([psi, np.zeros(n)])  # (2, N): LC blends, K keeps a_ori
-    accel = _car_following(idm, sv.desired_speed)
-
-    x = np.full(2, float(sv.x))
-    v = np.full(2, float(sv.v))
-    xs, vs, acc = np.empty((2, n)), np.empty((2, n)), np.empty((2, n))
-    for k in range(n):
-        a_ori = accel(old_rear[k] - x, v, v - old_v[k])
-        a_new = accel(new_rear[k] - x, v, v - new_v[k])
-        a = np.maximum(blend_acceleration(a_ori, a_new, weights[:, k]), -params.emergency_decel)
-        v_next = v + a * dt
-        stops = v_next < 0.0
-        dx = np.where(stops, v * v / (2.0 * np.where(stops, -a, 1.0)), v * dt + 0.5 * a * dt * dt)
-        v_next = np.maximum(v_next, 0.0)
-        acc[:, k] = (v_next - v) / dt
-        x = x + dx
-        v = v_next
-        xs[:, k], vs[:, k] = x, v
-    return xs, vs, acc
-
-
-def _fv_kinematics(
-    fv: GameVehicle, t: FloatArray, params: GameParams
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Closed-form positions, speeds and applied accelerations (4, N) of FV's actions.
-
-    LC and CS cruise, AC/DC hold ``±fv_accel``; DC stops at v = 0 and stays there.
-    """
-    a = np.array([0.0, 0.0, params.fv_accel, -params.fv_accel])[:, None]  # (4, 1)
-    t_stop = np.where(a < 0.0, fv.v / np.where(a < 0.0, -a, 1.0), np.inf)
-    te = np.minimum(t[None, :], t_stop)  # (4, N)
-    x = fv.x + fv.v * te + 0.5 * a * te * te
-    v = np.maximum(fv.v + a * te, 0.0)
-    v_prev = np.concatenate([np.full((4, 1), float(fv.v)), v[:, :-1]], axis=1)
-    return x, v, (v - v_prev) / params.dt
-
-
-def _lateral_accel(t: FloatArray, params: GameParams) -> FloatArray:
-    """Lateral acceleration (N,) of a rest-to-rest quintic lane change over H (Eq. 4) [m/s^2]."""
-    _, _, ddp = quintic_shape(t / params.horizon)
-    return params.lane_width / params.horizon**2 * ddp
-
-
-def _safety_cost(
-    gap: FloatArray,
-    v_rear: FloatArray,
-    v_front: FloatArray,
-    delay: float,
-    active: BoolArray,
-    params: GameParams,
-) -> FloatArray:
-    """J_s over the last (time) axis from Eq. 15 on the active entries; inactive entries = 0."""
-    a_cr = critical_acceleration(
-        gap,
-        v_rear,
-        v_front,
-        delay=delay,
-        min_distance=params.min_distance,
-        emergency_decel=params.emergency_decel,
-    )
-    bad = active & ((gap <= 0.0) | ~(a_cr <= params.emergency_decel))
-    worst = np.where(active, np.where(bad, 0.0, a_cr), 0.0).max(axis=-1)
-    j_s = np.minimum(1.0, worst / params.safety_threshold)
-    return np.where(bad.any(axis=-1), INFEASIBLE_SAFETY_COST, j_s)
-
-
-def _efficiency_cost(v: FloatArray, v0: float) -> FloatArray:
-    """J_e = mean over the last axis of |v - v0| / v0 [-]."""
-    return np.asarray(np.mean(np.abs(v - v0), axis=-1) / v0, dtype=np.float64)
-
-
-def _comfort_cost(
-    a_lon: FloatArray,
-    a_lat: FloatArray,
-    a_max: FloatArray | float,
-    b_comf: FloatArray | float,
-    params: GameParams,
-) -> FloatArray:
-    """J_c = max|jerk|/j_max + mean[(a_x/a_ref)^2 + (a_y/a_max)^2] over the last axis.
-
-    The jerk is the finite difference of the acceleration series preceded by 0; longitudinal and
-    lateral parts combine as a vector norm. ``a_ref`` is ``a_max`` for ``a_x >= 0`` and
-    ``b_comf`` for braking. ``a_max``/``b_comf`` broadcast against the leading axes.
-    """
-    a_max = np.asarray(a_max, dtype=np.float64)[..., None]
-    b_comf = np.asarray(b_comf, dtype=np.float64)[..., None]
-    pad = np.zeros((*a_lon.shape[:-1], 1))
-    j_lon = np.diff(np.concatenate([pad, a_lon], axis=-1), axis=-1) / params.dt
-    j_lat = np.diff(np.concatenate([pad, a_lat], axis=-1), axis=-1) / params.dt
-    jerk = np.hypot(j_lon, j_lat).max(axis=-1)
-    ref = np.where(a_lon >= 0.0, a_max, b_comf)
-    mean_sq = np.mean(np.square(a_lon / ref) + np.square(a_lat / a_max), axis=-1)
-    return np.asarray(jerk / params.jerk_max + mean_sq, dtype=np.float64)
-
-
-def game_vehicle(x: FloatArray, v: FloatArray, fleet: Fleet, i: int) -> GameVehicle | None:
-    """The :class:`GameVehicle` of vehicle ``i`` (None for -1, a missing vehicle)."""
-    if i < 0:
-        return None
-    return GameVehicle(
-        x=float(x[i]),
-        v=float(v[i]),
-        length=float(fleet.length[i]),
-        desired_speed=float(fleet.v0[i]),
-        is_cav=bool(fleet.kind[i] == Kind.CAV),
-    )
 
 
 def lane_change_game(
@@ -569,22 +218,22 @@ def lane_change_game(
     n = params.n_steps
     # evaluation grid t_k = k dt, k = 1..N
     t: FloatArray = params.dt * np.arange(1, n + 1, dtype=np.float64)
-    lat = _lateral_accel(t, params)
+    lat = lateral_accel(t, params)
     sv_delay = params.delay_cav if sv.is_cav else params.delay_hdv
 
-    sv_x, sv_v, sv_a = _simulate_sv(sv, sv_leader, target_leader, sv_idm, params)
+    sv_x, sv_v, sv_a = simulate_sv(sv, sv_leader, target_leader, sv_idm, params)
     sv_rear = sv_x - sv.length
-    old_rear, old_v = _leader_track(sv_leader, t)
-    tl_rear, tl_v = _leader_track(target_leader, t)
+    old_rear, old_v = leader_track(sv_leader, t)
+    tl_rear, tl_v = leader_track(target_leader, t)
 
     # SV behind its leader in the lane it ends in: target leader (LC), current leader (K).
     lead_rear = np.stack([tl_rear, old_rear])
     lead_v = np.stack([tl_v, old_v])
     all_on = np.ones((2, n), dtype=bool)
-    sv_js_lead = _safety_cost(lead_rear - sv_x, sv_v, lead_v, sv_delay, all_on, params)  # (2,)
-    sv_je = _efficiency_cost(sv_v, sv.desired_speed)  # (2,)
+    sv_js_lead = safety_cost(lead_rear - sv_x, sv_v, lead_v, sv_delay, all_on, params)  # (2,)
+    sv_je = efficiency_cost(sv_v, sv.desired_speed)  # (2,)
     sv_lat = np.stack([lat, np.zeros(n)])
-    sv_jc = _comfort_cost(sv_a, sv_lat, sv_idm.max_accel, sv_idm.comfort_decel, params)  # (2,)
+    sv_jc = comfort_cost(sv_a, sv_lat, sv_idm.max_accel, sv_idm.comfort_decel, params)  # (2,)
     w_s, w_e, w_c = params.sv_weights
 
     if fv is None:
@@ -596,13 +245,13 @@ def lane_change_game(
         )
 
     fv_delay = params.delay_cav if fv.is_cav else params.delay_hdv
-    fv_x, fv_v, fv_a = _fv_kinematics(fv, t, params)  # (4, N)
+    fv_x, fv_v, fv_a = fv_kinematics(fv, t, params)  # (4, N)
     # FV interacts with SV (if SV changes) throughout, except after its own LC midpoint H/2.
     with_sv = np.ones((4, n), dtype=bool)
     with_sv[FV_LC] = t <= 0.5 * params.horizon + 1e-9
     gap_sv = sv_rear[SV_LC][None, :] - fv_x  # (4, N): FV behind SV in the target lane
     v_sv_lc = np.broadcast_to(sv_v[SV_LC], (4, n))
-    sv_js_fv = _safety_cost(gap_sv, fv_v, v_sv_lc, fv_delay, with_sv, params)  # (4,)
+    sv_js_fv = safety_cost(gap_sv, fv_v, v_sv_lc, fv_delay, with_sv, params)  # (4,)
     sv_js = np.maximum(sv_js_lead[:, None], np.stack([sv_js_fv, np.zeros(4)]))  # (2, 4)
     sv_cost = w_s * sv_js + (w_e * sv_je + w_c * sv_jc)[:, None]  # (2, 4)
 
@@ -610,14 +259,14 @@ def lane_change_game(
     gap_tl = tl_rear[None, :] - fv_x  # (4, N)
     fv_gap = np.stack([np.where(with_sv, gap_sv, gap_tl), gap_tl])  # (2, 4, N)
     fv_lead_v = np.stack([np.where(with_sv, v_sv_lc, tl_v), np.broadcast_to(tl_v, (4, n))])
-    fv_js = _safety_cost(fv_gap, fv_v, fv_lead_v, fv_delay, np.ones_like(fv_gap, bool), params)
-    fv_je = _efficiency_cost(fv_v, fv.desired_speed)  # (4,)
+    fv_js = safety_cost(fv_gap, fv_v, fv_lead_v, fv_delay, np.ones_like(fv_gap, bool), params)
+    fv_je = efficiency_cost(fv_v, fv.desired_speed)  # (4,)
     fv_lat = np.zeros((4, n))
     fv_lat[FV_LC] = lat
 
     if fv.is_cav:
         ref = params.types[params.reference_type]
-        fv_jc = _comfort_cost(fv_a, fv_lat, fv_idm.max_accel, fv_idm.comfort_decel, params)
+        fv_jc = comfort_cost(fv_a, fv_lat, fv_idm.max_accel, fv_idm.comfort_decel, params)
         fv_cost = ref.w_safety * fv_js + ref.w_efficiency * fv_je + ref.w_comfort * fv_jc
         solution = solve_cooperative(sv_cost, fv_cost)
         return _decision(
@@ -626,7 +275,7 @@ def lane_change_game(
 
     a_max = np.array([ty.max_accel for ty in params.types])
     b_comf = np.array([ty.comfort_decel for ty in params.types])
-    fv_jc = _comfort_cost(fv_a[:, None, :], fv_lat[:, None, :], a_max, b_comf, params)  # (4, T)
+    fv_jc = comfort_cost(fv_a[:, None, :], fv_lat[:, None, :], a_max, b_comf, params)  # (4, T)
     w = np.array([[ty.w_safety, ty.w_efficiency, ty.w_comfort] for ty in params.types])
     fv_cost = (
         w[:, 0] * fv_js[:, :, None] + w[:, 1] * fv_je[None, :, None] + w[:, 2] * fv_jc[None]

@@ -129,7 +129,7 @@ def make_simulation(
 def _undisturbed(condition: str, seed: int, overrides_json: str, engine: str) -> SimulationLog:
     """The run without its ramp vehicle (cached per worker process)."""
     config = load_config(condition, **json.loads(overrides_json))
-    return make_simulation(config, seed, engine, counterfactual=True).run()  # type: ignore[no-any-return]
+    return make_simulation(config, seed, engine, counterfactual=True).run()
 
 
 def undisturbed_log(spec: RunSpec) -> SimulationLog:

@@ -202,7 +202,7 @@ def paper_claims() -> list[Claim | ModeClaim]:
     out += [
         replace(c, text=f"{c.text}-R", b=(c.b[0], REPLANNING[c.b[1]]))
         for c in list(out)
-        if c is not None and c.b[1] in REPLANNING
+        if isinstance(c, Claim) and c.b[1] in REPLANNING
     ]
     out += [ModeClaim("C1", "longitudinal"), ModeClaim("C2", "lateral"),
             ModeClaim("C3", "longitudinal")]  # fmt: skip

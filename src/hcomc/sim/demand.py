@@ -206,7 +206,7 @@ def _platoon_demand(config: ScenarioConfig) -> Demand:
     scripted[0] = True
     return Demand(
         t=np.full(n, -config.warmup),
-        x=x,
+        x=x.astype(np.float64, copy=False),
         v=np.full(n, p.initial_speed),
         lane=np.full(n, Lane.MAIN_1, dtype=np.int64),
         kind=kind,

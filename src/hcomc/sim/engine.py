@@ -62,7 +62,7 @@ class Simulation:
         estimation errors) comes from one generator derived from it.
     """
 
-    def __init__(
+    def __init__(  # noqa: PLR0915 (allocates the state arrays one by one)
         self,
         config: ScenarioConfig,
         seed: int | None = None,
@@ -486,7 +486,7 @@ class Simulation:
         (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected."""
         from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
 
-        def vehicle(i: int):  # type: ignore[no-untyped-def]
+        def vehicle(i: int):
             return game_vehicle(self.x, self.v, self.fleet, i)
 
         keep = np.ones(chosen.size, dtype=bool)

@@ -24,25 +24,19 @@ array       shape     dtype    meaning                                 unused ce
 =========== ========= ======== ======================================= ==============
 
 A (step, vehicle) cell costs 22 bytes (float32 states; float32 resolution at
-x = 1500 [m] is about 1e-4 [m]). The 1 GiB budget of DESIGN.md §6 for a 1-hour run with
+x = 1500 [m] is about 1e-4 [m]). A 1 GiB budget for a 1-hour run with
 2000 vehicle slots therefore needs a logging interval of at least 0.15 [s]
 (3600 / 0.15 * 2000 * 22 B = 0.98 GiB); at 0.1 [s] the arrays take 1.48 GiB.
 
-Files: ``.npz`` (all arrays, events and metadata in one compressed archive) or
-``.parquet`` (the long-format frame of :meth:`SimulationLog.to_frame`, with the run
-metadata in the Parquet schema metadata and the events in a sibling
-``<stem>.events.parquet``). Both are written atomically and read back exactly by
-:meth:`SimulationLog.load`.
+Files (``.npz``, ``.parquet``, written atomically and read back exactly) are handled by
+:mod:`hcomc.sim.log_io` behind :meth:`SimulationLog.save` and :meth:`SimulationLog.load`.
 """
 
 from __future__ import annotations
 
-import base64
 import enum
-import json
 import math
 import os
-import uuid
 from pathlib import Path
 from typing import Any
 
@@ -50,13 +44,9 @@ import numpy as np
 import pandas as pd
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.sim.manifest import atomic_paths, json_default
 
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
 
-_FORMAT_VERSION = 1
-_PARQUET_META_KEY = b"hcomc.simulation_log"
-_PARQUET_EVENTS_META_KEY = b"hcomc.simulation_log.events"
 
 _STATE_FIELDS = ("x", "y", "v", "a", "heading")
 _VEHICLE_FIELDS = ("kind", "length", "width")
@@ -97,14 +87,6 @@ EVENT_DTYPE = np.dtype(
     ]
 )
 """Structured dtype of :attr:`SimulationLog.events`."""
-
-
-def _b64(arr: np.ndarray, dtype: str) -> str:
-    return base64.b64encode(np.ascontiguousarray(arr, dtype=dtype).tobytes()).decode("ascii")
-
-
-def _unb64(text: str, dtype: str) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(text), dtype=dtype).copy()
 
 
 class SimulationLog:
@@ -481,16 +463,6 @@ class SimulationLog:
         return pd.DataFrame(self._long_columns())
 
     # ------------------------------------------------------------------ persistence
-    def _header(self) -> dict[str, Any]:
-        return {
-            "format_version": _FORMAT_VERSION,
-            "n_steps": self.n_steps,
-            "n_vehicles": self.n_vehicles,
-            "dt": self.dt,
-            "n_recorded": self.n_recorded,
-            "meta": self.meta,
-        }
-
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the log to ``.npz`` or ``.parquet``, atomically.
 
@@ -519,55 +491,16 @@ class SimulationLog:
         and no temporary file behind. For Parquet the two files share a random token,
         so :meth:`load` detects a log and events file that do not belong together.
         """
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix == ".npz":
-            self._save_npz(path)
-        elif suffix == ".parquet":
-            self._save_parquet(path)
-        else:
-            raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
-        return path
+        from hcomc.sim.log_io import write_log  # the file formats live in log_io
 
-    def _save_npz(self, path: Path) -> None:
-        header = json.dumps(self._header(), default=json_default)
-        arrays = {name: getattr(self, name) for name in _ARRAY_FIELDS}
-        with atomic_paths(path) as (tmp,), tmp.open("wb") as fh:
-            # A file object, not a name: numpy would append ".npz" to the temp name.
-            np.savez_compressed(fh, header=np.array(header), events=self.events, **arrays)
+        return write_log(self, path)
 
     @staticmethod
     def events_path(path: str | os.PathLike[str]) -> Path:
         """Sibling file holding the events of a Parquet log: ``<stem>.events.parquet``."""
-        path = Path(path)
-        return path.with_name(f"{path.stem}.events.parquet")
+        from hcomc.sim.log_io import events_path
 
-    def _save_parquet(self, path: Path) -> None:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
-        token = uuid.uuid4().hex
-        header = self._header()
-        header["token"] = token
-        # Per-step and per-vehicle arrays are kept whole (bit-exact, base64): steps
-        # without active vehicles and never-active vehicles are absent from the frame.
-        header["t"] = _b64(self.t, "<f8")
-        header["kind"] = _b64(self.kind, "<i1")
-        header["length"] = _b64(self.length, "<f4")
-        header["width"] = _b64(self.width, "<f4")
-        header_json = json.dumps(header, default=json_default).encode("utf-8")
-        table = pa.table(self._long_columns())
-        table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
-
-        ev = self.events
-        ev_table = pa.table({name: ev[name] for name in EVENT_DTYPE.names or ()})
-        ev_meta = json.dumps({"format_version": _FORMAT_VERSION, "token": token}).encode()
-        ev_table = ev_table.replace_schema_metadata({_PARQUET_EVENTS_META_KEY: ev_meta})
-
-        # Events first, main file last: the main file's replacement commits the save.
-        with atomic_paths(self.events_path(path), path) as (tmp_ev, tmp_main):
-            pq.write_table(ev_table, tmp_ev)
-            pq.write_table(table, tmp_main)
+        return events_path(path)
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> SimulationLog:
@@ -589,71 +522,6 @@ class SimulationLog:
             On an unsupported suffix, an unknown format version, or (Parquet) an events
             file that does not belong to the log file.
         """
-        path = Path(path)
-        suffix = path.suffix.lower()
-        if suffix == ".npz":
-            return cls._load_npz(path)
-        if suffix == ".parquet":
-            return cls._load_parquet(path)
-        raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
+        from hcomc.sim.log_io import read_log
 
-    @staticmethod
-    def _check_version(header: dict[str, Any], path: Path) -> None:
-        version = header.get("format_version")
-        if version != _FORMAT_VERSION:
-            raise ValueError(f"{path}: unsupported simulation log format version {version!r}")
-
-    @classmethod
-    def _load_npz(cls, path: Path) -> SimulationLog:
-        with np.load(path, allow_pickle=False) as data:
-            header = json.loads(str(data["header"]))
-            cls._check_version(header, path)
-            arrays = {name: data[name] for name in _ARRAY_FIELDS}
-            events = data["events"]
-        return cls(
-            dt=header["dt"],
-            meta=header["meta"],
-            n_recorded=header["n_recorded"],
-            events=events,
-            **arrays,
-        )
-
-    @classmethod
-    def _load_parquet(cls, path: Path) -> SimulationLog:
-        import pyarrow.parquet as pq
-
-        table = pq.read_table(path)
-        raw = (table.schema.metadata or {}).get(_PARQUET_META_KEY)
-        if raw is None:
-            raise ValueError(f"{path}: not a hcomc simulation log (no {_PARQUET_META_KEY!r})")
-        header = json.loads(raw)
-        cls._check_version(header, path)
-
-        ev_path = cls.events_path(path)
-        ev_table = pq.read_table(ev_path)
-        ev_raw = (ev_table.schema.metadata or {}).get(_PARQUET_EVENTS_META_KEY)
-        ev_token = json.loads(ev_raw).get("token") if ev_raw is not None else None
-        if ev_token != header["token"]:
-            raise ValueError(f"{ev_path} does not belong to {path} (save was interrupted?)")
-        events = np.empty(ev_table.num_rows, dtype=EVENT_DTYPE)
-        for name in EVENT_DTYPE.names or ():
-            events[name] = ev_table.column(name).to_numpy()
-
-        log = cls.allocate(
-            header["n_steps"],
-            header["n_vehicles"],
-            dt=header["dt"],
-            kind=_unb64(header["kind"], "<i1"),
-            length=_unb64(header["length"], "<f4"),
-            width=_unb64(header["width"], "<f4"),
-            meta=header["meta"],
-        )
-        log.t[:] = _unb64(header["t"], "<f8")
-        steps = table.column("step").to_numpy()
-        vehicles = table.column("vehicle").to_numpy()
-        log.active[steps, vehicles] = True
-        for name in (*_STATE_FIELDS, "lane"):
-            getattr(log, name)[steps, vehicles] = table.column(name).to_numpy()
-        log._n_recorded = int(header["n_recorded"])
-        log._events.extend(tuple(e.item()) for e in events)
-        return log
+        return read_log(path)

@@ -102,7 +102,7 @@ def _revision_of(cwd: Path) -> str:
     return head
 
 
-def json_default(obj: Any) -> Any:
+def json_default(obj: Any) -> Any:  # noqa: PLR0911 (one return per convertible type)
     """``default`` hook for :func:`json.dumps` that understands numpy and friends.
 
     Converts numpy scalars to Python scalars, numpy arrays to (nested) lists, paths to

@@ -50,7 +50,7 @@ def sumo_binary(name: str) -> str:
     return found
 
 
-def import_libsumo():  # type: ignore[no-untyped-def]
+def import_libsumo():
     """The in-process SUMO API (``libsumo``), or :class:`SumoMissingError`."""
     # libsumo prints a pyarrow version notice with print(); keep stdout clean for --json
     notice = io.StringIO()

@@ -147,7 +147,7 @@ def aligned_reference(
     for name in ("x", "y", "v", "a", "heading"):
         cols[name][:] = np.nan
     cols["lane"][:] = -1
-    kind = np.zeros(n_vehicles, dtype=np.int8)
+    kind = np.zeros(n_vehicles, dtype=np.int64)  # stored as int8 by allocate
     length = np.full(n_vehicles, float(np.nanmax(reference.length, initial=5.0)))
     width = np.full(n_vehicles, float(np.nanmax(reference.width, initial=1.8)))
     for name, slot in ids.items():

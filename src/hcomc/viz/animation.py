@@ -15,7 +15,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from matplotlib import animation as mpl_animation
@@ -38,6 +38,9 @@ _FIG_SIZE = (12.0, 2.8)  # [in]; with _DPI an even pixel size, as H.264 needs
 _DPI = 100
 _AX_RECT = (0.035, 0.2, 0.955, 0.6)  # left, bottom, width, height (figure fraction)
 _Y_MARGIN = 0.85  # [lane widths] beyond the outer road edges
+
+# Coefficients (c0, c1, c2, c3) of a virtual vehicle's cubic x(τ) (Section III-A, Eqs. 8-9).
+Cubic = tuple[float, float, float, float]
 
 _COLOURS = {
     "hdv": "#d95f02",
@@ -89,7 +92,7 @@ class _Ghost:
     (from its t0 until its horizon ends or a replan of the same VR replaces it)."""
 
     label: str
-    coefficients: tuple[float, float, float, float]
+    coefficients: Cubic
     t0: float
     horizon: float
     until: float
@@ -190,18 +193,19 @@ def _ghosts(
             coefficients = plan.get(key)
             if coefficients is None or plan.get("horizon") is None or plan.get("t0") is None:
                 continue
-            k = group.get(owner)
-            valid = k is not None and 0 <= int(k) < lengths.size
+            owner_k = group.get(owner)
+            k = -1 if owner_k is None else int(owner_k)
+            valid = 0 <= k < lengths.size
             ghosts.append(
                 _Ghost(
                     label=label,
-                    coefficients=tuple(float(c) for c in coefficients),
+                    coefficients=cast(Cubic, tuple(float(c) for c in coefficients)),
                     t0=float(plan["t0"]),
                     horizon=float(plan["horizon"]),
                     until=until,
                     y=lane_y,
-                    length=float(lengths[int(k)]) if valid else road.vehicle_length,
-                    width=float(widths[int(k)]) if valid else road.vehicle_width,
+                    length=float(lengths[k]) if valid else road.vehicle_length,
+                    width=float(widths[k]) if valid else road.vehicle_width,
                 )
             )
     return ghosts
@@ -250,7 +254,7 @@ class _RoadAnimator:
             zorder=6,
         )
         self.ax.add_collection(self.ghost_patches)
-        label_style = {
+        label_style: dict[str, Any] = {
             "fontsize": 7,
             "ha": "center",
             "va": "bottom",
@@ -309,8 +313,13 @@ class _RoadAnimator:
             zorder=1,
         )
         ax.add_patch(zone)
-        solid = {"color": _COLOURS["marking"], "lw": 1.6, "zorder": 2, "solid_capstyle": "butt"}
-        dashed = {**solid, "lw": 1.2, "dashes": (6, 6)}
+        solid: dict[str, Any] = {
+            "color": _COLOURS["marking"],
+            "lw": 1.6,
+            "zorder": 2,
+            "solid_capstyle": "butt",
+        }
+        dashed: dict[str, Any] = {**solid, "lw": 1.2, "dashes": (6, 6)}
         ax.plot([0.0, r.length], [1.5 * W, 1.5 * W], **solid)  # outer edge of lane 2
         ax.plot([0.0, r.length], [half, half], **dashed)  # lane 2 | lane 1
         ax.plot([0.0, r.ramp_start], [-half, -half], **solid)  # lane 1 edge upstream
@@ -320,7 +329,13 @@ class _RoadAnimator:
         ax.plot([r.ramp_start, r.accel_lane_end], [-1.5 * W, -1.5 * W], **solid)
         ax.plot([r.accel_lane_end, r.accel_lane_end], [-1.5 * W, -half], **solid)
         y_text = -1.5 * W - 0.15 * W
-        text = {"fontsize": 7, "va": "top", "color": "#555555", "zorder": 3, "clip_on": True}
+        text: dict[str, Any] = {
+            "fontsize": 7,
+            "va": "top",
+            "color": "#555555",
+            "zorder": 3,
+            "clip_on": True,
+        }
         cz_mid = 0.5 * (max(r.control_zone_start, self.x_min) + min(r.accel_lane_start, self.x_max))
         ax.text(cz_mid, 1.5 * W + 0.55 * W, "control zone", ha="center", **{**text, "va": "bottom"})
         ramp_mid = 0.5 * (max(r.ramp_start, self.x_min) + min(r.accel_lane_start, self.x_max))
@@ -427,11 +442,13 @@ class _RoadAnimator:
             self.lengths[ids],
             self.widths[ids],
         )
-        self.vehicles.set_verts(corners)
-        self.vehicles.set_facecolor(self.face[ids])
+        # Arrays are accepted by matplotlib; its stubs only name sequences, hence the casts.
+        self.vehicles.set_verts(cast(Any, corners))
+        self.vehicles.set_facecolor(cast(Any, self.face[ids]))
         key = self.is_key[ids]
-        self.vehicles.set_edgecolor(np.where(key[:, None], (0, 0, 0, 1), (0.2, 0.2, 0.2, 0.8)))
-        self.vehicles.set_linewidth(np.where(key, 1.4, 0.4))
+        edge = np.where(key[:, None], (0, 0, 0, 1), (0.2, 0.2, 0.2, 0.8))
+        self.vehicles.set_edgecolor(cast(Any, edge))
+        self.vehicles.set_linewidth(cast(Any, np.where(key, 1.4, 0.4)))
 
         for role, k in self.key.items():
             label = self.labels[role]
@@ -451,7 +468,7 @@ class _RoadAnimator:
             label.xy = (gx - 0.5 * ghost.length, ghost.y)
             label.set_visible(True)
         self.ghost_patches.set_verts(
-            np.asarray(ghost_verts) if ghost_verts else np.empty((0, 4, 2))
+            cast(Any, np.asarray(ghost_verts) if ghost_verts else np.empty((0, 4, 2)))
         )
 
         self.clock.set_text(f"t = {t:.1f} s")
@@ -588,9 +605,9 @@ def animate(
 
     animator = _RoadAnimator(log, window_xy)
     if suffix == ".gif":
-        writer: mpl_animation.AbstractMovieWriter = _QuantizingPillowWriter(fps=fps)
+        writer: mpl_animation.AbstractMovieWriter = _QuantizingPillowWriter(fps=fps)  # type: ignore[arg-type]  # a float rate works
     else:
-        writer = mpl_animation.FFMpegWriter(fps=fps, codec="h264")
+        writer = mpl_animation.FFMpegWriter(fps=fps, codec="h264")  # type: ignore[arg-type]
     with atomic_paths(target) as (tmp,):
         # Writers pick the format from the extension, so render to "<tmp>.gif" / ".mp4".
         render_path = tmp.with_name(tmp.name + suffix)

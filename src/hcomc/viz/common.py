@@ -343,9 +343,10 @@ def shade_zones(
         else:
             lo_frac = 1.0 - band
             if orientation == "x":
-                span(lo, hi, ymin=lo_frac, ymax=1.0, zorder=4, **kwargs)
+                # span is axvspan here; mypy checks the call against both spans
+                span(lo, hi, ymin=lo_frac, ymax=1.0, zorder=4, **kwargs)  # type: ignore[misc]
             else:
-                span(lo, hi, xmin=lo_frac, xmax=1.0, zorder=4, **kwargs)
+                span(lo, hi, xmin=lo_frac, xmax=1.0, zorder=4, **kwargs)  # type: ignore[misc]
     if band is not None:
         edges = sorted({road.control_zone_start, road.accel_lane_start, road.accel_lane_end})
         for edge in edges:

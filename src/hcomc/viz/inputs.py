@@ -329,7 +329,7 @@ def make_figure(
     if not sources:
         raise ValueError(f"figure kind '{kind}' needs at least one input")
     scenario = len(sources) == 1 and is_scenario(sources[0])
-    if kind != "contour" and kind != "pareto" and len(sources) != 1:
+    if kind not in {"contour", "pareto"} and len(sources) != 1:
         raise ValueError(f"figure kind '{kind}' takes exactly one input, got {len(sources)}")
 
     if kind == "contour":

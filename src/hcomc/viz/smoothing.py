@@ -72,7 +72,7 @@ def _kernel(
     ox = np.arange(-n_x, n_x + 1) * dx
     ot = np.arange(-n_t, n_t + 1) * dt
     T, X = np.meshgrid(ot, ox, indexing="ij")
-    return np.exp(-np.abs(X) / sigma - np.abs(T - X / c) / tau), ox
+    return np.exp(-np.abs(X) / sigma - np.abs(T - X / c) / tau), ox.astype(np.float64, copy=False)
 
 
 def _weighted_mean(

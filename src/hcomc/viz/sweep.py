@@ -22,7 +22,7 @@ def _unit_better(metric: str) -> tuple[str, str]:
     raise ValueError(f"unknown metric '{metric}'; allowed: {allowed}")
 
 
-def heatmap_figure(table: pd.DataFrame, metric: str) -> Figure:
+def heatmap_figure(table: pd.DataFrame, metric: str) -> Figure:  # noqa: PLR0915 (panel after panel)
     """Mean ``metric`` per grid cell for each configuration, and HCOMC's improvement.
 
     Columns of cells are the (lane 1, lane 2) mean-headway pairs (density), rows the CAV

@@ -39,6 +39,7 @@ Eq. 1, 3, 4 and 14 below are cross-checked against the vectorised kernels of
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -573,14 +574,9 @@ def _created_pairs_safety(
     return worst
 
 
-_WARM = False
-
-
+@functools.cache  # once per process
 def warm_up() -> None:
     """Load (or compile) the kernel once per process, so decision times exclude it."""
-    global _WARM
-    if _WARM:
-        return
     params = np.tile(np.array([33.3, 1.0, 2.0, 1.4, 2.0, 4.0, 0.99, 5.0, 1.8]), (N_ROLES, 1))
     consts = np.zeros(N_CONSTS)
     consts[C_DT], consts[C_ACCEL_END], consts[C_WIDTH], consts[C_VMC_DUR] = 0.5, 950, 3.75, 4
@@ -592,4 +588,3 @@ def warm_up() -> None:
     rollout(x, np.full(N_ROLES, 25.0), np.zeros(N_ROLES), flags, flags, flags, params,
             np.full(N_STARTS, np.nan), one * 800.0, one * 4.0, one * 6.0,
             np.zeros(1, dtype=np.bool_), consts, 4)  # fmt: skip
-    _WARM = True

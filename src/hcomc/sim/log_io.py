@@ -1,0 +1,179 @@
+"""Files of a :class:`~hcomc.sim.log.SimulationLog`: ``.npz`` and ``.parquet``, atomic.
+
+``.npz`` holds all arrays, events and metadata in one compressed archive. ``.parquet``
+holds the long-format frame of :meth:`SimulationLog.to_frame`, with the run metadata in
+the Parquet schema metadata and the events in a sibling ``<stem>.events.parquet``; the two
+files share a random token so a log and an events file that do not belong together are
+detected. Both formats are read back exactly.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import uuid
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hcomc.sim.log import (
+    _ARRAY_FIELDS,
+    _STATE_FIELDS,
+    EVENT_DTYPE,
+    SimulationLog,
+)
+from hcomc.sim.manifest import atomic_paths, json_default
+
+__all__ = ["events_path", "read_log", "write_log"]
+
+_FORMAT_VERSION = 1
+_PARQUET_META_KEY = b"hcomc.simulation_log"
+_PARQUET_EVENTS_META_KEY = b"hcomc.simulation_log.events"
+
+
+def _b64(arr: np.ndarray, dtype: str) -> str:
+    return base64.b64encode(np.ascontiguousarray(arr, dtype=dtype).tobytes()).decode("ascii")
+
+
+def _unb64(text: str, dtype: str) -> np.ndarray:
+    return np.frombuffer(base64.b64decode(text), dtype=dtype).copy()
+
+
+def _header(log: SimulationLog) -> dict[str, Any]:
+    return {
+        "format_version": _FORMAT_VERSION,
+        "n_steps": log.n_steps,
+        "n_vehicles": log.n_vehicles,
+        "dt": log.dt,
+        "n_recorded": log.n_recorded,
+        "meta": log.meta,
+    }
+
+
+def events_path(path: str | os.PathLike[str]) -> Path:
+    """Sibling file holding the events of a Parquet log: ``<stem>.events.parquet``."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.events.parquet")
+
+
+def write_log(log: SimulationLog, path: str | os.PathLike[str]) -> Path:
+    """Write ``log`` to ``.npz`` or ``.parquet``, atomically (see :meth:`SimulationLog.save`)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".npz":
+        _write_npz(log, path)
+    elif suffix == ".parquet":
+        _write_parquet(log, path)
+    else:
+        raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
+    return path
+
+
+def _write_npz(log: SimulationLog, path: Path) -> None:
+    header = json.dumps(_header(log), default=json_default)
+    arrays = {name: getattr(log, name) for name in _ARRAY_FIELDS}
+    with atomic_paths(path) as (tmp,), tmp.open("wb") as fh:
+        # A file object, not a name: numpy would append ".npz" to the temp name.
+        np.savez_compressed(fh, header=np.array(header), events=log.events, **arrays)
+
+
+def _write_parquet(log: SimulationLog, path: Path) -> None:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    token = uuid.uuid4().hex
+    header = _header(log)
+    header["token"] = token
+    # Per-step and per-vehicle arrays are kept whole (bit-exact, base64): steps
+    # without active vehicles and never-active vehicles are absent from the frame.
+    header["t"] = _b64(log.t, "<f8")
+    header["kind"] = _b64(log.kind, "<i1")
+    header["length"] = _b64(log.length, "<f4")
+    header["width"] = _b64(log.width, "<f4")
+    header_json = json.dumps(header, default=json_default).encode("utf-8")
+    table = pa.table(log._long_columns())
+    table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
+
+    ev = log.events
+    ev_table = pa.table({name: ev[name] for name in EVENT_DTYPE.names or ()})
+    ev_meta = json.dumps({"format_version": _FORMAT_VERSION, "token": token}).encode()
+    ev_table = ev_table.replace_schema_metadata({_PARQUET_EVENTS_META_KEY: ev_meta})
+
+    # Events first, main file last: the main file's replacement commits the save.
+    with atomic_paths(events_path(path), path) as (tmp_ev, tmp_main):
+        pq.write_table(ev_table, tmp_ev)
+        pq.write_table(table, tmp_main)
+
+
+def read_log(path: str | os.PathLike[str]) -> SimulationLog:
+    """Read a log written by :func:`write_log` (see :meth:`SimulationLog.load`)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".npz":
+        return _read_npz(path)
+    if suffix == ".parquet":
+        return _read_parquet(path)
+    raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
+
+
+def _check_version(header: dict[str, Any], path: Path) -> None:
+    version = header.get("format_version")
+    if version != _FORMAT_VERSION:
+        raise ValueError(f"{path}: unsupported simulation log format version {version!r}")
+
+
+def _read_npz(path: Path) -> SimulationLog:
+    with np.load(path, allow_pickle=False) as data:
+        header = json.loads(str(data["header"]))
+        _check_version(header, path)
+        arrays = {name: data[name] for name in _ARRAY_FIELDS}
+        events = data["events"]
+    return SimulationLog(
+        dt=header["dt"],
+        meta=header["meta"],
+        n_recorded=header["n_recorded"],
+        events=events,
+        **arrays,
+    )
+
+
+def _read_parquet(path: Path) -> SimulationLog:
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path)
+    raw = (table.schema.metadata or {}).get(_PARQUET_META_KEY)
+    if raw is None:
+        raise ValueError(f"{path}: not a hcomc simulation log (no {_PARQUET_META_KEY!r})")
+    header = json.loads(raw)
+    _check_version(header, path)
+
+    ev_path = events_path(path)
+    ev_table = pq.read_table(ev_path)
+    ev_raw = (ev_table.schema.metadata or {}).get(_PARQUET_EVENTS_META_KEY)
+    ev_token = json.loads(ev_raw).get("token") if ev_raw is not None else None
+    if ev_token != header["token"]:
+        raise ValueError(f"{ev_path} does not belong to {path} (save was interrupted?)")
+    events = np.empty(ev_table.num_rows, dtype=EVENT_DTYPE)
+    for name in EVENT_DTYPE.names or ():
+        events[name] = ev_table.column(name).to_numpy()
+
+    log = SimulationLog.allocate(
+        header["n_steps"],
+        header["n_vehicles"],
+        dt=header["dt"],
+        kind=_unb64(header["kind"], "<i1"),
+        length=_unb64(header["length"], "<f4"),
+        width=_unb64(header["width"], "<f4"),
+        meta=header["meta"],
+    )
+    log.t[:] = _unb64(header["t"], "<f8")
+    steps = table.column("step").to_numpy()
+    vehicles = table.column("vehicle").to_numpy()
+    log.active[steps, vehicles] = True
+    for name in (*_STATE_FIELDS, "lane"):
+        getattr(log, name)[steps, vehicles] = table.column(name).to_numpy()
+    log._n_recorded = int(header["n_recorded"])
+    log._events.extend(tuple(e.item()) for e in events)
+    return log
