@@ -52,11 +52,11 @@ from pathlib import Path  # noqa: E402
 import pandas as pd  # noqa: E402
 from throughput import machine, scene_config  # noqa: E402
 
-from hcomc.config import ScenarioConfig, load_config  # noqa: E402
+from hcomc.config import ConfigError, ScenarioConfig, load_config  # noqa: E402
 from hcomc.road import Kind  # noqa: E402
 from hcomc.sim.demand import generate_demand  # noqa: E402
 from hcomc.sim.engine import Simulation  # noqa: E402
-from hcomc.sumo import import_libsumo, sumo_binary  # noqa: E402
+from hcomc.sumo import SumoMissingError, import_libsumo, sumo_binary  # noqa: E402
 from hcomc.sumo.export import export_scenario  # noqa: E402
 from hcomc.sumo.routes import vtype_attributes  # noqa: E402
 
@@ -309,10 +309,15 @@ def main() -> None:
     args = parser.parse_args()
     if min(args.sizes) < 2 or args.repeats < 1 or args.reproduce_seeds < 0:
         parser.error("--sizes must be >= 2, --repeats >= 1, --reproduce-seeds >= 0")
-    with tempfile.TemporaryDirectory(prefix="hcomc-vs-sumo-") as name:
-        tmp = Path(name)
-        rows = compare(make_scenes(args.sizes, args.duration, tmp), args.repeats)
-        repro = reproduce(args.reproduce_seeds, args.repeats, tmp) if args.reproduce_seeds else None
+    try:
+        with tempfile.TemporaryDirectory(prefix="hcomc-vs-sumo-") as name:
+            tmp = Path(name)
+            rows = compare(make_scenes(args.sizes, args.duration, tmp), args.repeats)
+            seeds = args.reproduce_seeds
+            repro = reproduce(seeds, args.repeats, tmp) if seeds else None
+    except (ConfigError, SumoMissingError, RuntimeError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
     report(rows, repro, as_json=args.json)
 
 
