@@ -14,8 +14,8 @@ Only stepping is timed (scene loading and allocation excluded in both engines). 
 alternate within one process, ``--repeats`` times, and the median is reported, so a loaded
 machine affects both alike. SUMO's vehicle-steps are the number of vehicles on the road after
 each step, summed. SUMO runs each scene twice: with collision detection off (the headline
-``sumo_steps_per_s`` and ``ratio``; SUMO's collision check turns into an all-pairs check per
-lane while vehicles change lanes continuously, which makes the on-ramp scene many times
+``sumo_steps_per_s`` and ``ratio``; with continuous lane changes SUMO's collision check grows
+about quadratically with the vehicles on a lane and makes the on-ramp scene many times
 slower) and with the exported options unchanged (``sumo_checked_steps_per_s``,
 ``ratio_checked``; collisions detected and counted, as our engine does).
 
@@ -62,8 +62,8 @@ from hcomc.sumo.routes import vtype_attributes  # noqa: E402
 
 LINE_SPEED = 25.0  # [m/s] cruising speed of the one-lane scene
 SEED = 0
-# SUMO's collision check falls back to all pairs of a lane while a vehicle changes lanes
-# continuously (lanechange.duration > 0), which dominates its step time on the on-ramp scene
+# with continuous lane changes (lanechange.duration > 0) SUMO's collision check grows about
+# quadratically with the vehicles on a lane and dominates its step time on the on-ramp scene
 NO_COLLISION_CHECK = ["--collision.action", "none"]
 
 
