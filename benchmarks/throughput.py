@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 import hcomc
-from hcomc.config import load_config
+from hcomc.config import ScenarioConfig, load_config
 from hcomc.sim.engine import Simulation
 
 SPACING = 5.0 * 30.0  # mean front-to-front spacing per lane at C1 headway and speed [m]
@@ -42,12 +42,16 @@ def machine() -> dict[str, object]:
     }
 
 
-def measure(n: int, duration: float, seed: int = 0) -> dict[str, float]:
-    """Vehicle-steps/s of one run with about ``n`` vehicles on the road."""
+def scene_config(n: int, duration: float) -> ScenarioConfig:
+    """Condition 1 with the mainline stretched so that about ``n`` vehicles are on the road."""
     length = max(1500.0, n / 2 * SPACING)
     road = {"length": length, "accel_lane_start": 700.0, "accel_lane_end": 950.0}
-    config = load_config("C1", duration=duration, warmup=0.0, road=road)
-    sim = Simulation(config, seed)
+    return load_config("C1", duration=duration, warmup=0.0, road=road)
+
+
+def measure(n: int, duration: float, seed: int = 0) -> dict[str, float]:
+    """Vehicle-steps/s of one run with about ``n`` vehicles on the road."""
+    sim = Simulation(scene_config(n, duration), seed)
     start = time.perf_counter()
     sim.run()
     wall = time.perf_counter() - start
