@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.road import Lane
+from hcomc.road import KEY_ROLES, Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -63,9 +63,7 @@ class MergeGroup:
 
     def as_dict(self) -> dict[str, int]:
         """Role name -> vehicle index."""
-        return dict(
-            zip(("VR", "VMC", "VMF", "VMR", "VNF", "VNR"), self.as_array().tolist(), strict=True)
-        )
+        return dict(zip(KEY_ROLES, self.as_array().tolist(), strict=True))
 
 
 @dataclass(frozen=True, slots=True)

@@ -25,6 +25,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 
 from hcomc.config import RoadParams
+from hcomc.road import KEY_ROLES
 from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import atomic_paths
@@ -52,7 +53,6 @@ _COLOURS = {
     "marking": "white",
     "edge": "#4d4d4d",
 }
-_ROLES = ("VR", "VMC", "VMF", "VMR", "VNF", "VNR")
 
 
 @dataclass(frozen=True)
@@ -235,7 +235,7 @@ class _RoadAnimator:
         group = (self.plan or {}).get("group") or {}
         self.key = {
             role: int(group[role])
-            for role in _ROLES
+            for role in KEY_ROLES
             if group.get(role) is not None and 0 <= int(group[role]) < log.n_vehicles
         }
         self.is_key = np.zeros(log.n_vehicles, dtype=bool)
