@@ -68,7 +68,21 @@ class MergeGroup:
 
 @dataclass(frozen=True, slots=True)
 class TrafficView:
-    """Read-only snapshot handed to a controller (arrays over all vehicle slots)."""
+    """Read-only snapshot handed to a controller (arrays over all vehicle slots).
+
+    Attributes
+    ----------
+    t : simulation time [s].
+    x, v, a : (N,) front-bumper position [m], speed [m/s], acceleration [m/s^2].
+    lane : (N,) current lane (:class:`hcomc.road.Lane`).
+    active : (N,) vehicle is on the road.
+    changing : (N,) vehicle is in a lane-change manoeuvre: between the start of its change
+        and its arrival on the target lane's centre line (the engine: target lane differs
+        from origin lane; SUMO co-simulation: off its origin lane or a change in progress).
+        Its ``lane`` switches to the target at the lateral midpoint.
+    fleet : per-vehicle constants; config : the scenario.
+    plans : the plans being executed.
+    """
 
     t: float
     x: FloatArray
