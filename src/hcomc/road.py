@@ -1,4 +1,4 @@
-"""Road layout: lane indices and lateral geometry (DESIGN.md §3).
+"""Road layout: lane indices, lateral geometry and the key-vehicle roles of a merge.
 
 Lanes are numbered so that ``lane - 1`` is the lateral offset in lane widths: the ramp and
 acceleration lane (``RAMP = 0``) at y = -W, lane 1 (right, ``MAIN_1 = 1``) at y = 0 and lane 2
@@ -30,6 +30,12 @@ class Kind(IntEnum):
 
 
 N_LANES = 3
+
+KEY_ROLES: tuple[str, ...] = ("VR", "VMC", "VMF", "VMR", "VNF", "VNR")
+"""The six key vehicles of a merge (paper Section II-A, Fig. 1): the ramp vehicle VR, the
+main-lane-1 vehicle VMC it cooperates with, the leader VMF and follower VMR of the gap in
+lane 1, and the leader VNF and follower VNR of VMC's gap in lane 2. Every per-role array,
+dict and plan record uses this order."""
 
 
 def lane_centre(lane: IntArray | int, width: float) -> FloatArray:

@@ -121,6 +121,7 @@ def test_fallback_when_no_candidate_is_feasible():
 CONDITIONS = ["C1", "C2", "C3", "C4", "C5"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", CONDITIONS)
 def test_closed_loop_twenty_seeds_no_key_vehicle_collision(name):
     planned = 0

@@ -110,6 +110,7 @@ def test_bad_experiment_input(args, fragment):
     assert "Traceback" not in result.output
 
 
+@pytest.mark.slow
 def test_reproduce_writes_every_output(tmp_path):
     result = CliRunner().invoke(app, ["reproduce", "--seeds", "1", "--workers", "2",
                                       "--out", str(tmp_path)])  # fmt: skip

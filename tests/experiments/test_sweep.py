@@ -45,6 +45,7 @@ def test_expand_is_the_grid_product(spec_file):
     assert len({run_key(r) for r in runs}) == len(runs)
 
 
+@pytest.mark.slow
 def test_local_pool_and_dask_cluster_give_identical_tables(spec_file, tmp_path):
     distributed = pytest.importorskip("distributed")
     spec = load_sweep(spec_file)
@@ -80,6 +81,7 @@ def test_a_dying_worker_has_its_runs_retried(spec_file, tmp_path, monkeypatch):
     assert len(list((tmp_path / "out" / "parts").glob("*.parquet"))) == 8
 
 
+@pytest.mark.slow
 def test_killed_sweep_resumes_without_losing_or_repeating_runs(spec_file, tmp_path):
     out = tmp_path / "store"
     cmd = [sys.executable, "-m", "hcomc", "sweep", str(spec_file), "--out", str(out),
@@ -130,6 +132,7 @@ def test_bad_spec_is_rejected_before_any_run(tmp_path, text, fragment):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_clear_error(spec_file, tmp_path):
     args = ["sweep", str(spec_file), "--scheduler", "tcp://127.0.0.1:9"]
     result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "o")])
@@ -138,6 +141,7 @@ def test_unreachable_scheduler_is_a_clear_error(spec_file, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_flow_sweep_reports_throughput_and_delay(tmp_path):
     path = tmp_path / "flow.toml"
     path.write_text(SPEC.replace('seeds = 2', 'seeds = 1\nramp = "flow"\nramp_mean_headway = 8.0')

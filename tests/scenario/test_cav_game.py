@@ -5,6 +5,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 import hcomc.control.lane_change_game as game_module
 from hcomc.config import load_config
@@ -47,6 +48,7 @@ def test_game_that_always_keeps_blocks_every_cav_discretionary_change(monkeypatc
     assert log.events_of(EventKind.MERGE).size > 0  # ramp merges are not gated
 
 
+@pytest.mark.slow
 def test_real_game_gates_cav_changes_and_stays_collision_free():
     without, with_game = simulate(_config(False), seed=2), simulate(_config(True), seed=2)
     assert _discretionary_starts(with_game)[0] < _discretionary_starts(without)[0]

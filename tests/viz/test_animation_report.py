@@ -21,9 +21,9 @@ from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.experiments.tables import claims
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import SimulationLog
-from hcomc.viz import animation as anim_mod
 from hcomc.viz.animation import animate
 from hcomc.viz.report import figure_png, write_report
+from hcomc.viz.scene import RoadScene
 
 # ----------------------------------------------------------------------------- animation
 
@@ -70,7 +70,7 @@ def test_gif_is_valid_and_animated(gif: Path) -> None:
 
 def test_animator_draws_key_vehicles_and_ghosts(c2_log: SimulationLog) -> None:
     plan = c2_log.meta["plans"][0]
-    animator = anim_mod._RoadAnimator(c2_log, (250.0, 1100.0))
+    animator = RoadScene(c2_log, (250.0, 1100.0))
     row_in = int(np.argmin(np.abs(c2_log.t - (plan["t0"] + 0.5))))  # before the first replan
     animator.update(row_in)
     assert len(animator.ghost_patches.get_paths()) == sum(

@@ -48,6 +48,7 @@ def test_plot_kinds_from_a_saved_run(run_dir, tmp_path, kind):
     assert pixels.std() > 0.05
 
 
+@pytest.mark.slow
 def test_heatmap_of_a_sweep(tmp_path):
     spec = tmp_path / "s.toml"
     spec.write_text(

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.road import Lane
+from hcomc.road import KEY_ROLES, Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -63,14 +63,26 @@ class MergeGroup:
 
     def as_dict(self) -> dict[str, int]:
         """Role name -> vehicle index."""
-        return dict(
-            zip(("VR", "VMC", "VMF", "VMR", "VNF", "VNR"), self.as_array().tolist(), strict=True)
-        )
+        return dict(zip(KEY_ROLES, self.as_array().tolist(), strict=True))
 
 
 @dataclass(frozen=True, slots=True)
 class TrafficView:
-    """Read-only snapshot handed to a controller (arrays over all vehicle slots)."""
+    """Read-only snapshot handed to a controller (arrays over all vehicle slots).
+
+    Attributes
+    ----------
+    t : simulation time [s].
+    x, v, a : (N,) front-bumper position [m], speed [m/s], acceleration [m/s^2].
+    lane : (N,) current lane (:class:`hcomc.road.Lane`).
+    active : (N,) vehicle is on the road.
+    changing : (N,) vehicle is in a lane-change manoeuvre: between the start of its change
+        and its arrival on the target lane's centre line (the engine: target lane differs
+        from origin lane; SUMO co-simulation: off its origin lane or a change in progress).
+        Its ``lane`` switches to the target at the lateral midpoint.
+    fleet : per-vehicle constants; config : the scenario.
+    plans : the plans being executed.
+    """
 
     t: float
     x: FloatArray

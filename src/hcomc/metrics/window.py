@@ -31,6 +31,7 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import RoadParams
+from hcomc.road import KEY_ROLES
 from hcomc.sim.log import EventKind, SimulationLog
 
 __all__ = [
@@ -42,9 +43,6 @@ __all__ = [
     "key_window",
     "merge_window",
 ]
-
-KEY_ROLES: tuple[str, ...] = ("VR", "VMC", "VMF", "VMR", "VNF", "VNR")
-"""Roles of the six key vehicles of a merge group."""
 
 A_TOL = 0.05
 """Stabilisation tolerance on abs(a - a_undisturbed) [m/s^2]."""

@@ -29,6 +29,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.control.base import MergePlan, Mode, virtual_states
+from hcomc.sim.plans import PlanRecord
 
 
 @dataclass
@@ -133,25 +134,6 @@ def virtual_leaders(
 
 
 def plan_record(plan: MergePlan) -> dict[str, Any]:
-    """JSON-ready summary of a plan, stored in ``SimulationLog.meta["plans"]`` for plots."""
-
-    def floats(values: FloatArray | None) -> list[float] | None:
-        return None if values is None else [float(v) for v in values]
-
-    return {
-        "group": plan.group.as_dict(),
-        "mode": Mode(plan.mode).name.lower(),
-        "t0": float(plan.t0),
-        "merge_x": float(plan.merge_x),
-        "vr_duration": float(plan.vr_duration),
-        "horizon": float(plan.horizon),
-        "vv1": floats(plan.vv1),
-        "vv2": floats(plan.vv2),
-        "sequence": plan.sequence,
-        "vv0": floats(plan.vv0),
-        "fallback": bool(plan.fallback),
-        "eq19_branch": str(plan.details.get("eq19_branch", "")),
-        "reason": plan.reason,
-        "objectives": dict(plan.objectives),
-        "decision_ms": float(plan.decision_ms),
-    }
+    """JSON-ready summary of a plan, stored in ``SimulationLog.meta["plans"]`` for plots
+    (:class:`hcomc.sim.plans.PlanRecord` is its typed form)."""
+    return PlanRecord.from_plan(plan).to_json()

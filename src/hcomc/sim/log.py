@@ -434,7 +434,8 @@ class SimulationLog:
         )
 
     # ------------------------------------------------------------------ long format
-    def _long_columns(self) -> dict[str, np.ndarray]:
+    def long_columns(self) -> dict[str, np.ndarray]:
+        """Columns of :meth:`to_frame` as arrays (also the Parquet file's table)."""
         steps, vehicles = np.nonzero(self.active)
         cols: dict[str, np.ndarray] = {
             "step": steps.astype(np.int64),
@@ -460,7 +461,7 @@ class SimulationLog:
             ``heading`` [rad] (float32), ``lane`` (int8), ``length`` [m], ``width`` [m]
             (float32), ordered by step then vehicle.
         """
-        return pd.DataFrame(self._long_columns())
+        return pd.DataFrame(self.long_columns())
 
     # ------------------------------------------------------------------ persistence
     def save(self, path: str | os.PathLike[str]) -> Path:

@@ -93,7 +93,7 @@ def _write_parquet(log: SimulationLog, path: Path) -> None:
     header["length"] = _b64(log.length, "<f4")
     header["width"] = _b64(log.width, "<f4")
     header_json = json.dumps(header, default=json_default).encode("utf-8")
-    table = pa.table(log._long_columns())
+    table = pa.table(log.long_columns())
     table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
 
     ev = log.events

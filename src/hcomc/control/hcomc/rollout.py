@@ -45,9 +45,10 @@ import math
 import numpy as np
 from numba import njit
 
+from hcomc.road import KEY_ROLES
+
 VR, VMC, VMF, VMR, VNF, VNR = range(6)
-ROLES = ("VR", "VMC", "VMF", "VMR", "VNF", "VNR")
-N_ROLES = 6
+N_ROLES = len(KEY_ROLES)  # role indices above follow KEY_ROLES
 # params columns
 P_V0, P_T, P_S0, P_A, P_B, P_DELTA, P_C, P_LEN, P_WID = range(9)
 N_PARAMS = 9

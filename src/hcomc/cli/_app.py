@@ -1,0 +1,203 @@
+"""The ``hcomc`` typer app and what its commands share: options, input checks, errors."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+from hcomc.config import ConfigError, ScenarioConfig, load_config
+
+app = typer.Typer(
+    name="hcomc",
+    help="Cooperative on-ramp merging (HCOMC) in mixed traffic on two-lane highways.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # plain help: flags shown as flags, "[s]" units kept literally
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+config_app = typer.Typer(help="Inspect scenario configs.", no_args_is_help=True)
+app.add_typer(config_app, name="config")
+
+# piped output (files, CI logs) gets wide tables instead of rich's 80-column default
+out = Console(width=None if sys.stdout.isatty() else 200)
+err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
+
+CONTROLLERS = ("none", "fifo", "game", "hcomc")
+OPTIMIZERS = ("nsga2", "pso", "sa")
+
+ConfigArg = Annotated[
+    str,
+    typer.Argument(
+        metavar="CONFIG", help="Preset name (C1..C5, platoon) or path to a TOML config file."
+    ),
+]
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set",
+        metavar="KEY=VALUE",
+        help="Override a config value, e.g. --set cav_penetration=0.5 or "
+        "--set demand.mean_headway_main_2=7 (repeatable; VALUE is read as TOML).",
+    ),
+]
+SeedOption = Annotated[int | None, typer.Option(help="Random seed (default: the config's).")]
+Optimizer = Annotated[
+    str | None, typer.Option(help="HCOMC optimiser: nsga2, pso or sa (default: the config's).")
+]
+
+
+def _show_version(value: bool) -> None:
+    if value:
+        from hcomc import __version__
+
+        out.print(f"hcomc {__version__}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_show_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
+    """Cooperative on-ramp merging (HCOMC) in mixed traffic on two-lane highways."""
+
+
+@contextmanager
+def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | None]:
+    """A progress-bar callback ``(done, total)`` on a terminal; None when output is piped."""
+    if not out.is_terminal:
+        yield None
+        return
+    with Progress(
+        TextColumn(f"[bold]{escape(label)}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+        console=out,
+        transient=True,
+    ) as bar:
+        task = bar.add_task(label, total=total)
+        yield lambda done, _total: bar.update(task, completed=done)
+
+
+def _fail(message: str) -> typer.Exit:
+    err.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
+    return typer.Exit(code=2)
+
+
+def _load(source: str, **overrides: Any) -> ScenarioConfig:
+    try:
+        return load_config(source, **overrides)
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
+
+
+def _settings(pairs: list[str] | None) -> dict[str, Any]:
+    """``--set KEY=VALUE`` pairs as overrides; VALUE is TOML (a bare word is a string)."""
+    import tomllib
+
+    settings: dict[str, Any] = {}
+    for pair in pairs or []:
+        key, sep, text = pair.partition("=")
+        if not sep or not key.strip():
+            raise _fail(f"option '--set' = '{pair}': allowed: KEY=VALUE, e.g. duration=60")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        settings[key.strip()] = value
+    return settings
+
+
+def _with(overrides: dict[str, Any], **options: Any) -> dict[str, Any]:
+    """``--set`` overrides plus the command's own options (None = not given)."""
+    given = {k: v for k, v in options.items() if v is not None}
+    for key, value in given.items():
+        if key in overrides and key != "control" and overrides[key] != value:
+            raise _fail(
+                f"option '--{key}' = {value} conflicts with '--set {key}={overrides[key]}'; "
+                "allowed: one of them"
+            )
+    return {**overrides, **given}
+
+
+def _choice(option: str, value: str | None, allowed: tuple[str, ...]) -> str | None:
+    """``value`` lower-cased if it is one of ``allowed`` (names are case-insensitive)."""
+    if value is None or value.lower() in allowed:
+        return None if value is None else value.lower()
+    key = f"control.{option.removeprefix('--')}"  # the config key the option sets
+    raise _fail(f"option '{option}' = '{value}' ({key}): allowed: {', '.join(allowed)}")
+
+
+def _check_seed(seed: int | None) -> None:
+    if seed is not None and seed < 0:
+        raise _fail(f"option '--seed' = {seed}: must be >= 0")
+
+
+def _control(base: ScenarioConfig, controller: str | None, optimizer: str | None) -> dict:
+    """The ``[control]`` table with the command's controller/optimiser; an optimiser only
+    applies to HCOMC, so passing one to another controller is an error, not ignored."""
+    controller = _choice("--controller", controller, CONTROLLERS)
+    optimizer = _choice("--optimizer", optimizer, OPTIMIZERS)
+    control = base.control.model_dump()
+    control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})
+    if optimizer is not None and control["controller"] != "hcomc":
+        raise _fail(
+            f"option '--optimizer' = '{optimizer}' does not apply to controller "
+            f"'{control['controller']}'; allowed: only with --controller hcomc"
+        )
+    return control
+
+
+def _refuse_overwrite(out_dir: Path | None, names: tuple[str, ...], force: bool) -> None:
+    """Stop before a run if ``out_dir`` is a file or already holds a run (unless --force)."""
+    if out_dir is None:
+        return
+    if out_dir.exists() and not out_dir.is_dir():
+        raise _fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    existing = [n for n in names if (out_dir / n).exists()]
+    if existing and not force:
+        raise _fail(
+            f"option '--out' = '{out_dir}' already holds a run ({', '.join(existing)}); "
+            "allowed: a new directory, or --force to overwrite it"
+        )
+
+
+Engine = Annotated[
+    str, typer.Option(help="Simulation engine: hcomc, or sumo (SUMO co-simulation, hcomc[sumo]).")
+]
+
+
+def _engine(engine: str, config: ScenarioConfig | None = None) -> str:
+    """Validate --engine (SUMO installed and able to run ``config`` when asked for)."""
+    from hcomc.sumo.cli import engine_error
+
+    problem = engine_error(engine, config)
+    if problem is not None:
+        raise _fail(problem)
+    return engine
+
+
+def _require_merge(cfg: ScenarioConfig, source: str, command: str) -> None:
+    """Merge-controller commands need a merge scenario with ramp demand."""
+    if cfg.scenario != "merge" or cfg.demand.ramp == "none":
+        what = f"scenario = '{cfg.scenario}'" if cfg.scenario != "merge" else "demand.ramp = 'none'"
+        raise _fail(
+            f"no ramp vehicle entered the control zone: '{source}' has {what}, so '{command}' "
+            "has no merge to control; allowed: a merge scenario with ramp demand (C1..C5, or "
+            "scenario = 'merge' with demand.ramp = 'single' or 'flow'); use 'hcomc simulate' "
+            "otherwise"
+        )

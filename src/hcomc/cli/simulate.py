@@ -1,0 +1,232 @@
+"""``hcomc config show``, ``hcomc simulate`` and ``hcomc plan``: one scenario, one run."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.markup import escape
+from rich.table import Table
+
+from hcomc.cli._app import (
+    ConfigArg,
+    Engine,
+    Optimizer,
+    SeedOption,
+    SetOption,
+    _check_seed,
+    _control,
+    _engine,
+    _fail,
+    _load,
+    _progress,
+    _refuse_overwrite,
+    _require_merge,
+    _settings,
+    _with,
+    app,
+    config_app,
+    out,
+)
+from hcomc.config import config_to_toml
+
+
+@config_app.command("show")
+def config_show(config: ConfigArg, settings: SetOption = None) -> None:
+    """Print the fully resolved config as TOML, each key with its meaning and unit.
+
+    The output is loadable by every command: hcomc config show C2 > my.toml.
+    """
+    sys.stdout.write(config_to_toml(_load(config, **_settings(settings)), annotate=True))
+
+
+SIMULATE_FILES = ("log.npz", "manifest.json", "summary.json")
+
+
+@app.command()
+def simulate(
+    config: ConfigArg,
+    seed: SeedOption = None,
+    duration: Annotated[
+        float | None, typer.Option(help="Measured duration [s] (default: the config's).")
+    ] = None,
+    out_dir: Annotated[
+        Path | None, typer.Option("--out", help="Write log.npz, manifest.json, summary.json here.")
+    ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Overwrite a run already in the --out directory.")
+    ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
+    controller: Annotated[
+        str | None,
+        typer.Option(help="Merge controller: none, fifo, game, hcomc (default: the config's)."),
+    ] = None,
+    optimizer: Optimizer = None,
+    settings: SetOption = None,
+    engine: Engine = "hcomc",
+) -> None:
+    """Simulate a scenario (merge controller from the config or --controller) and summarise."""
+    from hcomc.experiments.runner import make_simulation
+    from hcomc.sim.manifest import write_json_atomic
+    from hcomc.sim.summary import summarise
+
+    _check_seed(seed)
+    overrides = _settings(settings)
+    control = _control(_load(config, **overrides), controller, optimizer)
+    cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
+    _refuse_overwrite(out_dir, SIMULATE_FILES, force)
+    sim = make_simulation(cfg, None, _engine(engine, cfg))
+    start = time.perf_counter()
+    with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
+        log = sim.run(None if as_json else update)
+    wall = time.perf_counter() - start
+    summary: dict[str, Any] = {
+        "scenario": cfg.name,
+        "seed": sim.seed,
+        "controller": cfg.control.controller,
+        "optimizer": cfg.control.optimizer if cfg.control.controller == "hcomc" else None,
+        **summarise(log),
+    }
+    summary["wall_s"] = round(wall, 4)
+    summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        log.save(out_dir / "log.npz")
+        write_json_atomic(out_dir / "manifest.json", log.meta)
+        write_json_atomic(out_dir / "summary.json", summary)
+        summary["out"] = str(out_dir)
+    if as_json:
+        sys.stdout.write(json.dumps(summary) + "\n")
+    else:
+        _print_summary(summary)
+
+
+@app.command()
+def plan(
+    config: ConfigArg,
+    seed: SeedOption = None,
+    optimizer: Optimizer = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the decision as JSON.")] = False,
+    settings: SetOption = None,
+) -> None:
+    """Run until the first ramp vehicle enters the control zone and show HCOMC's decision."""
+    from hcomc.control.report import plan_report
+    from hcomc.sim.engine import Simulation
+
+    _check_seed(seed)
+    overrides = _settings(settings)
+    base = _load(config, **overrides)
+    _require_merge(base, config, "plan")
+    control = _control(base, "hcomc", optimizer)
+    cfg = _load(config, **_with(overrides, seed=seed, control=control))
+    sim = Simulation(cfg)
+    decision = sim.run_until_plan()
+    if decision is None:
+        raise _fail(
+            f"no ramp vehicle entered the control zone within duration = {cfg.duration} s "
+            f"of '{config}'; allowed: a longer --set duration=... or an earlier ramp release"
+        )
+    report = plan_report(sim, decision)
+    if as_json:
+        sys.stdout.write(json.dumps(report) + "\n")
+    else:
+        _print_plan(report)
+
+
+def _print_plan(report: dict[str, Any]) -> None:
+    out.print(
+        f"[bold]{report['scenario']}[/] seed {report['seed']} · t = {report['t']:.1f} s · "
+        f"optimiser {report['optimizer']} · {report['n_eval']} evaluations · "
+        f"decision {report['decision_ms']:.1f} ms"
+    )
+    keys = Table(title="key vehicles (Section II-A)")
+    for col in ("role", "id", "kind", "lane", "x [m]", "v [m/s]"):
+        keys.add_column(col, justify="right")
+    for role, k in report["key_vehicles"].items():
+        if k is None:
+            keys.add_row(role, "—", "—", "—", "—", "—")
+        else:
+            keys.add_row(
+                role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}", f"{k['v']:.2f}"
+            )
+    out.print(keys)
+    game = report["game"]
+    if game:
+        verdict = "admitted" if game["lateral_allowed"] else "not admitted"
+        out.print(f"lane-change game (VMC vs VNR): {game['reason']}; lateral mode {verdict}")
+    pareto = Table(title="Pareto set (feasible, non-dominated)")
+    cols = (
+        "#",
+        "merge x [m]",
+        "VR T_lc [s]",
+        "H [s]",
+        "mode",
+        "VR vs VMC",
+        "U_safe [m/s²]",
+        "U_fuel [L]",
+        "−U_eff [m/s²]",
+    )
+    for col in cols:
+        pareto.add_column(col, justify="right")
+    chosen = report["chosen"]
+    for i, p in enumerate(report["pareto"]):
+        mark = "★ " if chosen and i == chosen["index"] else ""
+        pareto.add_row(
+            f"{mark}{i}",
+            f"{p['merge_x']:.1f}",
+            f"{p['vr_duration']:.2f}",
+            f"{p['horizon']:.2f}",
+            p["mode"][:3],
+            p["sequence"],
+            f"{p['safety']:.3f}",
+            f"{p['fuel']:.4f}",
+            f"{p['efficiency']:.3f}",
+        )
+    out.print(pareto)
+    if chosen is None:
+        out.print(f"[yellow]fallback:[/] {report['reason']}")
+    else:
+        out.print(
+            f"chosen (Eq. 19, {report['eq19_branch']} branch): #{chosen['index']} · mode "
+            f"[bold]{report['mode']}[/] · VR {report['sequence']} of VMC · "
+            f"merge at {chosen['merge_x']:.1f} m, T_lc {chosen['vr_duration']:.2f} s, "
+            f"H {chosen['horizon']:.2f} s"
+        )
+
+
+def _print_summary(summary: dict[str, Any]) -> None:
+    controller = summary["controller"]
+    if summary.get("optimizer"):
+        controller += f" ({summary['optimizer']})"
+    title = f"{summary['scenario']} · seed {summary['seed']} · controller {controller}"
+    table = Table(title=escape(title), show_header=False)
+    table.add_column("figure")
+    table.add_column("value", justify="right")
+    rows = [
+        ("merge controller", controller),
+        ("measured duration [s]", f"{summary['duration_s']:.1f}"),
+        ("vehicles [count] (CAVs)", f"{summary['vehicles']} ({summary['cavs']})"),
+        ("merges [count]", str(summary["merges"])),
+        ("ramp vehicles waiting at lane end [count]", str(summary["ramp_waits"])),
+        ("lane changes [count]", str(summary["lane_changes"])),
+        ("collisions [count]", str(summary["collisions"])),
+    ]
+    for lane, speed in summary["mean_speed"].items():
+        rows.append(
+            (f"mean speed {lane.replace('_', ' ')} [m/s]", "—" if speed is None else f"{speed:.2f}")
+        )
+    rows += [
+        ("fuel, all vehicles [L]", f"{summary['fuel_l']:.3f}"),
+        ("vehicle-steps [count]", f"{summary['vehicle_steps']:,}"),
+        ("wall time [s]", f"{summary['wall_s']:.2f}"),
+        ("vehicle-steps per second [1/s]", f"{summary['vehicle_steps_per_s']:,}"),
+    ]
+    if "out" in summary:
+        rows.append(("written to", summary["out"]))
+    for row in rows:
+        table.add_row(*(escape(cell) for cell in row))
+    out.print(table)

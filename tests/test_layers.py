@@ -1,0 +1,127 @@
+"""Imports only run downwards through the package's layers.
+
+cli/sumo -> viz -> experiments -> metrics -> sim -> control -> safety/models/optim ->
+config/road (plus the small utilities ``rng`` and ``_typing``). Imports under
+``if TYPE_CHECKING:`` are for annotations only and do not count; imports inside functions
+do, since they run.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "hcomc"
+
+LAYERS = {
+    "cli": 7,
+    "__main__": 7,
+    "sumo": 7,
+    "viz": 6,
+    "experiments": 5,
+    "metrics": 4,
+    "sim": 3,
+    "control": 2,
+    "safety": 1,
+    "models": 1,
+    "optim": 1,
+    "config": 0,
+    "road": 0,
+    "rng": 0,
+    "_typing": 0,
+}
+ROOT_NAMES = {"__version__"}  # names defined in hcomc/__init__.py itself (layer 0)
+
+# Deliberate upward imports, each with its reason.
+ALLOWED = {
+    # The experiment runner can run a spec on the SUMO engine; the import happens only when
+    # engine="sumo" is asked for, so SUMO stays an optional extra.
+    ("hcomc.experiments.runner", "hcomc.sumo.cosim"),
+}
+
+
+def _layer(module: str) -> int | None:
+    """Layer of an hcomc module (None for other packages and the package root)."""
+    parts = module.split(".")
+    if parts[0] != "hcomc" or len(parts) == 1 or parts[1] in ROOT_NAMES:
+        return None
+    if parts[1] not in LAYERS:
+        raise AssertionError(f"hcomc.{parts[1]} has no layer: add it to LAYERS")
+    return LAYERS[parts[1]]
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _runtime_imports(tree: ast.AST) -> list[tuple[str, int]]:
+    """(imported module, line) of every import that runs, skipping TYPE_CHECKING blocks."""
+    found: list[tuple[str, int]] = []
+
+    def visit(node: ast.AST) -> None:
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and _is_type_checking(child):
+                for stmt in child.orelse:
+                    visit(ast.Module(body=[stmt], type_ignores=[]))
+                continue
+            if isinstance(child, ast.Import):
+                found.extend((alias.name, child.lineno) for alias in child.names)
+            elif isinstance(child, ast.ImportFrom) and child.module and child.level == 0:
+                found.append((child.module, child.lineno))
+                # `from hcomc.control import game` imports the module hcomc.control.game
+                found.extend((f"{child.module}.{a.name}", child.lineno) for a in child.names)
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def _modules() -> list[tuple[str, Path]]:
+    out = []
+    for path in sorted(SRC.rglob("*.py")):
+        name = ".".join(("hcomc", *path.relative_to(SRC).with_suffix("").parts))
+        out.append((name.removesuffix(".__init__"), path))
+    return out
+
+
+def _upward_imports(module: str, path: Path) -> list[str]:
+    mine = _layer(module)
+    if mine is None:
+        return []
+    bad = []
+    for target, line in _runtime_imports(ast.parse(path.read_text(encoding="utf-8"))):
+        theirs = _layer(target)
+        allowed = any(target.startswith(t) for m, t in ALLOWED if m == module)
+        if theirs is not None and theirs > mine and not allowed:
+            bad.append(f"{path.relative_to(SRC.parent)}:{line}: {module} imports {target}")
+    return bad
+
+
+@pytest.mark.parametrize(("module", "path"), _modules(), ids=[m for m, _ in _modules()])
+def test_no_import_runs_upwards(module: str, path: Path) -> None:
+    assert _upward_imports(module, path) == []
+
+
+def test_the_check_sees_lazy_upward_imports() -> None:
+    code = (
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n"
+        "    from hcomc.viz.common import new_figure\n"
+        "def f():\n"
+        "    from hcomc.sim import engine\n"
+        "    import hcomc.metrics\n"
+    )
+    found = _runtime_imports(ast.parse(code))
+    assert ("hcomc.viz.common", 3) not in found
+    assert ("hcomc.sim.engine", 5) in found
+    assert ("hcomc.metrics", 6) in found
+    assert [t for t, _ in found if _layer(t) is not None and _layer(t) > LAYERS["control"]] == [
+        "hcomc.sim",
+        "hcomc.sim.engine",
+        "hcomc.metrics",
+    ]
