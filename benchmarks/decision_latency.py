@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")  # one core, as DESIGN §6 asks
+    os.environ.setdefault(_var, "1")  # one core, comparable across machines
 
 import argparse  # noqa: E402
 import json  # noqa: E402

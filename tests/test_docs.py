@@ -92,3 +92,22 @@ def test_models_md_lists_every_config_key_with_its_current_default():
         for part in key.split("."):
             value = value[part]
         assert json.loads(shown.replace("\\|", "|")) == value, key
+
+
+CODE_FORBIDDEN = re.compile(
+    r"MODELS(\.md)?\s*§|DESIGN(\.md)?\s*§|MODELS\.md|DESIGN\.md|STYLE\.md|hcomc-paper\.md"
+    r"|\.\./shared|\(issues? \d"
+)
+
+
+def test_code_cites_no_material_users_do_not_have():
+    """Docstrings and comments cite the paper and docs/, never internal design notes."""
+    hits = [
+        f"{path.relative_to(ROOT)}:{i}"
+        for tree in ("src", "tests", "benchmarks", "examples")
+        for path in sorted((ROOT / tree).rglob("*.py"))
+        if path.name != "test_docs.py"
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if CODE_FORBIDDEN.search(line)
+    ]
+    assert not hits, hits

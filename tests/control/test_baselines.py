@@ -1,4 +1,4 @@
-"""FIFO and Game baseline merge controllers (MODELS.md §11; paper Table III)."""
+"""FIFO and Game baseline merge controllers (paper Table III)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""HCOMC controller: optimiser quality, determinism, closed loop, fallback, CLI (issue 3)."""
+"""HCOMC controller: optimiser quality, determinism, closed loop, fallback, CLI."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Experiment grid, summaries, claims and the reproduce command (issue 4)."""
+"""Experiment grid, summaries, claims and the reproduce command."""
 
 from __future__ import annotations
 

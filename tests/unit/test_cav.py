@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.cav (CAH and ACC blend; paper Eq. 3; MODELS.md §3)."""
+"""Tests for hcomc.models.cav (CAH and ACC blend; paper Eq. 3)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Tests for hcomc.safety.collision (paper Section II-C, Eq. 7; MODELS.md §13).
+"""Tests for hcomc.safety.collision (paper Section II-C, Eq. 7).
 
 The ground truth is shapely (GEOS), whose ``intersects`` predicate treats polygons as closed
 sets, so touching counts, as in our convention. shapely is a test-only dependency.

@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.fuel (paper Eq. 16, Kamal et al. 2011; MODELS.md §6)."""
+"""Tests for hcomc.models.fuel (paper Eq. 16, Kamal et al. 2011)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Tests for the lane-change game (paper Section III-B; MODELS.md §9).
+"""Tests for the lane-change game (paper Section III-B).
 
 Covers the generic solvers of :mod:`hcomc.control.game` on hand-computed games and the traffic
 game of :mod:`hcomc.control.lane_change_game` on small scenarios.
@@ -158,7 +158,7 @@ def test_expected_cost_equals_sigma_weighted_cost(
     prior = raw / raw.sum()
     prior[-1] = 1.0 - prior[:-1].sum()
     sol = solve_stackelberg_harsanyi(sv, fv, prior)
-    # With a type-independent SV cost, E(s) = Σ_f σ(f|s) J_SV(s, f) (MODELS §9 step 3).
+    # With a type-independent SV cost, E(s) = Σ_f σ(f|s) J_SV(s, f).
     np.testing.assert_allclose(
         sol.expected_cost, (sol.fv_mixed * sv).sum(axis=1), rtol=1e-12, atol=1e-12
     )

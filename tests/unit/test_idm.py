@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.idm (paper Eq. 1; MODELS.md §1)."""
+"""Tests for hcomc.models.idm (paper Eq. 1)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from hcomc.models.idm import desired_gap, equilibrium_gap, idm_acceleration, iidm_acceleration
 
-# MODELS.md §1 example: v0 = 33.3 m/s, T = 1.5 s, s0 = 2 m (a, b do not enter s_e).
+# Textbook example: v0 = 33.3 m/s, T = 1.5 s, s0 = 2 m (a, b do not enter s_e).
 HDV = {"v0": 33.3, "T": 1.5, "a": 1.0, "b": 2.0, "s0": 2.0, "delta": 4.0}
 EQ = {"v0": 33.3, "T": 1.5, "s0": 2.0, "delta": 4.0}
 MODELS = [idm_acceleration, iidm_acceleration]
@@ -50,7 +50,7 @@ def test_idm_reference_value() -> None:
 
 @pytest.mark.parametrize(
     ("v", "gap"),
-    # MODELS.md §1 lists 34.3, 47.8 and 80.2 m. The formula with v0 = 33.3 m/s gives 80.45 m at
+    # Reference tables list 34.3, 47.8 and 80.2 m. The formula with v0 = 33.3 m/s gives 80.45 m at
     # 30 m/s (80.2 is not reproduced; v0 = 120/3.6 would give 80.15), so the values computed
     # from the formula are pinned here.
     [(20.0, 34.30996), (25.0, 47.81911), (30.0, 80.45433)],

@@ -1,4 +1,4 @@
-"""MOBIL lane-change decisions and ramp gap acceptance (hcomc.sim.mobil, MODELS §8).
+"""MOBIL lane-change decisions and ramp gap acceptance (hcomc.sim.mobil).
 
 Situations are built by hand on a small Fleet of the C1 parameters; the index, leaders and
 followers are formed as ``Simulation._advance`` / ``_lane_changes`` form them (no vehicle
@@ -404,7 +404,7 @@ def _scenes(draw: st.DrawFn) -> tuple[list[tuple[int, float, float]], list[int],
 
 
 def _oracle(sc: Scene, c: int) -> tuple[bool, float]:
-    """MODELS §8 decision of candidate c on its own, and its distance from the threshold."""
+    """MOBIL decision of candidate c on its own, and its distance from the threshold."""
     lane, x = sc.lane, sc.snap.x
     own = int(lane[c])
     tgt = Lane.MAIN_2 if own == Lane.MAIN_1 else Lane.MAIN_1

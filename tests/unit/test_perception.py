@@ -37,7 +37,7 @@ def _at(z: np.ndarray, k: int) -> np.ndarray:
 
 
 def _delayed(z: np.ndarray, n: int, j: int, r: float) -> np.ndarray:
-    """MODELS §2.1: z(t - (j + r) dt) = (1 - r) z[n - j] + r z[n - j - 1]."""
+    """HDM delay interpolation: z(t - (j + r) dt) = (1 - r) z[n - j] + r z[n - j - 1]."""
     return (1.0 - r) * _at(z, n - j) + r * _at(z, n - j - 1)
 
 
@@ -165,7 +165,7 @@ def test_errors_off_leave_processes_at_zero():
 
 
 def test_gap_and_inverse_ttc_errors_are_applied_exactly():
-    """s_est = s exp(V_s w_s) and dv_est = dv + s sigma_r w_l (MODELS §2.2), given w."""
+    """s_est = s exp(V_s w_s) and dv_est = dv + s sigma_r w_l, given w."""
     params = _params(0.0, 0.0, 0.0, estimation_errors=True, gap_error=0.05, inverse_ttc_error=0.01)
     n = 4
     perception = Perception(params, np.ones(n, dtype=bool), 0.1, make_rng(0))

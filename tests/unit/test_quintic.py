@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.quintic (paper Eqs. 4-6; MODELS.md §4)."""
+"""Tests for hcomc.models.quintic (paper Eqs. 4-6)."""
 
 from __future__ import annotations
 
@@ -143,7 +143,7 @@ def test_lateral_offset_degenerate_length_is_finite() -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# time-parametrised peaks (MODELS.md §4)
+# time-parametrised peaks
 # --------------------------------------------------------------------------------------------
 
 

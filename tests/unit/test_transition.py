@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.transition (paper Eq. 14; MODELS.md §5)."""
+"""Tests for hcomc.models.transition (paper Eq. 14)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def test_gamma_and_lambda_for_default_tolerance() -> None:
 
 def test_gamma_for_other_tolerance() -> None:
     _, gamma = transition_parameters(4.0, tolerance=0.02)
-    np.testing.assert_allclose(gamma, 1.946, atol=1e-3)  # MODELS.md §5
+    np.testing.assert_allclose(gamma, 1.946, atol=1e-3)  # epsilon = 0.02
     np.testing.assert_allclose(transition_weight(0.0, 4.0, tolerance=0.02), 0.02, rtol=1e-12)
 
 

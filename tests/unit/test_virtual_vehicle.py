@@ -59,7 +59,7 @@ def test_cubic_extremes_match_dense_sampling():
 
 @pytest.mark.parametrize(("d", "expected"), [(30, 7.0), (50, 4.8), (80, 3.3), (110, 2.5)])
 def test_critical_acceleration_models_table(d, expected):
-    """MODELS.md §7: v_r = v_f = 25 m/s, T = 1 s, D = 2 m, a_merg = 7.5 m/s^2."""
+    """Eq. 15 worked example: v_r = v_f = 25 m/s, T = 1 s, D = 2 m, a_merg = 7.5 m/s^2."""
     assert float(critical_acceleration(d, 25.0, 25.0, delay=1.0)) == pytest.approx(
         expected, abs=0.05
     )

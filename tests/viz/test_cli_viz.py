@@ -1,4 +1,4 @@
-"""``hcomc plot`` and ``hcomc animate`` from the command line (issues 5 and 6)."""
+"""``hcomc plot`` and ``hcomc animate`` from the command line."""
 
 from __future__ import annotations
 

@@ -101,7 +101,7 @@ __all__ = [
 MERGE_OFFSET = 10.0
 """VR starts its change this far downstream of the acceleration-lane start [m]."""
 MIN_HORIZON = 4.0
-"""Lower bound of the virtual-vehicle horizon H [s] (MODELS.md §10: roughly 4-10 s)."""
+"""Lower bound of the virtual-vehicle horizon H [s] (roughly 4-10 s)."""
 FIFO_HEADWAY = 1.5
 """Ntousakis et al.'s minimum time headway between consecutive arrivals [s] (reported only)."""
 _MIN_SPEED = 0.1  # [m/s] floor in the arrival-time prediction
@@ -206,7 +206,7 @@ def predict_longitudinal(
 
 
 def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
-    """Whether VV1 of the prediction's ``row`` meets MODELS.md §10 (v >= 0, a >= -b_max)."""
+    """Whether VV1 of the prediction's ``row`` is feasible (v >= 0, a >= -b_max)."""
     return bool(pred.G[row, _G_VIRTUAL] <= 0.0)
 
 

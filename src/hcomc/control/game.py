@@ -1,4 +1,4 @@
-r"""Generic solvers for the two-player lane-change game (paper Section III-B; MODELS.md §9).
+r"""Generic solvers for the two-player lane-change game (paper Section III-B).
 
 The discretionary lane-change model of the HCOMC paper (Section III-B) lets the subject vehicle
 SV (the Stackelberg *leader*) choose an action knowing that the follower FV in the target lane
@@ -6,7 +6,7 @@ best-responds to it. An HDV follower's driving style is private information; fol
 the style is a *type* θ drawn from a common prior :math:`p_\theta`, and the types' pure best
 responses induce the "mixed-strategy probability distribution of FV" of the paper. SV minimises
 the expectation of its own cost under that distribution. A CAV follower cooperates instead
-(MODELS.md §9, step 4): both vehicles minimise the sum of their costs.
+(docs/models.md): both vehicles minimise the sum of their costs.
 
 The functions here are pure and work on cost arrays only (lower is better); the traffic-specific
 cost construction lives in :mod:`hcomc.control.lane_change_game`.
@@ -16,7 +16,7 @@ Array conventions: ``S`` SV actions, ``F`` FV actions, ``n_types`` FV types.
 References
 ----------
 .. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Section III-B.
-.. [2] MODELS.md §9 (solution steps 1-5).
+.. [2] docs/models.md, lane-change game.
 .. [3] J. C. Harsanyi, "Games with incomplete information played by 'Bayesian' players, I-III",
    Management Science 14 (1967-68).
 """
@@ -79,7 +79,7 @@ def _as_cost(name: str, value: ArrayLike, ndims: tuple[int, ...]) -> FloatArray:
 def solve_stackelberg_harsanyi(
     sv_cost: ArrayLike, fv_cost: ArrayLike, prior: ArrayLike
 ) -> GameSolution:
-    r"""Stackelberg equilibrium with a Harsanyi-typed follower (paper §III-B; MODELS §9 1-3).
+    r"""Stackelberg equilibrium with a Harsanyi-typed follower (paper §III-B).
 
     1. Follower best response of each type θ to each leader action s (ties to the lowest f):
        :math:`BR_\theta(s) = \arg\min_f J_{FV}^\theta(s, f)`.
@@ -98,7 +98,7 @@ def solve_stackelberg_harsanyi(
         FV cost of each joint action for each type. ``+inf`` is allowed, NaN is not.
     prior : array_like, shape (n_types,)
         Prior probabilities of the types, non-negative and summing to 1 (tolerance 1e-9).
-        The paper gives no prior; MODELS.md §9 suggests (0.25, 0.5, 0.25).
+        The paper gives no prior; docs/models.md suggests (0.25, 0.5, 0.25).
 
     Returns
     -------
@@ -159,7 +159,7 @@ def solve_stackelberg_harsanyi(
 
 
 def solve_cooperative(sv_cost: ArrayLike, fv_cost: ArrayLike) -> GameSolution:
-    r"""Cooperative solution with a CAV follower (MODELS.md §9, step 4).
+    r"""Cooperative solution with a CAV follower (docs/models.md).
 
     Both vehicles minimise the joint cost :math:`J(s, f) = J_{SV}(s, f) + J_{FV}(s, f)`. For each
     SV action the follower plays the joint minimiser :math:`f^*(s) = \arg\min_f J(s, f)` (ties to

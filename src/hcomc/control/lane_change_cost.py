@@ -80,9 +80,9 @@ class _Frozen(BaseModel):
 
 
 class DriverType(_Frozen):
-    """A Harsanyi driver type (driving style) of the follower, MODELS.md §9.
+    """A Harsanyi driver type (driving style) of the follower.
 
-    The IDM parameters and cost weights are MODELS.md §9's *suggestions*; the paper gives none.
+    The IDM parameters and cost weights are suggestions (docs/models.md); the paper gives none.
     """
 
     name: str = Field(min_length=1, description="type name, e.g. 'normal' [-]")
@@ -103,7 +103,7 @@ AGGRESSIVE = DriverType(
     w_efficiency=0.6,
     w_comfort=0.2,
 )
-"""Aggressive style (MODELS.md §9, suggested values)."""
+"""Aggressive style (suggested values)."""
 NORMAL = DriverType(
     name="normal",
     time_headway=1.5,
@@ -113,7 +113,7 @@ NORMAL = DriverType(
     w_efficiency=0.4,
     w_comfort=0.2,
 )
-"""Normal style (MODELS.md §9, suggested values)."""
+"""Normal style (suggested values)."""
 CONSERVATIVE = DriverType(
     name="conservative",
     time_headway=2.0,
@@ -123,16 +123,16 @@ CONSERVATIVE = DriverType(
     w_efficiency=0.2,
     w_comfort=0.2,
 )
-"""Conservative style (MODELS.md §9, suggested values)."""
+"""Conservative style (suggested values)."""
 
 
 class GameParams(_Frozen):
-    """Parameters of the discretionary lane-change game (paper §III-B; MODELS.md §7, §9).
+    """Parameters of the discretionary lane-change game (paper §III-B).
 
     The paper states none of the weights, priors or type parameters; the defaults are the
-    MODELS.md §9 suggestions (prior 0.25/0.5/0.25, SV weights 0.5/0.3/0.2) and the Eq. 15
-    defaults of MODELS.md §0. ``lane_width`` and ``transition_tolerance`` are additions used by
-    the lateral comfort term and the Eq. 14 transition.
+    suggestions of docs/models.md (prior 0.25/0.5/0.25, SV weights 0.5/0.3/0.2) and the
+    Eq. 15 values of ``config.control``. ``lane_width`` and ``transition_tolerance`` are
+    additions used by the lateral comfort term and the Eq. 14 transition.
     """
 
     types: tuple[DriverType, ...] = Field(
@@ -221,7 +221,7 @@ def game_params(config: ScenarioConfig) -> GameParams:
     )
 
 
-"""Default game parameters (MODELS.md §9 suggestions)."""
+"""Default game parameters."""
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 r"""Discretionary lane-change decision as a Stackelberg-Harsanyi game (paper Section III-B).
 
 The subject vehicle SV (a CAV with the intention to change to the adjacent lane) is the
-Stackelberg leader; the follower FV in the target lane is the follower player (MODELS.md §9):
+Stackelberg leader; the follower FV in the target lane is the follower player:
 
 * SV actions :math:`A_{SV} = \{LC, K\}` (indices 0, 1): change lane / keep following.
 * FV actions :math:`A_{FV} = \{LC, CS, AC, DC\}` (indices 0-3): change lane, constant speed,
@@ -13,7 +13,7 @@ Stackelberg leader; the follower FV in the target lane is the follower player (M
   it cooperates (:func:`hcomc.control.game.solve_cooperative`, with the "normal" weights).
 
 Every joint action is simulated over the horizon :math:`H = T_{lc}` on the grid
-:math:`t_k = k\,\Delta t`, :math:`k = 1..N`, and scored with the cost of MODELS.md §9,
+:math:`t_k = k\,\Delta t`, :math:`k = 1..N`, and scored with the cost of docs/models.md,
 
 .. math:: J = w_s J_s + w_e J_e + w_c J_c,
 
@@ -35,7 +35,7 @@ each term normalised to about [0, 1]:
 Assumptions (the paper gives no weights, priors or payoff formulas; reference [20] of the paper,
 which defines them, is only known by its abstract):
 
-* Types, IDM parameters, cost weights and prior are the *suggested* values of MODELS.md §9,
+* Types, IDM parameters, cost weights and prior are the *suggested* values of docs/models.md,
   not the paper's; they are configurable in :class:`GameParams`.
 * Leaders (SV's current leader and the target-lane leader) keep constant speed.
 * SV keeping (K) follows its current leader with the IDM (Eq. 1); SV changing (LC) follows the
@@ -59,14 +59,14 @@ which defines them, is only known by its abstract):
   contributes no pair.
 * SV's cost does not depend on FV's type (FV's actions are type-independent constant
   accelerations); FV's cost does through the type's weights and its :math:`a_{max}`, :math:`b`.
-  The type's time headway is carried (MODELS.md §9 table) but not used by the constant-
+  The type's time headway is carried but not used by the constant-
   acceleration actions.
 
 References
 ----------
 .. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Section III-B, Eqs. (1),
    (4), (14), (15).
-.. [2] MODELS.md §5 (tanh transition), §7 (Eq. 15), §9 (game formulation).
+.. [2] docs/models.md: Eq. 14, Eq. 15, the lane-change game.
 .. [3] P. Hang et al., "Human-like decision making for autonomous driving: a noncooperative game
    theoretic approach", IEEE T-ITS 22(4), 2076-2087 (2021) (driving-style weighted costs).
 """
@@ -172,7 +172,7 @@ def lane_change_game(
     sv_idm: IDMParams,
     fv_idm: IDMParams,
 ) -> LaneChangeDecision:
-    r"""Decide a discretionary lane change of SV by the SV-FV game (paper §III-B; MODELS §9).
+    r"""Decide a discretionary lane change of SV by the SV-FV game (paper §III-B).
 
     Builds the cost matrices of every joint action (SV ∈ {LC, K}, FV ∈ {LC, CS, AC, DC}) by
     forward simulation over the horizon (see the module docstring for the dynamics, the cost

@@ -1,8 +1,8 @@
-r"""Game-theoretic merge baseline (Liao et al. 2022; Kita 1999; MODELS.md §9, §11).
+r"""Game-theoretic merge baseline (Liao et al. 2022; Kita 1999).
 
 The "Game" benchmark of the paper's Table III is Liao et al.'s two-player game between the ramp
 vehicle and the mainline lag vehicle, which may be an HDV. Only the abstracts are known, so it is
-implemented as the Kita-style 2x2 game recommended by MODELS.md §11, executed longitudinally
+implemented as the Kita-style 2x2 game of docs/models.md, executed longitudinally
 with the virtual vehicle VV1 (Eq. 8-10); no lateral cooperation, no NSGA-II (paper Table III).
 
 Players and actions (row player first; index 0 / 1):
@@ -30,7 +30,7 @@ The relabelled group is :func:`hcomc.control.fifo.behind_group` (old VMC → ``v
 in a copy of the prediction's key state (:func:`hcomc.control.fifo.with_cooperation`): the
 rollout makes that role follow VV1 iff the flag is set. The simulation state is never touched.
 
-Payoffs (MODELS.md §9/§11): :math:`U = -J`, :math:`J = w_s J_s + w_e J_e + w_c J_c` per player,
+Payoffs: :math:`U = -J`, :math:`J = w_s J_s + w_e J_e + w_c J_c` per player,
 over the whole prediction window:
 
 * :math:`J_s = \min(1, U_{safe}/a_{th})`, :math:`a_{th}` = ``control.safety_threshold``
@@ -80,7 +80,7 @@ prediction are reused):
   response therefore compares the costs of the vehicle that actually decides to yield. Were the
   column player always VMC, its payoff in the "behind" row would be that of the rollout's VMF
   role (constant speed) and could not depend on its action. A missing lag vehicle has cost 0.
-* Whether the game is cooperative or non-cooperative is decided by VMC's kind, as MODELS.md §11
+* Whether the game is cooperative or non-cooperative is decided by VMC's kind, as docs/models.md
   says; a non-CAV lag vehicle is never commanded, whatever the cell.
 * An HDV's "yield" is predicted as tracking VV1 (an idealised yield), its "not yield" as its
   IDM car following without delays or noise (the rollout's HDV model).
@@ -97,7 +97,7 @@ References
    theoretic analysis", Transportation Research Part A 33 (1999) 305-312.
 .. [3] P. Hang et al., "Human-like decision making for autonomous driving: a noncooperative
    game theoretic approach", IEEE T-ITS 22(4) (2021) 2076-2087 (style weights).
-.. [4] MODELS.md §9 (cost terms, weights), §10 (virtual vehicle), §11 (baselines).
+.. [4] docs/models.md: lane-change game, virtual vehicles, baselines.
 """
 
 from __future__ import annotations
@@ -150,9 +150,9 @@ YIELD, NOT_YIELD = 0, 1
 ROW_NAMES = ("ahead", "behind")
 COL_NAMES = ("yield", "not_yield")
 CAV_WEIGHTS = (0.5, 0.3, 0.2)
-"""(w_s, w_e, w_c) of a CAV ramp vehicle (MODELS.md §9)."""
+"""(w_s, w_e, w_c) of a CAV ramp vehicle."""
 NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
-"""(w_s, w_e, w_c) of the "normal" driving type (MODELS.md §9; Hang et al. 2021)."""
+"""(w_s, w_e, w_c) of the "normal" driving type (Hang et al. 2021)."""
 INFEASIBLE_SAFETY = INFEASIBLE_SAFETY_COST
 """J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]; the
 same cost the lane-change game gives an infeasible action."""
@@ -209,7 +209,7 @@ def pure_nash(A: ArrayLike, B: ArrayLike) -> list[tuple[int, int]]:
 
 
 def kita_mixed(A: ArrayLike, B: ArrayLike) -> tuple[float, float]:
-    r"""Kita's closed-form mixed equilibrium of a 2x2 game (MODELS.md §9).
+    r"""Kita's closed-form mixed equilibrium of a 2x2 game.
 
     .. math::
        q^* = \frac{a_{22} - a_{12}}{a_{11} - a_{12} - a_{21} + a_{22}},\qquad
@@ -276,7 +276,7 @@ def player_cost(
     j_s: float,
     row: int = 0,
 ) -> tuple[float, dict[str, float]]:
-    """Cost ``w_s J_s + w_e J_e + w_c J_c`` of the key vehicle in ``role`` (MODELS.md §9).
+    """Cost ``w_s J_s + w_e J_e + w_c J_c`` of the key vehicle in ``role``.
 
     ``J_e = mean |v - v0| / v0`` and ``J_c = mean a^2 / a_max^2`` over the prediction window,
     with the vehicle's desired speed and maximum-acceleration parameters; ``j_s`` is the shared

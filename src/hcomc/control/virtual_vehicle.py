@@ -3,8 +3,8 @@
 The virtual vehicle VV1 (of VR, in lane 1) moves along a cubic in time from the state of VMF
 at t0' to the state of VR at tf' (Eq. 8-10); VMC follows it with its own car-following model,
 so its leader morphs smoothly from VMF to VR. VV2 (of VMC, in lane 2) does the same from VNF
-to VMC for VNR (Eq. 11-13). Time is taken relative to t0 for numerical conditioning (MODELS
-§10), so the coefficients ``b = (b1, b2, b3, b4)`` give ``x(t) = b1 + b2 τ + b3 τ² + b4 τ³``
+to VMC for VNR (Eq. 11-13). Time is taken relative to t0 for numerical conditioning, so the
+coefficients ``b = (b1, b2, b3, b4)`` give ``x(t) = b1 + b2 τ + b3 τ² + b4 τ³``
 with ``τ = t - t0``.
 """
 

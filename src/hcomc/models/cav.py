@@ -1,7 +1,7 @@
 r"""CAV car-following kernels: constant-acceleration heuristic (CAH) and the ACC blend.
 
 Vectorised implementation of the ACC model of Kesting, Treiber & Helbing (2010), which the HCOMC
-paper uses for connected and automated vehicles (paper Eq. 3, MODELS.md §3). The CAH gives the
+paper uses for connected and automated vehicles (paper Eq. 3). The CAH gives the
 maximum acceleration that avoids a crash if the leader keeps its current acceleration; the ACC
 blend mixes it with the IDM/IIDM acceleration through the coolness factor ``c``.
 
@@ -38,7 +38,7 @@ def cah_acceleration(
     *,
     a: FloatArray | float,
 ) -> FloatArray:
-    r"""Constant-acceleration heuristic (CAH) of Kesting et al. (2010), MODELS.md §3.
+    r"""Constant-acceleration heuristic (CAH) of Kesting et al. (2010).
 
     With the leader acceleration capped at the own maximum acceleration,
     :math:`\tilde a_l = \min(a_l, a)`,
@@ -132,7 +132,7 @@ def acc_acceleration(
        \end{cases}
 
     The paper's Eq. (3) prints only the second branch; the first branch of Kesting et al. (2010)
-    is restored here (MODELS.md §3, §16 item 3). Without it, a large :math:`a_\mathrm{IDM}`
+    is restored here. Without it, a large :math:`a_\mathrm{IDM}`
     would be capped near :math:`a_\mathrm{CAH} + b`.
 
     Parameters

@@ -6,7 +6,7 @@ r"""Polynomial fuel-consumption model, paper Eq. (16) (Kamal et al. 2011).
    \quad [\mathrm{mL/s}], \qquad v\ [\mathrm{m/s}],\ a\ [\mathrm{m/s^2}]
 
 with the coefficient vectors ``Q = (b0, b1, b2, b3)`` and ``R = (c0, c1, c2)`` of Kamal et al.
-as used by Rios-Torres & Malikopoulos (MODELS.md §6). The acceleration term describes engine
+as used by Rios-Torres & Malikopoulos. The acceleration term describes engine
 power demand; applied to braking it would give a fuel *credit* and even a negative total at low
 speed. The default therefore applies it for ``a > 0`` only (``accel_term="positive"``); the
 unsigned variant (``"signed"``, as in some public code) is available. Both clip the total rate
@@ -18,7 +18,7 @@ References
    with up-down slopes", IEEE Trans. ITS 12(3), 783-794 (2011).
 .. [2] J. Rios-Torres and A. A. Malikopoulos, "Automated and cooperative vehicle merging at
    highway on-ramps", IEEE Trans. ITS 18(4), 780-789 (2017).
-.. [3] HCOMC paper (arXiv:2507.11621), Eq. (16); MODELS.md §6.
+.. [3] HCOMC paper (arXiv:2507.11621), Eq. (16).
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ class FuelParams(BaseModel):
     """Coefficients of the Eq. (16) fuel-rate polynomial (Kamal et al. 2011).
 
     Defaults: Q and R of Kamal et al. (2011) as used by Rios-Torres & Malikopoulos (2017)
-    (``SEUChang/CBF_Merging`` ``fuel_consumption.m``), MODELS.md §6.
+    (``SEUChang/CBF_Merging`` ``fuel_consumption.m``).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -60,7 +60,7 @@ class FuelParams(BaseModel):
         default="positive",
         description=(
             "'positive': acceleration term for a > 0 only, no fuel credit for braking "
-            "(default, MODELS.md §6); 'signed': term applied for any sign of a. The total rate "
+            "(default); 'signed': term applied for any sign of a. The total rate "
             "[mL/s] is clipped at 0 in both cases."
         ),
     )
@@ -100,13 +100,13 @@ def fuel_rate(
     -----
     The paper's Eq. (16) applies the acceleration term with its sign. The default
     ``"positive"`` convention gives no fuel credit for braking, the usual reading of Kamal's
-    model (MODELS.md §6, §16 item 4); with ``"signed"`` the rate would be negative at low speed
+    model; with ``"signed"`` the rate would be negative at low speed
     while braking without the clip at 0.
 
     References
     ----------
     .. [1] Kamal et al., IEEE Trans. ITS 12(3), 783 (2011).
-    .. [2] HCOMC paper (arXiv:2507.11621), Eq. (16); MODELS.md §6.
+    .. [2] HCOMC paper (arXiv:2507.11621), Eq. (16).
 
     Examples
     --------
@@ -160,7 +160,7 @@ def fuel_consumed(
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (16); MODELS.md §6 and §12 (Fuel Cons.).
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (16); docs/models.md (fuel; the Fuel Cons. metric).
 
     Examples
     --------

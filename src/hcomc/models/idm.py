@@ -7,7 +7,7 @@ example one entry per vehicle, with per-vehicle parameter arrays), broadcast the
 numpy rules and return ``float64`` arrays. They are called inside the simulation step loop, so
 they avoid Python-level loops and keep temporaries to a minimum.
 
-Sign conventions (MODELS.md notation): ``s`` is the bumper-to-bumper gap to the leader [m]
+Sign conventions: ``s`` is the bumper-to-bumper gap to the leader [m]
 (``np.inf`` when there is no leader), ``v`` the own speed [m/s] and ``dv = v - v_leader`` the
 approach rate [m/s] (positive when closing in).
 
@@ -175,7 +175,7 @@ def iidm_acceleration(
     s0: FloatArray | float,
     delta: FloatArray | float,
 ) -> FloatArray:
-    r"""Improved IDM (IIDM) acceleration (Treiber & Kesting 2013; MODELS.md §1).
+    r"""Improved IDM (IIDM) acceleration (Treiber & Kesting 2013).
 
     With :math:`z = s^*(v, \Delta v)/s` and :math:`a_\mathrm{free}` the free-road term,
 
@@ -195,7 +195,7 @@ def iidm_acceleration(
        \end{cases}
 
     Unlike the IDM, the IIDM equilibrium gap is exactly :math:`s_0 + vT` for all
-    :math:`v < v_0`. It is the base of Kesting's ACC/CAH model (MODELS.md §3), so it is offered
+    :math:`v < v_0`. It is the base of Kesting's ACC/CAH model, so it is offered
     as a switch next to the paper's plain IDM of Eq. (1).
 
     Parameters
@@ -305,7 +305,7 @@ def equilibrium_gap(
     References
     ----------
     .. [1] Treiber, Hennecke & Helbing, Phys. Rev. E 62, 1805 (2000).
-    .. [2] MODELS.md §1.
+    .. [2] docs/models.md, car following.
 
     Examples
     --------

@@ -9,13 +9,13 @@ so the engine evaluates ``y(x(t))`` every step with :func:`lateral_offset`, whic
 normalised rest-to-rest closed form :math:`y_0 + W\,p(\xi)` with
 :math:`p(\xi) = 10\xi^3 - 15\xi^4 + 6\xi^5`. :func:`quintic_coefficients` solves the general
 6x6 boundary-value system for non-zero end states. The ``peak_*`` and :func:`min_duration`
-helpers give the exact time-parametrised extrema (MODELS.md §4) used to choose the lane-change
+helpers give the exact time-parametrised extrema used to choose the lane-change
 duration.
 
 References
 ----------
 .. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Eqs. (4)-(6).
-.. [2] MODELS.md §4 (peak values, duration selection).
+.. [2] docs/models.md, lane changes (peak values, duration selection).
 """
 
 from __future__ import annotations
@@ -117,7 +117,7 @@ def quintic_coefficients(
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4); MODELS.md §4.
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4).
 
     Examples
     --------
@@ -171,7 +171,7 @@ def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, Float
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4); MODELS.md §4.
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (4).
 
     Examples
     --------
@@ -208,8 +208,8 @@ def lateral_offset(
        \frac{d^2y}{dx^2} = \frac{W}{L^2} p''(\xi),\qquad
        \xi = \frac{x - x_0}{L},\ L = x_f - x_0,\ W = y_f - y_0
 
-    with :math:`p` from :func:`quintic_shape`. Time derivatives follow from the chain rule
-    (MODELS.md §4): :math:`\dot y = y'\dot x` and :math:`\ddot y = y''\dot x^2 + y'\ddot x`.
+    with :math:`p` from :func:`quintic_shape`. Time derivatives follow from the chain rule:
+    :math:`\dot y = y'\dot x` and :math:`\ddot y = y''\dot x^2 + y'\ddot x`.
 
     Parameters
     ----------
@@ -233,7 +233,7 @@ def lateral_offset(
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eqs. (4)-(6); MODELS.md §4.
+    .. [1] HCOMC paper (arXiv:2507.11621), Eqs. (4)-(6).
 
     Examples
     --------
@@ -256,7 +256,7 @@ def peak_lateral_speed(width: FloatArray | float, duration: FloatArray | float) 
 
     .. math:: \max_t |\dot y| = \frac{15}{8}\,\frac{W}{T_{lc}} = 1.875\,\frac{W}{T_{lc}}
 
-    attained at mid-manoeuvre (MODELS.md §4).
+    attained at mid-manoeuvre.
 
     Parameters
     ----------
@@ -284,7 +284,7 @@ def peak_lateral_accel(width: FloatArray | float, duration: FloatArray | float) 
     .. math:: \max_t |\ddot y| = \frac{10}{\sqrt 3}\,\frac{W}{T_{lc}^2}
               \approx 5.7735\,\frac{W}{T_{lc}^2}
 
-    attained at :math:`\xi = (3 \mp \sqrt 3)/6` (MODELS.md §4).
+    attained at :math:`\xi = (3 \mp \sqrt 3)/6`.
 
     Parameters
     ----------
@@ -312,7 +312,7 @@ def peak_lateral_jerk(width: FloatArray | float, duration: FloatArray | float) -
 
     .. math:: \max_t |\dddot y| = 60\,\frac{W}{T_{lc}^3}
 
-    attained at the start and end of the manoeuvre (MODELS.md §4).
+    attained at the start and end of the manoeuvre.
 
     Parameters
     ----------
@@ -345,7 +345,7 @@ def min_duration(
        T_\mathrm{min} = \max\left(\sqrt{\frac{10}{\sqrt 3}\frac{W}{a_{y,\max}}},\;
                         \left(\frac{60\,W}{j_{y,\max}}\right)^{1/3}\right)
 
-    (MODELS.md §4), the inverse of :func:`peak_lateral_accel` and :func:`peak_lateral_jerk`.
+    the inverse of :func:`peak_lateral_accel` and :func:`peak_lateral_jerk`.
 
     Parameters
     ----------

@@ -7,14 +7,14 @@ output jumps. Eq. (14) blends the accelerations before and after the switch,
           \qquad \Psi(\tau) = \tfrac12\left[\tanh(\lambda\tau - \gamma) + 1\right],
 
 with τ the time since the switch. The paper states :math:`\Psi(t_0) = 0` and
-:math:`\Psi(t_f) = 1`, which a tanh cannot reach; following MODELS.md §5 the parameters are
+:math:`\Psi(t_f) = 1`, which a tanh cannot reach; following docs/models.md the parameters are
 chosen from a tolerance ε so that :math:`\Psi(0) = \varepsilon`, :math:`\Psi(T) = 1 - \varepsilon`
 and the midpoint is at :math:`T/2`.
 
 References
 ----------
 .. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Eq. (14).
-.. [2] MODELS.md §5; the same shape is SUMO EIDM's drive-off smoothing.
+.. [2] docs/models.md; the same shape is SUMO EIDM's drive-off smoothing.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from hcomc._typing import FloatArray
 __all__ = ["blend_acceleration", "transition_parameters", "transition_weight"]
 
 DEFAULT_TOLERANCE: float = 0.01
-"""Default ε: Ψ(0) = 0.01 and Ψ(T) = 0.99 (MODELS.md §5)."""
+"""Default ε: Ψ(0) = 0.01 and Ψ(T) = 0.99."""
 
 
 def transition_parameters(
@@ -55,7 +55,7 @@ def transition_parameters(
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14); MODELS.md §5.
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14).
 
     Examples
     --------
@@ -101,7 +101,7 @@ def transition_weight(
 
     References
     ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14); MODELS.md §5.
+    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14).
 
     Examples
     --------

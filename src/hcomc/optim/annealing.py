@@ -1,7 +1,7 @@
 """Simulated annealing: SciPy's ``dual_annealing`` behind our Optimizer interface.
 
 pymoo has no simulated annealing, so the SA baseline wraps SciPy's maintained generalized
-simulated annealing (MODELS.md §14) and minimises ``problem.scalarise(F, G)``.
+simulated annealing and minimises ``problem.scalarise(F, G)``.
 
 * ``no_local_search=True``: traditional generalized SA, no L-BFGS-B polishing (the
   finite-difference local search would spend evaluations on a non-smooth, simulated

@@ -1,6 +1,6 @@
 """NSGA-II and PSO from pymoo behind our :class:`~hcomc.optim.base.Optimizer` interface.
 
-This is the only module that imports pymoo (STYLE.md §3.4). A private adapter,
+This is the only module that imports pymoo. A private adapter,
 :class:`_PymooProblem`, wraps our vectorised :class:`~hcomc.optim.base.Problem` as a
 ``pymoo.core.problem.Problem``: one ``problem.evaluate(X)`` call per population, rows counted.
 
@@ -123,12 +123,12 @@ class NSGA2Optimizer:
         probability min(0.5, 1/n_var)).
     eliminate_duplicates : pymoo's duplicate elimination. Off by default: with continuous
         variables exact duplicates are vanishingly rare, and the pairwise check costs about
-        1 ms per generation of the 50 ms decision budget (DESIGN §6).
+        1 ms per generation of the 50 ms decision budget.
 
     Notes
     -----
     Tournament by domination then crowding, rank-and-crowding survival, duplicate elimination
-    (pymoo defaults otherwise; MODELS.md §14). The returned set is the feasible, mutually
+    (pymoo defaults otherwise). The returned set is the feasible, mutually
     non-dominated subset of *every* evaluated row (an archive: with a small population, the
     final population alone can hold fewer good trade-offs than were found on the way); if no
     row is feasible it is pymoo's single least-violating row, with ``feasible`` False.
@@ -209,7 +209,7 @@ class PSOOptimizer:
 
     Minimises ``problem.scalarise(F, G)`` as a single unconstrained objective (the constraint
     penalty is inside ``scalarise``), with pymoo's adaptive PSO (w = 0.9, c1 = c2 = 2.0 as the
-    starting values, fuzzy adaptation, Latin hypercube initialisation; MODELS.md §14).
+    starting values, fuzzy adaptation, Latin hypercube initialisation).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 r"""Picking one plan from a Pareto set: the paper's Eq. 19 rule, and a non-dominated filter.
 
-Eq. 19 (paper Section III-C-2; MODELS.md §7):
+Eq. 19 (paper Section III-C-2):
 
 1. If every candidate has ``U_safe`` above the threshold (4 m/s^2), pick the one with the
    smallest ``U_safe``.
@@ -12,7 +12,7 @@ Eq. 19 (paper Section III-C-2; MODELS.md §7):
 
 The paper normalises ``U_eff`` itself as if it were a cost; the problem minimises ``-U_eff``,
 so the ``efficiency`` column is already a cost and the rule is applied to it unchanged (the
-consistent reading, MODELS.md §7).
+consistent reading).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Each vehicle is a closed rectangle of length ``L`` and width ``W`` [m]. Its reference point
 ``(x, y)`` is the centre of the **front bumper**: ``x`` is the longitudinal position [m],
 ``y`` the lateral position of the vehicle's centre line [m], and ``heading`` [rad] is measured
-from the +x axis (MODELS.md §13: ``heading = atan2(ẏ, ẋ)``). The rectangle's centre is
+from the +x axis (``heading = atan2(ẏ, ẋ)``). The rectangle's centre is
 therefore at ``(x - L/2 cos h, y - L/2 sin h)``.
 
 Two closed rectangles intersect if and only if
@@ -14,7 +14,7 @@ Two closed rectangles intersect if and only if
    as a collision), or
 2. one rectangle lies entirely inside the other, so that no edges meet. Then every corner of
    the inner rectangle is inside the outer one, so testing one corner each way suffices
-   (point-in-polygon check, MODELS.md §13).
+   (point-in-polygon check).
 
 Everything is vectorised over arbitrary leading batch shapes (pairs, candidates × pairs ×
 time steps, ...) with NumPy broadcasting; there are no Python loops over pairs.
@@ -194,7 +194,7 @@ def _corner_rows(
 def segments_intersect(p1: ArrayLike, p2: ArrayLike, q1: ArrayLike, q2: ArrayLike) -> BoolArray:
     r"""Whether closed segments ``P1P2`` and ``Q1Q2`` intersect (paper Eq. 7).
 
-    Two steps (MODELS.md §13):
+    Two steps:
 
     1. **Quick rejection.** If the axis-aligned bounding boxes of the segments do not overlap
        (closed boxes, so touching boxes overlap), the segments cannot intersect.

@@ -1,4 +1,4 @@
-"""Critical acceleration, the HCOMC safety index (paper Eq. 15; MODELS.md §7)."""
+"""Critical acceleration, the HCOMC safety index (paper Eq. 15)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Traffic demand: arrival schedules per lane and vehicle kinds (DESIGN.md §3).
+"""Traffic demand: arrival schedules per lane and vehicle kinds.
 
 Mainline headways are shifted exponential, ``h = h_min + Exp(mean - h_min)``, so their mean is
 the condition's average time headway (paper Table I). The mainline is pre-filled at

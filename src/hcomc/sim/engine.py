@@ -1,4 +1,4 @@
-"""Simulation engine: release -> perceive -> decide -> check -> integrate -> log (DESIGN.md §2).
+"""Simulation engine: release -> perceive -> decide -> check -> integrate -> log.
 
 State is struct-of-arrays over every vehicle of the run (``active`` marks those on the road).
 All vehicles decide from the same snapshot, then all integrate, so update order cannot bias

@@ -5,7 +5,7 @@ A manifest records everything needed to reproduce or audit a run: the seed (and 
 version, the git revision of the source tree, and the interpreter, numpy and platform
 versions. Manifests and sweep results are written atomically (temporary file in the
 same directory, then :func:`os.replace`), so an interrupted write never leaves a
-half-written file and never clobbers an existing good one (DESIGN.md §7).
+half-written file and never clobbers an existing good one.
 """
 
 from __future__ import annotations

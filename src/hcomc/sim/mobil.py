@@ -1,4 +1,4 @@
-"""Lane-change decisions without a merge controller: MOBIL and ramp gap acceptance (MODELS §8).
+"""Lane-change decisions without a merge controller: MOBIL and ramp gap acceptance.
 
 Every candidate has exactly one possible target lane: lane 1 -> lane 2 (to the left),
 lane 2 -> lane 1 (to the right) and ramp -> lane 1 on the acceleration lane. For candidate c,

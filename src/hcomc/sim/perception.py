@@ -1,4 +1,4 @@
-"""What drivers perceive: exact for CAVs, delayed and noisy for HDVs (paper Eq. 2; MODELS §2).
+"""What drivers perceive: exact for CAVs, delayed and noisy for HDVs (paper Eq. 2).
 
 HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
 
@@ -9,7 +9,7 @@ HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
   *current* leader (documented simplification: a new leader after a cut-in is perceived at its
   delayed position, not with the delay of noticing it).
 * **Estimation errors** as Ornstein-Uhlenbeck processes ``w(t+dt) = exp(-dt/tau~) w(t) +
-  sqrt(2 dt/tau~) xi`` (the MODELS.md update, stationary variance ~1), independent per driver
+  sqrt(2 dt/tau~) xi`` (stationary variance ~1), independent per driver
   for the gap (``s_est = s exp(V_s w_s)``) and the inverse TTC
   (``dv_est = dv + s sigma_r w_l``); ``w(0) ~ N(0, 1)``.
 * **Independent of who is on the road**: every step draws the innovations ``xi`` for *all* N

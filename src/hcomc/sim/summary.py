@@ -14,7 +14,7 @@ from hcomc.sim.log import EventKind, SimulationLog
 def summarise(log: SimulationLog) -> dict[str, Any]:
     """Vehicles, merges, collisions, ramp waits, mean speed per lane [m/s] and fuel [L].
 
-    Fuel is Eq. 16 summed over all vehicles in the logged window (MODELS.md §6).
+    Fuel is Eq. 16 summed over all vehicles in the logged window.
     """
     events = log.events
     kinds = events["kind"]
