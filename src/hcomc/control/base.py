@@ -95,6 +95,29 @@ class TrafficView:
     config: ScenarioConfig
     plans: tuple[MergePlan, ...] = ()
 
+    @classmethod
+    def snapshot(
+        cls,
+        t: float,
+        state: dict[str, np.ndarray],
+        fleet: Fleet,
+        config: ScenarioConfig,
+        plans: tuple[MergePlan, ...] = (),
+    ) -> TrafficView:
+        """A read-only view of an engine's state: copies of the ``x, v, a, lane, active,
+        changing`` arrays, frozen, so a controller can never write the simulation state."""
+
+        def frozen(name: str) -> np.ndarray:
+            out = np.array(state[name], copy=True)
+            out.flags.writeable = False
+            return out
+
+        return cls(
+            t=t, x=frozen("x"), v=frozen("v"), a=frozen("a"), lane=frozen("lane"),
+            active=frozen("active"), changing=frozen("changing"), fleet=fleet, config=config,
+            plans=plans,
+        )  # fmt: skip
+
     def live_plan(self, vr: int) -> MergePlan | None:
         """The plan being executed for ramp vehicle ``vr``, if any."""
         return next((p for p in self.plans if p.group.vr == vr), None)

@@ -303,17 +303,10 @@ class Simulation:
     # ---------------------------------------------------------------- plans
     def _view(self, t: float) -> TrafficView:
         """Read-only copy of the state for a controller."""
-
-        def frozen(arr: np.ndarray) -> np.ndarray:
-            out = arr.copy()
-            out.flags.writeable = False
-            return out
-
-        return TrafficView(
-            t=t, x=frozen(self.x), v=frozen(self.v), a=frozen(self.a), lane=frozen(self.lane),
-            active=frozen(self.active), changing=frozen(self.origin != self.target),
-            fleet=self.fleet, config=self.config, plans=tuple(p.plan for p in self.plans),
-        )  # fmt: skip
+        state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
+                 "active": self.active, "changing": self.origin != self.target}  # fmt: skip
+        plans = tuple(p.plan for p in self.plans)
+        return TrafficView.snapshot(t, state, self.fleet, self.config, plans)
 
     def _identify_key_vehicles(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Record each ramp vehicle's key vehicles when it enters the control zone.

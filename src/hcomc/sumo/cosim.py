@@ -250,16 +250,11 @@ class SumoSimulation:
 
     # ---------------------------------------------------------------- plans
     def _view(self, t: float) -> TrafficView:
-        def frozen(arr: np.ndarray) -> np.ndarray:
-            out = arr.copy()
-            out.flags.writeable = False
-            return out
-
-        return TrafficView(
-            t=t, x=frozen(self.x), v=frozen(self.v), a=frozen(self.a), lane=frozen(self.lane),
-            active=frozen(self.active), changing=frozen(self.changing()), fleet=self.fleet,
-            config=self.config, plans=tuple(p.plan for p in self.plans),
-        )  # fmt: skip
+        """Read-only copy of the state for a controller (as our engine builds it)."""
+        state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
+                 "active": self.active, "changing": self.changing()}  # fmt: skip
+        plans = tuple(p.plan for p in self.plans)
+        return TrafficView.snapshot(t, state, self.fleet, self.config, plans)
 
     def _key_vehicles(self, ids: np.ndarray, t: float) -> None:
         """Key vehicles and (with a controller) a plan when a ramp vehicle enters the zone."""
