@@ -69,6 +69,7 @@ from hcomc.control.hcomc.rollout import (
     P_WID,
     VMC,
     VR,
+    counterfactual,
     rollout,
 )
 from hcomc.models.fuel import fuel_rate
@@ -192,6 +193,16 @@ class MergeProblem:
         self.dt = control.prediction_dt
         self.n_steps = int(np.ceil((reach + self.xu[1] + control.post_merge) / self.dt))
         self._fuel_ref = float(fuel_rate(s.v[VR], 0.0) * self.n_steps * self.dt / 1000.0)
+        # the no-merge counterfactual of each sequence's key group: candidate-independent, so
+        # rolled out once per planning instant, not once per population
+        self._no_merge = tuple(
+            None
+            if st is None
+            else np.stack(
+                counterfactual(st.x, st.v, st.a, st.present, st.params, self.consts, self.n_steps)
+            )
+            for st in states
+        )
 
     # ------------------------------------------------------------------ evaluate
     def predict(self, X: FloatArray) -> Prediction:
@@ -211,15 +222,15 @@ class MergeProblem:
         vv = [np.zeros((n, 4)) for _ in range(3)]
         for which in (AHEAD, BEHIND):
             rows = np.flatnonzero(seq == which)
-            state = self.states[which]
-            if rows.size == 0 or state is None:
+            state, cf = self.states[which], self._no_merge[which]
+            if rows.size == 0 or state is None or cf is None:
                 continue
             out = rollout(
                 state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
                 state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
-                lateral[rows], self.consts, K,
+                lateral[rows], self.consts, K, cf,
             )  # fmt: skip
-            xs, ys, vs, as_, hs, km, u_safe, u_eff, g, v0_, v1_, v2_, near, cf = out
+            xs, ys, vs, as_, hs, km, u_safe, u_eff, g, v0_, v1_, v2_, near = out
             Xt[rows], Yt[rows], Vt[rows], At[rows], Ht[rows] = xs, ys, vs, as_, hs
             k_merge[rows] = km
             for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):

@@ -298,6 +298,7 @@ def rollout(
     lateral: np.ndarray,
     consts: np.ndarray,
     n_steps: int,
+    cf: np.ndarray,
 ):
     """Simulate every candidate; return trajectories, objectives and constraint parts.
 
@@ -315,6 +316,8 @@ def rollout(
     merge_x, vr_dur, horizon, lateral : (C,) candidate variables.
     consts : (12,) constants (``C_*``).
     n_steps : prediction steps K.
+    cf : (3, K + 1, 6) x, v and a of the no-merge :func:`counterfactual` (candidate-independent:
+        the caller computes it once per planning instant, not once per population).
 
     Returns
     -------
@@ -330,13 +333,12 @@ def rollout(
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
     near : (C, K + 1, 15) key-vehicle pairs (i < j, row-major) whose bounding boxes overlap;
         only these can collide (the exact Eq. 7 test is left to the caller).
-    cf : (3, K + 1, 6) the counterfactual's x, v and a.
     """
     n_c = merge_x.size
     dt, accel_end, width = consts[C_DT], consts[C_ACCEL_END], consts[C_WIDTH]
     vmc_dur, gamma, emergency = consts[C_VMC_DUR], consts[C_GAMMA], consts[C_EMERGENCY]
     K = n_steps
-    Xc, Vc, Ac = counterfactual(x0, v0, a0, present, params, consts, K)
+    Xc, Vc, Ac = cf[0], cf[1], cf[2]
     X = np.empty((n_c, K + 1, N_ROLES))
     Y = np.zeros((n_c, K + 1, N_ROLES))
     V = np.empty((n_c, K + 1, N_ROLES))
@@ -523,9 +525,7 @@ def rollout(
                                           lat, consts)  # fmt: skip
         if u_safe[c] == np.inf:
             g[c, G_UNSAFE] = 1.0
-    cf = np.empty((3, K + 1, N_ROLES))
-    cf[0], cf[1], cf[2] = Xc, Vc, Ac
-    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2, near, cf
+    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2, near
 
 
 @njit(cache=True)
@@ -586,6 +586,7 @@ def warm_up() -> None:
     x = np.array([400.0, 380.0, 480.0, 300.0, 450.0, 330.0])
     one = np.ones(1)
     flags = np.ones(N_ROLES, dtype=np.bool_)
-    rollout(x, np.full(N_ROLES, 25.0), np.zeros(N_ROLES), flags, flags, flags, params,
-            np.full(N_STARTS, np.nan), one * 800.0, one * 4.0, one * 6.0,
-            np.zeros(1, dtype=np.bool_), consts, 4)  # fmt: skip
+    v, a = np.full(N_ROLES, 25.0), np.zeros(N_ROLES)
+    cf = np.stack(counterfactual(x, v, a, flags, params, consts, 4))
+    rollout(x, v, a, flags, flags, flags, params, np.full(N_STARTS, np.nan), one * 800.0,
+            one * 4.0, one * 6.0, np.zeros(1, dtype=np.bool_), consts, 4, cf)  # fmt: skip
