@@ -57,10 +57,13 @@ def test_cubic_extremes_match_dense_sampling():
     np.testing.assert_allclose(a_min, a.min(axis=0), atol=1e-9)
 
 
+EQ15 = {"min_distance": 2.0, "emergency_decel": 7.5}  # D [m] and a_merg [m/s^2] of the example
+
+
 @pytest.mark.parametrize(("d", "expected"), [(30, 7.0), (50, 4.8), (80, 3.3), (110, 2.5)])
 def test_critical_acceleration_models_table(d, expected):
     """Eq. 15 worked example: v_r = v_f = 25 m/s, T = 1 s, D = 2 m, a_merg = 7.5 m/s^2."""
-    assert float(critical_acceleration(d, 25.0, 25.0, delay=1.0)) == pytest.approx(
+    assert float(critical_acceleration(d, 25.0, 25.0, delay=1.0, **EQ15)) == pytest.approx(
         expected, abs=0.05
     )
 
@@ -68,9 +71,12 @@ def test_critical_acceleration_models_table(d, expected):
 def test_critical_acceleration_closed_form_and_infinite_case():
     d, vr, vf, T = 40.0, 30.0, 20.0, 0.5
     expected = vr**2 / (2 * (d - 2.0 - vr * T + vf**2 / 15.0))
-    assert float(critical_acceleration(d, vr, vf, delay=T)) == pytest.approx(expected, rel=1e-12)
+    a_cr = float(critical_acceleration(d, vr, vf, delay=T, **EQ15))
+    assert a_cr == pytest.approx(expected, rel=1e-12)
     # a 5 m gap at 30 m/s behind a standing vehicle: no deceleration avoids the crash
-    assert np.isinf(critical_acceleration(5.0, 30.0, 0.0, delay=1.0))
-    out = critical_acceleration(np.array([5.0, 80.0]), 30.0, 0.0, delay=np.array([1.0, 0.5]))
+    assert np.isinf(critical_acceleration(5.0, 30.0, 0.0, delay=1.0, **EQ15))
+    out = critical_acceleration(
+        np.array([5.0, 80.0]), 30.0, 0.0, delay=np.array([1.0, 0.5]), **EQ15
+    )
     assert np.isinf(out[0])
     assert np.isfinite(out[1])

@@ -20,8 +20,8 @@ def critical_acceleration(
     v_f: ArrayLike,
     *,
     delay: ArrayLike,
-    min_distance: float = 2.0,
-    emergency_decel: float = 7.5,
+    min_distance: float,
+    emergency_decel: float,
 ) -> FloatArray:
     r"""Deceleration the rear vehicle needs if its leader brakes in an emergency [m/s^2].
 
@@ -45,8 +45,9 @@ def critical_acceleration(
 
     Examples
     --------
-    >>> round(float(critical_acceleration(50.0, 25.0, 25.0, delay=1.0)), 2)
-    4.84
+    >>> round(float(critical_acceleration(50.0, 25.0, 25.0, delay=1.0, min_distance=2.0,
+    ...                                   emergency_decel=7.5)), 2)
+    4.83
     """
     v_r = np.asarray(v_r, dtype=np.float64)
     v_f = np.asarray(v_f, dtype=np.float64)
