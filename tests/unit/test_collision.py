@@ -267,15 +267,13 @@ def _composed_reference(ca: FloatArray, cb: FloatArray) -> BoolArray:
     )
 
 
-def test_rectangles_collide_equals_composed_eq7_test(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The fused kernel (shared cross products, chunks) is bitwise the composed Eq. (7) test."""
+def test_rectangles_collide_equals_composed_eq7_test() -> None:
+    """The compiled pair kernel is bitwise the composed Eq. (7) test of the public blocks."""
     rng = np.random.default_rng(17)
     na, nb = _near_random_pairs(rng, 3000)
     ia, ib = _shuffle_exact(rng, _integer_rects(rng, 3000, 3), _integer_rects(rng, 3000, 3))
     a, b = np.concatenate([na, ia]), np.concatenate([nb, ib])
     expected = _composed_reference(a, b)
-    np.testing.assert_array_equal(rectangles_collide(a, b), expected)
-    monkeypatch.setattr(collision, "_CHUNK", 7)  # many chunks, ragged last one
     np.testing.assert_array_equal(rectangles_collide(a, b), expected)
 
 
@@ -546,24 +544,14 @@ def test_prefilter_keeps_diagonal_corner_contact() -> None:
     assert vehicles_collide(*args[5:], *args[:5])
 
 
-def test_prefilter_runs_exact_test_only_on_close_pairs(monkeypatch: pytest.MonkeyPatch) -> None:
-    calls: list[int] = []
-    exact = collision._collide_rows
-
-    def spy(ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray) -> BoolArray:
-        calls.append(ax.shape[1])
-        return exact(ax, ay, bx, by)
-
-    monkeypatch.setattr(collision, "_collide_rows", spy)
+def test_prefilter_decides_far_pairs_and_keeps_close_ones() -> None:
+    """2000 pairs, 3 within the discs: exactly the close pairs can collide, far ones never."""
     xb = np.full(2000, 1000.0)
     xb[:4] = [2.0, 5.0, 5.2, 9.0]  # 3 pass the prefilter (centre distance <= 5.31 m)
     got = collision.vehicles_collide(0.0, 0.0, 0.0, CAR_L, CAR_W, xb, 0.0, 0.0, CAR_L, CAR_W)
-    assert calls == [3]
     np.testing.assert_array_equal(got[:3], [True, True, False])
     assert not got[3:].any()
-    calls.clear()
-    collision.vehicles_collide(0.0, 0.0, 0.0, CAR_L, CAR_W, 1000.0, 0.0, 0.0, CAR_L, CAR_W)
-    assert calls == []
+    assert not collision.vehicle_pair_collides(0.0, 0.0, 0.0, CAR_L, CAR_W, 1e3, 0.0, 0.0, 5, 2)
 
 
 def test_prefilter_never_rejects_corner_to_corner_contacts() -> None:

@@ -20,11 +20,15 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
-__all__ = ["acc_acceleration", "cah_acceleration"]
+__all__ = ["acc_accel", "acc_acceleration", "cah_accel", "cah_acceleration"]
 
 S_MIN_CAH: float = 0.01
 """Lower guard on the gap [m] in the CAH (as in MovSim and SUMO)."""
@@ -96,20 +100,31 @@ def cah_acceleration(
     >>> float(cah_acceleration(50.0, 10.0, 0.0, 0.0, a=1.4))
     -1.0
     """
-    s = np.asarray(s, dtype=np.float64)
-    v = np.asarray(v, dtype=np.float64)
-    a_lt = np.minimum(a_l, a)
-    no_leader = np.isinf(s)
-    # Finite stand-in for "no leader" keeps inf * 0 out of the branch condition.
-    s_g = np.where(no_leader, 1.0, np.maximum(s, S_MIN_CAH))
+    return broadcast_apply(_cah_array, s, v, v_l, a_l, a)
+
+
+@njit(cache=True)
+def cah_accel(s: float, v: float, v_l: float, a_l: float, a: float) -> float:
+    """CAH acceleration of one vehicle [m/s^2]: the one implementation of
+    :func:`cah_acceleration` (same arguments, positional)."""
+    a_lt = min(a_l, a)
+    if math.isinf(s):
+        return a_lt
+    s_g = max(s, S_MIN_CAH)
     two_s_a = 2.0 * s_g * a_lt
-    denom = np.square(v_l) - two_s_a
-    use_first = (v_l * (v - v_l) <= -two_s_a) & (denom > 0.0)
-    first = np.square(v) * a_lt / np.where(use_first, denom, 1.0)
-    dvp = np.maximum(v - v_l, 0.0)
-    second = a_lt - dvp * dvp / (2.0 * s_g)
-    out = np.where(no_leader, a_lt, np.where(use_first, first, second))
-    return np.asarray(out, dtype=np.float64)
+    denom = v_l * v_l - two_s_a
+    if v_l * (v - v_l) <= -two_s_a and denom > 0.0:
+        return v * v * a_lt / denom
+    dvp = max(v - v_l, 0.0)
+    return a_lt - dvp * dvp / (2.0 * s_g)
+
+
+@njit(cache=True)
+def _cah_array(s, v, v_l, a_l, a):
+    out = np.empty(s.size)
+    for i in range(s.size):
+        out[i] = cah_accel(s[i], v[i], v_l[i], a_l[i], a[i])
+    return out
 
 
 def acc_acceleration(
@@ -162,6 +177,21 @@ def acc_acceleration(
     >>> float(acc_acceleration(0.5, -1.0, b=2.0, c=0.99))
     0.5
     """
-    a_idm = np.asarray(a_idm, dtype=np.float64)
-    blend = (1.0 - c) * a_idm + c * (a_cah + b * np.tanh((a_idm - a_cah) / b))
-    return np.asarray(np.where(a_idm >= a_cah, a_idm, blend), dtype=np.float64)
+    return broadcast_apply(_acc_array, a_idm, a_cah, b, c)
+
+
+@njit(cache=True)
+def acc_accel(a_idm: float, a_cah: float, b: float, c: float) -> float:
+    """ACC acceleration of one vehicle, Eq. (3) [m/s^2]: the one implementation of
+    :func:`acc_acceleration` (same arguments, positional)."""
+    if a_idm >= a_cah:
+        return a_idm
+    return (1.0 - c) * a_idm + c * (a_cah + b * math.tanh((a_idm - a_cah) / b))
+
+
+@njit(cache=True)
+def _acc_array(a_idm, a_cah, b, c):
+    out = np.empty(a_idm.size)
+    for i in range(a_idm.size):
+        out[i] = acc_accel(a_idm[i], a_cah[i], b[i], c[i])
+    return out

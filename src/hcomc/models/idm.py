@@ -4,8 +4,9 @@ Pure, vectorised implementations of the car-following law of the HCOMC paper, Eq
 (Treiber, Hennecke & Helbing 2000), the IIDM variant used by MovSim's ACC model and SUMO's EIDM
 (Treiber & Kesting 2013), and the IDM equilibrium gap. All functions take scalars or arrays (for
 example one entry per vehicle, with per-vehicle parameter arrays), broadcast them with the usual
-numpy rules and return ``float64`` arrays. They are called inside the simulation step loop, so
-they avoid Python-level loops and keep temporaries to a minimum.
+numpy rules and return ``float64`` arrays. Each equation has one home: a scalar
+numba-compiled kernel (:func:`idm_accel`, :func:`iidm_accel`) that the simulation step, the
+HCOMC prediction and the tests all call; the array functions apply it elementwise.
 
 Sign conventions: ``s`` is the bumper-to-bumper gap to the leader [m]
 (``np.inf`` when there is no leader), ``v`` the own speed [m/s] and ``dv = v - v_leader`` the
@@ -23,11 +24,22 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
-__all__ = ["desired_gap", "equilibrium_gap", "idm_acceleration", "iidm_acceleration"]
+__all__ = [
+    "desired_gap",
+    "equilibrium_gap",
+    "idm_accel",
+    "idm_acceleration",
+    "iidm_accel",
+    "iidm_acceleration",
+]
 
 S_MIN: float = 1e-3
 """Lower guard on the gap [m] used in the interaction term (avoids division by zero)."""
@@ -87,9 +99,21 @@ def desired_gap(
     >>> float(desired_gap(20.0, -100.0, T=1.5, a=1.0, b=2.0, s0=2.0))
     2.0
     """
-    v = np.asarray(v, dtype=np.float64)
-    dyn = v * T + v * dv / (2.0 * np.sqrt(np.multiply(a, b)))
-    return np.asarray(np.maximum(dyn, 0.0) + s0, dtype=np.float64)
+    return broadcast_apply(_desired_gap_array, v, dv, T, a, b, s0)
+
+
+@njit(cache=True)
+def desired_gap_scalar(v: float, dv: float, T: float, a: float, b: float, s0: float) -> float:
+    """:func:`desired_gap` of one vehicle (Eq. 1) [m]."""
+    return max(v * T + v * dv / (2.0 * math.sqrt(a * b)), 0.0) + s0
+
+
+@njit(cache=True)
+def _desired_gap_array(v, dv, T, a, b, s0):
+    out = np.empty(v.size)
+    for i in range(v.size):
+        out[i] = desired_gap_scalar(v[i], dv[i], T[i], a[i], b[i], s0[i])
+    return out
 
 
 def idm_acceleration(
@@ -158,9 +182,25 @@ def idm_acceleration(
     >>> float(idm_acceleration(np.inf, 0.0, 0.0, v0=33.3, T=1.5, a=1.0, b=2.0, s0=2.0, delta=4))
     1.0
     """
-    v = np.asarray(v, dtype=np.float64)
-    z = desired_gap(v, dv, T=T, a=a, b=b, s0=s0) / np.maximum(s, S_MIN)
-    return np.asarray(a * (1.0 - np.power(v / v0, delta) - z * z), dtype=np.float64)
+    return broadcast_apply(_idm_array, s, v, dv, v0, T, a, b, s0, delta)
+
+
+@njit(cache=True)
+def idm_accel(
+    s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float, delta: float
+) -> float:
+    """IDM acceleration of one vehicle, paper Eq. (1) [m/s^2]: the one implementation of
+    :func:`idm_acceleration` (same arguments, positional)."""
+    z = desired_gap_scalar(v, dv, T, a, b, s0) / max(s, S_MIN)
+    return a * (1.0 - (v / v0) ** delta - z * z)
+
+
+@njit(cache=True)
+def _idm_array(s, v, dv, v0, T, a, b, s0, delta):
+    out = np.empty(s.size)
+    for i in range(s.size):
+        out[i] = idm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])
+    return out
 
 
 def iidm_acceleration(
@@ -241,27 +281,34 @@ def iidm_acceleration(
     >>> float(iidm_acceleration(32.0, 20.0, 0.0, v0=33.3, T=1.5, a=1.0, b=2.0, s0=2.0, delta=4))
     0.0
     """
-    v = np.asarray(v, dtype=np.float64)
-    z = desired_gap(v, dv, T=T, a=a, b=b, s0=s0) / np.maximum(s, S_MIN)
-    below = v <= v0
-    # Free-road term of both speed regimes; each ratio is formed so that it is <= 1 and finite.
-    a_free = np.where(
-        below,
-        a * (1.0 - np.power(np.minimum(v, v0) / v0, delta)),
-        -b * (1.0 - np.power(v0 / np.maximum(v, v0), np.divide(a, b) * delta)),
-    )
-    interaction = a * (1.0 - z * z)
-    small = z < 1.0
-    # v <= v0 and z < 1: a_free (1 - z^(2a/a_free)), a_free >= 0 floored inside the exponent and
-    # z clipped to 1 so that the unused lanes of np.where cannot overflow.
-    exponent = np.multiply(a, 2.0) / np.maximum(a_free, _A_FREE_FLOOR)
-    approach = a_free * (1.0 - np.power(np.minimum(z, 1.0), exponent))
-    out = np.where(
-        below,
-        np.where(small, approach, interaction),
-        np.where(small, a_free, a_free + interaction),
-    )
-    return np.asarray(out, dtype=np.float64)
+    return broadcast_apply(_iidm_array, s, v, dv, v0, T, a, b, s0, delta)
+
+
+@njit(cache=True)
+def iidm_accel(
+    s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float, delta: float
+) -> float:
+    """IIDM acceleration of one vehicle [m/s^2]: the one implementation of
+    :func:`iidm_acceleration` (same arguments, positional)."""
+    z = desired_gap_scalar(v, dv, T, a, b, s0) / max(s, S_MIN)
+    if v <= v0:
+        a_free = a * (1.0 - (min(v, v0) / v0) ** delta)
+        if z < 1.0:
+            # a_free >= 0 is floored inside the exponent, so z^inf -> 0 at v = v0
+            return a_free * (1.0 - min(z, 1.0) ** (a * 2.0 / max(a_free, _A_FREE_FLOOR)))
+        return a * (1.0 - z * z)
+    a_free = -b * (1.0 - (v0 / max(v, v0)) ** (a / b * delta))
+    if z < 1.0:
+        return a_free
+    return a_free + a * (1.0 - z * z)
+
+
+@njit(cache=True)
+def _iidm_array(s, v, dv, v0, T, a, b, s0, delta):
+    out = np.empty(s.size)
+    for i in range(s.size):
+        out[i] = iidm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])
+    return out
 
 
 def equilibrium_gap(

@@ -23,8 +23,10 @@ from __future__ import annotations
 from math import comb, sqrt
 
 import numpy as np
+from numba import njit
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
 __all__ = [
     "lateral_offset",
@@ -178,17 +180,43 @@ def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, Float
     >>> [float(q) for q in quintic_shape(0.5)]
     [0.5, 1.875, 0.0]
     """
-    xi = np.clip(np.asarray(xi, dtype=np.float64), 0.0, 1.0)
+    xi = np.asarray(xi, dtype=np.float64)
+    p, dp, ddp = _shape_array(np.ascontiguousarray(xi).reshape(-1))
+    return p.reshape(xi.shape), dp.reshape(xi.shape), ddp.reshape(xi.shape)
+
+
+@njit(cache=True)
+def quintic_shape_scalar(xi: float) -> tuple[float, float, float]:
+    """:func:`quintic_shape` of one ξ (clipped to [0, 1]): the one implementation of Eq. (4)'s
+    normalised polynomial 10ξ³ − 15ξ⁴ + 6ξ⁵ and its first two derivatives."""
+    xi = min(max(xi, 0.0), 1.0)
     xi2 = xi * xi
     om = 1.0 - xi
     p = xi2 * xi * (10.0 + xi * (6.0 * xi - 15.0))
     dp = 30.0 * xi2 * om * om
     ddp = 60.0 * xi * om * (1.0 - 2.0 * xi)
-    return (
-        np.asarray(p, dtype=np.float64),
-        np.asarray(dp, dtype=np.float64),
-        np.asarray(ddp, dtype=np.float64),
-    )
+    return p, dp, ddp
+
+
+@njit(cache=True)
+def _shape_array(xi):
+    p, dp, ddp = np.empty(xi.size), np.empty(xi.size), np.empty(xi.size)
+    for i in range(xi.size):
+        p[i], dp[i], ddp[i] = quintic_shape_scalar(xi[i])
+    return p, dp, ddp
+
+
+@njit(cache=True)
+def lateral_state(
+    x: float, x0: float, xf: float, y0: float, yf: float
+) -> tuple[float, float, float]:
+    """y [m], dy/dx [-] and d²y/dx² [1/m] of one vehicle at x on the quintic path from
+    (x0, y0) to (xf, yf) (Eq. 4-6): the one implementation behind :func:`lateral_offset`."""
+    length = max(xf - x0, _MIN_LENGTH)
+    width = yf - y0
+    p, dp, ddp = quintic_shape_scalar((x - x0) / length)
+    slope = width / length
+    return y0 + width * p, slope * dp, slope / length * ddp
 
 
 def lateral_offset(
@@ -240,15 +268,16 @@ def lateral_offset(
     >>> [round(float(q), 6) for q in lateral_offset(50.0, 0.0, 100.0, 0.0, 3.75)]
     [1.875, 0.070312, 0.0]
     """
-    length = np.maximum(np.subtract(xf, x0), _MIN_LENGTH)
-    width = np.subtract(yf, y0)
-    p, dp, ddp = quintic_shape(np.subtract(x, x0) / length)
-    slope = width / length
-    return (
-        np.asarray(y0 + width * p, dtype=np.float64),
-        np.asarray(slope * dp, dtype=np.float64),
-        np.asarray(slope / length * ddp, dtype=np.float64),
-    )
+    out = broadcast_apply(_lateral_array, x, x0, xf, y0, yf)
+    return out[..., 0], out[..., 1], out[..., 2]
+
+
+@njit(cache=True)
+def _lateral_array(x, x0, xf, y0, yf):
+    out = np.empty((x.size, 3))
+    for i in range(x.size):
+        out[i, 0], out[i, 1], out[i, 2] = lateral_state(x[i], x0[i], xf[i], y0[i], yf[i])
+    return out
 
 
 def peak_lateral_speed(width: FloatArray | float, duration: FloatArray | float) -> FloatArray:

@@ -19,11 +19,22 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
-__all__ = ["blend_acceleration", "transition_parameters", "transition_weight"]
+__all__ = [
+    "blend",
+    "blend_acceleration",
+    "transition_gamma",
+    "transition_parameters",
+    "transition_psi",
+    "transition_weight",
+]
 
 DEFAULT_TOLERANCE: float = 0.01
 """Default ε: Ψ(0) = 0.01 and Ψ(T) = 0.99."""
@@ -108,8 +119,28 @@ def transition_weight(
     >>> [round(float(w), 6) for w in transition_weight(np.array([0.0, 2.0, 4.0]), 4.0)]
     [0.01, 0.5, 0.99]
     """
-    lam, gamma = transition_parameters(duration, tolerance)
-    return np.asarray(0.5 * (np.tanh(lam * tau - gamma) + 1.0), dtype=np.float64)
+    _, gamma = transition_parameters(1.0, tolerance)
+    return broadcast_apply(_weight_array, tau, duration, gamma)
+
+
+def transition_gamma(tolerance: float) -> float:
+    """γ = artanh(1 − 2ε) of Eq. (14) for the tolerance ε [-] (as :func:`transition_parameters`)."""
+    return float(transition_parameters(1.0, tolerance)[1])
+
+
+@njit(cache=True)
+def transition_psi(tau: float, duration: float, gamma: float) -> float:
+    """Ψ(τ) of Eq. (14) for one vehicle, with λ = 2γ/T: the one implementation of
+    :func:`transition_weight` (γ from :func:`transition_gamma`)."""
+    return 0.5 * (math.tanh(2.0 * gamma / duration * tau - gamma) + 1.0)
+
+
+@njit(cache=True)
+def _weight_array(tau, duration, gamma):
+    out = np.empty(tau.size)
+    for i in range(tau.size):
+        out[i] = transition_psi(tau[i], duration[i], gamma[i])
+    return out
 
 
 def blend_acceleration(
@@ -145,5 +176,18 @@ def blend_acceleration(
     >>> float(blend_acceleration(-1.0, 1.0, 0.25))
     -0.5
     """
-    weight = np.asarray(weight, dtype=np.float64)
-    return np.asarray(weight * a_new + (1.0 - weight) * a_ori, dtype=np.float64)
+    return broadcast_apply(_blend_array, a_ori, a_new, weight)
+
+
+@njit(cache=True)
+def blend(a_ori: float, a_new: float, weight: float) -> float:
+    """Eq. (14) blend of one vehicle: the one implementation of :func:`blend_acceleration`."""
+    return weight * a_new + (1.0 - weight) * a_ori
+
+
+@njit(cache=True)
+def _blend_array(a_ori, a_new, weight):
+    out = np.empty(a_ori.size)
+    for i in range(a_ori.size):
+        out[i] = blend(a_ori[i], a_new[i], weight[i])
+    return out

@@ -16,10 +16,11 @@ Two closed rectangles intersect if and only if
    the inner rectangle is inside the outer one, so testing one corner each way suffices
    (point-in-polygon check).
 
-Everything is vectorised over arbitrary leading batch shapes (pairs, candidates × pairs ×
-time steps, ...) with NumPy broadcasting; there are no Python loops over pairs.
-:func:`vehicles_collide` also has a bounding-circle prefilter, so in large, mostly sparse
-batches only nearby pairs pay for the exact test.
+Each test has one home, a scalar numba-compiled kernel (:func:`segment_pair_intersects`,
+:func:`point_in_quad`, :func:`quads_collide`, :func:`vehicle_pair_collides`) that the
+simulation step calls per pair; the array functions apply it over arbitrary leading batch
+shapes with NumPy broadcasting. :func:`vehicle_pair_collides` also has a bounding-circle
+prefilter, so in large, mostly sparse batches only nearby pairs pay for the exact test.
 
 Floating-point note: the predicates are evaluated in float64 without exact arithmetic.
 They are exact when the corner coordinates and their differences and cross products are
@@ -29,16 +30,23 @@ is within a few ulps of touching may be classified either way.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from hcomc._typing import BoolArray, FloatArray
 
 __all__ = [
+    "point_in_quad",
     "point_in_rectangle",
+    "quads_collide",
     "rectangle_corners",
     "rectangles_collide",
+    "segment_pair_intersects",
     "segments_intersect",
+    "vehicle_pair_collides",
     "vehicles_collide",
 ]
 
@@ -48,60 +56,128 @@ __all__ = [
 #: corner along their diagonals, where the centre distance equals the sum of half-diagonals).
 _PREFILTER_REL_SLACK = 1e-9
 
-#: Index of the next corner along the boundary (edge ``i`` runs from corner ``i`` to ``_NEXT[i]``).
-_NEXT = np.array([1, 2, 3, 0])
 
-#: Pairs per chunk of the exact test: bounds each (4, 4, chunk) float64 temporary to 128 kB
-#: per 1024 pairs (a few MB per call at most) while keeping the per-chunk Python overhead
-#: small. Measured on 2000 close pairs: 512 -> 0.48 ms, 2048 -> 0.29 ms, 4096 -> 0.29 ms.
-_CHUNK = 4096
-
-
-def _cross(ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray) -> FloatArray:
-    """Z component of the 2-D cross product ``a × b`` [m²]."""
-    return ax * by - ay * bx
-
-
-def _straddles(d1: FloatArray, d2: FloatArray) -> BoolArray:
-    """True where ``d1 · d2 <= 0``: opposite signs, or either is zero (touching counts).
+@njit(cache=True)
+def _straddles(d1: float, d2: float) -> bool:
+    """``d1 · d2 <= 0``: opposite signs, or either is zero (touching counts).
 
     Evaluated from the signs rather than the product, so tiny values cannot underflow to a
     spurious zero product and huge ones cannot overflow. NaN gives True here; the
     bounding-box test (always combined with this one) rejects NaN.
     """
-    return np.asarray(~(((d1 > 0) & (d2 > 0)) | ((d1 < 0) & (d2 < 0))))
+    return not ((d1 > 0.0 and d2 > 0.0) or (d1 < 0.0 and d2 < 0.0))
 
 
-def _segments_intersect_xy(
-    p1x: FloatArray,
-    p1y: FloatArray,
-    p2x: FloatArray,
-    p2y: FloatArray,
-    q1x: FloatArray,
-    q1y: FloatArray,
-    q2x: FloatArray,
-    q2y: FloatArray,
-) -> BoolArray:
-    """Implement :func:`segments_intersect` on separate coordinate arrays (broadcast)."""
+@njit(cache=True)
+def segment_pair_intersects(
+    p1x: float, p1y: float, p2x: float, p2y: float,
+    q1x: float, q1y: float, q2x: float, q2y: float,
+) -> bool:  # fmt: skip
+    """Eq. (7) for one pair of closed segments P1P2, Q1Q2: the one implementation behind
+    :func:`segments_intersect` and every rectangle test."""
     # 1. Quick rejection: the segments' axis-aligned bounding boxes must overlap (closed).
-    bbox = (
-        np.maximum(np.minimum(p1x, p2x), np.minimum(q1x, q2x))
-        <= np.minimum(np.maximum(p1x, p2x), np.maximum(q1x, q2x))
-    ) & (
-        np.maximum(np.minimum(p1y, p2y), np.minimum(q1y, q2y))
-        <= np.minimum(np.maximum(p1y, p2y), np.maximum(q1y, q2y))
-    )
-    # 2. Straddle test, Eq. (7) with "<= 0": P1, P2 on opposite sides of (or on) line Q1Q2 ...
-    qx = q2x - q1x
-    qy = q2y - q1y
-    d1 = _cross(p1x - q1x, p1y - q1y, qx, qy)
-    d2 = _cross(p2x - q1x, p2y - q1y, qx, qy)
+    if max(min(p1x, p2x), min(q1x, q2x)) > min(max(p1x, p2x), max(q1x, q2x)):
+        return False
+    if max(min(p1y, p2y), min(q1y, q2y)) > min(max(p1y, p2y), max(q1y, q2y)):
+        return False
+    if math.isnan(p1x + p1y + p2x + p2y + q1x + q1y + q2x + q2y):
+        return False
+    # 2. Straddle test with "<= 0": P1, P2 on opposite sides of (or on) line Q1Q2 ...
+    qx, qy = q2x - q1x, q2y - q1y
+    d1 = (p1x - q1x) * qy - (p1y - q1y) * qx
+    d2 = (p2x - q1x) * qy - (p2y - q1y) * qx
     # ... and Q1, Q2 on opposite sides of (or on) line P1P2.
-    px = p2x - p1x
-    py = p2y - p1y
-    d3 = _cross(q1x - p1x, q1y - p1y, px, py)
-    d4 = _cross(q2x - p1x, q2y - p1y, px, py)
-    return np.asarray(bbox & _straddles(d1, d2) & _straddles(d3, d4))
+    px, py = p2x - p1x, p2y - p1y
+    d3 = (q1x - p1x) * py - (q1y - p1y) * px
+    d4 = (q2x - p1x) * py - (q2y - p1y) * px
+    return _straddles(d1, d2) and _straddles(d3, d4)
+
+
+@njit(cache=True)
+def point_in_quad(px: float, py: float, cx: np.ndarray, cy: np.ndarray) -> bool:
+    """Whether point P lies in (or on) the convex quadrilateral with corners ``cx, cy`` (4,)
+    in boundary order, either orientation: the one implementation behind
+    :func:`point_in_rectangle`."""
+    pos = neg = False
+    for i in range(4):
+        k = (i + 1) % 4
+        side = (cx[k] - cx[i]) * (py - cy[i]) - (cy[k] - cy[i]) * (px - cx[i])
+        pos = pos or side > 0.0
+        neg = neg or side < 0.0
+        if not (side >= 0.0 or side <= 0.0):  # NaN
+            return False
+    return not (pos and neg)
+
+
+@njit(cache=True)
+def quads_collide(ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray) -> bool:
+    """Whether two closed convex quadrilaterals (corners (4,) each, boundary order) share a
+    point: an edge pair meets (Eq. 7) or one contains a corner of the other. The one
+    implementation behind :func:`rectangles_collide`."""
+    for i in range(4):
+        i1 = (i + 1) % 4
+        for j in range(4):
+            j1 = (j + 1) % 4
+            if segment_pair_intersects(ax[i], ay[i], ax[i1], ay[i1], bx[j], by[j], bx[j1], by[j1]):
+                return True
+    return point_in_quad(bx[0], by[0], ax, ay) or point_in_quad(ax[0], ay[0], bx, by)
+
+
+@njit(cache=True)
+def corners_into(
+    x: float, y: float, c: float, s: float, length: float, width: float,
+    cx: np.ndarray, cy: np.ndarray,
+) -> None:  # fmt: skip
+    """Write the corners of one vehicle into ``cx, cy`` (4,), counter-clockwise from the
+    front-right (``c, s`` = cos, sin of the heading): the one implementation behind
+    :func:`rectangle_corners`."""
+    half_w = 0.5 * width
+    ws = half_w * s
+    wc = half_w * c
+    rear_x = x - length * c  # rear-bumper centre
+    rear_y = y - length * s
+    cx[0], cy[0] = x + ws, y - wc  # front-right (u = 0, v = -W/2)
+    cx[1], cy[1] = x - ws, y + wc  # front-left (u = 0, v = W/2)
+    cx[2], cy[2] = rear_x - ws, rear_y + wc  # rear-left (u = -L, v = W/2)
+    cx[3], cy[3] = rear_x + ws, rear_y - wc  # rear-right (u = -L, v = -W/2)
+
+
+@njit(cache=True)
+def _within(dx: float, dy: float, reach: float, scale: float) -> bool:
+    """Bounding-circle test ``dx² + dy² <= reach²`` with the relative slack; NaN gives False.
+
+    ``reach`` is widened by ``_PREFILTER_REL_SLACK`` times (``reach`` + the largest absolute
+    coordinate ``scale``), which dominates the rounding error of the corner coordinates.
+    """
+    reach = reach + _PREFILTER_REL_SLACK * (reach + scale)
+    return dx * dx + dy * dy <= reach * reach
+
+
+@njit(cache=True)
+def vehicle_pair_collides(
+    xa: float, ya: float, ha: float, la: float, wa: float,
+    xb: float, yb: float, hb: float, lb: float, wb: float,
+) -> bool:  # fmt: skip
+    """Whether vehicles A and B collide: the one implementation behind
+    :func:`vehicles_collide` (same arguments, one pair), prefilters included."""
+    # Stage 1: discs about the front-bumper centres (no trigonometry).
+    reach = math.sqrt(la * la + 0.25 * wa * wa) + math.sqrt(lb * lb + 0.25 * wb * wb)
+    scale = max(abs(xa), abs(ya), abs(xb), abs(yb))
+    if not _within(xa - xb, ya - yb, reach, scale):
+        return False
+    # Stage 2: discs about the rectangle centres, radius = half-diagonal.
+    ca, sa, cb, sb = math.cos(ha), math.sin(ha), math.cos(hb), math.sin(hb)
+    cxa, cya = xa - 0.5 * la * ca, ya - 0.5 * la * sa
+    cxb, cyb = xb - 0.5 * lb * cb, yb - 0.5 * lb * sb
+    reach = 0.5 * (math.sqrt(la * la + wa * wa) + math.sqrt(lb * lb + wb * wb))
+    scale = max(abs(cxa), abs(cya), abs(cxb), abs(cyb))
+    if not _within(cxa - cxb, cya - cyb, reach, scale):
+        return False
+    # Exact test (Eq. 7 plus containment).
+    ax, ay, bx, by = np.empty(4), np.empty(4), np.empty(4), np.empty(4)
+    corners_into(xa, ya, ca, sa, la, wa, ax, ay)
+    corners_into(xb, yb, cb, sb, lb, wb, bx, by)
+    return quads_collide(ax, ay, bx, by)
 
 
 def _as_points(a: ArrayLike, name: str, trailing: tuple[int, ...]) -> FloatArray:
@@ -157,38 +233,24 @@ def rectangle_corners(
     >>> rectangle_corners(10.0, 0.0, 0.0, 5.0, 2.0).tolist()
     [[10.0, -1.0], [10.0, 1.0], [5.0, 1.0], [5.0, -1.0]]
     """
-    xb, yb, hb, lb, wb = np.broadcast_arrays(
-        *(np.asarray(a, dtype=np.float64) for a in (x, y, heading, length, width))
+    xb, yb, hb, lb, wb = (
+        np.ascontiguousarray(a).reshape(-1)
+        for a in np.broadcast_arrays(
+            *(np.asarray(a, dtype=np.float64) for a in (x, y, heading, length, width))
+        )
     )
-    cx, cy = _corner_rows(xb, yb, np.cos(hb), np.sin(hb), lb, wb)
-    return np.ascontiguousarray(np.moveaxis(np.stack([cx, cy], axis=-1), 0, -2))
+    shape = np.broadcast_shapes(*(np.shape(a) for a in (x, y, heading, length, width)))
+    return _corners_array(xb, yb, hb, lb, wb).reshape((*shape, 4, 2))
 
 
-def _corner_rows(
-    x: FloatArray,
-    y: FloatArray,
-    c: FloatArray,
-    s: FloatArray,
-    length: FloatArray,
-    width: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """Corner coordinates with the corner index first: two arrays of shape ``(4, *x.shape)``.
-
-    ``c`` and ``s`` are ``cos h`` and ``sin h``. Both :func:`rectangle_corners` and
-    :func:`vehicles_collide` use this, so their corners agree bitwise.
-    """
-    half_w = 0.5 * width
-    ws = half_w * s
-    wc = half_w * c
-    rear_x = x - length * c  # rear-bumper centre
-    rear_y = y - length * s
-    cx = np.empty((4, *x.shape))
-    cy = np.empty((4, *x.shape))
-    cx[0], cy[0] = x + ws, y - wc  # front-right (u = 0, v = -W/2)
-    cx[1], cy[1] = x - ws, y + wc  # front-left (u = 0, v = W/2)
-    cx[2], cy[2] = rear_x - ws, rear_y + wc  # rear-left (u = -L, v = W/2)
-    cx[3], cy[3] = rear_x + ws, rear_y - wc  # rear-right (u = -L, v = -W/2)
-    return cx, cy
+@njit(cache=True)
+def _corners_array(x, y, h, length, width):
+    out = np.empty((x.size, 4, 2))
+    cx, cy = np.empty(4), np.empty(4)
+    for i in range(x.size):
+        corners_into(x[i], y[i], math.cos(h[i]), math.sin(h[i]), length[i], width[i], cx, cy)
+        out[i, :, 0], out[i, :, 1] = cx, cy
+    return out
 
 
 def segments_intersect(p1: ArrayLike, p2: ArrayLike, q1: ArrayLike, q2: ArrayLike) -> BoolArray:
@@ -234,28 +296,22 @@ def segments_intersect(p1: ArrayLike, p2: ArrayLike, q1: ArrayLike, q2: ArrayLik
     >>> bool(segments_intersect([0, 0], [1, 0], [2, 0], [3, 0]))  # colinear, disjoint
     False
     """
-    a1 = _as_points(p1, "p1", (2,))
-    a2 = _as_points(p2, "p2", (2,))
-    b1 = _as_points(q1, "q1", (2,))
-    b2 = _as_points(q2, "q2", (2,))
-    return _segments_intersect_xy(
-        a1[..., 0],
-        a1[..., 1],
-        a2[..., 0],
-        a2[..., 1],
-        b1[..., 0],
-        b1[..., 1],
-        b2[..., 0],
-        b2[..., 1],
-    )
+    pts = [
+        _as_points(p, name, (2,)) for p, name in ((p1, "p1"), (p2, "p2"), (q1, "q1"), (q2, "q2"))
+    ]
+    shape = np.broadcast_shapes(*(p.shape[:-1] for p in pts))
+    flat = [np.broadcast_to(p, (*shape, 2)).reshape(-1, 2) for p in pts]
+    return _segments_array(*flat).reshape(shape)
 
 
-def _point_in_quad_xy(px: FloatArray, py: FloatArray, cx: FloatArray, cy: FloatArray) -> BoolArray:
-    """Implement :func:`point_in_rectangle`; ``px`` has shape ``(...)``, ``cx`` ``(..., 4)``."""
-    ex = cx[..., _NEXT] - cx
-    ey = cy[..., _NEXT] - cy
-    side = _cross(ex, ey, px[..., None] - cx, py[..., None] - cy)
-    return np.asarray(np.all(side >= 0, axis=-1) | np.all(side <= 0, axis=-1))
+@njit(cache=True)
+def _segments_array(a1, a2, b1, b2):
+    out = np.empty(a1.shape[0], dtype=np.bool_)
+    for i in range(a1.shape[0]):
+        out[i] = segment_pair_intersects(
+            a1[i, 0], a1[i, 1], a2[i, 0], a2[i, 1], b1[i, 0], b1[i, 1], b2[i, 0], b2[i, 1]
+        )
+    return out
 
 
 def point_in_rectangle(points: ArrayLike, corners: ArrayLike) -> BoolArray:
@@ -289,7 +345,18 @@ def point_in_rectangle(points: ArrayLike, corners: ArrayLike) -> BoolArray:
     """
     pts = _as_points(points, "points", (2,))
     cor = _as_points(corners, "corners", (4, 2))
-    return _point_in_quad_xy(pts[..., 0], pts[..., 1], cor[..., 0], cor[..., 1])
+    shape = np.broadcast_shapes(pts.shape[:-1], cor.shape[:-2])
+    flat_p = np.broadcast_to(pts, (*shape, 2)).reshape(-1, 2)
+    flat_c = np.broadcast_to(cor, (*shape, 4, 2)).reshape(-1, 4, 2)
+    return _points_array(flat_p, flat_c).reshape(shape)
+
+
+@njit(cache=True)
+def _points_array(p, c):
+    out = np.empty(p.shape[0], dtype=np.bool_)
+    for i in range(p.shape[0]):
+        out[i] = point_in_quad(p[i, 0], p[i, 1], c[i, :, 0].copy(), c[i, :, 1].copy())
+    return out
 
 
 def rectangles_collide(corners_a: ArrayLike, corners_b: ArrayLike) -> BoolArray:
@@ -319,83 +386,19 @@ def rectangles_collide(corners_a: ArrayLike, corners_b: ArrayLike) -> BoolArray:
     a = _as_points(corners_a, "corners_a", (4, 2))
     b = _as_points(corners_b, "corners_b", (4, 2))
     shape = np.broadcast_shapes(a.shape[:-2], b.shape[:-2])
-    n = int(np.prod(shape))
-    # Corner index first, flat batch last: (4, 2, n) views, so the loops run along the batch.
-    at = np.broadcast_to(a, (*shape, 4, 2)).reshape(n, 4, 2).transpose(1, 2, 0)
-    bt = np.broadcast_to(b, (*shape, 4, 2)).reshape(n, 4, 2).transpose(1, 2, 0)
-    return _collide_rows(at[:, 0], at[:, 1], bt[:, 0], bt[:, 1]).reshape(shape)
+    flat_a = np.broadcast_to(a, (*shape, 4, 2)).reshape(-1, 4, 2)
+    flat_b = np.broadcast_to(b, (*shape, 4, 2)).reshape(-1, 4, 2)
+    return _quads_array(flat_a, flat_b).reshape(shape)
 
 
-def _collide_rows(ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray) -> BoolArray:
-    """Implement :func:`rectangles_collide` on corner rows of shape ``(4, n)``, in chunks."""
-    n = ax.shape[1]
-    out = np.empty(n, dtype=np.bool_)
-    for start in range(0, n, _CHUNK):
-        sl = slice(start, start + _CHUNK)
-        out[sl] = _collide_chunk(
-            np.ascontiguousarray(ax[:, sl]),
-            np.ascontiguousarray(ay[:, sl]),
-            np.ascontiguousarray(bx[:, sl]),
-            np.ascontiguousarray(by[:, sl]),
+@njit(cache=True)
+def _quads_array(a, b):
+    out = np.empty(a.shape[0], dtype=np.bool_)
+    for i in range(a.shape[0]):
+        out[i] = quads_collide(
+            a[i, :, 0].copy(), a[i, :, 1].copy(), b[i, :, 0].copy(), b[i, :, 1].copy()
         )
     return out
-
-
-def _collide_chunk(ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray) -> BoolArray:
-    """Exact rectangle test on contiguous corner rows ``(4, m)``; edge pairs are ``(4, 4, m)``."""
-    # Edge i of A runs a_i -> a_{i+1} (axis 0 of the pair arrays); edge j of B along axis 1.
-    ax1, ay1, bx1, by1 = ax[_NEXT], ay[_NEXT], bx[_NEXT], by[_NEXT]
-    eax, eay, ebx, eby = ax1 - ax, ay1 - ay, bx1 - bx, by1 - by
-    # 1. Quick rejection: the closed bounding boxes of edges i and j overlap in x and in y.
-    lo_ax, hi_ax = np.minimum(ax, ax1)[:, None], np.maximum(ax, ax1)[:, None]
-    lo_ay, hi_ay = np.minimum(ay, ay1)[:, None], np.maximum(ay, ay1)[:, None]
-    lo_bx, hi_bx = np.minimum(bx, bx1)[None], np.maximum(bx, bx1)[None]
-    lo_by, hi_by = np.minimum(by, by1)[None], np.maximum(by, by1)[None]
-    hit = lo_ax <= hi_bx
-    hit &= lo_bx <= hi_ax
-    hit &= lo_ay <= hi_by
-    hit &= lo_by <= hi_ay
-    # 2. Straddle test, Eq. (7). Each cross product serves two edge pairs:
-    #    S[i, j] = (a_i - b_j) x (b_{j+1} - b_j) is d1 of pair (i, j) and d2 of pair (i - 1, j);
-    #    T[i, j] = (b_j - a_i) x (a_{i+1} - a_i) is d3 of pair (i, j) and d4 of pair (i, j - 1).
-    # The values are bitwise those that segments_intersect computes for the same two edges.
-    dx = ax[:, None] - bx[None]
-    dy = ay[:, None] - by[None]
-    S = dx * eby[None]
-    tmp = dy * ebx[None]
-    S -= tmp
-    T = np.multiply(dy, eax[:, None])
-    np.multiply(dx, eay[:, None], out=tmp)
-    T -= tmp
-    # Strictly on the same side (product > 0) rejects; a product <= 0 passes (touching counts),
-    # as in _straddles.
-    pos, neg = S > 0, S < 0
-    hit &= ~((pos & pos[_NEXT]) | (neg & neg[_NEXT]))
-    pos, neg = T > 0, T < 0
-    hit &= ~((pos & pos[:, _NEXT]) | (neg & neg[:, _NEXT]))
-    edges = hit.reshape(16, -1).any(axis=0)
-    # Containment (point in convex polygon, either orientation): corner b_0 is in A iff
-    # (a_{i+1} - a_i) x (b_0 - a_i) = -T[i, 0] has one sign for all i; a_0 in B likewise
-    # with -S[0, j].
-    t0, s0 = T[:, 0], S[0]
-    b_in_a = (t0 <= 0).all(axis=0) | (t0 >= 0).all(axis=0)
-    a_in_b = (s0 <= 0).all(axis=0) | (s0 >= 0).all(axis=0)
-    return np.asarray(edges | b_in_a | a_in_b)
-
-
-def _within(
-    dx: FloatArray, dy: FloatArray, reach: FloatArray, coords: tuple[FloatArray, ...]
-) -> BoolArray:
-    """Bounding-circle test ``dx² + dy² <= reach²`` with the relative slack; NaN gives False.
-
-    ``reach`` is widened by ``_PREFILTER_REL_SLACK`` times (``reach`` + the largest absolute
-    coordinate in ``coords``), which dominates the rounding error of the corner coordinates.
-    """
-    scale = np.abs(coords[0])
-    for c in coords[1:]:
-        np.maximum(scale, np.abs(c), out=scale)
-    reach = reach + _PREFILTER_REL_SLACK * (reach + scale)
-    return np.asarray(dx * dx + dy * dy <= reach * reach)
 
 
 def vehicles_collide(
@@ -457,32 +460,20 @@ def vehicles_collide(
     >>> vehicles_collide(10.0, 0.0, 0.0, 5.0, 1.8, [15.0, 15.01], 0.0, 0.0, 5.0, 1.8).tolist()
     [True, False]
     """
-    arrays = np.broadcast_arrays(
-        *(np.asarray(v, dtype=np.float64) for v in (xa, ya, ha, la, wa, xb, yb, hb, lb, wb))
-    )
-    shape = arrays[0].shape
-    xa_, ya_, ha_, la_, wa_, xb_, yb_, hb_, lb_, wb_ = (v.ravel() for v in arrays)
-    out = np.zeros(xa_.shape, dtype=np.bool_)
+    args = (xa, ya, ha, la, wa, xb, yb, hb, lb, wb)
+    shape = np.broadcast_shapes(*(np.shape(v) for v in args))
+    flat = [
+        np.ascontiguousarray(np.broadcast_to(np.asarray(v, dtype=np.float64), shape)).reshape(-1)
+        for v in args
+    ]
+    return _vehicles_array(*flat).reshape(shape)
 
-    # Stage 1: discs about the front-bumper centres (no trigonometry).
-    reach = np.sqrt(la_ * la_ + 0.25 * wa_ * wa_) + np.sqrt(lb_ * lb_ + 0.25 * wb_ * wb_)
-    idx = np.flatnonzero(_within(xa_ - xb_, ya_ - yb_, reach, (xa_, ya_, xb_, yb_)))
-    if idx.size == 0:
-        return out.reshape(shape)
-    xa_, ya_, ha_, la_, wa_ = xa_[idx], ya_[idx], ha_[idx], la_[idx], wa_[idx]
-    xb_, yb_, hb_, lb_, wb_ = xb_[idx], yb_[idx], hb_[idx], lb_[idx], wb_[idx]
 
-    # Stage 2: discs about the rectangle centres, radius = half-diagonal.
-    ca, sa, cb, sb = np.cos(ha_), np.sin(ha_), np.cos(hb_), np.sin(hb_)
-    cxa, cya = xa_ - 0.5 * la_ * ca, ya_ - 0.5 * la_ * sa
-    cxb, cyb = xb_ - 0.5 * lb_ * cb, yb_ - 0.5 * lb_ * sb
-    reach = 0.5 * (np.sqrt(la_ * la_ + wa_ * wa_) + np.sqrt(lb_ * lb_ + wb_ * wb_))
-    sub = np.flatnonzero(_within(cxa - cxb, cya - cyb, reach, (cxa, cya, cxb, cyb)))
-    if sub.size == 0:
-        return out.reshape(shape)
-
-    # Exact test (Eq. 7 plus containment) on the remaining pairs only.
-    rax, ray = _corner_rows(xa_[sub], ya_[sub], ca[sub], sa[sub], la_[sub], wa_[sub])
-    rbx, rby = _corner_rows(xb_[sub], yb_[sub], cb[sub], sb[sub], lb_[sub], wb_[sub])
-    out[idx[sub]] = _collide_rows(rax, ray, rbx, rby)
-    return out.reshape(shape)
+@njit(cache=True)
+def _vehicles_array(xa, ya, ha, la, wa, xb, yb, hb, lb, wb):
+    out = np.empty(xa.size, dtype=np.bool_)
+    for i in range(xa.size):
+        out[i] = vehicle_pair_collides(
+            xa[i], ya[i], ha[i], la[i], wa[i], xb[i], yb[i], hb[i], lb[i], wb[i]
+        )
+    return out

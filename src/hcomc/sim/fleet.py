@@ -14,8 +14,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.models.cav import acc_acceleration, cah_acceleration
-from hcomc.models.idm import idm_acceleration, iidm_acceleration
+from hcomc.models.following import follow_acceleration
 from hcomc.road import Kind
 
 
@@ -79,18 +78,8 @@ def follow(
     s : bumper-to-bumper gap to the leader [m], ``inf`` without a leader.
     v, vl : own and leader speed [m/s].
     al : leader acceleration [m/s^2] (used by the CAH of CAVs only).
-
-    Without a leader the ACC reduces to the free-road IDM (Kesting 2010 defines the CAH
-    for a leader only).
     """
     v0, T, s0, a, b, delta, c = fleet.matrix[:, ids]
-    dv = np.where(np.isfinite(s), v - vl, 0.0)
-    acc = idm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
-    if fleet.any_iidm:
-        improved = iidm_acceleration(s, v, dv, v0=v0, T=T, a=a, b=b, s0=s0, delta=delta)
-        acc = np.where(fleet.iidm[ids], improved, acc)
-    cooperative = (c > 0) & np.isfinite(s)
-    if cooperative.any():
-        cah = cah_acceleration(np.where(cooperative, s, 1.0), v, vl, al, a=a)
-        acc = np.where(cooperative, acc_acceleration(acc, cah, b=b, c=c), acc)
-    return acc
+    return follow_acceleration(
+        s, v, vl, al, v0=v0, T=T, s0=s0, a=a, b=b, delta=delta, c=c, iidm=fleet.iidm[ids]
+    )
