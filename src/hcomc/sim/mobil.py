@@ -21,15 +21,20 @@ targets the same gap.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
+from hcomc.models.following import follow_accel
 from hcomc.road import Lane
-from hcomc.sim.fleet import Fleet, follow
-from hcomc.sim.neighbours import LaneIndex
+from hcomc.sim.fleet import Fleet
+from hcomc.sim.neighbours import LaneIndex, lookup_one
+
+_RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,16 +46,98 @@ class Snapshot:
     a: FloatArray
 
 
-def _gap_accel(
-    fleet: Fleet, snap: Snapshot, ids: IntArray, leader: IntArray
-) -> tuple[FloatArray, FloatArray]:
-    """Gap of ``ids`` to ``leader`` (inf for -1) and their model acceleration behind it."""
-    has = leader >= 0
-    lead = np.where(has, leader, 0)
-    s = np.where(has, snap.x[lead] - fleet.length[lead] - snap.x[ids], np.inf)
-    vl = np.where(has, snap.v[lead], snap.v[ids])
-    al = np.where(has, snap.a[lead], 0.0)
-    return s, follow(fleet, ids, s, snap.v[ids], vl, al)
+@njit(cache=True)
+def model_accel(
+    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
+    x: np.ndarray, v: np.ndarray, a: np.ndarray, i: int, leader: int,
+) -> tuple[float, float]:  # fmt: skip
+    """Gap of vehicle i to ``leader`` (inf for -1) and its model acceleration behind it
+    (exact perception: the decision, not the control)."""
+    if leader >= 0:
+        s, vl, al = x[leader] - length[leader] - x[i], v[leader], a[leader]
+    else:
+        s, vl, al = math.inf, v[i], 0.0
+    m = matrix[:, i]
+    return s, follow_accel(s, v[i], vl, al, m[0], m[1], m[2], m[3], m[4], m[5], m[6], iidm[i])
+
+
+@njit(cache=True)
+def _situation(matrix, iidm, length, x, v, a, follower, leader):
+    """(gap, acceleration) of ``follower`` behind ``leader``; (inf, 0) without a follower."""
+    if follower < 0:
+        return math.inf, 0.0
+    return model_accel(matrix, iidm, length, x, v, a, follower, leader)
+
+
+@njit(cache=True)
+def mobil_decide(
+    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
+    x: np.ndarray, v: np.ndarray, a: np.ndarray,
+    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray,
+    cand: np.ndarray, lane: np.ndarray, leader: np.ndarray, follower: np.ndarray,
+    target: np.ndarray, force: np.ndarray, params: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Accepted changes among candidates (see the module docstring): ``(vehicles, targets)``.
+
+    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
+    ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
+    """
+    min_gap, b_safe, politeness, threshold, bias = (
+        params[0],
+        params[1],
+        params[2],
+        params[3],
+        params[4],
+    )
+    n = cand.size
+    ok = np.zeros(n, dtype=np.bool_)
+    new_lead = np.empty(n, dtype=np.int64)
+    new_fol = np.empty(n, dtype=np.int64)
+    mandatory = np.empty(n, dtype=np.bool_)
+    for k in range(n):
+        c, tgt = cand[k], target[k]
+        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, tgt, x[c])
+        s_o, acc0 = _situation(matrix, iidm, length, x, v, a, c, leader[k])
+        s_c, acc1 = _situation(matrix, iidm, length, x, v, a, c, new_lead[k])
+        _, acc2 = _situation(matrix, iidm, length, x, v, a, new_fol[k], new_lead[k])
+        s_n, acc3 = _situation(matrix, iidm, length, x, v, a, new_fol[k], c)
+        _, acc4 = _situation(matrix, iidm, length, x, v, a, follower[k], c)
+        _, acc5 = _situation(matrix, iidm, length, x, v, a, follower[k], leader[k])
+        standing = leader[k] >= 0 and v[leader[k]] < 1.0
+        clear = not standing or s_o >= 3.0 * length[c] + min_gap
+        safe = clear and s_c >= min_gap and s_n >= min_gap and acc3 >= -b_safe and acc1 >= -b_safe
+        gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
+        side = bias if tgt == _MAIN_2 else -bias
+        mandatory[k] = lane[k] == _RAMP or force[k]
+        ok[k] = safe and (mandatory[k] or gain > threshold + side)
+    sel = np.flatnonzero(ok)
+    return _resolve(cand[sel], target[sel], new_lead[sel], new_fol[sel], mandatory[sel], x)
+
+
+@njit(cache=True)
+def _resolve(ids, target, new_lead, new_fol, mandatory, x):
+    """Drop changes that conflict with a higher-priority change of the same round."""
+    if ids.size <= 1:
+        return ids, target
+    # priority: ramp vehicles first, then further downstream first
+    priority = np.full(x.size, -np.inf)
+    for k in range(ids.size):
+        priority[ids[k]] = mandatory[k] * 1e9 + x[ids[k]]
+    keep = np.ones(ids.size, dtype=np.bool_)
+    for k in range(ids.size):
+        mine = priority[ids[k]]
+        lead = new_lead[k] if new_lead[k] >= 0 else ids[k]
+        fol = new_fol[k] if new_fol[k] >= 0 else ids[k]
+        beaten = priority[lead] > mine or priority[fol] > mine
+        # two changes into the same gap (same target lane, same new follower): keep the best
+        for m in range(ids.size):
+            if m != k and target[m] == target[k] and new_fol[m] == new_fol[k]:
+                other = priority[ids[m]]
+                if other > mine or (other == mine and m < k):
+                    beaten = True
+        keep[k] = not beaten
+    sel = np.flatnonzero(keep)
+    return ids[sel], target[sel]
 
 
 def decide(
@@ -71,63 +158,28 @@ def decide(
     ``target`` defaults to the one possible target of each lane; ``force`` marks changes
     commanded by a merge plan, which are checked for safety only (like the ramp's).
     """
+    cand = np.ascontiguousarray(cand, dtype=np.int64).reshape(-1)
     if cand.size == 0:
         return cand, cand
+    lane = np.ascontiguousarray(lane, dtype=np.int64)
     if target is None:
         target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
-    new_lead, new_fol = index.lookup(target, snap.x[cand])
-    # all situations in one vectorised call, rows: candidate before/after, new follower
-    # before/after, old follower before/after (-1 followers are masked afterwards)
-    followers = np.concatenate([cand, cand, new_fol, new_fol, follower, follower])
-    leaders = np.concatenate([leader, new_lead, new_lead, cand, cand, leader])
-    present = followers >= 0
-    s, acc = _gap_accel(fleet, snap, np.where(present, followers, 0), leaders)
-    s = np.where(present, s, np.inf).reshape(6, cand.size)
-    acc = np.where(present, acc, 0.0).reshape(6, cand.size)
-    s_o, s_c, s_n = s[0], s[1], s[3]
-    a_c_new, a_n_new = acc[1], acc[3]
-    gain_c, gain_n, gain_o = acc[1] - acc[0], acc[3] - acc[2], acc[5] - acc[4]
-    standing = (leader >= 0) & (snap.v[np.where(leader >= 0, leader, 0)] < 1.0)
-    clear = ~standing | (s_o >= 3.0 * fleet.length[cand] + params.min_gap)
-    safe = (
-        clear
-        & (s_c >= params.min_gap)
-        & (s_n >= params.min_gap)
-        & (a_n_new >= -params.safe_decel)
-        & (a_c_new >= -params.safe_decel)
-    )
-    gain = gain_c + params.politeness * (gain_n + gain_o)
-    bias = np.where(target == Lane.MAIN_2, params.keep_right_bias, -params.keep_right_bias)
-    mandatory = lane == Lane.RAMP
-    if force is not None:
-        mandatory = mandatory | force
-    ok = safe & (mandatory | (gain > params.threshold + bias))
-    return _resolve(cand[ok], target[ok], new_lead[ok], new_fol[ok], mandatory[ok], snap.x)
+    force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
+    return mobil_decide(
+        fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a,
+        index.key, index.lane, index.vehicle, cand, lane,
+        _ints(leader), _ints(follower),
+        _ints(target), force, lane_change_params(params),
+    )  # fmt: skip
 
 
-def _resolve(
-    ids: IntArray,
-    target: IntArray,
-    new_lead: IntArray,
-    new_fol: IntArray,
-    mandatory: BoolArray,
-    x: FloatArray,
-) -> tuple[IntArray, IntArray]:
-    """Drop changes that conflict with a higher-priority change of the same round."""
-    if ids.size <= 1:
-        return ids, target
-    # priority: ramp vehicles first, then further downstream first
-    priority = np.empty(x.size)
-    priority.fill(-np.inf)
-    priority[ids] = mandatory * 1e9 + x[ids]
-    mine = priority[ids]
-    beaten = (priority[np.where(new_lead >= 0, new_lead, ids)] > mine) | (
-        priority[np.where(new_fol >= 0, new_fol, ids)] > mine
-    )
-    # two changes into the same gap (same target lane and same new follower): keep the best
-    gap_key = target * (x.size + 1) + (new_fol + 1)
-    order = np.lexsort((-mine, gap_key))
-    first = np.ones(ids.size, dtype=bool)
-    first[order[1:]] = gap_key[order[1:]] != gap_key[order[:-1]]
-    keep = ~beaten & first
-    return ids[keep], target[keep]
+def lane_change_params(params: LaneChangeParams) -> FloatArray:
+    """The MOBIL parameters as the kernel reads them."""
+    return np.array(
+        [params.min_gap, params.safe_decel, params.politeness, params.threshold,
+         params.keep_right_bias], dtype=np.float64,
+    )  # fmt: skip
+
+
+def _ints(a: IntArray) -> IntArray:
+    return np.ascontiguousarray(a, dtype=np.int64).reshape(-1)

@@ -26,10 +26,69 @@ exist the current values are used.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import HDVParams
+
+
+@njit(cache=True)
+def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> float:
+    """Column ``col`` of the ring buffer ``hist`` at ``t - tau`` (linear interpolation)."""
+    size = hist.shape[0]
+    lag = tau / dt
+    j = math.floor(lag + 1e-9)
+    r = max(lag - j, 0.0)
+    now = hist[(step - j) % size, col]
+    if r == 0.0:
+        return now
+    return (1.0 - r) * now + r * hist[(step - j - 1) % size, col]
+
+
+@njit(cache=True)
+def perceive_one(
+    x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray,
+    step: int, i: int, leader: int, leader_length: float, dt: float, taus: np.ndarray,
+    gap_error: float, ttc_error: float, errors: bool,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Delayed, noisy ``(s_est, v, v_leader_est)`` of HDV i behind ``leader`` (-1: none; the
+    gap is then infinite). ``taus`` = reaction times on gap, own speed and approach rate [s]."""
+    has = leader >= 0
+    lead = leader if has else i
+    x_i = delayed(x_hist, step, i, taus[0], dt)
+    x_l = delayed(x_hist, step, lead, taus[0], dt)
+    s = x_l - leader_length - x_i if has else math.inf
+    v = delayed(v_hist, step, i, taus[1], dt)
+    dv = delayed(v_hist, step, i, taus[2], dt) - delayed(v_hist, step, lead, taus[2], dt)
+    if errors:
+        s_true = s if has else 0.0
+        dv = dv + s_true * ttc_error * w_ttc[i]
+        s = s * math.exp(gap_error * w_gap[i])
+    return s, v, v - (dv if has else 0.0)
+
+
+@njit(cache=True)
+def advance_errors_of(
+    w_gap: np.ndarray, w_ttc: np.ndarray, ids: np.ndarray, xi: np.ndarray, decay: float,
+    kick: float,
+) -> None:  # fmt: skip
+    """One OU step of both error processes for vehicles ``ids`` with innovations ``xi`` (2, N)."""
+    for i in ids:
+        w_gap[i] = decay * w_gap[i] + kick * xi[0, i]
+        w_ttc[i] = decay * w_ttc[i] + kick * xi[1, i]
+
+
+@njit(cache=True)
+def _perceive_many(x_hist, v_hist, w_gap, w_ttc, step, ids, leader, length, dt, taus, ge, te, err):
+    s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
+    for k in range(ids.size):
+        s[k], v[k], vl[k] = perceive_one(
+            x_hist, v_hist, w_gap, w_ttc, step, ids[k], leader[k], length[k], dt, taus, ge, te, err
+        )
+    return s, v, vl
 
 
 class Perception:
@@ -78,17 +137,15 @@ class Perception:
         if not self.errors:
             return
         xi = rng.standard_normal((2, self.is_hdv.size))
-        self.w_gap[ids] = self._decay * self.w_gap[ids] + self._kick * xi[0, ids]
-        self.w_ttc[ids] = self._decay * self.w_ttc[ids] + self._kick * xi[1, ids]
+        advance_errors_of(self.w_gap, self.w_ttc, _ints(ids), xi, self._decay, self._kick)
 
-    def _delayed(self, hist: FloatArray, step: int, cols: IntArray, tau: float) -> FloatArray:
-        lag = tau / self.dt
-        j = int(np.floor(lag + 1e-9))
-        r = max(lag - j, 0.0)
-        now = hist[(step - j) % self.size, cols]
-        if r == 0.0:
-            return now
-        return (1.0 - r) * now + r * hist[(step - j - 1) % self.size, cols]
+    @property
+    def taus(self) -> FloatArray:
+        """Reaction times on gap, own speed and approach rate [s]."""
+        p = self.params
+        return np.array(
+            [p.reaction_time_gap, p.reaction_time_speed, p.reaction_time_approach], dtype=float
+        )
 
     def perceive(
         self, step: int, ids: IntArray, leader: IntArray, leader_length: FloatArray
@@ -98,17 +155,12 @@ class Perception:
         ``leader`` is -1 where there is none: the gap is then infinite.
         """
         p = self.params
-        has = leader >= 0
-        lead = np.where(has, leader, ids)
-        x_i = self._delayed(self.x_hist, step, ids, p.reaction_time_gap)
-        x_l = self._delayed(self.x_hist, step, lead, p.reaction_time_gap)
-        s = np.where(has, x_l - leader_length - x_i, np.inf)
-        v = self._delayed(self.v_hist, step, ids, p.reaction_time_speed)
-        dv = self._delayed(self.v_hist, step, ids, p.reaction_time_approach) - self._delayed(
-            self.v_hist, step, lead, p.reaction_time_approach
-        )
-        if self.errors:
-            s_true = np.where(has, s, 0.0)
-            dv = dv + s_true * p.inverse_ttc_error * self.w_ttc[ids]
-            s = s * np.exp(p.gap_error * self.w_gap[ids])
-        return s, v, v - np.where(has, dv, 0.0)
+        return _perceive_many(
+            self.x_hist, self.v_hist, self.w_gap, self.w_ttc, step, _ints(ids), _ints(leader),
+            np.ascontiguousarray(leader_length, dtype=np.float64), self.dt, self.taus,
+            p.gap_error, p.inverse_ttc_error, self.errors,
+        )  # fmt: skip
+
+
+def _ints(a: IntArray) -> IntArray:
+    return np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
