@@ -26,7 +26,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -123,6 +123,21 @@ class TrafficView:
         return next((p for p in self.plans if p.group.vr == vr), None)
 
 
+@dataclass(frozen=True, slots=True)
+class PlanDetails:
+    """Controller-specific extras of a plan, for reporting only (the engine never reads them).
+
+    This base carries none; each controller that reports more subclasses it with typed fields
+    (:class:`hcomc.control.hcomc.controller.HCOMCDetails`,
+    :class:`hcomc.control.fifo.FIFODetails`, :class:`hcomc.control.merge_game.GameDetails`).
+    """
+
+    @property
+    def eq19_branch(self) -> str:
+        """The Eq. 19 case that picked the plan; "" when the controller does not apply Eq. 19."""
+        return ""
+
+
 @dataclass(frozen=True)
 class MergePlan:
     """A controller's decision for one VR (all times absolute simulation time [s]).
@@ -143,7 +158,8 @@ class MergePlan:
     reason : short human-readable explanation.
     objectives : objective values of the chosen plan (safety, fuel, efficiency).
     decision_ms : wall time of the decision [ms].
-    details : controller-specific extras (Pareto set, game outcome, …) for reporting.
+    details : controller-specific extras (Pareto set, game outcome, …) for reporting: a
+        :class:`PlanDetails` (subclass).
     sequence : merge sequence, "ahead" (VR in front of the vehicle that was VMC when the
         key vehicles were identified) or "behind" (VR between that VMC and VMR). ``group`` is
         the group the plan executes: for "behind" it is :func:`behind_group`, in which the
@@ -163,7 +179,7 @@ class MergePlan:
     reason: str = ""
     objectives: dict[str, float] = field(default_factory=dict)
     decision_ms: float = 0.0
-    details: dict[str, Any] = field(default_factory=dict)
+    details: PlanDetails = field(default_factory=PlanDetails)
     sequence: str = "ahead"
 
 

@@ -109,7 +109,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    PlanDetails,
+    TrafficView,
+    elapsed_ms,
+)
 from hcomc.control.fifo import (
     PredictingBaseline,
     longitudinal_plan,
@@ -135,6 +142,7 @@ __all__ = [
     "NOT_YIELD",
     "YIELD",
     "GameController",
+    "GameDetails",
     "GameOutcome",
     "kita_mixed",
     "player_cost",
@@ -178,6 +186,37 @@ class GameOutcome:
     pure: tuple[tuple[int, int], ...] = ()
     p: float = float("nan")
     q: float = float("nan")
+
+
+PredictionPair = tuple[Prediction, Prediction]
+
+
+@dataclass(frozen=True, slots=True)
+class GameDetails(PlanDetails):
+    """What a played merge game reports besides its plan (indices: [row, column], rows
+    AHEAD/BEHIND, columns YIELD/NOT_YIELD).
+
+    Attributes
+    ----------
+    J_vr, J_lag : (2, 2) costs of VR and of the lag vehicle (their payoffs are the negatives).
+    terms : cost terms per cell ("ahead/yield", ...) and player ("VR", "lag").
+    u_safe : (2, 2) worst Eq. 15 critical acceleration per cell [m/s^2] (inf: VR not merged).
+    outcome : the solution played.
+    cell : names of the played actions (row, column).
+    groups : the usual and the relabelled key group ("ahead", "behind").
+    predictions : the prediction of each cell, ``predictions[row][col]``.
+    feasible : whether the played cell's prediction satisfies every constraint.
+    """
+
+    J_vr: FloatArray
+    J_lag: FloatArray
+    terms: dict[str, dict[str, dict[str, float]]]
+    u_safe: FloatArray
+    outcome: GameOutcome
+    cell: tuple[str, str]
+    groups: tuple[MergeGroup, MergeGroup]
+    predictions: tuple[PredictionPair, PredictionPair]
+    feasible: bool
 
 
 def _matrix(name: str, value: ArrayLike) -> FloatArray:
@@ -332,11 +371,9 @@ class GameController(PredictingBaseline):
 
     Notes
     -----
-    See the module docstring for players, payoffs, solution and every assumption. ``details``
-    holds ``J_vr`` / ``J_lag`` (2x2 costs), ``A`` / ``B`` (payoffs = -costs), ``terms`` (cost
-    terms per cell and player), ``u_safe`` (2x2), ``outcome`` (:class:`GameOutcome`), ``cell``
-    (names of the played actions), ``groups`` (usual and relabelled key groups),
-    ``predictions`` (2x2 nested list of :class:`~hcomc.control.hcomc.problem.Prediction`).
+    See the module docstring for players, payoffs, solution and every assumption. A played
+    game's plan carries :class:`GameDetails`; without a VMC no game is played and the plan
+    carries none.
     """
 
     name = "game"
@@ -355,7 +392,6 @@ class GameController(PredictingBaseline):
                 vr_duration=vr_duration,
                 reason="game: no lane-1 vehicle behind VR, no game to play",
                 decision_ms=elapsed_ms(start),
-                details={"outcome": None, "groups": (group,)},
             )
         h_max = float(view.config.control.horizon_max)
         threshold = float(view.config.control.safety_threshold)
@@ -385,11 +421,17 @@ class GameController(PredictingBaseline):
         exec_group = groups[outcome.row]
         pred = preds[outcome.row][outcome.col]
         cell = (ROW_NAMES[outcome.row], COL_NAMES[outcome.col])
-        details: dict[str, object] = {
-            "J_vr": J_vr, "J_lag": J_lag, "A": -J_vr, "B": -J_lag, "terms": terms,
-            "u_safe": u_safe, "outcome": outcome, "cell": cell, "groups": groups,
-            "predictions": preds, "feasible": bool((pred.G[0] <= 0.0).all()),
-        }  # fmt: skip
+        details = GameDetails(
+            J_vr=J_vr,
+            J_lag=J_lag,
+            terms=terms,
+            u_safe=u_safe,
+            outcome=outcome,
+            cell=cell,
+            groups=groups,
+            predictions=((preds[0][0], preds[0][1]), (preds[1][0], preds[1][1])),
+            feasible=bool((pred.G[0] <= 0.0).all()),
+        )
         what = f"game ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
         return longitudinal_plan(
             view,
