@@ -148,6 +148,23 @@ def _view(vmc_x: float, vmc_v: float, kinds: list[int] | None = None) -> Traffic
                        changing=np.zeros(7, dtype=bool), fleet=fleet, config=config)  # fmt: skip
 
 
+def test_a_changing_vehicle_is_a_key_vehicle_of_one_lane_at_a_time():
+    """Vehicle 5 changes from lane 2 to lane 1 between VR's projection (400 m) and VMC (330 m):
+    before the lateral midpoint it is VNF (lane 2), after it VMC (lane 1), never both."""
+    view = _view(vmc_x=330.0, vmc_v=30.0)
+    changing = np.zeros(7, dtype=bool)
+    changing[5] = True
+    before = replace(view, changing=changing)
+    group = find_key_vehicles(before, 0)
+    assert group == find_key_vehicles(view, 0)
+    assert (group.vmc, group.vnf, group.vnr) == (2, 5, 6)
+    lane = view.lane.copy()
+    lane[5] = Lane.MAIN_1
+    after = find_key_vehicles(replace(before, lane=lane), 0)
+    assert (after.vmf, after.vmc, after.vmr) == (1, 5, 2)
+    assert 5 not in (after.vnf, after.vnr)
+
+
 def test_merge_position_is_fixed_and_ends_on_the_acceleration_lane():
     view = _view(330.0, 30.0)
     assert merge_position(view, 0) == (710.0, view.config.cav.lane_change_duration)

@@ -17,8 +17,11 @@ mapping at the same x, Uno et al. 1999):
 * VMR — the lane-1 vehicle behind VMC;
 * VNF, VNR — the lane-2 vehicles directly ahead of and behind VMC.
 
-A missing vehicle is -1. Without VMC there is no one to cooperate (VR merges by gap
-acceptance); without VMF or VNF the road ahead is free (planners use a phantom far ahead).
+A vehicle belongs to the lane its ``view.lane`` entry gives; a vehicle in a lane change
+switches lane at the lateral midpoint of its change, so it is a key vehicle of one lane at a
+time (``view.changing`` is not used here). A missing vehicle is -1. Without VMC there is no one
+to cooperate (VR merges by gap acceptance); without VMF or VNF the road ahead is free (planners
+use a phantom far ahead).
 """
 
 from __future__ import annotations
@@ -79,7 +82,8 @@ class TrafficView:
     changing : (N,) vehicle is in a lane-change manoeuvre: between the start of its change
         and its arrival on the target lane's centre line (the engine: target lane differs
         from origin lane; SUMO co-simulation: off its origin lane or a change in progress).
-        Its ``lane`` switches to the target at the lateral midpoint.
+        Its ``lane`` switches to the target at the lateral midpoint. Information for
+        controllers; the key-vehicle rules go by ``lane`` alone.
     fleet : per-vehicle constants; config : the scenario.
     plans : the plans being executed.
     """
@@ -201,7 +205,8 @@ class MergeController(Protocol):
 def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
     """Nearest vehicle ahead (x' > x) and behind (x' <= x) in ``lane``, -1 if none.
 
-    A vehicle changing into or out of ``lane`` counts as in it (it occupies both lanes).
+    "In ``lane``" is ``view.lane == lane``: a changing vehicle counts in its origin lane up to
+    the lateral midpoint of its change and in its target lane after it, never in both.
     """
     in_lane = view.active & (view.lane == lane)
     in_lane[exclude] = False
