@@ -113,11 +113,13 @@ def test_closed_loop_is_safe_longitudinal_and_deterministic_per_request(controll
             pairs = set(collisions["vehicle"].tolist()) | set(collisions["other"].tolist())
             assert not keys & pairs, f"collision involving key vehicles, seed {seed}"
             assert group.vr in merged or group.vr in waited
-            # same request + same rng => same plan; the controller writes nothing
-            before = view.x.copy(), view.v.copy(), view.lane.copy()
+            # same request + same rng => same plan; the controller writes nothing: the view
+            # is read-only and the simulation state is untouched
+            assert not any(a.flags.writeable for a in (view.x, view.v, view.lane))
+            state = sim.x.copy(), sim.v.copy(), sim.lane.copy()
             again = [sim.controller.plan(view, group, np.random.default_rng(11)) for _ in "ab"]
             _same_plan(*again)
-            for arr, old in zip((view.x, view.v, view.lane), before, strict=True):
+            for arr, old in zip((sim.x, sim.v, sim.lane), state, strict=True):
                 np.testing.assert_array_equal(arr, old)
 
 

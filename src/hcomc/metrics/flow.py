@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc.metrics.window import road_of
+from hcomc.road import Kind, Lane
 from hcomc.sim.log import SimulationLog
 
 DOWNSTREAM = 50.0  # [m] reference section beyond the acceleration-lane end
@@ -42,11 +43,11 @@ def ramp_delay(log: SimulationLog) -> float:
     cfg = log.meta["config"]
     x_ref = road_of(log).accel_lane_end + DOWNSTREAM
     arrive = _crossing_times(log, x_ref)
-    ramp = ((log.lane == 0) & log.active).any(axis=0)
+    ramp = ((log.lane == Lane.RAMP) & log.active).any(axis=0)
     first = np.where(log.active.any(axis=0), log.active.argmax(axis=0), 0)
     entered = log.t[first]
     x_start = log.x[first, np.arange(log.x.shape[1])].astype(np.float64)
-    v0 = np.where(log.kind == 1, cfg["cav"]["desired_speed"], cfg["hdv"]["desired_speed"])
+    v0 = np.where(log.kind == Kind.CAV, cfg["cav"]["desired_speed"], cfg["hdv"]["desired_speed"])
     ok = ramp & np.isfinite(arrive)
     delay = (arrive - entered) - (x_ref - x_start) / v0
     return float(delay[ok].mean()) if ok.any() else float("nan")

@@ -14,6 +14,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from hcomc.metrics import reference_speed, road_of, speed_field
+from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
 from hcomc.viz.common import (
     LANE_NAMES,
@@ -152,7 +153,7 @@ def contour_figure(
                     )
             if merge:
                 shade_zones(ax, road, orientation="x", band=0.035, label=row == col == 0)
-            if lane == 1 and math.isfinite(t_merge):
+            if lane == Lane.MAIN_1 and math.isfinite(t_merge):
                 ax.plot([x_merge], [t_merge], linestyle="none", zorder=5, **_MERGE)
             ax.set_title(f"{label} · {LANE_NAMES[lane]}")
             ax.text(
