@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.road import KEY_ROLES, Lane
+from hcomc.road import KEY_ROLES, Kind, Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -121,6 +121,10 @@ class TrafficView:
             active=frozen("active"), changing=frozen("changing"), fleet=fleet, config=config,
             plans=plans,
         )  # fmt: skip
+
+    def is_cav(self, i: int) -> bool:
+        """Whether vehicle ``i`` exists (``i >= 0``; -1 is a missing key vehicle) and is a CAV."""
+        return i >= 0 and bool(self.fleet.kind[i] == Kind.CAV)
 
     def live_plan(self, vr: int) -> MergePlan | None:
         """The plan being executed for ramp vehicle ``vr``, if any."""

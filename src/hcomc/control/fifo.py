@@ -91,7 +91,6 @@ from hcomc.control.hcomc.problem import (
     Prediction,
 )
 from hcomc.control.hcomc.rollout import VMC, VR, warm_up
-from hcomc.road import Kind
 
 __all__ = [
     "FIFO_HEADWAY",
@@ -219,10 +218,6 @@ def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
     return bool(pred.G[row, _G_VIRTUAL] <= 0.0)
 
 
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
-
-
 def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
     """FIFO arrival times respecting a minimum headway: ``t_k = max(t_k, t_{k-1} + h)``."""
     out: dict[str, float] = {}
@@ -333,7 +328,7 @@ class FIFOController(PredictingBaseline):
             start=start,
             details=details,
             sequence=seq,
-            commands=_is_cav(view, exec_group.vmc),
+            commands=view.is_cav(exec_group.vmc),
         )
 
 
@@ -382,7 +377,7 @@ def longitudinal_plan(
         merge_x=merge_x,
         vr_duration=vr_duration,
         horizon=horizon,
-        vv0=np.array(pred.vv0[0], dtype=np.float64) if _is_cav(view, group.vr) else None,
+        vv0=np.array(pred.vv0[0], dtype=np.float64) if view.is_cav(group.vr) else None,
         vv1=np.array(pred.vv1[0], dtype=np.float64) if commands else None,
         reason=reason if commands else f"{reason}; no vehicle commanded",
         objectives=predicted_objectives(pred),

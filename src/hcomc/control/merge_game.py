@@ -129,9 +129,8 @@ from hcomc.control.fifo import (
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.controller import sequence_groups
 from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import C_A_MERG, P_A, P_V0, VMC, VR
+from hcomc.control.hcomc.rollout import P_A, P_V0, VMC, VR
 from hcomc.control.lane_change_game import INFEASIBLE_SAFETY_COST
-from hcomc.road import Kind
 
 __all__ = [
     "AHEAD",
@@ -353,13 +352,9 @@ def safety_term(
         or g[_G["not_merged"]] > 0.0
         or not np.isfinite(u_safe)
         or not virtual_vehicle_feasible(pred, row)
-        or a_min < -float(problem.consts[C_A_MERG])
+        or a_min < -problem.safety.emergency_decel
     )
     return INFEASIBLE_SAFETY if infeasible else float(min(1.0, u_safe / threshold))
-
-
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
 
 
 class GameController(PredictingBaseline):
@@ -404,7 +399,7 @@ class GameController(PredictingBaseline):
         preds: list[list[Prediction]] = [[first, first], [first, first]]
         J_vr, J_lag, u_safe = np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((2, 2))
         terms: dict[str, dict[str, dict[str, float]]] = {}
-        w_vr = CAV_WEIGHTS if _is_cav(view, vr) else NORMAL_WEIGHTS
+        w_vr = CAV_WEIGHTS if view.is_cav(vr) else NORMAL_WEIGHTS
         for i in (AHEAD, BEHIND):
             for j in (YIELD, NOT_YIELD):
                 if not (i == AHEAD and j == YIELD):
@@ -416,7 +411,7 @@ class GameController(PredictingBaseline):
                 J_vr[i, j], t_vr = player_cost(pred, problem, VR, w_vr, j_s)
                 J_lag[i, j], t_lag = player_cost(pred, problem, VMC, NORMAL_WEIGHTS, j_s)
                 terms[f"{ROW_NAMES[i]}/{COL_NAMES[j]}"] = {"VR": t_vr, "lag": t_lag}
-        cooperative = _is_cav(view, group.vmc)
+        cooperative = view.is_cav(group.vmc)
         outcome = solve_merge_game(J_vr, J_lag, cooperative=cooperative, rng=rng)
         exec_group = groups[outcome.row]
         pred = preds[outcome.row][outcome.col]
@@ -444,5 +439,5 @@ class GameController(PredictingBaseline):
             start=start,
             details=details,
             sequence=outcome.row,
-            commands=outcome.col == YIELD and _is_cav(view, exec_group.vmc),
+            commands=outcome.col == YIELD and view.is_cav(exec_group.vmc),
         )

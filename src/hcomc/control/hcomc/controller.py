@@ -158,10 +158,6 @@ def merge_problem(
     return MergeProblem((states[0], states[1]), view.config, lateral_allowed)
 
 
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
-
-
 class HCOMCController:
     """The HCOMC merge controller with a pluggable optimiser."""
 
@@ -175,10 +171,10 @@ class HCOMCController:
 
     def lateral_game(self, view: TrafficView, group: MergeGroup) -> LaneChangeDecision | None:
         """Section III-B game: may the cooperating vehicle (SV) move to lane 2 before VNR?"""
-        if not _is_cav(view, group.vmc):
+        if not view.is_cav(group.vmc):
             return None
         cfg = view.config
-        fv_cav = _is_cav(view, group.vnr)
+        fv_cav = view.is_cav(group.vnr)
         sv = game_vehicle(view.x, view.v, view.fleet, group.vmc)
         assert sv is not None  # a CAV is present
         return play_lane_change_game(
@@ -237,7 +233,7 @@ class HCOMCController:
         lateral = bool(x[3] >= 0.5)
         mode = (
             Mode.NONE
-            if not _is_cav(view, exec_group.vmc)
+            if not view.is_cav(exec_group.vmc)
             else Mode.LATERAL
             if lateral
             else Mode.LONGITUDINAL
@@ -256,10 +252,10 @@ class HCOMCController:
             merge_x=float(x[0]),
             vr_duration=float(x[1]),
             horizon=float(x[2]),
-            vv0=chosen.vv0[0].copy() if _is_cav(view, group.vr) else None,
+            vv0=chosen.vv0[0].copy() if view.is_cav(group.vr) else None,
             vv1=chosen.vv1[0].copy() if mode == Mode.LONGITUDINAL else None,
             vv2=chosen.vv2[0].copy()
-            if mode == Mode.LATERAL and _is_cav(view, exec_group.vnr)
+            if mode == Mode.LATERAL and view.is_cav(exec_group.vnr)
             else None,
             reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}",
             objectives=dict(zip(OBJECTIVES, map(float, result.F[k]), strict=True)),
