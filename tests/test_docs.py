@@ -100,12 +100,29 @@ CODE_FORBIDDEN = re.compile(
 )
 
 
+CODE = [
+    *(
+        path
+        for tree in ("src", "tests", "benchmarks", "examples")
+        for path in (ROOT / tree).rglob("*.py")
+    ),
+    *(ROOT / "src" / "hcomc" / "configs").rglob("*.toml"),  # presets shipped with the package
+    *(ROOT / "configs").rglob("*.toml"),  # example sweeps
+]
+
+
+def test_code_scan_covers_the_config_presets():
+    names = {path.relative_to(ROOT).as_posix() for path in CODE}
+    assert "src/hcomc/configs/conditions/C1.toml" in names
+    assert "configs/sweeps/example.toml" in names
+
+
 def test_code_cites_no_material_users_do_not_have():
-    """Docstrings and comments cite the paper and docs/, never internal design notes."""
+    """Docstrings, comments and the TOML presets cite the paper and docs/, never internal
+    design notes."""
     hits = [
         f"{path.relative_to(ROOT)}:{i}"
-        for tree in ("src", "tests", "benchmarks", "examples")
-        for path in sorted((ROOT / tree).rglob("*.py"))
+        for path in sorted(CODE)
         if path.name != "test_docs.py"
         for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
         if CODE_FORBIDDEN.search(line)

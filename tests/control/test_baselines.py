@@ -18,7 +18,7 @@ from hcomc.control.base import (
     behind_group,
     find_key_vehicles,
 )
-from hcomc.control.fifo import FIFOController, merge_position, with_cooperation
+from hcomc.control.fifo import FIFOController, FIFODetails, merge_position, with_cooperation
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.rollout import VMC, VR
 from hcomc.control.merge_game import (
@@ -27,6 +27,7 @@ from hcomc.control.merge_game import (
     NOT_YIELD,
     YIELD,
     GameController,
+    GameDetails,
     kita_mixed,
     pure_nash,
     solve_merge_game,
@@ -66,10 +67,14 @@ def _same_plan(a: MergePlan, b: MergePlan) -> None:
     assert a.vv2 is None
     assert b.vv2 is None
     assert a.objectives == b.objectives
-    for key in ("arrival", "sequence", "slot", "yielding", "cell", "J_vr", "J_lag"):
-        if key in a.details:
-            np.testing.assert_array_equal(np.asarray(a.details[key], dtype=object),
-                                          np.asarray(b.details[key], dtype=object))  # fmt: skip
+    assert type(a.details) is type(b.details)
+    if isinstance(a.details, FIFODetails) and isinstance(b.details, FIFODetails):
+        assert (a.details.arrival, a.details.order, a.details.yielding) == (
+            b.details.arrival, b.details.order, b.details.yielding)  # fmt: skip
+    if isinstance(a.details, GameDetails) and isinstance(b.details, GameDetails):
+        assert (a.details.outcome, a.details.cell) == (b.details.outcome, b.details.cell)
+        np.testing.assert_array_equal(a.details.J_vr, b.details.J_vr)
+        np.testing.assert_array_equal(a.details.J_lag, b.details.J_lag)
 
 
 # ------------------------------------------------------------------ registry, closed loop
@@ -108,11 +113,13 @@ def test_closed_loop_is_safe_longitudinal_and_deterministic_per_request(controll
             pairs = set(collisions["vehicle"].tolist()) | set(collisions["other"].tolist())
             assert not keys & pairs, f"collision involving key vehicles, seed {seed}"
             assert group.vr in merged or group.vr in waited
-            # same request + same rng => same plan; the controller writes nothing
-            before = view.x.copy(), view.v.copy(), view.lane.copy()
+            # same request + same rng => same plan; the controller writes nothing: the view
+            # is read-only and the simulation state is untouched
+            assert not any(a.flags.writeable for a in (view.x, view.v, view.lane))
+            state = sim.x.copy(), sim.v.copy(), sim.lane.copy()
             again = [sim.controller.plan(view, group, np.random.default_rng(11)) for _ in "ab"]
             _same_plan(*again)
-            for arr, old in zip((view.x, view.v, view.lane), before, strict=True):
+            for arr, old in zip((sim.x, sim.v, sim.lane), state, strict=True):
                 np.testing.assert_array_equal(arr, old)
 
 
@@ -143,6 +150,23 @@ def _view(vmc_x: float, vmc_v: float, kinds: list[int] | None = None) -> Traffic
                        changing=np.zeros(7, dtype=bool), fleet=fleet, config=config)  # fmt: skip
 
 
+def test_a_changing_vehicle_is_a_key_vehicle_of_one_lane_at_a_time():
+    """Vehicle 5 changes from lane 2 to lane 1 between VR's projection (400 m) and VMC (330 m):
+    before the lateral midpoint it is VNF (lane 2), after it VMC (lane 1), never both."""
+    view = _view(vmc_x=330.0, vmc_v=30.0)
+    changing = np.zeros(7, dtype=bool)
+    changing[5] = True
+    before = replace(view, changing=changing)
+    group = find_key_vehicles(before, 0)
+    assert group == find_key_vehicles(view, 0)
+    assert (group.vmc, group.vnf, group.vnr) == (2, 5, 6)
+    lane = view.lane.copy()
+    lane[5] = Lane.MAIN_1
+    after = find_key_vehicles(replace(before, lane=lane), 0)
+    assert (after.vmf, after.vmc, after.vmr) == (1, 5, 2)
+    assert 5 not in (after.vnf, after.vnr)
+
+
 def test_merge_position_is_fixed_and_ends_on_the_acceleration_lane():
     view = _view(330.0, 30.0)
     assert merge_position(view, 0) == (710.0, view.config.cav.lane_change_duration)
@@ -160,14 +184,19 @@ def test_fifo_vr_arriving_first_keeps_the_group_and_vmc_yields():
     plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
     assert plan.group == group
     assert plan.mode == Mode.LONGITUDINAL
-    assert plan.details["order"] == ["VMF", "VR", "VMC"]
-    assert plan.details["arrival"]["VR"] == pytest.approx(3.0 + 310.0 / 25.0)
+    d = plan.details
+    assert isinstance(d, FIFODetails)
+    assert d.order == ("VMF", "VR", "VMC")
+    assert d.arrival["VR"] == pytest.approx(3.0 + 310.0 / 25.0)
+    assert d.arrival["VMC"] == pytest.approx(3.0 + 380.0 / 30.0)
     assert plan.sequence == "ahead"
-    assert plan.details["yielding"] == 2
+    assert d.yielding == 2
     # VV1 starts at VMF's state (Eq. 8-10) and is the prediction's cubic
     np.testing.assert_allclose(plan.vv1[:2], [480.0, 30.0])
     # ... and ends at VR's predicted state at the horizon (Eq. 8: x_VV1(tf') = x_VR(tf'))
-    pred = plan.details["prediction"]
+    pred = d.prediction
+    assert pred is not None
+    assert d.feasible == bool((pred.G[0] <= 0.0).all())
     at_h = int(np.argmin(np.abs(pred.t - plan.horizon)))
     x_end, v_end, _ = cubic_state(plan.vv1, plan.horizon)
     dt_off = plan.horizon - pred.t[at_h]
@@ -180,7 +209,9 @@ def test_fifo_vmc_arriving_first_relabels_the_group_so_vmr_yields():
     view = _view(vmc_x=390.0, vmc_v=32.0)  # t_VMC = 320/32 = 10 s < t_VR = 12.4 s
     group = find_key_vehicles(view, 0)
     plan = FIFOController(view.config).plan(view, group, np.random.default_rng(0))
-    assert plan.details["order"] == ["VMF", "VMC", "VR"]
+    assert isinstance(plan.details, FIFODetails)
+    assert plan.details.order == ("VMF", "VMC", "VR")
+    assert plan.details.yielding == 3  # the old VMR yields
     assert plan.sequence == "behind"
     assert plan.group == MergeGroup(vr=0, vmc=3, vmf=2, vmr=4, vnf=5, vnr=6)
     assert plan.group == behind_group(view, group)
@@ -279,8 +310,9 @@ def test_game_cav_vmc_plays_the_cooperative_cell_and_yields():
                 if group.vmc < 0 or view.fleet.kind[group.vmc] != Kind.CAV:
                     continue
                 d = plan.details
-                out = d["outcome"]
-                joint = d["J_vr"] + d["J_lag"]
+                assert isinstance(d, GameDetails)
+                out = d.outcome
+                joint = d.J_vr + d.J_lag
                 assert out.kind == "cooperative"
                 assert joint[out.row, out.col] == joint.min()
                 expected = group if out.row == AHEAD else behind_group(view, group)
@@ -289,7 +321,7 @@ def test_game_cav_vmc_plays_the_cooperative_cell_and_yields():
                     seen_yield = True
                     assert plan.mode == Mode.LONGITUDINAL
                     assert plan.group.vmc == group.vmc
-                    pred = d["predictions"][AHEAD][YIELD]
+                    pred = d.predictions[AHEAD][YIELD]
                     np.testing.assert_array_equal(plan.vv1, pred.vv1[0])
                 if out.col == NOT_YIELD:
                     assert plan.mode == Mode.NONE

@@ -13,8 +13,9 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.base import Mode
-from hcomc.control.hcomc.controller import HCOMCController
+from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
 from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem
+from hcomc.control.report import plan_report
 from hcomc.optim.selection import non_dominated
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
@@ -80,8 +81,11 @@ def test_same_seed_same_plan(optimizer):
     assert a.mode == b.mode
     assert (a.merge_x, a.vr_duration, a.horizon) == (b.merge_x, b.vr_duration, b.horizon)
     assert a.objectives == b.objectives
-    np.testing.assert_array_equal(a.details["pareto_X"], b.details["pareto_X"])
-    assert a.details["optimizer"] == optimizer
+    assert isinstance(a.details, HCOMCDetails)
+    assert isinstance(b.details, HCOMCDetails)
+    np.testing.assert_array_equal(a.details.pareto.X, b.details.pareto.X)
+    assert a.details.pareto.algorithm == optimizer
+    assert (a.details.chosen, a.details.eq19_branch) == (b.details.chosen, b.details.eq19_branch)
 
 
 def test_full_run_with_hcomc_is_deterministic():
@@ -167,6 +171,43 @@ def test_plan_cli_json():
     for p in report["pareto"]:
         assert {"merge_x", "vr_duration", "horizon", "mode", "safety", "fuel",
                 "efficiency"} <= p.keys()  # fmt: skip
+
+
+REPORT_KEYS = {"scenario", "seed", "t", "optimizer", "safety_threshold", "n_eval",
+               "key_vehicles", "game", "pareto", "chosen", "mode", "sequence", "eq19_branch",
+               "fallback", "reason", "decision_ms"}  # fmt: skip
+
+
+def test_plan_report_is_read_from_the_typed_details():
+    sim = Simulation(_config("C1"), 1)
+    plan = sim.run_until_plan()
+    assert plan is not None
+    d = plan.details
+    assert isinstance(d, HCOMCDetails)
+    report = json.loads(json.dumps(plan_report(sim, plan)))
+    assert set(report) == REPORT_KEYS
+    assert (report["optimizer"], report["n_eval"]) == (d.pareto.algorithm, d.pareto.n_eval)
+    assert len(report["pareto"]) == int(d.pareto.feasible.sum()) > 0
+    assert d.chosen >= 0
+    assert report["chosen"]["index"] == d.chosen
+    assert report["chosen"]["merge_x"] == d.pareto.X[d.chosen, 0] == plan.merge_x
+    assert report["chosen"]["safety"] == d.pareto.F[d.chosen, 0] == plan.objectives["safety"]
+    assert report["eq19_branch"] == d.eq19_branch != ""
+    assert d.game is d.games[0]
+    assert d.game is not None  # C1's first VMC is a CAV
+    assert report["game"]["change"] == d.game.change
+    assert sim.log.meta["plans"][-1]["eq19_branch"] == d.eq19_branch
+
+
+def test_plan_report_of_a_plan_without_hcomc_details():
+    sim = Simulation(_config("C1", controller="fifo"), 1)
+    plan = sim.run_until_plan()
+    assert plan is not None
+    report = plan_report(sim, plan)
+    assert set(report) == REPORT_KEYS
+    assert (report["pareto"], report["chosen"], report["game"]) == ([], None, None)
+    assert (report["n_eval"], report["eq19_branch"]) == (0, "")
+    assert report["optimizer"] == sim.config.control.optimizer
 
 
 def test_plan_cli_table_and_errors():

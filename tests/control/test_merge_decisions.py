@@ -12,7 +12,7 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.base import behind_group
-from hcomc.control.hcomc.controller import HCOMCController, merge_problem
+from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails, merge_problem
 from hcomc.control.hcomc.problem import AHEAD, BEHIND, MergeProblem, problem_constants
 from hcomc.control.hcomc.rollout import (
     C_A_MERG,
@@ -95,7 +95,8 @@ def test_warm_start_seeds_the_next_decision_with_the_last_pareto_set():
     view, group = _instant(1)
     controller = HCOMCController(view.config)
     first = controller.plan(view, group, np.random.default_rng(0))
-    assert controller._pareto[group.vr].shape[0] == first.details["pareto_X"].shape[0]
+    assert isinstance(first.details, HCOMCDetails)
+    assert controller._pareto[group.vr].shape[0] == first.details.pareto.X.shape[0]
 
 
 def test_controlled_vr_follows_its_plan_as_predicted():
@@ -109,7 +110,9 @@ def test_controlled_vr_follows_its_plan_as_predicted():
         vr = plan.group.vr
         if sim.fleet.kind[vr] != Kind.CAV:
             continue
-        pred = plan.details["prediction"]
+        assert isinstance(plan.details, HCOMCDetails)
+        pred = plan.details.prediction
+        assert pred is not None
         starts = log.events_of(EventKind.LANE_CHANGE_START)
         t_lc = starts[starts["vehicle"] == vr]["t"][0]
         on_grid = np.isclose(np.mod(pred.t, 0.5), 0.0) | np.isclose(np.mod(pred.t, 0.5), 0.5)

@@ -17,7 +17,7 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.models.quintic import lateral_offset
 from hcomc.models.transition import transition_weight
-from hcomc.road import Lane, lane_centre
+from hcomc.road import Kind, Lane, lane_centre
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -301,7 +301,7 @@ def _staged(vehicles: list[tuple[int, float, float]]) -> Simulation:
     )
     sim = Simulation(config, seed=0)
     assert sim.demand.n >= len(vehicles)
-    assert (sim.fleet.kind == 1).all()
+    assert (sim.fleet.kind == Kind.CAV).all()
     sim._queue_pos = [q.size for q in sim._queues]  # release nothing
     for i, (lane, x, v) in enumerate(vehicles):
         sim.x[i], sim.v[i] = x, v

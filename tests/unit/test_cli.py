@@ -95,6 +95,15 @@ def _write(tmp_path, text):
         (lambda p: ["config", "show", "nope"], ["unknown preset 'nope'"]),
         (lambda p: ["simulate", "C1", "--duration", "-5"], ["'duration'", "-5", "greater than 0"]),
         (lambda p: ["simulate", "C1", "--seed", "-1"], ["--seed", "-1", ">= 0"]),
+        # refused when the run is set up (the log's size), not when the config is loaded
+        (
+            lambda p: ["simulate", "C1", "--set", "log_memory_limit=0.0001"],
+            ["log_memory_limit", "0.0001", "rows x"],
+        ),
+        (
+            lambda p: ["plan", "C1", "--set", "log_memory_limit=0.0001"],
+            ["log_memory_limit", "0.0001", "rows x"],
+        ),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path, args, fragments):

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from pydantic import ValidationError
 
-from hcomc.config import CAVParams, HDVParams, IDMParams
+from hcomc.config import CAVParams, HDVParams, IDMParams, ScenarioConfig
 from hcomc.control.game import GameSolution, solve_cooperative, solve_stackelberg_harsanyi
 from hcomc.control.lane_change_game import (
     FV_AC,
@@ -28,6 +28,7 @@ from hcomc.control.lane_change_game import (
     GameParams,
     GameVehicle,
     LaneChangeDecision,
+    game_params,
     lane_change_game,
 )
 
@@ -383,3 +384,13 @@ def test_game_vehicle_validation(kwargs: dict[str, float], match: str) -> None:
     }
     with pytest.raises(ValueError, match=match):
         GameVehicle(**{**base, **kwargs})  # type: ignore[arg-type]
+
+
+def test_the_game_defaults_are_the_config_defaults() -> None:
+    """The Eq. 15 values, the threshold, the lane width and the transition tolerance have one
+    home, the scenario config: the game's own defaults are read from it."""
+    assert game_params(ScenarioConfig()) == GAME_DEFAULT
+    moved = ScenarioConfig().model_copy(
+        update={"control": ScenarioConfig().control.model_copy(update={"safety_threshold": 3.0})}
+    )
+    assert game_params(moved).safety_threshold == 3.0 != GAME_DEFAULT.safety_threshold

@@ -6,6 +6,9 @@ import datetime as dt
 import json
 import math
 import os
+import re
+import shutil
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -453,8 +456,33 @@ def test_git_revision_outside_repo_is_unknown(tmp_path: Path) -> None:
 
 def test_git_revision_default_never_raises() -> None:
     rev = git_revision()
-    assert isinstance(rev, str)
-    assert rev
+    assert re.fullmatch(r"unknown|[0-9a-f]{40}(-dirty)?", rev), rev
+
+
+@pytest.mark.skipif(shutil.which("git") is None, reason="needs the git executable")
+def test_git_revision_of_a_repository_is_its_head(tmp_path: Path) -> None:
+    """Both outcomes on a repository made here: HEAD's hash, then "-dirty" with a change."""
+
+    def git(*args: str) -> str:
+        done = subprocess.run(
+            ["git", "-c", "user.name=t", "-c", "user.email=t@example.org", *args],
+            cwd=tmp_path, capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        return done.stdout.strip()
+
+    git("init", "-q")
+    (tmp_path / "a.txt").write_text("a\n", encoding="utf-8")
+    git("add", "a.txt")
+    git("commit", "-q", "-m", "one")
+    head = git("rev-parse", "HEAD")
+    manifest_module._revision_of.cache_clear()
+    try:
+        assert git_revision(tmp_path) == head
+        (tmp_path / "b.txt").write_text("b\n", encoding="utf-8")  # untracked: dirty
+        manifest_module._revision_of.cache_clear()
+        assert git_revision(tmp_path / "a.txt") == f"{head}-dirty"
+    finally:
+        manifest_module._revision_of.cache_clear()
 
 
 def test_git_revision_without_git(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -11,7 +11,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
-from hcomc.control.base import MergeGroup, MergePlan, Mode
+from hcomc.control.base import MergeGroup, MergePlan, Mode, PlanDetails
+from hcomc.control.hcomc.controller import HCOMCDetails
+from hcomc.optim.base import ParetoResult
 from hcomc.road import KEY_ROLES
 from hcomc.sim.engine import Simulation
 from hcomc.sim.execution import plan_record
@@ -20,6 +22,15 @@ from hcomc.sim.plans import PlanRecord, plan_records
 
 finite = st.floats(-1e4, 1e4, allow_nan=False)
 cubics = st.none() | st.lists(finite, min_size=4, max_size=4).map(np.array)
+
+
+def _details(branch: str) -> PlanDetails:
+    """HCOMC's details with Eq. 19 ``branch``; a plain plan's (no Eq. 19) when empty."""
+    if not branch:
+        return PlanDetails()
+    empty = np.zeros((0, 3))
+    pareto = ParetoResult(empty, empty, empty, np.zeros(0, dtype=bool), 0, "nsga2")
+    return HCOMCDetails(pareto=pareto, games=(None, None), eq19_branch=branch)
 
 
 @given(
@@ -43,7 +54,7 @@ def test_record_survives_json(group, mode, t0, merge_x, vv, sequence, branch, ob
         vv2=vv[2],
         sequence=sequence,
         objectives=objectives,
-        details={"eq19_branch": branch} if branch else {},
+        details=_details(branch),
     )
     text = json.dumps(plan_record(plan))  # NaN != NaN: compare records through their JSON
     record = PlanRecord.from_json(json.loads(text))
@@ -52,6 +63,7 @@ def test_record_survives_json(group, mode, t0, merge_x, vv, sequence, branch, ob
     assert record.vehicle("VR") == group[0]
     assert [record.vehicle(r) for r in KEY_ROLES] == group
     assert record.mode == mode.name.lower()
+    assert record.eq19_branch == plan.details.eq19_branch == branch
     for got, want in zip((record.vv0, record.vv1, record.vv2), vv, strict=True):
         assert got == (None if want is None else tuple(want.tolist()))
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import json
 import subprocess
 import sys
@@ -19,14 +20,14 @@ from matplotlib.image import imread
 from hcomc.config import load_config
 from hcomc.control.report import plan_report
 from hcomc.experiments.tables import LABELS
-from hcomc.metrics import KEY_ROLES
+from hcomc.metrics import KEY_ROLES, road_of
 from hcomc.sim.engine import Simulation, simulate
 from hcomc.sim.log import SimulationLog
+from hcomc.viz.animation import animate
 from hcomc.viz.common import (
     ALLOWED_FORMATS,
     configuration_label,
     key_group,
-    road_geometry,
     save_figure,
     shade_zones,
 )
@@ -38,6 +39,7 @@ from hcomc.viz.figures import (
     trajectories_figure,
 )
 from hcomc.viz.inputs import FIGURE_KINDS, load_reports, load_runs, make_figure
+from hcomc.viz.scene import RoadScene
 from hcomc.viz.smoothing import adaptive_smoothing
 
 CONTROLLERS = {"FIFO": "fifo", "Game": "game", "HCOMC": "hcomc"}
@@ -242,7 +244,7 @@ def test_save_figure_is_deterministic(tmp_path: Path) -> None:
 
 
 def test_road_geometry_and_zones(logs: dict[str, SimulationLog]) -> None:
-    road = road_geometry(logs["FIFO"])
+    road = road_of(logs["FIFO"])
     assert (road.accel_lane_start, road.accel_lane_end, road.control_zone_start) == (
         700.0,
         950.0,
@@ -252,6 +254,25 @@ def test_road_geometry_and_zones(logs: dict[str, SimulationLog]) -> None:
     shade_zones(ax, road)
     assert {p.get_label() for p in ax.patches} == {"control zone", "acceleration lane"}
     assert configuration_label(logs["Game"]) == "Game"
+
+
+def test_a_log_without_road_geometry_is_refused_everywhere(
+    logs: dict[str, SimulationLog], tmp_path: Path
+) -> None:
+    """One reader of the geometry: no figure or animation draws a run on a default road."""
+    log = copy.copy(logs["HCOMC"])
+    log.meta = {k: v for k, v in log.meta.items() if k != "config"}
+    builders = [
+        lambda: contour_figure({"HCOMC": log}),
+        lambda: timespace_figure(log),
+        lambda: trajectories_figure(log),
+        lambda: RoadScene(log, (0.0, 1000.0)),
+        lambda: animate(log, tmp_path / "a.gif"),
+    ]
+    for build in builders:
+        with pytest.raises(ValueError, match="road geometry is missing"):
+            build()
+    assert not (tmp_path / "a.gif").exists()
 
 
 # --------------------------------------------------------------------------- smoothing

@@ -12,10 +12,28 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from typer.core import TyperGroup
 
 from hcomc.config import ConfigError, ScenarioConfig, load_config
 
+
+class _Commands(TyperGroup):
+    """The command group: a config that cannot be realised is a one-line error, exit 2.
+
+    Loading checks most of a config; what only shows when a run is set up (a log larger
+    than ``log_memory_limit``, for one) raises :class:`~hcomc.config.ConfigError` later, in
+    any command, and is reported here the same way instead of as a traceback.
+    """
+
+    def invoke(self, ctx: Any) -> Any:  # ctx: typer's click Context
+        try:
+            return super().invoke(ctx)
+        except ConfigError as exc:
+            raise _fail(str(exc)) from None
+
+
 app = typer.Typer(
+    cls=_Commands,
     name="hcomc",
     help="Cooperative on-ramp merging (HCOMC) in mixed traffic on two-lane highways.",
     no_args_is_help=True,

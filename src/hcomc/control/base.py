@@ -17,8 +17,11 @@ mapping at the same x, Uno et al. 1999):
 * VMR — the lane-1 vehicle behind VMC;
 * VNF, VNR — the lane-2 vehicles directly ahead of and behind VMC.
 
-A missing vehicle is -1. Without VMC there is no one to cooperate (VR merges by gap
-acceptance); without VMF or VNF the road ahead is free (planners use a phantom far ahead).
+A vehicle belongs to the lane its ``view.lane`` entry gives; a vehicle in a lane change
+switches lane at the lateral midpoint of its change, so it is a key vehicle of one lane at a
+time (``view.changing`` is not used here). A missing vehicle is -1. Without VMC there is no one
+to cooperate (VR merges by gap acceptance); without VMF or VNF the road ahead is free (planners
+use a phantom far ahead).
 """
 
 from __future__ import annotations
@@ -26,12 +29,12 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.road import KEY_ROLES, Lane
+from hcomc.road import KEY_ROLES, Kind, Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -79,7 +82,8 @@ class TrafficView:
     changing : (N,) vehicle is in a lane-change manoeuvre: between the start of its change
         and its arrival on the target lane's centre line (the engine: target lane differs
         from origin lane; SUMO co-simulation: off its origin lane or a change in progress).
-        Its ``lane`` switches to the target at the lateral midpoint.
+        Its ``lane`` switches to the target at the lateral midpoint. Information for
+        controllers; the key-vehicle rules go by ``lane`` alone.
     fleet : per-vehicle constants; config : the scenario.
     plans : the plans being executed.
     """
@@ -118,9 +122,28 @@ class TrafficView:
             plans=plans,
         )  # fmt: skip
 
+    def is_cav(self, i: int) -> bool:
+        """Whether vehicle ``i`` exists (``i >= 0``; -1 is a missing key vehicle) and is a CAV."""
+        return i >= 0 and bool(self.fleet.kind[i] == Kind.CAV)
+
     def live_plan(self, vr: int) -> MergePlan | None:
         """The plan being executed for ramp vehicle ``vr``, if any."""
         return next((p for p in self.plans if p.group.vr == vr), None)
+
+
+@dataclass(frozen=True, slots=True)
+class PlanDetails:
+    """Controller-specific extras of a plan, for reporting only (the engine never reads them).
+
+    This base carries none; each controller that reports more subclasses it with typed fields
+    (:class:`hcomc.control.hcomc.controller.HCOMCDetails`,
+    :class:`hcomc.control.fifo.FIFODetails`, :class:`hcomc.control.merge_game.GameDetails`).
+    """
+
+    @property
+    def eq19_branch(self) -> str:
+        """The Eq. 19 case that picked the plan; "" when the controller does not apply Eq. 19."""
+        return ""
 
 
 @dataclass(frozen=True)
@@ -143,7 +166,8 @@ class MergePlan:
     reason : short human-readable explanation.
     objectives : objective values of the chosen plan (safety, fuel, efficiency).
     decision_ms : wall time of the decision [ms].
-    details : controller-specific extras (Pareto set, game outcome, …) for reporting.
+    details : controller-specific extras (Pareto set, game outcome, …) for reporting: a
+        :class:`PlanDetails` (subclass).
     sequence : merge sequence, "ahead" (VR in front of the vehicle that was VMC when the
         key vehicles were identified) or "behind" (VR between that VMC and VMR). ``group`` is
         the group the plan executes: for "behind" it is :func:`behind_group`, in which the
@@ -163,7 +187,7 @@ class MergePlan:
     reason: str = ""
     objectives: dict[str, float] = field(default_factory=dict)
     decision_ms: float = 0.0
-    details: dict[str, Any] = field(default_factory=dict)
+    details: PlanDetails = field(default_factory=PlanDetails)
     sequence: str = "ahead"
 
 
@@ -185,7 +209,8 @@ class MergeController(Protocol):
 def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
     """Nearest vehicle ahead (x' > x) and behind (x' <= x) in ``lane``, -1 if none.
 
-    A vehicle changing into or out of ``lane`` counts as in it (it occupies both lanes).
+    "In ``lane``" is ``view.lane == lane``: a changing vehicle counts in its origin lane up to
+    the lateral midpoint of its change and in its target lane after it, never in both.
     """
     in_lane = view.active & (view.lane == lane)
     in_lane[exclude] = False

@@ -41,7 +41,7 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   Ntousakis et al.'s minimum time headway h = 1.5 s between consecutive arrivals is supplied by
   the yielding vehicle's own car-following model behind VV1 (it keeps its time gap), not by
   shifting VV1. The h-respecting FIFO schedule ``t_k = max(t_k, t_{k-1} + h)`` is reported in
-  ``details`` for information only.
+  :class:`FIFODetails` for information only.
 * **Prediction.** VR, VMF and the yielding vehicle are predicted with
   :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
   candidate ``[merge_x, vr_duration, H, 0, sequence]`` (longitudinal); its ``vv0[0]`` and
@@ -49,8 +49,9 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   infeasible (speed < 0 or deceleration beyond ``control.virtual_max_decel``), the plan falls
   back to gap acceptance (``fallback=True``, mode NONE, ``merge_x`` NaN), like HCOMC's.
 * **Only VMF, VMC and VR are sequenced.** If VR is predicted to arrive even before VMF, it still
-  takes the VMF-VMC slot (VMF's own leader is outside the key group); ``details["order"]``
-  shows the predicted order and the engine's MOBIL safety check decides the actual gap.
+  takes the VMF-VMC slot (VMF's own leader is outside the key group);
+  :attr:`FIFODetails.order` shows the predicted order and the engine's MOBIL safety check
+  decides the actual gap.
 * Speeds below 0.1 m/s are floored in the arrival-time prediction (no division by zero).
 
 References
@@ -65,12 +66,19 @@ from __future__ import annotations
 
 import copy
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    PlanDetails,
+    TrafficView,
+    elapsed_ms,
+)
 from hcomc.control.hcomc.controller import merge_problem, sequence_groups
 from hcomc.control.hcomc.problem import (
     AHEAD,
@@ -83,13 +91,13 @@ from hcomc.control.hcomc.problem import (
     Prediction,
 )
 from hcomc.control.hcomc.rollout import VMC, VR, warm_up
-from hcomc.road import Kind
 
 __all__ = [
     "FIFO_HEADWAY",
     "MERGE_OFFSET",
     "MIN_HORIZON",
     "FIFOController",
+    "FIFODetails",
     "arrival_times",
     "merge_position",
     "predict_longitudinal",
@@ -210,10 +218,6 @@ def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
     return bool(pred.G[row, _G_VIRTUAL] <= 0.0)
 
 
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
-
-
 def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
     """FIFO arrival times respecting a minimum headway: ``t_k = max(t_k, t_{k-1} + h)``."""
     out: dict[str, float] = {}
@@ -222,6 +226,29 @@ def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
         prev = max(t, prev + headway)
         out[role] = prev
     return out
+
+
+@dataclass(frozen=True, slots=True)
+class FIFODetails(PlanDetails):
+    """What a FIFO decision reports besides its plan.
+
+    Attributes
+    ----------
+    arrival : predicted arrival time at the merge position per role ("VR", "VMC", "VMF";
+        missing vehicles left out) [s, absolute].
+    order : the roles in FIFO order (earliest arrival first).
+    schedule : the h-respecting arrival times per role (information only) [s, absolute].
+    yielding : vehicle index of the vehicle that yields (-1: none).
+    prediction : the prediction of the executed candidate (None without a VMC).
+    feasible : whether that prediction satisfies every constraint (False without one).
+    """
+
+    arrival: dict[str, float]
+    order: tuple[str, ...]
+    schedule: dict[str, float]
+    yielding: int = -1
+    prediction: Prediction | None = None
+    feasible: bool = False
 
 
 class PredictingBaseline:
@@ -246,10 +273,8 @@ class FIFOController(PredictingBaseline):
 
     Notes
     -----
-    See the module docstring for the rule and every assumption. ``details`` holds ``arrival``
-    (predicted arrival times), ``order`` (roles in FIFO order), ``schedule`` (h-respecting
-    arrival times, information only), ``yielding`` (vehicle index or -1), ``prediction`` and
-    ``feasible`` (the predicted plan's constraints all <= 0).
+    See the module docstring for the rule and every assumption; the plan's ``details`` are a
+    :class:`FIFODetails`.
     """
 
     name = "fifo"
@@ -263,11 +288,8 @@ class FIFOController(PredictingBaseline):
         vr = group.vr
         merge_x, vr_duration = merge_position(view, vr)
         arrivals = arrival_times(view, group, merge_x)
-        details: dict[str, object] = {
-            "arrival": arrivals,
-            "order": [r for r, _ in sorted(arrivals.items(), key=lambda kv: kv[1])],
-            "schedule": _schedule(arrivals, FIFO_HEADWAY),
-        }
+        order = tuple(r for r, _ in sorted(arrivals.items(), key=lambda kv: kv[1]))
+        schedule = _schedule(arrivals, FIFO_HEADWAY)
         if group.vmc < 0:
             return MergePlan(
                 group,
@@ -277,17 +299,23 @@ class FIFOController(PredictingBaseline):
                 vr_duration=vr_duration,
                 reason="FIFO: no lane-1 vehicle behind VR, nobody to yield",
                 decision_ms=elapsed_ms(start),
-                details={**details, "yielding": -1},
+                details=FIFODetails(arrivals, order, schedule),
             )
         seq = AHEAD if arrivals["VR"] < arrivals["VMC"] else BEHIND
         exec_group = sequence_groups(view, group)[seq]
-        details.update(yielding=exec_group.vmc)
         h_max = float(view.config.control.horizon_max)
         problem = self.problem(view, group)
         pred, horizon = predict_longitudinal(
             problem, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max, seq
         )
-        details.update(prediction=pred, feasible=bool((pred.G[0] <= 0.0).all()))
+        details = FIFODetails(
+            arrivals,
+            order,
+            schedule,
+            yielding=exec_group.vmc,
+            prediction=pred,
+            feasible=bool((pred.G[0] <= 0.0).all()),
+        )
         what = "VR before VMC: VMC yields" if seq == AHEAD else "VMC before VR: VR merges behind"
         return longitudinal_plan(
             view,
@@ -300,7 +328,7 @@ class FIFOController(PredictingBaseline):
             start=start,
             details=details,
             sequence=seq,
-            commands=_is_cav(view, exec_group.vmc),
+            commands=view.is_cav(exec_group.vmc),
         )
 
 
@@ -319,7 +347,7 @@ def longitudinal_plan(
     horizon: float,
     reason: str,
     start: float,
-    details: dict,
+    details: PlanDetails,
     sequence: int,
     commands: bool,
 ) -> MergePlan:
@@ -349,7 +377,7 @@ def longitudinal_plan(
         merge_x=merge_x,
         vr_duration=vr_duration,
         horizon=horizon,
-        vv0=np.array(pred.vv0[0], dtype=np.float64) if _is_cav(view, group.vr) else None,
+        vv0=np.array(pred.vv0[0], dtype=np.float64) if view.is_cav(group.vr) else None,
         vv1=np.array(pred.vv1[0], dtype=np.float64) if commands else None,
         reason=reason if commands else f"{reason}; no vehicle commanded",
         objectives=predicted_objectives(pred),

@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.config import IDMParams
+from hcomc.config import ControlParams, IDMParams, LaneChangeParams, RoadParams
 from hcomc.models.idm import idm_acceleration, iidm_acceleration
 from hcomc.models.quintic import quintic_shape
 from hcomc.models.transition import blend_acceleration, transition_weight
@@ -126,13 +126,19 @@ CONSERVATIVE = DriverType(
 """Conservative style (suggested values)."""
 
 
+def _default(model: type[BaseModel], name: str) -> float:
+    """The scenario config's default of ``name`` (its one home), as a game default."""
+    return float(model.model_fields[name].default)
+
+
 class GameParams(_Frozen):
     """Parameters of the discretionary lane-change game (paper §III-B).
 
     The paper states none of the weights, priors or type parameters; the defaults are the
-    suggestions of docs/models.md (prior 0.25/0.5/0.25, SV weights 0.5/0.3/0.2) and the
-    Eq. 15 values of ``config.control``. ``lane_width`` and ``transition_tolerance`` are
-    additions used by the lateral comfort term and the Eq. 14 transition.
+    suggestions of docs/models.md (prior 0.25/0.5/0.25, SV weights 0.5/0.3/0.2). The
+    Eq. 15 values, the threshold, ``lane_width`` and ``transition_tolerance`` (used by the
+    lateral comfort term and the Eq. 14 transition) belong to the scenario config: their
+    defaults here are read from it, and :func:`game_params` copies a config's values.
     """
 
     types: tuple[DriverType, ...] = Field(
@@ -150,18 +156,47 @@ class GameParams(_Frozen):
     horizon: float = Field(4.0, gt=0, le=30, description="H = T_lc, simulation horizon [s]")
     dt: float = Field(0.25, gt=0, le=2, description="prediction step, divides horizon [s]")
     safety_threshold: float = Field(
-        4.0, gt=0, le=20, description="a_th, critical acceleration mapped to J_s = 1 [m/s^2]"
+        _default(ControlParams, "safety_threshold"),
+        gt=0,
+        le=20,
+        description="a_th, critical acceleration mapped to J_s = 1 [m/s^2]",
     )
     jerk_max: float = Field(5.0, gt=0, le=100, description="j_max, jerk normaliser [m/s^3]")
-    delay_cav: float = Field(0.5, ge=0, le=5, description="Eq. 15 delay T, CAV follower [s]")
-    delay_hdv: float = Field(1.0, ge=0, le=5, description="Eq. 15 delay T, HDV follower [s]")
-    min_distance: float = Field(2.0, ge=0, le=50, description="Eq. 15 residual distance D [m]")
-    emergency_decel: float = Field(
-        7.5, gt=0, le=15, description="Eq. 15 a_merg, emergency deceleration [m/s^2]"
+    delay_cav: float = Field(
+        _default(ControlParams, "safety_delay_cav"),
+        ge=0,
+        le=5,
+        description="Eq. 15 delay T, CAV follower [s]",
     )
-    lane_width: float = Field(3.75, gt=0, le=10, description="W, lateral lane-change offset [m]")
+    delay_hdv: float = Field(
+        _default(ControlParams, "safety_delay_hdv"),
+        ge=0,
+        le=5,
+        description="Eq. 15 delay T, HDV follower [s]",
+    )
+    min_distance: float = Field(
+        _default(ControlParams, "safety_min_distance"),
+        ge=0,
+        le=50,
+        description="Eq. 15 residual distance D [m]",
+    )
+    emergency_decel: float = Field(
+        _default(ControlParams, "safety_emergency_decel"),
+        gt=0,
+        le=15,
+        description="Eq. 15 a_merg, emergency deceleration [m/s^2]",
+    )
+    lane_width: float = Field(
+        _default(RoadParams, "lane_width"),
+        gt=0,
+        le=10,
+        description="W, lateral lane-change offset [m]",
+    )
     transition_tolerance: float = Field(
-        0.01, gt=0, lt=0.5, description="epsilon of the Eq. 14 transition, Psi(0) = eps [-]"
+        _default(LaneChangeParams, "transition_tolerance"),
+        gt=0,
+        lt=0.5,
+        description="epsilon of the Eq. 14 transition, Psi(0) = eps [-]",
     )
 
     @model_validator(mode="after")
@@ -199,6 +234,7 @@ class GameParams(_Frozen):
 
 
 GAME_DEFAULT: GameParams = GameParams()
+"""Default game parameters (those of the default scenario config)."""
 
 
 def game_params(config: ScenarioConfig) -> GameParams:
@@ -219,9 +255,6 @@ def game_params(config: ScenarioConfig) -> GameParams:
             "transition_tolerance": config.lane_change.transition_tolerance,
         }
     )
-
-
-"""Default game parameters."""
 
 
 @dataclass(frozen=True)

@@ -109,7 +109,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
+from hcomc.control.base import (
+    MergeGroup,
+    MergePlan,
+    Mode,
+    PlanDetails,
+    TrafficView,
+    elapsed_ms,
+)
 from hcomc.control.fifo import (
     PredictingBaseline,
     longitudinal_plan,
@@ -122,9 +129,8 @@ from hcomc.control.fifo import (
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.controller import sequence_groups
 from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import C_A_MERG, P_A, P_V0, VMC, VR
+from hcomc.control.hcomc.rollout import P_A, P_V0, VMC, VR
 from hcomc.control.lane_change_game import INFEASIBLE_SAFETY_COST
-from hcomc.road import Kind
 
 __all__ = [
     "AHEAD",
@@ -135,6 +141,7 @@ __all__ = [
     "NOT_YIELD",
     "YIELD",
     "GameController",
+    "GameDetails",
     "GameOutcome",
     "kita_mixed",
     "player_cost",
@@ -178,6 +185,37 @@ class GameOutcome:
     pure: tuple[tuple[int, int], ...] = ()
     p: float = float("nan")
     q: float = float("nan")
+
+
+PredictionPair = tuple[Prediction, Prediction]
+
+
+@dataclass(frozen=True, slots=True)
+class GameDetails(PlanDetails):
+    """What a played merge game reports besides its plan (indices: [row, column], rows
+    AHEAD/BEHIND, columns YIELD/NOT_YIELD).
+
+    Attributes
+    ----------
+    J_vr, J_lag : (2, 2) costs of VR and of the lag vehicle (their payoffs are the negatives).
+    terms : cost terms per cell ("ahead/yield", ...) and player ("VR", "lag").
+    u_safe : (2, 2) worst Eq. 15 critical acceleration per cell [m/s^2] (inf: VR not merged).
+    outcome : the solution played.
+    cell : names of the played actions (row, column).
+    groups : the usual and the relabelled key group ("ahead", "behind").
+    predictions : the prediction of each cell, ``predictions[row][col]``.
+    feasible : whether the played cell's prediction satisfies every constraint.
+    """
+
+    J_vr: FloatArray
+    J_lag: FloatArray
+    terms: dict[str, dict[str, dict[str, float]]]
+    u_safe: FloatArray
+    outcome: GameOutcome
+    cell: tuple[str, str]
+    groups: tuple[MergeGroup, MergeGroup]
+    predictions: tuple[PredictionPair, PredictionPair]
+    feasible: bool
 
 
 def _matrix(name: str, value: ArrayLike) -> FloatArray:
@@ -314,13 +352,9 @@ def safety_term(
         or g[_G["not_merged"]] > 0.0
         or not np.isfinite(u_safe)
         or not virtual_vehicle_feasible(pred, row)
-        or a_min < -float(problem.consts[C_A_MERG])
+        or a_min < -problem.safety.emergency_decel
     )
     return INFEASIBLE_SAFETY if infeasible else float(min(1.0, u_safe / threshold))
-
-
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
 
 
 class GameController(PredictingBaseline):
@@ -332,11 +366,9 @@ class GameController(PredictingBaseline):
 
     Notes
     -----
-    See the module docstring for players, payoffs, solution and every assumption. ``details``
-    holds ``J_vr`` / ``J_lag`` (2x2 costs), ``A`` / ``B`` (payoffs = -costs), ``terms`` (cost
-    terms per cell and player), ``u_safe`` (2x2), ``outcome`` (:class:`GameOutcome`), ``cell``
-    (names of the played actions), ``groups`` (usual and relabelled key groups),
-    ``predictions`` (2x2 nested list of :class:`~hcomc.control.hcomc.problem.Prediction`).
+    See the module docstring for players, payoffs, solution and every assumption. A played
+    game's plan carries :class:`GameDetails`; without a VMC no game is played and the plan
+    carries none.
     """
 
     name = "game"
@@ -355,7 +387,6 @@ class GameController(PredictingBaseline):
                 vr_duration=vr_duration,
                 reason="game: no lane-1 vehicle behind VR, no game to play",
                 decision_ms=elapsed_ms(start),
-                details={"outcome": None, "groups": (group,)},
             )
         h_max = float(view.config.control.horizon_max)
         threshold = float(view.config.control.safety_threshold)
@@ -368,7 +399,7 @@ class GameController(PredictingBaseline):
         preds: list[list[Prediction]] = [[first, first], [first, first]]
         J_vr, J_lag, u_safe = np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((2, 2))
         terms: dict[str, dict[str, dict[str, float]]] = {}
-        w_vr = CAV_WEIGHTS if _is_cav(view, vr) else NORMAL_WEIGHTS
+        w_vr = CAV_WEIGHTS if view.is_cav(vr) else NORMAL_WEIGHTS
         for i in (AHEAD, BEHIND):
             for j in (YIELD, NOT_YIELD):
                 if not (i == AHEAD and j == YIELD):
@@ -380,16 +411,22 @@ class GameController(PredictingBaseline):
                 J_vr[i, j], t_vr = player_cost(pred, problem, VR, w_vr, j_s)
                 J_lag[i, j], t_lag = player_cost(pred, problem, VMC, NORMAL_WEIGHTS, j_s)
                 terms[f"{ROW_NAMES[i]}/{COL_NAMES[j]}"] = {"VR": t_vr, "lag": t_lag}
-        cooperative = _is_cav(view, group.vmc)
+        cooperative = view.is_cav(group.vmc)
         outcome = solve_merge_game(J_vr, J_lag, cooperative=cooperative, rng=rng)
         exec_group = groups[outcome.row]
         pred = preds[outcome.row][outcome.col]
         cell = (ROW_NAMES[outcome.row], COL_NAMES[outcome.col])
-        details: dict[str, object] = {
-            "J_vr": J_vr, "J_lag": J_lag, "A": -J_vr, "B": -J_lag, "terms": terms,
-            "u_safe": u_safe, "outcome": outcome, "cell": cell, "groups": groups,
-            "predictions": preds, "feasible": bool((pred.G[0] <= 0.0).all()),
-        }  # fmt: skip
+        details = GameDetails(
+            J_vr=J_vr,
+            J_lag=J_lag,
+            terms=terms,
+            u_safe=u_safe,
+            outcome=outcome,
+            cell=cell,
+            groups=groups,
+            predictions=((preds[0][0], preds[0][1]), (preds[1][0], preds[1][1])),
+            feasible=bool((pred.G[0] <= 0.0).all()),
+        )
         what = f"game ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
         return longitudinal_plan(
             view,
@@ -402,5 +439,5 @@ class GameController(PredictingBaseline):
             start=start,
             details=details,
             sequence=outcome.row,
-            commands=outcome.col == YIELD and _is_cav(view, exec_group.vmc),
+            commands=outcome.col == YIELD and view.is_cav(exec_group.vmc),
         )

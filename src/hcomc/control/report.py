@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from hcomc.control.base import MergePlan, Mode
+from hcomc.control.hcomc.controller import HCOMCDetails
 from hcomc.road import Kind
 
 if TYPE_CHECKING:
@@ -43,24 +44,25 @@ def plan_report(sim: Simulation, plan: MergePlan) -> dict[str, Any]:
             }
         )
     d = plan.details
-    game = d.get("game")
-    pareto = [
-        _solution(x, f)
-        for x, f, ok in zip(d.get("pareto_X", []), d.get("pareto_F", []), d.get("feasible", []),
-                            strict=True)
-        if ok
-    ]  # fmt: skip
+    hcomc = d if isinstance(d, HCOMCDetails) else None
+    game = None if hcomc is None else hcomc.game
+    pareto: list[dict[str, Any]] = []
     chosen = None
-    if "chosen" in d:
-        chosen = {"index": int(d["chosen"]), **_solution(d["pareto_X"][d["chosen"]],
-                                                         d["pareto_F"][d["chosen"]])}  # fmt: skip
+    if hcomc is not None:
+        res = hcomc.pareto
+        pareto = [
+            _solution(x, f) for x, f, ok in zip(res.X, res.F, res.feasible, strict=True) if ok
+        ]
+        if hcomc.chosen >= 0:
+            k = hcomc.chosen
+            chosen = {"index": k, **_solution(res.X[k], res.F[k])}
     return {
         "scenario": sim.config.name,
         "seed": sim.seed,
         "t": float(plan.t0),
-        "optimizer": d.get("optimizer", sim.config.control.optimizer),
+        "optimizer": sim.config.control.optimizer if hcomc is None else hcomc.pareto.algorithm,
         "safety_threshold": sim.config.control.safety_threshold,
-        "n_eval": int(d.get("n_eval", 0)),
+        "n_eval": 0 if hcomc is None else int(hcomc.pareto.n_eval),
         "key_vehicles": keys,
         "game": None
         if game is None
@@ -74,7 +76,7 @@ def plan_report(sim: Simulation, plan: MergePlan) -> dict[str, Any]:
         "chosen": chosen,
         "mode": Mode(plan.mode).name.lower(),
         "sequence": plan.sequence,
-        "eq19_branch": str(d.get("eq19_branch", "")),
+        "eq19_branch": d.eq19_branch,
         "fallback": plan.fallback,
         "reason": plan.reason,
         "decision_ms": float(plan.decision_ms),

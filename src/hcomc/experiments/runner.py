@@ -148,7 +148,7 @@ def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
     return {
         "mode": last.mode.name.lower(),
         "fallback": bool(last.fallback),
-        "eq19_branch": str(last.details.get("eq19_branch", "")),
+        "eq19_branch": last.details.eq19_branch,
         "replans": len(plans) - 1,
         "decision_ms": float(np.mean([p.decision_ms for p in plans])),
     }

@@ -50,6 +50,7 @@ from hcomc.metrics.window import (
     MetricWindow,
     key_window,
     merge_window,
+    road_of,
 )
 
 __all__ = [
@@ -79,6 +80,7 @@ __all__ = [
     "min_ttc",
     "pet_at_merge",
     "reference_speed",
+    "road_of",
     "speed_field",
     "stabilisation_time",
 ]

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hcomc.metrics.window import road_of
+from hcomc.road import Kind, Lane
 from hcomc.sim.log import SimulationLog
 
 DOWNSTREAM = 50.0  # [m] reference section beyond the acceleration-lane end
@@ -31,8 +33,7 @@ def _crossing_times(log: SimulationLog, x_ref: float) -> np.ndarray:
 
 def throughput(log: SimulationLog) -> float:
     """Vehicles per hour past ``accel_lane_end + 50 m`` over the logged window [veh/h]."""
-    road = log.meta["config"]["road"]
-    times = _crossing_times(log, road["accel_lane_end"] + DOWNSTREAM)
+    times = _crossing_times(log, road_of(log).accel_lane_end + DOWNSTREAM)
     span = float(log.t[-1] - log.t[0]) if log.t.size > 1 else 0.0
     return float(np.isfinite(times).sum() / span * 3600.0) if span > 0 else float("nan")
 
@@ -40,14 +41,13 @@ def throughput(log: SimulationLog) -> float:
 def ramp_delay(log: SimulationLog) -> float:
     """Mean delay of ramp vehicles between the ramp entry and ``accel_lane_end + 50 m`` [s]."""
     cfg = log.meta["config"]
-    road = cfg["road"]
-    x_ref = road["accel_lane_end"] + DOWNSTREAM
+    x_ref = road_of(log).accel_lane_end + DOWNSTREAM
     arrive = _crossing_times(log, x_ref)
-    ramp = ((log.lane == 0) & log.active).any(axis=0)
+    ramp = ((log.lane == Lane.RAMP) & log.active).any(axis=0)
     first = np.where(log.active.any(axis=0), log.active.argmax(axis=0), 0)
     entered = log.t[first]
     x_start = log.x[first, np.arange(log.x.shape[1])].astype(np.float64)
-    v0 = np.where(log.kind == 1, cfg["cav"]["desired_speed"], cfg["hdv"]["desired_speed"])
+    v0 = np.where(log.kind == Kind.CAV, cfg["cav"]["desired_speed"], cfg["hdv"]["desired_speed"])
     ok = ramp & np.isfinite(arrive)
     delay = (arrive - entered) - (x_ref - x_start) / v0
     return float(delay[ok].mean()) if ok.any() else float("nan")

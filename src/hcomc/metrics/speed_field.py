@@ -30,6 +30,7 @@ from hcomc.metrics.window import (
     times,
     window_rows,
 )
+from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
 
 __all__ = [
@@ -135,7 +136,7 @@ def reference_speed(log: SimulationLog, window: MetricWindow) -> float:
     """
     rows = window_rows(log, window)
     lane = log.lane[rows]
-    main = log.active[rows] & ((lane == 1) | (lane == 2))
+    main = log.active[rows] & ((lane == Lane.MAIN_1) | (lane == Lane.MAIN_2))
     v = log.v[rows].astype(np.float64)
     upstream = main & (log.x[rows].astype(np.float64) < road_of(log).control_zone_start)
     for mask in (upstream, main):

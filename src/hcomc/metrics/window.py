@@ -95,13 +95,25 @@ class MetricWindow:
 
 
 def road_of(log: SimulationLog) -> RoadParams:
-    """The road geometry of the run (``log.meta["config"]["road"]``)."""
+    """The road geometry of the run (``log.meta["config"]["road"]``).
+
+    The one reader of a log's geometry: metrics, figures and the animation all use it, so a
+    log without geometry fails everywhere the same way instead of being drawn on a default
+    road.
+
+    Raises
+    ------
+    ValueError
+        If the log's metadata holds no road section.
+    pydantic.ValidationError
+        If the stored road section is invalid.
+    """
     try:
         road = log.meta["config"]["road"]
     except (KeyError, TypeError) as exc:
         raise ValueError(
-            "metrics need the road geometry in log.meta['config']['road'] "
-            "(the resolved scenario config)"
+            "the road geometry is missing from log.meta['config']['road'] "
+            "(the resolved scenario config a run records)"
         ) from exc
     return RoadParams.model_validate(road)
 

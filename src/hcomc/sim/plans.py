@@ -95,7 +95,7 @@ class PlanRecord:
             sequence=plan.sequence,
             vv0=_cubic(plan.vv0, "vv0"),
             fallback=bool(plan.fallback),
-            eq19_branch=str(plan.details.get("eq19_branch", "")),
+            eq19_branch=plan.details.eq19_branch,
             reason=plan.reason,
             objectives={k: float(v) for k, v in plan.objectives.items()},
             decision_ms=float(plan.decision_ms),

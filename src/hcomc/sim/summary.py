@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from hcomc.models.fuel import fuel_consumed
-from hcomc.road import Lane
+from hcomc.road import Kind, Lane
 from hcomc.sim.log import EventKind, SimulationLog
 
 
@@ -26,7 +26,7 @@ def summarise(log: SimulationLog) -> dict[str, Any]:
         speed[key] = float(np.mean(log.v[cells])) if cells.any() else None
     return {
         "vehicles": int(seen.sum()),
-        "cavs": int((seen & (log.kind == 1)).sum()),
+        "cavs": int((seen & (log.kind == Kind.CAV)).sum()),
         "merges": int((kinds == EventKind.MERGE).sum()),
         "collisions": int((kinds == EventKind.COLLISION).sum()),
         "ramp_waits": int((kinds == EventKind.RAMP_WAIT).sum()),

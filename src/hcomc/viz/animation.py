@@ -137,8 +137,8 @@ def animate(
     Parameters
     ----------
     log : SimulationLog
-        The run. Its ``meta["config"]["road"]`` gives the geometry (defaults of
-        :class:`hcomc.config.RoadParams` for missing keys) and ``meta["plans"]`` the plans.
+        The run. Its ``meta["config"]["road"]`` gives the geometry (a log without one is
+        refused, :func:`hcomc.metrics.road_of`) and ``meta["plans"]`` the plans.
     out_path : str or os.PathLike
         Output file, ``.gif`` (always available) or ``.mp4`` (needs ``ffmpeg``). Its
         directory must exist. Written atomically: an existing file is replaced only once
@@ -165,8 +165,9 @@ def animate(
     ------
     ValueError
         If the extension is neither ``.gif`` nor ``.mp4``, if ``.mp4`` is asked for without
-        ``ffmpeg``, if the log has no recorded rows, or on a bad ``fps``, ``speedup``,
-        ``t_range`` or ``window``. All checks run before anything is drawn.
+        ``ffmpeg``, if the log has no recorded rows or no road geometry, or on a bad
+        ``fps``, ``speedup``, ``t_range`` or ``window``. All checks run before anything is
+        drawn.
 
     Notes
     -----
@@ -186,7 +187,7 @@ def animate(
     if not np.isfinite(t).all():
         raise ValueError("the log's time column contains NaN in its recorded rows")
     rows = _frame_rows(t, speedup / fps, t_range)
-    road = SceneRoad.from_meta(log.meta)
+    road = SceneRoad.of(log)
     window_xy = _check_window(window, road)
     if not target.parent.is_dir():
         raise ValueError(f"output directory {str(target.parent)!r} does not exist")

@@ -1,4 +1,4 @@
-"""Shared pieces of the static figures: saving, road geometry, zone shading and colours.
+"""Shared pieces of the static figures: saving, zone shading and colours.
 
 Colours are fixed here so that every figure (and the animation and HTML report) shows a
 vehicle type, a key role or a road zone in the same colour.
@@ -44,7 +44,6 @@ __all__ = [
     "log_window",
     "merge_time",
     "new_figure",
-    "road_geometry",
     "run_title",
     "save_figure",
     "shade_zones",
@@ -178,31 +177,6 @@ def save_figure(fig: Figure, path: str | os.PathLike[str]) -> Path:
 
 
 # --------------------------------------------------------------------------- run facts
-def road_geometry(log: SimulationLog) -> RoadParams:
-    """Road geometry of a run, from ``log.meta["config"]["road"]``.
-
-    Parameters
-    ----------
-    log : SimulationLog
-        A log written by the engine (its metadata holds the resolved config).
-
-    Returns
-    -------
-    hcomc.config.RoadParams
-        Validated geometry: ``length``, ``lane_width``, ``accel_lane_start``,
-        ``accel_lane_end``, ``ramp_start``, ``control_zone_length`` and
-        ``control_zone_start`` [m]. A log without a road section gets the defaults.
-
-    Raises
-    ------
-    pydantic.ValidationError
-        If the stored road section is invalid.
-    """
-    config = log.meta.get("config")
-    road = config.get("road", {}) if isinstance(config, Mapping) else {}
-    return RoadParams.model_validate(road)
-
-
 def first_plan(log: SimulationLog) -> dict[str, Any] | None:
     """The first merge plan of the run (``log.meta["plans"][0]``), None if there is none."""
     plans = log.meta.get("plans") or []
@@ -313,7 +287,7 @@ def shade_zones(
         Axes whose horizontal (``orientation="x"``) or vertical (``"y"``) data axis is the
         road position x [m].
     road : hcomc.config.RoadParams
-        Road geometry (:func:`road_geometry`).
+        Road geometry (:func:`hcomc.metrics.road_of`).
     orientation : {"x", "y"}
         Which axis carries the road position.
     band : float or None

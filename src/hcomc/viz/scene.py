@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 
-from hcomc.config import RoadParams
+from hcomc.metrics import road_of
 from hcomc.road import KEY_ROLES
 from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.log import SimulationLog
@@ -63,11 +63,9 @@ class SceneRoad:
     vehicle_width: float
 
     @classmethod
-    def from_meta(cls, meta: Mapping[str, Any]) -> SceneRoad:
-        """Geometry from ``meta["config"]["road"]``, defaults for missing keys."""
-        raw = dict((meta.get("config") or {}).get("road") or {})
-        fields = set(RoadParams.model_fields)
-        road = RoadParams(**{k: v for k, v in raw.items() if k in fields})
+    def of(cls, log: SimulationLog) -> SceneRoad:
+        """Geometry of the run (:func:`hcomc.metrics.road_of`; raises without one)."""
+        road = road_of(log)
         return cls(
             length=road.length,
             lane_width=road.lane_width,
@@ -148,7 +146,7 @@ class RoadScene:
 
     def __init__(self, log: SimulationLog, window: tuple[float, float]) -> None:
         self.log = log
-        self.road = SceneRoad.from_meta(log.meta)
+        self.road = SceneRoad.of(log)
         self.x_min, self.x_max = window
         self.fig = Figure(figsize=_FIG_SIZE, dpi=DPI)
         self.ax = self.fig.add_axes(_AX_RECT)

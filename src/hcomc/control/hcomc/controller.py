@@ -21,6 +21,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from hcomc.control.base import (
     MergeGroup,
     MergePlan,
     Mode,
+    PlanDetails,
     TrafficView,
     behind_group,
     elapsed_ms,
@@ -40,6 +42,7 @@ from hcomc.control.hcomc.problem import (
     SEQUENCES,
     KeyState,
     MergeProblem,
+    Prediction,
     default_starts,
 )
 from hcomc.control.hcomc.rollout import (
@@ -55,12 +58,39 @@ from hcomc.control.hcomc.rollout import (
 )
 from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
 from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
-from hcomc.optim.base import Optimizer
+from hcomc.optim.base import Optimizer, ParetoResult
 from hcomc.optim.registry import optimizer_from_config
 from hcomc.optim.selection import eq19_branch, select_eq19
 from hcomc.road import Kind
 
 _PHANTOM_AHEAD = 1000.0  # [m] a missing VMF/VNF is a free-road phantom this far ahead
+
+
+@dataclass(frozen=True, slots=True)
+class HCOMCDetails(PlanDetails):
+    """What an HCOMC decision reports besides its plan.
+
+    Attributes
+    ----------
+    pareto : the optimiser's returned set (decision vectors, objectives, constraints,
+        feasibility, evaluations spent, optimiser name).
+    games : the Section III-B lateral game of each sequence ("ahead", "behind"); None where
+        the cooperating vehicle is not a CAV.
+    chosen : row of ``pareto`` that Eq. 19 picked (-1: no feasible row, the fallback applies).
+    prediction : the prediction of the chosen row (None without a pick).
+    eq19_branch : the Eq. 19 case that picked it ("" without a pick).
+    """
+
+    pareto: ParetoResult
+    games: tuple[LaneChangeDecision | None, LaneChangeDecision | None]
+    chosen: int = -1
+    prediction: Prediction | None = None
+    eq19_branch: str = ""
+
+    @property
+    def game(self) -> LaneChangeDecision | None:
+        """The lateral game of the "ahead" sequence (the key group as identified)."""
+        return self.games[AHEAD]
 
 
 def key_state(view: TrafficView, group: MergeGroup, starts: np.ndarray | None = None) -> KeyState:
@@ -128,10 +158,6 @@ def merge_problem(
     return MergeProblem((states[0], states[1]), view.config, lateral_allowed)
 
 
-def _is_cav(view: TrafficView, i: int) -> bool:
-    return i >= 0 and bool(view.fleet.kind[i] == Kind.CAV)
-
-
 class HCOMCController:
     """The HCOMC merge controller with a pluggable optimiser."""
 
@@ -145,10 +171,10 @@ class HCOMCController:
 
     def lateral_game(self, view: TrafficView, group: MergeGroup) -> LaneChangeDecision | None:
         """Section III-B game: may the cooperating vehicle (SV) move to lane 2 before VNR?"""
-        if not _is_cav(view, group.vmc):
+        if not view.is_cav(group.vmc):
             return None
         cfg = view.config
-        fv_cav = _is_cav(view, group.vnr)
+        fv_cav = view.is_cav(group.vnr)
         sv = game_vehicle(view.x, view.v, view.fleet, group.vmc)
         assert sv is not None  # a CAV is present
         return play_lane_change_game(
@@ -186,9 +212,6 @@ class HCOMCController:
         result = self.optimizer.minimize(
             problem, budget=budget, rng=rng, initial=self._pareto.get(group.vr)
         )
-        details = {"pareto_X": result.X, "pareto_F": result.F, "pareto_G": result.G,
-                   "feasible": result.feasible, "n_eval": result.n_eval,
-                   "optimizer": result.algorithm, "game": games[AHEAD], "games": games}  # fmt: skip
         if not result.any_feasible:
             self._pareto.pop(group.vr, None)
             return MergePlan(
@@ -198,7 +221,7 @@ class HCOMCController:
                 fallback=True,
                 decision_ms=elapsed_ms(start),
                 reason="no feasible candidate: VR merges by gap acceptance",
-                details=details,
+                details=HCOMCDetails(pareto=result, games=games),
             )
         self._pareto[group.vr] = result.X[result.feasible]
         threshold = problem.safety.threshold
@@ -210,12 +233,14 @@ class HCOMCController:
         lateral = bool(x[3] >= 0.5)
         mode = (
             Mode.NONE
-            if not _is_cav(view, exec_group.vmc)
+            if not view.is_cav(exec_group.vmc)
             else Mode.LATERAL
             if lateral
             else Mode.LONGITUDINAL
         )
-        details.update(
+        details = HCOMCDetails(
+            pareto=result,
+            games=games,
             chosen=k,
             prediction=chosen,
             eq19_branch=eq19_branch(result.F, OBJECTIVES, result.feasible, threshold),
@@ -227,10 +252,10 @@ class HCOMCController:
             merge_x=float(x[0]),
             vr_duration=float(x[1]),
             horizon=float(x[2]),
-            vv0=chosen.vv0[0].copy() if _is_cav(view, group.vr) else None,
+            vv0=chosen.vv0[0].copy() if view.is_cav(group.vr) else None,
             vv1=chosen.vv1[0].copy() if mode == Mode.LONGITUDINAL else None,
             vv2=chosen.vv2[0].copy()
-            if mode == Mode.LATERAL and _is_cav(view, exec_group.vnr)
+            if mode == Mode.LATERAL and view.is_cav(exec_group.vnr)
             else None,
             reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}",
             objectives=dict(zip(OBJECTIVES, map(float, result.F[k]), strict=True)),
@@ -242,6 +267,7 @@ class HCOMCController:
 
 __all__ = [
     "HCOMCController",
+    "HCOMCDetails",
     "continuation_starts",
     "key_state",
     "merge_problem",

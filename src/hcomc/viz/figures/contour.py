@@ -13,14 +13,14 @@ from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from hcomc.metrics import reference_speed, speed_field
+from hcomc.metrics import reference_speed, road_of, speed_field
+from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
 from hcomc.viz.common import (
     LANE_NAMES,
     NO_DATA_COLOR,
     log_window,
     new_figure,
-    road_geometry,
     run_title,
     shade_zones,
     speed_cmap,
@@ -120,7 +120,7 @@ def contour_figure(
     mesh = None
     for col, label in enumerate(labels):
         log = logs[label]
-        road = road_geometry(log)
+        road = road_of(log)
         level = v_refs[label] - LOW_SPEED_MARGIN
         t_merge, x_merge = _merge_of(log)
         for row, lane in enumerate(lanes):
@@ -153,7 +153,7 @@ def contour_figure(
                     )
             if merge:
                 shade_zones(ax, road, orientation="x", band=0.035, label=row == col == 0)
-            if lane == 1 and math.isfinite(t_merge):
+            if lane == Lane.MAIN_1 and math.isfinite(t_merge):
                 ax.plot([x_merge], [t_merge], linestyle="none", zorder=5, **_MERGE)
             ax.set_title(f"{label} · {LANE_NAMES[lane]}")
             ax.text(

@@ -10,6 +10,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 
+from hcomc.metrics import road_of
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.viz.common import (
     LANE_NAMES,
@@ -17,7 +18,6 @@ from hcomc.viz.common import (
     first_plan,
     key_group,
     new_figure,
-    road_geometry,
     run_title,
     shade_zones,
     speed_cmap,
@@ -86,7 +86,7 @@ def timespace_figure(log: SimulationLog) -> Figure:
     matplotlib.figure.Figure
         One axes per used lane and a speed colour bar [m/s].
     """
-    road = road_geometry(log)
+    road = road_of(log)
     times = _times(log)
     group = key_group(log)
     plan = first_plan(log)

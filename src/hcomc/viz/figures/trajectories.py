@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from hcomc.metrics import KEY_ROLES
+from hcomc.metrics import KEY_ROLES, road_of
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.viz.common import (
     LANE_NAMES,
@@ -16,7 +16,6 @@ from hcomc.viz.common import (
     key_group,
     key_time,
     new_figure,
-    road_geometry,
     run_title,
     shade_zones,
 )
@@ -90,7 +89,7 @@ def trajectories_figure(log: SimulationLog) -> Figure:
             "zone (no merge plan and no key vehicles in this log); allowed: a merge scenario "
             "run long enough for the ramp vehicle to arrive"
         )
-    road = road_geometry(log)
+    road = road_of(log)
     times = _times(log)
     n = log.n_recorded
     t0 = key_time(log)
