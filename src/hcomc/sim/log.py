@@ -342,6 +342,13 @@ class SimulationLog:
         if k >= self._n_recorded:
             self._n_recorded = k + 1
 
+    def mark_recorded(self, n: int) -> None:
+        """Declare rows ``0 .. n-1`` written (by a compiled writer that fills the arrays
+        directly, as :func:`hcomc.sim.core.record_row` does)."""
+        if not 0 <= n <= self.x.shape[0]:
+            raise IndexError(f"{n} rows outside the log's {self.x.shape[0]} rows")
+        self._n_recorded = max(self._n_recorded, n)
+
     def add_event(
         self,
         t: float,

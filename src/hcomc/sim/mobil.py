@@ -46,7 +46,7 @@ class Snapshot:
     a: FloatArray
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def model_accel(
     matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
     x: np.ndarray, v: np.ndarray, a: np.ndarray, i: int, leader: int,
@@ -61,7 +61,7 @@ def model_accel(
     return s, follow_accel(s, v[i], vl, al, m[0], m[1], m[2], m[3], m[4], m[5], m[6], iidm[i])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _situation(matrix, iidm, length, x, v, a, follower, leader):
     """(gap, acceleration) of ``follower`` behind ``leader``; (inf, 0) without a follower."""
     if follower < 0:

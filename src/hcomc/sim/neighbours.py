@@ -37,7 +37,7 @@ def sort_entries(
     return vehicle[order], lane[order], key[order], rank
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def neighbour(vehicle: np.ndarray, lane_of: np.ndarray, pos: int, lane: int) -> int:
     """Vehicle of sorted entry ``pos`` if it exists and lies in ``lane``, else -1."""
     if 0 <= pos < vehicle.size and lane_of[pos] == lane:
@@ -45,7 +45,7 @@ def neighbour(vehicle: np.ndarray, lane_of: np.ndarray, pos: int, lane: int) -> 
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lookup_one(
     key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray, lane: int, x: float
 ) -> tuple[int, int]:

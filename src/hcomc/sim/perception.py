@@ -35,7 +35,7 @@ from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import HDVParams
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> float:
     """Column ``col`` of the ring buffer ``hist`` at ``t - tau`` (linear interpolation)."""
     size = hist.shape[0]
@@ -48,7 +48,7 @@ def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> flo
     return (1.0 - r) * now + r * hist[(step - j - 1) % size, col]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def perceive_one(
     x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray,
     step: int, i: int, leader: int, leader_length: float, dt: float, taus: np.ndarray,
@@ -114,8 +114,8 @@ class Perception:
         )
         self.w_gap = rng.standard_normal(n) if self.errors else np.zeros(n)
         self.w_ttc = rng.standard_normal(n) if self.errors else np.zeros(n)
-        self._decay = np.exp(-dt / params.error_correlation_time)
-        self._kick = np.sqrt(2.0 * dt / params.error_correlation_time)
+        self.decay = np.exp(-dt / params.error_correlation_time)
+        self.kick = np.sqrt(2.0 * dt / params.error_correlation_time)
 
     def fill(self, ids: IntArray, x: FloatArray, v: FloatArray) -> None:
         """Initialise the history of newly released vehicles with their current state."""
@@ -137,7 +137,7 @@ class Perception:
         if not self.errors:
             return
         xi = rng.standard_normal((2, self.is_hdv.size))
-        advance_errors_of(self.w_gap, self.w_ttc, _ints(ids), xi, self._decay, self._kick)
+        advance_errors_of(self.w_gap, self.w_ttc, _ints(ids), xi, self.decay, self.kick)
 
     @property
     def taus(self) -> FloatArray:
