@@ -44,7 +44,8 @@ from hcomc.models.transition import transition_gamma
 from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.sim import core
-from hcomc.sim.core import Core
+from hcomc.sim import core_state as layout
+from hcomc.sim.core_state import Core
 from hcomc.sim.demand import generate_demand
 from hcomc.sim.execution import ActivePlan, holding_lane, plan_record, virtual_leaders
 from hcomc.sim.fleet import Fleet
@@ -123,25 +124,25 @@ class Simulation:
         perceive = per.errors or max(per.taus) > 0
         f8, i8, b1 = np.float64, np.int64, np.bool_
         consts = np.zeros(13)
-        consts[[core.DT, core.WARMUP, core.WIDTH, core.ACCEL_START, core.ACCEL_END]] = (
+        consts[[layout.DT, layout.WARMUP, layout.WIDTH, layout.ACCEL_START, layout.ACCEL_END]] = (
             self.dt, config.warmup, road.lane_width, road.accel_lane_start, road.accel_lane_end
         )  # fmt: skip
-        consts[[core.CZ_START, core.ROAD_LENGTH, core.EMERGENCY]] = (
+        consts[[layout.CZ_START, layout.ROAD_LENGTH, layout.EMERGENCY]] = (
             road.control_zone_start, road.length, config.lane_change.emergency_decel
         )  # fmt: skip
-        consts[core.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
-        consts[[core.DECAY, core.KICK]] = per.decay, per.kick
-        consts[[core.GAP_ERROR, core.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
+        consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
+        consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
+        consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
         flags = np.zeros(9, dtype=i8)
-        flags[core.PERCEIVE], flags[core.ERRORS] = perceive, per.errors
-        flags[core.PLATOON] = config.scenario == "platoon"
-        flags[core.DECIDE_EVERY], flags[core.LOG_EVERY] = self._decide_every, self._log_every
-        flags[core.N_WARMUP] = self.n_warmup
-        flags[core.CONTROLLER] = self.controller is not None
-        flags[core.CAV_GAME] = config.lane_change.cav_game
+        flags[layout.PERCEIVE], flags[layout.ERRORS] = perceive, per.errors
+        flags[layout.PLATOON] = config.scenario == "platoon"
+        flags[layout.DECIDE_EVERY], flags[layout.LOG_EVERY] = self._decide_every, self._log_every
+        flags[layout.N_WARMUP] = self.n_warmup
+        flags[layout.CONTROLLER] = self.controller is not None
+        flags[layout.CAV_GAME] = config.lane_change.cav_game
         counters = np.zeros(6, dtype=i8)
         innov_steps = _INNOVATION_STEPS if per.errors else 0
-        counters[core.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
+        counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
         n_events = max(4096, 16 * n)
         return Core(
             matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
@@ -195,12 +196,12 @@ class Simulation:
     @property
     def step_index(self) -> int:
         """Steps simulated so far (warm-up included)."""
-        return int(self.core.counters[core.STEP])
+        return int(self.core.counters[layout.STEP])
 
     @property
     def vehicle_steps(self) -> int:
         """Sum over the steps simulated so far of the vehicles on the road."""
-        return int(self.core.counters[core.VEHICLE_STEPS])
+        return int(self.core.counters[layout.VEHICLE_STEPS])
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
@@ -211,7 +212,7 @@ class Simulation:
         self._record()
         self._advance_to(total, True, progress, total)
         self._flush_events()
-        rows = int(self.core.counters[core.ROWS])
+        rows = int(self.core.counters[layout.ROWS])
         self.log.mark_recorded(rows)
         self.log.finish(rows)
         self.log.meta["vehicle_steps"] = self.vehicle_steps
@@ -228,11 +229,11 @@ class Simulation:
         while self.step_index < stop:
             chunk = stop if progress is None else min(stop, (self.step_index // 100 + 1) * 100)
             reason = core.run_steps(self.core, chunk, log_rows, *arrays)
-            if reason == core.FLUSH:
+            if reason == layout.FLUSH:
                 self._flush_events()
-            elif reason == core.REFILL:
+            elif reason == layout.REFILL:
                 self._refill_innovations()
-            elif reason == core.NEED_PYTHON:
+            elif reason == layout.NEED_PYTHON:
                 self.step()
                 k = self.step_index - self.n_warmup
                 if log_rows and k > 0 and k % self._log_every == 0:
@@ -248,22 +249,22 @@ class Simulation:
 
     def _record(self) -> None:
         log = self.log
-        rows = int(self.core.counters[core.ROWS])
+        rows = int(self.core.counters[layout.ROWS])
         if rows >= log.x.shape[0]:
             raise IndexError(f"row {rows} outside the log's {log.x.shape[0]} rows")
         core.record_row(self.core, rows, self.t, log.t, log.x, log.y, log.v, log.a,
                         log.heading, log.lane, log.active)  # fmt: skip
-        self.core.counters[core.ROWS] = rows + 1
+        self.core.counters[layout.ROWS] = rows + 1
 
     def _flush_events(self) -> None:
         """Move the compiled step's buffered events into the log, in order."""
         c = self.core
-        for k in range(int(c.counters[core.N_EVENTS])):
+        for k in range(int(c.counters[layout.N_EVENTS])):
             self.log.add_event(
                 float(c.ev_t[k]), int(c.ev_kind[k]), int(c.ev_vehicle[k]), int(c.ev_other[k]),
                 float(c.ev_x[k]), float(c.ev_value[k]),
             )  # fmt: skip
-        c.counters[core.N_EVENTS] = 0
+        c.counters[layout.N_EVENTS] = 0
 
     def _refill_innovations(self) -> None:
         """Draw the next innovations of the HDV estimation errors: ``(2, N)`` standard normals
@@ -271,22 +272,22 @@ class Simulation:
         does not depend on how many steps one compiled call runs)."""
         c = self.core
         c.innov[:] = self.rng.standard_normal(c.innov.shape)
-        c.counters[core.INNOV_CURSOR] = 0
+        c.counters[layout.INNOV_CURSOR] = 0
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
         """Advance the whole traffic state by one step ``dt``, consulting the controller."""
         c, t = self.core, self.t
-        if c.flags[core.ERRORS] and c.counters[core.INNOV_CURSOR] >= c.innov.shape[0]:
+        if c.flags[layout.ERRORS] and c.counters[layout.INNOV_CURSOR] >= c.innov.shape[0]:
             self._refill_innovations()
-        if c.counters[core.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
+        if c.counters[layout.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
             self._flush_events()
         self._release(t)
         ids = np.flatnonzero(self.active)
         if ids.size == 0:
             core.push_history(c)
             return
-        c.counters[core.VEHICLE_STEPS] += ids.size
+        c.counters[layout.VEHICLE_STEPS] += ids.size
         changing = self.origin[ids] != self.target[ids]
         self._identify_key_vehicles(ids, changing, t)
         if self.controller is not None:
@@ -310,7 +311,7 @@ class Simulation:
         core.step_finish(c, ids, t, acc, vs, ls)
         if self.plans:
             self._finish_plans()
-        c.flags[core.HAS_PLANS] = bool(self.plans)
+        c.flags[layout.HAS_PLANS] = bool(self.plans)
         self._flush_events()
 
     def _release(self, t: float) -> None:

@@ -1,0 +1,110 @@
+"""Kernels of the compiled step that decide and start lane changes: MOBIL and the ramp's
+gap acceptance (:mod:`hcomc.sim.mobil`), commanded changes of merge plans, and the start of
+the quintic manoeuvre (Eq. 4-6)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hcomc.sim.core_state import (
+    ACCEL_END,
+    ACCEL_START,
+    EV_FALLBACK,
+    EV_LC_START,
+    MAIN_1,
+    MAIN_2,
+    RAMP,
+    Core,
+    add_event,
+)  # fmt: skip
+from hcomc.sim.mobil import mobil_decide
+from hcomc.sim.neighbours import neighbour
+
+
+# --------------------------------------------------------------------------- decide
+@njit(cache=True)
+def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
+    """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide`) for the vehicles at
+    positions ``cand_pos`` of ``ids``."""
+    n = cand_pos.size
+    cand = np.empty(n, dtype=np.int64)
+    lanes = np.empty(n, dtype=np.int64)
+    leader = np.empty(n, dtype=np.int64)
+    follower = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        p = cand_pos[k]
+        cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
+        follower[k] = neighbour(vs, ls, rank[p] - 1, ls[rank[p]])
+    return mobil_decide(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
+                        leader, follower, target, force, c.lc_params)  # fmt: skip
+
+
+@njit(cache=True)
+def commanded_changes(
+    c: Core, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
+    ks: np.ndarray, rank: np.ndarray, req_vehicle: np.ndarray, req_target: np.ndarray,
+    req_duration: np.ndarray, req_release_x: np.ndarray, req_vr: np.ndarray,
+    req_other: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """Lane changes a live plan commands now, each checked by the MOBIL safety criterion.
+
+    Result per request: 1 started; -1 failed for good (the unsafe vehicle is at or past
+    ``req_release_x``: a FALLBACK event for ``req_vr``/``req_other`` is logged); 0 not yet.
+    ``req_duration`` NaN keeps the vehicle's own lane-change duration.
+    """
+    out = np.zeros(req_vehicle.size, dtype=np.int64)
+    for r in range(req_vehicle.size):
+        i = req_vehicle[r]
+        pos = np.array([np.searchsorted(ids, i)])
+        tgt = np.array([req_target[r]])
+        chosen, _ = _mobil(c, ids, pos, lead, vs, ls, ks, rank, tgt, np.ones(1, dtype=np.bool_))
+        if chosen.size:
+            start_lane_changes(c, chosen, tgt, t, req_duration[r : r + 1])
+            out[r] = 1
+        elif c.x[req_vr[r]] >= req_release_x[r]:
+            out[r] = -1
+            add_event(c, t, EV_FALLBACK, req_vr[r], req_other[r], c.x[req_vr[r]], math.nan)
+    return out
+
+
+@njit(cache=True)
+def discretionary_changes(
+    c: Core, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
+    vs: np.ndarray, ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
+    holding its lane for a plan; ramp vehicles on the acceleration lane only)."""
+    sel = np.zeros(ids.size, dtype=np.bool_)
+    for k in range(ids.size):
+        i = ids[k]
+        ramp = c.lane[i] == RAMP
+        on_accel = ramp and c.consts[ACCEL_START] <= c.x[i] <= c.consts[ACCEL_END]
+        sel[k] = not changing[k] and not c.scripted[i] and (not ramp or on_accel) and not holding[i]
+    pos = np.flatnonzero(sel)
+    target = np.empty(pos.size, dtype=np.int64)
+    for k in range(pos.size):
+        target[k] = MAIN_2 if c.lane[ids[pos[k]]] == MAIN_1 else MAIN_1
+    force = np.zeros(pos.size, dtype=np.bool_)
+    return _mobil(c, ids, pos, lead, vs, ls, ks, rank, target, force)
+
+
+@njit(cache=True)
+def start_lane_changes(
+    c: Core, chosen: np.ndarray, target: np.ndarray, t: float, duration: np.ndarray
+) -> None:
+    """Begin quintic lane changes (Eq. 4-6); x_f is predicted from the current speed.
+    ``duration`` (one value, NaN: the vehicle's own) is a merge plan's duration for VR."""
+    for k in range(chosen.size):
+        i = chosen[k]
+        if duration.size and not math.isnan(duration[0]):
+            c.lc_dur[i] = duration[0]
+        c.origin[i] = c.lane[i]
+        c.target[i] = target[k]
+        c.lc_t0[i] = t
+        c.lc_x0[i] = c.x[i]
+        c.lc_xf[i] = c.x[i] + max(c.v[i] * c.lc_dur[i], 3.0 * c.length[i])
+    for k in range(chosen.size):
+        add_event(c, t, EV_LC_START, chosen[k], -1, c.x[chosen[k]], target[k])

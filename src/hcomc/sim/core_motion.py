@@ -1,0 +1,320 @@
+"""Kernels of the compiled step that move vehicles: release, car following with HDV
+perception (Eq. 1-3), the Eq. 14 blend, lane-end and virtual leaders, collisions (Eq. 7),
+integration, quintic lateral motion (Eq. 4-6) and exits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hcomc.models.following import follow_accel
+from hcomc.models.quintic import lateral_state
+from hcomc.models.transition import blend, transition_psi
+from hcomc.safety.collision import vehicle_pair_collides
+from hcomc.sim.core_state import (
+    ACCEL_END,
+    DT,
+    EMERGENCY,
+    ERRORS,
+    EV_COLLISION,
+    EV_EXIT,
+    EV_INSERTION,
+    EV_LC_END,
+    EV_MERGE,
+    EV_WAIT,
+    GAMMA,
+    GAP_ERROR,
+    N_COLLIDING,
+    PERCEIVE,
+    RAMP,
+    ROAD_LENGTH,
+    STEP,
+    TTC_ERROR,
+    WARMUP,
+    WIDTH,
+    Core,
+    _centre,
+    add_event,
+)  # fmt: skip
+from hcomc.sim.neighbours import lookup_one, neighbour, sort_entries
+from hcomc.sim.perception import perceive_one
+
+_WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
+_WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
+
+
+# ---------------------------------------------------------------------------- release
+@njit(cache=True)
+def _insert(c: Core, i: int, lane: int, t: float) -> bool:
+    """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
+
+    The release speed is kept if the gap exceeds ``s0 + v T``; otherwise the vehicle is
+    released at the speed of the vehicle ahead if that gap suffices, else it waits. The
+    initial fill (released at ``-warmup``) does not check gaps.
+    """
+    x, v = c.d_x[i], c.d_v[i]
+    if c.d_t[i] > -c.consts[WARMUP] + 1e-9:
+        j, best = -1, math.inf
+        for k in range(c.x.size):
+            in_lane = c.active[k] and (c.lane[k] == lane or c.target[k] == lane)
+            if in_lane and x <= c.x[k] < best:
+                j, best = k, c.x[k]
+        if j >= 0:
+            gap = c.x[j] - c.length[j] - x
+            s0, T = c.matrix[2, i], c.matrix[1, i]
+            if gap < s0 + v * T:
+                v = min(v, c.v[j])
+                if gap < s0 + v * T:
+                    return False
+    c.x[i], c.v[i], c.active[i] = x, v, True
+    c.x_hist[:, i] = x
+    c.v_hist[:, i] = v
+    add_event(c, t, EV_INSERTION, i, -1, x, t - c.d_t[i])
+    return True
+
+
+@njit(cache=True)
+def release(c: Core, t: float) -> None:
+    """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue).
+    Releasing twice at the same t is a no-op."""
+    for lane in range(3):
+        start, end = c.queue_start[lane], c.queue_start[lane + 1]
+        pos = c.queue_pos[lane]
+        while start + pos < end and c.d_t[c.queues[start + pos]] <= t + 1e-9:
+            if not _insert(c, c.queues[start + pos], lane, t):
+                break
+            pos += 1
+        c.queue_pos[lane] = pos
+
+
+# ------------------------------------------------------------------------- perceive
+@njit(cache=True, inline="always")
+def follow_one(c: Core, i: int, leader: int, perceive: bool) -> float:
+    """Car-following acceleration of i behind ``leader`` (-1: none), HDVs perceiving Eq. 2
+    when ``perceive`` (reaction delays and estimation errors)."""
+    has = leader >= 0
+    lead = leader if has else i
+    s = c.x[lead] - c.length[lead] - c.x[i] if has else math.inf
+    v, vl, al = c.v[i], (c.v[lead] if has else c.v[i]), (c.a[lead] if has else 0.0)
+    if perceive and c.is_hdv[i]:
+        s, v, vl = perceive_one(
+            c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.counters[STEP], i, leader, c.length[lead],
+            c.consts[DT], c.taus, c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0,
+        )  # fmt: skip
+    m = c.matrix[:, i]
+    return follow_accel(s, v, vl, al, m[0], m[1], m[2], m[3], m[4], m[5], m[6], c.iidm[i])
+
+
+@njit(cache=True)
+def follow_many(c: Core, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
+    """:func:`follow_one` of each vehicle of ``ids`` behind its leader."""
+    out = np.empty(ids.size)
+    perceive = c.flags[PERCEIVE] > 0
+    for k in range(ids.size):
+        out[k] = follow_one(c, ids[k], leaders[k], perceive)
+    return out
+
+
+@njit(cache=True)
+def lane_index(c: Core, ids: np.ndarray, changing: np.ndarray):
+    """Sorted entries of this step: every vehicle in its lane and a changer also in the
+    other lane its body overlaps (the target lane from its start, the origin lane while its
+    body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``."""
+    width = c.consts[WIDTH]
+    n = ids.size
+    n_ch = 0
+    for k in range(n):
+        n_ch += changing[k]
+    veh = np.empty(n + n_ch, dtype=np.int64)
+    lanes = np.empty(n + n_ch, dtype=np.int64)
+    xs = np.empty(n + n_ch)
+    in_ori = np.zeros(n, dtype=np.bool_)
+    in_tgt = np.zeros(n, dtype=np.bool_)
+    m = n
+    for k in range(n):
+        i = ids[k]
+        veh[k], lanes[k], xs[k] = i, c.lane[i], c.x[i]
+    for k in range(n):  # changers' second entries follow all first entries, in ids order
+        i = ids[k]
+        if not changing[k]:
+            continue
+        reach = 0.5 * (width + c.width[i])
+        in_ori[k] = abs(c.y[i] - _centre(c.origin[i], width)) < reach
+        in_tgt[k] = abs(c.y[i] - _centre(c.target[i], width)) < reach
+        crossed = c.lane[i] == c.target[i]
+        if crossed and not in_ori[k]:
+            continue
+        veh[m], lanes[m], xs[m] = i, (c.origin[i] if crossed else c.target[i]), c.x[i]
+        m += 1
+    vs, ls, ks, rank = sort_entries(veh[:m], lanes[:m], xs[:m])
+    return vs, ls, ks, rank, in_ori, in_tgt
+
+
+@njit(cache=True)
+def step_accelerations(
+    c: Core, ids: np.ndarray, t: float, following: np.ndarray, vv_fol: np.ndarray,
+    vv_x: np.ndarray, vv_v: np.ndarray, vv_a: np.ndarray, vv_len: np.ndarray,
+):  # fmt: skip
+    """Accelerations of every active vehicle ``ids`` for this step, from one snapshot.
+
+    Car following (Eq. 1/3, HDVs perceiving Eq. 2) behind the leader of the lane it drives
+    in; a changer blends (Eq. 14) the accelerations behind its origin- and target-lane
+    leaders and respects the leader of every lane its body overlaps; ramp vehicles that have
+    not started merging stop at the acceleration-lane end unless they follow a live plan
+    (``following``); commanded vehicles also follow their virtual leaders (rows ``vv_*``);
+    every deceleration is limited to the emergency value; a scripted leader follows its
+    profile exactly. Returns ``(acc, changing, vehicle, lane, key, rank, lead)``.
+    """
+    n = ids.size
+    changing = np.empty(n, dtype=np.bool_)
+    for k in range(n):
+        changing[k] = c.origin[ids[k]] != c.target[ids[k]]
+    vs, ls, ks, rank, in_ori, in_tgt = lane_index(c, ids, changing)
+    perceive = c.flags[PERCEIVE] > 0
+    lead = np.empty(n, dtype=np.int64)
+    acc = np.empty(n)
+    for k in range(n):
+        i = ids[k]
+        pos = rank[k]
+        lead[k] = neighbour(vs, ls, pos + 1, ls[pos])
+        if changing[k]:
+            lead[k] = lookup_one(ks, ls, vs, c.origin[i], c.x[i])[0]
+        acc[k] = follow_one(c, i, lead[k], perceive)
+        if changing[k]:
+            a_ori = acc[k]
+            a_new = follow_one(c, i, lookup_one(ks, ls, vs, c.target[i], c.x[i])[0], perceive)
+            psi = transition_psi(t - c.lc_t0[i], c.lc_dur[i], c.consts[GAMMA])
+            b = blend(a_ori, a_new, psi)
+            if in_ori[k]:
+                b = min(b, a_ori)
+            acc[k] = min(b, a_new) if in_tgt[k] else b
+    accel_end = c.consts[ACCEL_END]
+    for k in range(n):  # the acceleration-lane end, a static obstacle seen exactly
+        i = ids[k]
+        if c.lane[i] == RAMP and not changing[k] and not following[i]:
+            m = c.matrix[:, i]
+            a_stop = follow_accel(accel_end - c.x[i], c.v[i], 0.0, 0.0, m[0], m[1], m[2], m[3],
+                                  m[4], m[5], m[6], c.iidm[i])  # fmt: skip
+            acc[k] = min(acc[k], a_stop)
+    if vv_fol.size:
+        before = acc.copy()
+        for r in range(vv_fol.size):  # a later row for the same follower replaces an earlier
+            i = vv_fol[r]
+            if vv_x[r] > c.x[i]:
+                k = np.searchsorted(ids, i)
+                m = c.matrix[:, i]
+                a_v = follow_accel(vv_x[r] - vv_len[r] - c.x[i], c.v[i], vv_v[r], vv_a[r], m[0],
+                                   m[1], m[2], m[3], m[4], m[5], m[6], c.iidm[i])  # fmt: skip
+                acc[k] = min(before[k], a_v)
+    dt = c.consts[DT]
+    for k in range(n):
+        i = ids[k]
+        acc[k] = max(acc[k], -c.consts[EMERGENCY])
+        if c.scripted[i]:  # a scripted profile is followed exactly
+            target = np.interp(t + dt, c.profile[:, 0], c.profile[:, 1])
+            acc[k] = (target - c.v[i]) / dt
+    return acc, changing, vs, ls, ks, rank, lead
+
+
+# ---------------------------------------------------------------------------- check
+@njit(cache=True)
+def check_collisions(c: Core, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
+    """Oriented-rectangle test (Eq. 7) of each entry against its next two leaders per lane;
+    a pair is logged when its contact begins.
+
+    A 1-D prefilter skips pairs whose x-extents cannot overlap: a rectangle whose front
+    bumper centre is at x lies within ``[x - L - W/2, x + W/2]`` for any heading.
+    """
+    n = c.x.size
+    codes = np.empty(4 * vs.size + 1, dtype=np.int64)
+    m = 0
+    for gap in (1, 2):
+        for p in range(vs.size - gap):
+            i, j = vs[p], vs[p + gap]
+            if ls[p] != ls[p + gap] or i == j:
+                continue
+            if c.x[i] + 0.5 * c.width[i] < c.x[j] - c.length[j] - 0.5 * c.width[j]:
+                continue
+            if vehicle_pair_collides(
+                c.x[i],
+                c.y[i],
+                c.heading[i],
+                c.length[i],
+                c.width[i],
+                c.x[j],
+                c.y[j],
+                c.heading[j],
+                c.length[j],
+                c.width[j],
+            ):
+                codes[m] = min(i, j) * n + max(i, j)
+                m += 1
+    now = np.unique(codes[:m])
+    before = c.colliding[: c.counters[N_COLLIDING]]
+    for code in now:
+        k = np.searchsorted(before, code)
+        if k < before.size and before[k] == code:
+            continue
+        i, j = code // n, code % n
+        add_event(c, t, EV_COLLISION, i, j, c.x[i], math.nan)
+    c.colliding[: now.size] = now
+    c.counters[N_COLLIDING] = now.size
+
+
+# ------------------------------------------------------------------------ integrate
+@njit(cache=True)
+def integrate(c: Core, ids: np.ndarray, acc: np.ndarray) -> None:
+    """Ballistic update; a vehicle that would reverse stops exactly at v = 0."""
+    dt = c.consts[DT]
+    for k in range(ids.size):
+        i = ids[k]
+        v0, ak = c.v[i], acc[k]
+        v1 = v0 + ak * dt
+        if v1 < 0.0:
+            c.x[i] += -(v0 * v0) / (2.0 * ak)
+            c.v[i] = 0.0
+            c.a[i] = -v0 / dt
+        else:
+            c.x[i] += v0 * dt + 0.5 * ak * dt * dt
+            c.v[i] = v1
+            c.a[i] = ak
+
+
+@njit(cache=True)
+def lateral(c: Core, t: float) -> None:
+    """Move changing vehicles along their quintic path; switch lane at the lane line."""
+    width = c.consts[WIDTH]
+    for i in range(c.x.size):
+        if not c.active[i] or c.origin[i] == c.target[i]:
+            continue
+        x0, xf = c.lc_x0[i], c.lc_xf[i]
+        y, dy_dx, _ = lateral_state(c.x[i], x0, xf, _centre(c.origin[i], width),
+                                    _centre(c.target[i], width))  # fmt: skip
+        c.y[i] = y
+        c.heading[i] = math.atan(dy_dx)
+        xi = (c.x[i] - x0) / (xf - x0)
+        c.lane[i] = c.target[i] if xi >= 0.5 else c.origin[i]
+        if xi >= 1.0:
+            add_event(c, t, EV_LC_END, i, -1, c.x[i], c.target[i])
+            if c.origin[i] == RAMP:
+                add_event(c, t, EV_MERGE, i, -1, c.x[i], math.nan)
+            c.lc_dur[i] = c.lc_duration[i]
+            c.origin[i] = c.target[i]
+            c.y[i] = _centre(c.target[i], width)
+            c.heading[i] = 0.0
+
+
+@njit(cache=True)
+def bookkeeping(c: Core, ids: np.ndarray, t: float) -> None:
+    """Exits past the road end; ramp vehicles waiting at the acceleration-lane end."""
+    for i in ids:
+        if c.x[i] - c.length[i] > c.consts[ROAD_LENGTH]:
+            c.active[i] = False
+            add_event(c, t, EV_EXIT, i, -1, c.x[i], math.nan)
+    for i in ids:
+        if (c.lane[i] == RAMP and c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED
+                and c.x[i] > c.consts[ACCEL_END] - _WAIT_ZONE and not c.waited[i]):  # fmt: skip
+            c.waited[i] = True
+            add_event(c, t, EV_WAIT, i, -1, c.x[i], math.nan)

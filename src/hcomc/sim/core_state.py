@@ -1,0 +1,107 @@
+"""State of the compiled simulation step: the :class:`Core` arrays and their layout.
+
+:class:`Core` holds every array the step reads or writes (per-vehicle parameters and state,
+the HDV perception buffers, the demand queues, the event buffer, counters) as one typed
+record that numba passes to every kernel of :mod:`hcomc.sim.core`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+# lanes and event kinds (IntEnums of hcomc.road and hcomc.sim.log, as plain ints)
+RAMP, MAIN_1, MAIN_2 = 0, 1, 2
+EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
+EV_FALLBACK = 8
+# counters
+STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS = range(6)
+# consts
+(DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
+ KICK, GAP_ERROR, TTC_ERROR) = range(13)  # fmt: skip
+# flags
+(PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER, CAV_GAME,
+ HAS_PLANS) = range(9)  # fmt: skip
+# reasons run_steps returns
+DONE, NEED_PYTHON, FLUSH, REFILL = range(4)
+
+_WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
+_WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
+
+
+class Core(NamedTuple):
+    """Every array of one run's step (shape (N,) unless noted)."""
+
+    matrix: np.ndarray  # (7, N): v0, T, s0, a, b, delta, coolness
+    iidm: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+    lc_duration: np.ndarray
+    scripted: np.ndarray
+    is_hdv: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    heading: np.ndarray
+    lane: np.ndarray
+    origin: np.ndarray  # lane a change started from (= lane when keeping)
+    target: np.ndarray  # lane a change goes to (= lane when keeping)
+    lc_t0: np.ndarray
+    lc_x0: np.ndarray
+    lc_xf: np.ndarray
+    lc_dur: np.ndarray
+    active: np.ndarray
+    waited: np.ndarray
+    identified: np.ndarray  # key vehicles recorded at control-zone entry
+    planned: np.ndarray  # a controller planned for this ramp vehicle
+    x_hist: np.ndarray  # (K, N) perception ring buffers
+    v_hist: np.ndarray
+    w_gap: np.ndarray
+    w_ttc: np.ndarray
+    taus: np.ndarray  # (3,) reaction times on gap, speed, approach rate [s]
+    d_t: np.ndarray  # demand: release time, position, speed
+    d_x: np.ndarray
+    d_v: np.ndarray
+    queues: np.ndarray  # vehicles by lane, concatenated
+    queue_start: np.ndarray  # (4,) start of each lane's queue in ``queues``
+    queue_pos: np.ndarray  # (3,) next vehicle of each queue
+    colliding: np.ndarray  # pair codes i * N + j of the pairs in contact last step
+    ev_t: np.ndarray  # event buffer
+    ev_kind: np.ndarray
+    ev_vehicle: np.ndarray
+    ev_other: np.ndarray
+    ev_x: np.ndarray
+    ev_value: np.ndarray
+    counters: np.ndarray  # int64, see STEP ... ROWS
+    consts: np.ndarray  # float64, see DT ... TTC_ERROR
+    flags: np.ndarray  # int64, see PERCEIVE ... HAS_PLANS
+    lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
+    profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
+    innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
+
+
+# ----------------------------------------------------------------------------- events
+@njit(cache=True, inline="always")
+def add_event(c: Core, t: float, kind: int, i: int, other: int, x: float, value: float) -> None:
+    """Append an event to the buffer (the engine flushes it to the log)."""
+    k = c.counters[N_EVENTS]
+    c.ev_t[k], c.ev_kind[k], c.ev_vehicle[k], c.ev_other[k] = t, kind, i, other
+    c.ev_x[k], c.ev_value[k] = x, value
+    c.counters[N_EVENTS] = k + 1
+
+
+@njit(cache=True, inline="always")
+def _centre(lane: int, width: float) -> float:
+    return (lane - 1.0) * width
+
+
+@njit(cache=True)
+def push_history(c: Core) -> None:
+    """End of a step: count it and store the state in the perception ring buffer."""
+    c.counters[STEP] += 1
+    row = c.counters[STEP] % c.x_hist.shape[0]
+    c.x_hist[row] = c.x
+    c.v_hist[row] = c.v
