@@ -1,40 +1,21 @@
-"""Simulation log: preallocated struct-of-arrays trajectories plus a list of events.
+"""Simulation log: preallocated struct-of-arrays trajectories plus a table of events.
 
 The engine writes one row per logging step with :meth:`SimulationLog.record` (a handful
 of vectorised numpy operations, no Python loop over vehicles) and appends rare discrete
 events (insertions, lane changes, merges, collisions, plan fallbacks ...) with
 :meth:`SimulationLog.add_event`. Metrics, tables and figures read the log afterwards.
 
-Layout (``T`` logging steps x ``N`` vehicle slots):
-
-=========== ========= ======== ======================================= ==============
-array       shape     dtype    meaning                                 unused cell
-=========== ========= ======== ======================================= ==============
-``t``       (T,)      float64  time of the row [s]                     NaN
-``x``       (T, N)    float32  longitudinal position [m]               NaN
-``y``       (T, N)    float32  lateral position [m]                    NaN
-``v``       (T, N)    float32  speed [m/s]                             NaN
-``a``       (T, N)    float32  acceleration [m/s^2]                    NaN
-``heading`` (T, N)    float32  heading angle [rad]                     NaN
-``lane``    (T, N)    int8     lane index (0 = ramp, 1, 2)             -1
-``active``  (T, N)    bool     vehicle is on the road                  False
-``kind``    (N,)      int8     0 = HDV, 1 = CAV                        -
-``length``  (N,)      float32  vehicle length [m]                      -
-``width``   (N,)      float32  vehicle width [m]                       -
-=========== ========= ======== ======================================= ==============
-
-A (step, vehicle) cell costs 22 bytes (float32 states; float32 resolution at
-x = 1500 [m] is about 1e-4 [m]). A 1 GiB budget for a 1-hour run with
-2000 vehicle slots therefore needs a logging interval of at least 0.15 [s]
-(3600 / 0.15 * 2000 * 22 B = 0.98 GiB); at 0.1 [s] the arrays take 1.48 GiB.
-
-Files (``.npz``, ``.parquet``, written atomically and read back exactly) are handled by
-:mod:`hcomc.sim.log_io` behind :meth:`SimulationLog.save` and :meth:`SimulationLog.load`.
+The trajectories are ``T`` logging rows x ``N`` vehicle slots: ``t`` (T,) float64 and
+``x, y, v, a, heading`` (float32), ``lane`` (int8), ``active`` (bool), each a plain
+C-contiguous (T, N) numpy array, plus per-slot ``kind``, ``length``, ``width``. The layout,
+the reasons for each dtype and the memory figures are in :mod:`hcomc.sim.log_layout`; the
+events in :mod:`hcomc.sim.log_events`. Files (``.npz``, ``.parquet``, written atomically
+and read back exactly) are handled by :mod:`hcomc.sim.log_io` behind
+:meth:`SimulationLog.save` and :meth:`SimulationLog.load`.
 """
 
 from __future__ import annotations
 
-import enum
 import math
 import os
 from pathlib import Path
@@ -44,80 +25,52 @@ import numpy as np
 import pandas as pd
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.sim.log_events import EVENT_DTYPE, EventKind, EventTable
+from hcomc.sim.log_layout import (
+    ARRAY_FIELDS,
+    CELL_FIELDS,
+    STATE_FIELDS,
+    VEHICLE_FIELDS,
+    allocate_rows,
+    as_layout,
+    bytes_needed,
+)
 
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
-
-
-_STATE_FIELDS = ("x", "y", "v", "a", "heading")
-_VEHICLE_FIELDS = ("kind", "length", "width")
-_ARRAY_FIELDS = ("t", *_STATE_FIELDS, "lane", "active", *_VEHICLE_FIELDS)
-
-
-class EventKind(enum.IntEnum):
-    """Kinds of discrete events recorded in a :class:`SimulationLog`."""
-
-    INSERTION = 0
-    """A vehicle entered the simulation."""
-    LANE_CHANGE_START = 1
-    """A vehicle started a (quintic) lane change; ``value`` = target lane."""
-    LANE_CHANGE_END = 2
-    """A vehicle completed a lane change; ``value`` = new lane."""
-    MERGE = 3
-    """A ramp vehicle completed its merge into lane 1."""
-    COLLISION = 4
-    """Two vehicles' rectangles overlap; ``vehicle`` and ``other`` are the pair."""
-    RAMP_WAIT = 5
-    """A ramp vehicle stopped at the end of the acceleration lane."""
-    EXIT = 6
-    """A vehicle left the simulated road."""
-    PLAN = 7
-    """A merge controller issued a plan for a ramp vehicle."""
-    FALLBACK = 8
-    """A controller fell back to a safe plan (e.g. all candidates infeasible)."""
-
-
-EVENT_DTYPE = np.dtype(
-    [
-        ("t", "f8"),  # [s]
-        ("kind", "i1"),  # EventKind
-        ("vehicle", "i8"),  # vehicle slot
-        ("other", "i8"),  # second vehicle slot, -1 if none
-        ("x", "f8"),  # position [m], NaN if not given
-        ("value", "f8"),  # kind-specific payload, NaN if not given
-    ]
-)
-"""Structured dtype of :attr:`SimulationLog.events`."""
 
 
 class SimulationLog:
     """Preallocated struct-of-arrays log of one simulation run.
 
     Build it with :meth:`allocate` (or :meth:`load`); the constructor takes ready arrays
-    and is meant for internal use. See the module docstring for the array layout.
+    and is meant for internal use. See :mod:`hcomc.sim.log_layout` for the array layout.
 
     Parameters
     ----------
     dt : float
         Logging interval [s].
     t : numpy.ndarray
-        (T,) float64 row times [s].
+        (T,) row times [s].
     x, y, v, a, heading : numpy.ndarray
-        (T, N) float32 position [m], lateral position [m], speed [m/s],
-        acceleration [m/s^2], heading [rad].
+        (T, N) position [m], lateral position [m], speed [m/s], acceleration [m/s^2],
+        heading [rad].
     lane : numpy.ndarray
-        (T, N) int8 lane index, -1 when inactive.
+        (T, N) lane index, -1 when inactive.
     active : numpy.ndarray
-        (T, N) bool activity mask.
+        (T, N) activity mask.
     kind : numpy.ndarray
-        (N,) int8 vehicle type, 0 = HDV, 1 = CAV.
+        (N,) vehicle type, 0 = HDV, 1 = CAV.
     length, width : numpy.ndarray
-        (N,) float32 vehicle dimensions [m].
+        (N,) vehicle dimensions [m].
     meta : dict or None
         JSON-serialisable run metadata (seed, config, version ...).
     n_recorded : int
         Number of rows already written.
     events : numpy.ndarray or None
         Initial events, :data:`EVENT_DTYPE`.
+
+    Arrays already of the layout's dtype and C-contiguous are kept as they are (no
+    copy); others are converted (e.g. float64 states are rounded to float32).
     """
 
     def __init__(
@@ -142,46 +95,48 @@ class SimulationLog:
         dt = float(dt)
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt (logging interval) must be finite and > 0 [s], got {dt}")
+        given = {
+            "t": t, "x": x, "y": y, "v": v, "a": a, "heading": heading, "lane": lane,
+            "active": active, "kind": kind, "length": length, "width": width,
+        }  # fmt: skip
+        x_shape = np.shape(x)
+        if len(x_shape) != 2:
+            raise ValueError(f"x must be two-dimensional (rows x vehicles), got shape {x_shape}")
+        n_steps, n_vehicles = x_shape
+        expected: dict[str, tuple[int, ...]] = {"t": (n_steps,)}
+        expected.update(dict.fromkeys(CELL_FIELDS, (n_steps, n_vehicles)))
+        expected.update(dict.fromkeys(VEHICLE_FIELDS, (n_vehicles,)))
+        for name, shape in expected.items():
+            if np.shape(given[name]) != shape:
+                raise ValueError(f"{name} has shape {np.shape(given[name])}, expected {shape}")
+        arrays = {name: as_layout(name, given[name]) for name in ARRAY_FIELDS}
         self.dt: float = dt
-        self.t: FloatArray = t
-        self.x = x
-        self.y = y
-        self.v = v
-        self.a = a
-        self.heading = heading
-        self.lane = lane
-        self.active = active
-        self.kind = kind
-        self.length = length
-        self.width = width
+        self.t: FloatArray = arrays["t"]
+        self.x: np.ndarray = arrays["x"]
+        self.y: np.ndarray = arrays["y"]
+        self.v: np.ndarray = arrays["v"]
+        self.a: np.ndarray = arrays["a"]
+        self.heading: np.ndarray = arrays["heading"]
+        self.lane: np.ndarray = arrays["lane"]
+        self.active: BoolArray = arrays["active"]
+        self.kind: np.ndarray = arrays["kind"]
+        self.length: np.ndarray = arrays["length"]
+        self.width: np.ndarray = arrays["width"]
         self.meta: dict[str, Any] = {} if meta is None else meta
-        n_steps, n_vehicles = self.x.shape
-        for name in (*_STATE_FIELDS, "lane", "active"):
-            if getattr(self, name).shape != (n_steps, n_vehicles):
-                raise ValueError(
-                    f"{name} has shape {getattr(self, name).shape}, "
-                    f"expected {(n_steps, n_vehicles)}"
-                )
-        if self.t.shape != (n_steps,):
-            raise ValueError(f"t has shape {self.t.shape}, expected {(n_steps,)}")
-        for name in _VEHICLE_FIELDS:
-            if getattr(self, name).shape != (n_vehicles,):
-                raise ValueError(
-                    f"{name} has shape {getattr(self, name).shape}, expected {(n_vehicles,)}"
-                )
         if not 0 <= n_recorded <= n_steps:
             raise ValueError(f"n_recorded must be in [0, {n_steps}], got {n_recorded}")
         self._n_recorded = int(n_recorded)
-        self._events: list[tuple[float, int, int, int, float, float]] = []
-        if events is not None:
-            self._events.extend(tuple(e.item()) for e in np.asarray(events, EVENT_DTYPE))
+        self._event_table = EventTable(n_vehicles, events)
 
     # ------------------------------------------------------------------ construction
     @staticmethod
     def bytes_needed(n_steps: int, n_vehicles: int) -> int:
-        """Memory of the (T x N) arrays of a log [bytes]: five float32 states, int8 lane and
-        bool active per cell (events and per-vehicle arrays are negligible)."""
-        return n_steps * n_vehicles * (len(_STATE_FIELDS) * 4 + 1 + 1)
+        """Exact memory of the arrays of a (T x N) log [bytes], events excluded.
+
+        Equals :attr:`nbytes` of the log :meth:`allocate` would build; see
+        :func:`hcomc.sim.log_layout.bytes_needed`.
+        """
+        return bytes_needed(n_steps, n_vehicles)
 
     @classmethod
     def allocate(
@@ -240,22 +195,21 @@ class SimulationLog:
             arr = per_vehicle[name].astype(np.float64)
             if arr.size and not (np.isfinite(arr).all() and (arr > 0).all()):
                 raise ValueError(f"{name} must be finite and > 0 [m]")
-        shape = (n_steps, n_vehicles)
-        states = {name: np.full(shape, np.nan, dtype=np.float32) for name in _STATE_FIELDS}
+        rows = allocate_rows(n_steps, n_vehicles)
         return cls(
             dt=dt,
-            t=np.full(n_steps, np.nan, dtype=np.float64),
-            lane=np.full(shape, -1, dtype=np.int8),
-            active=np.zeros(shape, dtype=np.bool_),
-            kind=kind_arr.astype(np.int8),
-            length=per_vehicle["length"].astype(np.float32),
-            width=per_vehicle["width"].astype(np.float32),
             meta=meta,
-            x=states["x"],
-            y=states["y"],
-            v=states["v"],
-            a=states["a"],
-            heading=states["heading"],
+            t=rows["t"],
+            x=rows["x"],
+            y=rows["y"],
+            v=rows["v"],
+            a=rows["a"],
+            heading=rows["heading"],
+            lane=rows["lane"],
+            active=rows["active"],
+            kind=per_vehicle["kind"],
+            length=per_vehicle["length"],
+            width=per_vehicle["width"],
         )
 
     # ------------------------------------------------------------------ sizes
@@ -282,13 +236,13 @@ class SimulationLog:
     @property
     def nbytes(self) -> int:
         """Memory held by the log's arrays [bytes] (events excluded)."""
-        return int(sum(getattr(self, name).nbytes for name in _ARRAY_FIELDS))
+        return int(sum(getattr(self, name).nbytes for name in ARRAY_FIELDS))
 
     def __repr__(self) -> str:
         return (
             f"SimulationLog(n_steps={self.n_steps}, n_vehicles={self.n_vehicles}, "
             f"dt={self.dt}, n_recorded={self.n_recorded}, "
-            f"vehicle_steps={self.vehicle_steps}, n_events={len(self._events)})"
+            f"vehicle_steps={self.vehicle_steps}, n_events={len(self._event_table)})"
         )
 
     # ------------------------------------------------------------------ writing
@@ -380,13 +334,7 @@ class SimulationLog:
         ValueError
             On an unknown *kind* or a vehicle index out of range.
         """
-        kind = EventKind(kind)
-        n = self.x.shape[1]
-        if not 0 <= vehicle < n:
-            raise ValueError(f"event vehicle {vehicle} outside [0, {n})")
-        if not -1 <= other < n:
-            raise ValueError(f"event other vehicle {other} outside [-1, {n})")
-        self._events.append((float(t), int(kind), int(vehicle), int(other), float(x), float(value)))
+        self._event_table.add(t, kind, vehicle, other, x, value)
 
     def finish(self, n: int | None = None) -> SimulationLog:
         """Trim the log to its first *n* rows, releasing the memory of the rest.
@@ -405,7 +353,7 @@ class SimulationLog:
         if not 0 <= n <= self.n_steps:
             raise ValueError(f"cannot trim to {n} rows, log has {self.n_steps}")
         if n != self.n_steps:
-            for name in ("t", *_STATE_FIELDS, "lane", "active"):
+            for name in ("t", *CELL_FIELDS):
                 setattr(self, name, getattr(self, name)[:n].copy())
         self._n_recorded = min(self._n_recorded, n)
         return self
@@ -416,29 +364,15 @@ class SimulationLog:
     @property
     def events(self) -> np.ndarray:
         """All events as a structured array (:data:`EVENT_DTYPE`), stably sorted by t."""
-        arr = np.array(self._events, dtype=EVENT_DTYPE)
-        return arr[np.argsort(arr["t"], kind="stable")]
+        return self._event_table.sorted()
 
     def events_of(self, kind: EventKind | int) -> np.ndarray:
         """Events of one kind, stably sorted by t."""
-        ev = self.events
-        return ev[ev["kind"] == int(EventKind(kind))]
+        return self._event_table.of_kind(kind)
 
     def events_frame(self) -> pd.DataFrame:
         """Events as a DataFrame; ``kind`` is a categorical of :class:`EventKind` names."""
-        ev = self.events
-        names = [k.name for k in EventKind]
-        codes = ev["kind"].astype(np.int64)  # EventKind values are 0..8 == category codes
-        return pd.DataFrame(
-            {
-                "t": ev["t"],
-                "kind": pd.Categorical.from_codes(codes, categories=names),
-                "vehicle": ev["vehicle"],
-                "other": ev["other"],
-                "x": ev["x"],
-                "value": ev["value"],
-            }
-        )
+        return self._event_table.frame()
 
     # ------------------------------------------------------------------ long format
     def long_columns(self) -> dict[str, np.ndarray]:
@@ -450,7 +384,7 @@ class SimulationLog:
             "vehicle": vehicles.astype(np.int64),
             "kind": self.kind[vehicles],
         }
-        for name in _STATE_FIELDS:
+        for name in STATE_FIELDS:
             cols[name] = getattr(self, name)[steps, vehicles]
         cols["lane"] = self.lane[steps, vehicles]
         cols["length"] = self.length[vehicles]

@@ -4,7 +4,9 @@
 holds the long-format frame of :meth:`SimulationLog.to_frame`, with the run metadata in
 the Parquet schema metadata and the events in a sibling ``<stem>.events.parquet``; the two
 files share a random token so a log and an events file that do not belong together are
-detected. Both formats are read back exactly.
+detected. Both formats are read back exactly, with the dtypes of
+:mod:`hcomc.sim.log_layout`; files whose arrays have other dtypes (e.g. float64 states) are
+read and converted to that layout.
 """
 
 from __future__ import annotations
@@ -18,12 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from hcomc.sim.log import (
-    _ARRAY_FIELDS,
-    _STATE_FIELDS,
-    EVENT_DTYPE,
-    SimulationLog,
-)
+from hcomc.sim.log import SimulationLog
+from hcomc.sim.log_events import EVENT_DTYPE
+from hcomc.sim.log_layout import ARRAY_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
 from hcomc.sim.manifest import atomic_paths, json_default
 
 __all__ = ["events_path", "read_log", "write_log"]
@@ -73,7 +72,7 @@ def write_log(log: SimulationLog, path: str | os.PathLike[str]) -> Path:
 
 def _write_npz(log: SimulationLog, path: Path) -> None:
     header = json.dumps(_header(log), default=json_default)
-    arrays = {name: getattr(log, name) for name in _ARRAY_FIELDS}
+    arrays = {name: getattr(log, name) for name in ARRAY_FIELDS}
     with atomic_paths(path) as (tmp,), tmp.open("wb") as fh:
         # A file object, not a name: numpy would append ".npz" to the temp name.
         np.savez_compressed(fh, header=np.array(header), events=log.events, **arrays)
@@ -128,7 +127,7 @@ def _read_npz(path: Path) -> SimulationLog:
     with np.load(path, allow_pickle=False) as data:
         header = json.loads(str(data["header"]))
         _check_version(header, path)
-        arrays = {name: data[name] for name in _ARRAY_FIELDS}
+        arrays = {name: data[name] for name in ARRAY_FIELDS}
         events = data["events"]
     return SimulationLog(
         dt=header["dt"],
@@ -159,21 +158,24 @@ def _read_parquet(path: Path) -> SimulationLog:
     for name in EVENT_DTYPE.names or ():
         events[name] = ev_table.column(name).to_numpy()
 
-    log = SimulationLog.allocate(
-        header["n_steps"],
-        header["n_vehicles"],
+    n_steps, n_vehicles = int(header["n_steps"]), int(header["n_vehicles"])
+    arrays = allocate_rows(n_steps, n_vehicles)
+    arrays["t"][:] = _unb64(header["t"], "<f8")
+    steps = table.column("step").to_numpy()
+    vehicles = table.column("vehicle").to_numpy()
+    arrays["active"][steps, vehicles] = True
+    for name in (*STATE_FIELDS, "lane"):
+        column = table.column(name).to_numpy()
+        if column.dtype.kind != DTYPES[name].kind:
+            raise ValueError(f"{path}: column {name!r} has dtype {column.dtype}")
+        arrays[name][steps, vehicles] = column  # float64 columns are rounded to float32
+    return SimulationLog(
         dt=header["dt"],
+        meta=header["meta"],
+        n_recorded=header["n_recorded"],
+        events=events,
         kind=_unb64(header["kind"], "<i1"),
         length=_unb64(header["length"], "<f4"),
         width=_unb64(header["width"], "<f4"),
-        meta=header["meta"],
+        **arrays,
     )
-    log.t[:] = _unb64(header["t"], "<f8")
-    steps = table.column("step").to_numpy()
-    vehicles = table.column("vehicle").to_numpy()
-    log.active[steps, vehicles] = True
-    for name in (*_STATE_FIELDS, "lane"):
-        getattr(log, name)[steps, vehicles] = table.column(name).to_numpy()
-    log._n_recorded = int(header["n_recorded"])
-    log._events.extend(tuple(e.item()) for e in events)
-    return log
