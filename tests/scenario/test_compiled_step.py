@@ -14,6 +14,7 @@ a few percent of arguments.
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -22,10 +23,11 @@ import pytest
 from hcomc.sim.engine import Simulation
 
 DATA = Path(__file__).parent.parent / "data" / "numpy_step"
-spec = __import__("importlib.util").util.spec_from_file_location("ref", DATA / "make_reference.py")
-assert spec is not None and spec.loader is not None
-reference = __import__("importlib.util").util.module_from_spec(spec)
-spec.loader.exec_module(reference)
+_spec = importlib.util.spec_from_file_location("make_reference", DATA / "make_reference.py")
+assert _spec is not None
+assert _spec.loader is not None
+reference = importlib.util.module_from_spec(_spec)  # its CASES: what was recorded
+_spec.loader.exec_module(reference)
 
 
 @pytest.mark.parametrize("name", sorted(reference.CASES))
