@@ -90,31 +90,50 @@ def release(c: Core, t: float) -> None:
 
 
 # ------------------------------------------------------------------------- perceive
-@njit(cache=True, inline="always")
-def follow_one(c: Core, i: int, leader: int, perceive: bool) -> float:
-    """Car-following acceleration of i behind ``leader`` (-1: none), HDVs perceiving Eq. 2
-    when ``perceive`` (reaction delays and estimation errors)."""
-    has = leader >= 0
-    lead = leader if has else i
-    s = c.x[lead] - c.length[lead] - c.x[i] if has else math.inf
-    v, vl, al = c.v[i], (c.v[lead] if has else c.v[i]), (c.a[lead] if has else 0.0)
-    if perceive and c.is_hdv[i]:
-        s, v, vl = perceive_one(
-            c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.counters[STEP], i, leader, c.length[lead],
-            c.consts[DT], c.taus, c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0,
-        )  # fmt: skip
-    m = c.matrix[:, i]
-    return follow_accel(s, v, vl, al, m[0], m[1], m[2], m[3], m[4], m[5], m[6], c.iidm[i])
-
-
 @njit(cache=True)
 def follow_many(c: Core, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
-    """:func:`follow_one` of each vehicle of ``ids`` behind its leader."""
-    out = np.empty(ids.size)
-    perceive = c.flags[PERCEIVE] > 0
-    for k in range(ids.size):
-        out[k] = follow_one(c, ids[k], leaders[k], perceive)
+    """Car-following acceleration of each vehicle of ``ids`` behind its leader (-1: none),
+    HDVs perceiving Eq. 2 (reaction delays and estimation errors) when the run has them.
+
+    Written as three passes (exact inputs; the HDVs' perceived inputs; Eq. 1/3) so the hot
+    loops touch plain arrays only.
+    """
+    matrix, length, x, v, a = c.matrix, c.length, c.x, c.v, c.a
+    n = ids.size
+    s, vi, vl, al = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    for k in range(n):
+        i, j = ids[k], leaders[k]
+        if j >= 0:
+            s[k], vl[k], al[k] = x[j] - length[j] - x[i], v[j], a[j]
+        else:
+            s[k], vl[k], al[k] = math.inf, v[i], 0.0
+        vi[k] = v[i]
+    if c.flags[PERCEIVE] > 0:
+        step, dt, errors = c.counters[STEP], c.consts[DT], c.flags[ERRORS] > 0
+        gap_error, ttc_error = c.consts[GAP_ERROR], c.consts[TTC_ERROR]
+        x_hist, v_hist, w_gap, w_ttc, taus = c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.taus
+        for k in range(n):
+            i, j = ids[k], leaders[k]
+            if c.is_hdv[i]:
+                s[k], vi[k], vl[k] = perceive_one(
+                    x_hist, v_hist, w_gap, w_ttc, step, i, j, length[j if j >= 0 else i], dt,
+                    taus, gap_error, ttc_error, errors,
+                )  # fmt: skip
+    out = np.empty(n)
+    iidm = c.iidm
+    for k in range(n):
+        i = ids[k]
+        out[k] = follow_accel(s[k], vi[k], vl[k], al[k], matrix[0, i], matrix[1, i],
+                              matrix[2, i], matrix[3, i], matrix[4, i], matrix[5, i],
+                              matrix[6, i], iidm[i])  # fmt: skip
     return out
+
+
+@njit(cache=True, inline="always")
+def _follow_exact(matrix, iidm, i, s, v, vl, al):
+    """Eq. 1/3 of vehicle i with exact inputs (lane end, virtual leaders)."""
+    return follow_accel(s, v, vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
+                        matrix[4, i], matrix[5, i], matrix[6, i], iidm[i])  # fmt: skip
 
 
 @njit(cache=True)
@@ -172,31 +191,51 @@ def step_accelerations(
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]
     vs, ls, ks, rank, in_ori, in_tgt = lane_index(c, ids, changing)
-    perceive = c.flags[PERCEIVE] > 0
     lead = np.empty(n, dtype=np.int64)
-    acc = np.empty(n)
     for k in range(n):
         i = ids[k]
-        pos = rank[k]
-        lead[k] = neighbour(vs, ls, pos + 1, ls[pos])
         if changing[k]:
             lead[k] = lookup_one(ks, ls, vs, c.origin[i], c.x[i])[0]
-        acc[k] = follow_one(c, i, lead[k], perceive)
-        if changing[k]:
-            a_ori = acc[k]
-            a_new = follow_one(c, i, lookup_one(ks, ls, vs, c.target[i], c.x[i])[0], perceive)
-            psi = transition_psi(t - c.lc_t0[i], c.lc_dur[i], c.consts[GAMMA])
-            b = blend(a_ori, a_new, psi)
-            if in_ori[k]:
-                b = min(b, a_ori)
-            acc[k] = min(b, a_new) if in_tgt[k] else b
+        else:
+            lead[k] = neighbour(vs, ls, rank[k] + 1, ls[rank[k]])
+    acc = follow_many(c, ids, lead)
+    _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks)
+    _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len)
+    return acc, changing, vs, ls, ks, rank, lead
+
+
+@njit(cache=True)
+def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
+    """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
+    (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
+    overlaps."""
+    ch = np.flatnonzero(changing)
+    n_ch = ch.size
+    lead_new = np.empty(n_ch, dtype=np.int64)
+    for m in range(n_ch):
+        i = ids[ch[m]]
+        lead_new[m] = lookup_one(ks, ls, vs, c.target[i], c.x[i])[0]
+    a_new = follow_many(c, ids[ch], lead_new)
+    for m in range(n_ch):
+        k = ch[m]
+        i = ids[k]
+        a_ori = acc[k]
+        psi = transition_psi(t - c.lc_t0[i], c.lc_dur[i], c.consts[GAMMA])
+        b = blend(a_ori, a_new[m], psi)
+        if in_ori[k]:
+            b = min(b, a_ori)
+        acc[k] = min(b, a_new[m]) if in_tgt[k] else b
+
+
+@njit(cache=True)
+def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len):
+    """The lane end, virtual leaders, the emergency limit and scripted profiles."""
+    n = ids.size
     accel_end = c.consts[ACCEL_END]
     for k in range(n):  # the acceleration-lane end, a static obstacle seen exactly
         i = ids[k]
         if c.lane[i] == RAMP and not changing[k] and not following[i]:
-            m = c.matrix[:, i]
-            a_stop = follow_accel(accel_end - c.x[i], c.v[i], 0.0, 0.0, m[0], m[1], m[2], m[3],
-                                  m[4], m[5], m[6], c.iidm[i])  # fmt: skip
+            a_stop = _follow_exact(c.matrix, c.iidm, i, accel_end - c.x[i], c.v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
     if vv_fol.size:
         before = acc.copy()
@@ -204,9 +243,8 @@ def step_accelerations(
             i = vv_fol[r]
             if vv_x[r] > c.x[i]:
                 k = np.searchsorted(ids, i)
-                m = c.matrix[:, i]
-                a_v = follow_accel(vv_x[r] - vv_len[r] - c.x[i], c.v[i], vv_v[r], vv_a[r], m[0],
-                                   m[1], m[2], m[3], m[4], m[5], m[6], c.iidm[i])  # fmt: skip
+                gap = vv_x[r] - vv_len[r] - c.x[i]
+                a_v = _follow_exact(c.matrix, c.iidm, i, gap, c.v[i], vv_v[r], vv_a[r])
                 acc[k] = min(before[k], a_v)
     dt = c.consts[DT]
     for k in range(n):
@@ -215,7 +253,6 @@ def step_accelerations(
         if c.scripted[i]:  # a scripted profile is followed exactly
             target = np.interp(t + dt, c.profile[:, 0], c.profile[:, 1])
             acc[k] = (target - c.v[i]) / dt
-    return acc, changing, vs, ls, ks, rank, lead
 
 
 # ---------------------------------------------------------------------------- check

@@ -46,27 +46,28 @@ class Snapshot:
     a: FloatArray
 
 
-@njit(cache=True, inline="always")
-def model_accel(
-    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
-    x: np.ndarray, v: np.ndarray, a: np.ndarray, i: int, leader: int,
-) -> tuple[float, float]:  # fmt: skip
-    """Gap of vehicle i to ``leader`` (inf for -1) and its model acceleration behind it
-    (exact perception: the decision, not the control)."""
-    if leader >= 0:
-        s, vl, al = x[leader] - length[leader] - x[i], v[leader], a[leader]
-    else:
-        s, vl, al = math.inf, v[i], 0.0
-    m = matrix[:, i]
-    return s, follow_accel(s, v[i], vl, al, m[0], m[1], m[2], m[3], m[4], m[5], m[6], iidm[i])
-
-
-@njit(cache=True, inline="always")
-def _situation(matrix, iidm, length, x, v, a, follower, leader):
-    """(gap, acceleration) of ``follower`` behind ``leader``; (inf, 0) without a follower."""
-    if follower < 0:
-        return math.inf, 0.0
-    return model_accel(matrix, iidm, length, x, v, a, follower, leader)
+@njit(cache=True)
+def model_accels(
+    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray, x: np.ndarray, v: np.ndarray,
+    a: np.ndarray, followers: np.ndarray, leaders: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Gap of each follower to its leader (inf for -1) and its model acceleration behind it
+    (exact perception: the decision, not the control); (inf, 0) where the follower is -1."""
+    n = followers.size
+    s, acc = np.full(n, math.inf), np.zeros(n)
+    for k in range(n):
+        i, j = followers[k], leaders[k]
+        if i < 0:
+            continue
+        if j >= 0:
+            s[k], vl, al = x[j] - length[j] - x[i], v[j], a[j]
+        else:
+            vl, al = v[i], 0.0
+        acc[k] = follow_accel(
+            s[k], v[i], vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
+            matrix[4, i], matrix[5, i], matrix[6, i], iidm[i],
+        )  # fmt: skip
+    return s, acc
 
 
 @njit(cache=True)
@@ -90,24 +91,27 @@ def mobil_decide(
         params[4],
     )
     n = cand.size
-    ok = np.zeros(n, dtype=np.bool_)
     new_lead = np.empty(n, dtype=np.int64)
     new_fol = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, target[k], x[cand[k]])
+    # all situations in one pass, rows: candidate before/after, new follower before/after,
+    # old follower before/after
+    followers = np.concatenate((cand, cand, new_fol, new_fol, follower, follower))
+    leaders = np.concatenate((leader, new_lead, new_lead, cand, cand, leader))
+    s, acc = model_accels(matrix, iidm, length, x, v, a, followers, leaders)
+    ok = np.zeros(n, dtype=np.bool_)
     mandatory = np.empty(n, dtype=np.bool_)
     for k in range(n):
-        c, tgt = cand[k], target[k]
-        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, tgt, x[c])
-        s_o, acc0 = _situation(matrix, iidm, length, x, v, a, c, leader[k])
-        s_c, acc1 = _situation(matrix, iidm, length, x, v, a, c, new_lead[k])
-        _, acc2 = _situation(matrix, iidm, length, x, v, a, new_fol[k], new_lead[k])
-        s_n, acc3 = _situation(matrix, iidm, length, x, v, a, new_fol[k], c)
-        _, acc4 = _situation(matrix, iidm, length, x, v, a, follower[k], c)
-        _, acc5 = _situation(matrix, iidm, length, x, v, a, follower[k], leader[k])
+        c = cand[k]
+        s_o, s_c, s_n = s[k], s[n + k], s[3 * n + k]
+        acc0, acc1, acc2 = acc[k], acc[n + k], acc[2 * n + k]
+        acc3, acc4, acc5 = acc[3 * n + k], acc[4 * n + k], acc[5 * n + k]
         standing = leader[k] >= 0 and v[leader[k]] < 1.0
         clear = not standing or s_o >= 3.0 * length[c] + min_gap
         safe = clear and s_c >= min_gap and s_n >= min_gap and acc3 >= -b_safe and acc1 >= -b_safe
         gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
-        side = bias if tgt == _MAIN_2 else -bias
+        side = bias if target[k] == _MAIN_2 else -bias
         mandatory[k] = lane[k] == _RAMP or force[k]
         ok[k] = safe and (mandatory[k] or gain > threshold + side)
     sel = np.flatnonzero(ok)
