@@ -83,39 +83,63 @@ def mobil_decide(
     ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
     ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
     """
-    min_gap, b_safe, politeness, threshold, bias = (
-        params[0],
-        params[1],
-        params[2],
-        params[3],
-        params[4],
-    )
+    min_gap, b_safe, politeness = params[0], params[1], params[2]
+    threshold, bias = params[3], params[4]
     n = cand.size
     new_lead = np.empty(n, dtype=np.int64)
     new_fol = np.empty(n, dtype=np.int64)
-    for k in range(n):
-        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, target[k], x[cand[k]])
-    # all situations in one pass, rows: candidate before/after, new follower before/after,
-    # old follower before/after
-    followers = np.concatenate((cand, cand, new_fol, new_fol, follower, follower))
-    leaders = np.concatenate((leader, new_lead, new_lead, cand, cand, leader))
-    s, acc = model_accels(matrix, iidm, length, x, v, a, followers, leaders)
-    ok = np.zeros(n, dtype=np.bool_)
     mandatory = np.empty(n, dtype=np.bool_)
-    for k in range(n):
+    ok = np.zeros(n, dtype=np.bool_)
+    for k in range(n):  # 1. the gap criteria, which need no model acceleration
         c = cand[k]
-        s_o, s_c, s_n = s[k], s[n + k], s[3 * n + k]
-        acc0, acc1, acc2 = acc[k], acc[n + k], acc[2 * n + k]
-        acc3, acc4, acc5 = acc[3 * n + k], acc[4 * n + k], acc[5 * n + k]
+        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, target[k], x[c])
+        mandatory[k] = lane[k] == _RAMP or force[k]
+        s_o = _gap(length, x, c, leader[k])
+        s_c = _gap(length, x, c, new_lead[k])
+        s_n = _gap(length, x, new_fol[k], c) if new_fol[k] >= 0 else math.inf
         standing = leader[k] >= 0 and v[leader[k]] < 1.0
         clear = not standing or s_o >= 3.0 * length[c] + min_gap
-        safe = clear and s_c >= min_gap and s_n >= min_gap and acc3 >= -b_safe and acc1 >= -b_safe
+        ok[k] = clear and s_c >= min_gap and s_n >= min_gap
+    # 2. the deceleration criteria: candidate and new follower after the change
+    pos = np.flatnonzero(ok)
+    m = pos.size
+    _, after = model_accels(
+        matrix, iidm, length, x, v, a,
+        np.concatenate((cand[pos], new_fol[pos])), np.concatenate((new_lead[pos], cand[pos])),
+    )  # fmt: skip
+    for q in range(m):
+        ok[pos[q]] = after[q] >= -b_safe and after[m + q] >= -b_safe
+    # 3. the incentive of discretionary changes (rows: candidate before, new follower before,
+    #    old follower after, old follower before)
+    disc = np.flatnonzero(ok & ~mandatory)
+    _, before = model_accels(
+        matrix, iidm, length, x, v, a,
+        np.concatenate((cand[disc], new_fol[disc], follower[disc], follower[disc])),
+        np.concatenate((leader[disc], new_lead[disc], cand[disc], leader[disc])),
+    )  # fmt: skip
+    d = disc.size
+    for q in range(d):
+        k = disc[q]
+        acc0, acc2, acc4, acc5 = before[q], before[d + q], before[2 * d + q], before[3 * d + q]
+        acc1, acc3 = _after_of(after, pos, m, k)
         gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
         side = bias if target[k] == _MAIN_2 else -bias
-        mandatory[k] = lane[k] == _RAMP or force[k]
-        ok[k] = safe and (mandatory[k] or gain > threshold + side)
+        ok[k] = gain > threshold + side
     sel = np.flatnonzero(ok)
     return _resolve(cand[sel], target[sel], new_lead[sel], new_fol[sel], mandatory[sel], x)
+
+
+@njit(cache=True, inline="always")
+def _gap(length: np.ndarray, x: np.ndarray, i: int, j: int) -> float:
+    """Bumper gap of i to j [m], inf for j = -1."""
+    return x[j] - length[j] - x[i] if j >= 0 else math.inf
+
+
+@njit(cache=True, inline="always")
+def _after_of(after: np.ndarray, pos: np.ndarray, m: int, k: int) -> tuple[float, float]:
+    """(acc1, acc3) of candidate k from the safety pass (``pos`` ascending)."""
+    q = np.searchsorted(pos, k)
+    return after[q], after[m + q]
 
 
 @njit(cache=True)
