@@ -302,7 +302,7 @@ def _staged(vehicles: list[tuple[int, float, float]]) -> Simulation:
     sim = Simulation(config, seed=0)
     assert sim.demand.n >= len(vehicles)
     assert (sim.fleet.kind == Kind.CAV).all()
-    sim.core.queue_pos[:] = np.diff(sim.core.queue_start)  # release nothing
+    sim.arrays.queue_pos[:] = np.diff(sim.arrays.queue_start)  # release nothing
     for i, (lane, x, v) in enumerate(vehicles):
         sim.x[i], sim.v[i] = x, v
         sim.lane[i] = sim.origin[i] = sim.target[i] = lane

@@ -1,7 +1,7 @@
-"""The compiled simulation step over the struct-of-arrays state of
-:class:`hcomc.sim.core_state.Core`. The step is split into kernels (here,
-:mod:`hcomc.sim.core_motion` and :mod:`hcomc.sim.core_lane_change`) that the engine composes
-in two ways:
+"""The compiled simulation step over the struct-of-arrays state of one run
+(:class:`hcomc.sim.core_state.Core`, fields as in :class:`~hcomc.sim.core_state.CoreArrays`).
+The step is split into kernels (here, :mod:`hcomc.sim.core_motion` and
+:mod:`hcomc.sim.core_lane_change`) that the engine composes in two ways:
 
 * :func:`run_steps` advances many steps in one compiled call while nothing needs Python:
   no live merge plan, no ramp vehicle entering the control zone, no game-confirmed lane
@@ -59,10 +59,11 @@ from hcomc.sim.core_state import (
     STEP,
     VEHICLE_STEPS,
     WARMUP,
-    Core,
+    CoreArrays,
     push_history,
 )
 from hcomc.sim.perception import advance_errors_of
+from hcomc.sim.small import nonzero
 
 __all__ = [
     "commanded_changes", "discretionary_changes", "follow_many", "push_history", "record_row",
@@ -72,7 +73,7 @@ __all__ = [
 
 @njit(cache=True)
 def step_finish(
-    c: Core, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
+    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
 ) -> None:
     """Collisions, integration, lateral motion, exits, the HDVs' error processes (one row of
     pre-drawn innovations per step with active vehicles) and the perception history."""
@@ -81,7 +82,7 @@ def step_finish(
     lateral(c, t)
     bookkeeping(c, ids, t)
     if c.flags[ERRORS] > 0:
-        hdv = ids[c.is_hdv[ids]]
+        hdv = ids[nonzero(c.is_hdv[ids])]
         xi = c.innov[c.counters[INNOV_CURSOR]]
         c.counters[INNOV_CURSOR] += 1
         advance_errors_of(c.w_gap, c.w_ttc, hdv, xi, c.consts[DECAY], c.consts[KICK])
@@ -91,7 +92,7 @@ def step_finish(
 # --------------------------------------------------------------------------- record
 @njit(cache=True)
 def record_row(
-    c: Core, k: int, t: float, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
+    c: CoreArrays, k: int, t: float, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
     lv: np.ndarray, la: np.ndarray, lh: np.ndarray, ll: np.ndarray, lact: np.ndarray,
 ) -> None:  # fmt: skip
     """Write log row k; inactive vehicles get NaN (floats) and -1 (lane)."""
@@ -109,7 +110,7 @@ def record_row(
 
 # ----------------------------------------------------------------------------- loop
 @njit(cache=True)
-def needs_python(c: Core) -> bool:
+def needs_python(c: CoreArrays) -> bool:
     """Whether this step needs the engine's Python side: a live plan, game-confirmed lane
     changes, or a ramp vehicle entering the control zone (key vehicles, a plan)."""
     if c.flags[HAS_PLANS] > 0 or c.flags[CAV_GAME] > 0:
@@ -127,9 +128,9 @@ def needs_python(c: Core) -> bool:
 
 
 @njit(cache=True)
-def step_alone(c: Core, t: float) -> None:
+def step_alone(c: CoreArrays, t: float) -> None:
     """One whole step after release with no controller inputs (the fast path)."""
-    ids = np.flatnonzero(c.active)
+    ids = nonzero(c.active)
     if ids.size == 0:
         push_history(c)
         return
@@ -148,7 +149,7 @@ def step_alone(c: Core, t: float) -> None:
 
 @njit(cache=True)
 def run_steps(
-    c: Core, stop: int, log_rows: bool, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
+    c: CoreArrays, stop: int, log_rows: bool, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
     lv: np.ndarray, la: np.ndarray, lh: np.ndarray, ll: np.ndarray, lact: np.ndarray,
 ) -> int:  # fmt: skip
     """Advance until step ``stop`` or until Python is needed; returns why it stopped.

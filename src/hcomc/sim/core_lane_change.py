@@ -17,11 +17,12 @@ from hcomc.sim.core_state import (
     MAIN_1,
     MAIN_2,
     RAMP,
-    Core,
+    CoreArrays,
     add_event,
 )  # fmt: skip
 from hcomc.sim.mobil import mobil_decide
 from hcomc.sim.neighbours import neighbour
+from hcomc.sim.small import nonzero, search_left
 
 
 # --------------------------------------------------------------------------- decide
@@ -44,7 +45,7 @@ def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
 
 @njit(cache=True)
 def commanded_changes(
-    c: Core, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
+    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
     ks: np.ndarray, rank: np.ndarray, req_vehicle: np.ndarray, req_target: np.ndarray,
     req_duration: np.ndarray, req_release_x: np.ndarray, req_vr: np.ndarray,
     req_other: np.ndarray,
@@ -58,7 +59,7 @@ def commanded_changes(
     out = np.zeros(req_vehicle.size, dtype=np.int64)
     for r in range(req_vehicle.size):
         i = req_vehicle[r]
-        pos = np.array([np.searchsorted(ids, i)])
+        pos = np.array([search_left(ids, i)])
         tgt = np.array([req_target[r]])
         chosen, _ = _mobil(c, ids, pos, lead, vs, ls, ks, rank, tgt, np.ones(1, dtype=np.bool_))
         if chosen.size:
@@ -72,7 +73,7 @@ def commanded_changes(
 
 @njit(cache=True)
 def discretionary_changes(
-    c: Core, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
+    c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
     vs: np.ndarray, ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
@@ -83,7 +84,7 @@ def discretionary_changes(
         ramp = c.lane[i] == RAMP
         on_accel = ramp and c.consts[ACCEL_START] <= c.x[i] <= c.consts[ACCEL_END]
         sel[k] = not changing[k] and not c.scripted[i] and (not ramp or on_accel) and not holding[i]
-    pos = np.flatnonzero(sel)
+    pos = nonzero(sel)
     target = np.empty(pos.size, dtype=np.int64)
     for k in range(pos.size):
         target[k] = MAIN_2 if c.lane[ids[pos[k]]] == MAIN_1 else MAIN_1
@@ -93,7 +94,7 @@ def discretionary_changes(
 
 @njit(cache=True)
 def start_lane_changes(
-    c: Core, chosen: np.ndarray, target: np.ndarray, t: float, duration: np.ndarray
+    c: CoreArrays, chosen: np.ndarray, target: np.ndarray, t: float, duration: np.ndarray
 ) -> None:
     """Begin quintic lane changes (Eq. 4-6); x_f is predicted from the current speed.
     ``duration`` (one value, NaN: the vehicle's own) is a merge plan's duration for VR."""

@@ -34,12 +34,13 @@ from hcomc.sim.core_state import (
     TTC_ERROR,
     WARMUP,
     WIDTH,
-    Core,
+    CoreArrays,
     _centre,
     add_event,
 )  # fmt: skip
 from hcomc.sim.neighbours import lookup_one, neighbour, sort_entries
 from hcomc.sim.perception import perceive_one
+from hcomc.sim.small import nonzero, search_left, unique
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -47,7 +48,7 @@ _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 # ---------------------------------------------------------------------------- release
 @njit(cache=True)
-def _insert(c: Core, i: int, lane: int, t: float) -> bool:
+def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
     """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
 
     The release speed is kept if the gap exceeds ``s0 + v T``; otherwise the vehicle is
@@ -76,7 +77,7 @@ def _insert(c: Core, i: int, lane: int, t: float) -> bool:
 
 
 @njit(cache=True)
-def release(c: Core, t: float) -> None:
+def release(c: CoreArrays, t: float) -> None:
     """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue).
     Releasing twice at the same t is a no-op."""
     for lane in range(3):
@@ -91,7 +92,7 @@ def release(c: Core, t: float) -> None:
 
 # ------------------------------------------------------------------------- perceive
 @njit(cache=True)
-def follow_many(c: Core, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
+def follow_many(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
     """Car-following acceleration of each vehicle of ``ids`` behind its leader (-1: none),
     HDVs perceiving Eq. 2 (reaction delays and estimation errors) when the run has them.
 
@@ -137,7 +138,7 @@ def _follow_exact(matrix, iidm, i, s, v, vl, al):
 
 
 @njit(cache=True)
-def lane_index(c: Core, ids: np.ndarray, changing: np.ndarray):
+def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its
     body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``."""
@@ -173,7 +174,7 @@ def lane_index(c: Core, ids: np.ndarray, changing: np.ndarray):
 
 @njit(cache=True)
 def step_accelerations(
-    c: Core, ids: np.ndarray, t: float, following: np.ndarray, vv_fol: np.ndarray,
+    c: CoreArrays, ids: np.ndarray, t: float, following: np.ndarray, vv_fol: np.ndarray,
     vv_x: np.ndarray, vv_v: np.ndarray, vv_a: np.ndarray, vv_len: np.ndarray,
 ):  # fmt: skip
     """Accelerations of every active vehicle ``ids`` for this step, from one snapshot.
@@ -209,7 +210,7 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
     overlaps."""
-    ch = np.flatnonzero(changing)
+    ch = nonzero(changing)
     n_ch = ch.size
     lead_new = np.empty(n_ch, dtype=np.int64)
     for m in range(n_ch):
@@ -242,7 +243,7 @@ def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_le
         for r in range(vv_fol.size):  # a later row for the same follower replaces an earlier
             i = vv_fol[r]
             if vv_x[r] > c.x[i]:
-                k = np.searchsorted(ids, i)
+                k = search_left(ids, i)
                 gap = vv_x[r] - vv_len[r] - c.x[i]
                 a_v = _follow_exact(c.matrix, c.iidm, i, gap, c.v[i], vv_v[r], vv_a[r])
                 acc[k] = min(before[k], a_v)
@@ -257,7 +258,7 @@ def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_le
 
 # ---------------------------------------------------------------------------- check
 @njit(cache=True)
-def check_collisions(c: Core, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
+def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
     """Oriented-rectangle test (Eq. 7) of each entry against its next two leaders per lane;
     a pair is logged when its contact begins.
 
@@ -288,10 +289,10 @@ def check_collisions(c: Core, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
             ):
                 codes[m] = min(i, j) * n + max(i, j)
                 m += 1
-    now = np.unique(codes[:m])
+    now = unique(codes[:m])
     before = c.colliding[: c.counters[N_COLLIDING]]
     for code in now:
-        k = np.searchsorted(before, code)
+        k = search_left(before, code)
         if k < before.size and before[k] == code:
             continue
         i, j = code // n, code % n
@@ -302,7 +303,7 @@ def check_collisions(c: Core, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
 
 # ------------------------------------------------------------------------ integrate
 @njit(cache=True)
-def integrate(c: Core, ids: np.ndarray, acc: np.ndarray) -> None:
+def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
     """Ballistic update; a vehicle that would reverse stops exactly at v = 0."""
     dt = c.consts[DT]
     for k in range(ids.size):
@@ -320,7 +321,7 @@ def integrate(c: Core, ids: np.ndarray, acc: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def lateral(c: Core, t: float) -> None:
+def lateral(c: CoreArrays, t: float) -> None:
     """Move changing vehicles along their quintic path; switch lane at the lane line."""
     width = c.consts[WIDTH]
     for i in range(c.x.size):
@@ -344,7 +345,7 @@ def lateral(c: Core, t: float) -> None:
 
 
 @njit(cache=True)
-def bookkeeping(c: Core, ids: np.ndarray, t: float) -> None:
+def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     """Exits past the road end; ramp vehicles waiting at the acceleration-lane end."""
     for i in ids:
         if c.x[i] - c.length[i] > c.consts[ROAD_LENGTH]:

@@ -1,8 +1,11 @@
-"""State of the compiled simulation step: the :class:`Core` arrays and their layout.
+"""State of the compiled simulation step: the :class:`CoreArrays` and their layout.
 
-:class:`Core` holds every array the step reads or writes (per-vehicle parameters and state,
-the HDV perception buffers, the demand queues, the event buffer, counters) as one typed
-record that numba passes to every kernel of :mod:`hcomc.sim.core`.
+:class:`CoreArrays` holds every array the step reads or writes (per-vehicle parameters and
+state, the HDV perception buffers, the demand queues, the event buffer, counters). The
+kernels of :mod:`hcomc.sim.core` receive them as one :class:`Core`, a compiled reference
+record over the same buffers: passing it costs one pointer, whatever the number of arrays
+(a tuple of arrays would be unpacked and reference-counted array by array at every call).
+Python reads and writes the state through the :class:`CoreArrays`.
 """
 
 from __future__ import annotations
@@ -11,6 +14,8 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.core import types
+from numba.experimental import structref
 
 # lanes and event kinds (IntEnums of hcomc.road and hcomc.sim.log, as plain ints)
 RAMP, MAIN_1, MAIN_2 = 0, 1, 2
@@ -31,7 +36,7 @@ _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
-class Core(NamedTuple):
+class CoreArrays(NamedTuple):
     """Every array of one run's step (shape (N,) unless noted)."""
 
     matrix: np.ndarray  # (7, N): v0, T, s0, a, b, delta, coolness
@@ -83,9 +88,30 @@ class Core(NamedTuple):
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
 
 
+@structref.register
+class CoreType(types.StructRef):
+    """numba type of :class:`Core`."""
+
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class Core(structref.StructRefProxy):
+    """The compiled kernels' handle on one run's :class:`CoreArrays` (the same buffers)."""
+
+    def __new__(cls, arrays: CoreArrays) -> Core:
+        return structref.StructRefProxy.__new__(cls, *arrays)
+
+
+structref.define_constructor(Core, CoreType, list(CoreArrays._fields))
+structref.define_boxing(CoreType, Core)
+
+
 # ----------------------------------------------------------------------------- events
 @njit(cache=True, inline="always")
-def add_event(c: Core, t: float, kind: int, i: int, other: int, x: float, value: float) -> None:
+def add_event(
+    c: CoreArrays, t: float, kind: int, i: int, other: int, x: float, value: float
+) -> None:
     """Append an event to the buffer (the engine flushes it to the log)."""
     k = c.counters[N_EVENTS]
     c.ev_t[k], c.ev_kind[k], c.ev_vehicle[k], c.ev_other[k] = t, kind, i, other
@@ -99,7 +125,7 @@ def _centre(lane: int, width: float) -> float:
 
 
 @njit(cache=True)
-def push_history(c: Core) -> None:
+def push_history(c: CoreArrays) -> None:
     """End of a step: count it and store the state in the perception ring buffer."""
     c.counters[STEP] += 1
     row = c.counters[STEP] % c.x_hist.shape[0]

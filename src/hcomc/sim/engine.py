@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -45,7 +46,7 @@ from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
-from hcomc.sim.core_state import Core
+from hcomc.sim.core_state import Core, CoreArrays
 from hcomc.sim.demand import generate_demand
 from hcomc.sim.execution import ActivePlan, holding_lane, plan_record, virtual_leaders
 from hcomc.sim.fleet import Fleet
@@ -103,15 +104,18 @@ class Simulation:
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
-        self.core = self._build_core()
-        c = self.core  # the state arrays, by name (views of the compiled core's arrays)
+        self.arrays = self._build_arrays()
+        # the kernels see the same arrays through one compiled reference, typed as its fields
+        self.core: Any = Core(self.arrays)
+        c = self.arrays  # the state arrays, by name
         self.x, self.y, self.v, self.a, self.heading = c.x, c.y, c.v, c.a, c.heading
         self.lane, self.origin, self.target = c.lane, c.origin, c.target
         self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
         self.active, self.waited, self.planned = c.active, c.waited, c.planned
         self.log = self._allocate_log()
+        self._stage = 0
 
-    def _build_core(self) -> Core:
+    def _build_arrays(self) -> CoreArrays:
         config, demand, fleet, per = self.config, self.demand, self.fleet, self.perception
         n = demand.n
         road, hdv = config.road, config.hdv
@@ -144,7 +148,7 @@ class Simulation:
         innov_steps = _INNOVATION_STEPS if per.errors else 0
         counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
         n_events = max(4096, 16 * n)
-        return Core(
+        return CoreArrays(
             matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
             length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
             scripted=fleet.scripted.astype(b1), is_hdv=self.is_hdv.astype(b1),
@@ -196,50 +200,76 @@ class Simulation:
     @property
     def step_index(self) -> int:
         """Steps simulated so far (warm-up included)."""
-        return int(self.core.counters[layout.STEP])
+        return int(self.arrays.counters[layout.STEP])
 
     @property
     def vehicle_steps(self) -> int:
         """Sum over the steps simulated so far of the vehicles on the road."""
-        return int(self.core.counters[layout.VEHICLE_STEPS])
+        return int(self.arrays.counters[layout.VEHICLE_STEPS])
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
         """Warm up, then simulate ``duration`` seconds, logging every ``log_interval``."""
         total = self.n_warmup + self.n_steps
-        self._advance_to(self.n_warmup, False, progress, total)
-        self._release(self.t)  # vehicles due at t = 0 are on the road in the first row
-        self._record()
-        self._advance_to(total, True, progress, total)
-        self._flush_events()
-        rows = int(self.core.counters[layout.ROWS])
-        self.log.mark_recorded(rows)
-        self.log.finish(rows)
-        self.log.meta["vehicle_steps"] = self.vehicle_steps
+        while not self.finished:
+            stop = self.stop_step
+            if progress is not None:  # report every 100 steps
+                stop = min(stop, (self.step_index // 100 + 1) * 100)
+            self.resume(core.run_steps(self.core, stop, self.logging, *self.log_arrays))
+            if progress is not None and self.step_index % 100 == 0:
+                progress(self.step_index, total)
         if progress is not None:
             progress(total, total)
         return self.log
 
-    def _advance_to(
-        self, stop: int, log_rows: bool, progress: Callable[[int, int], None] | None, total: int
-    ) -> None:
-        """Run compiled stretches of steps, stepping in Python at decision events."""
+    # The run as a sequence of compiled stretches (also driven by hcomc.sim.ensemble):
+    # stage 0 warms up to ``n_warmup``, stage 1 logs to the end, stage 2 is done.
+    @property
+    def finished(self) -> bool:
+        """Whether the run has reached its end (its log is complete)."""
+        return self._stage == 2
+
+    @property
+    def stop_step(self) -> int:
+        """Last step of the current stage."""
+        return self.n_warmup if self._stage == 0 else self.n_warmup + self.n_steps
+
+    @property
+    def logging(self) -> bool:
+        """Whether steps of the current stage write log rows."""
+        return self._stage == 1
+
+    @property
+    def log_arrays(self) -> tuple[np.ndarray, ...]:
+        """The log's trajectory arrays, as the compiled step writes them."""
         log = self.log
-        arrays = (log.t, log.x, log.y, log.v, log.a, log.heading, log.lane, log.active)
-        while self.step_index < stop:
-            chunk = stop if progress is None else min(stop, (self.step_index // 100 + 1) * 100)
-            reason = core.run_steps(self.core, chunk, log_rows, *arrays)
-            if reason == layout.FLUSH:
-                self._flush_events()
-            elif reason == layout.REFILL:
-                self._refill_innovations()
-            elif reason == layout.NEED_PYTHON:
-                self.step()
-                k = self.step_index - self.n_warmup
-                if log_rows and k > 0 and k % self._log_every == 0:
-                    self._record()
-            if progress is not None and self.step_index % 100 == 0:
-                progress(self.step_index, total)
+        return (log.t, log.x, log.y, log.v, log.a, log.heading, log.lane, log.active)
+
+    def resume(self, reason: int) -> None:
+        """Do what the compiled stretch that returned ``reason`` left to Python."""
+        if reason == layout.FLUSH:
+            self._flush_events()
+        elif reason == layout.REFILL:
+            self._refill_innovations()
+        elif reason == layout.NEED_PYTHON:
+            self.step()
+            k = self.step_index - self.n_warmup
+            if self.logging and k > 0 and k % self._log_every == 0:
+                self._record()
+        elif self.step_index >= self.stop_step:
+            self._next_stage()
+
+    def _next_stage(self) -> None:
+        if self._stage == 0:
+            self._release(self.t)  # vehicles due at t = 0 are on the road in the first row
+            self._record()
+        else:
+            self._flush_events()
+            rows = int(self.arrays.counters[layout.ROWS])
+            self.log.mark_recorded(rows)
+            self.log.finish(rows)
+            self.log.meta["vehicle_steps"] = self.vehicle_steps
+        self._stage += 1
 
     def run_until_plan(self) -> MergePlan | None:
         """Step (without logging rows) until the first plan; None if the run ends first."""
@@ -249,16 +279,16 @@ class Simulation:
 
     def _record(self) -> None:
         log = self.log
-        rows = int(self.core.counters[layout.ROWS])
+        rows = int(self.arrays.counters[layout.ROWS])
         if rows >= log.x.shape[0]:
             raise IndexError(f"row {rows} outside the log's {log.x.shape[0]} rows")
         core.record_row(self.core, rows, self.t, log.t, log.x, log.y, log.v, log.a,
                         log.heading, log.lane, log.active)  # fmt: skip
-        self.core.counters[layout.ROWS] = rows + 1
+        self.arrays.counters[layout.ROWS] = rows + 1
 
     def _flush_events(self) -> None:
         """Move the compiled step's buffered events into the log, in order."""
-        c = self.core
+        c = self.arrays
         for k in range(int(c.counters[layout.N_EVENTS])):
             self.log.add_event(
                 float(c.ev_t[k]), int(c.ev_kind[k]), int(c.ev_vehicle[k]), int(c.ev_other[k]),
@@ -270,14 +300,14 @@ class Simulation:
         """Draw the next innovations of the HDV estimation errors: ``(2, N)`` standard normals
         per step, for all vehicles, in the order the steps use them (so the random stream
         does not depend on how many steps one compiled call runs)."""
-        c = self.core
+        c = self.arrays
         c.innov[:] = self.rng.standard_normal(c.innov.shape)
         c.counters[layout.INNOV_CURSOR] = 0
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
         """Advance the whole traffic state by one step ``dt``, consulting the controller."""
-        c, t = self.core, self.t
+        c, t = self.arrays, self.t
         if c.flags[layout.ERRORS] and c.counters[layout.INNOV_CURSOR] >= c.innov.shape[0]:
             self._refill_innovations()
         if c.counters[layout.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
@@ -285,7 +315,7 @@ class Simulation:
         self._release(t)
         ids = np.flatnonzero(self.active)
         if ids.size == 0:
-            core.push_history(c)
+            core.push_history(self.core)
             return
         c.counters[layout.VEHICLE_STEPS] += ids.size
         changing = self.origin[ids] != self.target[ids]
@@ -295,20 +325,22 @@ class Simulation:
         following = np.zeros(self.x.size, dtype=bool)
         following[[p.vr for p in self.plans if p.vr_following]] = True
         vv = virtual_leaders(self.plans, t, self.x, self.v, self.a, self.fleet.length)
-        acc, changing, vs, ls, ks, rank, lead = core.step_accelerations(c, ids, t, following, *vv)
+        acc, changing, vs, ls, ks, rank, lead = core.step_accelerations(
+            self.core, ids, t, following, *vv
+        )
         index = LaneIndex(vehicle=vs, lane=ls, key=ks, rank=rank)
         if self.plans:
             self._execute_plans(ids, index, lead, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
             holding = holding_lane(self.plans, self.fleet.kind == Kind.CAV)
             chosen, target = core.discretionary_changes(
-                c, ids, changing, holding, lead, vs, ls, ks, rank
+                self.core, ids, changing, holding, lead, vs, ls, ks, rank
             )
             if self.config.lane_change.cav_game and chosen.size:
                 keep = self._game_confirms(chosen, target, ids, lead, index)
                 chosen, target = chosen[keep], target[keep]
-            core.start_lane_changes(c, chosen, target, t, _NO_FLOAT)
-        core.step_finish(c, ids, t, acc, vs, ls)
+            core.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
+        core.step_finish(self.core, ids, t, acc, vs, ls)
         if self.plans:
             self._finish_plans()
         c.flags[layout.HAS_PLANS] = bool(self.plans)
@@ -344,7 +376,7 @@ class Simulation:
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
         for vr in new.tolist():
-            self.core.identified[vr] = True
+            self.arrays.identified[vr] = True
             if vr in self.key_groups:
                 continue
             group = find_key_vehicles(self._view(t), vr)

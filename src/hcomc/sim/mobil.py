@@ -33,6 +33,7 @@ from hcomc.models.following import follow_accel
 from hcomc.road import Lane
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.neighbours import LaneIndex, lookup_one
+from hcomc.sim.small import join, nonzero, search_left
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
@@ -101,21 +102,21 @@ def mobil_decide(
         clear = not standing or s_o >= 3.0 * length[c] + min_gap
         ok[k] = clear and s_c >= min_gap and s_n >= min_gap
     # 2. the deceleration criteria: candidate and new follower after the change
-    pos = np.flatnonzero(ok)
+    pos = nonzero(ok)
     m = pos.size
     _, after = model_accels(
         matrix, iidm, length, x, v, a,
-        np.concatenate((cand[pos], new_fol[pos])), np.concatenate((new_lead[pos], cand[pos])),
+        join((cand[pos], new_fol[pos])), join((new_lead[pos], cand[pos])),
     )  # fmt: skip
     for q in range(m):
         ok[pos[q]] = after[q] >= -b_safe and after[m + q] >= -b_safe
     # 3. the incentive of discretionary changes (rows: candidate before, new follower before,
     #    old follower after, old follower before)
-    disc = np.flatnonzero(ok & ~mandatory)
+    disc = nonzero(ok & ~mandatory)
     _, before = model_accels(
         matrix, iidm, length, x, v, a,
-        np.concatenate((cand[disc], new_fol[disc], follower[disc], follower[disc])),
-        np.concatenate((leader[disc], new_lead[disc], cand[disc], leader[disc])),
+        join((cand[disc], new_fol[disc], follower[disc], follower[disc])),
+        join((leader[disc], new_lead[disc], cand[disc], leader[disc])),
     )  # fmt: skip
     d = disc.size
     for q in range(d):
@@ -125,7 +126,7 @@ def mobil_decide(
         gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
         side = bias if target[k] == _MAIN_2 else -bias
         ok[k] = gain > threshold + side
-    sel = np.flatnonzero(ok)
+    sel = nonzero(ok)
     return _resolve(cand[sel], target[sel], new_lead[sel], new_fol[sel], mandatory[sel], x)
 
 
@@ -138,7 +139,7 @@ def _gap(length: np.ndarray, x: np.ndarray, i: int, j: int) -> float:
 @njit(cache=True, inline="always")
 def _after_of(after: np.ndarray, pos: np.ndarray, m: int, k: int) -> tuple[float, float]:
     """(acc1, acc3) of candidate k from the safety pass (``pos`` ascending)."""
-    q = np.searchsorted(pos, k)
+    q = search_left(pos, k)
     return after[q], after[m + q]
 
 
@@ -164,7 +165,7 @@ def _resolve(ids, target, new_lead, new_fol, mandatory, x):
                 if other > mine or (other == mine and m < k):
                     beaten = True
         keep[k] = not beaten
-    sel = np.flatnonzero(keep)
+    sel = nonzero(keep)
     return ids[sel], target[sel]
 
 

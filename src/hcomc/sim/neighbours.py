@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from hcomc._typing import FloatArray, IntArray
+from hcomc.sim.small import search_right, stable_argsort
 
 OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
@@ -30,7 +31,7 @@ def sort_entries(
     """Entries (vehicle, lane) at positions x sorted by ``lane * OFFSET + x`` (stable):
     ``(vehicle, lane, key, rank)`` with ``rank`` the sorted position of each given entry."""
     key = lane * OFFSET + x
-    order = np.argsort(key, kind="mergesort")
+    order = stable_argsort(key)
     rank = np.empty(order.size, dtype=np.int64)
     for p in range(order.size):
         rank[order[p]] = p
@@ -53,7 +54,7 @@ def lookup_one(
 
     An entry at exactly the same position counts as the follower.
     """
-    pos = int(np.searchsorted(key, lane * OFFSET + x, side="right"))
+    pos = search_right(key, lane * OFFSET + x)
     return neighbour(vehicle, lane_of, pos, lane), neighbour(vehicle, lane_of, pos - 1, lane)
 
 
