@@ -60,21 +60,21 @@ def test_local_pool_and_dask_cluster_give_identical_tables(spec_file, tmp_path):
     assert (tmp_path / "dask" / "summary.csv").stat().st_size > 0
 
 
-_RUN_ONE = sweep_mod.run_one
+_RUN_BATCH = sweep_mod.run_batch
 
 
-def _dying_run_one(run):
+def _dying_run_batch(runs, threads=None):
     """Kill the worker process the first time it is called (marker file), then behave."""
     marker = Path(os.environ["HCOMC_TEST_MARKER"])
     if not marker.exists():
         marker.write_text("died once")
         os._exit(13)
-    return _RUN_ONE(run)
+    return _RUN_BATCH(runs, threads=threads)
 
 
 def test_a_dying_worker_has_its_runs_retried(spec_file, tmp_path, monkeypatch):
     monkeypatch.setenv("HCOMC_TEST_MARKER", str(tmp_path / "marker"))
-    monkeypatch.setattr(sweep_mod, "run_one", _dying_run_one)
+    monkeypatch.setattr(sweep_mod, "run_batch", _dying_run_batch)
     table = run_sweep(load_sweep(spec_file), tmp_path / "out", workers=2)
     assert (tmp_path / "marker").exists()
     assert len(table) == 8

@@ -20,11 +20,11 @@ workers, so tables are identical for 1 or N workers.
 from __future__ import annotations
 
 import json
+import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,9 @@ import pandas as pd
 
 from hcomc.config import load_config
 from hcomc.sim.log import EventKind, SimulationLog
+
+_SPAWN = multiprocessing.get_context("spawn")
+"""Worker processes start afresh: a fork would copy the parallel ensemble's thread pool."""
 
 CONFIGURATIONS: dict[str, tuple[str, str]] = {
     "FIFO": ("fifo", "nsga2"),
@@ -125,17 +128,34 @@ def make_simulation(
     return Simulation(config, seed, counterfactual=counterfactual)
 
 
-@lru_cache(maxsize=64)
-def _undisturbed(condition: str, seed: int, overrides_json: str, engine: str) -> SimulationLog:
-    """The run without its ramp vehicle (cached per worker process)."""
+_REFERENCES: dict[tuple[str, int, str, str], SimulationLog] = {}
+"""Undisturbed runs of this process, by (condition, seed, non-control overrides, engine)."""
+_MAX_REFERENCES = 128
+
+
+def _reference_key(spec: RunSpec) -> tuple[str, int, str, str]:
+    return (*spec.reference_key(), spec.engine)
+
+
+def _remember(key: tuple[str, int, str, str], log: SimulationLog) -> None:
+    _REFERENCES[key] = log
+    while len(_REFERENCES) > _MAX_REFERENCES:  # forget the oldest
+        del _REFERENCES[next(iter(_REFERENCES))]
+
+
+def _reference_simulation(spec: RunSpec) -> Any:
+    condition, seed, overrides_json, engine = _reference_key(spec)
     config = load_config(condition, **json.loads(overrides_json))
-    return make_simulation(config, seed, engine, counterfactual=True).run()
+    return make_simulation(config, seed, engine, counterfactual=True)
 
 
 def undisturbed_log(spec: RunSpec) -> SimulationLog:
     """The undisturbed counterpart of ``spec``'s run (same condition, seed, overrides and
-    engine)."""
-    return _undisturbed(*spec.reference_key(), spec.engine)
+    engine), simulated once per process."""
+    key = _reference_key(spec)
+    if key not in _REFERENCES:
+        _remember(key, _reference_simulation(spec).run())
+    return _REFERENCES[key]
 
 
 def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
@@ -169,12 +189,59 @@ def realised_sequence(log: SimulationLog, vr: int, vmc: int) -> str:
 
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
     """Simulate one run and compute its metrics: ``(row, manifest)``."""
+    return run_batch([spec])[0]
+
+
+def run_batch(
+    specs: Sequence[RunSpec], *, threads: int | None = None
+) -> list[tuple[dict[str, Any], dict[str, Any]]]:
+    """Simulate runs as one batch and compute their metrics: ``(row, manifest)`` per spec.
+
+    Runs on our engine, with the undisturbed runs they need that this process has not
+    simulated yet, advance together as one ensemble (:func:`hcomc.sim.ensemble.run_ensemble`,
+    on ``threads`` cores); each run's result is bit-identical to running it alone. SUMO runs
+    are simulated one after the other. ``wall_s`` is each run's share of the batch's time.
+    """
+    from hcomc.sim.ensemble import run_ensemble
+
+    start = time.perf_counter()
+    configs = [load_config(spec.condition, **spec.config_overrides()) for spec in specs]
+    sims = [make_simulation(c, s.seed, s.engine) for c, s in zip(configs, specs, strict=True)]
+    missing: dict[tuple[str, int, str, str], Any] = {}
+    for spec in specs:
+        key = _reference_key(spec)
+        if key not in _REFERENCES and key not in missing:
+            missing[key] = _reference_simulation(spec)
+    batch = [*sims, *missing.values()]
+    ours = [sim for sim in batch if _engine_of(sim) == "hcomc"]
+    run_ensemble(ours, threads=threads)
+    for sim in batch:
+        if _engine_of(sim) != "hcomc":
+            sim.run()
+    for key, sim in missing.items():
+        _remember(key, sim.log)
+    share = (time.perf_counter() - start) / max(len(specs), 1)
+    return [
+        _measure(spec, config, sim, share)
+        for spec, config, sim in zip(specs, configs, sims, strict=True)
+    ]
+
+
+def _engine_of(sim: Any) -> str:
+    """The engine a simulation object runs on."""
+    from hcomc.sim.engine import Simulation
+
+    return "hcomc" if isinstance(sim, Simulation) else "sumo"
+
+
+def _measure(
+    spec: RunSpec, config: Any, sim: Any, wall: float
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The results row and manifest of a finished run."""
     from hcomc.metrics import compute_metrics, key_window
 
-    config = load_config(spec.condition, **spec.config_overrides())
+    log = sim.log
     start = time.perf_counter()
-    sim = make_simulation(config, spec.seed, spec.engine)
-    log = sim.run()
     controller, optimizer = ALL_CONFIGURATIONS[spec.configuration]
     row: dict[str, Any] = {
         "condition": config.name,
@@ -209,7 +276,7 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
         from hcomc.metrics.flow import ramp_delay, throughput
 
         row.update(throughput=throughput(log), ramp_delay=ramp_delay(log), plans=len(sim.decisions))
-    row["wall_s"] = time.perf_counter() - start
+    row["wall_s"] = wall + time.perf_counter() - start
     manifest = {
         **log.meta,
         "run": {
@@ -223,14 +290,22 @@ def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
     return row, manifest
 
 
+def batches(n: int, size: int) -> list[list[int]]:
+    """Indices 0..n-1 in consecutive chunks of at most ``size``."""
+    size = max(1, size)
+    return [list(range(k, min(k + size, n))) for k in range(0, n, size)]
+
+
 def run_grid(
     specs: Sequence[RunSpec],
     *,
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
     on_result: Callable[[int, dict[str, Any], dict[str, Any]], None] | None = None,
+    batch_size: int = 16,
 ) -> pd.DataFrame:
-    """Run every spec (in ``workers`` processes) and return the rows in spec order."""
+    """Run every spec (in ``workers`` processes, ``batch_size`` runs per ensemble) and return
+    the rows in spec order."""
     rows: list[dict[str, Any] | None] = [None] * len(specs)
     done = 0
 
@@ -243,12 +318,18 @@ def run_grid(
         if progress is not None:
             progress(done, len(specs))
 
+    chunks = batches(len(specs), batch_size)
     if workers <= 1:
-        for i, spec in enumerate(specs):
-            collect(i, run_one(spec))
-    else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            futures = {pool.submit(run_one, spec): i for i, spec in enumerate(specs)}
+        for chunk in chunks:
+            for i, result in zip(chunk, run_batch([specs[i] for i in chunk]), strict=True):
+                collect(i, result)
+    else:  # one core per worker process: the processes share the cores
+        with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
+            futures = {
+                pool.submit(run_batch, [specs[i] for i in chunk], threads=1): chunk
+                for chunk in chunks
+            }
             for future in as_completed(futures):
-                collect(futures[future], future.result())
+                for i, result in zip(futures[future], future.result(), strict=True):
+                    collect(i, result)
     return pd.DataFrame(rows)

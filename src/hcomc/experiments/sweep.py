@@ -33,7 +33,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 import hcomc
 from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
-from hcomc.experiments.runner import CONFIGURATIONS, RunSpec, run_one
+from hcomc.experiments.runner import _SPAWN, CONFIGURATIONS, RunSpec, batches, run_batch
 from hcomc.experiments.tables import mean_ci
 from hcomc.sim.manifest import atomic_paths, write_json_atomic
 
@@ -241,24 +241,44 @@ def run_sweep(
     return assemble(spec, out)
 
 
+BATCH_SIZE = 4
+"""Runs simulated together as one ensemble (one task on a worker or a Dask cluster). A
+killed sweep loses at most the batches that were running; small batches keep that small."""
+
+
+def _chunks(todo: list[int]) -> list[list[int]]:
+    return [[todo[k] for k in chunk] for chunk in batches(len(todo), BATCH_SIZE)]
+
+
+def _store_batch(chunk, results, store) -> None:
+    for i, result in zip(chunk, results, strict=True):
+        store(i, result)
+
+
 def _run_local(runs, todo, store, workers: int, restarts: int) -> None:
     if workers <= 1:
-        for i in todo:
-            store(i, run_one(runs[i]))
+        for chunk in _chunks(todo):
+            _store_batch(chunk, run_batch([runs[i] for i in chunk]), store)
         return
-    pending = list(todo)
+    pending = _chunks(todo)
     for _ in range(restarts + 1):
+        finished: set[int] = set()
         try:
-            with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(run_one, runs[i]): i for i in pending}
+            with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
+                futures = {
+                    pool.submit(run_batch, [runs[i] for i in chunk], threads=1): k
+                    for k, chunk in enumerate(pending)
+                }
                 for future in as_completed(futures):
-                    i = futures[future]
-                    store(i, future.result())
-                    pending.remove(i)
+                    k = futures[future]
+                    _store_batch(pending[k], future.result(), store)
+                    finished.add(k)
             return
         except BrokenProcessPool:  # a worker died: rebuild the pool, resubmit the rest
+            pending = [chunk for k, chunk in enumerate(pending) if k not in finished]
             continue
-    raise RuntimeError(f"the process pool broke {restarts + 1} times; {len(pending)} runs left")
+    left = sum(len(chunk) for chunk in pending)
+    raise RuntimeError(f"the process pool broke {restarts + 1} times; {left} runs left")
 
 
 def connect(scheduler: str) -> Any:
@@ -282,9 +302,13 @@ def _run_dask(scheduler: str, runs, todo, store) -> None:
 
     client = connect(scheduler)
     try:
-        futures = {client.submit(run_one, runs[i], pure=False, retries=2): i for i in todo}
+        chunks = _chunks(todo)
+        futures = {
+            client.submit(run_batch, [runs[i] for i in chunk], pure=False, retries=2): k
+            for k, chunk in enumerate(chunks)
+        }
         for future in dask_completed(list(futures)):
-            store(futures[future], future.result())
+            _store_batch(chunks[futures[future]], future.result(), store)
     finally:
         client.close()
 

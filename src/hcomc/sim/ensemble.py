@@ -38,6 +38,10 @@ def _advance_batch(cores, logs, stops, logging, reasons):
         )
 
 
+# the same loop on one thread: no thread pool (safe in forked worker processes)
+_advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
+
+
 def run_ensemble(
     sims: Sequence[Simulation],
     *,
@@ -46,13 +50,17 @@ def run_ensemble(
 ) -> list[SimulationLog]:
     """Run every simulation to its end as one batch; their logs, in order.
 
-    ``threads`` bounds the cores used (default: numba's, i.e. all); ``progress(done, total)``
-    is called as runs finish.
+    ``threads`` bounds the cores used (default: numba's, i.e. all; 1 runs the batch on the
+    calling thread, which forked worker processes need); ``progress(done, total)`` is called
+    as runs finish.
     """
-    previous = numba.get_num_threads()
-    if threads is not None:
-        most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
-        numba.set_num_threads(max(1, min(threads, most)))
+    most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
+    threads = most if threads is None else max(1, min(threads, most))
+    advance = _advance_batch_serial if threads == 1 else _advance_batch
+    previous = threads
+    if threads > 1:  # the thread pool is touched only when used (a forked child must not)
+        previous = numba.get_num_threads()
+        numba.set_num_threads(threads)
     try:
         pending = [s for s in sims if not s.finished]
         while pending:
@@ -63,7 +71,7 @@ def run_ensemble(
                 stops = np.array([s.stop_step for s in pending], dtype=np.int64)
                 logging = np.array([s.logging for s in pending], dtype=np.bool_)
                 reasons = np.empty(len(pending), dtype=np.int64)
-                _advance_batch(cores, logs, stops, logging, reasons)
+                advance(cores, logs, stops, logging, reasons)
                 for sim, reason in zip(pending, reasons.tolist(), strict=True):
                     sim.resume(reason)
                 if any(s.finished for s in pending):
@@ -71,7 +79,8 @@ def run_ensemble(
                     if progress is not None:
                         progress(len(sims) - len(pending), len(sims))
     finally:
-        numba.set_num_threads(previous)
+        if threads > 1:
+            numba.set_num_threads(previous)
     return [s.log for s in sims]
 
 
