@@ -10,6 +10,8 @@ pymoo computes it, so that the compiled optimiser reproduces pymoo's decisions e
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
@@ -162,6 +164,7 @@ def tournament(P: IntArray, F: FloatArray, cv: FloatArray, crowding: FloatArray)
     return S
 
 
+@functools.cache  # once per process
 def warm_up() -> None:
     """Compile (or load from numba's cache) every kernel of this module now."""
     F = np.array([[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]])
