@@ -75,6 +75,9 @@ def pareto_ranks(F: FloatArray) -> IntArray:
                         nxt[j] = True
         front = np.flatnonzero(nxt)
         k += 1
+    # rows left unranked sit on a dominance cycle, possible only through NaN (comparisons with
+    # NaN are skipped): they share the next rank, so that every row has one
+    rank[rank < 0] = k
     return rank
 
 
@@ -136,6 +139,22 @@ def crowding_distance(F: FloatArray) -> FloatArray:
 
 
 @njit(cache=True)
+def ranked_fronts(F: FloatArray, n_needed: int) -> tuple[IntArray, FloatArray, int]:
+    """Ranks of all rows, and the crowding distance within its front of every row of the
+    first fronts that together hold at least ``n_needed`` rows (NaN beyond); the rank of the
+    last of those fronts."""
+    rank = pareto_ranks(F)
+    crowd = np.full(F.shape[0], np.nan)
+    taken, k = 0, 0
+    while taken < n_needed:
+        front = np.flatnonzero(rank == k)
+        crowd[front] = crowding_distance(F[front])
+        taken += front.size
+        k += 1
+    return rank, crowd, k - 1
+
+
+@njit(cache=True)
 def tournament(P: IntArray, F: FloatArray, cv: FloatArray, crowding: FloatArray) -> IntArray:
     """Winners of NSGA-II binary tournaments between rows ``P[i, 0]`` and ``P[i, 1]``.
 
@@ -171,4 +190,5 @@ def warm_up() -> None:
     pareto_ranks(F)
     non_dominated_mask(F)
     crowding_distance(F)
+    ranked_fronts(F, 2)
     tournament(np.array([[0, 1], [1, 2]], dtype=np.int64), F, np.zeros(3), np.ones(3))

@@ -26,7 +26,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim.base import ParetoResult, Problem, archive_front, initial_rows
-from hcomc.optim.dominance import crowding_distance, pareto_ranks, tournament, warm_up
+from hcomc.optim.dominance import ranked_fronts, tournament, warm_up
 
 _SEED_HIGH = 2**31 - 1
 _PROB_BIN = 0.5  # SBX: probability of exchanging the two children's values of a variable
@@ -83,29 +83,19 @@ def survive(pop: Population, n_survive: int, rng: np.random.Generator) -> Popula
     infeas = infeas[np.argsort(cv[infeas])]
     rank = np.full(X.shape[0], -1, dtype=np.int64)
     crowd = np.full(X.shape[0], np.nan)
-    chosen: list[IntArray] = []
+    idx = infeas[:n_survive]
     n_feasible = min(feas.size, n_survive)
     if n_feasible > 0:
-        Ff = F[feas].astype(np.float64)
-        ranks = pareto_ranks(Ff)
-        taken, k = 0, 0
-        while taken < n_feasible:
-            front = np.flatnonzero(ranks == k)
-            d = crowding_distance(Ff[front])
-            keep = np.arange(front.size)
-            if taken + front.size > n_feasible:
-                n_remove = taken + front.size - n_feasible
-                perm = rng.permutation(front.size)
-                keep = np.flip(perm[np.argsort(d[perm], kind="quicksort")])[:-n_remove]
-            rows = feas[front]
-            rank[rows], crowd[rows] = k, d
-            chosen.append(rows[keep])
-            taken += keep.size
-            k += 1
-    n_rest = n_survive - sum(c.size for c in chosen)
-    if n_rest > 0:
-        chosen.append(infeas[:n_rest])
-    idx = np.concatenate(chosen) if chosen else np.zeros(0, dtype=np.int64)
+        ranks, d, last = ranked_fronts(F[feas].astype(np.float64), n_feasible)
+        rank[feas], crowd[feas] = ranks, d
+        inner = np.flatnonzero(ranks < last)  # whole fronts, front by front, in index order
+        inner = inner[np.argsort(ranks[inner], kind="stable")]
+        front = np.flatnonzero(ranks == last)
+        n_remove = inner.size + front.size - n_feasible
+        if n_remove > 0:  # the front that does not fit: largest crowding first
+            perm = rng.permutation(front.size)
+            front = front[np.flip(perm[np.argsort(d[front][perm], kind="quicksort")])[:-n_remove]]
+        idx = np.concatenate([feas[inner], feas[front], infeas[: n_survive - n_feasible]])
     return Population(X, F, cv, rank, crowd, pop.row).take(idx)
 
 
@@ -118,7 +108,8 @@ def select_parents(pop: Population, n_matings: int, rng: np.random.Generator) ->
     P = P.reshape(n_matings * 2, 2)
     S = tournament(P, pop.F, pop.cv, pop.crowding)
     for i in np.flatnonzero(S < 0):
-        S[i] = rng.choice([P[i, 0], P[i, 1]])
+        # a fair coin, the draw pymoo's ``rng.choice([a, b])`` makes (same stream)
+        S[i] = P[i, int(rng.integers(0, 2))]
     return S.reshape(n_matings, 2)
 
 
