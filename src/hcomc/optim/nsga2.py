@@ -140,26 +140,23 @@ def sbx(
     cross_mating = rng.random(n_matings) < prob
     Xp = np.empty_like(X)
     if np.any(cross_mating):
-        prob_bin = np.full((n_matings, 1), _PROB_BIN)
-        prob_bin[rng.random((n_matings, 1)) > 1.0] = 0.0  # exchange probability 1 (pymoo)
-        etas = np.full((n_matings, 1), float(eta))
-        cross = rng.random((n_matings, n_var)) < np.full((n_matings, 1), _PROB_VAR)
+        rng.random((n_matings, 1))  # pymoo's exchange draw (exchange probability 1: unused)
+        cross = rng.random((n_matings, n_var)) < _PROB_VAR
         cross[np.abs(X[0] - X[1]) <= 1.0e-14] = False
         cross[:, xl == xu] = False
         p1, p2 = X[0][cross], X[1][cross]
         sm = p1 < p2
         y1, y2 = np.where(sm, p1, p2), np.where(sm, p2, p1)
-        _xl = np.repeat(xl[None, :], n_matings, axis=0)[cross]
-        _xu = np.repeat(xu[None, :], n_matings, axis=0)[cross]
-        e = etas.repeat(n_var, axis=1)[cross]
-        pb = prob_bin.repeat(n_var, axis=1)[cross]
-        rand = rng.random(len(e))
+        _xl = np.broadcast_to(xl, cross.shape)[cross]
+        _xu = np.broadcast_to(xu, cross.shape)[cross]
+        e = np.full(p1.size, float(eta))
+        rand = rng.random(p1.size)
         delta = y2 - y1
         c1 = 0.5 * ((y1 + y2) - _betaq(1.0 + (2.0 * (y1 - _xl) / delta), rand, e) * delta)
         c2 = 0.5 * ((y1 + y2) + _betaq(1.0 + (2.0 * (_xu - y2) / delta), rand, e) * delta)
         child1, child2 = np.where(sm, c1, c2), np.where(sm, c2, c1)
-        b = np.bitwise_xor(rng.random(len(pb)) < pb, X[0, cross] > X[1, cross])
-        child1, child2 = np.where(b, (child2, child1), (child1, child2))
+        b = np.bitwise_xor(rng.random(p1.size) < _PROB_BIN, p1 > p2)
+        child1, child2 = np.where(b, child2, child1), np.where(b, child1, child2)
         Q = np.copy(X)
         Q[0, cross], Q[1, cross] = child1, child2
         Q = np.clip(Q, xl, xu)
@@ -179,14 +176,13 @@ def polynomial_mutation(
     """Polynomial mutation: each row with probability ``prob``, each of its variables with
     probability ``min(0.5, 1 / n_var)`` (not where the bounds coincide), within the bounds."""
     n, n_var = X.shape
-    prob_var = np.full(n, min(0.5, 1.0 / n_var))
-    mut = rng.random((n, n_var)) < prob_var[:, None]
+    mut = rng.random((n, n_var)) < min(0.5, 1.0 / n_var)
     mut[:, xl == xu] = False
     Xp = X.copy()
-    _xl = np.repeat(xl[None, :], n, axis=0)[mut]
-    _xu = np.repeat(xu[None, :], n, axis=0)[mut]
+    _xl = np.broadcast_to(xl, mut.shape)[mut]
+    _xu = np.broadcast_to(xu, mut.shape)[mut]
     x = X[mut]
-    e = np.tile(np.full(n, float(eta))[:, None], (1, n_var))[mut]
+    e = np.full(x.size, float(eta))
     delta1 = (x - _xl) / (_xu - _xl)
     delta2 = (_xu - x) / (_xu - _xl)
     mut_pow = 1.0 / (e + 1.0)
