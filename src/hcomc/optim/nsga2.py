@@ -25,12 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.optim import dominance, variation
 from hcomc.optim.base import ParetoResult, Problem, archive_front, initial_rows
-from hcomc.optim.dominance import ranked_fronts, tournament, warm_up
+from hcomc.optim.dominance import ranked_fronts, tournament
+from hcomc.optim.variation import polynomial_mutation, sbx
 
 _SEED_HIGH = 2**31 - 1
-_PROB_BIN = 0.5  # SBX: probability of exchanging the two children's values of a variable
-_PROB_VAR = 0.5  # SBX: probability that a variable is crossed
 
 
 def violation(G: FloatArray) -> FloatArray:
@@ -113,95 +113,6 @@ def select_parents(pop: Population, n_matings: int, rng: np.random.Generator) ->
     return S.reshape(n_matings, 2)
 
 
-def _betaq(beta: FloatArray, rand: FloatArray, eta: FloatArray) -> FloatArray:
-    alpha = 2.0 - np.power(beta, -(eta + 1.0))
-    mask, mask_not = (rand <= (1.0 / alpha)), (rand > (1.0 / alpha))
-    betaq = np.zeros(mask.shape)
-    betaq[mask] = np.power((rand * alpha), (1.0 / (eta + 1.0)))[mask]
-    betaq[mask_not] = np.power((1.0 / (2.0 - rand * alpha)), (1.0 / (eta + 1.0)))[mask_not]
-    return betaq
-
-
-def sbx(
-    X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    eta: float,
-    prob: float,
-    rng: np.random.Generator,
-) -> FloatArray:
-    """Simulated binary crossover of parent pairs ``X`` (2, n_matings, n_var) -> children.
-
-    A mating is crossed with probability ``prob``, each of its variables with probability 1/2
-    (not when the parents are within 1e-14 or the bounds coincide); the two children's values of
-    a crossed variable are exchanged with probability 1/2; children are clamped to the bounds.
-    """
-    _, n_matings, n_var = X.shape
-    cross_mating = rng.random(n_matings) < prob
-    Xp = np.empty_like(X)
-    if np.any(cross_mating):
-        rng.random((n_matings, 1))  # pymoo's exchange draw (exchange probability 1: unused)
-        cross = rng.random((n_matings, n_var)) < _PROB_VAR
-        cross[np.abs(X[0] - X[1]) <= 1.0e-14] = False
-        cross[:, xl == xu] = False
-        p1, p2 = X[0][cross], X[1][cross]
-        sm = p1 < p2
-        y1, y2 = np.where(sm, p1, p2), np.where(sm, p2, p1)
-        _xl = np.broadcast_to(xl, cross.shape)[cross]
-        _xu = np.broadcast_to(xu, cross.shape)[cross]
-        e = np.full(p1.size, float(eta))
-        rand = rng.random(p1.size)
-        delta = y2 - y1
-        c1 = 0.5 * ((y1 + y2) - _betaq(1.0 + (2.0 * (y1 - _xl) / delta), rand, e) * delta)
-        c2 = 0.5 * ((y1 + y2) + _betaq(1.0 + (2.0 * (_xu - y2) / delta), rand, e) * delta)
-        child1, child2 = np.where(sm, c1, c2), np.where(sm, c2, c1)
-        b = np.bitwise_xor(rng.random(p1.size) < _PROB_BIN, p1 > p2)
-        child1, child2 = np.where(b, child2, child1), np.where(b, child1, child2)
-        Q = np.copy(X)
-        Q[0, cross], Q[1, cross] = child1, child2
-        Q = np.clip(Q, xl, xu)
-        Xp[:, cross_mating] = Q[:, cross_mating]
-    Xp[:, ~cross_mating] = X[:, ~cross_mating]
-    return Xp.reshape(-1, n_var)
-
-
-def polynomial_mutation(
-    X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    eta: float,
-    prob: float,
-    rng: np.random.Generator,
-) -> FloatArray:
-    """Polynomial mutation: each row with probability ``prob``, each of its variables with
-    probability ``min(0.5, 1 / n_var)`` (not where the bounds coincide), within the bounds."""
-    n, n_var = X.shape
-    mut = rng.random((n, n_var)) < min(0.5, 1.0 / n_var)
-    mut[:, xl == xu] = False
-    Xp = X.copy()
-    _xl = np.broadcast_to(xl, mut.shape)[mut]
-    _xu = np.broadcast_to(xu, mut.shape)[mut]
-    x = X[mut]
-    e = np.full(x.size, float(eta))
-    delta1 = (x - _xl) / (_xu - _xl)
-    delta2 = (_xu - x) / (_xu - _xl)
-    mut_pow = 1.0 / (e + 1.0)
-    rand = rng.random(x.shape)
-    mask = rand <= 0.5
-    mask_not = np.logical_not(mask)
-    deltaq = np.zeros(x.shape)
-    with np.errstate(invalid="ignore"):
-        val = 2.0 * rand + (1.0 - 2.0 * rand) * (np.power(1.0 - delta1, (e + 1.0)))
-        deltaq[mask] = (np.power(val, mut_pow) - 1.0)[mask]
-        val = 2.0 * (1.0 - rand) + 2.0 * (rand - 0.5) * (np.power(1.0 - delta2, (e + 1.0)))
-        deltaq[mask_not] = (1.0 - (np.power(val, mut_pow)))[mask_not]
-    y = np.clip(x + deltaq * (_xu - _xl), _xl, _xu)
-    Xp[mut] = y
-    Xp = np.clip(Xp, xl, xu)
-    rows: BoolArray = np.asarray(rng.random(n) <= prob)
-    return np.where(rows[:, None], Xp, X)
-
-
 @dataclass(frozen=True, slots=True)
 class CompiledNSGA2Optimizer:
     """NSGA-II on arrays with numba kernels; the same decisions as the pymoo optimiser.
@@ -225,7 +136,8 @@ class CompiledNSGA2Optimizer:
     def __post_init__(self) -> None:
         if self.pop_size < 2:
             raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
-        warm_up()  # load the compiled kernels now, not inside a timed decision
+        dominance.warm_up()  # load the compiled kernels now, not inside a timed decision
+        variation.warm_up()
 
     def minimize(
         self,
