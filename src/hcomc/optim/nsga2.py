@@ -3,13 +3,13 @@
 :class:`CompiledNSGA2Optimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 NSGA2Optimizer` (pymoo 0.6's ``NSGA2`` with SBX, polynomial mutation, binary tournament by
 constraint violation, domination and crowding, rank-and-crowding survival with feasible rows
-first, no duplicate elimination) on plain arrays: non-dominated ranks, crowding distance and
-the tournaments are numba kernels (:mod:`hcomc.optim.dominance`), and so are SBX and polynomial
-mutation (:mod:`hcomc.optim.variation`, powers through numpy as pymoo computes them). It draws the same random numbers in the same order
-from a generator seeded like pymoo's, and computes every floating-point value with the same
-operations, so for the same problem, budget and ``rng`` it evaluates the same rows and returns
-the same Pareto set as the pymoo optimiser (tests hold it to that), at a fraction of the
-per-generation cost.
+first, no duplicate elimination) on plain arrays: non-dominated ranks, crowding distance and the
+tournaments are numba kernels (:mod:`hcomc.optim.dominance`), and so are SBX and polynomial
+mutation (:mod:`hcomc.optim.variation`, powers through numpy as pymoo computes them). It draws
+the same random numbers in the same order from a generator seeded like pymoo's, and computes
+every floating-point value with the same operations, so for the same problem, budget and ``rng``
+it evaluates the same rows and returns the same Pareto set as the pymoo optimiser (tests hold it
+to that), at a fraction of the per-generation cost.
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
