@@ -17,7 +17,11 @@ point is averaged over the repeats, and all decision times give the median and p
 evaluations (e.g. of a faster optimiser: :func:`evaluate` takes any ``Optimizer``) report
 the ratio to it per problem.
 
-    python benchmarks/record_decisions.py [--record] [--count 60] [--optimizer nsga2]
+With several ``--optimizer`` options the optimisers take each decision in turn, in one process
+(:func:`evaluate_side_by_side`), and ``identical_to_first`` counts the decisions whose Pareto set
+equals the first optimiser's bit for bit.
+
+    python benchmarks/record_decisions.py [--record] [--count 60] [--optimizer nsga2 ...]
                                           [--repeats 3] [--save-baseline] [--json]
 """
 
@@ -189,34 +193,59 @@ def evaluate(
     Returns the per-problem mean hypervolume, the number of problems with a feasible plan,
     and the decision time median / p95 / max [ms] over all decisions.
     """
-    times: list[float] = []
-    rows = []
+    return evaluate_side_by_side(decisions, [optimizer], repeats)[0]
+
+
+def evaluate_side_by_side(
+    decisions: list[Decision], optimizers: list[Optimizer | None], repeats: int = 3
+) -> list[dict[str, Any]]:
+    """:func:`evaluate` for several optimisers in one pass: each decision is taken by every
+    optimiser in turn (same problem, same generator seed), so that machine load affects their
+    times alike. ``identical_to_first`` counts decisions whose Pareto set equals the first
+    optimiser's bit for bit."""
+    times: list[list[float]] = [[] for _ in optimizers]
+    rows: list[list[dict[str, Any]]] = [[] for _ in optimizers]
+    identical = [0 for _ in optimizers]
     for k, d in enumerate(decisions):
-        chosen = optimizer or optimizer_from_config(d.config.control)
-        controller = HCOMCController(d.config, optimizer=chosen)
+        chosen = [opt or optimizer_from_config(d.config.control) for opt in optimizers]
         if k == 0:
-            controller.plan(d.view, d.group, np.random.default_rng(0))  # warm-up
-        volumes = []
+            for opt in chosen:  # warm-up: compiled kernels loaded outside the timed calls
+                HCOMCController(d.config, optimizer=opt).plan(
+                    d.view, d.group, np.random.default_rng(0)
+                )
+        volumes: list[list[float]] = [[] for _ in optimizers]
         for r in range(repeats):
-            fresh = HCOMCController(d.config, optimizer=chosen)  # no warm start between repeats
-            start = time.perf_counter()
-            plan = fresh.plan(d.view, d.group, np.random.default_rng(r))
-            times.append((time.perf_counter() - start) * 1e3)
-            feasible = plan.details["pareto_F"][plan.details["feasible"]]
-            volumes.append(hypervolume(feasible, d.reference))
-        rows.append({"problem": d.name, "hypervolume": float(np.mean(volumes))})
-    ms = np.array(times)
-    return {
-        "optimizer": (optimizer or optimizer_from_config(decisions[0].config.control)).name,
-        "budget": decisions[0].config.control.budget,
-        "problems": len(decisions),
-        "decisions": int(ms.size),
-        "median_ms": round(float(np.median(ms)), 1),
-        "p95_ms": round(float(np.percentile(ms, 95)), 1),
-        "max_ms": round(float(ms.max()), 1),
-        "with_feasible_front": sum(r["hypervolume"] > 0 for r in rows),
-        "per_problem": rows,
-    }
+            first: np.ndarray | None = None
+            for i, opt in enumerate(chosen):
+                fresh = HCOMCController(d.config, optimizer=opt)  # no warm start between repeats
+                start = time.perf_counter()
+                plan = fresh.plan(d.view, d.group, np.random.default_rng(r))
+                times[i].append((time.perf_counter() - start) * 1e3)
+                pareto = np.asarray(plan.details["pareto_X"])
+                first = pareto if i == 0 else first
+                identical[i] += int(first is not None and np.array_equal(pareto, first))
+                feasible = plan.details["pareto_F"][plan.details["feasible"]]
+                volumes[i].append(hypervolume(feasible, d.reference))
+        for i in range(len(optimizers)):
+            rows[i].append({"problem": d.name, "hypervolume": float(np.mean(volumes[i]))})
+    results = []
+    for i, opt in enumerate(optimizers):
+        ms = np.array(times[i])
+        results.append(
+            {
+                "optimizer": (opt or optimizer_from_config(decisions[0].config.control)).name,
+                "budget": decisions[0].config.control.budget,
+                "problems": len(decisions),
+                "decisions": int(ms.size),
+                "median_ms": round(float(np.median(ms)), 1),
+                "p95_ms": round(float(np.percentile(ms, 95)), 1),
+                "max_ms": round(float(ms.max()), 1),
+                "with_feasible_front": sum(r["hypervolume"] > 0 for r in rows[i]),
+                "identical_to_first": identical[i],
+                "per_problem": rows[i],
+            }
+        )
+    return results
 
 
 def against_baseline(result: dict[str, Any], baseline: dict[str, Any]) -> dict[str, float]:
@@ -244,8 +273,10 @@ def main() -> None:
     parser.add_argument(
         "--optimizer",
         choices=sorted(OPTIMIZERS),
+        action="append",
         default=None,
-        help="optimiser to evaluate (default: each config's own, NSGA-II)",
+        help="optimiser to evaluate (default: each config's own, NSGA-II); repeat it to "
+        "compare several side by side in one run, e.g. --optimizer nsga2-pymoo --optimizer nsga2",
     )
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument(
@@ -266,31 +297,37 @@ def main() -> None:
     if not args.problems.exists():
         fail(f"{args.problems} missing; run with --record first")
     decisions = load_decisions(args.problems)
-    optimizer = None
+    optimizers: list[Optimizer | None] = [None]
     if args.optimizer is not None:
-        control = decisions[0].config.control.model_copy(update={"optimizer": args.optimizer})
-        optimizer = optimizer_from_config(control)
-    result = evaluate(decisions, optimizer, args.repeats)
+        optimizers = []
+        for name in args.optimizer:
+            control = decisions[0].config.control.model_copy(update={"optimizer": name})
+            optimizers.append(optimizer_from_config(control))
+    results = evaluate_side_by_side(decisions, optimizers, args.repeats)
     if args.save_baseline:
-        baseline.write_text(json.dumps({"machine": machine(), **result}, indent=1) + "\n")
+        baseline.write_text(json.dumps({"machine": machine(), **results[0]}, indent=1) + "\n")
     if baseline.exists():
-        result["vs_baseline"] = against_baseline(result, json.loads(baseline.read_text()))
+        reference = json.loads(baseline.read_text())
+        for result in results:
+            result["vs_baseline"] = against_baseline(result, reference)
     if args.json:
-        print(json.dumps({"machine": machine(), "results": [result]}))
+        print(json.dumps({"machine": machine(), "results": results}))
         return
     print("machine:", ", ".join(f"{k} {v}" for k, v in machine().items()))
-    print(
-        f"{result['optimizer']}: {result['problems']} problems x {args.repeats} decisions, "
-        f"budget {result['budget']}; {result['with_feasible_front']} with a feasible front"
-    )
-    print(
-        f"decision time median {result['median_ms']} ms, p95 {result['p95_ms']} ms, "
-        f"max {result['max_ms']} ms"
-    )
-    hv = np.array([r["hypervolume"] for r in result["per_problem"]])
-    print(f"hypervolume per problem: median {np.median(hv):.4g}, mean {hv.mean():.4g}")
-    if "vs_baseline" in result:
-        print("vs baseline:", ", ".join(f"{k} {v}" for k, v in result["vs_baseline"].items()))
+    for result in results:
+        print(
+            f"{result['optimizer']}: {result['problems']} problems x {args.repeats} decisions, "
+            f"budget {result['budget']}; {result['with_feasible_front']} with a feasible front; "
+            f"{result['identical_to_first']} Pareto sets identical to {results[0]['optimizer']}'s"
+        )
+        print(
+            f"  decision time median {result['median_ms']} ms, p95 {result['p95_ms']} ms, "
+            f"max {result['max_ms']} ms"
+        )
+        hv = np.array([r["hypervolume"] for r in result["per_problem"]])
+        print(f"  hypervolume per problem: median {np.median(hv):.4g}, mean {hv.mean():.4g}")
+        if "vs_baseline" in result:
+            print("  vs baseline:", ", ".join(f"{k} {v}" for k, v in result["vs_baseline"].items()))
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from hcomc._typing import FloatArray
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import ParetoResult
+from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, make_optimizer
 from hcomc.optim.selection import non_dominated, select_eq19
@@ -287,7 +288,7 @@ def test_nsga2_deterministic_per_seed() -> None:
 
 def test_nsga2_operator_parameters_are_used() -> None:
     opt = make_optimizer("nsga2", pop_size=10, crossover_eta=5.0, mutation_eta=5.0)
-    assert isinstance(opt, NSGA2Optimizer)
+    assert isinstance(opt, CompiledNSGA2Optimizer)
     assert (opt.pop_size, opt.crossover_eta, opt.mutation_eta) == (10, 5.0, 5.0)
     res = opt.minimize(ConstrainedDTLZ2(), budget=50, rng=np.random.default_rng(0))
     assert res.n_eval == 50
@@ -297,6 +298,8 @@ def test_nsga2_operator_parameters_are_used() -> None:
     assert res.X.shape != res2.X.shape or not np.array_equal(res.X, res2.X)
     with pytest.raises(ValueError, match="pop_size"):
         NSGA2Optimizer(pop_size=1)
+    with pytest.raises(ValueError, match="pop_size"):
+        CompiledNSGA2Optimizer(pop_size=1)
 
 
 def test_warm_start_rows_open_the_first_population() -> None:
@@ -446,12 +449,14 @@ def test_optimizer_consumes_only_the_given_rng(name: str) -> None:
 
 
 def test_registry() -> None:
-    assert set(OPTIMIZERS) == {"nsga2", "pso", "sa"}
+    assert set(OPTIMIZERS) == {"nsga2", "nsga2-pymoo", "pso", "sa"}
+    assert isinstance(make_optimizer("nsga2-pymoo", pop_size=8), NSGA2Optimizer)
     assert isinstance(make_optimizer("pso", pop_size=8), PSOOptimizer)
     assert isinstance(make_optimizer("sa"), AnnealingOptimizer)
     with pytest.raises(ValueError, match=r"option 'pop_size' does not apply to optimizer 'sa'"):
         make_optimizer("sa", pop_size=8)  # SA has no population: never silently ignored
-    with pytest.raises(ValueError, match=r"^unknown optimizer 'nope'; allowed: nsga2, pso, sa$"):
+    allowed = "nsga2, nsga2-pymoo, pso, sa"
+    with pytest.raises(ValueError, match=rf"^unknown optimizer 'nope'; allowed: {allowed}$"):
         make_optimizer("nope")
 
 

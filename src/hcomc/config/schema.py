@@ -246,7 +246,13 @@ class ControlParams(_Frozen):
             "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game)"
         ),
     )
-    optimizer: Literal["nsga2", "pso", "sa"] = Field("nsga2", description="HCOMC optimiser")
+    optimizer: Literal["nsga2", "nsga2-pymoo", "pso", "sa"] = Field(
+        "nsga2",
+        description=(
+            "HCOMC optimiser; 'nsga2' = compiled NSGA-II, 'nsga2-pymoo' = the same algorithm "
+            "through pymoo (identical results, slower)"
+        ),
+    )
     budget: int = Field(
         360, ge=10, le=100_000, description="candidate evaluations per decision (all optimisers)"
     )

@@ -13,7 +13,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from hcomc._typing import BoolArray, FloatArray
+from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.optim.selection import non_dominated
 
 
 @runtime_checkable
@@ -101,3 +102,16 @@ def initial_rows(
     seeds = np.clip(np.atleast_2d(np.asarray(initial, dtype=np.float64))[:size], xl, xu)
     rest = xl + rng.random((size - seeds.shape[0], xl.size)) * (xu - xl)
     return np.vstack([seeds, rest])
+
+
+def archive_front(F: FloatArray, G: FloatArray) -> IntArray:
+    """Rows of the feasible (``G <= 0``), mutually non-dominated subset of evaluated rows, one
+    per distinct objective vector (the first evaluated), in evaluation order; empty if none is
+    feasible. The set a multi-objective optimiser returns from its archive of evaluations."""
+    rows = np.flatnonzero(np.all(G <= 0.0, axis=1))
+    if rows.size == 0:
+        return rows
+    rows = rows[non_dominated(F[rows])]
+    # one row per distinct objective vector (duplicates carry no information)
+    _, distinct = np.unique(F[rows], axis=0, return_index=True)
+    return rows[np.sort(distinct)]

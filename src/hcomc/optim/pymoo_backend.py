@@ -32,8 +32,7 @@ from pymoo.optimize import minimize as _pymoo_minimize
 from pymoo.termination import get_termination
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.optim.base import ParetoResult, Problem, initial_rows
-from hcomc.optim.selection import non_dominated
+from hcomc.optim.base import ParetoResult, Problem, archive_front, initial_rows
 
 _SEED_HIGH = 2**31 - 1
 
@@ -139,7 +138,7 @@ class NSGA2Optimizer:
     crossover_prob: float = 0.9
     mutation_eta: float = 20.0
     eliminate_duplicates: bool = False
-    name: str = field(default="nsga2", init=False)
+    name: str = field(default="nsga2-pymoo", init=False)
 
     def __post_init__(self) -> None:
         if self.pop_size < 2:
@@ -173,14 +172,8 @@ class NSGA2Optimizer:
             save_history=False,
         )
         X, F, G = (np.concatenate(part) for part in zip(*adapter.archive, strict=True))
-        feasible = _feasible(G)
-        if feasible.any():
-            rows = np.flatnonzero(feasible)
-            rows = rows[non_dominated(F[rows])]
-            # one row per distinct objective vector (duplicates carry no information)
-            _, distinct = np.unique(F[rows], axis=0, return_index=True)
-            keep = rows[np.sort(distinct)]
-        else:
+        keep = archive_front(F, G)
+        if keep.size == 0:
             # pymoo's least-infeasible individual (res.opt is None when nothing is feasible)
             opt = res.algorithm.opt
             return ParetoResult(
@@ -197,7 +190,7 @@ class NSGA2Optimizer:
             X=X[keep],
             F=F[keep],
             G=G[keep],
-            feasible=feasible[keep],
+            feasible=np.ones(keep.size, dtype=bool),
             n_eval=adapter.n_rows,
             algorithm=self.name,
         )

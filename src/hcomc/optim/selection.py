@@ -22,6 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray
+from hcomc.optim.dominance import non_dominated_mask
 
 SAFETY = "safety"
 FUEL = "fuel"
@@ -46,18 +47,13 @@ def non_dominated(F: FloatArray) -> BoolArray:
 
     Notes
     -----
-    Pairwise and vectorised: O(n^2 m) time and memory, fine for Pareto sets of a few hundred
-    rows.
+    Pairwise, O(n^2 m) time, compiled (:func:`hcomc.optim.dominance.non_dominated_mask`).
     """
-    F = np.asarray(F, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.float64)
     if F.ndim != 2:
         raise ValueError(f"F must be 2-D (n, m), got shape {F.shape}")
-    if F.shape[0] == 0:
-        return np.zeros(0, dtype=np.bool_)
-    a, b = F[:, None, :], F[None, :, :]
-    # dominates[i, j]: row i dominates row j
-    dominates = np.all(a <= b, axis=2) & np.any(a < b, axis=2)
-    return ~np.any(dominates, axis=0)
+    mask: BoolArray = non_dominated_mask(F)
+    return mask
 
 
 def _column(names: Sequence[str], name: str) -> int:

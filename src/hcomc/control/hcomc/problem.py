@@ -205,14 +205,40 @@ class MergeProblem:
         )
 
     # ------------------------------------------------------------------ evaluate
-    def predict(self, X: FloatArray) -> Prediction:
-        """Roll out every candidate row of ``X`` and compute its objectives and constraints."""
-        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+    def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
+        """Merge sequence, lateral flag and "behind without a vehicle" flag of every row."""
         seq = np.where(X[:, 4] >= 0.5, BEHIND, AHEAD)
         lateral = X[:, 3] >= 0.5
         seq[lateral] = AHEAD  # lateral: the cooperating vehicle leaves; VR takes its slot
         no_behind = (seq == BEHIND) & (self.states[BEHIND] is None)
         seq[no_behind] = AHEAD
+        return seq, lateral, no_behind
+
+    def _score(
+        self, which: int, rows: IntArray, X: FloatArray, lateral: BoolArray, G: FloatArray
+    ) -> tuple[FloatArray, tuple[FloatArray, ...]] | None:
+        """Roll out ``rows`` of ``X`` in sequence ``which``: their objectives (writing their
+        constraints into ``G``) and the kernel's outputs; None if there is nothing to roll."""
+        state, cf = self.states[which], self._no_merge[which]
+        if rows.size == 0 or state is None or cf is None:
+            return None
+        out = rollout(
+            state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
+            state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
+            lateral[rows], self.consts, self.n_steps, cf,
+        )  # fmt: skip
+        xs, ys, vs, as_, hs, _, u_safe, u_eff, g, _, _, _, near = out
+        G[rows, : g.shape[1]] = g
+        G[rows, G_COLLISION] = self._collisions(state, xs, ys, hs, near)
+        allowed = self.lateral_allowed[which]
+        G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
+        fuel = self._fuel(xs, vs, as_, cf, state)
+        return np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff]), out
+
+    def predict(self, X: FloatArray) -> Prediction:
+        """Roll out every candidate row of ``X`` and compute its objectives and constraints."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        seq, lateral, no_behind = self._sequences(X)
         n, K = X.shape[0], self.n_steps
         shape = (n, K + 1, N_ROLES)
         Xt, Yt, Vt, At, Ht = (np.zeros(shape) for _ in range(5))
@@ -222,25 +248,15 @@ class MergeProblem:
         vv = [np.zeros((n, 4)) for _ in range(3)]
         for which in (AHEAD, BEHIND):
             rows = np.flatnonzero(seq == which)
-            state, cf = self.states[which], self._no_merge[which]
-            if rows.size == 0 or state is None or cf is None:
+            scored = self._score(which, rows, X, lateral, G)
+            if scored is None:
                 continue
-            out = rollout(
-                state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-                state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
-                lateral[rows], self.consts, K, cf,
-            )  # fmt: skip
-            xs, ys, vs, as_, hs, km, u_safe, u_eff, g, v0_, v1_, v2_, near = out
+            F[rows], out = scored
+            xs, ys, vs, as_, hs, km, _, _, _, v0_, v1_, v2_, _ = out
             Xt[rows], Yt[rows], Vt[rows], At[rows], Ht[rows] = xs, ys, vs, as_, hs
             k_merge[rows] = km
             for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):
                 dst[rows] = src
-            G[rows, : g.shape[1]] = g
-            G[rows, G_COLLISION] = self._collisions(state, xs, ys, hs, near)
-            allowed = self.lateral_allowed[which]
-            G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
-            fuel = self._fuel(xs, vs, as_, cf, state)
-            F[rows] = np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff])
         G[no_behind, _G_SEQUENCE] = 1.0
         t: FloatArray = np.arange(K + 1, dtype=np.float64) * self.dt
         return Prediction(
@@ -248,9 +264,19 @@ class MergeProblem:
         )
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5)."""
-        p = self.predict(X)
-        return p.F, p.G
+        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5): those of
+        :meth:`predict`, without assembling the trajectories."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        seq, lateral, no_behind = self._sequences(X)
+        F = np.zeros((X.shape[0], self.n_obj))
+        G = np.zeros((X.shape[0], self.n_constr))
+        for which in (AHEAD, BEHIND):
+            rows = np.flatnonzero(seq == which)
+            scored = self._score(which, rows, X, lateral, G)
+            if scored is not None:
+                F[rows] = scored[0]
+        G[no_behind, _G_SEQUENCE] = 1.0
+        return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
         """Eq. 19 as one cost for PSO and SA, with the U_safe gate as a penalty.
