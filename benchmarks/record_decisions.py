@@ -47,7 +47,7 @@ from throughput import machine  # noqa: E402
 
 from hcomc.config import ScenarioConfig, load_config, validate_config  # noqa: E402
 from hcomc.control.base import MergeGroup, TrafficView  # noqa: E402
-from hcomc.control.hcomc.controller import HCOMCController  # noqa: E402
+from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails  # noqa: E402
 from hcomc.optim.base import Optimizer  # noqa: E402
 from hcomc.optim.registry import OPTIMIZERS, optimizer_from_config  # noqa: E402
 from hcomc.sim.engine import Simulation  # noqa: E402
@@ -144,9 +144,9 @@ def reference_point(config: ScenarioConfig, view: TrafficView, group: MergeGroup
     fronts = [F[np.all(G <= 0, axis=1)]]
     for seed in range(REFERENCE_SEEDS):
         plan = controller.plan(view, group, np.random.default_rng(seed))
-        details = plan.details
-        if "pareto_F" in details:
-            fronts.append(details["pareto_F"][details["feasible"]])
+        if isinstance(plan.details, HCOMCDetails):
+            pareto = plan.details.pareto
+            fronts.append(pareto.F[pareto.feasible])
     feasible = np.vstack(fronts)
     if feasible.size == 0:
         return np.full(problem.n_obj, np.nan)  # nothing feasible found: hypervolume is 0
@@ -221,10 +221,11 @@ def evaluate_side_by_side(
                 start = time.perf_counter()
                 plan = fresh.plan(d.view, d.group, np.random.default_rng(r))
                 times[i].append((time.perf_counter() - start) * 1e3)
-                pareto = np.asarray(plan.details["pareto_X"])
+                assert isinstance(plan.details, HCOMCDetails)
+                pareto = np.asarray(plan.details.pareto.X)
                 first = pareto if i == 0 else first
                 identical[i] += int(first is not None and np.array_equal(pareto, first))
-                feasible = plan.details["pareto_F"][plan.details["feasible"]]
+                feasible = plan.details.pareto.F[plan.details.pareto.feasible]
                 volumes[i].append(hypervolume(feasible, d.reference))
         for i in range(len(optimizers)):
             rows[i].append({"problem": d.name, "hypervolume": float(np.mean(volumes[i]))})
