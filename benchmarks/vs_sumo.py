@@ -26,16 +26,20 @@ configured, 120 s including the warm-up, collision detection off). Its wall time
 everything ``reproduce`` does (undisturbed reference runs, metrics, tables, report figures,
 process start); ``hcomc_runs_wall_s`` is the part spent inside the runs.
 
+``--ensemble N`` (default 100) runs N Condition 1 runs as one ensemble
+(:func:`hcomc.sim.ensemble.run_ensemble`, on every core) and compares their aggregate
+vehicle-steps/s with SUMO's single-run rate on the same scene.
+
     python benchmarks/vs_sumo.py [--json] [--sizes 100 500 2000] [--repeats 3]
-                                 [--reproduce-seeds 1]
+                                 [--reproduce-seeds 1] [--ensemble 100]
 """
 
 from __future__ import annotations
 
 import os
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")  # one core for both engines
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # one core per engine run (only the ensemble uses more)
 
 import argparse  # noqa: E402
 import json  # noqa: E402
@@ -262,6 +266,41 @@ def compare(scenes: list[Scene], repeats: int) -> list[dict[str, object]]:
     return rows
 
 
+# ---------------------------------------------------------------------------- ensemble
+def ensemble(runs: int, repeats: int, tmp: Path) -> dict[str, object]:
+    """``runs`` Condition 1 runs (seeds 0..runs-1) as one ensemble on every core, against
+    SUMO's single-run rate on the same scene (seed ``SEED``, collision detection off)."""
+    from hcomc.sim.ensemble import run_ensemble
+
+    config = load_config("C1")
+    run_ensemble([Simulation(config, runs)])  # load the compiled kernels
+    sims = [Simulation(config, seed) for seed in range(runs)]
+    start = time.perf_counter()
+    run_ensemble(sims)
+    wall = time.perf_counter() - start
+    vehicle_steps = sum(sim.vehicle_steps for sim in sims)
+    exported = export_scenario(config, SEED, tmp / "ensemble_c1")
+    steps = round((config.warmup + config.duration) / config.dt)
+    args = ["-c", str(exported.sumocfg), *NO_COLLISION_CHECK]
+    rate = median_rate([time_sumo(args, steps) for _ in range(repeats)])
+    return {
+        "runs": runs,
+        "threads": numba_threads(),
+        "vehicle_steps": vehicle_steps,
+        "hcomc_wall_s": round(wall, 3),
+        "hcomc_steps_per_s": round(vehicle_steps / wall),
+        "sumo_steps_per_s": round(rate),
+        "ratio": round(vehicle_steps / wall / rate, 2),
+    }
+
+
+def numba_threads() -> int:
+    """Threads the ensemble runs on."""
+    import numba
+
+    return int(numba.get_num_threads())
+
+
 # --------------------------------------------------------------------------- reproduce
 def reproduce(seeds: int, repeats: int, tmp: Path) -> dict[str, object]:
     """``hcomc reproduce --seeds S --workers 1`` against SUMO at the same vehicle-steps."""
@@ -305,29 +344,41 @@ def main() -> None:
         default=0,
         help="also compare 'hcomc reproduce --seeds S' (0: skip)",
     )
+    parser.add_argument(
+        "--ensemble",
+        type=int,
+        default=100,
+        help="also compare an ensemble of this many C1 runs (0: skip)",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    if min(args.sizes) < 2 or args.repeats < 1 or args.reproduce_seeds < 0:
-        parser.error("--sizes must be >= 2, --repeats >= 1, --reproduce-seeds >= 0")
+    if min(args.sizes) < 2 or args.repeats < 1 or min(args.reproduce_seeds, args.ensemble) < 0:
+        parser.error("--sizes must be >= 2, --repeats >= 1, --reproduce-seeds and --ensemble >= 0")
     try:
         with tempfile.TemporaryDirectory(prefix="hcomc-vs-sumo-") as name:
             tmp = Path(name)
             rows = compare(make_scenes(args.sizes, args.duration, tmp), args.repeats)
             seeds = args.reproduce_seeds
             repro = reproduce(seeds, args.repeats, tmp) if seeds else None
+            batch = ensemble(args.ensemble, args.repeats, tmp) if args.ensemble else None
     except (ConfigError, SumoMissingError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
-    report(rows, repro, as_json=args.json)
+    report(rows, repro, batch, as_json=args.json)
 
 
 def report(
-    rows: list[dict[str, object]], repro: dict[str, object] | None, *, as_json: bool
+    rows: list[dict[str, object]],
+    repro: dict[str, object] | None,
+    batch: dict[str, object] | None,
+    *,
+    as_json: bool,
 ) -> None:
     """Print the figures (a table, or one JSON object)."""
     facts = {**machine(), "sumo": sumo_version(), "load_average": os.getloadavg()}
     if as_json:
-        print(json.dumps({"machine": facts, "results": rows, "reproduce": repro}))
+        print(json.dumps({"machine": facts, "results": rows, "reproduce": repro,
+                          "ensemble": batch}))  # fmt: skip
         return
     print("machine:", ", ".join(f"{k} {v}" for k, v in facts.items()))
     head = ("scene", "size", "veh hcomc", "veh SUMO", "hcomc veh-steps/s", "SUMO veh-steps/s",
@@ -337,6 +388,12 @@ def report(
     print(" ".join(f"{h:>{max(len(h), 7)}}" for h in head))
     for r in rows:
         print(" ".join(f"{r[k]:>{max(len(h), 7)}}" for h, k in zip(head, keys, strict=True)))
+    if batch is not None:
+        print(
+            f"ensemble of {batch['runs']} C1 runs on {batch['threads']} threads: "
+            f"{batch['hcomc_steps_per_s']:,} veh-steps/s aggregate; SUMO single run "
+            f"{batch['sumo_steps_per_s']:,}; ratio {batch['ratio']}"
+        )
     if repro is not None:
         print(
             f"reproduce --seeds {repro['seeds']} --workers 1: {repro['runs']} runs, "
