@@ -41,22 +41,20 @@ from hcomc.control.base import (
     TrafficView,
     find_key_vehicles,
 )
-from hcomc.models.transition import transition_gamma
 from hcomc.rng import make_rng
-from hcomc.road import Kind, Lane, lane_centre
+from hcomc.road import Kind, Lane
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
-from hcomc.sim.core_state import Core, CoreArrays
+from hcomc.sim.core_build import build_arrays
+from hcomc.sim.core_state import Core
 from hcomc.sim.demand import generate_demand
 from hcomc.sim.execution import ActivePlan, holding_lane, plan_record, virtual_leaders
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
-from hcomc.sim.mobil import lane_change_params
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import Perception
 
-_INNOVATION_STEPS = 64  # steps of estimation-error innovations drawn per refill
 _NO_INT = np.empty(0, dtype=np.int64)
 _NO_FLOAT = np.empty(0)
 
@@ -104,7 +102,11 @@ class Simulation:
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
-        self.arrays = self._build_arrays()
+        self.arrays = build_arrays(
+            config, self.demand, self.fleet, self.perception,
+            counterfactual=counterfactual, controlled=controller is not None,
+            n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
+        )  # fmt: skip
         # the kernels see the same arrays through one compiled reference, typed as its fields
         self.core: Any = Core(self.arrays)
         c = self.arrays  # the state arrays, by name
@@ -114,63 +116,6 @@ class Simulation:
         self.active, self.waited, self.planned = c.active, c.waited, c.planned
         self.log = self._allocate_log()
         self._stage = 0
-
-    def _build_arrays(self) -> CoreArrays:
-        config, demand, fleet, per = self.config, self.demand, self.fleet, self.perception
-        n = demand.n
-        road, hdv = config.road, config.hdv
-        queues = [
-            np.flatnonzero(demand.lane == lane)
-            if not (self.counterfactual and lane == Lane.RAMP)
-            else np.empty(0, dtype=np.int64)
-            for lane in Lane
-        ]
-        perceive = per.errors or max(per.taus) > 0
-        f8, i8, b1 = np.float64, np.int64, np.bool_
-        consts = np.zeros(13)
-        consts[[layout.DT, layout.WARMUP, layout.WIDTH, layout.ACCEL_START, layout.ACCEL_END]] = (
-            self.dt, config.warmup, road.lane_width, road.accel_lane_start, road.accel_lane_end
-        )  # fmt: skip
-        consts[[layout.CZ_START, layout.ROAD_LENGTH, layout.EMERGENCY]] = (
-            road.control_zone_start, road.length, config.lane_change.emergency_decel
-        )  # fmt: skip
-        consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
-        consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
-        consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
-        flags = np.zeros(9, dtype=i8)
-        flags[layout.PERCEIVE], flags[layout.ERRORS] = perceive, per.errors
-        flags[layout.PLATOON] = config.scenario == "platoon"
-        flags[layout.DECIDE_EVERY], flags[layout.LOG_EVERY] = self._decide_every, self._log_every
-        flags[layout.N_WARMUP] = self.n_warmup
-        flags[layout.CONTROLLER] = self.controller is not None
-        flags[layout.CAV_GAME] = config.lane_change.cav_game
-        counters = np.zeros(6, dtype=i8)
-        innov_steps = _INNOVATION_STEPS if per.errors else 0
-        counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
-        n_events = max(4096, 16 * n)
-        return CoreArrays(
-            matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
-            length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
-            scripted=fleet.scripted.astype(b1), is_hdv=self.is_hdv.astype(b1),
-            x=np.zeros(n), y=lane_centre(demand.lane, road.lane_width), v=np.zeros(n),
-            a=np.zeros(n), heading=np.zeros(n), lane=demand.lane.astype(i8),
-            origin=demand.lane.astype(i8), target=demand.lane.astype(i8),
-            lc_t0=np.zeros(n), lc_x0=np.zeros(n), lc_xf=np.ones(n),
-            lc_dur=fleet.lc_duration.copy(),  # a merge plan may set VR's duration
-            active=np.zeros(n, dtype=b1), waited=np.zeros(n, dtype=b1),
-            identified=np.zeros(n, dtype=b1), planned=np.zeros(n, dtype=b1),
-            x_hist=per.x_hist, v_hist=per.v_hist, w_gap=per.w_gap, w_ttc=per.w_ttc,
-            taus=per.taus, d_t=demand.t.astype(f8), d_x=demand.x.astype(f8),
-            d_v=demand.v.astype(f8), queues=np.concatenate(queues).astype(i8),
-            queue_start=np.cumsum([0, *(q.size for q in queues)]).astype(i8),
-            queue_pos=np.zeros(3, dtype=i8), colliding=np.zeros(8 * n + 8, dtype=i8),
-            ev_t=np.zeros(n_events), ev_kind=np.zeros(n_events, dtype=i8),
-            ev_vehicle=np.zeros(n_events, dtype=i8), ev_other=np.zeros(n_events, dtype=i8),
-            ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
-            consts=consts, flags=flags, lc_params=lane_change_params(config.lane_change),
-            profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
-            innov=np.zeros((innov_steps, 2, n)),
-        )  # fmt: skip
 
     def _allocate_log(self) -> SimulationLog:
         config, n = self.config, self.demand.n

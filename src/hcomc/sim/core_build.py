@@ -1,0 +1,92 @@
+"""Building the arrays of the compiled step (:class:`~hcomc.sim.core_state.CoreArrays`) for
+one run from its config, demand, fleet and HDV perception."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc.config import ScenarioConfig
+from hcomc.models.transition import transition_gamma
+from hcomc.road import Lane, lane_centre
+from hcomc.sim import core_state as layout
+from hcomc.sim.core_state import CoreArrays
+from hcomc.sim.demand import Demand
+from hcomc.sim.fleet import Fleet
+from hcomc.sim.mobil import lane_change_params
+from hcomc.sim.perception import Perception
+
+INNOVATION_STEPS = 64
+"""Steps of HDV estimation-error innovations drawn at a time (the engine refills them)."""
+
+
+def build_arrays(
+    config: ScenarioConfig,
+    demand: Demand,
+    fleet: Fleet,
+    per: Perception,
+    *,
+    counterfactual: bool,
+    controlled: bool,
+    n_warmup: int,
+    decide_every: int,
+    log_every: int,
+) -> CoreArrays:
+    """The state of a run before its first step (no vehicle released yet).
+
+    ``counterfactual`` leaves the ramp queue empty (the undisturbed run); ``controlled``
+    says whether a merge controller plans for ramp vehicles entering the control zone.
+    """
+    n = demand.n
+    road, hdv = config.road, config.hdv
+    queues = [
+        np.flatnonzero(demand.lane == lane)
+        if not (counterfactual and lane == Lane.RAMP)
+        else np.empty(0, dtype=np.int64)
+        for lane in Lane
+    ]
+    perceive = per.errors or max(per.taus) > 0
+    f8, i8, b1 = np.float64, np.int64, np.bool_
+    consts = np.zeros(13)
+    consts[[layout.DT, layout.WARMUP, layout.WIDTH, layout.ACCEL_START, layout.ACCEL_END]] = (
+        config.dt, config.warmup, road.lane_width, road.accel_lane_start, road.accel_lane_end
+    )  # fmt: skip
+    consts[[layout.CZ_START, layout.ROAD_LENGTH, layout.EMERGENCY]] = (
+        road.control_zone_start, road.length, config.lane_change.emergency_decel
+    )  # fmt: skip
+    consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
+    consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
+    consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
+    flags = np.zeros(9, dtype=i8)
+    flags[layout.PERCEIVE], flags[layout.ERRORS] = perceive, per.errors
+    flags[layout.PLATOON] = config.scenario == "platoon"
+    flags[layout.DECIDE_EVERY], flags[layout.LOG_EVERY] = decide_every, log_every
+    flags[layout.N_WARMUP] = n_warmup
+    flags[layout.CONTROLLER] = controlled
+    flags[layout.CAV_GAME] = config.lane_change.cav_game
+    counters = np.zeros(6, dtype=i8)
+    innov_steps = INNOVATION_STEPS if per.errors else 0
+    counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
+    n_events = max(4096, 16 * n)
+    return CoreArrays(
+        matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
+        length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
+        scripted=fleet.scripted.astype(b1), is_hdv=per.is_hdv.astype(b1),
+        x=np.zeros(n), y=lane_centre(demand.lane, road.lane_width), v=np.zeros(n),
+        a=np.zeros(n), heading=np.zeros(n), lane=demand.lane.astype(i8),
+        origin=demand.lane.astype(i8), target=demand.lane.astype(i8),
+        lc_t0=np.zeros(n), lc_x0=np.zeros(n), lc_xf=np.ones(n),
+        lc_dur=fleet.lc_duration.copy(),  # a merge plan may set VR's duration
+        active=np.zeros(n, dtype=b1), waited=np.zeros(n, dtype=b1),
+        identified=np.zeros(n, dtype=b1), planned=np.zeros(n, dtype=b1),
+        x_hist=per.x_hist, v_hist=per.v_hist, w_gap=per.w_gap, w_ttc=per.w_ttc,
+        taus=per.taus, d_t=demand.t.astype(f8), d_x=demand.x.astype(f8),
+        d_v=demand.v.astype(f8), queues=np.concatenate(queues).astype(i8),
+        queue_start=np.cumsum([0, *(q.size for q in queues)]).astype(i8),
+        queue_pos=np.zeros(3, dtype=i8), colliding=np.zeros(8 * n + 8, dtype=i8),
+        ev_t=np.zeros(n_events), ev_kind=np.zeros(n_events, dtype=i8),
+        ev_vehicle=np.zeros(n_events, dtype=i8), ev_other=np.zeros(n_events, dtype=i8),
+        ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
+        consts=consts, flags=flags, lc_params=lane_change_params(config.lane_change),
+        profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
+        innov=np.zeros((innov_steps, 2, n)),
+    )  # fmt: skip
