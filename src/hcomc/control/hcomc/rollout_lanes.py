@@ -1,0 +1,143 @@
+"""Lane-change progress of the HCOMC prediction: lane membership, quintic path, box overlap.
+
+As in the engine, a lane change follows the quintic path of Eq. 4-6 parametrised in x, from
+the position where it starts to ``x0 + max(v T_lc, 3 L)``, and a changing vehicle occupies
+both lanes until its change ends. The path is :func:`hcomc.models.quintic.lateral_state` (its
+one home); the progress of one candidate is a small vector (layout ``L_*`` of
+:mod:`hcomc.control.hcomc.rollout_layout`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hcomc.control.hcomc.rollout_layout import (
+    L_LATERAL,
+    L_VMC_DONE,
+    L_VMC_X0,
+    L_VMC_XF,
+    L_VR_DONE,
+    L_VR_STARTED,
+    L_VR_T0,
+    L_VR_X0,
+    L_VR_XF,
+    LANE0,
+    N_ROLES,
+    P_LEN,
+    P_WID,
+    VMC,
+    VNF,
+    VNR,
+    VR,
+)
+from hcomc.models.quintic import lateral_state
+
+
+@njit(cache=True)
+def path_end(x: float, v: float, duration: float, length: float) -> float:
+    """Predicted end of a lane change starting at x: ``x + max(v T_lc, 3 L)`` [m]."""
+    return x + max(v * duration, 3.0 * length)
+
+
+@njit(cache=True)
+def start_progress(
+    lc: np.ndarray, lateral: bool, x: np.ndarray, v: np.ndarray, vmc_dur: float, params: np.ndarray
+) -> None:
+    """Reset ``lc`` at planning time: VR on the ramp; in lateral mode VMC starts its change."""
+    lc[:] = 0.0
+    lc[L_VR_XF] = 1.0
+    lc[L_LATERAL] = 1.0 if lateral else 0.0
+    lc[L_VMC_DONE] = 0.0 if lateral else 1.0
+    lc[L_VMC_X0] = x[VMC]
+    lc[L_VMC_XF] = path_end(x[VMC], v[VMC], vmc_dur, params[VMC, P_LEN])
+
+
+@njit(cache=True)
+def memberships(lc: np.ndarray, in1: np.ndarray, in2: np.ndarray) -> None:
+    """Which roles occupy lane 1 and lane 2 (a changing vehicle occupies both)."""
+    for r in range(N_ROLES):
+        in1[r] = LANE0[r] == 1
+        in2[r] = LANE0[r] == 2
+    if lc[L_VR_STARTED]:
+        in1[VR] = True
+    if lc[L_LATERAL]:
+        in2[VMC] = True
+        if lc[L_VMC_DONE]:
+            in1[VMC] = False
+
+
+@njit(cache=True)
+def advance_progress(
+    lc: np.ndarray, x: np.ndarray, v: np.ndarray, t_next: float, merge_x: float,
+    vr_dur: float, vr_len: float,
+) -> tuple[bool, bool]:  # fmt: skip
+    """Update the progress after a step ending at ``t_next``; (VR started, VR done) now.
+
+    VR starts its change where it first reaches ``merge_x``; a change ends once the vehicle
+    passes the predicted end of its path.
+    """
+    started = done = False
+    if not lc[L_VR_STARTED] and x[VR] >= merge_x:
+        started = True
+        lc[L_VR_STARTED], lc[L_VR_T0], lc[L_VR_X0] = 1.0, t_next, x[VR]
+        lc[L_VR_XF] = path_end(x[VR], v[VR], vr_dur, vr_len)
+    if lc[L_VR_STARTED] and not lc[L_VR_DONE] and x[VR] >= lc[L_VR_XF]:
+        done = True
+        lc[L_VR_DONE] = 1.0
+    if not lc[L_VMC_DONE] and x[VMC] >= lc[L_VMC_XF]:
+        lc[L_VMC_DONE] = 1.0
+    return started, done
+
+
+@njit(cache=True)
+def lateral_pose(lc: np.ndarray, x: np.ndarray, width: float, y: np.ndarray, h: np.ndarray) -> None:
+    """Lateral position and heading of the roles (lane 1 at y = 0, the ramp at -width).
+
+    ``y`` and ``h`` come in zeroed; only the roles off lane 1 or changing are written.
+    """
+    if lc[L_VR_STARTED] and not lc[L_VR_DONE]:
+        y[VR], slope, _ = lateral_state(x[VR], lc[L_VR_X0], lc[L_VR_XF], -width, 0.0)
+        h[VR] = math.atan(slope)
+    elif not lc[L_VR_DONE]:
+        y[VR] = -width
+    if lc[L_LATERAL] and not lc[L_VMC_DONE]:
+        y[VMC], slope, _ = lateral_state(x[VMC], lc[L_VMC_X0], lc[L_VMC_XF], 0.0, width)
+        h[VMC] = math.atan(slope)
+    elif lc[L_LATERAL]:
+        y[VMC] = width
+    y[VNF] = width
+    y[VNR] = width
+
+
+@njit(cache=True)
+def near_pairs(
+    x: np.ndarray,
+    y: np.ndarray,
+    h: np.ndarray,
+    present: np.ndarray,
+    params: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Axis-aligned bounding-box overlap of every key pair (front-bumper reference point).
+
+    A rectangle of length L and width W at heading h lies within x in [x - L - W/2, x + W/2]
+    and y within W/2 + L |sin h| of its reference point. Only overlapping pairs can collide;
+    the exact Eq. 7 test is left to the caller.
+    """
+    reach = np.empty(N_ROLES)
+    for r in range(N_ROLES):
+        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(h[r]))
+    p = 0
+    for i in range(N_ROLES):
+        for j in range(i + 1, N_ROLES):
+            if present[i] and present[j]:
+                wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
+                out[p] = (
+                    abs(y[i] - y[j]) <= reach[i] + reach[j]
+                    and x[i] + wi >= x[j] - params[j, P_LEN] - wj
+                    and x[j] + wj >= x[i] - params[i, P_LEN] - wi
+                )
+            p += 1
