@@ -38,7 +38,7 @@ from hcomc.control.hcomc.rollout_step import (
 from hcomc.models.transition import blend, transition_psi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def vr_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
     in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv0: np.ndarray, horizon: float,
@@ -62,7 +62,7 @@ def vr_accel(
     return blend(free_road(p, v[VR]), a_new, w)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def vmc_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
     in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv1: np.ndarray, horizon: float,
@@ -86,7 +86,7 @@ def vmc_accel(
     return min(acc, behind(VMC, VR, x, v, a, params))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def vnr_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
     in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv2: np.ndarray, horizon: float,
@@ -100,7 +100,7 @@ def vnr_accel(
     return acc
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def accelerations(
     acc: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray,
     in1: np.ndarray, in2: np.ndarray, present: np.ndarray, coop: np.ndarray,

@@ -55,7 +55,7 @@ def start_progress(
     lc[L_VMC_XF] = path_end(x[VMC], v[VMC], vmc_dur, params[VMC, P_LEN])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def memberships(lc: np.ndarray, in1: np.ndarray, in2: np.ndarray) -> None:
     """Which roles occupy lane 1 and lane 2 (a changing vehicle occupies both)."""
     for r in range(N_ROLES):
@@ -69,7 +69,7 @@ def memberships(lc: np.ndarray, in1: np.ndarray, in2: np.ndarray) -> None:
             in1[VMC] = False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def advance_progress(
     lc: np.ndarray, x: np.ndarray, v: np.ndarray, t_next: float, merge_x: float,
     vr_dur: float, vr_len: float,
@@ -92,7 +92,7 @@ def advance_progress(
     return started, done
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def lateral_pose(lc: np.ndarray, x: np.ndarray, width: float, y: np.ndarray, h: np.ndarray) -> None:
     """Lateral position and heading of the roles (lane 1 at y = 0, the ramp at -width).
 
@@ -112,7 +112,7 @@ def lateral_pose(lc: np.ndarray, x: np.ndarray, width: float, y: np.ndarray, h: 
     y[VNR] = width
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def near_pairs(
     x: np.ndarray,
     y: np.ndarray,

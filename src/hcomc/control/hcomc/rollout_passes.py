@@ -78,7 +78,7 @@ def counterfactual(
     return X, V, A
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def step(
     k: int, x: np.ndarray, v: np.ndarray, a: np.ndarray, lc: np.ndarray, present: np.ndarray,
     coop: np.ndarray, cav: np.ndarray, params: np.ndarray, vvs: np.ndarray, plan: np.ndarray,

@@ -27,7 +27,7 @@ from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.models.following import follow_accel
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def follow_role(p: np.ndarray, s: float, v: float, vl: float, al: float) -> float:
     """Car-following acceleration of a vehicle with parameter row ``p`` [m/s^2].
 
@@ -39,13 +39,13 @@ def follow_role(p: np.ndarray, s: float, v: float, vl: float, al: float) -> floa
     )  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def free_road(p: np.ndarray, v: float) -> float:
     """Acceleration without a leader [m/s^2]."""
     return follow_role(p, np.inf, v, v, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def leader(
     r: int, lane: int, x: np.ndarray, in1: np.ndarray, in2: np.ndarray, present: np.ndarray
 ) -> int:
@@ -60,7 +60,7 @@ def leader(
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def behind(
     r: int, j: int, x: np.ndarray, v: np.ndarray, a: np.ndarray, params: np.ndarray
 ) -> float:
@@ -70,7 +70,7 @@ def behind(
     return follow_role(params[r], x[j] - params[j, P_LEN] - x[r], v[r], v[j], a[j])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def behind_virtual(
     p: np.ndarray, x: float, v: float, b: np.ndarray, tau: float, lead_len: float
 ) -> float:
@@ -79,7 +79,7 @@ def behind_virtual(
     return follow_role(p, xv - lead_len - x, v, vv, av)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def integrate(
     x: np.ndarray,
     v: np.ndarray,
