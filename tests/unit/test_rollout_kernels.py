@@ -61,7 +61,7 @@ def test_role_following_is_the_engines(variant, kind, s, v, vl, al):
     fleet = FLEETS[variant]
     expected = follow(fleet, np.array([kind]), np.array([s]), np.array([v]), np.array([vl]),
                       np.array([al]))[0]  # fmt: skip
-    assert follow_role(_params(fleet, kind), s, v, vl, al) == expected
+    assert follow_role(_params(fleet, kind)[None, :], 0, s, v, vl, al) == expected
 
 
 def test_parameter_rows_carry_the_iidm_flag():

@@ -65,21 +65,21 @@ def cubic_state(b: FloatArray, tau: ArrayLike) -> tuple[FloatArray, FloatArray, 
 
 
 @njit(cache=True)
-def cubic_point(b: np.ndarray, tau: float) -> tuple[float, float, float]:
-    """Position, speed and acceleration of the cubic ``b`` (4,) at one ``tau``: the one
+def cubic_point(
+    b1: float, b2: float, b3: float, b4: float, tau: float
+) -> tuple[float, float, float]:
+    """Position, speed and acceleration of the cubic (b1, b2, b3, b4) at one ``tau``: the one
     implementation of :func:`cubic_state` (Eq. 9)."""
-    x = b[0] + tau * (b[1] + tau * (b[2] + tau * b[3]))
-    v = b[1] + tau * (2.0 * b[2] + 3.0 * tau * b[3])
-    return x, v, 2.0 * b[2] + 6.0 * tau * b[3]
+    x = b1 + tau * (b2 + tau * (b3 + tau * b4))
+    v = b2 + tau * (2.0 * b3 + 3.0 * tau * b4)
+    return x, v, 2.0 * b3 + 6.0 * tau * b4
 
 
 @njit(cache=True)
 def _state_array(b1, b2, b3, b4, tau):
     out = np.empty((tau.size, 3))
-    b = np.empty(4)
     for i in range(tau.size):
-        b[0], b[1], b[2], b[3] = b1[i], b2[i], b3[i], b4[i]
-        out[i, 0], out[i, 1], out[i, 2] = cubic_point(b, tau[i])
+        out[i, 0], out[i, 1], out[i, 2] = cubic_point(b1[i], b2[i], b3[i], b4[i], tau[i])
     return out
 
 

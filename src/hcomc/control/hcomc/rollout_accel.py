@@ -41,31 +41,31 @@ from hcomc.models.transition import blend, transition_psi
 @njit(cache=True, inline="always")
 def vr_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
-    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv0: np.ndarray, horizon: float,
+    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vvs: np.ndarray, horizon: float,
     vr_dur: float, controlled: bool, accel_end: float, gamma: float, joint: bool,
 ) -> float:  # fmt: skip
     """VR: on the ramp free road capped by VV0 (CAV) or the lane end (HDV); while merging the
     Eq. 14 blend from the free road to its lane-1 leader; after the merge that leader."""
-    p = params[VR]
     if not lc[L_VR_STARTED]:
-        acc = free_road(p, v[VR])
+        acc = free_road(params, VR, v[VR])
         if not controlled:
-            return min(acc, follow_role(p, accel_end - x[VR], v[VR], 0.0, 0.0))
+            return min(acc, follow_role(params, VR, accel_end - x[VR], v[VR], 0.0, 0.0))
         if t <= horizon:
-            return min(acc, behind_virtual(p, x[VR], v[VR], vv0, t, params[VMF, P_LEN]))
+            vv0 = behind_virtual(params, VR, x[VR], v[VR], vvs, 0, t, params[VMF, P_LEN])
+            return min(acc, vv0)
         return min(acc, behind(VR, VMF, x, v, a, params))
     lead = leader(VR, 1, x, in1, in2, present) if joint else VMF
     a_new = behind(VR, lead, x, v, a, params)
     if lc[L_VR_DONE]:
         return a_new
     w = transition_psi(t - lc[L_VR_T0], vr_dur, gamma)
-    return blend(free_road(p, v[VR]), a_new, w)
+    return blend(free_road(params, VR, v[VR]), a_new, w)
 
 
 @njit(cache=True, inline="always")
 def vmc_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
-    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv1: np.ndarray, horizon: float,
+    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vvs: np.ndarray, horizon: float,
     vmc_dur: float, gamma: float, longitudinal: bool, joint: bool,
 ) -> float:  # fmt: skip
     """VMC: its lane-1 leader, capped by VV1 in longitudinal mode until VR's merge ends; in
@@ -81,7 +81,7 @@ def vmc_accel(
     if not (longitudinal and joint) or lc[L_VR_DONE]:
         return acc
     if t <= horizon:
-        vv = behind_virtual(params[VMC], x[VMC], v[VMC], vv1, t, params[VR, P_LEN])
+        vv = behind_virtual(params, VMC, x[VMC], v[VMC], vvs, 1, t, params[VR, P_LEN])
         return min(acc, vv)
     return min(acc, behind(VMC, VR, x, v, a, params))
 
@@ -89,14 +89,15 @@ def vmc_accel(
 @njit(cache=True, inline="always")
 def vnr_accel(
     x: np.ndarray, v: np.ndarray, a: np.ndarray, t: float, lc: np.ndarray, in1: np.ndarray,
-    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vv2: np.ndarray, horizon: float,
+    in2: np.ndarray, present: np.ndarray, params: np.ndarray, vvs: np.ndarray, horizon: float,
     cooperates: bool, joint: bool,
 ) -> float:  # fmt: skip
     """VNR: its lane-2 leader, capped by VV2 within the horizon when it cooperates in
     lateral mode."""
     acc = behind(VNR, leader(VNR, 2, x, in1, in2, present), x, v, a, params)
     if lc[L_LATERAL] and cooperates and joint and t <= horizon:
-        acc = min(acc, behind_virtual(params[VNR], x[VNR], v[VNR], vv2, t, params[VMC, P_LEN]))
+        vv = behind_virtual(params, VNR, x[VNR], v[VNR], vvs, 2, t, params[VMC, P_LEN])
+        acc = min(acc, vv)
     return acc
 
 
@@ -112,13 +113,13 @@ def accelerations(
     accel_end, vmc_dur, gamma = consts
     acc[VMF] = 0.0
     acc[VNF] = 0.0
-    acc[VR] = vr_accel(x, v, a, t, lc, in1, in2, present, params, vvs[0], horizon, vr_dur,
+    acc[VR] = vr_accel(x, v, a, t, lc, in1, in2, present, params, vvs, horizon, vr_dur,
                        controlled_vr, accel_end, gamma, joint)  # fmt: skip
     if present[VMC]:
-        acc[VMC] = vmc_accel(x, v, a, t, lc, in1, in2, present, params, vvs[1], horizon,
+        acc[VMC] = vmc_accel(x, v, a, t, lc, in1, in2, present, params, vvs, horizon,
                              vmc_dur, gamma, longitudinal, joint)  # fmt: skip
     if present[VMR]:
         acc[VMR] = behind(VMR, leader(VMR, 1, x, in1, in2, present), x, v, a, params)
     if present[VNR]:
-        acc[VNR] = vnr_accel(x, v, a, t, lc, in1, in2, present, params, vvs[2], horizon,
+        acc[VNR] = vnr_accel(x, v, a, t, lc, in1, in2, present, params, vvs, horizon,
                              bool(coop[VNR]), joint)  # fmt: skip

@@ -93,51 +93,55 @@ def advance_progress(
 
 
 @njit(cache=True, inline="always")
-def lateral_pose(lc: np.ndarray, x: np.ndarray, width: float, y: np.ndarray, h: np.ndarray) -> None:
-    """Lateral position and heading of the roles (lane 1 at y = 0, the ramp at -width).
-
-    ``y`` and ``h`` come in zeroed; only the roles off lane 1 or changing are written.
+def lateral_pose(
+    lc: np.ndarray, x: np.ndarray, width: float, Y: np.ndarray, H: np.ndarray, k: int
+) -> None:
+    """Lateral position ``Y[k]`` and heading ``H[k]`` of the roles (lane 1 at y = 0, the ramp
+    at -width). The rows come in zeroed; only the roles off lane 1 or changing are written.
     """
     if lc[L_VR_STARTED] and not lc[L_VR_DONE]:
-        y[VR], slope, _ = lateral_state(x[VR], lc[L_VR_X0], lc[L_VR_XF], -width, 0.0)
-        h[VR] = math.atan(slope)
+        Y[k, VR], slope, _ = lateral_state(x[VR], lc[L_VR_X0], lc[L_VR_XF], -width, 0.0)
+        H[k, VR] = math.atan(slope)
     elif not lc[L_VR_DONE]:
-        y[VR] = -width
+        Y[k, VR] = -width
     if lc[L_LATERAL] and not lc[L_VMC_DONE]:
-        y[VMC], slope, _ = lateral_state(x[VMC], lc[L_VMC_X0], lc[L_VMC_XF], 0.0, width)
-        h[VMC] = math.atan(slope)
+        Y[k, VMC], slope, _ = lateral_state(x[VMC], lc[L_VMC_X0], lc[L_VMC_XF], 0.0, width)
+        H[k, VMC] = math.atan(slope)
     elif lc[L_LATERAL]:
-        y[VMC] = width
-    y[VNF] = width
-    y[VNR] = width
+        Y[k, VMC] = width
+    Y[k, VNF] = width
+    Y[k, VNR] = width
 
 
 @njit(cache=True, inline="always")
 def near_pairs(
-    x: np.ndarray,
-    y: np.ndarray,
-    h: np.ndarray,
+    X: np.ndarray,
+    Y: np.ndarray,
+    H: np.ndarray,
+    k: int,
     present: np.ndarray,
     params: np.ndarray,
-    out: np.ndarray,
+    near: np.ndarray,
+    reach: np.ndarray,
 ) -> None:
-    """Axis-aligned bounding-box overlap of every key pair (front-bumper reference point).
+    """Axis-aligned bounding-box overlap of every key pair at step k (into ``near[k]``;
+    ``reach`` (6,) is scratch space).
 
     A rectangle of length L and width W at heading h lies within x in [x - L - W/2, x + W/2]
-    and y within W/2 + L |sin h| of its reference point. Only overlapping pairs can collide;
-    the exact Eq. 7 test is left to the caller.
+    and y within W/2 + L |sin h| of its front-bumper reference point. Only overlapping pairs
+    can collide; the exact Eq. 7 test is left to the caller.
     """
-    reach = np.empty(N_ROLES)
     for r in range(N_ROLES):
-        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(h[r]))
+        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(H[k, r]))
     p = 0
     for i in range(N_ROLES):
         for j in range(i + 1, N_ROLES):
             if present[i] and present[j]:
+                li, lj = params[i, P_LEN], params[j, P_LEN]
                 wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
-                out[p] = (
-                    abs(y[i] - y[j]) <= reach[i] + reach[j]
-                    and x[i] + wi >= x[j] - params[j, P_LEN] - wj
-                    and x[j] + wj >= x[i] - params[i, P_LEN] - wi
+                near[k, p] = (
+                    abs(Y[k, i] - Y[k, j]) <= reach[i] + reach[j]
+                    and X[k, i] + wi >= X[k, j] - lj - wj
+                    and X[k, j] + wj >= X[k, i] - li - wi
                 )
             p += 1

@@ -67,10 +67,11 @@ def counterfactual(
     in1 = LANE0 == 1
     in2 = LANE0 == 2
     for k in range(n_steps + 1):
-        X[k], V[k], A[k] = x, v, a
+        for r in range(N_ROLES):
+            X[k, r], V[k, r], A[k, r] = x[r], v[r], a[r]
         if k == n_steps:
             break
-        acc[VR] = free_road(params[VR], v[VR])
+        acc[VR] = free_road(params, VR, v[VR])
         for r in (VMC, VMR, VNR):
             if present[r]:
                 acc[r] = behind(r, leader(r, LANE0[r], x, in1, in2, present), x, v, a, params)
@@ -138,11 +139,13 @@ def joint_pass(
     lc = np.empty(N_PROGRESS)
     start_progress(lc, lateral, x, v, consts[C_VMC_DUR], params)
     in1, in2, acc = LANE0 == 1, LANE0 == 2, np.zeros(N_ROLES)
+    reach = np.empty(N_ROLES)
     k_merge, overrun = -1, plan[0] - consts[C_ACCEL_END]
     for k in range(n_steps + 1):
-        X[k], V[k], A[k] = x, v, a
-        lateral_pose(lc, x, consts[C_WIDTH], Y[k], HEAD[k])
-        near_pairs(X[k], Y[k], HEAD[k], present, params, near[k])
+        for r in range(N_ROLES):
+            X[k, r], V[k, r], A[k, r] = x[r], v[r], a[r]
+        lateral_pose(lc, x, consts[C_WIDTH], Y, HEAD, k)
+        near_pairs(X, Y, HEAD, k, present, params, near, reach)
         if k == n_steps:
             break
         started, done = step(k, x, v, a, lc, present, coop, cav, params, vvs, plan,

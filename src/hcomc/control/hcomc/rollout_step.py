@@ -28,21 +28,22 @@ from hcomc.models.following import follow_accel
 
 
 @njit(cache=True, inline="always")
-def follow_role(p: np.ndarray, s: float, v: float, vl: float, al: float) -> float:
-    """Car-following acceleration of a vehicle with parameter row ``p`` [m/s^2].
+def follow_role(params: np.ndarray, r: int, s: float, v: float, vl: float, al: float) -> float:
+    """Car-following acceleration of role r (parameter row ``params[r]``) [m/s^2].
 
-    ``s`` is the gap to the leader (``inf``: free road); IDM or IIDM per ``p[P_IIDM]``.
+    ``s`` is the gap to the leader (``inf``: free road); IDM or IIDM per ``params[r, P_IIDM]``.
     """
+    p = params
     return follow_accel(
-        s, v, vl, al, p[P_V0], p[P_T], p[P_S0], p[P_A], p[P_B], p[P_DELTA], p[P_C],
-        p[P_IIDM] > 0.5,
+        s, v, vl, al, p[r, P_V0], p[r, P_T], p[r, P_S0], p[r, P_A], p[r, P_B], p[r, P_DELTA],
+        p[r, P_C], p[r, P_IIDM] > 0.5,
     )  # fmt: skip
 
 
 @njit(cache=True, inline="always")
-def free_road(p: np.ndarray, v: float) -> float:
-    """Acceleration without a leader [m/s^2]."""
-    return follow_role(p, np.inf, v, v, 0.0)
+def free_road(params: np.ndarray, r: int, v: float) -> float:
+    """Acceleration of role r without a leader [m/s^2]."""
+    return follow_role(params, r, np.inf, v, v, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -66,17 +67,19 @@ def behind(
 ) -> float:
     """Acceleration of role r behind role j (free road for j = -1) [m/s^2]."""
     if j < 0:
-        return free_road(params[r], v[r])
-    return follow_role(params[r], x[j] - params[j, P_LEN] - x[r], v[r], v[j], a[j])
+        return free_road(params, r, v[r])
+    return follow_role(params, r, x[j] - params[j, P_LEN] - x[r], v[r], v[j], a[j])
 
 
 @njit(cache=True, inline="always")
 def behind_virtual(
-    p: np.ndarray, x: float, v: float, b: np.ndarray, tau: float, lead_len: float
-) -> float:
-    """Acceleration behind the cubic virtual vehicle ``b`` at ``tau`` (length ``lead_len``)."""
-    xv, vv, av = cubic_point(b, tau)
-    return follow_role(p, xv - lead_len - x, v, vv, av)
+    params: np.ndarray, r: int, x: float, v: float, vvs: np.ndarray, i: int, tau: float,
+    lead_len: float,
+) -> float:  # fmt: skip
+    """Acceleration of role r (at x, v) behind the cubic virtual vehicle ``vvs[i]`` at ``tau``
+    (length ``lead_len``)."""
+    xv, vv, av = cubic_point(vvs[i, 0], vvs[i, 1], vvs[i, 2], vvs[i, 3], tau)
+    return follow_role(params, r, xv - lead_len - x, v, vv, av)
 
 
 @njit(cache=True, inline="always")
