@@ -24,8 +24,9 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     resolve_starts,
 )
+from hcomc.control.hcomc.rollout_layout import R_ACC, R_V, R_X
 from hcomc.control.hcomc.rollout_score import created_pairs_safety, efficiency_gain
-from hcomc.control.hcomc.rollout_step import follow_role, integrate
+from hcomc.control.hcomc.rollout_step import follow_role, integrate, new_state
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind
 from hcomc.safety.critical import critical_accel, critical_acceleration
@@ -87,11 +88,12 @@ def test_iidm_changes_the_prediction_of_a_follower():
 
 
 def test_integration_stops_exactly_at_zero_speed():
-    x, v, a = np.zeros(N_ROLES), np.full(N_ROLES, 1.0), np.zeros(N_ROLES)
-    acc = np.full(N_ROLES, -4.0)
-    integrate(x, v, a, acc, np.ones(N_ROLES, dtype=np.bool_), 0.5, 9.0)
-    np.testing.assert_allclose(x, 1.0 / 8.0)  # v^2 / (2 b), not v dt - b dt^2 / 2 = 0
-    np.testing.assert_array_equal(v, 0.0)
+    S = new_state(np.zeros(N_ROLES), np.full(N_ROLES, 1.0), np.zeros(N_ROLES),
+                  np.ones(N_ROLES, dtype=np.bool_))  # fmt: skip
+    S[R_ACC] = -4.0
+    integrate(S, 0.5, 9.0)
+    np.testing.assert_allclose(S[R_X], 1.0 / 8.0)  # v^2 / (2 b), not v dt - b dt^2 / 2 = 0
+    np.testing.assert_array_equal(S[R_V], 0.0)
 
 
 @settings(max_examples=200, deadline=None)

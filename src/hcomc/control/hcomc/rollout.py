@@ -135,13 +135,13 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
         plan = np.array([merge_x[c], vr_dur[c], horizon[c]])
         lat, lon = lateral[c] and coop_vmc, (not lateral[c]) and coop_vmc
         vv0_cubic(starts, horizon[c], cf, consts[C_DT], vvs[c, 0])
-        pre_pass(x0, v0, a0, present, coop, cav, params, starts, vvs[c], plan, lat, consts, K)
+        flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
+        pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, lat, flags, consts, K)
         k_merge[c], g[c, G_OVERRUN] = joint_pass(
-            x0, v0, a0, present, coop, cav, params, vvs[c], plan, lat, lon, consts,
+            x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
             X[c], Y[c], V[c], A[c], HEAD[c], near[c],
         )  # fmt: skip
-        uses = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
-        g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], uses, consts)
+        g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
         u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])
         km = k_merge[c]
         if km < 0:

@@ -59,4 +59,9 @@ N_G = 5
 ) = range(9)
 N_PROGRESS = 9
 
+# rows of the state of the roles during one pass: position, speed, acceleration, commanded
+# acceleration of the next step, lane-1 and lane-2 membership and presence (flags 0.0 / 1.0)
+R_X, R_V, R_A, R_ACC, R_IN1, R_IN2, R_PRESENT = range(7)
+N_STATE = 7
+
 LANE0 = np.array([0, 1, 1, 1, 2, 2])  # lanes of the roles at planning time (0 = ramp)

@@ -29,6 +29,11 @@ from hcomc.control.hcomc.rollout_layout import (
     N_PROGRESS,
     N_ROLES,
     P_LEN,
+    R_A,
+    R_ACC,
+    R_PRESENT,
+    R_V,
+    R_X,
     S_VV0_V,
     S_VV0_X,
     S_VV1_V,
@@ -40,7 +45,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_step import behind, free_road, integrate, leader
+from hcomc.control.hcomc.rollout_step import behind, free_road, integrate, leader, new_state
 from hcomc.control.virtual_vehicle import cubic_into
 
 
@@ -62,72 +67,70 @@ def counterfactual(
     X = np.empty((n_steps + 1, N_ROLES))
     V = np.empty((n_steps + 1, N_ROLES))
     A = np.empty((n_steps + 1, N_ROLES))
-    x, v, a = x0.copy(), v0.copy(), a0.copy()
-    acc = np.zeros(N_ROLES)
-    in1 = LANE0 == 1
-    in2 = LANE0 == 2
+    S = new_state(x0, v0, a0, present)
     for k in range(n_steps + 1):
-        for r in range(N_ROLES):
-            X[k, r], V[k, r], A[k, r] = x[r], v[r], a[r]
+        record(S, X, V, A, k)
         if k == n_steps:
             break
-        acc[VR] = free_road(params, VR, v[VR])
+        S[R_ACC, VR] = free_road(params, VR, S[R_V, VR])
         for r in (VMC, VMR, VNR):
-            if present[r]:
-                acc[r] = behind(r, leader(r, LANE0[r], x, in1, in2, present), x, v, a, params)
-        integrate(x, v, a, acc, present, consts[C_DT], consts[C_EMERGENCY])
+            if S[R_PRESENT, r]:
+                S[R_ACC, r] = behind(S, params, r, leader(S, r, LANE0[r]))
+        integrate(S, consts[C_DT], consts[C_EMERGENCY])
     return X, V, A
 
 
 @njit(cache=True, inline="always")
+def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -> None:
+    """Write the roles' x, v and a into row k of X, V, A."""
+    for r in range(N_ROLES):
+        X[k, r], V[k, r], A[k, r] = S[R_X, r], S[R_V, r], S[R_A, r]
+
+
+@njit(cache=True, inline="always")
 def step(
-    k: int, x: np.ndarray, v: np.ndarray, a: np.ndarray, lc: np.ndarray, present: np.ndarray,
-    coop: np.ndarray, cav: np.ndarray, params: np.ndarray, vvs: np.ndarray, plan: np.ndarray,
-    longitudinal: bool, consts: np.ndarray, joint: bool, in1: np.ndarray, in2: np.ndarray,
-    acc: np.ndarray,
+    k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
+    plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
 ) -> tuple[bool, bool]:  # fmt: skip
     """Advance the roles by one step from step k; (VR started, VR ended its change) in it.
 
     ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
-    ``in1``, ``in2`` (bool) and ``acc`` (6,) are scratch space.
+    ``flags`` are those of :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
     """
     dt = consts[C_DT]
-    memberships(lc, in1, in2)
+    memberships(lc, S)
     lane_consts = (consts[C_ACCEL_END], consts[C_VMC_DUR], consts[C_GAMMA])
-    accelerations(acc, x, v, a, k * dt, lc, in1, in2, present, coop, params, vvs, plan[2],
-                  plan[1], bool(cav[VR]), longitudinal, lane_consts, joint)  # fmt: skip
-    integrate(x, v, a, acc, present, dt, consts[C_EMERGENCY])
-    return advance_progress(lc, x, v, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
+    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint)
+    integrate(S, dt, consts[C_EMERGENCY])
+    return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
 
 
 @njit(cache=True)
 def pre_pass(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, coop: np.ndarray,
-    cav: np.ndarray, params: np.ndarray, starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray,
-    lateral: bool, consts: np.ndarray, n_steps: int,
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
+    starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
+    flags: tuple[bool, bool, bool], consts: np.ndarray, n_steps: int,
 ) -> None:  # fmt: skip
     """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
     the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``."""
-    x, v, a = x0.copy(), v0.copy(), a0.copy()
+    S = new_state(x0, v0, a0, present)
     lc = np.empty(N_PROGRESS)
-    start_progress(lc, lateral, x, v, consts[C_VMC_DUR], params)
-    in1, in2, acc = LANE0 == 1, LANE0 == 2, np.zeros(N_ROLES)
+    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     k = 0
     while k * consts[C_DT] < plan[2] and k < n_steps:
-        step(k, x, v, a, lc, present, coop, cav, params, vvs, plan, False, consts, False, in1,
-              in2, acc)  # fmt: skip
+        step(k, S, lc, params, vvs, plan, flags, consts, False)
         k += 1
     # virtual-vehicle end states at the horizon, or at the window's end if that comes first
-    cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], x[VR], v[VR], vvs[1])
-    cubic_into(plan[2], x0[VNF], v0[VNF], x[VMC], v[VMC], vvs[2])
+    cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], S[R_X, VR], S[R_V, VR], vvs[1])
+    cubic_into(plan[2], x0[VNF], v0[VNF], S[R_X, VMC], S[R_V, VMC], vvs[2])
 
 
 @njit(cache=True)
 def joint_pass(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, coop: np.ndarray,
-    cav: np.ndarray, params: np.ndarray, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
-    longitudinal: bool, consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray,
-    A: np.ndarray, HEAD: np.ndarray, near: np.ndarray,
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
+    vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
+    consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
+    HEAD: np.ndarray, near: np.ndarray,
 ) -> tuple[int, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … near (K + 1, ...).
 
@@ -135,21 +138,18 @@ def joint_pass(
     end of its path lies beyond the acceleration lane [m].
     """
     n_steps = X.shape[0] - 1
-    x, v, a = x0.copy(), v0.copy(), a0.copy()
+    S = new_state(x0, v0, a0, present)
     lc = np.empty(N_PROGRESS)
-    start_progress(lc, lateral, x, v, consts[C_VMC_DUR], params)
-    in1, in2, acc = LANE0 == 1, LANE0 == 2, np.zeros(N_ROLES)
+    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     reach = np.empty(N_ROLES)
     k_merge, overrun = -1, plan[0] - consts[C_ACCEL_END]
     for k in range(n_steps + 1):
-        for r in range(N_ROLES):
-            X[k, r], V[k, r], A[k, r] = x[r], v[r], a[r]
-        lateral_pose(lc, x, consts[C_WIDTH], Y, HEAD, k)
-        near_pairs(X, Y, HEAD, k, present, params, near, reach)
+        record(S, X, V, A, k)
+        lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
+        near_pairs(X, Y, HEAD, k, S, params, near, reach)
         if k == n_steps:
             break
-        started, done = step(k, x, v, a, lc, present, coop, cav, params, vvs, plan,
-                              longitudinal, consts, True, in1, in2, acc)  # fmt: skip
+        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
         if done:
