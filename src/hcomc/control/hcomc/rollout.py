@@ -36,7 +36,8 @@ a numpy time-stepping loop cannot do within the decision-time budget. They are s
 concern — array layouts (:mod:`~hcomc.control.hcomc.rollout_layout`), car following and
 integration (:mod:`~hcomc.control.hcomc.rollout_step`), accelerations of the roles
 (:mod:`~hcomc.control.hcomc.rollout_accel`), lane-change progress
-(:mod:`~hcomc.control.hcomc.rollout_lanes`) and scoring
+(:mod:`~hcomc.control.hcomc.rollout_lanes`), the passes
+(:mod:`~hcomc.control.hcomc.rollout_passes`) and scoring
 (:mod:`~hcomc.control.hcomc.rollout_score`) — and every equation is called from its one home
 in :mod:`hcomc.models`, :mod:`hcomc.safety` and :mod:`hcomc.control.virtual_vehicle`, the
 same functions the engine executes.
@@ -118,6 +119,7 @@ _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0
 @njit(cache=True)
 def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_dur, horizon,
                     lateral, consts, n_steps, cf):  # fmt: skip
+    """The compiled body of :func:`rollout` (same arguments, ``starts`` resolved)."""
     n_c, K = merge_x.size, n_steps
     X = np.empty((n_c, K + 1, N_ROLES))
     V = np.empty((n_c, K + 1, N_ROLES))
