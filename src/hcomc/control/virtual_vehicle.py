@@ -11,9 +11,11 @@ with ``τ = t - t0``.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
 
 def cubic_coefficients(
@@ -34,23 +36,51 @@ def cubic_coefficients(
     x0, v0 : start position [m] and speed [m/s] (VMF for VV1, VNF for VV2).
     xf, vf : end position [m] and speed [m/s] (VR for VV1, VMC for VV2).
     """
-    H = np.asarray(horizon, dtype=np.float64)
-    x0, v0 = np.asarray(x0, dtype=np.float64), np.asarray(v0, dtype=np.float64)
-    dx = np.asarray(xf, dtype=np.float64) - x0
-    vf = np.asarray(vf, dtype=np.float64)
-    b3 = (3.0 * dx - (2.0 * v0 + vf) * H) / (H * H)
-    b4 = (-2.0 * dx + (v0 + vf) * H) / (H * H * H)
-    return np.stack(np.broadcast_arrays(x0, v0, b3, b4), axis=-1)
+    return broadcast_apply(_coefficients_array, horizon, x0, v0, xf, vf)
+
+
+@njit(cache=True)
+def cubic_into(h: float, x0: float, v0: float, xf: float, vf: float, out: np.ndarray) -> None:
+    """Write the coefficients of one cubic into ``out`` (4,): the one implementation of
+    :func:`cubic_coefficients` (Eq. 10)."""
+    dx = xf - x0
+    out[0], out[1] = x0, v0
+    out[2] = (3.0 * dx - (2.0 * v0 + vf) * h) / (h * h)
+    out[3] = (-2.0 * dx + (v0 + vf) * h) / (h * h * h)
+
+
+@njit(cache=True)
+def _coefficients_array(h, x0, v0, xf, vf):
+    out = np.empty((h.size, 4))
+    for i in range(h.size):
+        cubic_into(h[i], x0[i], v0[i], xf[i], vf[i], out[i])
+    return out
 
 
 def cubic_state(b: FloatArray, tau: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Position [m], speed [m/s] and acceleration [m/s^2] of the cubic at ``tau`` (Eq. 9)."""
-    tau = np.asarray(tau, dtype=np.float64)
-    b1, b2, b3, b4 = (b[..., i] for i in range(4))
+    b = np.asarray(b, dtype=np.float64)
+    out = broadcast_apply(_state_array, b[..., 0], b[..., 1], b[..., 2], b[..., 3], tau)
+    return out[..., 0], out[..., 1], out[..., 2]
+
+
+@njit(cache=True)
+def cubic_point(
+    b1: float, b2: float, b3: float, b4: float, tau: float
+) -> tuple[float, float, float]:
+    """Position, speed and acceleration of the cubic (b1, b2, b3, b4) at one ``tau``: the one
+    implementation of :func:`cubic_state` (Eq. 9)."""
     x = b1 + tau * (b2 + tau * (b3 + tau * b4))
     v = b2 + tau * (2.0 * b3 + 3.0 * tau * b4)
-    a = 2.0 * b3 + 6.0 * tau * b4
-    return x, v, a
+    return x, v, 2.0 * b3 + 6.0 * tau * b4
+
+
+@njit(cache=True)
+def _state_array(b1, b2, b3, b4, tau):
+    out = np.empty((tau.size, 3))
+    for i in range(tau.size):
+        out[i, 0], out[i, 1], out[i, 2] = cubic_point(b1[i], b2[i], b3[i], b4[i], tau[i])
+    return out
 
 
 def cubic_extremes(b: FloatArray, horizon: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -59,13 +89,29 @@ def cubic_extremes(b: FloatArray, horizon: ArrayLike) -> tuple[FloatArray, Float
     The acceleration is linear in τ, so its minimum is at an end; the speed is quadratic, so its
     minimum is at an end or at the vertex ``τ* = -b3 / (3 b4)`` if that lies inside.
     """
-    H = np.asarray(horizon, dtype=np.float64)
-    _, v_end, a_end = cubic_state(b, H)
-    b2, b3, b4 = b[..., 1], b[..., 2], b[..., 3]
-    a_min = np.minimum(2.0 * b3, a_end)
-    safe_b4 = np.where(b4 == 0.0, 1.0, b4)
-    vertex = np.where(b4 > 0.0, -b3 / (3.0 * safe_b4), -1.0)
-    inside = (vertex > 0.0) & (vertex < H)
-    v_vertex = b2 + vertex * (2.0 * b3 + 3.0 * vertex * b4)
-    v_min = np.minimum(np.minimum(b2, v_end), np.where(inside, v_vertex, np.inf))
+    b = np.asarray(b, dtype=np.float64)
+    out = broadcast_apply(_extremes_array, b[..., 0], b[..., 1], b[..., 2], b[..., 3], horizon)
+    return out[..., 0], out[..., 1]
+
+
+@njit(cache=True)
+def cubic_minima(b: np.ndarray, h: float) -> tuple[float, float]:
+    """Minimum speed and acceleration of the cubic ``b`` (4,) on [0, h]: the one
+    implementation of :func:`cubic_extremes`."""
+    a_min = min(2.0 * b[2], 2.0 * b[2] + 6.0 * h * b[3])
+    v_min = min(b[1], b[1] + h * (2.0 * b[2] + 3.0 * h * b[3]))
+    if b[3] > 0.0:
+        vertex = -b[2] / (3.0 * b[3])
+        if 0.0 < vertex < h:
+            v_min = min(v_min, b[1] + vertex * (2.0 * b[2] + 3.0 * vertex * b[3]))
     return v_min, a_min
+
+
+@njit(cache=True)
+def _extremes_array(b1, b2, b3, b4, h):
+    out = np.empty((h.size, 2))
+    b = np.empty(4)
+    for i in range(h.size):
+        b[0], b[1], b[2], b[3] = b1[i], b2[i], b3[i], b4[i]
+        out[i, 0], out[i, 1] = cubic_minima(b, h[i])
+    return out

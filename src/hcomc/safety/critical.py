@@ -6,9 +6,11 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
 if TYPE_CHECKING:
     from hcomc.config import ControlParams
@@ -49,16 +51,28 @@ def critical_acceleration(
     ...                                   emergency_decel=7.5)), 2)
     4.83
     """
-    v_r = np.asarray(v_r, dtype=np.float64)
-    v_f = np.asarray(v_f, dtype=np.float64)
-    denom = 2.0 * (
-        np.asarray(d, dtype=np.float64)
-        - min_distance
-        - v_r * np.asarray(delay, dtype=np.float64)
-        + v_f * v_f / (2.0 * emergency_decel)
+    return broadcast_apply(
+        _critical_array, d, v_r, v_f, delay, float(min_distance), float(emergency_decel)
     )
-    ok = denom > 0.0
-    return np.where(ok, v_r * v_r / np.where(ok, denom, 1.0), np.inf)
+
+
+@njit(cache=True)
+def critical_accel(
+    d: float, v_r: float, v_f: float, delay: float, min_distance: float, emergency_decel: float
+) -> float:
+    """Eq. 15 for one follower-leader pair [m/s^2] (``inf`` when no deceleration avoids the
+    crash): the one implementation behind :func:`critical_acceleration` (same arguments,
+    positional)."""
+    denom = 2.0 * (d - min_distance - v_r * delay + v_f * v_f / (2.0 * emergency_decel))
+    return v_r * v_r / denom if denom > 0.0 else np.inf
+
+
+@njit(cache=True)
+def _critical_array(d, v_r, v_f, delay, min_distance, emergency_decel):
+    out = np.empty(d.size)
+    for i in range(d.size):
+        out[i] = critical_accel(d[i], v_r[i], v_f[i], delay[i], min_distance[i], emergency_decel[i])
+    return out
 
 
 @dataclass(frozen=True, slots=True)

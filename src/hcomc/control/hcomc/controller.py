@@ -99,9 +99,8 @@ def key_state(view: TrafficView, group: MergeGroup, starts: np.ndarray | None = 
     ids = group.as_array()
     present = ids >= 0
     safe = np.where(present, ids, group.vr)
-    params = np.column_stack([f.v0, f.T, f.s0, f.a, f.b, f.delta, f.coolness, f.length, f.width])[
-        safe
-    ]
+    columns = [f.v0, f.T, f.s0, f.a, f.b, f.delta, f.coolness, f.length, f.width, f.iidm]
+    params = np.column_stack(columns).astype(np.float64)[safe]
     x, v, a = view.x[safe].copy(), view.v[safe].copy(), view.a[safe].copy()
     cav = f.kind[safe] == Kind.CAV
     anchor = group.vmc if group.vmc >= 0 else group.vr

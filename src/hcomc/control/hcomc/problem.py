@@ -109,7 +109,7 @@ class KeyState:
     present: BoolArray
     cav: BoolArray
     coop: BoolArray
-    params: FloatArray  # (6, 9): v0, T, s0, a, b, delta, coolness, length, width
+    params: FloatArray  # (6, 10): v0, T, s0, a, b, delta, coolness, length, width, iidm
     ids: IntArray  # (6,) vehicle indices in the simulation, -1 for absent or phantom
     starts: FloatArray  # (4,) VV0 x, v and VV1 x, v (NaN = default)
 

@@ -1,0 +1,146 @@
+"""Lane-change progress of the HCOMC prediction: lane membership, quintic path, box overlap.
+
+As in the engine, a lane change follows the quintic path of Eq. 4-6 parametrised in x, from
+the position where it starts to ``x0 + max(v T_lc, 3 L)``, and a changing vehicle occupies
+both lanes until its change ends. The path is :func:`hcomc.models.quintic.lateral_state` (its
+one home); the progress of one candidate is a small vector (layout ``L_*`` of
+:mod:`hcomc.control.hcomc.rollout_layout`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hcomc.control.hcomc.rollout_layout import (
+    L_LATERAL,
+    L_VMC_DONE,
+    L_VMC_X0,
+    L_VMC_XF,
+    L_VR_DONE,
+    L_VR_STARTED,
+    L_VR_T0,
+    L_VR_X0,
+    L_VR_XF,
+    LANE0,
+    N_ROLES,
+    P_LEN,
+    P_WID,
+    R_IN1,
+    R_IN2,
+    R_PRESENT,
+    R_V,
+    R_X,
+    VMC,
+    VNF,
+    VNR,
+    VR,
+)
+from hcomc.models.quintic import lateral_state
+
+
+@njit(cache=True)
+def path_end(x: float, v: float, duration: float, length: float) -> float:
+    """Predicted end of a lane change starting at x: ``x + max(v T_lc, 3 L)`` [m]."""
+    return x + max(v * duration, 3.0 * length)
+
+
+@njit(cache=True)
+def start_progress(
+    lc: np.ndarray, lateral: bool, S: np.ndarray, vmc_dur: float, params: np.ndarray
+) -> None:
+    """Reset ``lc`` at planning time: VR on the ramp; in lateral mode VMC starts its change."""
+    lc[:] = 0.0
+    lc[L_VR_XF] = 1.0
+    lc[L_LATERAL] = 1.0 if lateral else 0.0
+    lc[L_VMC_DONE] = 0.0 if lateral else 1.0
+    lc[L_VMC_X0] = S[R_X, VMC]
+    lc[L_VMC_XF] = path_end(S[R_X, VMC], S[R_V, VMC], vmc_dur, params[VMC, P_LEN])
+
+
+@njit(cache=True, inline="always")
+def memberships(lc: np.ndarray, S: np.ndarray) -> None:
+    """Which roles occupy lane 1 and lane 2 (a changing vehicle occupies both)."""
+    for r in range(N_ROLES):
+        S[R_IN1, r] = 1.0 if LANE0[r] == 1 else 0.0
+        S[R_IN2, r] = 1.0 if LANE0[r] == 2 else 0.0
+    if lc[L_VR_STARTED]:
+        S[R_IN1, VR] = 1.0
+    if lc[L_LATERAL]:
+        S[R_IN2, VMC] = 1.0
+        if lc[L_VMC_DONE]:
+            S[R_IN1, VMC] = 0.0
+
+
+@njit(cache=True, inline="always")
+def advance_progress(
+    lc: np.ndarray, S: np.ndarray, t_next: float, merge_x: float, vr_dur: float, vr_len: float
+) -> tuple[bool, bool]:
+    """Update the progress after a step ending at ``t_next``; (VR started, VR done) now.
+
+    VR starts its change where it first reaches ``merge_x``; a change ends once the vehicle
+    passes the predicted end of its path.
+    """
+    started = done = False
+    x_vr = S[R_X, VR]
+    if not lc[L_VR_STARTED] and x_vr >= merge_x:
+        started = True
+        lc[L_VR_STARTED], lc[L_VR_T0], lc[L_VR_X0] = 1.0, t_next, x_vr
+        lc[L_VR_XF] = path_end(x_vr, S[R_V, VR], vr_dur, vr_len)
+    if lc[L_VR_STARTED] and not lc[L_VR_DONE] and x_vr >= lc[L_VR_XF]:
+        done = True
+        lc[L_VR_DONE] = 1.0
+    if not lc[L_VMC_DONE] and S[R_X, VMC] >= lc[L_VMC_XF]:
+        lc[L_VMC_DONE] = 1.0
+    return started, done
+
+
+@njit(cache=True, inline="always")
+def lateral_pose(
+    lc: np.ndarray, S: np.ndarray, width: float, Y: np.ndarray, H: np.ndarray, k: int
+) -> None:
+    """Lateral position ``Y[k]`` and heading ``H[k]`` of the roles (lane 1 at y = 0, the ramp
+    at -width). The rows come in zeroed; only the roles off lane 1 or changing are written.
+    """
+    if lc[L_VR_STARTED] and not lc[L_VR_DONE]:
+        Y[k, VR], slope, _ = lateral_state(S[R_X, VR], lc[L_VR_X0], lc[L_VR_XF], -width, 0.0)
+        H[k, VR] = math.atan(slope)
+    elif not lc[L_VR_DONE]:
+        Y[k, VR] = -width
+    if lc[L_LATERAL] and not lc[L_VMC_DONE]:
+        Y[k, VMC], slope, _ = lateral_state(S[R_X, VMC], lc[L_VMC_X0], lc[L_VMC_XF], 0.0, width)
+        H[k, VMC] = math.atan(slope)
+    elif lc[L_LATERAL]:
+        Y[k, VMC] = width
+    Y[k, VNF] = width
+    Y[k, VNR] = width
+
+
+@njit(cache=True, inline="always")
+def near_pairs(
+    X: np.ndarray, Y: np.ndarray, H: np.ndarray, k: int, S: np.ndarray, params: np.ndarray,
+    near: np.ndarray, reach: np.ndarray,
+) -> None:  # fmt: skip
+    """Axis-aligned bounding-box overlap of every key pair at step k (into ``near[k]``;
+    ``reach`` (6,) is scratch space).
+
+    A rectangle of length L and width W at heading h lies within x in [x - L - W/2, x + W/2]
+    and y within W/2 + L |sin h| of its front-bumper reference point. Only overlapping pairs
+    can collide; the exact Eq. 7 test is left to the caller.
+    """
+    for r in range(N_ROLES):
+        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(H[k, r]))
+    p = 0
+    for i in range(N_ROLES):
+        for j in range(i + 1, N_ROLES):
+            if S[R_PRESENT, i] and S[R_PRESENT, j]:
+                li, lj = params[i, P_LEN], params[j, P_LEN]
+                wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
+                near[k, p] = (
+                    abs(Y[k, i] - Y[k, j]) <= reach[i] + reach[j]
+                    and X[k, i] + wi >= X[k, j] - lj - wj
+                    and X[k, j] + wj >= X[k, i] - li - wi
+                )
+            p += 1

@@ -1,0 +1,67 @@
+"""Array layouts of the HCOMC prediction kernels (:mod:`hcomc.control.hcomc.rollout`).
+
+The compiled kernels exchange plain arrays; this module names their rows and columns: the six
+key-vehicle roles, the per-role model parameters, the constants read from the config, the
+start states of the virtual vehicles, the constraint columns and the lane-change progress of
+one candidate.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc.road import KEY_ROLES
+
+VR, VMC, VMF, VMR, VNF, VNR = range(6)
+N_ROLES = len(KEY_ROLES)  # role indices above follow KEY_ROLES
+N_PAIRS = N_ROLES * (N_ROLES - 1) // 2  # key-vehicle pairs i < j, row-major
+
+# params columns: Eq. 1 / Eq. 3 parameters, body size, and whether the base model is the IIDM
+P_V0, P_T, P_S0, P_A, P_B, P_DELTA, P_C, P_LEN, P_WID, P_IIDM = range(10)
+N_PARAMS = 10
+
+# constants vector
+(
+    C_DT,
+    C_ACCEL_END,
+    C_WIDTH,
+    C_VMC_DUR,
+    C_GAMMA,
+    C_EMERGENCY,
+    C_VV_DECEL,
+    C_POLITENESS,
+    C_D,
+    C_A_MERG,
+    C_DELAY_CAV,
+    C_DELAY_HDV,
+) = range(12)
+N_CONSTS = 12
+
+# start states of the virtual vehicles VV0 and VV1 (NaN: the Eq. 8 default)
+S_VV0_X, S_VV0_V, S_VV1_X, S_VV1_V = range(4)
+N_STARTS = 4
+
+# constraint columns
+G_COLLISION, G_NOT_MERGED, G_UNSAFE, G_VIRTUAL, G_OVERRUN = range(5)
+N_G = 5
+
+# lane-change progress of one candidate in one pass (flags stored as 0.0 / 1.0)
+(
+    L_VR_STARTED,  # VR has begun its change to lane 1
+    L_VR_DONE,  # ... and ended it
+    L_VR_T0,  # time the change began [s]
+    L_VR_X0,  # start and predicted end of VR's quintic path [m]
+    L_VR_XF,
+    L_LATERAL,  # the cooperating VMC changes to lane 2 (lateral mode)
+    L_VMC_DONE,  # ... and has ended that change (or never changes)
+    L_VMC_X0,  # start and predicted end of VMC's quintic path [m]
+    L_VMC_XF,
+) = range(9)
+N_PROGRESS = 9
+
+# rows of the state of the roles during one pass: position, speed, acceleration, commanded
+# acceleration of the next step, lane-1 and lane-2 membership and presence (flags 0.0 / 1.0)
+R_X, R_V, R_A, R_ACC, R_IN1, R_IN2, R_PRESENT = range(7)
+N_STATE = 7
+
+LANE0 = np.array([0, 1, 1, 1, 2, 2])  # lanes of the roles at planning time (0 = ramp)

@@ -1,0 +1,171 @@
+"""The three passes of the HCOMC prediction over one candidate (see
+:mod:`hcomc.control.hcomc.rollout`): the no-merge counterfactual, the pre-pass that fixes the
+end states of the virtual vehicles VV1 and VV2, and the joint pass of every key vehicle.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from hcomc.control.hcomc.rollout_accel import accelerations
+from hcomc.control.hcomc.rollout_lanes import (
+    advance_progress,
+    lateral_pose,
+    memberships,
+    near_pairs,
+    start_progress,
+)
+from hcomc.control.hcomc.rollout_layout import (
+    C_ACCEL_END,
+    C_DT,
+    C_EMERGENCY,
+    C_GAMMA,
+    C_VMC_DUR,
+    C_WIDTH,
+    L_VR_STARTED,
+    L_VR_XF,
+    LANE0,
+    N_PROGRESS,
+    N_ROLES,
+    P_LEN,
+    R_A,
+    R_ACC,
+    R_PRESENT,
+    R_V,
+    R_X,
+    S_VV0_V,
+    S_VV0_X,
+    S_VV1_V,
+    S_VV1_X,
+    VMC,
+    VMF,
+    VMR,
+    VNF,
+    VNR,
+    VR,
+)
+from hcomc.control.hcomc.rollout_step import behind, free_road, integrate, leader, new_state
+from hcomc.control.virtual_vehicle import cubic_into
+
+
+@njit(cache=True)
+def counterfactual(
+    x0: np.ndarray,
+    v0: np.ndarray,
+    a0: np.ndarray,
+    present: np.ndarray,
+    params: np.ndarray,
+    consts: np.ndarray,
+    n_steps: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pass 0: the key vehicles without the merge, (n_steps + 1, 6) each of x, v, a.
+
+    VR drives alone on a free road (no lane end); every mainline key vehicle follows the
+    nearest key vehicle ahead in its own lane, nobody cooperates or changes lane.
+    """
+    X = np.empty((n_steps + 1, N_ROLES))
+    V = np.empty((n_steps + 1, N_ROLES))
+    A = np.empty((n_steps + 1, N_ROLES))
+    S = new_state(x0, v0, a0, present)
+    for k in range(n_steps + 1):
+        record(S, X, V, A, k)
+        if k == n_steps:
+            break
+        S[R_ACC, VR] = free_road(params, VR, S[R_V, VR])
+        for r in (VMC, VMR, VNR):
+            if S[R_PRESENT, r]:
+                S[R_ACC, r] = behind(S, params, r, leader(S, r, LANE0[r]))
+        integrate(S, consts[C_DT], consts[C_EMERGENCY])
+    return X, V, A
+
+
+@njit(cache=True, inline="always")
+def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -> None:
+    """Write the roles' x, v and a into row k of X, V, A."""
+    for r in range(N_ROLES):
+        X[k, r], V[k, r], A[k, r] = S[R_X, r], S[R_V, r], S[R_A, r]
+
+
+@njit(cache=True, inline="always")
+def step(
+    k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
+    plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
+) -> tuple[bool, bool]:  # fmt: skip
+    """Advance the roles by one step from step k; (VR started, VR ended its change) in it.
+
+    ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
+    ``flags`` are those of :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
+    """
+    dt = consts[C_DT]
+    memberships(lc, S)
+    lane_consts = (consts[C_ACCEL_END], consts[C_VMC_DUR], consts[C_GAMMA])
+    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint)
+    integrate(S, dt, consts[C_EMERGENCY])
+    return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
+
+
+@njit(cache=True)
+def pre_pass(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
+    starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
+    flags: tuple[bool, bool, bool], consts: np.ndarray, n_steps: int,
+) -> None:  # fmt: skip
+    """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
+    the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``."""
+    S = new_state(x0, v0, a0, present)
+    lc = np.empty(N_PROGRESS)
+    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
+    k = 0
+    while k * consts[C_DT] < plan[2] and k < n_steps:
+        step(k, S, lc, params, vvs, plan, flags, consts, False)
+        k += 1
+    # virtual-vehicle end states at the horizon, or at the window's end if that comes first
+    cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], S[R_X, VR], S[R_V, VR], vvs[1])
+    cubic_into(plan[2], x0[VNF], v0[VNF], S[R_X, VMC], S[R_V, VMC], vvs[2])
+
+
+@njit(cache=True)
+def joint_pass(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
+    vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
+    consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
+    HEAD: np.ndarray, near: np.ndarray,
+) -> tuple[int, float]:  # fmt: skip
+    """Pass 2: every key vehicle, trajectories written to X … near (K + 1, ...).
+
+    Returns the step at which VR's change ends (-1: not within the window) and how far the
+    end of its path lies beyond the acceleration lane [m].
+    """
+    n_steps = X.shape[0] - 1
+    S = new_state(x0, v0, a0, present)
+    lc = np.empty(N_PROGRESS)
+    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
+    reach = np.empty(N_ROLES)
+    k_merge, overrun = -1, plan[0] - consts[C_ACCEL_END]
+    for k in range(n_steps + 1):
+        record(S, X, V, A, k)
+        lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
+        near_pairs(X, Y, HEAD, k, S, params, near, reach)
+        if k == n_steps:
+            break
+        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True)
+        if started:
+            overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
+        if done:
+            k_merge = k + 1
+    if not lc[L_VR_STARTED]:
+        overrun = plan[0] - consts[C_ACCEL_END]
+    return k_merge, overrun
+
+
+@njit(cache=True)
+def vv0_cubic(
+    starts: np.ndarray, horizon: float, cf: np.ndarray, dt: float, out: np.ndarray
+) -> None:
+    """VV0: from its start state to VR's future leader (the VMF role) at H, as predicted
+    without the merge (projected from the nearest step)."""
+    n_steps = cf.shape[1] - 1
+    kh = min(int(round(horizon / dt)), n_steps)  # noqa: RUF046 (numba typing)
+    xf = cf[0, kh, VMF] + cf[1, kh, VMF] * (horizon - kh * dt)
+    cubic_into(horizon, starts[S_VV0_X], starts[S_VV0_V], xf, cf[1, kh, VMF], out)

@@ -1,0 +1,119 @@
+"""Per-step kernels of the HCOMC prediction: car following of a role, leaders, integration.
+
+Every equation is called from its one home: car following (Eq. 1, the IIDM, Eq. 3) from
+:func:`hcomc.models.following.follow_accel`, the virtual vehicles' cubics (Eq. 9) from
+:func:`hcomc.control.virtual_vehicle.cubic_point`. The ballistic step with a stop at v = 0 is
+the engine's integration scheme. The roles' state is one (7, 6) array ``S`` (rows ``R_*`` of
+:mod:`hcomc.control.hcomc.rollout_layout`), so that the compiled kernels pass few arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from hcomc.control.hcomc.rollout_layout import (
+    LANE0,
+    N_ROLES,
+    N_STATE,
+    P_A,
+    P_B,
+    P_C,
+    P_DELTA,
+    P_IIDM,
+    P_LEN,
+    P_S0,
+    P_T,
+    P_V0,
+    R_A,
+    R_ACC,
+    R_IN1,
+    R_IN2,
+    R_PRESENT,
+    R_V,
+    R_X,
+)
+from hcomc.control.virtual_vehicle import cubic_point
+from hcomc.models.following import follow_accel
+
+
+@njit(cache=True, inline="always")
+def follow_role(params: np.ndarray, r: int, s: float, v: float, vl: float, al: float) -> float:
+    """Car-following acceleration of role r (parameter row ``params[r]``) [m/s^2].
+
+    ``s`` is the gap to the leader (``inf``: free road); IDM or IIDM per ``params[r, P_IIDM]``.
+    """
+    p = params
+    return follow_accel(
+        s, v, vl, al, p[r, P_V0], p[r, P_T], p[r, P_S0], p[r, P_A], p[r, P_B], p[r, P_DELTA],
+        p[r, P_C], p[r, P_IIDM] > 0.5,
+    )  # fmt: skip
+
+
+@njit(cache=True, inline="always")
+def free_road(params: np.ndarray, r: int, v: float) -> float:
+    """Acceleration of role r without a leader [m/s^2]."""
+    return follow_role(params, r, np.inf, v, v, 0.0)
+
+
+@njit(cache=True, inline="always")
+def leader(S: np.ndarray, r: int, lane: int) -> int:
+    """Nearest present key vehicle strictly ahead of role r in ``lane`` (1 or 2), -1 if none."""
+    row = R_IN1 if lane == 1 else R_IN2
+    best, best_x = -1, np.inf
+    for j in range(N_ROLES):
+        if j != r and S[R_PRESENT, j] and S[row, j] and S[R_X, r] < S[R_X, j] < best_x:
+            best, best_x = j, S[R_X, j]
+    return best
+
+
+@njit(cache=True, inline="always")
+def behind(S: np.ndarray, params: np.ndarray, r: int, j: int) -> float:
+    """Acceleration of role r behind role j (free road for j = -1) [m/s^2]."""
+    if j < 0:
+        return free_road(params, r, S[R_V, r])
+    gap = S[R_X, j] - params[j, P_LEN] - S[R_X, r]
+    return follow_role(params, r, gap, S[R_V, r], S[R_V, j], S[R_A, j])
+
+
+@njit(cache=True, inline="always")
+def behind_virtual(
+    S: np.ndarray, params: np.ndarray, r: int, vvs: np.ndarray, i: int, tau: float,
+    lead_len: float,
+) -> float:  # fmt: skip
+    """Acceleration of role r behind the cubic virtual vehicle ``vvs[i]`` at ``tau`` (length
+    ``lead_len``) [m/s^2]."""
+    xv, vv, av = cubic_point(vvs[i, 0], vvs[i, 1], vvs[i, 2], vvs[i, 3], tau)
+    return follow_role(params, r, xv - lead_len - S[R_X, r], S[R_V, r], vv, av)
+
+
+@njit(cache=True, inline="always")
+def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
+    """Ballistic step of every present role with its acceleration ``S[R_ACC]`` (floored at
+    the emergency deceleration), stopping exactly at v = 0 (as the engine)."""
+    for r in range(N_ROLES):
+        if not S[R_PRESENT, r]:
+            continue
+        ar = max(S[R_ACC, r], -emergency)
+        v = S[R_V, r]
+        v1 = v + ar * dt
+        if v1 < 0.0:
+            S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
+            S[R_A, r] = -v / dt
+            S[R_V, r] = 0.0
+        else:
+            S[R_X, r] += v * dt + 0.5 * ar * dt * dt
+            S[R_V, r] = v1
+            S[R_A, r] = ar
+
+
+@njit(cache=True)
+def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) -> np.ndarray:
+    """The state ``S`` (7, 6) of the roles at planning time (lane rows at their start lanes)."""
+    S = np.zeros((N_STATE, N_ROLES))
+    for r in range(N_ROLES):
+        S[R_X, r], S[R_V, r], S[R_A, r] = x[r], v[r], a[r]
+        S[R_IN1, r] = 1.0 if LANE0[r] == 1 else 0.0
+        S[R_IN2, r] = 1.0 if LANE0[r] == 2 else 0.0
+        S[R_PRESENT, r] = 1.0 if present[r] else 0.0
+    return S
