@@ -37,7 +37,7 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.base import Mode
-from hcomc.control.hcomc.controller import merge_problem
+from hcomc.control.hcomc.controller import HCOMCDetails, merge_problem
 from hcomc.control.hcomc.rollout import P_IIDM, VR
 from hcomc.road import Lane
 from hcomc.sim.engine import Simulation
@@ -76,7 +76,8 @@ def _execute(prediction_dt: float, variant: str = "idm", seed: int = 0) -> Execu
     plan = sim.run_until_plan()
     assert plan is not None
     assert plan.mode == Mode.LONGITUDINAL  # a cooperating VMC, a controlled VR
-    pred = plan.details["prediction"]
+    assert isinstance(plan.details, HCOMCDetails)
+    pred = plan.details.prediction
     view, group = sim.requests[0]
     ids = plan.group.as_array()
     present = ids >= 0

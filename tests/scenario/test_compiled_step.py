@@ -56,7 +56,7 @@ def test_an_ensemble_gives_each_run_bit_identical_results() -> None:
     from hcomc.config import load_config
     from hcomc.sim.ensemble import run_ensemble
 
-    def configs():  # noqa: ANN202
+    def configs():
         return [
             (load_config("C2", duration=40.0), 1),
             (load_config("C5", duration=40.0, control={"controller": "fifo"}), 2),
