@@ -37,6 +37,9 @@ main-lane-1 vehicle VMC it cooperates with, the leader VMF and follower VMR of t
 lane 1, and the leader VNF and follower VNR of VMC's gap in lane 2. Every per-role array,
 dict and plan record uses this order."""
 
+VR, VMC, VMF, VMR, VNF, VNR = range(len(KEY_ROLES))
+"""Index of each key role in every per-role array (the order of :data:`KEY_ROLES`)."""
+
 
 def lane_centre(lane: IntArray | int, width: float) -> FloatArray:
     """Lateral position y of a lane's centre line [m]."""

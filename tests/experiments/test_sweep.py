@@ -96,13 +96,15 @@ def test_killed_sweep_resumes_without_losing_or_repeating_runs(spec_file, tmp_pa
     proc.wait()
     before = {p.name: (p.stat().st_mtime_ns, p.read_bytes()) for p in parts.glob("*.parquet")}
     assert 2 <= len(before) < 8
-    assert not list(parts.glob("*.tmp*"))  # no half-written part survives
+    for part in parts.glob("*.parquet"):  # every part is complete (written, then renamed)
+        assert len(pd.read_parquet(part)) == 1
     result = CliRunner().invoke(app, ["sweep", str(spec_file), "--out", str(out),
                                       "--workers", "2"])  # fmt: skip
     assert result.exit_code == 0, result.output
     assert f"{8 - len(before)} new, {len(before)} already done" in result.stdout
     after = {p.name: (p.stat().st_mtime_ns, p.read_bytes()) for p in parts.glob("*.parquet")}
     assert len(after) == 8
+    assert not list(parts.glob("*.tmp*"))  # the killed run's temporary files are gone
     for name, stamp in before.items():
         assert after[name] == stamp  # not recomputed
     table = pd.read_parquet(out / "sweep.parquet")

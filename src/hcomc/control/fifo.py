@@ -89,8 +89,9 @@ from hcomc.control.hcomc.problem import (
     KeyState,
     MergeProblem,
     Prediction,
+    load_prediction_kernels,
 )
-from hcomc.control.hcomc.rollout import VMC, VR, warm_up
+from hcomc.road import VMC, VR
 
 __all__ = [
     "FIFO_HEADWAY",
@@ -256,7 +257,7 @@ class PredictingBaseline:
     used as a predictor of the one candidate the baseline's rule picks."""
 
     def __init__(self, config: ScenarioConfig) -> None:
-        warm_up()  # load the compiled rollout now, not inside a timed decision
+        load_prediction_kernels()
         self.config = config
 
     def problem(self, view: TrafficView, group: MergeGroup) -> MergeProblem:

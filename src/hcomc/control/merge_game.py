@@ -129,8 +129,8 @@ from hcomc.control.fifo import (
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.controller import sequence_groups
 from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
-from hcomc.control.hcomc.rollout import P_A, P_V0, VMC, VR
 from hcomc.control.lane_change_game import INFEASIBLE_SAFETY_COST
+from hcomc.road import VMC, VR
 
 __all__ = [
     "AHEAD",
@@ -328,7 +328,7 @@ def player_cost(
     s = problem.states[int(pred.sequence[row])] or problem.state
     if not s.present[role]:
         return 0.0, {"J_s": 0.0, "J_e": 0.0, "J_c": 0.0}
-    v0, a_max = s.params[role, P_V0], s.params[role, P_A]
+    v0, a_max = s.desired_speed(role), s.max_accel(role)
     j_e = float(np.mean(np.abs(pred.V[row, :, role] - v0)) / v0)
     j_c = float(np.mean(pred.A[row, :, role] ** 2) / a_max**2)
     w_s, w_e, w_c = weights

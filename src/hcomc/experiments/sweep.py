@@ -216,6 +216,8 @@ def run_sweep(
     parts, manifests = out / "parts", out / "manifests"
     parts.mkdir(parents=True, exist_ok=True)
     manifests.mkdir(parents=True, exist_ok=True)
+    for stale in [*parts.glob(".*.tmp"), *manifests.glob(".*.tmp")]:
+        stale.unlink(missing_ok=True)  # a temporary file of a killed run, never a result
     keys = [run_key(r) for r in runs]
     todo = [i for i, k in enumerate(keys) if not (parts / f"{k}.parquet").exists()]
     done = len(runs) - len(todo)

@@ -65,12 +65,15 @@ from hcomc.control.hcomc.rollout import (
     N_CONSTS,
     N_ROLES,
     N_STARTS,
+    P_A,
     P_LEN,
+    P_V0,
     P_WID,
     VMC,
     VR,
     counterfactual,
     rollout,
+    warm_up,
 )
 from hcomc.models.fuel import fuel_rate
 from hcomc.safety.collision import vehicles_collide
@@ -112,6 +115,14 @@ class KeyState:
     params: FloatArray  # (6, 10): v0, T, s0, a, b, delta, coolness, length, width, iidm
     ids: IntArray  # (6,) vehicle indices in the simulation, -1 for absent or phantom
     starts: FloatArray  # (4,) VV0 x, v and VV1 x, v (NaN = default)
+
+    def desired_speed(self, role: int) -> float:
+        """Desired speed v0 of a role [m/s] (Eq. 1)."""
+        return float(self.params[role, P_V0])
+
+    def max_accel(self, role: int) -> float:
+        """Maximum acceleration a of a role [m/s^2] (Eq. 1)."""
+        return float(self.params[role, P_A])
 
 
 @dataclass(frozen=True, slots=True)
@@ -341,3 +352,9 @@ class MergeProblem:
 def default_starts() -> FloatArray:
     """Start states of VV0 and VV1 for a first plan: the Eq. 8 defaults (all NaN)."""
     return np.full(N_STARTS, np.nan)
+
+
+def load_prediction_kernels() -> None:
+    """Load (or compile) the prediction kernels once per process, so that no timed decision
+    pays for it."""
+    warm_up()

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from hcomc.road import KEY_ROLES
+from hcomc.road import KEY_ROLES, VMC, VMF, VMR, VNF, VNR, VR
 
-VR, VMC, VMF, VMR, VNF, VNR = range(6)
-N_ROLES = len(KEY_ROLES)  # role indices above follow KEY_ROLES
+__all__ = ["VMC", "VMF", "VMR", "VNF", "VNR", "VR"]  # the role indices, from hcomc.road
+N_ROLES = len(KEY_ROLES)
 N_PAIRS = N_ROLES * (N_ROLES - 1) // 2  # key-vehicle pairs i < j, row-major
 
 # params columns: Eq. 1 / Eq. 3 parameters, body size, and whether the base model is the IIDM
