@@ -207,7 +207,7 @@ def test_run_accepts_the_table_spelling_of_a_controller():
          ["'--optimizer' = 'pso' does not apply", "'fifo'"], None),
         (["simulate", "C1", "--controller", "game", "--optimizer", "sa"],
          ["'--optimizer' = 'sa' does not apply", "'game'"], None),
-        (["simulate", "C1", "--optimizer", "ga"], ["'--optimizer' = 'ga'", "nsga2, pso, sa"],
+        (["simulate", "C1", "--optimizer", "ga"], ["'--optimizer' = 'ga'", "nsga2, nsga2-pymoo, pso, sa"],
          None),
         (["simulate", "C1", "--set", "cav_penetraton=0.5"],
          ["did you mean 'demand.cav_penetration'?"], None),
