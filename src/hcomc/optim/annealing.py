@@ -33,7 +33,7 @@ import numpy as np
 from scipy.optimize import dual_annealing
 
 from hcomc._typing import FloatArray
-from hcomc.optim.base import ParetoResult, Problem
+from hcomc.optim.base import ParetoResult, Problem, check_budget
 
 _SEED_HIGH = 2**31 - 1
 _NONFINITE_COST = 1e300
@@ -105,8 +105,7 @@ class AnnealingOptimizer:
 
         With ``initial``, the annealing starts from its first row (clipped to the bounds).
         """
-        if budget < 1:
-            raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
+        check_budget(budget)
         objective = _Objective(problem, budget)
         lower = np.array(problem.xl, dtype=np.float64, copy=True)
         upper = np.array(problem.xu, dtype=np.float64, copy=True)

@@ -91,6 +91,18 @@ class Optimizer(Protocol):
         ...
 
 
+def check_budget(budget: int) -> None:
+    """Raise unless ``budget`` allows at least one row evaluation."""
+    if budget < 1:
+        raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
+
+
+def check_pop_size(pop_size: int) -> None:
+    """Raise unless a population has at least two members."""
+    if pop_size < 2:
+        raise ValueError(f"pop_size must be >= 2, got {pop_size}")
+
+
 def initial_rows(
     problem: Problem, initial: FloatArray | None, size: int, rng: np.random.Generator
 ) -> FloatArray | None:

@@ -26,7 +26,14 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim import dominance, variation
-from hcomc.optim.base import ParetoResult, Problem, archive_front, initial_rows
+from hcomc.optim.base import (
+    ParetoResult,
+    Problem,
+    archive_front,
+    check_budget,
+    check_pop_size,
+    initial_rows,
+)
 from hcomc.optim.dominance import ranked_fronts, tournament
 from hcomc.optim.variation import polynomial_mutation, sbx
 
@@ -134,8 +141,7 @@ class CompiledNSGA2Optimizer:
     name: str = field(default="nsga2", init=False)
 
     def __post_init__(self) -> None:
-        if self.pop_size < 2:
-            raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
+        check_pop_size(self.pop_size)
         dominance.warm_up()  # load the compiled kernels now, not inside a timed decision
         variation.warm_up()
 
@@ -148,8 +154,7 @@ class CompiledNSGA2Optimizer:
         initial: FloatArray | None = None,
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
-        if budget < 1:
-            raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
+        check_budget(budget)
         n_gen = max(1, budget // self.pop_size)
         xl = np.array(problem.xl, dtype=np.float64, copy=True)
         xu = np.array(problem.xu, dtype=np.float64, copy=True)

@@ -32,7 +32,14 @@ from pymoo.optimize import minimize as _pymoo_minimize
 from pymoo.termination import get_termination
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.optim.base import ParetoResult, Problem, archive_front, initial_rows
+from hcomc.optim.base import (
+    ParetoResult,
+    Problem,
+    archive_front,
+    check_budget,
+    check_pop_size,
+    initial_rows,
+)
 
 _SEED_HIGH = 2**31 - 1
 
@@ -40,11 +47,6 @@ _SEED_HIGH = 2**31 - 1
 def _seed(rng: np.random.Generator) -> int:
     """An integer seed for a third-party optimiser, drawn from the run's generator."""
     return int(rng.integers(_SEED_HIGH))
-
-
-def _check_budget(budget: int) -> None:
-    if budget < 1:
-        raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
 
 
 def _n_gen(budget: int, pop_size: int) -> int:
@@ -141,8 +143,7 @@ class NSGA2Optimizer:
     name: str = field(default="nsga2-pymoo", init=False)
 
     def __post_init__(self) -> None:
-        if self.pop_size < 2:
-            raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
+        check_pop_size(self.pop_size)
 
     def minimize(
         self,
@@ -153,7 +154,7 @@ class NSGA2Optimizer:
         initial: FloatArray | None = None,
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
-        _check_budget(budget)
+        check_budget(budget)
         adapter = _PymooProblem(problem)
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = NSGA2(
@@ -226,8 +227,7 @@ class PSOOptimizer:
     name: str = field(default="pso", init=False)
 
     def __post_init__(self) -> None:
-        if self.pop_size < 2:
-            raise ValueError(f"pop_size must be >= 2, got {self.pop_size}")
+        check_pop_size(self.pop_size)
 
     def minimize(
         self,
@@ -238,7 +238,7 @@ class PSOOptimizer:
         initial: FloatArray | None = None,
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the best row seen."""
-        _check_budget(budget)
+        check_budget(budget)
         adapter = _PymooProblem(problem, scalar=True)
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = PSO(
