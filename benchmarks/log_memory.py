@@ -16,36 +16,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import subprocess
 import sys
 import time
 
 import numpy as np
+from throughput import machine
 
-import hcomc
 from hcomc.sim.log import SimulationLog
 
 GIB = 2**30
 TARGET_GIB = 0.6  # project target for a 1-hour, 2000-vehicle log
-
-
-def machine() -> dict[str, object]:
-    """Facts about the machine the figures come from."""
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh if "model name" in line)
-    except (OSError, StopIteration):
-        pass
-    return {
-        "cpu": cpu,
-        "cores": os.cpu_count(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "hcomc": hcomc.__version__,
-    }
 
 
 def log_rows(duration: float, dt: float, interval: float) -> int:
