@@ -36,6 +36,7 @@ fully deterministic; only the HCOMC optimisers draw from the run's seed.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -102,18 +103,18 @@ def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
     kinds = [(w, params) for w, params in ((p, config.cav), (1.0 - p, config.hdv)) if w > 0]
     v_max = min(params.desired_speed for _, params in kinds)
 
-    def needed(v: float) -> float:  # steady-state front-to-front spacing of the mix [m]
+    def needed(v: Any) -> Any:  # steady-state front-to-front spacing of the mix [m]
         return sum(w * _equilibrium_spacing(v, params, length) for w, params in kinds)
 
-    def excess(v: float) -> float:  # needed minus available spacing [m]
+    def excess(v: Any) -> Any:  # needed minus available spacing [m]
         return needed(v) - mean_headway * v
 
-    # scan up to just below v_max (the IDM gap is infinite at v0), then refine the last
-    # change of sign from "available spacing suffices" to "does not"
+    # scan up to just below v_max (the IDM gap is infinite at v0; the whole grid at once),
+    # then refine the last change of sign from "available spacing suffices" to "does not"
     grid = v_max * np.append(np.arange(1, 1000) / 1000.0, 1.0 - 1e-9)
-    ok = np.flatnonzero([excess(float(v)) < 0.0 for v in grid])
+    ok = np.flatnonzero(excess(grid) < 0.0)
     if ok.size == 0:  # over capacity: the speed of the shortest steady-state headway
-        k = int(np.argmin([needed(float(v)) / v for v in grid]))
+        k = int(np.argmin(needed(grid) / grid))
         lo, hi = float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)])
         best = minimize_scalar(lambda v: needed(v) / v, bounds=(lo, hi), method="bounded")
         return float(best.x)
@@ -214,21 +215,16 @@ def _platoon_demand(config: ScenarioConfig) -> Demand:
     )
 
 
-def _equilibrium_spacing(v: float, params: IDMParams, length: float) -> float:
-    """Front-to-front spacing of the IDM/IIDM steady state at speed v [m]."""
+def _equilibrium_spacing(v: Any, params: IDMParams, length: float) -> Any:
+    """Front-to-front spacing of the IDM/IIDM steady state at speed(s) v [m] (a float for a
+    float, an array for an array)."""
     if params.variant == "iidm":
-        gap = params.min_gap + v * params.time_headway
-    else:
-        gap = float(
-            equilibrium_gap(
-                v,
-                v0=params.desired_speed,
-                T=params.time_headway,
-                s0=params.min_gap,
-                delta=params.exponent,
-            )
-        )
-    return gap + length
+        return params.min_gap + v * params.time_headway + length
+    gap = equilibrium_gap(
+        v, v0=params.desired_speed, T=params.time_headway, s0=params.min_gap,
+        delta=params.exponent,
+    )  # fmt: skip
+    return (float(gap) if np.ndim(v) == 0 else gap) + length
 
 
 def generate_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
