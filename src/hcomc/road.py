@@ -39,6 +39,7 @@ dict and plan record uses this order."""
 
 VR, VMC, VMF, VMR, VNF, VNR = range(len(KEY_ROLES))
 """Index of each key role in every per-role array (the order of :data:`KEY_ROLES`)."""
+N_ROLES = len(KEY_ROLES)
 
 
 def lane_centre(lane: IntArray | int, width: float) -> FloatArray:

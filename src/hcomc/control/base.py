@@ -32,13 +32,17 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.road import KEY_ROLES, Kind, Lane
+from hcomc.road import KEY_ROLES, N_ROLES, VMC, VMF, VMR, VNF, VNR, VR, Kind, Lane
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
     from hcomc.sim.fleet import Fleet
+
+
+_MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)
 
 
 class Mode(IntEnum):
@@ -206,29 +210,56 @@ class MergeController(Protocol):
         ...
 
 
-def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
-    """Nearest vehicle ahead (x' > x) and behind (x' <= x) in ``lane``, -1 if none.
+@njit(cache=True)
+def nearest_in_lane(
+    x: np.ndarray, lane: np.ndarray, active: np.ndarray, in_lane: int, x0: float, exclude: int
+) -> tuple[int, int]:
+    """Nearest vehicle ahead (x' > x0) and behind (x' <= x0) in lane ``in_lane``, -1 if none
+    (ties: the lowest index); vehicle ``exclude`` is skipped.
 
-    "In ``lane``" is ``view.lane == lane``: a changing vehicle counts in its origin lane up to
+    "In the lane" is ``lane == in_lane``: a changing vehicle counts in its origin lane up to
     the lateral midpoint of its change and in its target lane after it, never in both.
     """
-    in_lane = view.active & (view.lane == lane)
-    in_lane[exclude] = False
-    idx = np.flatnonzero(in_lane)
-    ahead, behind = idx[view.x[idx] > x], idx[view.x[idx] <= x]
-    lead = int(ahead[np.argmin(view.x[ahead])]) if ahead.size else -1
-    follow = int(behind[np.argmax(view.x[behind])]) if behind.size else -1
+    lead, follow = -1, -1
+    x_lead, x_follow = np.inf, -np.inf
+    for i in range(x.size):
+        if i == exclude or not active[i] or lane[i] != in_lane:
+            continue
+        if x[i] > x0:
+            if x[i] < x_lead:
+                lead, x_lead = i, x[i]
+        elif x[i] > x_follow:
+            follow, x_follow = i, x[i]
     return lead, follow
+
+
+@njit(cache=True)
+def key_vehicle_indices(
+    x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int
+) -> np.ndarray:
+    """The six key vehicles of Section II-A around ramp vehicle ``vr``, in role order VR, VMC,
+    VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc)."""
+    out = np.full(N_ROLES, -1, dtype=np.int64)
+    out[VR] = vr
+    vmf, vmc = nearest_in_lane(x, lane, active, _MAIN_1, x[vr], vr)
+    out[VMF] = vmf
+    if vmc < 0:
+        return out
+    out[VMC] = vmc
+    out[VMR] = nearest_in_lane(x, lane, active, _MAIN_1, x[vmc] - 1e-9, vmc)[1]
+    out[VNF], out[VNR] = nearest_in_lane(x, lane, active, _MAIN_2, x[vmc], vmc)
+    return out
+
+
+def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
+    """:func:`nearest_in_lane` on a view."""
+    lead, follow = nearest_in_lane(view.x, view.lane, view.active, int(lane), float(x), exclude)
+    return int(lead), int(follow)
 
 
 def find_key_vehicles(view: TrafficView, vr: int) -> MergeGroup:
     """The six key vehicles of Section II-A around ramp vehicle ``vr`` (rules in module doc)."""
-    vmf, vmc = _nearest(view, Lane.MAIN_1, view.x[vr], vr)
-    if vmc < 0:
-        return MergeGroup(vr=vr, vmf=vmf)
-    _, vmr = _nearest(view, Lane.MAIN_1, view.x[vmc] - 1e-9, vmc)
-    vnf, vnr = _nearest(view, Lane.MAIN_2, view.x[vmc], vmc)
-    return MergeGroup(vr=vr, vmc=vmc, vmf=vmf, vmr=vmr, vnf=vnf, vnr=vnr)
+    return MergeGroup(*key_vehicle_indices(view.x, view.lane, view.active, vr).tolist())
 
 
 def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:

@@ -137,12 +137,12 @@ def step_alone(c: CoreArrays, t: float) -> None:
     c.counters[VEHICLE_STEPS] += ids.size
     no_int = np.empty(0, dtype=np.int64)
     no_float = np.empty(0)
-    free = np.zeros(c.x.size, dtype=np.bool_)
+    no_plan = np.zeros(c.x.size, dtype=np.bool_)
     acc, changing, vs, ls, ks, rank, lead = step_accelerations(
-        c, ids, t, free, no_int, no_float, no_float, no_float, no_float
+        c, ids, t, no_plan, no_int, no_float, no_float, no_float, no_float
     )
     if (c.counters[STEP] % c.flags[DECIDE_EVERY] == 0) and c.flags[PLATOON] == 0:
-        chosen, target = discretionary_changes(c, ids, changing, free, lead, vs, ls, ks, rank)
+        chosen, target = discretionary_changes(c, ids, changing, c.held, lead, vs, ls, ks, rank)
         start_lane_changes(c, chosen, target, t, no_float)
     step_finish(c, ids, t, acc, vs, ls)
 

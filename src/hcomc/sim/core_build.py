@@ -78,6 +78,7 @@ def build_arrays(
         lc_dur=fleet.lc_duration.copy(),  # a merge plan may set VR's duration
         active=np.zeros(n, dtype=b1), waited=np.zeros(n, dtype=b1),
         identified=np.zeros(n, dtype=b1), planned=np.zeros(n, dtype=b1),
+        a_cmd=np.full(n, np.nan), held=np.zeros(n, dtype=b1),
         x_hist=per.x_hist, v_hist=per.v_hist, w_gap=per.w_gap, w_ttc=per.w_ttc,
         taus=per.taus, d_t=demand.t.astype(f8), d_x=demand.x.astype(f8),
         d_v=demand.v.astype(f8), queues=np.concatenate(queues).astype(i8),

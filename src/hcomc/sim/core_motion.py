@@ -184,7 +184,8 @@ def step_accelerations(
     leaders and respects the leader of every lane its body overlaps; ramp vehicles that have
     not started merging stop at the acceleration-lane end unless they follow a live plan
     (``following``); commanded vehicles also follow their virtual leaders (rows ``vv_*``);
-    every deceleration is limited to the emergency value; a scripted leader follows its
+    a vehicle driven from outside (``a_cmd`` not NaN) takes its command instead; every
+    deceleration is limited to the emergency value; a scripted leader follows its
     profile exactly. Returns ``(acc, changing, vehicle, lane, key, rank, lead)``.
     """
     n = ids.size
@@ -230,7 +231,8 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
 
 @njit(cache=True)
 def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len):
-    """The lane end, virtual leaders, the emergency limit and scripted profiles."""
+    """The lane end, virtual leaders, commanded accelerations, the emergency limit and
+    scripted profiles."""
     n = ids.size
     accel_end = c.consts[ACCEL_END]
     for k in range(n):  # the acceleration-lane end, a static obstacle seen exactly
@@ -250,6 +252,8 @@ def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_le
     dt = c.consts[DT]
     for k in range(n):
         i = ids[k]
+        if not math.isnan(c.a_cmd[i]):  # driven from outside: the command replaces the model
+            acc[k] = c.a_cmd[i]
         acc[k] = max(acc[k], -c.consts[EMERGENCY])
         if c.scripted[i]:  # a scripted profile is followed exactly
             target = np.interp(t + dt, c.profile[:, 0], c.profile[:, 1])

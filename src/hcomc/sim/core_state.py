@@ -62,6 +62,8 @@ class CoreArrays(NamedTuple):
     waited: np.ndarray
     identified: np.ndarray  # key vehicles recorded at control-zone entry
     planned: np.ndarray  # a controller planned for this ramp vehicle
+    a_cmd: np.ndarray  # acceleration commanded from outside (an agent) [m/s^2]; NaN: none
+    held: np.ndarray  # makes no discretionary (MOBIL) lane change: driven from outside
     x_hist: np.ndarray  # (K, N) perception ring buffers
     v_hist: np.ndarray
     w_gap: np.ndarray

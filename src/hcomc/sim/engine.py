@@ -216,6 +216,46 @@ class Simulation:
             self.log.meta["vehicle_steps"] = self.vehicle_steps
         self._stage += 1
 
+    def run_to(self, step: int, *, until_key_vehicles: bool = False) -> None:
+        """Advance until step ``step`` (warm-up included; see :attr:`step_index`) or the end
+        of the run, whichever comes first; with ``until_key_vehicles`` also stop after the
+        step in which the first ramp vehicle's key vehicles were identified (it entered the
+        control zone). Python is entered only at decision events."""
+        while not self.reached(step, until_key_vehicles=until_key_vehicles):
+            stop = min(self.stop_step, step)
+            self.resume(core.run_steps(self.core, stop, self.logging, *self.log_arrays))
+
+    def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:
+        """Whether :meth:`run_to` with these arguments has nothing left to do."""
+        return (
+            self.finished
+            or self.step_index >= step
+            or (until_key_vehicles and bool(self.key_groups))
+        )
+
+    # ----------------------------------------------------- driven from outside (agents)
+    def command(self, i: int, accel: float) -> None:
+        """Drive vehicle ``i`` from outside: from the next step on, its acceleration is
+        ``accel`` [m/s^2] instead of its model's (still limited to the emergency
+        deceleration and to v >= 0), and it makes no lane change of its own (no MOBIL, no gap
+        acceptance, no braking for the lane end); NaN hands it back to its model."""
+        self.arrays.a_cmd[i] = accel
+        self.arrays.held[i] = not math.isnan(accel)
+
+    def start_lane_change(self, i: int, target: int, duration: float = math.nan) -> None:
+        """Start vehicle ``i``'s quintic lane change (Eq. 4-6) to lane ``target`` now, with
+        ``duration`` [s] (NaN: the vehicle's own); no safety check: a driving agent decides,
+        and a collision it causes is logged like any other."""
+        if self.origin[i] != self.target[i] or not self.active[i]:
+            raise ValueError(f"vehicle {i} is not on the road or already changing lanes")
+        if abs(int(target) - int(self.lane[i])) != 1:
+            raise ValueError(f"lane change of vehicle {i}: target lane {target} is not adjacent "
+                             f"to its lane {int(self.lane[i])}")  # fmt: skip
+        core.start_lane_changes(
+            self.core, np.array([i]), np.array([int(target)]), self.t, np.array([duration])
+        )
+        self._flush_events()
+
     def run_until_plan(self) -> MergePlan | None:
         """Step (without logging rows) until the first plan; None if the run ends first."""
         while not self.decisions and self.step_index < self.n_warmup + self.n_steps:
@@ -277,7 +317,7 @@ class Simulation:
         if self.plans:
             self._execute_plans(ids, index, lead, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
-            holding = holding_lane(self.plans, self.fleet.kind == Kind.CAV)
+            holding = holding_lane(self.plans, self.fleet.kind == Kind.CAV) | c.held
             chosen, target = core.discretionary_changes(
                 self.core, ids, changing, holding, lead, vs, ls, ks, rank
             )

@@ -54,34 +54,59 @@ def run_ensemble(
     calling thread, which forked worker processes need); ``progress(done, total)`` is called
     as runs finish.
     """
+    advance_ensemble(sims, None, threads=threads, progress=progress)
+    return [s.log for s in sims]
+
+
+def advance_ensemble(
+    sims: Sequence[Simulation],
+    steps: Sequence[int] | None,
+    *,
+    until_key_vehicles: Sequence[bool] | None = None,
+    threads: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> None:
+    """Advance every simulation to its step in ``steps`` (warm-up included; None: to its end)
+    as one batch: what :meth:`Simulation.run_to` does for one run (``until_key_vehicles``:
+    its flag, per run).
+
+    Learning environments use it to advance many episodes by one action period at once.
+    """
     most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
     threads = most if threads is None else max(1, min(threads, most))
     advance = _advance_batch_serial if threads == 1 else _advance_batch
+    end = np.iinfo(np.int64).max
+    goal = [end] * len(sims) if steps is None else [int(s) for s in steps]
+    keys = [False] * len(sims) if until_key_vehicles is None else list(until_key_vehicles)
+
+    def due(k: int) -> bool:
+        return not sims[k].reached(goal[k], until_key_vehicles=keys[k])
+
     previous = threads
     if threads > 1:  # the thread pool is touched only when used (a forked child must not)
         previous = numba.get_num_threads()
         numba.set_num_threads(threads)
     try:
-        pending = [s for s in sims if not s.finished]
+        pending = [k for k in range(len(sims)) if due(k)]
         while pending:
-            cores = List([s.core for s in pending])
-            logs = List([s.log_arrays for s in pending])
+            runs = [sims[k] for k in pending]
+            cores = List([s.core for s in runs])
+            logs = List([s.log_arrays for s in runs])
             members = len(pending)
             while len(pending) == members:
-                stops = np.array([s.stop_step for s in pending], dtype=np.int64)
-                logging = np.array([s.logging for s in pending], dtype=np.bool_)
-                reasons = np.empty(len(pending), dtype=np.int64)
+                stops = np.array([min(sims[k].stop_step, goal[k]) for k in pending], np.int64)
+                logging = np.array([s.logging for s in runs], dtype=np.bool_)
+                reasons = np.empty(members, dtype=np.int64)
                 advance(cores, logs, stops, logging, reasons)
-                for sim, reason in zip(pending, reasons.tolist(), strict=True):
+                for sim, reason in zip(runs, reasons.tolist(), strict=True):
                     sim.resume(reason)
-                if any(s.finished for s in pending):
-                    pending = [s for s in pending if not s.finished]
+                if not all(due(k) for k in pending):
+                    pending = [k for k in pending if due(k)]
                     if progress is not None:
                         progress(len(sims) - len(pending), len(sims))
     finally:
         if threads > 1:
             numba.set_num_threads(previous)
-    return [s.log for s in sims]
 
 
-__all__ = ["run_ensemble"]
+__all__ = ["advance_ensemble", "run_ensemble"]

@@ -366,6 +366,16 @@ class SimulationLog:
         """All events as a structured array (:data:`EVENT_DTYPE`), stably sorted by t."""
         return self._event_table.sorted()
 
+    @property
+    def n_events(self) -> int:
+        """Number of events recorded so far."""
+        return len(self._event_table)
+
+    def events_since(self, start: int) -> np.ndarray:
+        """The events recorded after the first ``start`` ones, in recording order (a
+        stream's cursor: ``events_since(n)`` with ``n`` an earlier :attr:`n_events`)."""
+        return self._event_table.since(start)
+
     def events_of(self, kind: EventKind | int) -> np.ndarray:
         """Events of one kind, stably sorted by t."""
         return self._event_table.of_kind(kind)

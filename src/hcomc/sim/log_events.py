@@ -113,6 +113,10 @@ class EventTable:
         self._buf[self._n] = (float(t), int(kind), int(vehicle), int(other), float(x), float(value))
         self._n += 1
 
+    def since(self, start: int) -> np.ndarray:
+        """The events appended after the first ``start`` ones, in the order they came."""
+        return self._buf[start : self._n].copy()
+
     def sorted(self) -> np.ndarray:
         """All events as a new :data:`EVENT_DTYPE` array, stably sorted by t."""
         used = self._buf[: self._n]
