@@ -148,6 +148,11 @@ class Simulation:
         return int(self.arrays.counters[layout.STEP])
 
     @property
+    def rows_recorded(self) -> int:
+        """Log rows written so far (rows ``[0, rows_recorded)`` of :attr:`log` are final)."""
+        return int(self.arrays.counters[layout.ROWS])
+
+    @property
     def vehicle_steps(self) -> int:
         """Sum over the steps simulated so far of the vehicles on the road."""
         return int(self.arrays.counters[layout.VEHICLE_STEPS])
@@ -193,7 +198,7 @@ class Simulation:
     def resume(self, reason: int) -> None:
         """Do what the compiled stretch that returned ``reason`` left to Python."""
         if reason == layout.FLUSH:
-            self._flush_events()
+            self.flush_events()
         elif reason == layout.REFILL:
             self._refill_innovations()
         elif reason == layout.NEED_PYTHON:
@@ -209,7 +214,7 @@ class Simulation:
             self._release(self.t)  # vehicles due at t = 0 are on the road in the first row
             self._record()
         else:
-            self._flush_events()
+            self.flush_events()
             rows = int(self.arrays.counters[layout.ROWS])
             self.log.mark_recorded(rows)
             self.log.finish(rows)
@@ -224,6 +229,7 @@ class Simulation:
         while not self.reached(step, until_key_vehicles=until_key_vehicles):
             stop = min(self.stop_step, step)
             self.resume(core.run_steps(self.core, stop, self.logging, *self.log_arrays))
+        self.flush_events()
 
     def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:
         """Whether :meth:`run_to` with these arguments has nothing left to do."""
@@ -254,7 +260,7 @@ class Simulation:
         core.start_lane_changes(
             self.core, np.array([i]), np.array([int(target)]), self.t, np.array([duration])
         )
-        self._flush_events()
+        self.flush_events()
 
     def run_until_plan(self) -> MergePlan | None:
         """Step (without logging rows) until the first plan; None if the run ends first."""
@@ -271,8 +277,9 @@ class Simulation:
                         log.heading, log.lane, log.active)  # fmt: skip
         self.arrays.counters[layout.ROWS] = rows + 1
 
-    def _flush_events(self) -> None:
-        """Move the compiled step's buffered events into the log, in order."""
+    def flush_events(self) -> None:
+        """Move the compiled step's buffered events into the log, in order (the compiled
+        stretches buffer them; :meth:`run_to` flushes when it returns)."""
         c = self.arrays
         for k in range(int(c.counters[layout.N_EVENTS])):
             self.log.add_event(
@@ -296,7 +303,7 @@ class Simulation:
         if c.flags[layout.ERRORS] and c.counters[layout.INNOV_CURSOR] >= c.innov.shape[0]:
             self._refill_innovations()
         if c.counters[layout.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
-            self._flush_events()
+            self.flush_events()
         self._release(t)
         ids = np.flatnonzero(self.active)
         if ids.size == 0:
@@ -329,12 +336,12 @@ class Simulation:
         if self.plans:
             self._finish_plans()
         c.flags[layout.HAS_PLANS] = bool(self.plans)
-        self._flush_events()
+        self.flush_events()
 
     def _release(self, t: float) -> None:
         """Insert the vehicles due at t (a no-op when repeated at the same t)."""
         core.release(self.core, t)
-        self._flush_events()
+        self.flush_events()
 
     def _follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
         """Car-following acceleration behind ``leader`` (-1: none), HDVs perceiving Eq. 2."""

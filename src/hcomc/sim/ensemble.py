@@ -104,6 +104,8 @@ def advance_ensemble(
                     pending = [k for k in pending if due(k)]
                     if progress is not None:
                         progress(len(sims) - len(pending), len(sims))
+        for sim in sims:
+            sim.flush_events()
     finally:
         if threads > 1:
             numba.set_num_threads(previous)

@@ -1,0 +1,241 @@
+"""One environment episode: a run and its undisturbed twin, from the moment the ramp vehicle
+VR enters the cooperative control zone until its merge is complete, a crash, or a timeout.
+
+The agent's vehicle (VR, or VMC) is driven through :meth:`Simulation.command` and
+:meth:`Simulation.start_lane_change`; everything else is the engine's. The twin is the same
+scenario and seed without the ramp vehicle (``counterfactual=True``), advanced in lockstep:
+Eq. 17's acceleration changes are measured against it, as the metrics' disturbance measures
+are. :class:`MergeEpisode` is shared by the single, the vector and the multi-agent
+environments; they advance many episodes' runs together with
+:func:`hcomc.sim.ensemble.advance_ensemble`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hcomc.config import ScenarioConfig
+from hcomc.envs.observation import N_OBS, observe, pair_safety
+from hcomc.envs.options import EnvOptions
+from hcomc.models.following import follow_accel
+from hcomc.models.fuel import fuel_rate
+from hcomc.road import VMC, VMR, VNR, Kind, Lane
+from hcomc.sim.engine import Simulation
+from hcomc.sim.log import EventKind, SimulationLog
+
+_END = np.iinfo(np.int64).max
+
+
+@dataclass(frozen=True, slots=True)
+class StepResult:
+    """What one environment step returns for one episode."""
+
+    obs: np.ndarray
+    reward: float
+    terminated: bool
+    truncated: bool
+    info: dict[str, object]
+
+
+class MergeEpisode:
+    """One episode of ``options`` with ``seed``; call :meth:`start` (or let a batch advance
+    :attr:`sim` until its key vehicles, then :meth:`begin`)."""
+
+    def __init__(self, options: EnvOptions, config: ScenarioConfig, seed: int) -> None:
+        self.options, self.config, self.seed = options, config, int(seed)
+        self.sim = Simulation(config, seed)
+        self.twin = Simulation(config, seed, counterfactual=True)
+        self.period_steps = round(options.action_period / config.dt)
+        self.is_cav = self.sim.fleet.kind == Kind.CAV
+        self.obs = np.zeros(N_OBS, dtype=np.float32)
+        self.vr = self.ego = -1
+        self.group = np.full(6, -1, dtype=np.int64)
+        self.t_start = math.nan
+        self._rows = self._events = 0
+        self.done = False
+
+    # ----------------------------------------------------------------- start
+    def start(self) -> np.ndarray:
+        """Run to VR's control-zone entry and return the first observation (one episode)."""
+        self.sim.run_to(_END, until_key_vehicles=True)
+        self.twin.run_to(self.sim.step_index)
+        return self.begin()
+
+    def begin(self) -> np.ndarray:
+        """Pick the agent once :attr:`sim` has identified VR's key vehicles and the twin has
+        reached the same step; returns the first observation."""
+        group = self.sim.key_group
+        if group is None or self.twin.step_index != self.sim.step_index:
+            raise RuntimeError(
+                f"seed {self.seed}: no ramp vehicle entered the control zone within the run "
+                f"({self.config.duration} s); allowed: a longer 'duration'"
+            )
+        self.vr = group.vr
+        self.ego = group.vr if self.options.agent == "vr" else group.vmc
+        if self.ego < 0:
+            raise RuntimeError(
+                f"seed {self.seed}: VR has no VMC to drive when it enters the control zone"
+            )
+        self.t_start = self.sim.t
+        self._rows = self.sim.rows_recorded
+        self._events = self.sim.log.n_events
+        self._observe()
+        return self.obs.copy()
+
+    @property
+    def driven(self) -> bool:
+        """Whether the agent drives (no controller does)."""
+        return self.options.controller is None
+
+    # ------------------------------------------------------------------ step
+    def apply(self, action: np.ndarray) -> int:
+        """Command the agent's vehicle for the next period; returns the step to advance to.
+
+        ``action[0]`` in [-1, 1] is the acceleration as a fraction of the vehicle's maximum
+        acceleration (> 0) or of the emergency deceleration (< 0); ``action[1] > 0`` starts a
+        lane change: VR from the acceleration lane into lane 1, VMC to the other main lane.
+        With a controller driving VR the action is not used.
+        """
+        sim, ego = self.sim, self.ego
+        if self.driven:
+            a = float(np.clip(action[0], -1.0, 1.0))
+            limit = sim.fleet.a[ego] if a >= 0 else self.config.lane_change.emergency_decel
+            sim.command(ego, a * float(limit))
+            if float(action[1]) > 0 and self._may_change():
+                target = Lane.MAIN_1 if sim.lane[ego] != Lane.MAIN_1 else Lane.MAIN_2
+                sim.start_lane_change(ego, int(target))
+        return sim.step_index + self.period_steps
+
+    def _may_change(self) -> bool:
+        sim, ego, road = self.sim, self.ego, self.config.road
+        if sim.origin[ego] != sim.target[ego] or not sim.active[ego]:
+            return False
+        if sim.lane[ego] == Lane.RAMP:
+            return bool(road.accel_lane_start <= sim.x[ego] <= road.accel_lane_end)
+        return self.options.agent == "vmc"
+
+    def evaluate(self) -> StepResult:
+        """Observation, reward, end of episode and info after the runs advanced one period."""
+        sim, w = self.sim, self.options.reward
+        self._observe()
+        collided = self.collided()
+        r0, r1 = self.new_rows()
+        vr, g = self.vr, self.group
+        merged = self.merged()
+        lane_end = self.driven and self.options.agent == "vr" and self.at_lane_end()
+        crashed = bool(collided.size) or lane_end
+        terminated = crashed or merged or not sim.active[vr]
+        timeout = not terminated and self.out_of_time()
+        safety = self.safety_of(self.ego)
+        fuel = self.fuel_of(vr, r0, r1) + self.fuel_of(int(g[VMC]), r0, r1)
+        eta = self.config.lane_change.politeness
+        efficiency = self.gain_of(vr, r0, r1) + eta * sum(
+            self.gain_of(int(g[role]), r0, r1) for role in (VMC, VMR, VNR)
+        )
+        reward = (
+            -w.safety * safety
+            - w.fuel * fuel
+            + w.efficiency * efficiency
+            - w.collision * crashed
+            - w.timeout * timeout
+        )
+        self.done = terminated or timeout
+        info: dict[str, object] = {
+            "t": sim.t, "elapsed": sim.t - self.t_start, "merged": merged,
+            "collision": bool(collided.size), "lane_end": lane_end, "timeout": timeout,
+            "safety": safety, "fuel": fuel, "efficiency": efficiency, "ego": self.ego, "vr": vr,
+            "seed": self.seed,
+        }  # fmt: skip
+        return StepResult(self.obs.copy(), float(reward), terminated, timeout, info)
+
+    def _observe(self) -> None:
+        s = self.sim
+        self.group = observe(
+            self.obs, s.x, s.v, s.lane, s.active, self.is_cav, s.origin, s.target, s.lc_x0,
+            s.lc_xf, self.ego, self.vr, self.config.road.accel_lane_end,
+        )  # fmt: skip
+
+    # ------------------------------------------------- pieces of every reward
+    def merged(self) -> bool:
+        """Whether VR's merge into lane 1 is complete."""
+        s, vr = self.sim, self.vr
+        return bool(s.lane[vr] == Lane.MAIN_1 and s.origin[vr] == s.target[vr])
+
+    def at_lane_end(self) -> bool:
+        """Whether VR is still on the acceleration lane at (or past) its end."""
+        s, vr = self.sim, self.vr
+        return bool(
+            s.lane[vr] == Lane.RAMP
+            and s.origin[vr] == s.target[vr]
+            and s.x[vr] >= self.config.road.accel_lane_end
+        )
+
+    def out_of_time(self) -> bool:
+        """Whether the episode has lasted ``max_episode_time`` or the run has ended."""
+        elapsed = self.sim.t - self.t_start
+        return elapsed >= self.options.max_episode_time - 1e-9 or self.sim.finished
+
+    def collided(self) -> np.ndarray:
+        """Vehicles in a collision that began since the last call (sorted, unique)."""
+        events = self.sim.log.events_since(self._events)
+        self._events = self.sim.log.n_events
+        hit = events[events["kind"] == EventKind.COLLISION]
+        return np.unique(np.concatenate([hit["vehicle"], hit["other"]]))
+
+    def new_rows(self) -> tuple[int, int]:
+        """Log rows recorded since the last call: ``[r0, r1)``."""
+        rows = self.sim.rows_recorded
+        r0, self._rows = self._rows, rows
+        return r0, rows
+
+    def safety_of(self, i: int) -> float:
+        """Eq. 15 over vehicle i's pairs now, normalised, times the action period [s]."""
+        s, ctl = self.sim, self.config.control
+        return self.options.action_period * pair_safety(
+            s.x, s.v, s.lane, s.origin, s.target, s.active, s.fleet.length, self.is_cav, i,
+            ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
+            ctl.safety_emergency_decel,
+        )  # fmt: skip
+
+    def fuel_of(self, i: int, r0: int, r1: int) -> float:
+        """Eq. 16: vehicle i's fuel over log rows ``[r0, r1)`` [mL] (0 for i < 0)."""
+        if i < 0 or r1 <= r0:
+            return 0.0
+        log = self.sim.log
+        v, a = log.v[r0:r1, i].astype(float), log.a[r0:r1, i].astype(float)
+        return float(np.nansum(fuel_rate(v, a))) * self.config.log_interval
+
+    def gain_of(self, i: int, r0: int, r1: int) -> float:
+        """Eq. 17's ``a_new - a_ori`` of vehicle i integrated over log rows ``[r0, r1)``
+        [m/s]: against the undisturbed run, or for a ramp vehicle (absent there) against its
+        model on a free road (0 for i < 0)."""
+        if i < 0 or r1 <= r0:
+            return 0.0
+        log, dt = self.sim.log, self.config.log_interval
+        a = log.a[r0:r1, i].astype(float)
+        if self.sim.demand.lane[i] != Lane.RAMP:
+            return float(np.nansum(a - self.twin.log.a[r0:r1, i].astype(float))) * dt
+        v0, T, s0, a_max, b, delta, c = self.sim.fleet.matrix[:, i].tolist()
+        iidm = bool(self.sim.fleet.iidm[i])
+        gain = 0.0
+        for k, v in enumerate(log.v[r0:r1, i].astype(float).tolist()):
+            if math.isfinite(v):
+                free = follow_accel(math.inf, v, 0.0, 0.0, v0, T, s0, a_max, b, delta, c, iidm)
+                gain += a[k] - free
+        return gain * dt
+
+    # ------------------------------------------------------------------ end
+    def finish(self) -> tuple[SimulationLog, SimulationLog]:
+        """Hand the agent's vehicle back to its model, run both runs to their end and return
+        ``(log, reference)`` for :func:`hcomc.metrics.compute_metrics`."""
+        if self.ego >= 0 and self.driven:
+            self.sim.command(self.ego, math.nan)
+        self.sim.run_to(_END)
+        self.twin.run_to(_END)
+        return self.sim.log, self.twin.log
+
+
+__all__ = ["MergeEpisode", "StepResult"]

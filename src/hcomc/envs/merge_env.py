@@ -1,0 +1,97 @@
+"""``hcomc/Merge-v0``: the Gymnasium environment of one on-ramp merge.
+
+The agent drives the ramp CAV VR (or, with ``agent="vmc"``, the mainline vehicle VR merges in
+front of) on the paper's road, among the scenario's human-driven and connected vehicles,
+from VR's entry into the cooperative control zone until its merge is complete. See
+docs/rl.md for the spaces, the reward and the options.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.observation import observation_bounds
+from hcomc.envs.options import EnvOptions, RewardWeights
+from hcomc.sim.log import SimulationLog
+
+
+def action_space() -> gym.spaces.Box:
+    """``[acceleration, lane change]``, both in [-1, 1] (see :meth:`MergeEpisode.apply`)."""
+    return gym.spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+
+
+def observation_space(options: EnvOptions) -> gym.spaces.Box:
+    """The observation vector of :mod:`hcomc.envs.observation`."""
+    low, high = observation_bounds(options.config().road.length)
+    return gym.spaces.Box(low, high, dtype=np.float32)
+
+
+class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
+    """One on-ramp merge per episode (``gymnasium.make("hcomc/Merge-v0", ...)``).
+
+    Parameters are those of :class:`hcomc.envs.options.EnvOptions`: ``scenario``,
+    ``overrides``, ``agent``, ``controller``, ``action_period``, ``max_episode_time`` and
+    ``reward`` (a :class:`RewardWeights` or a dict of its fields).
+
+    ``reset(seed=s)`` starts the scenario's run with seed ``s`` (the same traffic as
+    ``hcomc simulate CONDITION --seed s``); without a seed the next seed comes from the
+    environment's generator, itself seeded by the first ``reset(seed=...)``. Episodes are
+    bit-reproducible: the same seed and actions give the same observations and rewards.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (gymnasium's API)
+
+    def __init__(
+        self,
+        scenario: str = "C1",
+        *,
+        overrides: dict[str, Any] | None = None,
+        agent: str = "vr",
+        controller: str | None = None,
+        action_period: float = 0.5,
+        max_episode_time: float = 60.0,
+        reward: RewardWeights | dict[str, float] | None = None,
+    ) -> None:
+        weights = RewardWeights(**reward) if isinstance(reward, dict) else reward
+        self.options = EnvOptions(
+            scenario=scenario, overrides=dict(overrides or {}), agent=agent,  # type: ignore[arg-type]
+            controller=controller, action_period=action_period,
+            max_episode_time=max_episode_time, reward=weights or RewardWeights(),
+        )  # fmt: skip
+        self.config = self.options.config()
+        self.action_space = action_space()
+        self.observation_space = observation_space(self.options)
+        self.episode: MergeEpisode | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start the run of ``seed`` and advance it to VR's control-zone entry."""
+        super().reset(seed=seed)
+        run_seed = seed if seed is not None else int(self.np_random.integers(2**31 - 1))
+        self.episode = MergeEpisode(self.options, self.config, run_seed)
+        obs = self.episode.start()
+        return obs, {"seed": run_seed, "t": self.episode.sim.t, "ego": self.episode.ego}
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Drive one action period."""
+        episode = self.episode
+        if episode is None or episode.done:
+            raise RuntimeError("call reset() before step() (the episode has ended)")
+        target = episode.apply(np.asarray(action, dtype=np.float64))
+        episode.sim.run_to(target)
+        episode.twin.run_to(target)
+        result = episode.evaluate()
+        return result.obs, result.reward, result.terminated, result.truncated, result.info
+
+    def episode_logs(self) -> tuple[SimulationLog, SimulationLog]:
+        """The episode's log and its undisturbed reference, each run to the scenario's end
+        (the agent's vehicle back on its model after the episode), for
+        :func:`hcomc.metrics.compute_metrics` and the report's figures."""
+        if self.episode is None:
+            raise RuntimeError("no episode: call reset() first")
+        return self.episode.finish()

@@ -1,0 +1,150 @@
+"""A native vector environment of ``hcomc/Merge-v0``: many episodes advanced together on the
+ensemble engine (one compiled call per step for all runs, parallel over cores), not a pool of
+processes.
+
+Sub-environment k behaves exactly as a :class:`~hcomc.envs.merge_env.MergeEnv` reset with
+seed ``seed + k`` and then reset without a seed after each episode: the same observations,
+rewards and episode ends, bit for bit. Episodes end independently and restart on the next
+step (gymnasium's default "next step" autoreset: that step ignores the sub-environment's
+action and returns its first observation with reward 0).
+
+    envs = gymnasium.make_vec(
+        "hcomc/Merge-v0", num_envs=64, vectorization_mode="vector_entry_point"
+    )
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.merge_env import MergeEnv
+from hcomc.sim.engine import Simulation
+from hcomc.sim.ensemble import advance_ensemble
+
+_END = np.iinfo(np.int64).max
+_INFO_KEYS = ("seed", "merged", "collision", "lane_end", "timeout")
+
+
+class MergeVectorEnv(VectorEnv):
+    """``num_envs`` merge episodes stepped together.
+
+    Parameters
+    ----------
+    num_envs : number of sub-environments.
+    threads : cores for the ensemble (default: all numba may use).
+    **kwargs : the options of :class:`~hcomc.envs.merge_env.MergeEnv`.
+    """
+
+    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
+
+    def __init__(self, num_envs: int = 8, *, threads: int | None = None, **kwargs: Any) -> None:
+        if int(num_envs) < 1:
+            raise ValueError(f"key 'num_envs' = {num_envs}: allowed: an integer >= 1")
+        template = MergeEnv(**kwargs)
+        self.options, self.config = template.options, template.config
+        self.num_envs = int(num_envs)
+        self.threads = threads
+        self.single_observation_space = template.observation_space
+        self.single_action_space = template.action_space
+        self._obs_shape: tuple[int, ...] = template.observation_space.shape or (0,)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.episodes: list[MergeEpisode | None] = [None] * self.num_envs
+        self._rngs = [seeding.np_random(k)[0] for k in range(self.num_envs)]
+        self._ended = np.zeros(self.num_envs, dtype=bool)
+
+    # -------------------------------------------------------------------- reset
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start every sub-environment (``seed``: an int gives seed + k to sub-environment k,
+        a list one seed each)."""
+        if seed is not None:
+            seeds = [seed + k for k in range(self.num_envs)] if isinstance(seed, int) else seed
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"reset: {len(seeds)} seeds for {self.num_envs} environments")
+            self._rngs = [seeding.np_random(int(s))[0] for s in seeds]
+        run_seeds = [
+            int(s) if seed is not None else self._next_seed(k)
+            for k, s in enumerate(seeds if seed is not None else range(self.num_envs))
+        ]
+        obs = self._start(list(range(self.num_envs)), run_seeds)
+        self._ended[:] = False
+        infos = self._infos([{"seed": s} for s in run_seeds])
+        return np.stack(obs), infos
+
+    def _next_seed(self, k: int) -> int:
+        return int(self._rngs[k].integers(2**31 - 1))
+
+    def _start(self, which: list[int], seeds: list[int]) -> list[np.ndarray]:
+        """New episodes for sub-environments ``which``, advanced together to their start."""
+        new = [MergeEpisode(self.options, self.config, s) for s in seeds]
+        sims = [e.sim for e in new]
+        advance_ensemble(sims, [_END] * len(new), until_key_vehicles=[True] * len(new),
+                         threads=self.threads)  # fmt: skip
+        advance_ensemble([e.twin for e in new], [e.sim.step_index for e in new],
+                         threads=self.threads)  # fmt: skip
+        for k, episode in zip(which, new, strict=True):
+            self.episodes[k] = episode
+        return [e.begin() for e in new]
+
+    # --------------------------------------------------------------------- step
+    def step(
+        self, actions: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """One action period of every sub-environment (restarting those that ended)."""
+        actions = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
+        n = self.num_envs
+        obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
+        rewards = np.zeros(n)
+        terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+        details: list[dict[str, Any]] = [{} for _ in range(n)]
+        restart = np.flatnonzero(self._ended).tolist()
+        running = np.flatnonzero(~self._ended).tolist()
+        runs: list[Simulation] = []
+        goals: list[int] = []
+        for k in running:
+            episode = self.episodes[k]
+            assert episode is not None
+            target = episode.apply(actions[k])
+            runs += [episode.sim, episode.twin]
+            goals += [target, target]
+        advance_ensemble(runs, goals, threads=self.threads)
+        for k in running:
+            episode = self.episodes[k]
+            assert episode is not None
+            result = episode.evaluate()
+            obs[k], rewards[k] = result.obs, result.reward
+            terminated[k], truncated[k] = result.terminated, result.truncated
+            details[k] = result.info
+        if restart:
+            seeds = [self._next_seed(k) for k in restart]
+            for k, first in zip(restart, self._start(restart, seeds), strict=True):
+                obs[k] = first
+                details[k] = {"seed": self.episodes[k].seed}  # type: ignore[union-attr]
+        self._ended = terminated | truncated
+        return obs, rewards, terminated, truncated, self._infos(details)
+
+    def _infos(self, details: list[dict[str, Any]]) -> dict[str, Any]:
+        """Gymnasium's vector info layout: one array per key and a ``_key`` mask."""
+        out: dict[str, Any] = {}
+        for key in _INFO_KEYS:
+            mask = np.array([key in d for d in details])
+            if mask.any():
+                out[key] = np.array([d.get(key, 0) for d in details])
+                out[f"_{key}"] = mask
+        return out
+
+    def episode_logs(self, k: int) -> tuple[Any, Any]:
+        """Log and undisturbed reference of sub-environment k's current episode, run to the
+        scenario's end (see :meth:`MergeEnv.episode_logs`)."""
+        episode = self.episodes[k]
+        if episode is None:
+            raise RuntimeError("no episode: call reset() first")
+        return episode.finish()
