@@ -35,6 +35,7 @@ fully deterministic; only the HCOMC optimisers draw from the run's seed.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +43,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ConfigError, IDMParams, ScenarioConfig
+from hcomc.config import ConfigError, DemandParams, IDMParams, ScenarioConfig
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind, Lane
 
@@ -98,9 +99,16 @@ def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
     d = config.demand
     if not isinstance(d.main_speed, str):
         return float(d.main_speed)
+    return _free_flow_speed(d, config.cav, config.hdv, config.road.vehicle_length, mean_headway)
+
+
+@functools.lru_cache(maxsize=256)  # the same scenario's runs share it (environments, sweeps)
+def _free_flow_speed(
+    d: DemandParams, cav: IDMParams, hdv: IDMParams, length: float, mean_headway: float
+) -> float:
+    """The steady-state speed of :func:`lane_speed` (its parameters are immutable)."""
     p = d.cav_penetration
-    length = config.road.vehicle_length
-    kinds = [(w, params) for w, params in ((p, config.cav), (1.0 - p, config.hdv)) if w > 0]
+    kinds = [(w, params) for w, params in ((p, cav), (1.0 - p, hdv)) if w > 0]
     v_max = min(params.desired_speed for _, params in kinds)
 
     def needed(v: Any) -> Any:  # steady-state front-to-front spacing of the mix [m]
