@@ -234,9 +234,7 @@ def nearest_in_lane(
 
 
 @njit(cache=True)
-def key_vehicle_indices(
-    x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int
-) -> np.ndarray:
+def key_vehicle_indices(x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int) -> np.ndarray:
     """The six key vehicles of Section II-A around ramp vehicle ``vr``, in role order VR, VMC,
     VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc)."""
     out = np.full(N_ROLES, -1, dtype=np.int64)

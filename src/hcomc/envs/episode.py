@@ -20,13 +20,14 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.envs.observation import N_OBS, observe, pair_safety
 from hcomc.envs.options import EnvOptions
-from hcomc.models.following import follow_accel
-from hcomc.models.fuel import fuel_rate
+from hcomc.envs.reward import fuel_over_rows, gain_over_rows
+from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR, Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 
 _END = np.iinfo(np.int64).max
+_FUEL = np.array(FUEL_DEFAULT.coefficients())  # the fuel model the metrics use
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,7 +55,9 @@ class MergeEpisode:
         self.vr = self.ego = -1
         self.group = np.full(6, -1, dtype=np.int64)
         self.t_start = math.nan
-        self._rows = self._events = 0
+        self._rows = self._events = self._collisions = 0
+        self.ramp = self.sim.demand.lane == Lane.RAMP
+        self.params = np.ascontiguousarray(self.sim.fleet.matrix)
         self.done = False
 
     # ----------------------------------------------------------------- start
@@ -82,6 +85,7 @@ class MergeEpisode:
         self.t_start = self.sim.t
         self._rows = self.sim.rows_recorded
         self._events = self.sim.log.n_events
+        self._collisions = self.sim.collisions
         self._observe()
         return self.obs.copy()
 
@@ -180,6 +184,9 @@ class MergeEpisode:
 
     def collided(self) -> np.ndarray:
         """Vehicles in a collision that began since the last call (sorted, unique)."""
+        if self.sim.collisions == self._collisions:
+            return np.empty(0, dtype=np.int64)
+        self._collisions = self.sim.collisions
         events = self.sim.log.events_since(self._events)
         self._events = self.sim.log.n_events
         hit = events[events["kind"] == EventKind.COLLISION]
@@ -205,8 +212,7 @@ class MergeEpisode:
         if i < 0 or r1 <= r0:
             return 0.0
         log = self.sim.log
-        v, a = log.v[r0:r1, i].astype(float), log.a[r0:r1, i].astype(float)
-        return float(np.nansum(fuel_rate(v, a))) * self.config.log_interval
+        return fuel_over_rows(log.v, log.a, r0, r1, i, self.config.log_interval, _FUEL)
 
     def gain_of(self, i: int, r0: int, r1: int) -> float:
         """Eq. 17's ``a_new - a_ori`` of vehicle i integrated over log rows ``[r0, r1)``
@@ -214,18 +220,11 @@ class MergeEpisode:
         model on a free road (0 for i < 0)."""
         if i < 0 or r1 <= r0:
             return 0.0
-        log, dt = self.sim.log, self.config.log_interval
-        a = log.a[r0:r1, i].astype(float)
-        if self.sim.demand.lane[i] != Lane.RAMP:
-            return float(np.nansum(a - self.twin.log.a[r0:r1, i].astype(float))) * dt
-        v0, T, s0, a_max, b, delta, c = self.sim.fleet.matrix[:, i].tolist()
-        iidm = bool(self.sim.fleet.iidm[i])
-        gain = 0.0
-        for k, v in enumerate(log.v[r0:r1, i].astype(float).tolist()):
-            if math.isfinite(v):
-                free = follow_accel(math.inf, v, 0.0, 0.0, v0, T, s0, a_max, b, delta, c, iidm)
-                gain += a[k] - free
-        return gain * dt
+        s = self.sim
+        return gain_over_rows(
+            s.log.v, s.log.a, self.twin.log.a, r0, r1, i, self.config.log_interval,
+            bool(self.ramp[i]), self.params[:, i], bool(s.fleet.iidm[i]),
+        )  # fmt: skip
 
     # ------------------------------------------------------------------ end
     def finish(self) -> tuple[SimulationLog, SimulationLog]:

@@ -23,14 +23,17 @@ References
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
+from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
 from hcomc._typing import FloatArray
+from hcomc.models._broadcast import broadcast_apply
 
-__all__ = ["FUEL_DEFAULT", "FuelParams", "fuel_consumed", "fuel_rate"]
+__all__ = ["FUEL_DEFAULT", "FuelParams", "fuel_consumed", "fuel_rate", "fuel_rate_scalar"]
 
 
 class FuelParams(BaseModel):
@@ -64,6 +67,13 @@ class FuelParams(BaseModel):
             "[mL/s] is clipped at 0 in both cases."
         ),
     )
+
+
+    def coefficients(self) -> tuple[float, ...]:
+        """``(b0, b1, b2, b3, c0, c1, c2, positive_only)``, the arguments of
+        :func:`fuel_rate_scalar` after ``v`` and ``a``."""
+        positive = 1.0 if self.accel_term == "positive" else 0.0
+        return (*self.cruise, *self.accel, positive)
 
 
 FUEL_DEFAULT = FuelParams()
@@ -115,12 +125,32 @@ def fuel_rate(
     >>> round(float(fuel_rate(25.0, 1.0)), 4)
     4.4039
     """
-    b0, b1, b2, b3 = params.cruise
-    c0, c1, c2 = params.accel
-    v = np.asarray(v, dtype=np.float64)
-    a_eff = np.maximum(a, 0.0) if params.accel_term == "positive" else a
+    return broadcast_apply(_fuel_array, v, a, *params.coefficients())
+
+
+@njit(cache=True)
+def fuel_rate_scalar(
+    v: float, a: float, b0: float, b1: float, b2: float, b3: float, c0: float, c1: float,
+    c2: float, positive_only: float,
+) -> float:  # fmt: skip
+    """Eq. (16) for one vehicle [mL/s] (NaN if ``v`` or ``a`` is NaN): the one implementation
+    behind :func:`fuel_rate`; ``positive_only`` (1 or 0) applies the acceleration term for
+    a > 0 only. Arguments as :meth:`FuelParams.coefficients` orders them."""
+    if math.isnan(v) or math.isnan(a):
+        return math.nan
+    a_eff = max(a, 0.0) if positive_only else a
     rate = b0 + v * (b1 + v * (b2 + v * b3)) + a_eff * (c0 + v * (c1 + v * c2))
-    return np.asarray(np.maximum(rate, 0.0), dtype=np.float64)
+    return max(rate, 0.0)
+
+
+@njit(cache=True)
+def _fuel_array(v, a, b0, b1, b2, b3, c0, c1, c2, positive_only):
+    out = np.empty(v.size)
+    for i in range(v.size):
+        out[i] = fuel_rate_scalar(
+            v[i], a[i], b0[i], b1[i], b2[i], b3[i], c0[i], c1[i], c2[i], positive_only[i]
+        )
+    return out
 
 
 def fuel_consumed(

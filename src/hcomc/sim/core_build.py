@@ -63,7 +63,7 @@ def build_arrays(
     flags[layout.N_WARMUP] = n_warmup
     flags[layout.CONTROLLER] = controlled
     flags[layout.CAV_GAME] = config.lane_change.cav_game
-    counters = np.zeros(6, dtype=i8)
+    counters = np.zeros(7, dtype=i8)
     innov_steps = INNOVATION_STEPS if per.errors else 0
     counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
     n_events = max(4096, 16 * n)

@@ -15,6 +15,7 @@ from hcomc.models.transition import blend, transition_psi
 from hcomc.safety.collision import vehicle_pair_collides
 from hcomc.sim.core_state import (
     ACCEL_END,
+    COLLISIONS,
     DT,
     EMERGENCY,
     ERRORS,
@@ -301,6 +302,7 @@ def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) ->
             continue
         i, j = code // n, code % n
         add_event(c, t, EV_COLLISION, i, j, c.x[i], math.nan)
+        c.counters[COLLISIONS] += 1
     c.colliding[: now.size] = now
     c.counters[N_COLLIDING] = now.size
 

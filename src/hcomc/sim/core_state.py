@@ -22,7 +22,7 @@ RAMP, MAIN_1, MAIN_2 = 0, 1, 2
 EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
 EV_FALLBACK = 8
 # counters
-STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS = range(6)
+STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS = range(7)
 # consts
 (DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
  KICK, GAP_ERROR, TTC_ERROR) = range(13)  # fmt: skip
@@ -82,7 +82,7 @@ class CoreArrays(NamedTuple):
     ev_other: np.ndarray
     ev_x: np.ndarray
     ev_value: np.ndarray
-    counters: np.ndarray  # int64, see STEP ... ROWS
+    counters: np.ndarray  # int64, see STEP ... COLLISIONS
     consts: np.ndarray  # float64, see DT ... TTC_ERROR
     flags: np.ndarray  # int64, see PERCEIVE ... HAS_PLANS
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)

@@ -148,6 +148,11 @@ class Simulation:
         return int(self.arrays.counters[layout.STEP])
 
     @property
+    def collisions(self) -> int:
+        """Collisions (pairs coming into contact) so far; each is a COLLISION event."""
+        return int(self.arrays.counters[layout.COLLISIONS])
+
+    @property
     def rows_recorded(self) -> int:
         """Log rows written so far (rows ``[0, rows_recorded)`` of :attr:`log` are final)."""
         return int(self.arrays.counters[layout.ROWS])

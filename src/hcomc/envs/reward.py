@@ -1,0 +1,56 @@
+"""The reward terms of one action period, from the log rows the period wrote (compiled:
+they run for every episode at every step). Each calls the one home of its equation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from hcomc.models.following import follow_accel
+from hcomc.models.fuel import fuel_rate_scalar
+
+
+@njit(cache=True)
+def fuel_over_rows(
+    lv: np.ndarray, la: np.ndarray, r0: int, r1: int, i: int, dt: float, coefs: np.ndarray
+) -> float:
+    """Eq. 16: vehicle i's fuel over log rows ``[r0, r1)`` [mL] (rows where it is absent
+    count 0; ``coefs`` as :meth:`hcomc.models.fuel.FuelParams.coefficients`)."""
+    total = 0.0
+    for k in range(r0, r1):
+        rate = fuel_rate_scalar(
+            float(lv[k, i]), float(la[k, i]), coefs[0], coefs[1], coefs[2], coefs[3],
+            coefs[4], coefs[5], coefs[6], coefs[7],
+        )  # fmt: skip
+        if not math.isnan(rate):
+            total += rate
+    return total * dt
+
+
+@njit(cache=True)
+def gain_over_rows(
+    lv: np.ndarray, la: np.ndarray, ref_a: np.ndarray, r0: int, r1: int, i: int, dt: float,
+    free_road: bool, p: np.ndarray, iidm: bool,
+) -> float:  # fmt: skip
+    """Eq. 17's ``a_new - a_ori`` of vehicle i integrated over log rows ``[r0, r1)`` [m/s].
+
+    ``a_ori`` is the undisturbed run's (``ref_a``), or with ``free_road`` (a ramp vehicle,
+    absent from the undisturbed run) vehicle i's model on a free road at its speed
+    (``p`` = its v0, T, s0, a, b, delta, c). Rows where it is absent count 0.
+    """
+    total = 0.0
+    for k in range(r0, r1):
+        a, v = float(la[k, i]), float(lv[k, i])
+        if math.isnan(a) or math.isnan(v):
+            continue
+        if free_road:
+            ori = follow_accel(math.inf, v, 0.0, 0.0, p[0], p[1], p[2], p[3], p[4], p[5], p[6],
+                               iidm)  # fmt: skip
+        else:
+            ori = float(ref_a[k, i])
+            if math.isnan(ori):
+                continue
+        total += a - ori
+    return total * dt
