@@ -155,7 +155,7 @@ def test_reward_terms_against_independent_computations() -> None:
         assert info["safety"] == pytest.approx(expect_safety)
     w = env.options.reward
     total = -w.safety * info["safety"] - w.fuel * info["fuel"] + w.efficiency * info["efficiency"]
-    assert reward == pytest.approx(total)
+    assert reward == pytest.approx(total - w.time * env.options.action_period)
 
 
 def test_lane_end_and_timeout_end_the_episode_with_their_penalties() -> None:

@@ -143,6 +143,7 @@ class MergeEpisode:
             -w.safety * safety
             - w.fuel * fuel
             + w.efficiency * efficiency
+            - w.time * self.options.action_period
             - w.collision * crashed
             - w.timeout * timeout
         )

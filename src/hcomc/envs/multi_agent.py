@@ -12,8 +12,9 @@ Each agent has the action and observation spaces of ``hcomc/Merge-v0`` (the obse
 its own state and the six key vehicles around VR, relative to it); its lane-change action
 takes a ramp vehicle into lane 1 and a mainline vehicle to the other main lane. Its reward
 over a period is its own share of the same terms: Eq. 15 over its follower-leader pairs, its
-Eq. 16 fuel, its Eq. 17 acceleration change against the undisturbed run, the collision weight
-when it is in a collision (or is VR at the lane end), the timeout weight on truncation.
+Eq. 16 fuel, its Eq. 17 acceleration change against the undisturbed run, the time weight per
+second, the collision weight when it is in a collision (or is VR at the lane end), the
+timeout weight on truncation.
 """
 
 from __future__ import annotations
@@ -177,6 +178,7 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
                 -w.safety * e.safety_of(i)
                 - w.fuel * e.fuel_of(i, r0, r1)
                 + w.efficiency * e.gain_of(i, r0, r1)
+                - w.time * self.options.action_period
                 - w.collision * crashed
                 - w.timeout * timeout
             )

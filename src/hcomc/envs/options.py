@@ -22,19 +22,24 @@ CONTROLLERS = ("fifo", "game", "hcomc")
 class RewardWeights:
     """Weights of the reward terms (all >= 0); the reward of one action period is
 
-    ``- safety * S - fuel * F + efficiency * E - collision * [crash] - timeout * [timeout]``
+    ``- safety * S - fuel * F + efficiency * E - time * dt - collision * [crash]
+    - timeout * [timeout]``
 
     with S the Eq. 15 critical acceleration of the agent's follower-leader pairs divided by
     a_merg and capped at 1, integrated over the period [s]; F the Eq. 16 fuel of VR and VMC
     over the period [mL]; E the Eq. 17 gain over the period [m/s] (VR's acceleration minus
     its free-road acceleration, plus eta times the acceleration changes of VMC, VMR and VNR
-    against the undisturbed run). The defaults make a crash cost about as much as a minute
-    at the safety limit; they are a starting point, not tuned.
+    against the undisturbed run); dt the period [s] (``time`` prices the merge's duration, so
+    that waiting is not free: without it a discounted timeout at the end of a long episode
+    costs less than a risky merge now). A crash (a collision, or VR driven past the end of
+    the acceleration lane) and a timeout each cost about as much as a minute at the safety
+    limit. The defaults are a starting point, the same for every scenario, not tuned.
     """
 
     safety: float = 1.0
     fuel: float = 0.05
     efficiency: float = 0.1
+    time: float = 1.0
     collision: float = 50.0
     timeout: float = 50.0
 
