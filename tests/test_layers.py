@@ -1,6 +1,6 @@
 """Imports only run downwards through the package's layers.
 
-cli/sumo -> viz -> experiments -> metrics -> sim -> control -> safety/models/optim ->
+cli/sumo -> viz -> experiments/envs -> metrics -> sim -> control -> safety/models/optim ->
 config/road (plus the small utilities ``rng`` and ``_typing``). Imports under
 ``if TYPE_CHECKING:`` are for annotations only and do not count; imports inside functions
 do, since they run.
@@ -21,6 +21,7 @@ LAYERS = {
     "sumo": 7,
     "viz": 6,
     "experiments": 5,
+    "envs": 5,
     "metrics": 4,
     "sim": 3,
     "control": 2,

@@ -29,5 +29,6 @@ def test_ppo_example_trains_and_compares(tmp_path: Path) -> None:
     assert merged["critical_distance"].notna().all()
     assert (tmp_path / "ppo_merge.zip").stat().st_size > 0
     run = json.loads((tmp_path / "run.json").read_text())
-    assert run["timesteps"] == 2048 and run["train_seeds_from"] == 10_000
+    assert run["timesteps"] == 2048
+    assert run["train_seeds_from"] == 10_000
     assert (tmp_path / "comparison.md").read_text().startswith("| policy |")

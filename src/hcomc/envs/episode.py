@@ -25,6 +25,7 @@ from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR, Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.twin import can_twin, undisturbed_twin
 
 _END = np.iinfo(np.int64).max
 _FUEL = np.array(FUEL_DEFAULT.coefficients())  # the fuel model the metrics use
@@ -48,7 +49,7 @@ class MergeEpisode:
     def __init__(self, options: EnvOptions, config: ScenarioConfig, seed: int) -> None:
         self.options, self.config, self.seed = options, config, int(seed)
         self.sim = Simulation(config, seed)
-        self.twin = Simulation(config, seed, counterfactual=True)
+        self.twin: Simulation = self.sim  # set by make_twin()
         self.period_steps = round(options.action_period / config.dt)
         self.is_cav = self.sim.fleet.kind == Kind.CAV
         self.obs = np.zeros(N_OBS, dtype=np.float32)
@@ -64,14 +65,25 @@ class MergeEpisode:
     def start(self) -> np.ndarray:
         """Run to VR's control-zone entry and return the first observation (one episode)."""
         self.sim.run_to(_END, until_key_vehicles=True)
-        self.twin.run_to(self.sim.step_index)
+        if self.make_twin():
+            self.twin.run_to(self.sim.step_index)
         return self.begin()
+
+    def make_twin(self) -> bool:
+        """Make the undisturbed twin once :attr:`sim` has reached VR's entry: copied from its
+        state (:func:`hcomc.sim.twin.undisturbed_twin`) when that is exact, else a new
+        undisturbed run; True when the twin must still be advanced to :attr:`sim`'s step."""
+        if can_twin(self.sim):
+            self.twin = undisturbed_twin(self.sim)
+            return False
+        self.twin = Simulation(self.config, self.seed, counterfactual=True)
+        return True
 
     def begin(self) -> np.ndarray:
         """Pick the agent once :attr:`sim` has identified VR's key vehicles and the twin has
         reached the same step; returns the first observation."""
         group = self.sim.key_group
-        if group is None or self.twin.step_index != self.sim.step_index:
+        if group is None or self.twin is self.sim or self.twin.step_index != self.sim.step_index:
             raise RuntimeError(
                 f"seed {self.seed}: no ramp vehicle entered the control zone within the run "
                 f"({self.config.duration} s); allowed: a longer 'duration'"

@@ -88,7 +88,8 @@ class MergeVectorEnv(VectorEnv):
         sims = [e.sim for e in new]
         advance_ensemble(sims, [_END] * len(new), until_key_vehicles=[True] * len(new),
                          threads=self.threads)  # fmt: skip
-        advance_ensemble([e.twin for e in new], [e.sim.step_index for e in new],
+        behind = [e for e in new if e.make_twin()]  # twins that are not copies
+        advance_ensemble([e.twin for e in behind], [e.sim.step_index for e in behind],
                          threads=self.threads)  # fmt: skip
         for k, episode in zip(which, new, strict=True):
             self.episodes[k] = episode

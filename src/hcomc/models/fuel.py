@@ -68,7 +68,6 @@ class FuelParams(BaseModel):
         ),
     )
 
-
     def coefficients(self) -> tuple[float, ...]:
         """``(b0, b1, b2, b3, c0, c1, c2, positive_only)``, the arguments of
         :func:`fuel_rate_scalar` after ``v`` and ``a``."""

@@ -48,7 +48,13 @@ from hcomc.sim import core_state as layout
 from hcomc.sim.core_build import build_arrays
 from hcomc.sim.core_state import Core
 from hcomc.sim.demand import generate_demand
-from hcomc.sim.execution import ActivePlan, holding_lane, plan_record, virtual_leaders
+from hcomc.sim.execution import (
+    ActivePlan,
+    game_confirms,
+    holding_lane,
+    plan_record,
+    virtual_leaders,
+)
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
@@ -334,7 +340,10 @@ class Simulation:
                 self.core, ids, changing, holding, lead, vs, ls, ks, rank
             )
             if self.config.lane_change.cav_game and chosen.size:
-                keep = self._game_confirms(chosen, target, ids, lead, index)
+                keep = game_confirms(
+                    self.x, self.v, self.lane, self.fleet, self.config, chosen, target, ids,
+                    lead, index,
+                )  # fmt: skip
                 chosen, target = chosen[keep], target[keep]
             core.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
         core.step_finish(self.core, ids, t, acc, vs, ls)
@@ -480,32 +489,6 @@ class Simulation:
             gone = not self.active[g.vr] or (g.vmc >= 0 and not self.active[g.vmc])
             p.done = merged or gone
         self.plans = [p for p in self.plans if not p.done]
-
-    def _game_confirms(
-        self, chosen: IntArray, target: IntArray, ids: IntArray, lead: IntArray, index: LaneIndex
-    ) -> np.ndarray:
-        """Section III-B: a CAV's discretionary change must be its game equilibrium action
-        (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected."""
-        from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
-
-        def vehicle(i: int):
-            return game_vehicle(self.x, self.v, self.fleet, i)
-
-        keep = np.ones(chosen.size, dtype=bool)
-        new_lead, new_fol = index.lookup(target, self.x[chosen])
-        old_lead = lead[np.searchsorted(ids, chosen)]
-        cfg = self.config
-        for k, i in enumerate(chosen.tolist()):
-            if self.fleet.kind[i] != Kind.CAV or self.lane[i] == Lane.RAMP:
-                continue
-            fol = int(new_fol[k])
-            fv_idm = cfg.cav if fol >= 0 and self.fleet.kind[fol] == Kind.CAV else cfg.hdv
-            decision = lane_change_game(
-                vehicle(i), vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
-                params=game_params(cfg), sv_idm=cfg.cav, fv_idm=fv_idm,
-            )  # fmt: skip
-            keep[k] = decision.change
-        return keep
 
 
 def simulate(

@@ -23,13 +23,19 @@ the connected (CAV) key vehicles make no discretionary (MOBIL) lane changes of t
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.control.base import MergePlan, Mode, virtual_states
+from hcomc.road import Kind, Lane
 from hcomc.sim.plans import PlanRecord
+
+if TYPE_CHECKING:
+    from hcomc.config import ScenarioConfig
+    from hcomc.sim.fleet import Fleet
+    from hcomc.sim.neighbours import LaneIndex
 
 
 @dataclass
@@ -131,6 +137,34 @@ def virtual_leaders(
     table = np.array([r[1:] for r in rows], dtype=np.float64)
     followers = np.array([r[0] for r in rows], dtype=np.int64)
     return followers, table[:, 0], table[:, 1], table[:, 2], table[:, 3]
+
+
+def game_confirms(
+    x: FloatArray, v: FloatArray, lane: IntArray, fleet: Fleet, config: ScenarioConfig,
+    chosen: IntArray, target: IntArray, ids: IntArray, lead: IntArray, index: LaneIndex,
+) -> BoolArray:  # fmt: skip
+    """Section III-B: a CAV's discretionary change must be its game equilibrium action
+    (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected.
+    Returns which of the ``chosen`` changes (to lanes ``target``) go ahead."""
+    from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
+
+    def vehicle(i: int):
+        return game_vehicle(x, v, fleet, i)
+
+    keep = np.ones(chosen.size, dtype=bool)
+    new_lead, new_fol = index.lookup(target, x[chosen])
+    old_lead = lead[np.searchsorted(ids, chosen)]
+    for k, i in enumerate(chosen.tolist()):
+        if fleet.kind[i] != Kind.CAV or lane[i] == Lane.RAMP:
+            continue
+        fol = int(new_fol[k])
+        fv_idm = config.cav if fol >= 0 and fleet.kind[fol] == Kind.CAV else config.hdv
+        decision = lane_change_game(
+            vehicle(i), vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
+            params=game_params(config), sv_idm=config.cav, fv_idm=fv_idm,
+        )  # fmt: skip
+        keep[k] = decision.change
+    return keep
 
 
 def plan_record(plan: MergePlan) -> dict[str, Any]:

@@ -1,0 +1,92 @@
+"""The undisturbed twin of a run, made from the run's own state instead of simulated again.
+
+The undisturbed run (``Simulation(config, seed, counterfactual=True)``) has the same demand
+and random streams but never releases ramp vehicles. Until a ramp vehicle reaches the
+acceleration lane it cannot interact with mainline traffic: no mainline vehicle has it as a
+leader, changes lanes onto the ramp or collides with it, and the perception errors of every
+driver do not depend on who is on the road. Up to that moment the undisturbed run therefore
+*is* the run without its ramp vehicles, and :func:`undisturbed_twin` builds it that way: the
+state, the random generator and the log copied, the ramp vehicles' columns and events left
+out. Learning environments use it to start each episode's reference run at the cost of a
+copy; a test checks that the twin and the simulated undisturbed run agree bit for bit to the
+end of the run.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc.road import Lane
+from hcomc.sim import core_state as layout
+from hcomc.sim.engine import Simulation
+from hcomc.sim.log import EventKind
+
+# the state arrays a step changes (everything else is built from config and demand alike)
+_STATE = (
+    "x", "y", "v", "a", "heading", "lane", "origin", "target", "lc_t0", "lc_x0", "lc_xf",
+    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "x_hist",
+    "v_hist", "w_gap", "w_ttc", "queue_pos", "colliding", "counters", "innov",
+)  # fmt: skip
+_PER_VEHICLE = (
+    "x", "y", "v", "a", "heading", "lane", "origin", "target", "lc_t0", "lc_x0", "lc_xf",
+    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "w_gap", "w_ttc",
+)  # fmt: skip
+_LOG = ("t", "x", "y", "v", "a", "heading", "lane", "active")
+
+
+def can_twin(sim: Simulation) -> bool:
+    """Whether ``sim``'s undisturbed run can be made from its state now: no plan, and every
+    ramp vehicle released so far still on the ramp before the acceleration lane, keeping its
+    lane, in no collision."""
+    if sim.counterfactual or sim.plans or sim.decisions or sim.finished:
+        return False
+    c, ramp = sim.arrays, np.flatnonzero(sim.demand.lane == Lane.RAMP)
+    released = ramp[: int(c.queue_pos[Lane.RAMP])]
+    start = sim.config.road.accel_lane_start
+    keeping = c.origin[released] == c.target[released]
+    ok = c.active[released] & (c.lane[released] == Lane.RAMP) & keeping & (c.x[released] < start)
+    hit = sim.log.events_of(EventKind.COLLISION)
+    involved = np.isin(hit["vehicle"], ramp) | np.isin(hit["other"], ramp)
+    return bool(ok.all()) and not bool(involved.any())
+
+
+def undisturbed_twin(sim: Simulation) -> Simulation:
+    """The undisturbed run of ``sim``'s scenario and seed, at ``sim``'s step (see the module
+    doc); raises ``ValueError`` when :func:`can_twin` says it cannot be made."""
+    if not can_twin(sim):
+        raise ValueError("the undisturbed twin cannot be copied now: a ramp vehicle already "
+                         "interacts with the mainline (or a plan exists)")  # fmt: skip
+    sim.flush_events()
+    twin = Simulation(sim.config, sim.seed, counterfactual=True)
+    src, dst = sim.arrays, twin.arrays
+    ramp = np.flatnonzero(sim.demand.lane == Lane.RAMP)
+    kept = {name: getattr(dst, name)[ramp].copy() for name in _PER_VEHICLE}
+    hist = (dst.x_hist[:, ramp].copy(), dst.v_hist[:, ramp].copy())
+    ramp_queue = int(dst.queue_pos[Lane.RAMP])
+    for name in _STATE:
+        np.copyto(getattr(dst, name), getattr(src, name))
+    for name, values in kept.items():
+        getattr(dst, name)[ramp] = values
+    dst.x_hist[:, ramp], dst.v_hist[:, ramp] = hist
+    dst.queue_pos[Lane.RAMP] = ramp_queue
+    inserted = sim.log.events_of(EventKind.INSERTION)
+    inserted = inserted[np.isin(inserted["vehicle"], ramp)]
+    steps = np.round((inserted["t"] + sim.config.warmup) / sim.dt).astype(np.int64)
+    dst.counters[layout.VEHICLE_STEPS] -= int((sim.step_index - steps).sum())
+    twin.rng.bit_generator.state = sim.rng.bit_generator.state
+    rows = sim.rows_recorded
+    for name in _LOG:
+        getattr(twin.log, name)[:rows] = getattr(sim.log, name)[:rows]
+    for name in ("x", "y", "v", "a", "heading"):
+        getattr(twin.log, name)[:rows, ramp] = np.nan
+    twin.log.lane[:rows, ramp], twin.log.active[:rows, ramp] = -1, False
+    events = sim.log.events_since(0)
+    keep = ~(np.isin(events["vehicle"], ramp) | np.isin(events["other"], ramp))
+    for ev in events[keep]:
+        twin.log.add_event(float(ev["t"]), int(ev["kind"]), int(ev["vehicle"]),
+                           int(ev["other"]), float(ev["x"]), float(ev["value"]))  # fmt: skip
+    twin._stage = sim._stage
+    return twin
+
+
+__all__ = ["can_twin", "undisturbed_twin"]
