@@ -267,3 +267,24 @@ def test_multi_agent_rewards_and_membership() -> None:
         assert set(rew) == set(obs) == set(term)
     assert steps > 5
     assert len(seen) > len(members)
+
+
+def test_episode_log_works_with_metrics_files_and_figures(tmp_path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from hcomc.sim.log import SimulationLog
+    from hcomc.viz.figures.trajectories import trajectories_figure
+
+    env = MergeEnv("C1")
+    rollout(env, 2)
+    log, reference = env.episode_logs()
+    assert log.meta["agent"]["role"] == "VR"
+    assert log.meta["key_groups"][0]["VR"] == env.episode.vr
+    log.save(tmp_path / "log.npz")
+    again = SimulationLog.load(tmp_path / "log.npz")
+    m = compute_metrics(again, reference=reference)
+    assert math.isfinite(m["critical_distance"])
+    assert m["collisions"] == 0
+    fig = trajectories_figure(again)
+    assert "driven by a learning agent" in fig.get_suptitle()

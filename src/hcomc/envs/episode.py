@@ -95,6 +95,10 @@ class MergeEpisode:
                 f"seed {self.seed}: VR has no VMC to drive when it enters the control zone"
             )
         self.t_start = self.sim.t
+        if self.driven:  # said in the log, for figures and readers of saved episodes
+            role = "VR" if self.options.agent == "vr" else "VMC"
+            self.sim.log.meta["agent"] = {"role": role, "vehicle": int(self.ego),
+                                          "t_start": float(self.t_start)}  # fmt: skip
         self._rows = self.sim.rows_recorded
         self._events = self.sim.log.n_events
         self._collisions = self.sim.collisions

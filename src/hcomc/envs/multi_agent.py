@@ -90,6 +90,8 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             run_seed = int(self._rng.integers(2**31 - 1))
         episode = MergeEpisode(self.options, self.config, run_seed)
         episode.start()
+        episode.sim.log.meta["agent"] = {"role": "CAVs in the control zone", "vehicle": -1,
+                                         "t_start": float(episode.t_start)}  # fmt: skip
         self.episode = episode
         cav = np.flatnonzero(episode.sim.fleet.kind == Kind.CAV)
         self.possible_agents = [agent_name(int(i)) for i in cav]

@@ -204,7 +204,10 @@ def trajectories_figure(log: SimulationLog) -> Figure:
     ax_v.tick_params(labelbottom=False)
     ax_v.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
     title = run_title(log)
-    if plan is None:
+    agent = log.meta.get("agent")
+    if plan is None and agent:
+        coop = f"{agent['role']} driven by a learning agent"
+    elif plan is None:
         coop = "no merge controller (gap acceptance)"
     else:
         mode = str(plan.get("mode", "none"))
