@@ -11,7 +11,8 @@ traffic the policy has never seen. Observations and rewards are normalised durin
 (``VecNormalize``); the evaluation uses the frozen observation statistics and the
 deterministic action. Writes to ``--out``: ``ppo_merge.zip`` (the policy),
 ``vecnormalize.pkl``, ``episodes.csv`` (one row per policy and seed: return, outcome and
-every metric), ``comparison.md`` (medians per policy) and ``run.json`` (what ran).
+every metric), ``comparison.md`` (medians per policy, then PPO against each controller seed
+by seed), ``paired.csv`` and ``run.json`` (what ran).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 import hcomc
 from hcomc.envs import MergeEnv
-from hcomc.envs.policies import FIFO, GAME, HCOMC, evaluate, summary
+from hcomc.envs.policies import FIFO, GAME, HCOMC, evaluate, paired, summary
 from hcomc.sim.manifest import git_revision
 
 TRAIN_SEEDS = 10_000
@@ -61,6 +62,16 @@ def markdown(table: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n"
 
 
+def paired_markdown(pairs: pd.DataFrame) -> str:
+    """PPO against each controller, seed by seed (median difference PPO - controller)."""
+    lines = ["| PPO vs | metric | median difference [95 % CI] | PPO better in |",
+             "|---|---|---|---:|"]  # fmt: skip
+    for (versus, metric), row in pairs.iterrows():
+        ci = f"{row['median_diff']:.3g} [{row['ci_low']:.3g}, {row['ci_high']:.3g}]"
+        lines.append(f"| {versus} | {metric} | {ci} | {row['a_better']} of {row['n']} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> pd.DataFrame:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default="C1", help="condition preset or scenario TOML")
@@ -88,7 +99,12 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
                        action_period=args.action_period)  # fmt: skip
     pd.DataFrame([r.row() for r in results]).to_csv(args.out / "episodes.csv", index=False)
     table = summary(results)
-    (args.out / "comparison.md").write_text(markdown(table))
+    versus = [
+        paired(results, "PPO", name).assign(versus=name) for name in ("FIFO", "Game", "HCOMC")
+    ]
+    pairs = pd.concat(versus).reset_index().set_index(["versus", "metric"])
+    pairs.to_csv(args.out / "paired.csv")
+    (args.out / "comparison.md").write_text(markdown(table) + "\n" + paired_markdown(pairs))
     run = {
         "scenario": args.scenario, "timesteps": args.timesteps, "envs": args.envs,
         "eval_seeds": args.eval_seeds, "action_period": args.action_period, "seed": args.seed,
@@ -98,6 +114,7 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
     }  # fmt: skip
     (args.out / "run.json").write_text(json.dumps(run, indent=2) + "\n")
     print(markdown(table))
+    print(paired_markdown(pairs))
     return table
 
 

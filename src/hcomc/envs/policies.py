@@ -20,7 +20,7 @@ import pandas as pd
 
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.envs.options import CONTROLLERS
-from hcomc.metrics import compute_metrics
+from hcomc.metrics import METRICS, compute_metrics
 
 
 class Predictor(Protocol):
@@ -144,7 +144,37 @@ def summary(results: Sequence[EpisodeResult]) -> pd.DataFrame:
     return table
 
 
+PAIRED = ("episode_return", "critical_distance", "average_acceleration", "stabilisation_time",
+          "lsrv", "fuel", "min_ttc", "pet")  # fmt: skip
+"""The quantities :func:`paired` compares by default."""
+
+
+def paired(results: Sequence[EpisodeResult], a: str, b: str,
+           metrics: Sequence[str] = PAIRED) -> pd.DataFrame:  # fmt: skip
+    """Paired comparison of policies ``a`` and ``b`` seed by seed: per metric the median of
+    the differences a - b over the seeds where both are finite, its 95 % bootstrap interval
+    (the experiments' :func:`~hcomc.experiments.tables.median_ci`), n, and in how many of
+    them ``a`` is better (larger return, critical distance, TTC and PET; smaller for the
+    rest)."""
+    from hcomc.experiments.tables import median_ci
+
+    frame = pd.DataFrame([r.row() for r in results])
+    left = frame[frame["policy"] == a].set_index("seed")
+    right = frame[frame["policy"] == b].set_index("seed")
+    seeds = left.index.intersection(right.index)
+    rows = []
+    for name in metrics:
+        diff = (left.loc[seeds, name] - right.loc[seeds, name]).to_numpy(dtype=float)
+        diff = diff[np.isfinite(diff)]
+        median, low, high = median_ci(diff)
+        larger = name == "episode_return" or METRICS[name].better == "larger"
+        better = int((diff > 0).sum() if larger else (diff < 0).sum())
+        rows.append({"metric": name, "median_diff": median, "ci_low": low, "ci_high": high,
+                     "n": int(diff.size), "a_better": better})  # fmt: skip
+    return pd.DataFrame(rows).set_index("metric")
+
+
 __all__ = [
     "FIFO", "GAME", "HCOMC", "ControllerPolicy", "EpisodeResult", "Predictor", "as_function",
-    "evaluate", "run_episode", "summary",
+    "evaluate", "paired", "run_episode", "summary",
 ]  # fmt: skip
