@@ -82,12 +82,19 @@ class MergeVectorEnv(VectorEnv):
     def _next_seed(self, k: int) -> int:
         return int(self._rngs[k].integers(2**31 - 1))
 
-    def _start(self, which: list[int], seeds: list[int]) -> list[np.ndarray]:
-        """New episodes for sub-environments ``which``, advanced together to their start."""
+    def _start(
+        self,
+        which: list[int],
+        seeds: list[int],
+        runs: tuple[list[Simulation], list[int]] = ([], []),
+    ) -> list[np.ndarray]:
+        """New episodes for sub-environments ``which``, advanced to their start in one batch
+        with ``runs`` (other runs and the steps to advance them to)."""
         new = [MergeEpisode(self.options, self.config, s) for s in seeds]
-        sims = [e.sim for e in new]
-        advance_ensemble(sims, [_END] * len(new), until_key_vehicles=[True] * len(new),
-                         threads=self.threads)  # fmt: skip
+        sims, goals = runs
+        keys = [False] * len(sims) + [True] * len(new)
+        advance_ensemble([*sims, *(e.sim for e in new)], [*goals, *[_END] * len(new)],
+                         until_key_vehicles=keys, threads=self.threads)  # fmt: skip
         behind = [e for e in new if e.make_twin()]  # twins that are not copies
         advance_ensemble([e.twin for e in behind], [e.sim.step_index for e in behind],
                          threads=self.threads)  # fmt: skip
@@ -116,7 +123,8 @@ class MergeVectorEnv(VectorEnv):
             target = episode.apply(actions[k])
             runs += [episode.sim, episode.twin]
             goals += [target, target]
-        advance_ensemble(runs, goals, threads=self.threads)
+        seeds = [self._next_seed(k) for k in restart]
+        firsts = self._start(restart, seeds, (runs, goals))  # restarts advance with the rest
         for k in running:
             episode = self.episodes[k]
             assert episode is not None
@@ -124,11 +132,9 @@ class MergeVectorEnv(VectorEnv):
             obs[k], rewards[k] = result.obs, result.reward
             terminated[k], truncated[k] = result.terminated, result.truncated
             details[k] = result.info
-        if restart:
-            seeds = [self._next_seed(k) for k in restart]
-            for k, first in zip(restart, self._start(restart, seeds), strict=True):
-                obs[k] = first
-                details[k] = {"seed": self.episodes[k].seed}  # type: ignore[union-attr]
+        for k, first in zip(restart, firsts, strict=True):
+            obs[k] = first
+            details[k] = {"seed": self.episodes[k].seed}  # type: ignore[union-attr]
         self._ended = terminated | truncated
         return obs, rewards, terminated, truncated, self._infos(details)
 
