@@ -31,6 +31,26 @@ _END = np.iinfo(np.int64).max
 _FUEL = np.array(FUEL_DEFAULT.coefficients())  # the fuel model the metrics use
 
 
+def apply_action(sim: Simulation, config: ScenarioConfig, i: int, action: np.ndarray) -> None:
+    """Drive vehicle i with an action of the environments' action space.
+
+    ``action[0]`` in [-1, 1] is the acceleration as a fraction of the vehicle's maximum
+    acceleration (> 0) or of the emergency deceleration (< 0); ``action[1] > 0`` starts a lane
+    change unless one is under way: from the acceleration lane (only between its start and
+    end) into lane 1, from a main lane to the other.
+    """
+    a = float(np.clip(action[0], -1.0, 1.0))
+    limit = sim.fleet.a[i] if a >= 0 else config.lane_change.emergency_decel
+    sim.command(i, a * float(limit))
+    if float(action[1]) <= 0 or sim.origin[i] != sim.target[i] or not sim.active[i]:
+        return
+    road = config.road
+    if sim.lane[i] != Lane.RAMP:
+        sim.start_lane_change(i, int(Lane.MAIN_1 if sim.lane[i] == Lane.MAIN_2 else Lane.MAIN_2))
+    elif road.accel_lane_start <= sim.x[i] <= road.accel_lane_end:
+        sim.start_lane_change(i, int(Lane.MAIN_1))
+
+
 @dataclass(frozen=True, slots=True)
 class StepResult:
     """What one environment step returns for one episode."""
@@ -112,30 +132,11 @@ class MergeEpisode:
 
     # ------------------------------------------------------------------ step
     def apply(self, action: np.ndarray) -> int:
-        """Command the agent's vehicle for the next period; returns the step to advance to.
-
-        ``action[0]`` in [-1, 1] is the acceleration as a fraction of the vehicle's maximum
-        acceleration (> 0) or of the emergency deceleration (< 0); ``action[1] > 0`` starts a
-        lane change: VR from the acceleration lane into lane 1, VMC to the other main lane.
-        With a controller driving VR the action is not used.
-        """
-        sim, ego = self.sim, self.ego
+        """Command the agent's vehicle for the next period (:func:`apply_action`; not used
+        when a controller drives VR); returns the step to advance to."""
         if self.driven:
-            a = float(np.clip(action[0], -1.0, 1.0))
-            limit = sim.fleet.a[ego] if a >= 0 else self.config.lane_change.emergency_decel
-            sim.command(ego, a * float(limit))
-            if float(action[1]) > 0 and self._may_change():
-                target = Lane.MAIN_1 if sim.lane[ego] != Lane.MAIN_1 else Lane.MAIN_2
-                sim.start_lane_change(ego, int(target))
-        return sim.step_index + self.period_steps
-
-    def _may_change(self) -> bool:
-        sim, ego, road = self.sim, self.ego, self.config.road
-        if sim.origin[ego] != sim.target[ego] or not sim.active[ego]:
-            return False
-        if sim.lane[ego] == Lane.RAMP:
-            return bool(road.accel_lane_start <= sim.x[ego] <= road.accel_lane_end)
-        return self.options.agent == "vmc"
+            apply_action(self.sim, self.config, self.ego, action)
+        return self.sim.step_index + self.period_steps
 
     def evaluate(self) -> StepResult:
         """Observation, reward, end of episode and info after the runs advanced one period."""
@@ -254,4 +255,4 @@ class MergeEpisode:
         return self.sim.log, self.twin.log
 
 
-__all__ = ["MergeEpisode", "StepResult"]
+__all__ = ["MergeEpisode", "StepResult", "apply_action"]

@@ -26,11 +26,11 @@ import gymnasium as gym
 import numpy as np
 from pettingzoo import ParallelEnv
 
-from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.episode import MergeEpisode, apply_action
 from hcomc.envs.merge_env import action_space, observation_space
 from hcomc.envs.observation import N_OBS, observe
 from hcomc.envs.options import EnvOptions, RewardWeights
-from hcomc.road import Kind, Lane
+from hcomc.road import Kind
 
 
 def agent_name(i: int) -> str:
@@ -137,24 +137,11 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             if action is None:
                 s.command(i, float("nan"))
                 continue
-            self._apply(i, np.asarray(action, dtype=np.float64))
+            apply_action(s, self.config, i, np.asarray(action, dtype=np.float64))
         target = s.step_index + e.period_steps
         s.run_to(target)
         e.twin.run_to(target)
         return self._evaluate()
-
-    def _apply(self, i: int, action: np.ndarray) -> None:
-        s, road = self.episode.sim, self.config.road  # type: ignore[union-attr]
-        a = float(np.clip(action[0], -1.0, 1.0))
-        limit = s.fleet.a[i] if a >= 0 else self.config.lane_change.emergency_decel
-        s.command(i, a * float(limit))
-        if float(action[1]) <= 0 or s.origin[i] != s.target[i]:
-            return
-        if s.lane[i] == Lane.RAMP:
-            if road.accel_lane_start <= s.x[i] <= road.accel_lane_end:
-                s.start_lane_change(i, int(Lane.MAIN_1))
-        else:
-            s.start_lane_change(i, int(Lane.MAIN_1 if s.lane[i] == Lane.MAIN_2 else Lane.MAIN_2))
 
     def _evaluate(self) -> tuple[
         dict[str, np.ndarray], dict[str, float], dict[str, bool], dict[str, bool],
