@@ -39,41 +39,33 @@ Runner = tuple[Callable[[], int], Callable[[], float], float]
 size, and the simulated seconds per environment step."""
 
 
+def one_env(env: gym.Env, vehicles: Callable[[], float], period: float) -> Runner:
+    """A single environment stepped with random actions, restarted when an episode ends."""
+    env.action_space.seed(0)
+    env.reset(seed=0)
+
+    def step() -> int:
+        _, _, term, trunc, _ = env.step(env.action_space.sample())
+        if term or trunc:
+            env.reset()
+        return 1
+
+    return step, vehicles, period
+
+
 def highway_env() -> Runner:
-    """highway-env's merge-v0 with random actions."""
+    """highway-env's merge-v0."""
     import highway_env  # noqa: F401 (registers merge-v0)
 
     env = gym.make("merge-v0")
-    env.action_space.seed(0)
-    env.reset(seed=0)
-
-    def step() -> int:
-        _, _, term, trunc, _ = env.step(env.action_space.sample())
-        if term or trunc:
-            env.reset()
-        return 1
-
-    def vehicles() -> float:
-        return float(len(env.unwrapped.road.vehicles))
-
-    return step, vehicles, 1.0 / env.unwrapped.config["policy_frequency"]
+    period = 1.0 / env.unwrapped.config["policy_frequency"]
+    return one_env(env, lambda: float(len(env.unwrapped.road.vehicles)), period)
 
 
 def hcomc_single() -> Runner:
+    """``hcomc/Merge-v0``, one environment."""
     env = MergeEnv("C1", action_period=PERIOD)
-    env.action_space.seed(0)
-    env.reset(seed=0)
-
-    def step() -> int:
-        _, _, term, trunc, _ = env.step(env.action_space.sample())
-        if term or trunc:
-            env.reset()
-        return 1
-
-    def vehicles() -> float:
-        return float(env.episode.sim.active.sum())  # type: ignore[union-attr]
-
-    return step, vehicles, PERIOD
+    return one_env(env, lambda: float(env.episode.sim.active.sum()), PERIOD)  # type: ignore[union-attr]
 
 
 def hcomc_vector(n: int, threads: int | None) -> Runner:
