@@ -227,6 +227,25 @@ def test_add_event_validates() -> None:
         log.add_event(0.0, EventKind.COLLISION, 0, other=-2)
 
 
+def test_bulk_events_equal_one_by_one_and_cursor() -> None:
+    one, bulk = _empty(), _empty()
+    rows = [(0.5 * k, k % 9, k % N, (k % N) - 1, 10.0 * k, math.nan) for k in range(150)]
+    for row in rows:  # beyond the initial capacity: the table grows
+        one.add_event(*row)
+    events = np.array(rows, dtype=EVENT_DTYPE)
+    bulk.add_events(events[:70])
+    assert bulk.n_events == 70
+    bulk.add_events(events[70:])
+    for field in EVENT_DTYPE.names or ():
+        np.testing.assert_array_equal(bulk.events[field], one.events[field], err_msg=field)
+    np.testing.assert_array_equal(bulk.events_since(148)["t"], [74.0, 74.5])
+    with pytest.raises(ValueError, match="unknown event kinds"):
+        bulk.add_events(np.array([(0.0, 42, 0, -1, 0.0, 0.0)], dtype=EVENT_DTYPE))
+    with pytest.raises(ValueError, match="outside"):
+        bulk.add_events(np.array([(0.0, 1, N, -1, 0.0, 0.0)], dtype=EVENT_DTYPE))
+    assert bulk.n_events == 150
+
+
 def test_events_frame_has_kind_names() -> None:
     frame = _filled().events_frame()
     assert list(frame.columns) == ["t", "kind", "vehicle", "other", "x", "value"]

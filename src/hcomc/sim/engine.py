@@ -56,7 +56,7 @@ from hcomc.sim.execution import (
     virtual_leaders,
 )
 from hcomc.sim.fleet import Fleet
-from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import Perception
@@ -292,11 +292,14 @@ class Simulation:
         """Move the compiled step's buffered events into the log, in order (the compiled
         stretches buffer them; :meth:`run_to` flushes when it returns)."""
         c = self.arrays
-        for k in range(int(c.counters[layout.N_EVENTS])):
-            self.log.add_event(
-                float(c.ev_t[k]), int(c.ev_kind[k]), int(c.ev_vehicle[k]), int(c.ev_other[k]),
-                float(c.ev_x[k]), float(c.ev_value[k]),
-            )  # fmt: skip
+        n = int(c.counters[layout.N_EVENTS])
+        if n == 0:
+            return
+        events = np.empty(n, dtype=EVENT_DTYPE)
+        events["t"], events["kind"], events["x"] = c.ev_t[:n], c.ev_kind[:n], c.ev_x[:n]
+        events["vehicle"], events["other"] = c.ev_vehicle[:n], c.ev_other[:n]
+        events["value"] = c.ev_value[:n]
+        self.log.add_events(events)
         c.counters[layout.N_EVENTS] = 0
 
     def _refill_innovations(self) -> None:

@@ -366,6 +366,11 @@ class SimulationLog:
         """All events as a structured array (:data:`EVENT_DTYPE`), stably sorted by t."""
         return self._event_table.sorted()
 
+    def add_events(self, events: np.ndarray) -> None:
+        """Append many events at once (a structured array with the fields of
+        :data:`EVENT_DTYPE`), in order."""
+        self._event_table.extend(events)
+
     @property
     def n_events(self) -> int:
         """Number of events recorded so far."""

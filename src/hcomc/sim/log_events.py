@@ -113,6 +113,27 @@ class EventTable:
         self._buf[self._n] = (float(t), int(kind), int(vehicle), int(other), float(x), float(value))
         self._n += 1
 
+    def extend(self, events: np.ndarray) -> None:
+        """Append many events at once (:data:`EVENT_DTYPE` fields), checked as :meth:`add`
+        checks one."""
+        m = int(events.size)
+        if m == 0:
+            return
+        kinds = np.asarray(events["kind"])
+        if not np.isin(kinds, [k.value for k in EventKind]).all():
+            raise ValueError(f"unknown event kinds {sorted(set(kinds.tolist()) - set(EventKind))}")
+        vehicle, other = np.asarray(events["vehicle"]), np.asarray(events["other"])
+        n = self.n_vehicles
+        if vehicle.min() < 0 or vehicle.max() >= n or other.min() < -1 or other.max() >= n:
+            raise ValueError(f"event vehicles outside [0, {n}) (other: [-1, {n}))")
+        if self._n + m > self._buf.size:
+            grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
+            grown[: self._n] = self._buf[: self._n]
+            self._buf = grown
+        for name in EVENT_DTYPE.names or ():
+            self._buf[name][self._n : self._n + m] = events[name]
+        self._n += m
+
     def since(self, start: int) -> np.ndarray:
         """The events appended after the first ``start`` ones, in the order they came."""
         return self._buf[start : self._n].copy()

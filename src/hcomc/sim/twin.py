@@ -82,9 +82,7 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     twin.log.lane[:rows, ramp], twin.log.active[:rows, ramp] = -1, False
     events = sim.log.events_since(0)
     keep = ~(np.isin(events["vehicle"], ramp) | np.isin(events["other"], ramp))
-    for ev in events[keep]:
-        twin.log.add_event(float(ev["t"]), int(ev["kind"]), int(ev["vehicle"]),
-                           int(ev["other"]), float(ev["x"]), float(ev["value"]))  # fmt: skip
+    twin.log.add_events(events[keep])
     twin._stage = sim._stage
     return twin
 
