@@ -68,7 +68,7 @@ def paired_markdown(pairs: pd.DataFrame) -> str:
              "|---|---|---|---:|"]  # fmt: skip
     for (versus, metric), row in pairs.iterrows():
         ci = f"{row['median_diff']:.3g} [{row['ci_low']:.3g}, {row['ci_high']:.3g}]"
-        lines.append(f"| {versus} | {metric} | {ci} | {row['a_better']} of {row['n']} |")
+        lines.append(f"| {versus} | {metric} | {ci} | {int(row['a_better'])} of {int(row['n'])} |")
     return "\n".join(lines) + "\n"
 
 
