@@ -288,3 +288,15 @@ def test_episode_log_works_with_metrics_files_and_figures(tmp_path) -> None:
     assert m["collisions"] == 0
     fig = trajectories_figure(again)
     assert "driven by a learning agent" in fig.get_suptitle()
+
+
+def test_any_scenario_toml_and_overrides(tmp_path) -> None:
+    path = tmp_path / "half.toml"
+    path.write_text('base = "C2"\n[demand]\ncav_penetration = 0.5\n')
+    env = MergeEnv(str(path), overrides={"duration": 120.0})
+    assert env.config.demand.cav_penetration == 0.5
+    assert env.config.duration == 120.0
+    assert env.config.control.controller == "none"  # the agent drives, not a controller
+    obs, info = env.reset(seed=1)
+    assert info["ego"] == env.episode.vr
+    assert obs.shape == (N_OBS,)
