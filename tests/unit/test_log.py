@@ -239,10 +239,15 @@ def test_bulk_events_equal_one_by_one_and_cursor() -> None:
     for field in EVENT_DTYPE.names or ():
         np.testing.assert_array_equal(bulk.events[field], one.events[field], err_msg=field)
     np.testing.assert_array_equal(bulk.events_since(148)["t"], [74.0, 74.5])
-    with pytest.raises(ValueError, match="unknown event kinds"):
-        bulk.add_events(np.array([(0.0, 42, 0, -1, 0.0, 0.0)], dtype=EVENT_DTYPE))
-    with pytest.raises(ValueError, match="outside"):
-        bulk.add_events(np.array([(0.0, 1, N, -1, 0.0, 0.0)], dtype=EVENT_DTYPE))
+    for count in (1, 40):  # a few events go one by one, many at once: both are checked
+        bad_kind = np.array([(0.0, 1, 0, -1, 0.0, 0.0)] * count, dtype=EVENT_DTYPE)
+        bad_kind["kind"][-1] = 42
+        with pytest.raises(ValueError, match=r"EventKind|unknown event kinds"):
+            bulk.add_events(bad_kind[-1:] if count == 1 else bad_kind)
+        bad_vehicle = np.array([(0.0, 1, 0, -1, 0.0, 0.0)] * count, dtype=EVENT_DTYPE)
+        bad_vehicle["vehicle"][-1] = N
+        with pytest.raises(ValueError, match="outside"):
+            bulk.add_events(bad_vehicle)
     assert bulk.n_events == 150
 
 

@@ -95,17 +95,14 @@ def record_row(
     c: CoreArrays, k: int, t: float, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
     lv: np.ndarray, la: np.ndarray, lh: np.ndarray, ll: np.ndarray, lact: np.ndarray,
 ) -> None:  # fmt: skip
-    """Write log row k; inactive vehicles get NaN (floats) and -1 (lane)."""
+    """Write log row k for the vehicles on the road; the others keep the log's fill (NaN,
+    lane -1, inactive: :meth:`SimulationLog.allocate`), so a row costs what is on the road."""
     lt[k] = t
     for i in range(c.x.size):
-        on = c.active[i]
-        lact[k, i] = on
-        lx[k, i] = c.x[i] if on else np.nan
-        ly[k, i] = c.y[i] if on else np.nan
-        lv[k, i] = c.v[i] if on else np.nan
-        la[k, i] = c.a[i] if on else np.nan
-        lh[k, i] = c.heading[i] if on else np.nan
-        ll[k, i] = c.lane[i] if on else -1
+        if c.active[i]:
+            lact[k, i] = True
+            lx[k, i], ly[k, i], lv[k, i] = c.x[i], c.y[i], c.v[i]
+            la[k, i], lh[k, i], ll[k, i] = c.a[i], c.heading[i], c.lane[i]
 
 
 # ----------------------------------------------------------------------------- loop

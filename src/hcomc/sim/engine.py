@@ -56,7 +56,7 @@ from hcomc.sim.execution import (
     virtual_leaders,
 )
 from hcomc.sim.fleet import Fleet
-from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
+from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import Perception
@@ -295,11 +295,8 @@ class Simulation:
         n = int(c.counters[layout.N_EVENTS])
         if n == 0:
             return
-        events = np.empty(n, dtype=EVENT_DTYPE)
-        events["t"], events["kind"], events["x"] = c.ev_t[:n], c.ev_kind[:n], c.ev_x[:n]
-        events["vehicle"], events["other"] = c.ev_vehicle[:n], c.ev_other[:n]
-        events["value"] = c.ev_value[:n]
-        self.log.add_events(events)
+        self.log.add_event_columns(c.ev_t[:n], c.ev_kind[:n], c.ev_vehicle[:n],
+                                   c.ev_other[:n], c.ev_x[:n], c.ev_value[:n])  # fmt: skip
         c.counters[layout.N_EVENTS] = 0
 
     def _refill_innovations(self) -> None:

@@ -371,6 +371,13 @@ class SimulationLog:
         :data:`EVENT_DTYPE`), in order."""
         self._event_table.extend(events)
 
+    def add_event_columns(
+        self, t: np.ndarray, kind: np.ndarray, vehicle: np.ndarray, other: np.ndarray,
+        x: np.ndarray, value: np.ndarray,
+    ) -> None:  # fmt: skip
+        """:meth:`add_events` from one array per field."""
+        self._event_table.extend_columns(t, kind, vehicle, other, x, value)
+
     @property
     def n_events(self) -> int:
         """Number of events recorded so far."""

@@ -52,6 +52,9 @@ EVENT_DTYPE = np.dtype(
 """Structured dtype of :attr:`SimulationLog.events` (packed, 41 bytes per event)."""
 
 _INITIAL_CAPACITY = 64
+_FEW = 16  # events appended one by one by extend_columns
+_FIRST_KIND, _LAST_KIND = int(min(EventKind)), int(max(EventKind))
+assert list(EventKind) == list(range(_FIRST_KIND, _LAST_KIND + 1))  # kinds are contiguous
 
 
 class EventTable:
@@ -116,22 +119,45 @@ class EventTable:
     def extend(self, events: np.ndarray) -> None:
         """Append many events at once (:data:`EVENT_DTYPE` fields), checked as :meth:`add`
         checks one."""
-        m = int(events.size)
+        self.extend_columns(*(events[name] for name in EVENT_DTYPE.names or ()))
+
+    def extend_columns(
+        self, t: np.ndarray, kind: np.ndarray, vehicle: np.ndarray, other: np.ndarray,
+        x: np.ndarray, value: np.ndarray,
+    ) -> None:  # fmt: skip
+        """:meth:`extend` from one array per field (the engine's event buffers)."""
+        m = len(t)
         if m == 0:
             return
-        kinds = np.asarray(events["kind"])
-        if not np.isin(kinds, [k.value for k in EventKind]).all():
-            raise ValueError(f"unknown event kinds {sorted(set(kinds.tolist()) - set(EventKind))}")
-        vehicle, other = np.asarray(events["vehicle"]), np.asarray(events["other"])
         n = self.n_vehicles
-        if vehicle.min() < 0 or vehicle.max() >= n or other.min() < -1 or other.max() >= n:
+        if m <= _FEW:  # a few events: Python lists are cheaper than array calls
+            cols = [t.tolist(), kind.tolist(), vehicle.tolist(), other.tolist(), x.tolist(),
+                    value.tolist()]  # fmt: skip
+            lo = (min(cols[1]), min(cols[2]), min(cols[3]))
+            hi = (max(cols[1]), max(cols[2]), max(cols[3]))
+        else:
+            lo = (kind.min(), vehicle.min(), other.min())
+            hi = (kind.max(), vehicle.max(), other.max())
+        if lo[0] < _FIRST_KIND or hi[0] > _LAST_KIND:
+            raise ValueError(f"unknown event kinds in {sorted(set(kind.tolist()))}")
+        if lo[1] < 0 or hi[1] >= n or lo[2] < -1 or hi[2] >= n:
             raise ValueError(f"event vehicles outside [0, {n}) (other: [-1, {n}))")
         if self._n + m > self._buf.size:
             grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
             grown[: self._n] = self._buf[: self._n]
             self._buf = grown
-        for name in EVENT_DTYPE.names or ():
-            self._buf[name][self._n : self._n + m] = events[name]
+        if m <= _FEW:
+            for k, row in enumerate(zip(*cols, strict=True)):
+                self._buf[self._n + k] = row
+            self._n += m
+            return
+        if self._n + m > self._buf.size:
+            grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
+            grown[: self._n] = self._buf[: self._n]
+            self._buf = grown
+        rows = self._buf[self._n : self._n + m]
+        rows["t"], rows["kind"], rows["vehicle"] = t, kind, vehicle
+        rows["other"], rows["x"], rows["value"] = other, x, value
         self._n += m
 
     def since(self, start: int) -> np.ndarray:
