@@ -54,7 +54,6 @@ from hcomc.sim.core_state import (
     NEED_PYTHON,
     PLATOON,
     RAMP,
-    REFILL,
     ROWS,
     STEP,
     VEHICLE_STEPS,
@@ -146,12 +145,15 @@ def step_alone(c: CoreArrays, t: float) -> None:
 
 @njit(cache=True)
 def run_steps(
-    c: CoreArrays, stop: int, log_rows: bool, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
-    lv: np.ndarray, la: np.ndarray, lh: np.ndarray, ll: np.ndarray, lact: np.ndarray,
+    c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator, lt: np.ndarray,
+    lx: np.ndarray, ly: np.ndarray, lv: np.ndarray, la: np.ndarray, lh: np.ndarray,
+    ll: np.ndarray, lact: np.ndarray,
 ) -> int:  # fmt: skip
     """Advance until step ``stop`` or until Python is needed; returns why it stopped.
 
-    With ``log_rows`` every ``log_every``-th step after the warm-up writes a log row.
+    With ``log_rows`` every ``log_every``-th step after the warm-up writes a log row. The
+    HDVs' error innovations are drawn from the run's generator ``rng`` when they run out,
+    exactly as the engine's Python step draws them (the same stream whichever draws).
     """
     dt, warmup = c.consts[DT], c.consts[WARMUP]
     margin = 8 * c.x.size + 64
@@ -159,7 +161,8 @@ def run_steps(
         if c.counters[N_EVENTS] + margin > c.ev_t.size:
             return FLUSH
         if c.flags[ERRORS] > 0 and c.counters[INNOV_CURSOR] >= c.innov.shape[0]:
-            return REFILL
+            c.innov[:] = rng.standard_normal(c.innov.shape)
+            c.counters[INNOV_CURSOR] = 0
         t = -warmup + c.counters[STEP] * dt
         release(c, t)
         if needs_python(c):

@@ -16,7 +16,8 @@ from hcomc.sim.mobil import lane_change_params
 from hcomc.sim.perception import Perception
 
 INNOVATION_STEPS = 64
-"""Steps of HDV estimation-error innovations drawn at a time (the engine refills them)."""
+"""Steps of HDV estimation-error innovations drawn at a time (refilled from the run's generator
+by the compiled loop or by the engine's Python step)."""
 
 
 def build_arrays(

@@ -30,7 +30,7 @@ STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS = ran
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER, CAV_GAME,
  HAS_PLANS) = range(9)  # fmt: skip
 # reasons run_steps returns
-DONE, NEED_PYTHON, FLUSH, REFILL = range(4)
+DONE, NEED_PYTHON, FLUSH = range(3)
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged

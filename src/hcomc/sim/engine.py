@@ -176,7 +176,7 @@ class Simulation:
             stop = self.stop_step
             if progress is not None:  # report every 100 steps
                 stop = min(stop, (self.step_index // 100 + 1) * 100)
-            self.resume(core.run_steps(self.core, stop, self.logging, *self.log_arrays))
+            self.resume(core.run_steps(self.core, stop, self.logging, self.rng, *self.log_arrays))
             if progress is not None and self.step_index % 100 == 0:
                 progress(self.step_index, total)
         if progress is not None:
@@ -210,8 +210,6 @@ class Simulation:
         """Do what the compiled stretch that returned ``reason`` left to Python."""
         if reason == layout.FLUSH:
             self.flush_events()
-        elif reason == layout.REFILL:
-            self._refill_innovations()
         elif reason == layout.NEED_PYTHON:
             self.step()
             k = self.step_index - self.n_warmup
@@ -239,7 +237,7 @@ class Simulation:
         control zone). Python is entered only at decision events."""
         while not self.reached(step, until_key_vehicles=until_key_vehicles):
             stop = min(self.stop_step, step)
-            self.resume(core.run_steps(self.core, stop, self.logging, *self.log_arrays))
+            self.resume(core.run_steps(self.core, stop, self.logging, self.rng, *self.log_arrays))
         self.flush_events()
 
     def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:

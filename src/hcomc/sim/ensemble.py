@@ -29,35 +29,37 @@ from hcomc.sim.log import SimulationLog
 
 
 @njit(cache=True, parallel=True)
-def _advance_batch(cores, logs, stops, logging, reasons):
+def _advance_batch(cores, logs, rngs, stops, logging, reasons):
     """Advance every run to its stop (or until it needs Python), one thread per run."""
     for j in prange(len(cores)):
         k = np.int64(j)
         la = logs[k]
         reasons[k] = run_steps(
-            cores[k], stops[k], logging[k], la[0], la[1], la[2], la[3], la[4], la[5], la[6], la[7]
-        )
+            cores[k], stops[k], logging[k], rngs[k], la[0], la[1], la[2], la[3], la[4], la[5],
+            la[6], la[7],
+        )  # fmt: skip
 
 
 # the same loop on one thread: no thread pool (safe in forked worker processes)
 _advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
 
 
-_LAST: list[tuple[list[weakref.ref[Simulation]], List, List]] = []
+_LAST: list[tuple[list[weakref.ref[Simulation]], List, List, List]] = []
 
 
-def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
+def _typed_lists(runs: list[Simulation]) -> tuple[List, List, List]:
     """The compiled loop's lists of the runs' states and log arrays; the last batch's lists
     are reused when the same runs come again (a learning environment's every step), since
     building them costs about 20 us per run."""
     if _LAST:
-        refs, cores, logs = _LAST[0]
+        refs, cores, logs, rngs = _LAST[0]
         if len(refs) == len(runs) and all(r() is s for r, s in zip(refs, runs, strict=True)):
-            return cores, logs
+            return cores, logs, rngs
     cores = List([s.core for s in runs])
     logs = List([s.log_arrays for s in runs])
-    _LAST[:] = [([weakref.ref(s) for s in runs], cores, logs)]
-    return cores, logs
+    rngs = List([s.rng for s in runs])
+    _LAST[:] = [([weakref.ref(s) for s in runs], cores, logs, rngs)]
+    return cores, logs, rngs
 
 
 def run_ensemble(
@@ -108,13 +110,13 @@ def advance_ensemble(
         pending = [k for k in range(len(sims)) if due(k)]
         while pending:
             runs = [sims[k] for k in pending]
-            cores, logs = _typed_lists(runs)
+            cores, logs, rngs = _typed_lists(runs)
             members = len(pending)
             while len(pending) == members:
                 stops = np.array([min(sims[k].stop_step, goal[k]) for k in pending], np.int64)
                 logging = np.array([s.logging for s in runs], dtype=np.bool_)
                 reasons = np.empty(members, dtype=np.int64)
-                advance(cores, logs, stops, logging, reasons)
+                advance(cores, logs, rngs, stops, logging, reasons)
                 for sim, reason in zip(runs, reasons.tolist(), strict=True):
                     sim.resume(reason)
                 if not all(due(k) for k in pending):
