@@ -90,18 +90,15 @@ def step_finish(
 
 # --------------------------------------------------------------------------- record
 @njit(cache=True)
-def record_row(
-    c: CoreArrays, k: int, t: float, lt: np.ndarray, lx: np.ndarray, ly: np.ndarray,
-    lv: np.ndarray, la: np.ndarray, lh: np.ndarray, ll: np.ndarray, lact: np.ndarray,
-) -> None:  # fmt: skip
+def record_row(c: CoreArrays, k: int, t: float) -> None:
     """Write log row k for the vehicles on the road; the others keep the log's fill (NaN,
     lane -1, inactive: :meth:`SimulationLog.allocate`), so a row costs what is on the road."""
-    lt[k] = t
+    c.log_t[k] = t
     for i in range(c.x.size):
         if c.active[i]:
-            lact[k, i] = True
-            lx[k, i], ly[k, i], lv[k, i] = c.x[i], c.y[i], c.v[i]
-            la[k, i], lh[k, i], ll[k, i] = c.a[i], c.heading[i], c.lane[i]
+            c.log_active[k, i] = True
+            c.log_x[k, i], c.log_y[k, i], c.log_v[k, i] = c.x[i], c.y[i], c.v[i]
+            c.log_a[k, i], c.log_heading[k, i], c.log_lane[k, i] = c.a[i], c.heading[i], c.lane[i]
 
 
 # ----------------------------------------------------------------------------- loop
@@ -144,11 +141,7 @@ def step_alone(c: CoreArrays, t: float) -> None:
 
 
 @njit(cache=True)
-def run_steps(
-    c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator, lt: np.ndarray,
-    lx: np.ndarray, ly: np.ndarray, lv: np.ndarray, la: np.ndarray, lh: np.ndarray,
-    ll: np.ndarray, lact: np.ndarray,
-) -> int:  # fmt: skip
+def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator) -> int:
     """Advance until step ``stop`` or until Python is needed; returns why it stopped.
 
     With ``log_rows`` every ``log_every``-th step after the warm-up writes a log row. The
@@ -171,6 +164,6 @@ def run_steps(
         k = c.counters[STEP] - c.flags[N_WARMUP]
         if log_rows and k > 0 and k % c.flags[LOG_EVERY] == 0:
             t_row = -warmup + c.counters[STEP] * dt
-            record_row(c, c.counters[ROWS], t_row, lt, lx, ly, lv, la, lh, ll, lact)
+            record_row(c, c.counters[ROWS], t_row)
             c.counters[ROWS] += 1
     return DONE

@@ -12,6 +12,7 @@ from hcomc.sim import core_state as layout
 from hcomc.sim.core_state import CoreArrays
 from hcomc.sim.demand import Demand
 from hcomc.sim.fleet import Fleet
+from hcomc.sim.log import SimulationLog
 from hcomc.sim.mobil import lane_change_params
 from hcomc.sim.perception import Perception
 
@@ -25,6 +26,7 @@ def build_arrays(
     demand: Demand,
     fleet: Fleet,
     per: Perception,
+    log: SimulationLog,
     *,
     counterfactual: bool,
     controlled: bool,
@@ -32,7 +34,8 @@ def build_arrays(
     decide_every: int,
     log_every: int,
 ) -> CoreArrays:
-    """The state of a run before its first step (no vehicle released yet).
+    """The state of a run before its first step (no vehicle released yet), writing into
+    ``log``.
 
     ``counterfactual`` leaves the ramp queue empty (the undisturbed run); ``controlled``
     says whether a merge controller plans for ramp vehicles entering the control zone.
@@ -90,5 +93,7 @@ def build_arrays(
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
         consts=consts, flags=flags, lc_params=lane_change_params(config.lane_change),
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
-        innov=np.zeros((innov_steps, 2, n)),
+        innov=np.zeros((innov_steps, 2, n)), log_t=log.t, log_x=log.x, log_y=log.y,
+        log_v=log.v, log_a=log.a, log_heading=log.heading, log_lane=log.lane,
+        log_active=log.active,
     )  # fmt: skip

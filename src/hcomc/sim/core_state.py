@@ -1,7 +1,7 @@
 """State of the compiled simulation step: the :class:`CoreArrays` and their layout.
 
 :class:`CoreArrays` holds every array the step reads or writes (per-vehicle parameters and
-state, the HDV perception buffers, the demand queues, the event buffer, counters). The
+state, the HDV perception buffers, the demand queues, the event buffer, counters, the log). The
 kernels of :mod:`hcomc.sim.core` receive them as one :class:`Core`, a compiled reference
 record over the same buffers: passing it costs one pointer, whatever the number of arrays
 (a tuple of arrays would be unpacked and reference-counted array by array at every call).
@@ -88,6 +88,14 @@ class CoreArrays(NamedTuple):
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
+    log_t: np.ndarray  # the run's log (SimulationLog's arrays, the same buffers)
+    log_x: np.ndarray
+    log_y: np.ndarray
+    log_v: np.ndarray
+    log_a: np.ndarray
+    log_heading: np.ndarray
+    log_lane: np.ndarray
+    log_active: np.ndarray
 
 
 @structref.register

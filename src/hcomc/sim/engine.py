@@ -108,8 +108,9 @@ class Simulation:
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
+        self.log = self._allocate_log()
         self.arrays = build_arrays(
-            config, self.demand, self.fleet, self.perception,
+            config, self.demand, self.fleet, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip
@@ -120,7 +121,6 @@ class Simulation:
         self.lane, self.origin, self.target = c.lane, c.origin, c.target
         self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
         self.active, self.waited, self.planned = c.active, c.waited, c.planned
-        self.log = self._allocate_log()
         self._stage = 0
 
     def _allocate_log(self) -> SimulationLog:
@@ -176,7 +176,7 @@ class Simulation:
             stop = self.stop_step
             if progress is not None:  # report every 100 steps
                 stop = min(stop, (self.step_index // 100 + 1) * 100)
-            self.resume(core.run_steps(self.core, stop, self.logging, self.rng, *self.log_arrays))
+            self.resume(core.run_steps(self.core, stop, self.logging, self.rng))
             if progress is not None and self.step_index % 100 == 0:
                 progress(self.step_index, total)
         if progress is not None:
@@ -199,12 +199,6 @@ class Simulation:
     def logging(self) -> bool:
         """Whether steps of the current stage write log rows."""
         return self._stage == 1
-
-    @property
-    def log_arrays(self) -> tuple[np.ndarray, ...]:
-        """The log's trajectory arrays, as the compiled step writes them."""
-        log = self.log
-        return (log.t, log.x, log.y, log.v, log.a, log.heading, log.lane, log.active)
 
     def resume(self, reason: int) -> None:
         """Do what the compiled stretch that returned ``reason`` left to Python."""
@@ -237,7 +231,7 @@ class Simulation:
         control zone). Python is entered only at decision events."""
         while not self.reached(step, until_key_vehicles=until_key_vehicles):
             stop = min(self.stop_step, step)
-            self.resume(core.run_steps(self.core, stop, self.logging, self.rng, *self.log_arrays))
+            self.resume(core.run_steps(self.core, stop, self.logging, self.rng))
         self.flush_events()
 
     def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:
@@ -282,8 +276,7 @@ class Simulation:
         rows = int(self.arrays.counters[layout.ROWS])
         if rows >= log.x.shape[0]:
             raise IndexError(f"row {rows} outside the log's {log.x.shape[0]} rows")
-        core.record_row(self.core, rows, self.t, log.t, log.x, log.y, log.v, log.a,
-                        log.heading, log.lane, log.active)  # fmt: skip
+        core.record_row(self.core, rows, self.t)
         self.arrays.counters[layout.ROWS] = rows + 1
 
     def flush_events(self) -> None:

@@ -29,37 +29,32 @@ from hcomc.sim.log import SimulationLog
 
 
 @njit(cache=True, parallel=True)
-def _advance_batch(cores, logs, rngs, stops, logging, reasons):
+def _advance_batch(cores, rngs, stops, logging, reasons):
     """Advance every run to its stop (or until it needs Python), one thread per run."""
     for j in prange(len(cores)):
         k = np.int64(j)
-        la = logs[k]
-        reasons[k] = run_steps(
-            cores[k], stops[k], logging[k], rngs[k], la[0], la[1], la[2], la[3], la[4], la[5],
-            la[6], la[7],
-        )  # fmt: skip
+        reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
 
 
 # the same loop on one thread: no thread pool (safe in forked worker processes)
 _advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
 
 
-_LAST: list[tuple[list[weakref.ref[Simulation]], List, List, List]] = []
+_LAST: list[tuple[list[weakref.ref[Simulation]], List, List]] = []
 
 
-def _typed_lists(runs: list[Simulation]) -> tuple[List, List, List]:
-    """The compiled loop's lists of the runs' states and log arrays; the last batch's lists
+def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
+    """The compiled loop's lists of the runs' states and generators; the last batch's lists
     are reused when the same runs come again (a learning environment's every step), since
-    building them costs about 20 us per run."""
+    building them costs microseconds per run."""
     if _LAST:
-        refs, cores, logs, rngs = _LAST[0]
+        refs, cores, rngs = _LAST[0]
         if len(refs) == len(runs) and all(r() is s for r, s in zip(refs, runs, strict=True)):
-            return cores, logs, rngs
+            return cores, rngs
     cores = List([s.core for s in runs])
-    logs = List([s.log_arrays for s in runs])
     rngs = List([s.rng for s in runs])
-    _LAST[:] = [([weakref.ref(s) for s in runs], cores, logs, rngs)]
-    return cores, logs, rngs
+    _LAST[:] = [([weakref.ref(s) for s in runs], cores, rngs)]
+    return cores, rngs
 
 
 def run_ensemble(
@@ -108,21 +103,24 @@ def advance_ensemble(
         numba.set_num_threads(threads)
     try:
         pending = [k for k in range(len(sims)) if due(k)]
-        while pending:
-            runs = [sims[k] for k in pending]
-            cores, logs, rngs = _typed_lists(runs)
-            members = len(pending)
-            while len(pending) == members:
-                stops = np.array([min(sims[k].stop_step, goal[k]) for k in pending], np.int64)
-                logging = np.array([s.logging for s in runs], dtype=np.bool_)
-                reasons = np.empty(members, dtype=np.int64)
-                advance(cores, logs, rngs, stops, logging, reasons)
-                for sim, reason in zip(runs, reasons.tolist(), strict=True):
-                    sim.resume(reason)
-                if not all(due(k) for k in pending):
-                    pending = [k for k in pending if due(k)]
-                    if progress is not None:
-                        progress(len(sims) - len(pending), len(sims))
+        runs = [sims[k] for k in pending]
+        cores, rngs = _typed_lists(runs)  # one batch: a run that is done stands still
+        reasons = np.empty(len(runs), dtype=np.int64)
+        going = [True] * len(runs)
+        while any(going):
+            stops = np.array(
+                [min(r.stop_step, goal[k]) if g else r.step_index
+                 for r, k, g in zip(runs, pending, going, strict=True)], dtype=np.int64,
+            )  # fmt: skip
+            logging = np.array([r.logging for r in runs], dtype=np.bool_)
+            advance(cores, rngs, stops, logging, reasons)
+            for r, reason, g in zip(runs, reasons.tolist(), going, strict=True):
+                if g:
+                    r.resume(reason)
+            still = [due(k) for k in pending]
+            if progress is not None and still != going:
+                progress(len(sims) - sum(still), len(sims))
+            going = still
         for sim in sims:
             sim.flush_events()
     finally:
