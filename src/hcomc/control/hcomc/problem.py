@@ -61,14 +61,12 @@ from hcomc.control.hcomc.rollout import (
     C_VMC_DUR,
     C_VV_DECEL,
     C_WIDTH,
-    G_COLLISION,
     N_CONSTS,
     N_ROLES,
     N_STARTS,
     P_A,
     P_LEN,
     P_V0,
-    P_WID,
     VMC,
     VR,
     counterfactual,
@@ -76,7 +74,6 @@ from hcomc.control.hcomc.rollout import (
     warm_up,
 )
 from hcomc.models.fuel import fuel_rate
-from hcomc.safety.collision import vehicles_collide
 from hcomc.safety.critical import SafetyIndex
 
 OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
@@ -91,7 +88,6 @@ CONSTRAINTS = (
 )
 SEQUENCES = ("ahead", "behind")
 AHEAD, BEHIND = 0, 1
-_PAIRS = np.array([(i, j) for i in range(N_ROLES) for j in range(i + 1, N_ROLES)])
 _G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
 
 
@@ -238,9 +234,8 @@ class MergeProblem:
             state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
             lateral[rows], self.consts, self.n_steps, cf,
         )  # fmt: skip
-        xs, ys, vs, as_, hs, _, u_safe, u_eff, g, _, _, _, near = out
+        xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
         G[rows, : g.shape[1]] = g
-        G[rows, G_COLLISION] = self._collisions(state, xs, ys, hs, near)
         allowed = self.lateral_allowed[which]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
         fuel = self._fuel(xs, vs, as_, cf, state)
@@ -263,7 +258,7 @@ class MergeProblem:
             if scored is None:
                 continue
             F[rows], out = scored
-            xs, ys, vs, as_, hs, km, _, _, _, v0_, v1_, v2_, _ = out
+            xs, ys, vs, as_, hs, km, _, _, _, v0_, v1_, v2_ = out
             Xt[rows], Yt[rows], Vt[rows], At[rows], Ht[rows] = xs, ys, vs, as_, hs
             k_merge[rows] = km
             for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):
@@ -325,28 +320,6 @@ class MergeProblem:
             baseline = to_distance(VMC, cf[0], cf[1], cf[2])
             total = total + to_distance(VMC, X, V, A) - baseline
         return total / 1000.0
-
-    @staticmethod
-    def _collisions(
-        state: KeyState, X: FloatArray, Y: FloatArray, H: FloatArray, near: BoolArray
-    ) -> FloatArray:
-        """Colliding (pair, step) count per candidate: oriented rectangles (Eq. 7).
-
-        The kernel flags pairs whose bounding boxes overlap (``near``); the exact test of
-        :func:`hcomc.safety.collision.vehicles_collide` runs on those only.
-        """
-        count = np.zeros(X.shape[0])
-        if not near.any():
-            return count
-        length, width = state.params[:, P_LEN], state.params[:, P_WID]
-        c, k, p = np.nonzero(near)
-        a, b = _PAIRS[p, 0], _PAIRS[p, 1]
-        hit = vehicles_collide(
-            X[c, k, a], Y[c, k, a], H[c, k, a], length[a], width[a],
-            X[c, k, b], Y[c, k, b], H[c, k, b], length[b], width[b],
-        )  # fmt: skip
-        np.add.at(count, c[hit], 1.0)
-        return count
 
 
 def default_starts() -> FloatArray:

@@ -92,19 +92,24 @@ def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
     """Ballistic step of every present role with its acceleration ``S[R_ACC]`` (floored at
     the emergency deceleration), stopping exactly at v = 0 (as the engine)."""
     for r in range(N_ROLES):
-        if not S[R_PRESENT, r]:
-            continue
-        ar = max(S[R_ACC, r], -emergency)
-        v = S[R_V, r]
-        v1 = v + ar * dt
-        if v1 < 0.0:
-            S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
-            S[R_A, r] = -v / dt
-            S[R_V, r] = 0.0
-        else:
-            S[R_X, r] += v * dt + 0.5 * ar * dt * dt
-            S[R_V, r] = v1
-            S[R_A, r] = ar
+        if S[R_PRESENT, r]:
+            integrate_role(S, r, dt, emergency)
+
+
+@njit(cache=True, inline="always")
+def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
+    """The ballistic step of :func:`integrate` for role r alone."""
+    ar = max(S[R_ACC, r], -emergency)
+    v = S[R_V, r]
+    v1 = v + ar * dt
+    if v1 < 0.0:
+        S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
+        S[R_A, r] = -v / dt
+        S[R_V, r] = 0.0
+    else:
+        S[R_X, r] += v * dt + 0.5 * ar * dt * dt
+        S[R_V, r] = v1
+        S[R_A, r] = ar
 
 
 @njit(cache=True)
