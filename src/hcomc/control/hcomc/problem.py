@@ -210,6 +210,11 @@ class MergeProblem:
             )
             for st in states
         )
+        # the cooperating vehicle's counterfactual fuel of U_fuel, once per sequence
+        self._fuel_no_merge = tuple(
+            0.0 if cf is None else float(self._fuel_to_distance(i, (VMC,), *cf[:, None])[0, 0])
+            for i, cf in enumerate(self._no_merge)
+        )
 
     # ------------------------------------------------------------------ evaluate
     def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
@@ -238,7 +243,7 @@ class MergeProblem:
         G[rows, : g.shape[1]] = g
         allowed = self.lateral_allowed[which]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
-        fuel = self._fuel(xs, vs, as_, cf, state)
+        fuel = self._fuel(which, state, xs, vs, as_)
         return np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff]), out
 
     def predict(self, X: FloatArray) -> Prediction:
@@ -299,27 +304,38 @@ class MergeProblem:
 
     # ----------------------------------------------------------------- helpers
     def _fuel(
-        self, X: FloatArray, V: FloatArray, A: FloatArray, cf: FloatArray, state: KeyState
+        self, which: int, state: KeyState, X: FloatArray, V: FloatArray, A: FloatArray
     ) -> FloatArray:
-        """U_fuel over a common distance [L] (module docstring).
-
-        Each vehicle's fuel over the window is completed to the distance it covers in the
-        counterfactual at its end speed's cruise rate (a negative completion when it went
-        further): ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``.
-        """
-        dt = self.dt
-
-        def to_distance(r: int, x: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
-            burnt = fuel_rate(v[..., 1:, r], a[..., 1:, r]).sum(axis=-1) * dt
-            v_end = np.maximum(v[..., -1, r], 1.0)
-            rest = (cf[0, -1, r] - cf[0, 0, r]) - (x[..., -1, r] - x[..., 0, r])
-            return burnt + fuel_rate(v_end, 0.0) * rest / v_end
-
-        total = to_distance(VR, X, V, A)
-        if state.present[VMC]:
-            baseline = to_distance(VMC, cf[0], cf[1], cf[2])
-            total = total + to_distance(VMC, X, V, A) - baseline
+        """U_fuel over a common distance [L] of the rows rolled out in sequence ``which``
+        (module docstring): VR's fuel, plus the cooperating vehicle's minus its counterfactual
+        (:meth:`_fuel_to_distance`; the counterfactual part is computed once, at set-up)."""
+        with_vmc = bool(state.present[VMC])
+        fuel = self._fuel_to_distance(which, (VR, VMC) if with_vmc else (VR,), X, V, A)
+        total = fuel[0]
+        if with_vmc:
+            total = total + fuel[1] - self._fuel_no_merge[which]
         return total / 1000.0
+
+    def _fuel_to_distance(
+        self, which: int, roles: tuple[int, ...], X: FloatArray, V: FloatArray, A: FloatArray
+    ) -> FloatArray:
+        """Fuel [mL] of ``roles`` (n,) over the distance each covers in the counterfactual of
+        sequence ``which``, per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C).
+
+        Each vehicle's fuel over the window is completed to that distance at its end speed's
+        cruise rate (a negative completion when it went further):
+        ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. All roles go through one
+        :func:`~hcomc.models.fuel.fuel_rate` call (rows (n, C) of K samples each).
+        """
+        cf, r = self._no_merge[which], list(roles)
+        assert cf is not None
+        v = np.ascontiguousarray(V[:, 1:, r].transpose(2, 0, 1))
+        a = np.ascontiguousarray(A[:, 1:, r].transpose(2, 0, 1))
+        burnt = fuel_rate(v, a).sum(axis=-1) * self.dt
+        v_end = np.maximum(V[:, -1, r].T, 1.0)
+        rest = (cf[0, -1, r] - cf[0, 0, r])[:, None] - (X[:, -1, r] - X[:, 0, r]).T
+        fuel: FloatArray = burnt + fuel_rate(v_end, 0.0) * rest / v_end
+        return fuel
 
 
 def default_starts() -> FloatArray:
