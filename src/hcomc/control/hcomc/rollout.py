@@ -72,8 +72,10 @@ from hcomc.control.hcomc.rollout_layout import (
     N_CONSTS,
     N_G,
     N_PARAMS,
+    N_PROGRESS,
     N_ROLES,
     N_STARTS,
+    N_STATE,
     P_A,
     P_B,
     P_C,
@@ -141,6 +143,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     tracks = np.empty((2, K + 1, 2))
     tracked = np.zeros(2, dtype=np.bool_)
     plan = np.empty(3)
+    S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
     for c in range(n_c):
         plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
         lat, lon = lateral[c] and coop_vmc, (not lateral[c]) and coop_vmc
@@ -151,10 +154,10 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
         vv0_cubic(starts, horizon[c], cf, consts[C_DT], vvs[c, 0])
         flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
         pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, flags[0], consts,
-                 tracks[mode])  # fmt: skip
+                 tracks[mode], S, lc)  # fmt: skip
         k_merge[c], g[c, G_OVERRUN], g[c, G_COLLISION] = joint_pass(
             x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
-            X[c], Y[c], V[c], A[c], HEAD[c],
+            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach,
         )  # fmt: skip
         g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
         u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])

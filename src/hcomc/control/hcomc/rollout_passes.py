@@ -48,11 +48,13 @@ from hcomc.control.hcomc.rollout_layout import (
 )
 from hcomc.control.hcomc.rollout_step import (
     behind,
+    borrow,
     free_road,
     integrate,
     integrate_role,
     leader,
     new_state,
+    reset_state,
 )
 from hcomc.control.virtual_vehicle import cubic_into
 
@@ -148,18 +150,19 @@ def vmc_pre_track(
 def pre_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
-    consts: np.ndarray, vmc_track: np.ndarray,
+    consts: np.ndarray, vmc_track: np.ndarray, S: np.ndarray, lc: np.ndarray,
 ) -> None:  # fmt: skip
     """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
     the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``.
 
     Nobody else enters VR's or VMC's accelerations in this pass, so only VR (with VMF, which
     keeps its speed) is rolled out here; VMC's states come from ``vmc_track``
-    (:func:`vmc_pre_track` of the candidate's mode).
+    (:func:`vmc_pre_track` of the candidate's mode). ``S`` (7, 6) and ``lc`` (9,) are
+    scratch space.
     """
     n_steps = vmc_track.shape[0] - 1
-    S = new_state(x0, v0, a0, present)
-    lc = np.empty(N_PROGRESS)
+    S, lc, params, vvs, plan = borrow(S), borrow(lc), borrow(params), borrow(vvs), borrow(plan)
+    reset_state(S, x0, v0, a0, present)
     start_progress(lc, False, S, consts[C_VMC_DUR], params)
     dt, em = consts[C_DT], consts[C_EMERGENCY]
     k = 0
@@ -181,19 +184,21 @@ def joint_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
-    HEAD: np.ndarray,
+    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray,
 ) -> tuple[int, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m] and the number of colliding
-    (pair, step) combinations of the key vehicles (Eq. 7).
+    (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (7, 6), ``lc`` (9,) and
+    ``reach`` (6,) are scratch space.
     """
     n_steps = X.shape[0] - 1
-    S = new_state(x0, v0, a0, present)
-    lc = np.empty(N_PROGRESS)
+    S, lc, reach = borrow(S), borrow(lc), borrow(reach)
+    params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
+    X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
+    reset_state(S, x0, v0, a0, present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
-    reach = np.empty(N_ROLES)
     k_merge, overrun, collisions = -1, plan[0] - consts[C_ACCEL_END], 0
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
