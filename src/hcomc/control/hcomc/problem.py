@@ -212,8 +212,7 @@ class MergeProblem:
         )
         # the cooperating vehicle's counterfactual fuel of U_fuel, once per sequence
         self._fuel_no_merge = tuple(
-            0.0 if cf is None else float(self._fuel_to_distance(i, (VMC,), *cf[:, None])[0, 0])
-            for i, cf in enumerate(self._no_merge)
+            0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
 
     # ------------------------------------------------------------------ evaluate
@@ -243,7 +242,7 @@ class MergeProblem:
         G[rows, : g.shape[1]] = g
         allowed = self.lateral_allowed[which]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
-        fuel = self._fuel(which, state, xs, vs, as_)
+        fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[which])
         return np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff]), out
 
     def predict(self, X: FloatArray) -> Prediction:
@@ -304,31 +303,42 @@ class MergeProblem:
 
     # ----------------------------------------------------------------- helpers
     def _fuel(
-        self, which: int, state: KeyState, X: FloatArray, V: FloatArray, A: FloatArray
+        self,
+        X: FloatArray,
+        V: FloatArray,
+        A: FloatArray,
+        cf: FloatArray,
+        state: KeyState,
+        cf_fuel: float | None = None,
     ) -> FloatArray:
-        """U_fuel over a common distance [L] of the rows rolled out in sequence ``which``
-        (module docstring): VR's fuel, plus the cooperating vehicle's minus its counterfactual
-        (:meth:`_fuel_to_distance`; the counterfactual part is computed once, at set-up)."""
+        """U_fuel over a common distance [L] (module docstring): VR's fuel, plus the
+        cooperating vehicle's minus its fuel in the counterfactual ``cf`` (``cf_fuel``,
+        computed when None; the problem computes it once per sequence at set-up)."""
         with_vmc = bool(state.present[VMC])
-        fuel = self._fuel_to_distance(which, (VR, VMC) if with_vmc else (VR,), X, V, A)
+        fuel = self._fuel_to_distance(cf, (VR, VMC) if with_vmc else (VR,), X, V, A)
         total = fuel[0]
         if with_vmc:
-            total = total + fuel[1] - self._fuel_no_merge[which]
+            if cf_fuel is None:
+                cf_fuel = self._counterfactual_fuel(cf)
+            total = total + fuel[1] - cf_fuel
         return total / 1000.0
 
+    def _counterfactual_fuel(self, cf: FloatArray) -> float:
+        """The cooperating vehicle's fuel [mL] over its own distance in the counterfactual."""
+        return float(self._fuel_to_distance(cf, (VMC,), *cf[:, None])[0, 0])
+
     def _fuel_to_distance(
-        self, which: int, roles: tuple[int, ...], X: FloatArray, V: FloatArray, A: FloatArray
+        self, cf: FloatArray, roles: tuple[int, ...], X: FloatArray, V: FloatArray, A: FloatArray
     ) -> FloatArray:
-        """Fuel [mL] of ``roles`` (n,) over the distance each covers in the counterfactual of
-        sequence ``which``, per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C).
+        """Fuel [mL] of ``roles`` (n,) over the distance each covers in the counterfactual
+        ``cf`` (3, K + 1, 6), per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C).
 
         Each vehicle's fuel over the window is completed to that distance at its end speed's
         cruise rate (a negative completion when it went further):
         ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. All roles go through one
         :func:`~hcomc.models.fuel.fuel_rate` call (rows (n, C) of K samples each).
         """
-        cf, r = self._no_merge[which], list(roles)
-        assert cf is not None
+        r = list(roles)
         v = np.ascontiguousarray(V[:, 1:, r].transpose(2, 0, 1))
         a = np.ascontiguousarray(A[:, 1:, r].transpose(2, 0, 1))
         burnt = fuel_rate(v, a).sum(axis=-1) * self.dt

@@ -144,6 +144,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     tracked = np.zeros(2, dtype=np.bool_)
     plan = np.empty(3)
     S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
+    vr_acc = np.empty(max(K, 1))
     for c in range(n_c):
         plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
         lat, lon = lateral[c] and coop_vmc, (not lateral[c]) and coop_vmc
@@ -153,11 +154,11 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
             tracked[mode] = True
         vv0_cubic(starts, horizon[c], cf, consts[C_DT], vvs[c, 0])
         flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
-        pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, flags[0], consts,
-                 tracks[mode], S, lc)  # fmt: skip
+        n_known = pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, flags[0],
+                           consts, tracks[mode], S, lc, vr_acc)  # fmt: skip
         k_merge[c], g[c, G_OVERRUN], g[c, G_COLLISION] = joint_pass(
             x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
-            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach,
+            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach, vr_acc, n_known,
         )  # fmt: skip
         g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
         u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])

@@ -101,16 +101,19 @@ def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -
 def step(
     k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
     plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
+    vr_known: float,
 ) -> tuple[bool, bool]:  # fmt: skip
     """Advance the roles by one step from step k; (VR started, VR ended its change) in it.
 
     ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
-    ``flags`` are those of :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
+    ``flags`` and ``vr_known`` are those of
+    :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
     """
     dt = consts[C_DT]
     memberships(lc, S)
     lane_consts = (consts[C_ACCEL_END], consts[C_VMC_DUR], consts[C_GAMMA])
-    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint)
+    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint,
+                  vr_known)  # fmt: skip
     integrate(S, dt, consts[C_EMERGENCY])
     return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
 
@@ -151,7 +154,8 @@ def pre_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
     consts: np.ndarray, vmc_track: np.ndarray, S: np.ndarray, lc: np.ndarray,
-) -> None:  # fmt: skip
+    vr_acc: np.ndarray,
+) -> int:  # fmt: skip
     """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
     the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``.
 
@@ -159,16 +163,23 @@ def pre_pass(
     keeps its speed) is rolled out here; VMC's states come from ``vmc_track``
     (:func:`vmc_pre_track` of the candidate's mode). ``S`` (7, 6) and ``lc`` (9,) are
     scratch space.
+
+    Until VR starts its change its acceleration depends on VR, VV0 and VMF alone, as in the
+    joint pass: the steps' accelerations are written to ``vr_acc`` (K,) and their number is
+    returned, so that the joint pass takes them instead of computing them again.
     """
     n_steps = vmc_track.shape[0] - 1
     S, lc, params, vvs, plan = borrow(S), borrow(lc), borrow(params), borrow(vvs), borrow(plan)
+    vr_acc = borrow(vr_acc)
     reset_state(S, x0, v0, a0, present)
     start_progress(lc, False, S, consts[C_VMC_DUR], params)
     dt, em = consts[C_DT], consts[C_EMERGENCY]
-    k = 0
+    k = n_known = 0
     while k * dt < plan[2] and k < n_steps:
         S[R_ACC, VR] = vr_accel(S, lc, params, vvs, k * dt, plan[2], plan[1], controlled,
                                 consts[C_ACCEL_END], consts[C_GAMMA], False)  # fmt: skip
+        if not lc[L_VR_STARTED]:
+            vr_acc[k], n_known = S[R_ACC, VR], k + 1
         for r in (VR, VMF):  # the commanded acceleration of VMF stays 0 (new_state)
             if S[R_PRESENT, r]:
                 integrate_role(S, r, dt, em)
@@ -177,6 +188,7 @@ def pre_pass(
     # virtual-vehicle end states at the horizon, or at the window's end if that comes first
     cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], S[R_X, VR], S[R_V, VR], vvs[1])
     cubic_into(plan[2], x0[VNF], v0[VNF], vmc_track[k, 0], vmc_track[k, 1], vvs[2])
+    return n_known
 
 
 @njit(cache=True)
@@ -184,19 +196,22 @@ def joint_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
-    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray,
+    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray, vr_acc: np.ndarray,
+    n_known: int,
 ) -> tuple[int, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m] and the number of colliding
     (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (7, 6), ``lc`` (9,) and
-    ``reach`` (6,) are scratch space.
+    ``reach`` (6,) are scratch space; VR's accelerations of the first ``n_known`` steps are
+    those of the pre-pass (``vr_acc``, see :func:`pre_pass`).
     """
     n_steps = X.shape[0] - 1
     S, lc, reach = borrow(S), borrow(lc), borrow(reach)
     params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
     X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
+    vr_acc = borrow(vr_acc)
     reset_state(S, x0, v0, a0, present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     k_merge, overrun, collisions = -1, plan[0] - consts[C_ACCEL_END], 0
@@ -206,7 +221,8 @@ def joint_pass(
         collisions += collisions_at(X, Y, HEAD, k, S, params, reach)
         if k == n_steps:
             break
-        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True)
+        vr_known = vr_acc[k] if k < n_known else np.nan
+        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
         if done:
