@@ -158,7 +158,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
                            consts, tracks[mode], S, lc, vr_acc)  # fmt: skip
         k_merge[c], g[c, G_OVERRUN], g[c, G_COLLISION] = joint_pass(
             x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
-            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach, vr_acc, n_known,
+            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach, vr_acc, n_known, cf,
         )  # fmt: skip
         g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
         u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])

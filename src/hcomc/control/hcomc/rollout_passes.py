@@ -24,6 +24,7 @@ from hcomc.control.hcomc.rollout_layout import (
     C_GAMMA,
     C_VMC_DUR,
     C_WIDTH,
+    L_LATERAL,
     L_VR_STARTED,
     L_VR_XF,
     LANE0,
@@ -101,20 +102,29 @@ def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -
 def step(
     k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
     plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
-    vr_known: float,
+    vr_known: float, cf: np.ndarray,
 ) -> tuple[bool, bool]:  # fmt: skip
     """Advance the roles by one step from step k; (VR started, VR ended its change) in it.
 
     ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
     ``flags`` and ``vr_known`` are those of
-    :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
+    :func:`~hcomc.control.hcomc.rollout_accel.accelerations`. In longitudinal mode VNR
+    follows VNF alone, exactly as in the no-merge counterfactual ``cf`` (3, K + 1, 6): its
+    states are taken from there.
     """
     dt = consts[C_DT]
     memberships(lc, S)
     lane_consts = (consts[C_ACCEL_END], consts[C_VMC_DUR], consts[C_GAMMA])
+    vnr_known = not lc[L_LATERAL]
     accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint,
-                  vr_known)  # fmt: skip
+                  vr_known, vnr_known)  # fmt: skip
     integrate(S, dt, consts[C_EMERGENCY])
+    if vnr_known:
+        S[R_X, VNR], S[R_V, VNR], S[R_A, VNR] = (
+            cf[0, k + 1, VNR],
+            cf[1, k + 1, VNR],
+            cf[2, k + 1, VNR],
+        )
     return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
 
 
@@ -197,7 +207,7 @@ def joint_pass(
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
     HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray, vr_acc: np.ndarray,
-    n_known: int,
+    n_known: int, cf: np.ndarray,
 ) -> tuple[int, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
 
@@ -205,13 +215,14 @@ def joint_pass(
     of its path lies beyond the acceleration lane [m] and the number of colliding
     (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (7, 6), ``lc`` (9,) and
     ``reach`` (6,) are scratch space; VR's accelerations of the first ``n_known`` steps are
-    those of the pre-pass (``vr_acc``, see :func:`pre_pass`).
+    those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
+    counterfactual (:func:`step`).
     """
     n_steps = X.shape[0] - 1
     S, lc, reach = borrow(S), borrow(lc), borrow(reach)
     params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
     X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
-    vr_acc = borrow(vr_acc)
+    vr_acc, cf = borrow(vr_acc), borrow(cf)
     reset_state(S, x0, v0, a0, present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     k_merge, overrun, collisions = -1, plan[0] - consts[C_ACCEL_END], 0
@@ -222,7 +233,7 @@ def joint_pass(
         if k == n_steps:
             break
         vr_known = vr_acc[k] if k < n_known else np.nan
-        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known)
+        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known, cf)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
         if done:
