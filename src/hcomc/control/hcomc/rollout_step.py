@@ -136,10 +136,10 @@ def reset_state(
 
 
 @intrinsic
-def _as_pointer(typingctx, address):  # type: ignore[no-untyped-def]
+def _as_pointer(typingctx, address):
     """The integer ``address`` as a raw data pointer (for :func:`borrow`)."""
 
-    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+    def codegen(context, builder, signature, args):
         return builder.inttoptr(args[0], cgutils.voidptr_t)
 
     return types.voidptr(address), codegen
@@ -154,4 +154,4 @@ def borrow(a: np.ndarray) -> np.ndarray:
     following itself; a borrowed view is not counted. The caller must keep ``a`` alive while
     the view is used (the passes borrow their arguments and the caller's scratch arrays).
     """
-    return carray(_as_pointer(a.ctypes.data), a.shape, a.dtype)
+    return carray(_as_pointer(a.ctypes.data), a.shape, a.dtype)  # type: ignore[call-arg]
