@@ -70,6 +70,7 @@ from hcomc.control.hcomc.rollout import (
     VMC,
     VR,
     counterfactual,
+    resolve_starts,
     rollout,
     warm_up,
 )
@@ -210,6 +211,11 @@ class MergeProblem:
             )
             for st in states
         )
+        # the virtual vehicles' start states (Eq. 8 defaults resolved) once per sequence
+        self._starts = tuple(
+            None if st is None else resolve_starts(st.x, st.v, st.params, st.starts)
+            for st in states
+        )
         # the cooperating vehicle's counterfactual fuel of U_fuel, once per sequence
         self._fuel_no_merge = tuple(
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
@@ -230,12 +236,12 @@ class MergeProblem:
     ) -> tuple[FloatArray, tuple[FloatArray, ...]] | None:
         """Roll out ``rows`` of ``X`` in sequence ``which``: their objectives (writing their
         constraints into ``G``) and the kernel's outputs; None if there is nothing to roll."""
-        state, cf = self.states[which], self._no_merge[which]
-        if rows.size == 0 or state is None or cf is None:
+        state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
+        if rows.size == 0 or state is None or cf is None or starts is None:
             return None
         out = rollout(
             state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-            state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
+            starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
             lateral[rows], self.consts, self.n_steps, cf,
         )  # fmt: skip
         xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
