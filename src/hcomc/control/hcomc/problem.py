@@ -341,16 +341,20 @@ class MergeProblem:
 
         Each vehicle's fuel over the window is completed to that distance at its end speed's
         cruise rate (a negative completion when it went further):
-        ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. All roles go through one
-        :func:`~hcomc.models.fuel.fuel_rate` call (rows (n, C) of K samples each).
+        ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. One
+        :func:`~hcomc.models.fuel.fuel_rate` call takes all of it: rows (n, C) of the K
+        samples followed by the cruise sample at v_K.
         """
-        r = list(roles)
-        v = np.ascontiguousarray(V[:, 1:, r].transpose(2, 0, 1))
-        a = np.ascontiguousarray(A[:, 1:, r].transpose(2, 0, 1))
-        burnt = fuel_rate(v, a).sum(axis=-1) * self.dt
-        v_end = np.maximum(V[:, -1, r].T, 1.0)
-        rest = (cf[0, -1, r] - cf[0, 0, r])[:, None] - (X[:, -1, r] - X[:, 0, r]).T
-        fuel: FloatArray = burnt + fuel_rate(v_end, 0.0) * rest / v_end
+        n, (C, K1, _) = len(roles), X.shape
+        v, a = np.empty((n, C, K1)), np.empty((n, C, K1))
+        for i, r in enumerate(roles):
+            v[i, :, :-1], a[i, :, :-1] = V[:, 1:, r], A[:, 1:, r]
+            v[i, :, -1], a[i, :, -1] = np.maximum(V[:, -1, r], 1.0), 0.0
+        rate = fuel_rate(v, a)
+        burnt = rate[..., :-1].sum(axis=-1) * self.dt
+        r_ = list(roles)
+        rest = (cf[0, -1, r_] - cf[0, 0, r_])[:, None] - (X[:, -1, r_] - X[:, 0, r_]).T
+        fuel: FloatArray = burnt + rate[..., -1] * rest / v[..., -1]
         return fuel
 
 
