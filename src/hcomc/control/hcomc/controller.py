@@ -74,8 +74,11 @@ class HCOMCDetails(PlanDetails):
     ----------
     pareto : the optimiser's returned set (decision vectors, objectives, constraints,
         feasibility, evaluations spent, optimiser name).
-    games : the Section III-B lateral game of each sequence ("ahead", "behind"); None where
-        the cooperating vehicle is not a CAV.
+    games : the Section III-B lateral game per sequence ("ahead", "behind"): the "ahead"
+        sequence's, None where its cooperating vehicle is not a CAV; always None for
+        "behind", whose game is not played: a lateral candidate is always rolled out in the
+        "ahead" group (the cooperating vehicle leaves lane 1 and VR takes its slot), so that
+        game could not change the decision.
     chosen : row of ``pareto`` that Eq. 19 picked (-1: no feasible row, the fallback applies).
     prediction : the prediction of the chosen row (None without a pick).
     eq19_branch : the Eq. 19 case that picked it ("" without a pick).
@@ -189,11 +192,12 @@ class HCOMCController:
     def problem(
         self, view: TrafficView, group: MergeGroup
     ) -> tuple[MergeProblem, tuple[LaneChangeDecision | None, LaneChangeDecision | None]]:
-        """The merge problem of this planning instant and the lateral games per sequence."""
-        games = tuple(self.lateral_game(view, g) for g in sequence_groups(view, group))
-        allowed = tuple(bool(g is not None and (g.change or g.change_is_safe)) for g in games)
-        problem = merge_problem(view, group, (allowed[0], allowed[1]))
-        return problem, (games[0], games[1])
+        """The merge problem of this planning instant and the lateral games per sequence
+        (only the "ahead" sequence's is played, see :class:`HCOMCDetails`)."""
+        game = self.lateral_game(view, group)
+        allowed = bool(game is not None and (game.change or game.change_is_safe))
+        problem = merge_problem(view, group, (allowed, False))
+        return problem, (game, None)
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
         """Plan VR's merge and the key vehicles' cooperation."""

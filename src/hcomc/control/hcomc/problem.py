@@ -61,22 +61,20 @@ from hcomc.control.hcomc.rollout import (
     C_VMC_DUR,
     C_VV_DECEL,
     C_WIDTH,
-    G_COLLISION,
     N_CONSTS,
     N_ROLES,
     N_STARTS,
     P_A,
     P_LEN,
     P_V0,
-    P_WID,
     VMC,
     VR,
     counterfactual,
+    resolve_starts,
     rollout,
     warm_up,
 )
 from hcomc.models.fuel import fuel_rate
-from hcomc.safety.collision import vehicles_collide
 from hcomc.safety.critical import SafetyIndex
 
 OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
@@ -91,7 +89,6 @@ CONSTRAINTS = (
 )
 SEQUENCES = ("ahead", "behind")
 AHEAD, BEHIND = 0, 1
-_PAIRS = np.array([(i, j) for i in range(N_ROLES) for j in range(i + 1, N_ROLES)])
 _G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
 
 
@@ -214,6 +211,15 @@ class MergeProblem:
             )
             for st in states
         )
+        # the virtual vehicles' start states (Eq. 8 defaults resolved) once per sequence
+        self._starts = tuple(
+            None if st is None else resolve_starts(st.x, st.v, st.params, st.starts)
+            for st in states
+        )
+        # the cooperating vehicle's counterfactual fuel of U_fuel, once per sequence
+        self._fuel_no_merge = tuple(
+            0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
+        )
 
     # ------------------------------------------------------------------ evaluate
     def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
@@ -230,20 +236,19 @@ class MergeProblem:
     ) -> tuple[FloatArray, tuple[FloatArray, ...]] | None:
         """Roll out ``rows`` of ``X`` in sequence ``which``: their objectives (writing their
         constraints into ``G``) and the kernel's outputs; None if there is nothing to roll."""
-        state, cf = self.states[which], self._no_merge[which]
-        if rows.size == 0 or state is None or cf is None:
+        state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
+        if rows.size == 0 or state is None or cf is None or starts is None:
             return None
         out = rollout(
             state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-            state.starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
+            starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
             lateral[rows], self.consts, self.n_steps, cf,
         )  # fmt: skip
-        xs, ys, vs, as_, hs, _, u_safe, u_eff, g, _, _, _, near = out
+        xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
         G[rows, : g.shape[1]] = g
-        G[rows, G_COLLISION] = self._collisions(state, xs, ys, hs, near)
         allowed = self.lateral_allowed[which]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
-        fuel = self._fuel(xs, vs, as_, cf, state)
+        fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[which])
         return np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff]), out
 
     def predict(self, X: FloatArray) -> Prediction:
@@ -263,7 +268,7 @@ class MergeProblem:
             if scored is None:
                 continue
             F[rows], out = scored
-            xs, ys, vs, as_, hs, km, _, _, _, v0_, v1_, v2_, _ = out
+            xs, ys, vs, as_, hs, km, _, _, _, v0_, v1_, v2_ = out
             Xt[rows], Yt[rows], Vt[rows], At[rows], Ht[rows] = xs, ys, vs, as_, hs
             k_merge[rows] = km
             for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):
@@ -304,49 +309,53 @@ class MergeProblem:
 
     # ----------------------------------------------------------------- helpers
     def _fuel(
-        self, X: FloatArray, V: FloatArray, A: FloatArray, cf: FloatArray, state: KeyState
+        self,
+        X: FloatArray,
+        V: FloatArray,
+        A: FloatArray,
+        cf: FloatArray,
+        state: KeyState,
+        cf_fuel: float | None = None,
     ) -> FloatArray:
-        """U_fuel over a common distance [L] (module docstring).
-
-        Each vehicle's fuel over the window is completed to the distance it covers in the
-        counterfactual at its end speed's cruise rate (a negative completion when it went
-        further): ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``.
-        """
-        dt = self.dt
-
-        def to_distance(r: int, x: FloatArray, v: FloatArray, a: FloatArray) -> FloatArray:
-            burnt = fuel_rate(v[..., 1:, r], a[..., 1:, r]).sum(axis=-1) * dt
-            v_end = np.maximum(v[..., -1, r], 1.0)
-            rest = (cf[0, -1, r] - cf[0, 0, r]) - (x[..., -1, r] - x[..., 0, r])
-            return burnt + fuel_rate(v_end, 0.0) * rest / v_end
-
-        total = to_distance(VR, X, V, A)
-        if state.present[VMC]:
-            baseline = to_distance(VMC, cf[0], cf[1], cf[2])
-            total = total + to_distance(VMC, X, V, A) - baseline
+        """U_fuel over a common distance [L] (module docstring): VR's fuel, plus the
+        cooperating vehicle's minus its fuel in the counterfactual ``cf`` (``cf_fuel``,
+        computed when None; the problem computes it once per sequence at set-up)."""
+        with_vmc = bool(state.present[VMC])
+        fuel = self._fuel_to_distance(cf, (VR, VMC) if with_vmc else (VR,), X, V, A)
+        total = fuel[0]
+        if with_vmc:
+            if cf_fuel is None:
+                cf_fuel = self._counterfactual_fuel(cf)
+            total = total + fuel[1] - cf_fuel
         return total / 1000.0
 
-    @staticmethod
-    def _collisions(
-        state: KeyState, X: FloatArray, Y: FloatArray, H: FloatArray, near: BoolArray
-    ) -> FloatArray:
-        """Colliding (pair, step) count per candidate: oriented rectangles (Eq. 7).
+    def _counterfactual_fuel(self, cf: FloatArray) -> float:
+        """The cooperating vehicle's fuel [mL] over its own distance in the counterfactual."""
+        return float(self._fuel_to_distance(cf, (VMC,), *cf[:, None])[0, 0])
 
-        The kernel flags pairs whose bounding boxes overlap (``near``); the exact test of
-        :func:`hcomc.safety.collision.vehicles_collide` runs on those only.
+    def _fuel_to_distance(
+        self, cf: FloatArray, roles: tuple[int, ...], X: FloatArray, V: FloatArray, A: FloatArray
+    ) -> FloatArray:
+        """Fuel [mL] of ``roles`` (n,) over the distance each covers in the counterfactual
+        ``cf`` (3, K + 1, 6), per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C).
+
+        Each vehicle's fuel over the window is completed to that distance at its end speed's
+        cruise rate (a negative completion when it went further):
+        ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. One
+        :func:`~hcomc.models.fuel.fuel_rate` call takes all of it: rows (n, C) of the K
+        samples followed by the cruise sample at v_K.
         """
-        count = np.zeros(X.shape[0])
-        if not near.any():
-            return count
-        length, width = state.params[:, P_LEN], state.params[:, P_WID]
-        c, k, p = np.nonzero(near)
-        a, b = _PAIRS[p, 0], _PAIRS[p, 1]
-        hit = vehicles_collide(
-            X[c, k, a], Y[c, k, a], H[c, k, a], length[a], width[a],
-            X[c, k, b], Y[c, k, b], H[c, k, b], length[b], width[b],
-        )  # fmt: skip
-        np.add.at(count, c[hit], 1.0)
-        return count
+        n, (C, K1, _) = len(roles), X.shape
+        v, a = np.empty((n, C, K1)), np.empty((n, C, K1))
+        for i, r in enumerate(roles):
+            v[i, :, :-1], a[i, :, :-1] = V[:, 1:, r], A[:, 1:, r]
+            v[i, :, -1], a[i, :, -1] = np.maximum(V[:, -1, r], 1.0), 0.0
+        rate = fuel_rate(v, a)
+        burnt = rate[..., :-1].sum(axis=-1) * self.dt
+        r_ = list(roles)
+        rest = (cf[0, -1, r_] - cf[0, 0, r_])[:, None] - (X[:, -1, r_] - X[:, 0, r_]).T
+        fuel: FloatArray = burnt + rate[..., -1] * rest / v[..., -1]
+        return fuel
 
 
 def default_starts() -> FloatArray:

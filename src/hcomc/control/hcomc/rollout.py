@@ -71,10 +71,11 @@ from hcomc.control.hcomc.rollout_layout import (
     G_VIRTUAL,
     N_CONSTS,
     N_G,
-    N_PAIRS,
     N_PARAMS,
+    N_PROGRESS,
     N_ROLES,
     N_STARTS,
+    N_STATE,
     P_A,
     P_B,
     P_C,
@@ -96,7 +97,13 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_passes import counterfactual, joint_pass, pre_pass, vv0_cubic
+from hcomc.control.hcomc.rollout_passes import (
+    counterfactual,
+    joint_pass,
+    pre_pass,
+    vmc_pre_track,
+    vv0_cubic,
+)
 from hcomc.control.hcomc.rollout_score import (
     created_pairs_safety,
     efficiency_gain,
@@ -126,22 +133,32 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     Y = np.zeros((n_c, K + 1, N_ROLES))
     A = np.zeros((n_c, K + 1, N_ROLES))
     HEAD = np.zeros((n_c, K + 1, N_ROLES))
-    near = np.zeros((n_c, K + 1, N_PAIRS), dtype=np.bool_)
     k_merge = np.full(n_c, -1, dtype=np.int64)
     u_safe = np.full(n_c, np.inf)
     u_eff = np.zeros(n_c)
     g = np.zeros((n_c, N_G))
     vvs = np.zeros((n_c, 3, 4))
     coop_vmc = bool(coop[VMC] and present[VMC])
+    # VMC's pre-pass trajectory depends on the mode only: once per mode, when a candidate has it
+    tracks = np.empty((2, K + 1, 2))
+    tracked = np.zeros(2, dtype=np.bool_)
+    plan = np.empty(3)
+    S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
+    vr_acc = np.empty(max(K, 1))
     for c in range(n_c):
-        plan = np.array([merge_x[c], vr_dur[c], horizon[c]])
+        plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
         lat, lon = lateral[c] and coop_vmc, (not lateral[c]) and coop_vmc
+        mode = 1 if lat else 0
+        if not tracked[mode]:
+            tracks[mode] = vmc_pre_track(x0, v0, a0, present, params, lat, consts, K)
+            tracked[mode] = True
         vv0_cubic(starts, horizon[c], cf, consts[C_DT], vvs[c, 0])
         flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
-        pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, lat, flags, consts, K)
-        k_merge[c], g[c, G_OVERRUN] = joint_pass(
+        n_known = pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, flags[0],
+                           consts, tracks[mode], S, lc, vr_acc)  # fmt: skip
+        k_merge[c], g[c, G_OVERRUN], g[c, G_COLLISION] = joint_pass(
             x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
-            X[c], Y[c], V[c], A[c], HEAD[c], near[c],
+            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach, vr_acc, n_known, cf,
         )  # fmt: skip
         g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
         u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])
@@ -154,7 +171,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
         if u_safe[c] == np.inf:
             g[c, G_UNSAFE] = 1.0
     vv0, vv1, vv2 = vvs[:, 0].copy(), vvs[:, 1].copy(), vvs[:, 2].copy()
-    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2, near
+    return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2
 
 
 def resolve_starts(
@@ -224,10 +241,9 @@ def rollout(
     u_eff : (C,) Eq. 17 gain accumulated over the window against the no-merge counterfactual:
         mean over the K steps of (a_VR − a_VR,cf) + eta Σ_{VMC, VMR, VNR} (a_i − a_i,cf)
         [m/s^2].
-    g : (C, 5) constraint parts (collision column left 0 for the caller).
+    g : (C, 5) constraint parts; column ``G_COLLISION`` counts the colliding (pair, step)
+        combinations of the key vehicles (oriented rectangles, Eq. 7).
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
-    near : (C, K + 1, 15) key-vehicle pairs (i < j, row-major) whose bounding boxes overlap;
-        only these can collide (the exact Eq. 7 test is left to the caller).
     """
     resolved = resolve_starts(x0, v0, params, starts)
     out: tuple[np.ndarray, ...] = _rollout_kernel(

@@ -11,6 +11,8 @@ VMF and VNF, and nobody follows VV1 or VV2 (their end states are not fixed yet).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -102,22 +104,26 @@ def vnr_accel(
 def accelerations(
     S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray, t: float,
     horizon: float, vr_dur: float, flags: tuple[bool, bool, bool],
-    consts: tuple[float, float, float], joint: bool,
+    consts: tuple[float, float, float], joint: bool, vr_known: float, vnr_known: bool,
 ) -> None:  # fmt: skip
     """Fill ``S[R_ACC]`` for the step from ``t``. ``vvs`` (3, 4) holds VV0, VV1 and VV2;
     ``flags`` whether VR is controlled, VMC follows VV1 (longitudinal mode) and VNR
     cooperates; ``consts`` the acceleration-lane end, VMC's lateral change duration and
-    Eq. 14's gamma."""
+    Eq. 14's gamma; ``vr_known`` VR's acceleration when the caller knows it already (NaN:
+    compute it); ``vnr_known`` True leaves VNR's to the caller."""
     controlled_vr, longitudinal, coop_vnr = flags
     accel_end, vmc_dur, gamma = consts
     S[R_ACC, VMF] = 0.0
     S[R_ACC, VNF] = 0.0
-    S[R_ACC, VR] = vr_accel(S, lc, params, vvs, t, horizon, vr_dur, controlled_vr, accel_end,
-                            gamma, joint)  # fmt: skip
+    if math.isnan(vr_known):
+        S[R_ACC, VR] = vr_accel(S, lc, params, vvs, t, horizon, vr_dur, controlled_vr,
+                                accel_end, gamma, joint)  # fmt: skip
+    else:
+        S[R_ACC, VR] = vr_known
     if S[R_PRESENT, VMC]:
         S[R_ACC, VMC] = vmc_accel(S, lc, params, vvs, t, horizon, vmc_dur, gamma,
                                   longitudinal, joint)  # fmt: skip
     if S[R_PRESENT, VMR]:
         S[R_ACC, VMR] = behind(S, params, VMR, leader(S, VMR, 1))
-    if S[R_PRESENT, VNR]:
+    if S[R_PRESENT, VNR] and not vnr_known:
         S[R_ACC, VNR] = vnr_accel(S, lc, params, vvs, t, horizon, coop_vnr, joint)

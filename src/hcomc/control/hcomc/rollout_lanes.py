@@ -1,4 +1,4 @@
-"""Lane-change progress of the HCOMC prediction: lane membership, quintic path, box overlap.
+"""Lane-change progress of the HCOMC prediction: lane membership, quintic path, collisions.
 
 As in the engine, a lane change follows the quintic path of Eq. 4-6 parametrised in x, from
 the position where it starts to ``x0 + max(v T_lc, 3 L)``, and a changing vehicle occupies
@@ -39,6 +39,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VR,
 )
 from hcomc.models.quintic import lateral_state
+from hcomc.safety.collision import vehicle_pair_collides
 
 
 @njit(cache=True)
@@ -92,9 +93,16 @@ def advance_progress(
     if lc[L_VR_STARTED] and not lc[L_VR_DONE] and x_vr >= lc[L_VR_XF]:
         done = True
         lc[L_VR_DONE] = 1.0
+    advance_vmc(lc, S)
+    return started, done
+
+
+@njit(cache=True, inline="always")
+def advance_vmc(lc: np.ndarray, S: np.ndarray) -> None:
+    """VMC's part of :func:`advance_progress`: its lateral change ends once it passes the
+    predicted end of its path."""
     if not lc[L_VMC_DONE] and S[R_X, VMC] >= lc[L_VMC_XF]:
         lc[L_VMC_DONE] = 1.0
-    return started, done
 
 
 @njit(cache=True, inline="always")
@@ -119,28 +127,35 @@ def lateral_pose(
 
 
 @njit(cache=True, inline="always")
-def near_pairs(
+def collisions_at(
     X: np.ndarray, Y: np.ndarray, H: np.ndarray, k: int, S: np.ndarray, params: np.ndarray,
-    near: np.ndarray, reach: np.ndarray,
-) -> None:  # fmt: skip
-    """Axis-aligned bounding-box overlap of every key pair at step k (into ``near[k]``;
-    ``reach`` (6,) is scratch space).
+    reach: np.ndarray,
+) -> int:  # fmt: skip
+    """Number of colliding key pairs at step k (``reach`` (6,) is scratch space).
 
-    A rectangle of length L and width W at heading h lies within x in [x - L - W/2, x + W/2]
-    and y within W/2 + L |sin h| of its front-bumper reference point. Only overlapping pairs
-    can collide; the exact Eq. 7 test is left to the caller.
+    Axis-aligned bounding boxes first: a rectangle of length L and width W at heading h lies
+    within x in [x - L - W/2, x + W/2] and y within W/2 + L |sin h| of its front-bumper
+    reference point, so only pairs whose boxes overlap can collide; those get the exact Eq. 7
+    test of :func:`hcomc.safety.collision.vehicle_pair_collides`.
     """
     for r in range(N_ROLES):
-        reach[r] = 0.5 * params[r, P_WID] + params[r, P_LEN] * abs(math.sin(H[k, r]))
-    p = 0
+        h = H[k, r]  # L |sin h| is exactly 0 at h = 0 (every role off a lane change)
+        reach[r] = 0.5 * params[r, P_WID] + (params[r, P_LEN] * abs(math.sin(h)) if h else 0.0)
+    count = 0
     for i in range(N_ROLES):
         for j in range(i + 1, N_ROLES):
-            if S[R_PRESENT, i] and S[R_PRESENT, j]:
-                li, lj = params[i, P_LEN], params[j, P_LEN]
-                wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
-                near[k, p] = (
-                    abs(Y[k, i] - Y[k, j]) <= reach[i] + reach[j]
-                    and X[k, i] + wi >= X[k, j] - lj - wj
-                    and X[k, j] + wj >= X[k, i] - li - wi
+            if not (S[R_PRESENT, i] and S[R_PRESENT, j]):
+                continue
+            li, lj = params[i, P_LEN], params[j, P_LEN]
+            wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
+            if (
+                abs(Y[k, i] - Y[k, j]) <= reach[i] + reach[j]
+                and X[k, i] + wi >= X[k, j] - lj - wj
+                and X[k, j] + wj >= X[k, i] - li - wi
+                and vehicle_pair_collides(
+                    X[k, i], Y[k, i], H[k, i], li, params[i, P_WID],
+                    X[k, j], Y[k, j], H[k, j], lj, params[j, P_WID],
                 )
-            p += 1
+            ):  # fmt: skip
+                count += 1
+    return count

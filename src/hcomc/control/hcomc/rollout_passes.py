@@ -8,12 +8,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hcomc.control.hcomc.rollout_accel import accelerations
+from hcomc.control.hcomc.rollout_accel import accelerations, vmc_accel, vr_accel
 from hcomc.control.hcomc.rollout_lanes import (
     advance_progress,
+    advance_vmc,
+    collisions_at,
     lateral_pose,
     memberships,
-    near_pairs,
     start_progress,
 )
 from hcomc.control.hcomc.rollout_layout import (
@@ -23,6 +24,7 @@ from hcomc.control.hcomc.rollout_layout import (
     C_GAMMA,
     C_VMC_DUR,
     C_WIDTH,
+    L_LATERAL,
     L_VR_STARTED,
     L_VR_XF,
     LANE0,
@@ -45,7 +47,16 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_step import behind, free_road, integrate, leader, new_state
+from hcomc.control.hcomc.rollout_step import (
+    behind,
+    borrow,
+    free_road,
+    integrate,
+    integrate_role,
+    leader,
+    new_state,
+    reset_state,
+)
 from hcomc.control.virtual_vehicle import cubic_into
 
 
@@ -91,38 +102,103 @@ def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -
 def step(
     k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
     plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
+    vr_known: float, cf: np.ndarray,
 ) -> tuple[bool, bool]:  # fmt: skip
     """Advance the roles by one step from step k; (VR started, VR ended its change) in it.
 
     ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
-    ``flags`` are those of :func:`~hcomc.control.hcomc.rollout_accel.accelerations`.
+    ``flags`` and ``vr_known`` are those of
+    :func:`~hcomc.control.hcomc.rollout_accel.accelerations`. In longitudinal mode VNR
+    follows VNF alone, exactly as in the no-merge counterfactual ``cf`` (3, K + 1, 6): its
+    states are taken from there.
     """
     dt = consts[C_DT]
     memberships(lc, S)
     lane_consts = (consts[C_ACCEL_END], consts[C_VMC_DUR], consts[C_GAMMA])
-    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint)
+    vnr_known = not lc[L_LATERAL]
+    accelerations(S, lc, params, vvs, k * dt, plan[2], plan[1], flags, lane_consts, joint,
+                  vr_known, vnr_known)  # fmt: skip
     integrate(S, dt, consts[C_EMERGENCY])
+    if vnr_known:
+        S[R_X, VNR], S[R_V, VNR], S[R_A, VNR] = (
+            cf[0, k + 1, VNR],
+            cf[1, k + 1, VNR],
+            cf[2, k + 1, VNR],
+        )
     return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
+
+
+@njit(cache=True)
+def vmc_pre_track(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
+    lateral: bool, consts: np.ndarray, n_steps: int,
+) -> np.ndarray:  # fmt: skip
+    """VMC's position and speed (n_steps + 1, 2) in the pre-pass, at every step.
+
+    In the pre-pass VMC follows only VMF (and VNF in lateral mode), which keep their speed, so
+    its trajectory depends on the mode alone, not on the candidate: it is rolled out once per
+    population and mode, with the same per-step functions as the candidates' passes.
+    """
+    track = np.empty((n_steps + 1, 2))
+    S = new_state(x0, v0, a0, present)
+    lc = np.empty(N_PROGRESS)
+    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
+    vvs = np.zeros((3, 4))  # not followed in the pre-pass
+    dt, em = consts[C_DT], consts[C_EMERGENCY]
+    for k in range(n_steps + 1):
+        track[k, 0], track[k, 1] = S[R_X, VMC], S[R_V, VMC]
+        if k == n_steps:
+            break
+        if S[R_PRESENT, VMC]:
+            S[R_ACC, VMC] = vmc_accel(S, lc, params, vvs, k * dt, 0.0, consts[C_VMC_DUR],
+                                      consts[C_GAMMA], False, False)  # fmt: skip
+        for r in (VMC, VMF, VNF):  # the commanded acceleration of VMF, VNF stays 0
+            if S[R_PRESENT, r]:
+                integrate_role(S, r, dt, em)
+        advance_vmc(lc, S)
+    return track
 
 
 @njit(cache=True)
 def pre_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
-    starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
-    flags: tuple[bool, bool, bool], consts: np.ndarray, n_steps: int,
-) -> None:  # fmt: skip
+    starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
+    consts: np.ndarray, vmc_track: np.ndarray, S: np.ndarray, lc: np.ndarray,
+    vr_acc: np.ndarray,
+) -> int:  # fmt: skip
     """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
-    the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``."""
-    S = new_state(x0, v0, a0, present)
-    lc = np.empty(N_PROGRESS)
-    start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
-    k = 0
-    while k * consts[C_DT] < plan[2] and k < n_steps:
-        step(k, S, lc, params, vvs, plan, flags, consts, False)
+    the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``.
+
+    Nobody else enters VR's or VMC's accelerations in this pass, so only VR (with VMF, which
+    keeps its speed) is rolled out here; VMC's states come from ``vmc_track``
+    (:func:`vmc_pre_track` of the candidate's mode). ``S`` (7, 6) and ``lc`` (9,) are
+    scratch space.
+
+    Until VR starts its change its acceleration depends on VR, VV0 and VMF alone, as in the
+    joint pass: the steps' accelerations are written to ``vr_acc`` (K,) and their number is
+    returned, so that the joint pass takes them instead of computing them again.
+    """
+    n_steps = vmc_track.shape[0] - 1
+    S, lc, params, vvs, plan = borrow(S), borrow(lc), borrow(params), borrow(vvs), borrow(plan)
+    vr_acc = borrow(vr_acc)
+    reset_state(S, x0, v0, a0, present)
+    start_progress(lc, False, S, consts[C_VMC_DUR], params)
+    dt, em = consts[C_DT], consts[C_EMERGENCY]
+    k = n_known = 0
+    while k * dt < plan[2] and k < n_steps:
+        S[R_ACC, VR] = vr_accel(S, lc, params, vvs, k * dt, plan[2], plan[1], controlled,
+                                consts[C_ACCEL_END], consts[C_GAMMA], False)  # fmt: skip
+        if not lc[L_VR_STARTED]:
+            vr_acc[k], n_known = S[R_ACC, VR], k + 1
+        for r in (VR, VMF):  # the commanded acceleration of VMF stays 0 (new_state)
+            if S[R_PRESENT, r]:
+                integrate_role(S, r, dt, em)
+        advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
         k += 1
     # virtual-vehicle end states at the horizon, or at the window's end if that comes first
     cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], S[R_X, VR], S[R_V, VR], vvs[1])
-    cubic_into(plan[2], x0[VNF], v0[VNF], S[R_X, VMC], S[R_V, VMC], vvs[2])
+    cubic_into(plan[2], x0[VNF], v0[VNF], vmc_track[k, 0], vmc_track[k, 1], vvs[2])
+    return n_known
 
 
 @njit(cache=True)
@@ -130,33 +206,41 @@ def joint_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
-    HEAD: np.ndarray, near: np.ndarray,
-) -> tuple[int, float]:  # fmt: skip
-    """Pass 2: every key vehicle, trajectories written to X … near (K + 1, ...).
+    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray, vr_acc: np.ndarray,
+    n_known: int, cf: np.ndarray,
+) -> tuple[int, float, float]:  # fmt: skip
+    """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
 
-    Returns the step at which VR's change ends (-1: not within the window) and how far the
-    end of its path lies beyond the acceleration lane [m].
+    Returns the step at which VR's change ends (-1: not within the window), how far the end
+    of its path lies beyond the acceleration lane [m] and the number of colliding
+    (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (7, 6), ``lc`` (9,) and
+    ``reach`` (6,) are scratch space; VR's accelerations of the first ``n_known`` steps are
+    those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
+    counterfactual (:func:`step`).
     """
     n_steps = X.shape[0] - 1
-    S = new_state(x0, v0, a0, present)
-    lc = np.empty(N_PROGRESS)
+    S, lc, reach = borrow(S), borrow(lc), borrow(reach)
+    params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
+    X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
+    vr_acc, cf = borrow(vr_acc), borrow(cf)
+    reset_state(S, x0, v0, a0, present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
-    reach = np.empty(N_ROLES)
-    k_merge, overrun = -1, plan[0] - consts[C_ACCEL_END]
+    k_merge, overrun, collisions = -1, plan[0] - consts[C_ACCEL_END], 0
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
         lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
-        near_pairs(X, Y, HEAD, k, S, params, near, reach)
+        collisions += collisions_at(X, Y, HEAD, k, S, params, reach)
         if k == n_steps:
             break
-        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True)
+        vr_known = vr_acc[k] if k < n_known else np.nan
+        started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known, cf)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
         if done:
             k_merge = k + 1
     if not lc[L_VR_STARTED]:
         overrun = plan[0] - consts[C_ACCEL_END]
-    return k_merge, overrun
+    return k_merge, overrun, float(collisions)
 
 
 @njit(cache=True)

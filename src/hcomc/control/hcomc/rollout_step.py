@@ -10,7 +10,9 @@ the engine's integration scheme. The roles' state is one (7, 6) array ``S`` (row
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import carray, njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 from hcomc.control.hcomc.rollout_layout import (
     LANE0,
@@ -92,28 +94,64 @@ def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
     """Ballistic step of every present role with its acceleration ``S[R_ACC]`` (floored at
     the emergency deceleration), stopping exactly at v = 0 (as the engine)."""
     for r in range(N_ROLES):
-        if not S[R_PRESENT, r]:
-            continue
-        ar = max(S[R_ACC, r], -emergency)
-        v = S[R_V, r]
-        v1 = v + ar * dt
-        if v1 < 0.0:
-            S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
-            S[R_A, r] = -v / dt
-            S[R_V, r] = 0.0
-        else:
-            S[R_X, r] += v * dt + 0.5 * ar * dt * dt
-            S[R_V, r] = v1
-            S[R_A, r] = ar
+        if S[R_PRESENT, r]:
+            integrate_role(S, r, dt, emergency)
+
+
+@njit(cache=True, inline="always")
+def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
+    """The ballistic step of :func:`integrate` for role r alone."""
+    ar = max(S[R_ACC, r], -emergency)
+    v = S[R_V, r]
+    v1 = v + ar * dt
+    if v1 < 0.0:
+        S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
+        S[R_A, r] = -v / dt
+        S[R_V, r] = 0.0
+    else:
+        S[R_X, r] += v * dt + 0.5 * ar * dt * dt
+        S[R_V, r] = v1
+        S[R_A, r] = ar
 
 
 @njit(cache=True)
 def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) -> np.ndarray:
     """The state ``S`` (7, 6) of the roles at planning time (lane rows at their start lanes)."""
-    S = np.zeros((N_STATE, N_ROLES))
+    S = np.empty((N_STATE, N_ROLES))
+    reset_state(S, x, v, a, present)
+    return S
+
+
+@njit(cache=True, inline="always")
+def reset_state(
+    S: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray
+) -> None:
+    """Overwrite ``S`` (7, 6) with the state of :func:`new_state`."""
+    S[:] = 0.0
     for r in range(N_ROLES):
         S[R_X, r], S[R_V, r], S[R_A, r] = x[r], v[r], a[r]
         S[R_IN1, r] = 1.0 if LANE0[r] == 1 else 0.0
         S[R_IN2, r] = 1.0 if LANE0[r] == 2 else 0.0
         S[R_PRESENT, r] = 1.0 if present[r] else 0.0
-    return S
+
+
+@intrinsic
+def _as_pointer(typingctx, address):
+    """The integer ``address`` as a raw data pointer (for :func:`borrow`)."""
+
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], cgutils.voidptr_t)
+
+    return types.voidptr(address), codegen
+
+
+@njit(cache=True, inline="always")
+def borrow(a: np.ndarray) -> np.ndarray:
+    """A view of the C-contiguous array ``a`` that does not own its memory.
+
+    Numba counts the references to an owning array atomically each time an inlined helper
+    receives it; in the per-step loops of the passes that took about a quarter of the
+    kernel's time. A borrowed view is not counted. The caller must keep ``a`` alive while
+    the view is used (the passes borrow their arguments and the caller's scratch arrays).
+    """
+    return carray(_as_pointer(a.ctypes.data), a.shape, a.dtype)  # type: ignore[call-arg]
