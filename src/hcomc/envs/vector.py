@@ -82,19 +82,15 @@ class MergeVectorEnv(VectorEnv):
     def _next_seed(self, k: int) -> int:
         return int(self._rngs[k].integers(2**31 - 1))
 
-    def _start(
-        self,
-        which: list[int],
-        seeds: list[int],
-        runs: tuple[list[Simulation], list[int]] = ([], []),
-    ) -> list[np.ndarray]:
-        """New episodes for sub-environments ``which``, advanced to their start in one batch
-        with ``runs`` (other runs and the steps to advance them to)."""
+    def _start(self, which: list[int], seeds: list[int]) -> list[np.ndarray]:
+        """New episodes for sub-environments ``which``, advanced together to their start."""
         new = [MergeEpisode(self.options, self.config, s) for s in seeds]
-        sims, goals = runs
-        keys = [False] * len(sims) + [True] * len(new)
-        advance_ensemble([*sims, *(e.sim for e in new)], [*goals, *[_END] * len(new)],
-                         until_key_vehicles=keys, threads=self.threads)  # fmt: skip
+        advance_ensemble([e.sim for e in new], [_END] * len(new),
+                         until_key_vehicles=[True] * len(new), threads=self.threads)  # fmt: skip
+        return self._begin(which, new)
+
+    def _begin(self, which: list[int], new: list[MergeEpisode]) -> list[np.ndarray]:
+        """Twins and first observations of new episodes that reached VR's entry."""
         behind = [e for e in new if e.make_twin()]  # twins that are not copies
         advance_ensemble([e.twin for e in behind], [e.sim.step_index for e in behind],
                          threads=self.threads)  # fmt: skip
@@ -106,7 +102,11 @@ class MergeVectorEnv(VectorEnv):
     def step(
         self, actions: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        """One action period of every sub-environment (restarting those that ended)."""
+        """One action period of every sub-environment (restarting those that ended).
+
+        All runs advance in one compiled call, each sub-environment's run and twin in the same
+        places every step (a restarting one: its new run, and its old twin standing still).
+        """
         actions = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
         n = self.num_envs
         obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
@@ -114,18 +114,27 @@ class MergeVectorEnv(VectorEnv):
         terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
         details: list[dict[str, Any]] = [{} for _ in range(n)]
         restart = np.flatnonzero(self._ended).tolist()
-        running = np.flatnonzero(~self._ended).tolist()
+        new = {k: MergeEpisode(self.options, self.config, self._next_seed(k)) for k in restart}
         runs: list[Simulation] = []
         goals: list[int] = []
-        for k in running:
+        keys: list[bool] = []
+        for k in range(n):
             episode = self.episodes[k]
             assert episode is not None
-            target = episode.apply(actions[k])
-            runs += [episode.sim, episode.twin]
-            goals += [target, target]
-        seeds = [self._next_seed(k) for k in restart]
-        firsts = self._start(restart, seeds, (runs, goals))  # restarts advance with the rest
-        for k in running:
+            if k in new:
+                runs += [new[k].sim, episode.twin]
+                goals += [_END, episode.twin.step_index]
+                keys += [True, False]
+            else:
+                target = episode.apply(actions[k])
+                runs += [episode.sim, episode.twin]
+                goals += [target, target]
+                keys += [False, False]
+        advance_ensemble(runs, goals, until_key_vehicles=keys, threads=self.threads)
+        firsts = self._begin(restart, [new[k] for k in restart])
+        for k in range(n):
+            if k in new:
+                continue
             episode = self.episodes[k]
             assert episode is not None
             result = episode.evaluate()
@@ -134,7 +143,7 @@ class MergeVectorEnv(VectorEnv):
             details[k] = result.info
         for k, first in zip(restart, firsts, strict=True):
             obs[k] = first
-            details[k] = {"seed": self.episodes[k].seed}  # type: ignore[union-attr]
+            details[k] = {"seed": new[k].seed}
         self._ended = terminated | truncated
         return obs, rewards, terminated, truncated, self._infos(details)
 

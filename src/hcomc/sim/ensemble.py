@@ -44,13 +44,16 @@ _LAST: list[tuple[list[weakref.ref[Simulation]], List, List]] = []
 
 
 def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
-    """The compiled loop's lists of the runs' states and generators; the last batch's lists
-    are reused when the same runs come again (a learning environment's every step), since
-    building them costs microseconds per run."""
-    if _LAST:
+    """The compiled loop's lists of the runs' states and generators. The last batch's lists
+    are kept and only the places whose run changed are replaced (a learning environment
+    passes the same runs in the same places every step, with a few new episodes), since
+    each entry costs microseconds to convert."""
+    if _LAST and len(_LAST[0][0]) == len(runs):
         refs, cores, rngs = _LAST[0]
-        if len(refs) == len(runs) and all(r() is s for r, s in zip(refs, runs, strict=True)):
-            return cores, rngs
+        for k, run in enumerate(runs):
+            if refs[k]() is not run:
+                refs[k], cores[k], rngs[k] = weakref.ref(run), run.core, run.rng
+        return cores, rngs
     cores = List([s.core for s in runs])
     rngs = List([s.rng for s in runs])
     _LAST[:] = [([weakref.ref(s) for s in runs], cores, rngs)]
@@ -97,27 +100,28 @@ def advance_ensemble(
     def due(k: int) -> bool:
         return not sims[k].reached(goal[k], until_key_vehicles=keys[k])
 
+    if not any(due(k) for k in range(len(sims))):
+        return
     previous = threads
     if threads > 1:  # the thread pool is touched only when used (a forked child must not)
         previous = numba.get_num_threads()
         numba.set_num_threads(threads)
     try:
-        pending = [k for k in range(len(sims)) if due(k)]
-        runs = [sims[k] for k in pending]
-        cores, rngs = _typed_lists(runs)  # one batch: a run that is done stands still
+        runs = list(sims)
+        cores, rngs = _typed_lists(runs)  # one batch, the same places: a done run stands still
         reasons = np.empty(len(runs), dtype=np.int64)
-        going = [True] * len(runs)
+        going = [due(k) for k in range(len(runs))]
         while any(going):
             stops = np.array(
                 [min(r.stop_step, goal[k]) if g else r.step_index
-                 for r, k, g in zip(runs, pending, going, strict=True)], dtype=np.int64,
+                 for k, (r, g) in enumerate(zip(runs, going, strict=True))], dtype=np.int64,
             )  # fmt: skip
             logging = np.array([r.logging for r in runs], dtype=np.bool_)
             advance(cores, rngs, stops, logging, reasons)
             for r, reason, g in zip(runs, reasons.tolist(), going, strict=True):
                 if g:
                     r.resume(reason)
-            still = [due(k) for k in pending]
+            still = [due(k) for k in range(len(runs))]
             if progress is not None and still != going:
                 progress(len(sims) - sum(still), len(sims))
             going = still
