@@ -47,7 +47,8 @@ def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
     """The compiled loop's lists of the runs' states and generators. The last batch's lists
     are kept and only the places whose run changed are replaced (a learning environment
     passes the same runs in the same places every step, with a few new episodes), since
-    each entry costs microseconds to convert."""
+    each entry costs microseconds to convert. They hold the last batch's states until the
+    next batch (or the end of :func:`run_ensemble`)."""
     if _LAST and len(_LAST[0][0]) == len(runs):
         refs, cores, rngs = _LAST[0]
         for k, run in enumerate(runs):
@@ -73,6 +74,7 @@ def run_ensemble(
     as runs finish.
     """
     advance_ensemble(sims, None, threads=threads, progress=progress)
+    _LAST.clear()  # a finished batch's states need not outlive it
     return [s.log for s in sims]
 
 
