@@ -18,11 +18,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc.config import ScenarioConfig
+from hcomc.envs.batch import (
+    N_TERMS,
+    T_COLLISIONS,
+    T_EFFICIENCY,
+    T_FUEL,
+    T_LANE_END,
+    T_MERGED,
+    T_ROWS,
+    T_SAFETY,
+    apply_one,
+    parameters,
+    rewards,
+    step_terms,
+)
 from hcomc.envs.observation import N_OBS, observe, pair_safety
 from hcomc.envs.options import EnvOptions
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.models.fuel import FUEL_DEFAULT
-from hcomc.road import VMC, VMR, VNR, Kind, Lane
+from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.twin import can_twin, undisturbed_twin
@@ -31,24 +45,25 @@ _END = np.iinfo(np.int64).max
 _FUEL = np.array(FUEL_DEFAULT.coefficients())  # the fuel model the metrics use
 
 
-def apply_action(sim: Simulation, config: ScenarioConfig, i: int, action: np.ndarray) -> None:
+def apply_action(sim: Simulation, params: np.ndarray, i: int, action: np.ndarray) -> None:
     """Drive vehicle i with an action of the environments' action space.
 
     ``action[0]`` in [-1, 1] is the acceleration as a fraction of the vehicle's maximum
     acceleration (> 0) or of the emergency deceleration (< 0); ``action[1] > 0`` starts a lane
     change unless one is under way: from the acceleration lane (only between its start and
-    end) into lane 1, from a main lane to the other.
+    end) into lane 1, from a main lane to the other. ``params``: :func:`batch.parameters`.
     """
-    a = float(np.clip(action[0], -1.0, 1.0))
-    limit = sim.fleet.a[i] if a >= 0 else config.lane_change.emergency_decel
-    sim.command(i, a * float(limit))
-    if float(action[1]) <= 0 or sim.origin[i] != sim.target[i] or not sim.active[i]:
-        return
-    road = config.road
-    if sim.lane[i] != Lane.RAMP:
-        sim.start_lane_change(i, int(Lane.MAIN_1 if sim.lane[i] == Lane.MAIN_2 else Lane.MAIN_2))
-    elif road.accel_lane_start <= sim.x[i] <= road.accel_lane_end:
-        sim.start_lane_change(i, int(Lane.MAIN_1))
+    apply_one(sim.core, i, float(action[0]), float(action[1]), params)
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """How one environment step ended for one episode."""
+
+    terminated: bool
+    truncated: bool
+    crashed: bool
+    info: dict[str, object]
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,6 +94,7 @@ class MergeEpisode:
         self._rows = self._events = self._collisions = 0
         self.ramp = self.sim.demand.lane == Lane.RAMP
         self.params = np.ascontiguousarray(self.sim.fleet.matrix)
+        self.kernel_params = parameters(config, options.action_period)
         self.done = False
 
     # ----------------------------------------------------------------- start
@@ -135,43 +151,41 @@ class MergeEpisode:
         """Command the agent's vehicle for the next period (:func:`apply_action`; not used
         when a controller drives VR); returns the step to advance to."""
         if self.driven:
-            apply_action(self.sim, self.config, self.ego, action)
+            apply_action(self.sim, self.kernel_params, self.ego, action)
         return self.sim.step_index + self.period_steps
 
     def evaluate(self) -> StepResult:
         """Observation, reward, end of episode and info after the runs advanced one period."""
-        sim, w = self.sim, self.options.reward
-        self._observe()
-        collided = self.collided()
-        r0, r1 = self.new_rows()
-        vr, g = self.vr, self.group
-        merged = self.merged()
-        lane_end = self.driven and self.options.agent == "vr" and self.at_lane_end()
-        crashed = bool(collided.size) or lane_end
-        terminated = crashed or merged or not sim.active[vr]
+        terms = np.empty(N_TERMS)
+        self.group = step_terms(self.sim.core, self.twin.core, self.ego, self.vr, self._rows,
+                                self.kernel_params, self.obs, terms)  # fmt: skip
+        outcome = self.conclude(terms)
+        reward = rewards(terms[None, :], np.array([outcome.crashed]),
+                         np.array([outcome.truncated]), self.options.reward,
+                         self.options.action_period)[0]  # fmt: skip
+        return StepResult(self.obs.copy(), float(reward), outcome.terminated,
+                          outcome.truncated, outcome.info)  # fmt: skip
+
+    def conclude(self, terms: np.ndarray) -> Outcome:
+        """How the step ended, from its terms (:func:`~hcomc.envs.batch.step_terms`); the
+        reward is :func:`~hcomc.envs.batch.rewards` of the terms and this outcome."""
+        sim = self.sim
+        collision = terms[T_COLLISIONS] > self._collisions
+        self._collisions, self._rows = int(terms[T_COLLISIONS]), int(terms[T_ROWS])
+        merged = bool(terms[T_MERGED])
+        lane_end = self.driven and self.options.agent == "vr" and bool(terms[T_LANE_END])
+        crashed = bool(collision) or lane_end
+        terminated = crashed or merged or not sim.active[self.vr]
         timeout = not terminated and self.out_of_time()
-        safety = self.safety_of(self.ego)
-        fuel = self.fuel_of(vr, r0, r1) + self.fuel_of(int(g[VMC]), r0, r1)
-        eta = self.config.lane_change.politeness
-        efficiency = self.gain_of(vr, r0, r1) + eta * sum(
-            self.gain_of(int(g[role]), r0, r1) for role in (VMC, VMR, VNR)
-        )
-        reward = (
-            -w.safety * safety
-            - w.fuel * fuel
-            + w.efficiency * efficiency
-            - w.time * self.options.action_period
-            - w.collision * crashed
-            - w.timeout * timeout
-        )
         self.done = terminated or timeout
         info: dict[str, object] = {
             "t": sim.t, "elapsed": sim.t - self.t_start, "merged": merged,
-            "collision": bool(collided.size), "lane_end": lane_end, "timeout": timeout,
-            "safety": safety, "fuel": fuel, "efficiency": efficiency, "ego": self.ego, "vr": vr,
+            "collision": bool(collision), "lane_end": lane_end, "timeout": timeout,
+            "safety": float(terms[T_SAFETY]), "fuel": float(terms[T_FUEL]),
+            "efficiency": float(terms[T_EFFICIENCY]), "ego": self.ego, "vr": self.vr,
             "seed": self.seed,
         }  # fmt: skip
-        return StepResult(self.obs.copy(), float(reward), terminated, timeout, info)
+        return Outcome(terminated, timeout, crashed, info)
 
     def _observe(self) -> None:
         s = self.sim
@@ -255,4 +269,4 @@ class MergeEpisode:
         return self.sim.log, self.twin.log
 
 
-__all__ = ["MergeEpisode", "StepResult", "apply_action"]
+__all__ = ["MergeEpisode", "Outcome", "StepResult", "apply_action"]

@@ -137,7 +137,7 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             if action is None:
                 s.command(i, float("nan"))
                 continue
-            apply_action(s, self.config, i, np.asarray(action, dtype=np.float64))
+            apply_action(s, e.kernel_params, i, np.asarray(action, dtype=np.float64))
         target = s.step_index + e.period_steps
         s.run_to(target)
         e.twin.run_to(target)

@@ -21,9 +21,13 @@ import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
+from numba.typed import List
 
+from hcomc.envs.batch import N_TERMS, apply_batch, parameters, step_terms_batch
+from hcomc.envs.batch import rewards as step_rewards
 from hcomc.envs.episode import MergeEpisode
 from hcomc.envs.merge_env import MergeEnv
+from hcomc.road import N_ROLES
 from hcomc.sim.engine import Simulation
 from hcomc.sim.ensemble import advance_ensemble
 
@@ -56,6 +60,10 @@ class MergeVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.episodes: list[MergeEpisode | None] = [None] * self.num_envs
+        self._params = parameters(self.config, self.options.action_period)
+        self._mains: List | None = None
+        self._twins: List | None = None
+        self._listed: list[MergeEpisode] = []
         self._rngs = [seeding.np_random(k)[0] for k in range(self.num_envs)]
         self._ended = np.zeros(self.num_envs, dtype=bool)
 
@@ -109,43 +117,72 @@ class MergeVectorEnv(VectorEnv):
         """
         actions = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
         n = self.num_envs
-        obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
-        rewards = np.zeros(n)
         terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
         details: list[dict[str, Any]] = [{} for _ in range(n)]
         restart = np.flatnonzero(self._ended).tolist()
         new = {k: MergeEpisode(self.options, self.config, self._next_seed(k)) for k in restart}
+        episodes = self._current()
+        mains, twins = self._lists(episodes)
+        drive = np.array([e.driven and k not in new for k, e in enumerate(episodes)])
+        egos = np.array([e.ego for e in episodes], dtype=np.int64)
+        apply_batch(mains, egos, actions, drive, self._params)
         runs: list[Simulation] = []
         goals: list[int] = []
         keys: list[bool] = []
-        for k in range(n):
-            episode = self.episodes[k]
-            assert episode is not None
+        for k, episode in enumerate(episodes):
             if k in new:
                 runs += [new[k].sim, episode.twin]
                 goals += [_END, episode.twin.step_index]
                 keys += [True, False]
             else:
-                target = episode.apply(actions[k])
+                target = episode.sim.step_index + episode.period_steps
                 runs += [episode.sim, episode.twin]
                 goals += [target, target]
                 keys += [False, False]
-        advance_ensemble(runs, goals, until_key_vehicles=keys, threads=self.threads)
+        advance_ensemble(runs, goals, until_key_vehicles=keys, threads=self.threads,
+                         flush=False)  # the episodes count collisions, not events  # fmt: skip
+        vrs = np.array([e.vr for e in episodes], dtype=np.int64)
+        r0s = np.array([e._rows for e in episodes], dtype=np.int64)
+        obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
+        terms = np.zeros((n, N_TERMS))
+        groups = np.zeros((n, N_ROLES), dtype=np.int64)
+        step_terms_batch(mains, twins, egos, vrs, r0s, self._params, obs, terms, groups)
         firsts = self._begin(restart, [new[k] for k in restart])
-        for k in range(n):
+        crashed = np.zeros(n, dtype=bool)
+        for k, episode in enumerate(episodes):
             if k in new:
                 continue
-            episode = self.episodes[k]
-            assert episode is not None
-            result = episode.evaluate()
-            obs[k], rewards[k] = result.obs, result.reward
-            terminated[k], truncated[k] = result.terminated, result.truncated
-            details[k] = result.info
+            episode.obs[:], episode.group = obs[k], groups[k]
+            outcome = episode.conclude(terms[k])
+            terminated[k], truncated[k] = outcome.terminated, outcome.truncated
+            crashed[k], details[k] = outcome.crashed, outcome.info
+        reward = step_rewards(terms, crashed, truncated, self.options.reward,
+                              self.options.action_period)  # fmt: skip
+        reward[restart] = 0.0  # a restarting sub-environment's first observation
         for k, first in zip(restart, firsts, strict=True):
             obs[k] = first
             details[k] = {"seed": new[k].seed}
         self._ended = terminated | truncated
-        return obs, rewards, terminated, truncated, self._infos(details)
+        return obs, reward, terminated, truncated, self._infos(details)
+
+    def _current(self) -> list[MergeEpisode]:
+        episodes = [e for e in self.episodes if e is not None]
+        if len(episodes) != self.num_envs:
+            raise RuntimeError("call reset() before step()")
+        return episodes
+
+    def _lists(self, episodes: list[MergeEpisode]) -> tuple[List, List]:
+        """Compiled lists of the episodes' runs and twins, kept between steps: only the
+        places of new episodes are replaced."""
+        if self._mains is None or self._twins is None or len(self._listed) != len(episodes):
+            self._mains = List([e.sim.core for e in episodes])
+            self._twins = List([e.twin.core for e in episodes])
+            self._listed = list(episodes)
+        mains, twins = self._mains, self._twins
+        for k, e in enumerate(episodes):
+            if self._listed[k] is not e:
+                mains[k], twins[k], self._listed[k] = e.sim.core, e.twin.core, e
+        return mains, twins
 
     def _infos(self, details: list[dict[str, Any]]) -> dict[str, Any]:
         """Gymnasium's vector info layout: one array per key and a ``_key`` mask."""

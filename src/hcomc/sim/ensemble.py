@@ -85,12 +85,15 @@ def advance_ensemble(
     until_key_vehicles: Sequence[bool] | None = None,
     threads: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    flush: bool = True,
 ) -> None:
     """Advance every simulation to its step in ``steps`` (warm-up included; None: to its end)
     as one batch: what :meth:`Simulation.run_to` does for one run (``until_key_vehicles``:
     its flag, per run).
 
-    Learning environments use it to advance many episodes by one action period at once.
+    Learning environments use it to advance many episodes by one action period at once;
+    ``flush=False`` leaves the events of the last compiled stretch in the runs' buffers (they
+    reach the log at the next :meth:`Simulation.flush_events`, ``run_to`` or the run's end).
     """
     most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
     threads = most if threads is None else max(1, min(threads, most))
@@ -127,8 +130,9 @@ def advance_ensemble(
             if progress is not None and still != going:
                 progress(len(sims) - sum(still), len(sims))
             going = still
-        for sim in sims:
-            sim.flush_events()
+        if flush:
+            for sim in sims:
+                sim.flush_events()
     finally:
         if threads > 1:
             numba.set_num_threads(previous)

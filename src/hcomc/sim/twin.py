@@ -40,6 +40,7 @@ def can_twin(sim: Simulation) -> bool:
     lane, in no collision."""
     if sim.counterfactual or sim.plans or sim.decisions or sim.finished:
         return False
+    sim.flush_events()  # the collision events below must be in the log
     c, ramp = sim.arrays, np.flatnonzero(sim.demand.lane == Lane.RAMP)
     released = ramp[: int(c.queue_pos[Lane.RAMP])]
     start = sim.config.road.accel_lane_start

@@ -1,0 +1,144 @@
+"""The per-step work of an episode as compiled kernels: the agent's action, and after the
+runs advanced, the observation and the reward's terms. One episode
+(:class:`~hcomc.envs.episode.MergeEpisode`) calls them one at a time; the vector environment
+calls them for all its episodes at once, so a step of 64 environments costs a few Python
+calls instead of a few hundred.
+
+They read the runs' compiled state (:class:`hcomc.sim.core_state.Core`: positions, the
+log rows, the event counters) and call the one home of each equation.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numba import njit
+
+from hcomc.envs.observation import observe, pair_safety
+from hcomc.envs.reward import fuel_over_rows, gain_over_rows
+from hcomc.models.fuel import FUEL_DEFAULT
+from hcomc.road import VMC, VMR, VNR
+from hcomc.sim.core_lane_change import start_lane_changes
+from hcomc.sim.core_state import COLLISIONS, DT, MAIN_1, MAIN_2, RAMP, ROWS, STEP, WARMUP
+
+if TYPE_CHECKING:
+    from hcomc.config import ScenarioConfig
+    from hcomc.envs.options import RewardWeights
+
+# the episode parameters the kernels read, in one float64 vector (see parameters())
+P_ACCEL_START, P_ACCEL_END, P_EMERGENCY, P_DELAY_CAV, P_DELAY_HDV, P_MIN_DIST = range(6)
+P_A_MERG, P_PERIOD, P_LOG_DT, P_ETA, P_FUEL = range(6, 11)
+N_TERMS = 7
+"""Columns of a step's terms: safety, fuel, efficiency, merged, at lane end, collisions so
+far, log rows so far."""
+T_SAFETY, T_FUEL, T_EFFICIENCY, T_MERGED, T_LANE_END, T_COLLISIONS, T_ROWS = range(N_TERMS)
+
+
+def parameters(config: ScenarioConfig, action_period: float) -> np.ndarray:
+    """The parameter vector of a scenario for the kernels (the config's values)."""
+    road, ctl = config.road, config.control
+    head = [road.accel_lane_start, road.accel_lane_end, config.lane_change.emergency_decel,
+            ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
+            ctl.safety_emergency_decel, action_period, config.log_interval,
+            config.lane_change.politeness]  # fmt: skip
+    return np.array([*head, *FUEL_DEFAULT.coefficients()], dtype=np.float64)
+
+
+@njit(cache=True)
+def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
+    """Drive vehicle i with an action (see :func:`hcomc.envs.episode.apply_action`)."""
+    a = min(max(accel, -1.0), 1.0)
+    limit = c.matrix[3, i] if a >= 0 else p[P_EMERGENCY]  # its a_max, or the emergency
+    c.a_cmd[i] = a * limit
+    c.held[i] = True
+    if change <= 0 or c.origin[i] != c.target[i] or not c.active[i]:
+        return
+    if c.lane[i] != RAMP:
+        target = MAIN_1 if c.lane[i] == MAIN_2 else MAIN_2
+    elif p[P_ACCEL_START] <= c.x[i] <= p[P_ACCEL_END]:
+        target = MAIN_1
+    else:
+        return
+    t = -c.consts[WARMUP] + c.counters[STEP] * c.consts[DT]
+    start_lane_changes(c, np.array([i]), np.array([target]), t, np.array([math.nan]))
+
+
+@njit(cache=True)
+def _is_ramp(c, i: int) -> bool:
+    """Whether vehicle i came from the ramp (is in the ramp's release queue)."""
+    queue = c.queues[c.queue_start[RAMP] : c.queue_start[RAMP + 1]]
+    return bool(np.any(queue == i))
+
+
+@njit(cache=True)
+def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarray, terms):
+    """Observation (into ``out``) and reward terms (into ``terms``, see :data:`N_TERMS`) of
+    one episode after its run ``c`` and undisturbed twin ``ref`` advanced one period from
+    log row ``r0``; returns the key vehicles. Eq. 15 of the agent's pairs (normalised, times
+    the period), Eq. 16 of VR and VMC, Eq. 17 of VR (against its free road) plus eta times
+    that of VMC, VMR and VNR (against the twin)."""
+    is_cav = np.logical_not(c.is_hdv)
+    group = observe(out, c.x, c.v, c.lane, c.active, is_cav, c.origin, c.target, c.lc_x0,
+                    c.lc_xf, ego, vr, p[P_ACCEL_END])  # fmt: skip
+    terms[T_SAFETY] = p[P_PERIOD] * pair_safety(
+        c.x, c.v, c.lane, c.origin, c.target, c.active, c.length, is_cav, ego, p[P_DELAY_CAV],
+        p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG],
+    )  # fmt: skip
+    r1 = c.counters[ROWS]
+    fuel, own, others = 0.0, 0.0, 0.0
+    if r1 > r0:
+        coefs = p[P_FUEL:]
+        for i in (vr, group[VMC]):
+            if i >= 0:
+                fuel += fuel_over_rows(c.log_v, c.log_a, r0, r1, i, p[P_LOG_DT], coefs)
+        for r in range(4):
+            i = vr if r == 0 else group[(VMC, VMR, VNR)[r - 1]]
+            if i < 0:
+                continue
+            g = gain_over_rows(c.log_v, c.log_a, ref.log_a, r0, r1, i, p[P_LOG_DT],
+                               _is_ramp(c, i), c.matrix[:, i], c.iidm[i])  # fmt: skip
+            if r == 0:
+                own = g
+            else:
+                others += g
+    terms[T_FUEL], terms[T_EFFICIENCY] = fuel, own + p[P_ETA] * others
+    keeping = c.origin[vr] == c.target[vr]
+    terms[T_MERGED] = 1.0 if c.lane[vr] == MAIN_1 and keeping else 0.0
+    at_end = c.lane[vr] == RAMP and keeping and c.x[vr] >= p[P_ACCEL_END]
+    terms[T_LANE_END] = 1.0 if at_end else 0.0
+    terms[T_COLLISIONS] = c.counters[COLLISIONS]
+    terms[T_ROWS] = r1
+    return group
+
+
+@njit(cache=True)
+def step_terms_batch(cores, refs, egos, vrs, r0s, p, obs, terms, groups):
+    """:func:`step_terms` of every episode (rows of ``obs``, ``terms`` and ``groups``)."""
+    for k in range(len(cores)):
+        groups[k] = step_terms(cores[k], refs[k], egos[k], vrs[k], r0s[k], p, obs[k], terms[k])
+
+
+@njit(cache=True)
+def apply_batch(cores, egos, actions, drive, p):
+    """:func:`apply_one` for every episode whose ``drive`` flag is set."""
+    for k in range(len(cores)):
+        if drive[k]:
+            apply_one(cores[k], egos[k], actions[k, 0], actions[k, 1], p)
+
+
+def rewards(
+    terms: np.ndarray, crashed: np.ndarray, timeout: np.ndarray, w: RewardWeights, period: float
+) -> np.ndarray:
+    """The reward of each episode's period from its terms (rows of ``terms``) and outcome:
+    ``- safety S - fuel F + efficiency E - time dt - collision [crash] - timeout [timeout]``
+    (:class:`~hcomc.envs.options.RewardWeights`)."""
+    return (
+        -w.safety * terms[:, T_SAFETY]
+        - w.fuel * terms[:, T_FUEL]
+        + w.efficiency * terms[:, T_EFFICIENCY]
+        - w.time * period
+        - w.collision * crashed
+        - w.timeout * timeout
+    )
