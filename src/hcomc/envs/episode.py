@@ -91,7 +91,8 @@ class MergeEpisode:
         self.vr = self.ego = -1
         self.group = np.full(6, -1, dtype=np.int64)
         self.t_start = math.nan
-        self._rows = self._events = self._collisions = 0
+        self.rows_scored = 0  # log rows whose terms are in the rewards so far
+        self._events = self._collisions = 0
         self.ramp = self.sim.demand.lane == Lane.RAMP
         self.params = np.ascontiguousarray(self.sim.fleet.matrix)
         self.kernel_params = parameters(config, options.action_period)
@@ -135,7 +136,7 @@ class MergeEpisode:
             role = "VR" if self.options.agent == "vr" else "VMC"
             self.sim.log.meta["agent"] = {"role": role, "vehicle": int(self.ego),
                                           "t_start": float(self.t_start)}  # fmt: skip
-        self._rows = self.sim.rows_recorded
+        self.rows_scored = self.sim.rows_recorded
         self._events = self.sim.log.n_events
         self._collisions = self.sim.collisions
         self._observe()
@@ -157,7 +158,7 @@ class MergeEpisode:
     def evaluate(self) -> StepResult:
         """Observation, reward, end of episode and info after the runs advanced one period."""
         terms = np.empty(N_TERMS)
-        self.group = step_terms(self.sim.core, self.twin.core, self.ego, self.vr, self._rows,
+        self.group = step_terms(self.sim.core, self.twin.core, self.ego, self.vr, self.rows_scored,
                                 self.kernel_params, self.obs, terms)  # fmt: skip
         outcome = self.conclude(terms)
         reward = rewards(terms[None, :], np.array([outcome.crashed]),
@@ -171,7 +172,7 @@ class MergeEpisode:
         reward is :func:`~hcomc.envs.batch.rewards` of the terms and this outcome."""
         sim = self.sim
         collision = terms[T_COLLISIONS] > self._collisions
-        self._collisions, self._rows = int(terms[T_COLLISIONS]), int(terms[T_ROWS])
+        self._collisions, self.rows_scored = int(terms[T_COLLISIONS]), int(terms[T_ROWS])
         merged = bool(terms[T_MERGED])
         lane_end = self.driven and self.options.agent == "vr" and bool(terms[T_LANE_END])
         crashed = bool(collision) or lane_end
@@ -227,7 +228,7 @@ class MergeEpisode:
     def new_rows(self) -> tuple[int, int]:
         """Log rows recorded since the last call: ``[r0, r1)``."""
         rows = self.sim.rows_recorded
-        r0, self._rows = self._rows, rows
+        r0, self.rows_scored = self.rows_scored, rows
         return r0, rows
 
     def safety_of(self, i: int) -> float:

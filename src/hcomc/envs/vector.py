@@ -142,7 +142,7 @@ class MergeVectorEnv(VectorEnv):
         advance_ensemble(runs, goals, until_key_vehicles=keys, threads=self.threads,
                          flush=False)  # the episodes count collisions, not events  # fmt: skip
         vrs = np.array([e.vr for e in episodes], dtype=np.int64)
-        r0s = np.array([e._rows for e in episodes], dtype=np.int64)
+        r0s = np.array([e.rows_scored for e in episodes], dtype=np.int64)
         obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
         terms = np.zeros((n, N_TERMS))
         groups = np.zeros((n, N_ROLES), dtype=np.int64)
