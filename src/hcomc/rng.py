@@ -10,6 +10,16 @@ def make_rng(seed: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed))
 
 
+SEED_HIGH = 2**31 - 1
+"""Exclusive upper bound of the integer seeds :func:`draw_seed` draws."""
+
+
+def draw_seed(rng: np.random.Generator) -> int:
+    """One integer seed in ``[0, 2**31 - 1)`` drawn from ``rng`` (for a third-party
+    optimiser, or the next episode of an environment)."""
+    return int(rng.integers(SEED_HIGH))
+
+
 def spawn_seeds(seed: int, n: int) -> list[int]:
     """``n`` independent child seeds of ``seed`` (for replicate runs), reproducible."""
     children = np.random.SeedSequence(seed).spawn(n)

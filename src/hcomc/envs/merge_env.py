@@ -16,6 +16,7 @@ import numpy as np
 from hcomc.envs.episode import MergeEpisode
 from hcomc.envs.observation import observation_bounds
 from hcomc.envs.options import EnvOptions, RewardWeights
+from hcomc.rng import draw_seed
 from hcomc.sim.log import SimulationLog
 
 
@@ -72,7 +73,7 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Start the run of ``seed`` and advance it to VR's control-zone entry."""
         super().reset(seed=seed)
-        run_seed = seed if seed is not None else int(self.np_random.integers(2**31 - 1))
+        run_seed = seed if seed is not None else draw_seed(self.np_random)
         self.episode = MergeEpisode(self.options, self.config, run_seed)
         obs = self.episode.start()
         return obs, {"seed": run_seed, "t": self.episode.sim.t, "ego": self.episode.ego}

@@ -30,6 +30,7 @@ from hcomc.envs.episode import MergeEpisode, apply_action
 from hcomc.envs.merge_env import action_space, observation_space
 from hcomc.envs.observation import N_OBS, observe
 from hcomc.envs.options import EnvOptions, RewardWeights
+from hcomc.rng import draw_seed
 from hcomc.road import Kind
 
 
@@ -87,7 +88,7 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             self._rng = np.random.default_rng(seed)
             run_seed = int(seed)
         else:
-            run_seed = int(self._rng.integers(2**31 - 1))
+            run_seed = draw_seed(self._rng)
         episode = MergeEpisode(self.options, self.config, run_seed)
         episode.start()
         episode.sim.log.meta["agent"] = {"role": "CAVs in the control zone", "vehicle": -1,

@@ -27,6 +27,7 @@ from hcomc.envs.batch import N_TERMS, apply_batch, parameters, step_terms_batch
 from hcomc.envs.batch import rewards as step_rewards
 from hcomc.envs.episode import MergeEpisode
 from hcomc.envs.merge_env import MergeEnv
+from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
 from hcomc.sim.engine import Simulation
 from hcomc.sim.ensemble import advance_ensemble
@@ -88,7 +89,7 @@ class MergeVectorEnv(VectorEnv):
         return np.stack(obs), infos
 
     def _next_seed(self, k: int) -> int:
-        return int(self._rngs[k].integers(2**31 - 1))
+        return draw_seed(self._rngs[k])
 
     def _start(self, which: list[int], seeds: list[int]) -> list[np.ndarray]:
         """New episodes for sub-environments ``which``, advanced together to their start."""

@@ -17,7 +17,7 @@ simulated annealing and minimises ``problem.scalarise(F, G)``.
   raise. The best point is tracked on the true cost.
 * Seeding: ``dual_annealing`` takes ``rng=`` since SciPy 1.15 (``seed=`` before, still
   accepted as a legacy alias). A fresh ``numpy.random.Generator`` seeded with
-  ``int(rng.integers(2**31 - 1))`` from the caller's generator is passed through whichever
+  :func:`hcomc.rng.draw_seed` from the caller's generator is passed through whichever
   keyword the installed SciPy has.
 * SciPy calls the objective one point at a time, so each call is ``problem.evaluate`` on one
   row: inherent to SA and slower per row than the population-based optimisers.
@@ -34,8 +34,8 @@ from scipy.optimize import dual_annealing
 
 from hcomc._typing import FloatArray
 from hcomc.optim.base import ParetoResult, Problem, check_budget
+from hcomc.rng import draw_seed
 
-_SEED_HIGH = 2**31 - 1
 _NONFINITE_COST = 1e300
 _RNG_KEYWORD = "rng" if "rng" in inspect.signature(dual_annealing).parameters else "seed"
 
@@ -109,7 +109,7 @@ class AnnealingOptimizer:
         objective = _Objective(problem, budget)
         lower = np.array(problem.xl, dtype=np.float64, copy=True)
         upper = np.array(problem.xu, dtype=np.float64, copy=True)
-        generator = np.random.default_rng(int(rng.integers(_SEED_HIGH)))
+        generator = np.random.default_rng(draw_seed(rng))
         # past the hard cap the wrapper raises; the best row seen so far is then the answer
         with contextlib.suppress(_BudgetExhaustedError):
             dual_annealing(

@@ -13,7 +13,7 @@ to that), at a fraction of the per-generation cost.
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
-``int(rng.integers(2**31 - 1))`` drawn from the caller's generator after the warm-start rows;
+(:func:`hcomc.rng.draw_seed`) drawn from the caller's generator after the warm-start rows;
 the feasible, mutually non-dominated subset of every evaluated row (one per distinct objective
 vector), or the least-violating row of the final population when nothing is feasible.
 """
@@ -36,8 +36,7 @@ from hcomc.optim.base import (
 )
 from hcomc.optim.dominance import ranked_fronts, tournament
 from hcomc.optim.variation import polynomial_mutation, sbx
-
-_SEED_HIGH = 2**31 - 1
+from hcomc.rng import draw_seed
 
 
 def violation(G: FloatArray) -> FloatArray:
@@ -160,7 +159,7 @@ class CompiledNSGA2Optimizer:
         xu = np.array(problem.xu, dtype=np.float64, copy=True)
         n_var, n_obj, n_constr = int(problem.n_var), int(problem.n_obj), int(problem.n_constr)
         first = initial_rows(problem, initial, self.pop_size, rng)
-        gen = np.random.default_rng(int(rng.integers(_SEED_HIGH)))
+        gen = np.random.default_rng(draw_seed(rng))
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
         archive: list[tuple[FloatArray, FloatArray, FloatArray]] = []

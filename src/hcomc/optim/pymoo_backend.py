@@ -11,7 +11,7 @@ multiple of ``pop_size`` and at least one population when ``budget < pop_size``.
 ``ParetoResult.n_eval`` reports the rows actually evaluated (NSGA-II's duplicate elimination
 can, rarely, make a generation smaller).
 
-Seeding: one integer seed ``int(rng.integers(2**31 - 1))`` is drawn from the caller's
+Seeding: one integer seed (:func:`hcomc.rng.draw_seed`) is drawn from the caller's
 generator and passed to ``pymoo.optimize.minimize(seed=...)``; pymoo derives every random
 number of the run from it.
 """
@@ -40,13 +40,7 @@ from hcomc.optim.base import (
     check_pop_size,
     initial_rows,
 )
-
-_SEED_HIGH = 2**31 - 1
-
-
-def _seed(rng: np.random.Generator) -> int:
-    """An integer seed for a third-party optimiser, drawn from the run's generator."""
-    return int(rng.integers(_SEED_HIGH))
+from hcomc.rng import draw_seed
 
 
 def _n_gen(budget: int, pop_size: int) -> int:
@@ -168,7 +162,7 @@ class NSGA2Optimizer:
             adapter,
             algorithm,
             get_termination("n_gen", _n_gen(budget, self.pop_size)),
-            seed=_seed(rng),
+            seed=draw_seed(rng),
             verbose=False,
             save_history=False,
         )
@@ -253,7 +247,7 @@ class PSOOptimizer:
             adapter,
             algorithm,
             get_termination("n_gen", _n_gen(budget, self.pop_size)),
-            seed=_seed(rng),
+            seed=draw_seed(rng),
             verbose=False,
             save_history=False,
         )
