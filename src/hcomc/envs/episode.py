@@ -20,6 +20,13 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.envs.batch import (
     N_TERMS,
+    P_A_MERG,
+    P_DELAY_CAV,
+    P_DELAY_HDV,
+    P_FUEL,
+    P_LOG_DT,
+    P_MIN_DIST,
+    P_PERIOD,
     T_COLLISIONS,
     T_EFFICIENCY,
     T_FUEL,
@@ -35,14 +42,12 @@ from hcomc.envs.batch import (
 from hcomc.envs.observation import N_OBS, observe, pair_safety
 from hcomc.envs.options import EnvOptions
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
-from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.twin import can_twin, undisturbed_twin
 
 _END = np.iinfo(np.int64).max
-_FUEL = np.array(FUEL_DEFAULT.coefficients())  # the fuel model the metrics use
 
 
 def apply_action(sim: Simulation, params: np.ndarray, i: int, action: np.ndarray) -> None:
@@ -94,7 +99,6 @@ class MergeEpisode:
         self.rows_scored = 0  # log rows whose terms are in the rewards so far
         self._events = self._collisions = 0
         self.ramp = self.sim.demand.lane == Lane.RAMP
-        self.params = np.ascontiguousarray(self.sim.fleet.matrix)
         self.kernel_params = parameters(config, options.action_period)
         self.done = False
 
@@ -231,21 +235,22 @@ class MergeEpisode:
         r0, self.rows_scored = self.rows_scored, rows
         return r0, rows
 
+    # Each agent's own terms (the multi-agent environment), from the parameters and kernels
+    # that step_terms uses for the single agent.
     def safety_of(self, i: int) -> float:
         """Eq. 15 over vehicle i's pairs now, normalised, times the action period [s]."""
-        s, ctl = self.sim, self.config.control
-        return self.options.action_period * pair_safety(
+        s, p = self.sim, self.kernel_params
+        return p[P_PERIOD] * pair_safety(
             s.x, s.v, s.lane, s.origin, s.target, s.active, s.fleet.length, self.is_cav, i,
-            ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
-            ctl.safety_emergency_decel,
+            p[P_DELAY_CAV], p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG],
         )  # fmt: skip
 
     def fuel_of(self, i: int, r0: int, r1: int) -> float:
         """Eq. 16: vehicle i's fuel over log rows ``[r0, r1)`` [mL] (0 for i < 0)."""
         if i < 0 or r1 <= r0:
             return 0.0
-        log = self.sim.log
-        return fuel_over_rows(log.v, log.a, r0, r1, i, self.config.log_interval, _FUEL)
+        log, p = self.sim.log, self.kernel_params
+        return fuel_over_rows(log.v, log.a, r0, r1, i, p[P_LOG_DT], p[P_FUEL:])
 
     def gain_of(self, i: int, r0: int, r1: int) -> float:
         """Eq. 17's ``a_new - a_ori`` of vehicle i integrated over log rows ``[r0, r1)``
@@ -255,8 +260,8 @@ class MergeEpisode:
             return 0.0
         s = self.sim
         return gain_over_rows(
-            s.log.v, s.log.a, self.twin.log.a, r0, r1, i, self.config.log_interval,
-            bool(self.ramp[i]), self.params[:, i], bool(s.fleet.iidm[i]),
+            s.log.v, s.log.a, self.twin.log.a, r0, r1, i, self.kernel_params[P_LOG_DT],
+            bool(self.ramp[i]), s.arrays.matrix[:, i], bool(s.arrays.iidm[i]),
         )  # fmt: skip
 
     # ------------------------------------------------------------------ end
