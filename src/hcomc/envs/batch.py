@@ -21,7 +21,17 @@ from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR
 from hcomc.sim.core_lane_change import start_lane_changes
-from hcomc.sim.core_state import COLLISIONS, DT, MAIN_1, MAIN_2, RAMP, ROWS, STEP, WARMUP
+from hcomc.sim.core_state import (
+    COLLISIONS,
+    DT,
+    MAIN_1,
+    MAIN_2,
+    RAMP,
+    ROWS,
+    STEP,
+    WARMUP,
+    command,
+)
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -51,8 +61,7 @@ def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
     """Drive vehicle i with an action (see :func:`hcomc.envs.episode.apply_action`)."""
     a = min(max(accel, -1.0), 1.0)
     limit = c.matrix[3, i] if a >= 0 else p[P_EMERGENCY]  # its a_max, or the emergency
-    c.a_cmd[i] = a * limit
-    c.held[i] = True
+    command(c, i, a * limit)
     if change <= 0 or c.origin[i] != c.target[i] or not c.active[i]:
         return
     if c.lane[i] != RAMP:

@@ -129,6 +129,14 @@ def add_event(
     c.counters[N_EVENTS] = k + 1
 
 
+@njit(cache=True)
+def command(c: CoreArrays, i: int, accel: float) -> None:
+    """Drive vehicle i from outside with acceleration ``accel`` [m/s^2] from the next step on
+    (it then makes no lane change of its own); NaN hands it back to its model."""
+    c.a_cmd[i] = accel
+    c.held[i] = not np.isnan(accel)
+
+
 @njit(cache=True, inline="always")
 def _centre(lane: int, width: float) -> float:
     return (lane - 1.0) * width

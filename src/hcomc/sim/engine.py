@@ -248,8 +248,7 @@ class Simulation:
         ``accel`` [m/s^2] instead of its model's (still limited to the emergency
         deceleration and to v >= 0), and it makes no lane change of its own (no MOBIL, no gap
         acceptance, no braking for the lane end); NaN hands it back to its model."""
-        self.arrays.a_cmd[i] = accel
-        self.arrays.held[i] = not math.isnan(accel)
+        layout.command(self.core, i, float(accel))
 
     def start_lane_change(self, i: int, target: int, duration: float = math.nan) -> None:
         """Start vehicle ``i``'s quintic lane change (Eq. 4-6) to lane ``target`` now, with
