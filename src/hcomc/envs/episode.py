@@ -45,7 +45,7 @@ from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.twin import can_twin, undisturbed_twin
+from hcomc.sim.twin import undisturbed_twin
 
 _END = np.iinfo(np.int64).max
 
@@ -114,11 +114,12 @@ class MergeEpisode:
         """Make the undisturbed twin once :attr:`sim` has reached VR's entry: copied from its
         state (:func:`hcomc.sim.twin.undisturbed_twin`) when that is exact, else a new
         undisturbed run; True when the twin must still be advanced to :attr:`sim`'s step."""
-        if can_twin(self.sim):
+        try:
             self.twin = undisturbed_twin(self.sim)
             return False
-        self.twin = Simulation(self.config, self.seed, counterfactual=True)
-        return True
+        except ValueError:  # a ramp vehicle already interacts with the mainline
+            self.twin = Simulation(self.config, self.seed, counterfactual=True)
+            return True
 
     def begin(self) -> np.ndarray:
         """Pick the agent once :attr:`sim` has identified VR's key vehicles and the twin has

@@ -47,7 +47,7 @@ from hcomc.sim import core
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_build import build_arrays
 from hcomc.sim.core_state import Core
-from hcomc.sim.demand import generate_demand
+from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sim.execution import (
     ActivePlan,
     game_confirms,
@@ -86,31 +86,49 @@ class Simulation:
         *,
         counterfactual: bool = False,
     ) -> None:
-        self.config = config
-        self.counterfactual = counterfactual
-        self.seed = config.seed if seed is None else seed
-        self.rng = make_rng(self.seed)
-        self.dt = config.dt
-        self.demand = generate_demand(config, self.rng)
-        self.fleet = Fleet.build(config, self.demand.kind, self.demand.scripted)
+        seed = config.seed if seed is None else seed
+        rng = make_rng(seed)
+        demand = generate_demand(config, rng)
         if controller is None:
             from hcomc.control.registry import make_controller
 
             controller = make_controller(config)
-        self.controller = controller
+        fleet = Fleet.build(config, demand.kind, demand.scripted)
+        self._build(config, seed, rng, demand, fleet, controller, counterfactual)
+
+    @classmethod
+    def _sibling(cls, sim: Simulation, *, counterfactual: bool) -> Simulation:
+        """The run of ``sim``'s scenario and seed at step 0, built on the demand, fleet and
+        controller ``sim`` drew (shared, read-only) instead of drawing them again: its
+        generator resumes where ``sim``'s stood after the demand draw."""
+        rng = make_rng(sim.seed)
+        rng.bit_generator.state = sim._after_demand
+        new = cls.__new__(cls)
+        new._build(sim.config, sim.seed, rng, sim.demand, sim.fleet, sim.controller,
+                   counterfactual)  # fmt: skip
+        return new
+
+    def _build(
+        self, config: ScenarioConfig, seed: int, rng: np.random.Generator, demand: Demand,
+        fleet: Fleet, controller: MergeController | None, counterfactual: bool,
+    ) -> None:  # fmt: skip
+        self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
+        self._after_demand = rng.bit_generator.state  # for _sibling
+        self.counterfactual = counterfactual
+        self.demand, self.fleet, self.controller = demand, fleet, controller
         self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
         self.plans: list[ActivePlan] = []
         self.decisions: list[MergePlan] = []
         self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
-        self.is_hdv = self.demand.kind == Kind.HDV
-        self.perception = Perception(config.hdv, self.is_hdv, self.dt, self.rng)
+        self.is_hdv = demand.kind == Kind.HDV
+        self.perception = Perception(config.hdv, self.is_hdv, self.dt, rng)
         self.n_warmup = round(config.warmup / self.dt)
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
         self.log = self._allocate_log()
         self.arrays = build_arrays(
-            config, self.demand, self.fleet, self.perception, self.log,
+            config, demand, fleet, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip

@@ -24,6 +24,7 @@ from numba import njit, prange
 from numba.typed import List
 
 from hcomc.sim.core import run_steps
+from hcomc.sim.core_state import DONE, STEP
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 
@@ -97,45 +98,87 @@ def advance_ensemble(
     """
     most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
     threads = most if threads is None else max(1, min(threads, most))
-    advance = _advance_batch_serial if threads == 1 else _advance_batch
-    end = np.iinfo(np.int64).max
-    goal = [end] * len(sims) if steps is None else [int(s) for s in steps]
-    keys = [False] * len(sims) if until_key_vehicles is None else list(until_key_vehicles)
-
-    def due(k: int) -> bool:
-        return not sims[k].reached(goal[k], until_key_vehicles=keys[k])
-
-    if not any(due(k) for k in range(len(sims))):
+    runs = list(sims)
+    n = len(runs)
+    if n == 0:
         return
+    goal = np.full(n, _END, dtype=np.int64) if steps is None else np.array(steps, dtype=np.int64)
+    keys = np.zeros(n, dtype=bool)
+    if until_key_vehicles is not None:
+        keys[:] = until_key_vehicles
+    batch = _Batch(runs, goal, keys)
+    if not batch.going.any():
+        return
+    advance = _advance_batch_serial if threads == 1 else _advance_batch
     previous = threads
     if threads > 1:  # the thread pool is touched only when used (a forked child must not)
         previous = numba.get_num_threads()
         numba.set_num_threads(threads)
+    chunks = numba.set_parallel_chunksize(1) if threads > 1 else 0  # runs differ in length
     try:
-        runs = list(sims)
-        cores, rngs = _typed_lists(runs)  # one batch, the same places: a done run stands still
-        reasons = np.empty(len(runs), dtype=np.int64)
-        going = [due(k) for k in range(len(runs))]
-        while any(going):
-            stops = np.array(
-                [min(r.stop_step, goal[k]) if g else r.step_index
-                 for k, (r, g) in enumerate(zip(runs, going, strict=True))], dtype=np.int64,
-            )  # fmt: skip
-            logging = np.array([r.logging for r in runs], dtype=np.bool_)
-            advance(cores, rngs, stops, logging, reasons)
-            for r, reason, g in zip(runs, reasons.tolist(), going, strict=True):
-                if g:
-                    r.resume(reason)
-            still = [due(k) for k in range(len(runs))]
-            if progress is not None and still != going:
-                progress(len(sims) - sum(still), len(sims))
-            going = still
+        reasons = np.empty(n, dtype=np.int64)
+        while batch.going.any():
+            stops = np.where(batch.going, np.minimum(batch.stop, goal), batch.step)
+            advance(batch.cores, batch.rngs, stops, batch.logging, reasons)
+            before = batch.going
+            batch.resume(reasons)
+            if progress is not None and (batch.going != before).any():
+                progress(n - int(batch.going.sum()), n)
         if flush:
-            for sim in sims:
+            for sim in runs:
                 sim.flush_events()
     finally:
         if threads > 1:
+            numba.set_parallel_chunksize(chunks)
             numba.set_num_threads(previous)
+
+
+_END = np.iinfo(np.int64).max
+
+
+@njit(cache=True)
+def _step_indices(cores, out):
+    """Every run's step counter (what :attr:`Simulation.step_index` reads, for all at once)."""
+    for k in range(len(cores)):
+        out[k] = cores[k].counters[STEP]
+
+
+class _Batch:
+    """Where each run of a batch stands: its step, the stop of its stage, whether it logs and
+    whether it must go on, as arrays, so that a batch step costs Python only for the runs
+    that stopped for it (a decision event, a flush, the end of a stage)."""
+
+    def __init__(self, runs: list[Simulation], goal: np.ndarray, keys: np.ndarray) -> None:
+        self.runs, self.goal, self.keys = runs, goal, keys
+        self.cores, self.rngs = _typed_lists(runs)  # one batch, the same places
+        n = len(runs)
+        self.step = np.empty(n, dtype=np.int64)
+        self.stop = np.array([r.stop_step for r in runs], dtype=np.int64)
+        self.logging = np.array([r.logging for r in runs], dtype=np.bool_)
+        self.finished = np.array([r.finished for r in runs], dtype=np.bool_)
+        self.going = np.zeros(n, dtype=np.bool_)
+        self._update()
+
+    def _update(self) -> None:
+        """``going``: not finished, short of its goal, and (with ``keys``) no key vehicles yet
+        (what :meth:`Simulation.reached` says, run by run)."""
+        _step_indices(self.cores, self.step)
+        going = ~self.finished & (self.step < self.goal)
+        for k in np.flatnonzero(going & self.keys).tolist():
+            going[k] = not self.runs[k].key_groups
+        self.going = going
+
+    def resume(self, reasons: np.ndarray) -> None:
+        """Hand each run that stopped for Python to :meth:`Simulation.resume` (a run that
+        only reached its goal within its stage needs nothing)."""
+        _step_indices(self.cores, self.step)
+        python = self.going & ((reasons != DONE) | (self.step >= self.stop))
+        for k in np.flatnonzero(python).tolist():
+            run = self.runs[k]
+            run.resume(int(reasons[k]))
+            self.stop[k], self.logging[k] = run.stop_step, run.logging
+            self.finished[k] = run.finished
+        self._update()
 
 
 __all__ = ["advance_ensemble", "run_ensemble"]

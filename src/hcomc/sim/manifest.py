@@ -80,8 +80,10 @@ def git_revision(path: Path | None = None) -> str:
         repository has no commit yet, or git takes longer than 5 [s]. Never raises.
         Computed once per process and directory (every run of a sweep shares it).
     """
+    if path is None:
+        return _revision_of(_SOURCE_DIR)
     try:
-        cwd = Path(__file__).resolve().parent if path is None else Path(path)
+        cwd = Path(path)
         if cwd.is_file():
             cwd = cwd.parent
         if not cwd.is_dir():
@@ -89,6 +91,9 @@ def git_revision(path: Path | None = None) -> str:
     except OSError:
         return _UNKNOWN
     return _revision_of(cwd)
+
+
+_SOURCE_DIR = Path(__file__).resolve().parent  # the installed (editable) hcomc source tree
 
 
 @functools.cache
@@ -261,6 +266,12 @@ _RESERVED = (
 )
 
 
+@functools.cache
+def _platform() -> str:
+    """The machine's platform string (fixed for a process; a run's manifest asks each time)."""
+    return platform.platform()
+
+
 def build_manifest(
     *, seed: int, config: Mapping[str, Any] | Any, extra: Mapping[str, Any] | None = None
 ) -> dict[str, Any]:
@@ -313,7 +324,7 @@ def build_manifest(
         "git_revision": git_revision(),
         "python": platform.python_version(),
         "numpy": np.__version__,
-        "platform": platform.platform(),
+        "platform": _platform(),
         "created_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
     }
     manifest.update(_jsonable(dict(extra or {})))

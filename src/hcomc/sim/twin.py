@@ -41,14 +41,22 @@ def can_twin(sim: Simulation) -> bool:
     if sim.counterfactual or sim.plans or sim.decisions or sim.finished:
         return False
     sim.flush_events()  # the collision events below must be in the log
-    c, ramp = sim.arrays, np.flatnonzero(sim.demand.lane == Lane.RAMP)
-    released = ramp[: int(c.queue_pos[Lane.RAMP])]
+    c, ramp = sim.arrays, sim.demand.lane == Lane.RAMP
+    released = np.flatnonzero(ramp)[: int(c.queue_pos[Lane.RAMP])]
     start = sim.config.road.accel_lane_start
     keeping = c.origin[released] == c.target[released]
     ok = c.active[released] & (c.lane[released] == Lane.RAMP) & keeping & (c.x[released] < start)
-    hit = sim.log.events_of(EventKind.COLLISION)
-    involved = np.isin(hit["vehicle"], ramp) | np.isin(hit["other"], ramp)
-    return bool(ok.all()) and not bool(involved.any())
+    return bool(ok.all()) and not _involving(sim.log.events_of(EventKind.COLLISION), ramp).any()
+
+
+def _marked(ids: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Which of the vehicle ids (-1: none) the boolean mask over vehicles marks."""
+    return (ids >= 0) & mask[np.maximum(ids, 0)]
+
+
+def _involving(events: np.ndarray, vehicles: np.ndarray) -> np.ndarray:
+    """Which ``events`` name a vehicle the mask ``vehicles`` marks, as either party."""
+    return _marked(events["vehicle"], vehicles) | _marked(events["other"], vehicles)
 
 
 def undisturbed_twin(sim: Simulation) -> Simulation:
@@ -57,10 +65,10 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     if not can_twin(sim):
         raise ValueError("the undisturbed twin cannot be copied now: a ramp vehicle already "
                          "interacts with the mainline (or a plan exists)")  # fmt: skip
-    sim.flush_events()
-    twin = Simulation(sim.config, sim.seed, counterfactual=True)
+    twin = Simulation._sibling(sim, counterfactual=True)  # the same demand, not drawn again
     src, dst = sim.arrays, twin.arrays
-    ramp = np.flatnonzero(sim.demand.lane == Lane.RAMP)
+    is_ramp = sim.demand.lane == Lane.RAMP
+    ramp = np.flatnonzero(is_ramp)
     kept = {name: getattr(dst, name)[ramp].copy() for name in _PER_VEHICLE}
     hist = (dst.x_hist[:, ramp].copy(), dst.v_hist[:, ramp].copy())
     ramp_queue = int(dst.queue_pos[Lane.RAMP])
@@ -70,8 +78,8 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
         getattr(dst, name)[ramp] = values
     dst.x_hist[:, ramp], dst.v_hist[:, ramp] = hist
     dst.queue_pos[Lane.RAMP] = ramp_queue
-    inserted = sim.log.events_of(EventKind.INSERTION)
-    inserted = inserted[np.isin(inserted["vehicle"], ramp)]
+    events = sim.log.events_since(0)
+    inserted = events[(events["kind"] == EventKind.INSERTION) & _marked(events["vehicle"], is_ramp)]
     steps = np.round((inserted["t"] + sim.config.warmup) / sim.dt).astype(np.int64)
     dst.counters[layout.VEHICLE_STEPS] -= int((sim.step_index - steps).sum())
     twin.rng.bit_generator.state = sim.rng.bit_generator.state
@@ -81,9 +89,7 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     for name in ("x", "y", "v", "a", "heading"):
         getattr(twin.log, name)[:rows, ramp] = np.nan
     twin.log.lane[:rows, ramp], twin.log.active[:rows, ramp] = -1, False
-    events = sim.log.events_since(0)
-    keep = ~(np.isin(events["vehicle"], ramp) | np.isin(events["other"], ramp))
-    twin.log.add_events(events[keep])
+    twin.log.add_events(events[~_involving(events, is_ramp)])
     twin._stage = sim._stage
     return twin
 
