@@ -187,16 +187,23 @@ def test_vector_env_is_bit_identical_to_single_envs_with_autoreset() -> None:
     episodes = 0
     for _ in range(40):
         actions = rng.uniform(-1, 1, (n, 2)).astype(np.float32)
-        vobs, vrew, vterm, vtrunc, _ = envs.step(actions)
+        vobs, vrew, vterm, vtrunc, vinfo = envs.step(actions)
         for k, env in enumerate(singles):
             if ended[k]:
-                o, r, te, tr = env.reset()[0], 0.0, False, False
+                o, info = env.reset()
+                r, te, tr = 0.0, False, False
             else:
-                o, r, te, tr, _ = env.step(actions[k])
+                o, r, te, tr, info = env.step(actions[k])
             np.testing.assert_array_equal(vobs[k], o)
             assert vrew[k] == r
             assert vterm[k] == te
             assert vtrunc[k] == tr
+            assert vinfo["_seed"][k]
+            assert vinfo["seed"][k] == info["seed"]
+            for key in ("merged", "collision", "lane_end", "timeout"):  # a step's outcome
+                shown = key in vinfo and vinfo[f"_{key}"][k]
+                assert shown == (key in info)
+                assert not shown or vinfo[key][k] == info[key]
             ended[k] = te or tr
             episodes += te or tr
     assert episodes >= 3 * n  # the autoreset was exercised

@@ -11,7 +11,7 @@ log rows, the event counters) and call the one home of each equation.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -40,10 +40,11 @@ if TYPE_CHECKING:
 # the episode parameters the kernels read, in one float64 vector (see parameters())
 P_ACCEL_START, P_ACCEL_END, P_EMERGENCY, P_DELAY_CAV, P_DELAY_HDV, P_MIN_DIST = range(6)
 P_A_MERG, P_PERIOD, P_LOG_DT, P_ETA, P_FUEL = range(6, 11)
-N_TERMS = 7
+N_TERMS = 9
 """Columns of a step's terms: safety, fuel, efficiency, merged, at lane end, collisions so
-far, log rows so far."""
-T_SAFETY, T_FUEL, T_EFFICIENCY, T_MERGED, T_LANE_END, T_COLLISIONS, T_ROWS = range(N_TERMS)
+far, log rows so far, VR on the road, time [s]."""
+T_SAFETY, T_FUEL, T_EFFICIENCY, T_MERGED, T_LANE_END, T_COLLISIONS, T_ROWS = range(7)
+T_VR_ON_ROAD, T_TIME = 7, 8
 
 
 def parameters(config: ScenarioConfig, action_period: float) -> np.ndarray:
@@ -119,6 +120,8 @@ def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarra
     terms[T_LANE_END] = 1.0 if at_end else 0.0
     terms[T_COLLISIONS] = c.counters[COLLISIONS]
     terms[T_ROWS] = r1
+    terms[T_VR_ON_ROAD] = 1.0 if c.active[vr] else 0.0
+    terms[T_TIME] = -c.consts[WARMUP] + c.counters[STEP] * c.consts[DT]  # as Simulation.t
     return group
 
 
@@ -135,6 +138,35 @@ def apply_batch(cores, egos, actions, drive, p):
     for k in range(len(cores)):
         if drive[k]:
             apply_one(cores[k], egos[k], actions[k, 0], actions[k, 1], p)
+
+
+class Outcomes(NamedTuple):
+    """How a step ended, per episode (arrays, or scalars for one episode's terms)."""
+
+    terminated: Any
+    timeout: Any
+    crashed: Any
+    collision: Any
+    merged: Any
+    lane_end: Any
+
+
+def outcomes(
+    terms: np.ndarray, collisions_before: Any, t_start: Any, finished: Any, *,
+    lane_end_ends: bool, max_time: float,
+) -> Outcomes:  # fmt: skip
+    """How each episode's step ended, from its terms (the last axis of ``terms``) and its
+    state before the step: a new collision or (with ``lane_end_ends``: the agent drives VR)
+    VR stuck at the lane end is a crash; a crash, the merge or VR leaving the road ends the
+    episode; otherwise ``max_time`` [s] since ``t_start`` or the run's end is a timeout."""
+    collision = terms[..., T_COLLISIONS] > collisions_before
+    merged = terms[..., T_MERGED] > 0
+    lane_end = (terms[..., T_LANE_END] > 0) & lane_end_ends
+    crashed = collision | lane_end
+    terminated = crashed | merged | (terms[..., T_VR_ON_ROAD] == 0)
+    late = terms[..., T_TIME] - t_start >= max_time - 1e-9
+    timeout = ~terminated & (late | finished)
+    return Outcomes(terminated, timeout, crashed, collision, merged, lane_end)
 
 
 def rewards(

@@ -30,11 +30,11 @@ from hcomc.envs.batch import (
     T_COLLISIONS,
     T_EFFICIENCY,
     T_FUEL,
-    T_LANE_END,
-    T_MERGED,
     T_ROWS,
     T_SAFETY,
+    T_TIME,
     apply_one,
+    outcomes,
     parameters,
     rewards,
     step_terms,
@@ -175,23 +175,36 @@ class MergeEpisode:
     def conclude(self, terms: np.ndarray) -> Outcome:
         """How the step ended, from its terms (:func:`~hcomc.envs.batch.step_terms`); the
         reward is :func:`~hcomc.envs.batch.rewards` of the terms and this outcome."""
-        sim = self.sim
-        collision = terms[T_COLLISIONS] > self._collisions
-        self._collisions, self.rows_scored = int(terms[T_COLLISIONS]), int(terms[T_ROWS])
-        merged = bool(terms[T_MERGED])
-        lane_end = self.driven and self.options.agent == "vr" and bool(terms[T_LANE_END])
-        crashed = bool(collision) or lane_end
-        terminated = crashed or merged or not sim.active[self.vr]
-        timeout = not terminated and self.out_of_time()
-        self.done = terminated or timeout
+        o = outcomes(
+            terms, self._collisions, self.t_start, self.sim.finished,
+            lane_end_ends=self.lane_end_ends, max_time=self.options.max_episode_time,
+        )  # fmt: skip
+        self.record(terms, bool(o.terminated or o.timeout))
+        t = float(terms[T_TIME])
         info: dict[str, object] = {
-            "t": sim.t, "elapsed": sim.t - self.t_start, "merged": merged,
-            "collision": bool(collision), "lane_end": lane_end, "timeout": timeout,
-            "safety": float(terms[T_SAFETY]), "fuel": float(terms[T_FUEL]),
-            "efficiency": float(terms[T_EFFICIENCY]), "ego": self.ego, "vr": self.vr,
-            "seed": self.seed,
+            "t": t, "elapsed": t - self.t_start, "merged": bool(o.merged),
+            "collision": bool(o.collision), "lane_end": bool(o.lane_end),
+            "timeout": bool(o.timeout), "safety": float(terms[T_SAFETY]),
+            "fuel": float(terms[T_FUEL]), "efficiency": float(terms[T_EFFICIENCY]),
+            "ego": self.ego, "vr": self.vr, "seed": self.seed,
         }  # fmt: skip
-        return Outcome(terminated, timeout, crashed, info)
+        return Outcome(bool(o.terminated), bool(o.timeout), bool(o.crashed), info)
+
+    def record(self, terms: np.ndarray, done: bool) -> None:
+        """Take in a step's terms: the collisions and log rows they counted, and its end."""
+        self._collisions, self.rows_scored = int(terms[T_COLLISIONS]), int(terms[T_ROWS])
+        self.done = done
+
+    @property
+    def lane_end_ends(self) -> bool:
+        """Whether VR stuck at the lane end ends the episode as a crash (the agent drives VR;
+        a controller or VMC's agent leaves VR to its model, which waits there)."""
+        return self.driven and self.options.agent == "vr"
+
+    @property
+    def collisions_counted(self) -> int:
+        """Collisions counted by the steps so far (a step's new ones are a crash)."""
+        return self._collisions
 
     def _observe(self) -> None:
         s = self.sim

@@ -23,7 +23,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numba.typed import List
 
-from hcomc.envs.batch import N_TERMS, apply_batch, parameters, step_terms_batch
+from hcomc.envs.batch import N_TERMS, apply_batch, outcomes, parameters, step_terms_batch
 from hcomc.envs.batch import rewards as step_rewards
 from hcomc.envs.episode import MergeEpisode
 from hcomc.envs.merge_env import MergeEnv
@@ -34,6 +34,7 @@ from hcomc.sim.ensemble import advance_ensemble
 
 _END = np.iinfo(np.int64).max
 _INFO_KEYS = ("seed", "merged", "collision", "lane_end", "timeout")
+_INFO_ORDER = [k for key in _INFO_KEYS for k in (key, f"_{key}")]
 
 
 class MergeVectorEnv(VectorEnv):
@@ -118,8 +119,6 @@ class MergeVectorEnv(VectorEnv):
         """
         actions = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
         n = self.num_envs
-        terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
-        details: list[dict[str, Any]] = [{} for _ in range(n)]
         restart = np.flatnonzero(self._ended).tolist()
         new = {k: MergeEpisode(self.options, self.config, self._next_seed(k)) for k in restart}
         episodes = self._current()
@@ -148,23 +147,29 @@ class MergeVectorEnv(VectorEnv):
         terms = np.zeros((n, N_TERMS))
         groups = np.zeros((n, N_ROLES), dtype=np.int64)
         step_terms_batch(mains, twins, egos, vrs, r0s, self._params, obs, terms, groups)
+        before = np.array([e.collisions_counted for e in episodes])
+        t_start = np.array([e.t_start for e in episodes])
+        finished = np.array([e.sim.finished for e in episodes])
+        o = outcomes(terms, before, t_start, finished, lane_end_ends=episodes[0].lane_end_ends,
+                     max_time=self.options.max_episode_time)  # fmt: skip
         firsts = self._begin(restart, [new[k] for k in restart])
-        crashed = np.zeros(n, dtype=bool)
-        for k, episode in enumerate(episodes):
-            if k in new:
-                continue
+        going = np.ones(n, dtype=bool)
+        going[restart] = False  # a restarting sub-environment: its old episode has ended
+        for k in np.flatnonzero(going).tolist():
+            episode = episodes[k]
             episode.obs[:], episode.group = obs[k], groups[k]
-            outcome = episode.conclude(terms[k])
-            terminated[k], truncated[k] = outcome.terminated, outcome.truncated
-            crashed[k], details[k] = outcome.crashed, outcome.info
-        reward = step_rewards(terms, crashed, truncated, self.options.reward,
+            episode.record(terms[k], bool(o.terminated[k] or o.timeout[k]))
+        terminated, truncated = o.terminated & going, o.timeout & going
+        reward = step_rewards(terms, o.crashed & going, truncated, self.options.reward,
                               self.options.action_period)  # fmt: skip
         reward[restart] = 0.0  # a restarting sub-environment's first observation
-        for k, first in zip(restart, firsts, strict=True):
-            obs[k] = first
-            details[k] = {"seed": new[k].seed}
+        if restart:
+            obs[restart] = np.stack(firsts)
         self._ended = terminated | truncated
-        return obs, reward, terminated, truncated, self._infos(details)
+        info = {"merged": o.merged, "collision": o.collision, "lane_end": o.lane_end,
+                "timeout": o.timeout}  # fmt: skip
+        seeds = np.array([e.seed for e in self._current()])
+        return obs, reward, terminated, truncated, self._step_infos(info, going, seeds)
 
     def _current(self) -> list[MergeEpisode]:
         episodes = [e for e in self.episodes if e is not None]
@@ -184,6 +189,18 @@ class MergeVectorEnv(VectorEnv):
             if self._listed[k] is not e:
                 mains[k], twins[k], self._listed[k] = e.sim.core, e.twin.core, e
         return mains, twins
+
+    @staticmethod
+    def _step_infos(
+        outcome: dict[str, np.ndarray], going: np.ndarray, seeds: np.ndarray
+    ) -> dict[str, Any]:
+        """:meth:`_infos` of a step: every sub-environment's episode seed, and the outcome of
+        the going ones (a restarted one's step is its new episode's first observation)."""
+        out: dict[str, Any] = {"seed": seeds, "_seed": np.ones(seeds.size, dtype=bool)}
+        if going.any():
+            for key, values in outcome.items():
+                out[key], out[f"_{key}"] = np.where(going, values, False), going.copy()
+        return {key: out[key] for key in sorted(out, key=_INFO_ORDER.index)}
 
     def _infos(self, details: list[dict[str, Any]]) -> dict[str, Any]:
         """Gymnasium's vector info layout: one array per key and a ``_key`` mask."""
