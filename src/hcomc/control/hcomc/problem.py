@@ -42,13 +42,14 @@ game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to m
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ScenarioConfig
+from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.control.hcomc.rollout import (
     C_A_MERG,
     C_ACCEL_END,
@@ -75,6 +76,7 @@ from hcomc.control.hcomc.rollout import (
     rollout,
     warm_up,
 )
+from hcomc.control.lane_change_cost import GAME_DEFAULT, GameVehicle, simulate_sv
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate, fuel_rate_scalar
 from hcomc.safety.critical import SafetyIndex
 
@@ -436,7 +438,14 @@ def default_starts() -> FloatArray:
     return np.full(N_STARTS, np.nan)
 
 
+@functools.cache  # once per process
 def load_prediction_kernels() -> None:
-    """Load (or compile) the prediction kernels once per process, so that no timed decision
-    pays for it."""
+    """Load (or compile) the kernels of a decision once per process, so that no timed
+    decision pays for it: the rollout, U_fuel's and the lane-change game's SV simulation."""
     warm_up()
+    trajectory = np.zeros((1, 2, N_ROLES))
+    roles = np.zeros(1, dtype=np.int64)
+    coefficients = FUEL_DEFAULT.coefficients()
+    _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, *coefficients)
+    sv = GameVehicle(x=0.0, v=10.0, length=5.0, desired_speed=30.0, is_cav=True)
+    simulate_sv(sv, None, None, IDMParams(), GAME_DEFAULT)
