@@ -9,18 +9,18 @@ functions and solves the game.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numba import njit
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.config import ControlParams, IDMParams, LaneChangeParams, RoadParams
-from hcomc.models.idm import idm_acceleration, iidm_acceleration
+from hcomc.models.idm import idm_accel, iidm_accel
 from hcomc.models.quintic import quintic_shape
-from hcomc.models.transition import blend_acceleration, transition_weight
+from hcomc.models.transition import blend, transition_gamma, transition_psi
 from hcomc.road import Kind
 from hcomc.safety.critical import critical_acceleration
 
@@ -304,26 +304,6 @@ def leader_track(leader: GameVehicle | None, t: FloatArray) -> tuple[FloatArray,
     return rear, np.full(t.shape, float(leader.v))
 
 
-def _car_following(idm: IDMParams, v0: float) -> Callable[..., FloatArray]:
-    """IDM (or IIDM, per ``idm.variant``) acceleration as a function of (s, v, dv)."""
-    kernel = iidm_acceleration if idm.variant == "iidm" else idm_acceleration
-
-    def accel(s: FloatArray, v: FloatArray, dv: FloatArray) -> FloatArray:
-        return kernel(
-            s,
-            v,
-            dv,
-            v0=v0,
-            T=idm.time_headway,
-            a=idm.max_accel,
-            b=idm.comfort_decel,
-            s0=idm.min_gap,
-            delta=idm.exponent,
-        )
-
-    return accel
-
-
 def simulate_sv(
     sv: GameVehicle,
     old: GameVehicle | None,
@@ -333,33 +313,64 @@ def simulate_sv(
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Positions, speeds and applied accelerations (2, N) of SV for actions (LC, K).
 
-    Ballistic update with a stop at v = 0; the IDM output is floored at ``-emergency_decel``.
-    Row LC blends the accelerations towards ``old`` and ``new`` with Eq. 14 (Ψ at the start of
-    each step, τ = t_{k-1}); row K follows ``old``. The loop runs over the N time steps only.
+    Ballistic update with a stop at v = 0; the IDM (or IIDM, per ``idm.variant``) output is
+    floored at ``-emergency_decel``. Row LC blends the accelerations towards ``old`` and
+    ``new`` with Eq. 14 (Ψ at the start of each step, τ = t_{k-1}); row K follows ``old``.
+    The loop over the N time steps is compiled (:func:`_simulate_sv_kernel`).
     """
     n, dt = params.n_steps, params.dt
     t_start: FloatArray = dt * np.arange(n, dtype=np.float64)
     old_rear, old_v = leader_track(old, t_start)
     new_rear, new_v = leader_track(new, t_start)
-    psi = transition_weight(t_start, params.horizon, params.transition_tolerance)
-    weights = np.stack([psi, np.zeros(n)])  # (2, N): LC blends, K keeps a_ori
-    accel = _car_following(idm, sv.desired_speed)
+    car_following = (
+        float(sv.desired_speed),
+        idm.time_headway,
+        idm.max_accel,
+        idm.comfort_decel,
+        idm.min_gap,
+        idm.exponent,
+        idm.variant == "iidm",
+    )
+    return _simulate_sv_kernel(
+        float(sv.x), float(sv.v), old_rear, old_v, new_rear, new_v, *car_following,
+        dt, params.horizon, transition_gamma(params.transition_tolerance),
+        params.emergency_decel,
+    )  # fmt: skip
 
-    x = np.full(2, float(sv.x))
-    v = np.full(2, float(sv.v))
+
+@njit(cache=True)
+def _simulate_sv_kernel(
+    x0, v_start, old_rear, old_v, new_rear, new_v, v0, T, a_max, b, s0, delta, iidm, dt,
+    horizon, gamma, emergency_decel,
+):  # fmt: skip
+    """:func:`simulate_sv`'s loop: row 0 (LC) with Ψ(t_{k-1}) of Eq. 14, row 1 (K) with
+    weight 0; the car-following law is :func:`~hcomc.models.idm.iidm_accel` if ``iidm``,
+    else :func:`~hcomc.models.idm.idm_accel`."""
+    n = old_rear.size
     xs, vs, acc = np.empty((2, n)), np.empty((2, n)), np.empty((2, n))
-    for k in range(n):
-        a_ori = accel(old_rear[k] - x, v, v - old_v[k])
-        a_new = accel(new_rear[k] - x, v, v - new_v[k])
-        a = np.maximum(blend_acceleration(a_ori, a_new, weights[:, k]), -params.emergency_decel)
-        v_next = v + a * dt
-        stops = v_next < 0.0
-        dx = np.where(stops, v * v / (2.0 * np.where(stops, -a, 1.0)), v * dt + 0.5 * a * dt * dt)
-        v_next = np.maximum(v_next, 0.0)
-        acc[:, k] = (v_next - v) / dt
-        x = x + dx
-        v = v_next
-        xs[:, k], vs[:, k] = x, v
+    for row in range(2):
+        x, v = x0, v_start
+        for k in range(n):
+            s_ori, dv_ori = old_rear[k] - x, v - old_v[k]
+            s_new, dv_new = new_rear[k] - x, v - new_v[k]
+            if iidm:
+                a_ori = iidm_accel(s_ori, v, dv_ori, v0, T, a_max, b, s0, delta)
+                a_new = iidm_accel(s_new, v, dv_new, v0, T, a_max, b, s0, delta)
+            else:
+                a_ori = idm_accel(s_ori, v, dv_ori, v0, T, a_max, b, s0, delta)
+                a_new = idm_accel(s_new, v, dv_new, v0, T, a_max, b, s0, delta)
+            weight = transition_psi(dt * k, horizon, gamma) if row == 0 else 0.0
+            a = max(blend(a_ori, a_new, weight), -emergency_decel)
+            v_next = v + a * dt
+            if v_next < 0.0:  # stops within the step
+                dx = v * v / (2.0 * -a)
+                v_next = 0.0
+            else:
+                dx = v * dt + 0.5 * a * dt * dt
+            acc[row, k] = (v_next - v) / dt
+            x = x + dx
+            v = v_next
+            xs[row, k], vs[row, k] = x, v
     return xs, vs, acc
 
 

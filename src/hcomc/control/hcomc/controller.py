@@ -44,6 +44,7 @@ from hcomc.control.hcomc.problem import (
     MergeProblem,
     Prediction,
     default_starts,
+    load_prediction_kernels,
 )
 from hcomc.control.hcomc.rollout import (
     S_VV0_V,
@@ -54,7 +55,6 @@ from hcomc.control.hcomc.rollout import (
     VMF,
     VNF,
     VR,
-    warm_up,
 )
 from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
 from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
@@ -166,7 +166,7 @@ class HCOMCController:
     name = "hcomc"
 
     def __init__(self, config: ScenarioConfig, optimizer: Optimizer | None = None) -> None:
-        warm_up()  # load the compiled rollout now, not inside a timed decision
+        load_prediction_kernels()  # load the compiled kernels now, not inside a timed decision
         self.config = config
         self.optimizer = optimizer or optimizer_from_config(config.control)
         self._pareto: dict[int, np.ndarray] = {}  # last Pareto set per VR (warm start)

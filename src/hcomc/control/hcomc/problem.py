@@ -42,12 +42,14 @@ game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to m
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ScenarioConfig
+from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.control.hcomc.rollout import (
     C_A_MERG,
     C_ACCEL_END,
@@ -74,7 +76,8 @@ from hcomc.control.hcomc.rollout import (
     rollout,
     warm_up,
 )
-from hcomc.models.fuel import fuel_rate
+from hcomc.control.lane_change_cost import GAME_DEFAULT, GameVehicle, simulate_sv
+from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate, fuel_rate_scalar
 from hcomc.safety.critical import SafetyIndex
 
 OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
@@ -341,21 +344,93 @@ class MergeProblem:
 
         Each vehicle's fuel over the window is completed to that distance at its end speed's
         cruise rate (a negative completion when it went further):
-        ``fuel(D) = sum fe dt + fe_cruise(v_K) (D - dx) / v_K``. One
-        :func:`~hcomc.models.fuel.fuel_rate` call takes all of it: rows (n, C) of the K
-        samples followed by the cruise sample at v_K.
+        ``fuel(D) = sum fe dt + fe_cruise(max(v_K, 1)) (D - dx) / max(v_K, 1)``, with the
+        rates of :func:`~hcomc.models.fuel.fuel_rate_scalar` (:func:`_fuel_to_distance_kernel`).
         """
-        n, (C, K1, _) = len(roles), X.shape
-        v, a = np.empty((n, C, K1)), np.empty((n, C, K1))
-        for i, r in enumerate(roles):
-            v[i, :, :-1], a[i, :, :-1] = V[:, 1:, r], A[:, 1:, r]
-            v[i, :, -1], a[i, :, -1] = np.maximum(V[:, -1, r], 1.0), 0.0
-        rate = fuel_rate(v, a)
-        burnt = rate[..., :-1].sum(axis=-1) * self.dt
-        r_ = list(roles)
-        rest = (cf[0, -1, r_] - cf[0, 0, r_])[:, None] - (X[:, -1, r_] - X[:, 0, r_]).T
-        fuel: FloatArray = burnt + rate[..., -1] * rest / v[..., -1]
-        return fuel
+        return _fuel_to_distance_kernel(
+            cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, *FUEL_DEFAULT.coefficients()
+        )
+
+
+@njit(cache=True)
+def _block_sum(a: FloatArray, lo: int, n: int) -> float:
+    """numpy's pairwise sum of ``a[lo:lo + n]`` for n <= 128: in order below 8 values, else
+    eight partial sums combined as a tree, then the remainder in order."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i, m = 8, n - n % 8
+    while i < m:
+        j = lo + i
+        r0, r1, r2, r3 = r0 + a[j], r1 + a[j + 1], r2 + a[j + 2], r3 + a[j + 3]
+        r4, r5, r6, r7 = r4 + a[j + 4], r5 + a[j + 5], r6 + a[j + 6], r7 + a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True)
+def _pairwise_sum(a: FloatArray, n: int) -> float:
+    """Sum of ``a[:n]`` in numpy's pairwise order, so that it equals ``ndarray.sum`` bit for
+    bit: blocks of up to 128 values (:func:`_block_sum`), longer runs split in two at half
+    the length rounded down to a multiple of 8 and the halves added. The split is walked with
+    an explicit stack (numba cannot cache a recursive function)."""
+    if n <= 128:
+        return _block_sum(a, 0, n)
+    node_lo = np.empty(64, dtype=np.int64)  # pending nodes: start, length, stage
+    node_n = np.empty(64, dtype=np.int64)
+    stage = np.empty(64, dtype=np.int64)
+    sums = np.empty(64)  # finished nodes' sums, in order
+    node_lo[0], node_n[0], stage[0] = 0, n, 0
+    top, done = 0, 0
+    while top >= 0:
+        lo, m = node_lo[top], node_n[top]
+        if m <= 128:
+            sums[done] = _block_sum(a, lo, m)
+            done += 1
+            top -= 1
+            continue
+        half = m // 2
+        half -= half % 8
+        if stage[top] == 2:  # both halves summed
+            sums[done - 2] = sums[done - 2] + sums[done - 1]
+            done -= 1
+            top -= 1
+            continue
+        child_lo, child_n = (lo, half) if stage[top] == 0 else (lo + half, m - half)
+        stage[top] += 1
+        top += 1
+        node_lo[top], node_n[top], stage[top] = child_lo, child_n, 0
+    return float(sums[0])
+
+
+@njit(cache=True)
+def _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2, positive):
+    """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed
+    times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still missing."""
+    C, K1 = X.shape[0], X.shape[1]
+    out = np.empty((roles.size, C))
+    rate = np.empty(K1 - 1)
+    for i in range(roles.size):
+        r = roles[i]
+        distance = cf[0, K1 - 1, r] - cf[0, 0, r]
+        for c in range(C):
+            for k in range(1, K1):
+                rate[k - 1] = fuel_rate_scalar(
+                    V[c, k, r], A[c, k, r], b0, b1, b2, b3, c0, c1, c2, positive
+                )
+            v_end = max(V[c, K1 - 1, r], 1.0)
+            cruise = fuel_rate_scalar(v_end, 0.0, b0, b1, b2, b3, c0, c1, c2, positive)
+            rest = distance - (X[c, K1 - 1, r] - X[c, 0, r])
+            out[i, c] = _pairwise_sum(rate, K1 - 1) * dt + cruise * rest / v_end
+    return out
 
 
 def default_starts() -> FloatArray:
@@ -363,7 +438,14 @@ def default_starts() -> FloatArray:
     return np.full(N_STARTS, np.nan)
 
 
+@functools.cache  # once per process
 def load_prediction_kernels() -> None:
-    """Load (or compile) the prediction kernels once per process, so that no timed decision
-    pays for it."""
+    """Load (or compile) the kernels of a decision once per process, so that no timed
+    decision pays for it: the rollout, U_fuel's and the lane-change game's SV simulation."""
     warm_up()
+    trajectory = np.zeros((1, 2, N_ROLES))
+    roles = np.zeros(1, dtype=np.int64)
+    coefficients = FUEL_DEFAULT.coefficients()
+    _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, *coefficients)
+    sv = GameVehicle(x=0.0, v=10.0, length=5.0, desired_speed=30.0, is_cav=True)
+    simulate_sv(sv, None, None, IDMParams(), GAME_DEFAULT)
