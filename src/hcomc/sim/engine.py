@@ -145,7 +145,7 @@ class Simulation:
         config, n = self.config, self.demand.n
         meta = build_manifest(
             seed=self.seed,
-            config=config.model_dump(mode="json"),
+            config=config,
             extra={"dt": self.dt, "log_interval": config.log_interval},
         )
         rows = self.n_steps // self._log_every + 1

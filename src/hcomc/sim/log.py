@@ -189,7 +189,7 @@ class SimulationLog:
                 raise ValueError(f"{name} must have shape ({n_vehicles},), got {arr.shape}")
             per_vehicle[name] = arr
         kind_arr = per_vehicle["kind"]
-        if kind_arr.size and not np.isin(kind_arr, (0, 1)).all():
+        if kind_arr.size and not ((kind_arr == 0) | (kind_arr == 1)).all():
             raise ValueError(f"kind must be 0 (HDV) or 1 (CAV), got values {np.unique(kind_arr)}")
         for name in ("length", "width"):
             arr = per_vehicle[name].astype(np.float64)

@@ -312,14 +312,16 @@ def build_manifest(
     if clash:
         raise ValueError(f"extra may not override standard manifest keys: {clash}")
     if not isinstance(config, Mapping) and callable(getattr(config, "model_dump", None)):
-        config = config.model_dump(mode="json")
-    if not isinstance(config, Mapping):
+        plain = config.model_dump(mode="json")  # a new tree of plain JSON types already
+    elif isinstance(config, Mapping):
+        plain = _jsonable(dict(config))
+    else:
         raise TypeError(f"config must be a mapping, got {type(config).__name__}")
     entropy = np.random.SeedSequence(seed).entropy
     manifest: dict[str, Any] = {
         "seed": seed,
         "seed_entropy": int(entropy) if isinstance(entropy, int) else None,
-        "config": _jsonable(dict(config)),
+        "config": plain,
         "hcomc_version": hcomc.__version__,
         "git_revision": git_revision(),
         "python": platform.python_version(),
