@@ -41,6 +41,8 @@ def _advance_batch(cores, rngs, stops, logging, reasons):
 _advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
 
 
+_END = np.iinfo(np.int64).max  # "no goal": to the run's end
+
 _LAST: list[tuple[list[weakref.ref[Simulation]], List, List]] = []
 
 
@@ -131,9 +133,6 @@ def advance_ensemble(
         if threads > 1:
             numba.set_parallel_chunksize(chunks)
             numba.set_num_threads(previous)
-
-
-_END = np.iinfo(np.int64).max
 
 
 @njit(cache=True)
