@@ -1,11 +1,12 @@
-"""Building the arrays of the compiled step (:class:`~hcomc.sim.core_state.CoreArrays`) for
-one run from its config, demand, fleet and HDV perception."""
+"""Building one run's log and the arrays of the compiled step
+(:class:`~hcomc.sim.core_state.CoreArrays`) from its config, demand, fleet and HDV
+perception."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from hcomc.config import ScenarioConfig
+from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
 from hcomc.sim import core_state as layout
@@ -13,12 +14,34 @@ from hcomc.sim.core_state import CoreArrays
 from hcomc.sim.demand import Demand
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import SimulationLog
+from hcomc.sim.manifest import build_manifest
 from hcomc.sim.mobil import lane_change_params
 from hcomc.sim.perception import Perception
 
 INNOVATION_STEPS = 64
 """Steps of HDV estimation-error innovations drawn at a time (refilled from the run's generator
 by the compiled loop or by the engine's Python step)."""
+
+
+def allocate_log(
+    config: ScenarioConfig, seed: int, demand: Demand, fleet: Fleet, rows: int
+) -> SimulationLog:
+    """The empty log of a run (``rows`` logging rows, one column per vehicle of the demand)
+    with the run's manifest; a clear error when it would exceed ``log_memory_limit``."""
+    n = demand.n
+    need = SimulationLog.bytes_needed(rows, n) / 2**30
+    if need > config.log_memory_limit:
+        raise ConfigError(
+            f"key 'log_memory_limit' = {config.log_memory_limit} GiB: this run's log needs "
+            f"{need:.2f} GiB ({rows} rows x {n} vehicles); allowed: a larger "
+            "log_memory_limit, a coarser log_interval or a shorter duration"
+        )
+    meta = build_manifest(seed=seed, config=config,
+                          extra={"dt": config.dt, "log_interval": config.log_interval})  # fmt: skip
+    return SimulationLog.allocate(
+        rows, n, dt=config.log_interval, kind=demand.kind, length=fleet.length,
+        width=fleet.width, meta=meta,
+    )  # fmt: skip
 
 
 def build_arrays(

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
-from hcomc.config import ConfigError, ScenarioConfig
+from hcomc.config import ScenarioConfig
 from hcomc.control.base import (
     MergeController,
     MergeGroup,
@@ -45,7 +45,7 @@ from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import build_arrays
+from hcomc.sim.core_build import allocate_log, build_arrays
 from hcomc.sim.core_state import Core
 from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sim.execution import (
@@ -57,7 +57,6 @@ from hcomc.sim.execution import (
 )
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.manifest import build_manifest
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import Perception
 
@@ -126,7 +125,7 @@ class Simulation:
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
-        self.log = self._allocate_log()
+        self.log = allocate_log(config, seed, demand, fleet, self.n_steps // self._log_every + 1)
         self.arrays = build_arrays(
             config, demand, fleet, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
@@ -140,26 +139,6 @@ class Simulation:
         self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
         self.active, self.waited, self.planned = c.active, c.waited, c.planned
         self._stage = 0
-
-    def _allocate_log(self) -> SimulationLog:
-        config, n = self.config, self.demand.n
-        meta = build_manifest(
-            seed=self.seed,
-            config=config,
-            extra={"dt": self.dt, "log_interval": config.log_interval},
-        )
-        rows = self.n_steps // self._log_every + 1
-        need = SimulationLog.bytes_needed(rows, n) / 2**30
-        if need > config.log_memory_limit:
-            raise ConfigError(
-                f"key 'log_memory_limit' = {config.log_memory_limit} GiB: this run's log needs "
-                f"{need:.2f} GiB ({rows} rows x {n} vehicles); allowed: a larger "
-                "log_memory_limit, a coarser log_interval or a shorter duration"
-            )
-        return SimulationLog.allocate(
-            rows, n, dt=config.log_interval, kind=self.demand.kind, length=self.fleet.length,
-            width=self.fleet.width, meta=meta,
-        )  # fmt: skip
 
     @property
     def t(self) -> float:
