@@ -47,3 +47,19 @@ def test_no_twin_once_the_ramp_vehicle_reaches_the_acceleration_lane() -> None:
     planned = Simulation(load_config("C1", control={"controller": "fifo"}), 0)
     planned.run_to(END, until_key_vehicles=True)
     assert not can_twin(planned)  # the plan acts from the step it is made
+
+
+@pytest.mark.parametrize("counterfactual", [True, False])
+def test_a_run_built_on_drawn_demand_is_the_run_of_its_seed(counterfactual: bool) -> None:
+    """``Simulation._sibling`` (the twin's frame: another run's demand and fleet, not drawn
+    again) gives the run a new ``Simulation`` of the same seed gives, from a run that has
+    already advanced."""
+    config = load_config("C2", control={"controller": "none"})
+    sim = Simulation(config, 5)
+    sim.run_to(400)  # the source's generator has moved on: the sibling must not start there
+    a = Simulation._sibling(sim, counterfactual=counterfactual).run()
+    b = Simulation(config, 5, counterfactual=counterfactual).run()
+    for name in FIELDS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert a.meta["config"] == b.meta["config"]
+    assert a.meta["seed"] == b.meta["seed"]
