@@ -57,11 +57,9 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
         max_episode_time: float = 60.0,
         reward: RewardWeights | dict[str, float] | None = None,
     ) -> None:
-        weights = RewardWeights(**reward) if isinstance(reward, dict) else reward
-        self.options = EnvOptions(
-            scenario=scenario, overrides=dict(overrides or {}), agent=agent,  # type: ignore[arg-type]
-            controller=controller, action_period=action_period,
-            max_episode_time=max_episode_time, reward=weights or RewardWeights(),
+        self.options = EnvOptions.of(
+            scenario, overrides=overrides, reward=reward, agent=agent, controller=controller,
+            action_period=action_period, max_episode_time=max_episode_time,
         )  # fmt: skip
         self.config = self.options.config()
         self.action_space = action_space()

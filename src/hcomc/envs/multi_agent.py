@@ -54,10 +54,9 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         max_episode_time: float = 60.0,
         reward: RewardWeights | dict[str, float] | None = None,
     ) -> None:
-        weights = RewardWeights(**reward) if isinstance(reward, dict) else reward
-        self.options = EnvOptions(
-            scenario=scenario, overrides=dict(overrides or {}), action_period=action_period,
-            max_episode_time=max_episode_time, reward=weights or RewardWeights(),
+        self.options = EnvOptions.of(
+            scenario, overrides=overrides, reward=reward, action_period=action_period,
+            max_episode_time=max_episode_time,
         )  # fmt: skip
         self.config = self.options.config()
         self._obs_space = observation_space(self.options)

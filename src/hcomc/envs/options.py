@@ -4,6 +4,7 @@ period, the episode limit and the reward weights (their one home)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
@@ -92,8 +93,19 @@ class EnvOptions:
             value = getattr(self, key)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise ConfigError(f"key '{key}' = {value!r}: allowed: a number > 0")
-        if isinstance(self.reward, dict):  # accept a plain mapping from gymnasium.make
+        if isinstance(self.reward, Mapping):  # a plain mapping, as gymnasium.make passes it
             object.__setattr__(self, "reward", RewardWeights(**self.reward))
+
+    @classmethod
+    def of(
+        cls, scenario: str, *, overrides: Mapping[str, Any] | None = None,
+        reward: RewardWeights | Mapping[str, float] | None = None, **rest: Any,
+    ) -> EnvOptions:  # fmt: skip
+        """The options an environment's constructor was given (``rest``: the other fields):
+        ``None`` for the default overrides and weights; ``reward`` may be a mapping of
+        :class:`RewardWeights` fields."""
+        weights: Any = RewardWeights() if reward is None else reward  # a mapping: see below
+        return cls(scenario=scenario, overrides=dict(overrides or {}), reward=weights, **rest)
 
     def config(self) -> ScenarioConfig:
         """The scenario as the environment runs it (its controller set by ``controller``)."""
