@@ -207,11 +207,14 @@ class MergeEpisode:
         return self._collisions
 
     def _observe(self) -> None:
+        self.group = self.observe_into(self.obs, self.ego)
+
+    def observe_into(self, out: np.ndarray, i: int) -> np.ndarray:
+        """Write vehicle i's observation (:func:`~hcomc.envs.observation.observe`) into
+        ``out``; returns the key vehicles around VR."""
         s = self.sim
-        self.group = observe(
-            self.obs, s.x, s.v, s.lane, s.active, self.is_cav, s.origin, s.target, s.lc_x0,
-            s.lc_xf, self.ego, self.vr, self.config.road.accel_lane_end,
-        )  # fmt: skip
+        return observe(out, s.x, s.v, s.lane, s.active, self.is_cav, s.origin, s.target,
+                       s.lc_x0, s.lc_xf, i, self.vr, self.config.road.accel_lane_end)  # fmt: skip
 
     # ------------------------------------------------- pieces of every reward
     def merged(self) -> bool:

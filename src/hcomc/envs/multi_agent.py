@@ -28,7 +28,7 @@ from pettingzoo import ParallelEnv
 
 from hcomc.envs.episode import MergeEpisode, apply_action
 from hcomc.envs.merge_env import action_space, observation_space
-from hcomc.envs.observation import N_OBS, observe
+from hcomc.envs.observation import N_OBS
 from hcomc.envs.options import EnvOptions, RewardWeights
 from hcomc.rng import draw_seed
 from hcomc.road import Kind
@@ -115,11 +115,9 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         return joined
 
     def _observe(self, i: int) -> np.ndarray:
-        e = self.episode
-        assert e is not None
-        s, out = e.sim, np.zeros(N_OBS, dtype=np.float32)
-        observe(out, s.x, s.v, s.lane, s.active, e.is_cav, s.origin, s.target, s.lc_x0,
-                s.lc_xf, i, e.vr, self.config.road.accel_lane_end)  # fmt: skip
+        assert self.episode is not None
+        out = np.zeros(N_OBS, dtype=np.float32)
+        self.episode.observe_into(out, i)
         return out
 
     # --------------------------------------------------------------------- step
