@@ -118,38 +118,21 @@ def test_reward_terms_against_independent_computations() -> None:
     in_lane = [i for i in np.flatnonzero(sim.active) if sim.lane[i] == sim.lane[vr] and i != vr]
     ahead = [i for i in in_lane if sim.x[i] > sim.x[vr]]
     behind = [i for i in in_lane if sim.x[i] <= sim.x[vr]]
+
+    def critical(follower: int, leader: int, delay: float) -> float:  # Eq. 15 of one pair
+        gap = sim.x[leader] - p.length[leader] - sim.x[follower]
+        return float(critical_acceleration(
+            gap, sim.v[follower], sim.v[leader], delay=delay,
+            min_distance=ctl.safety_min_distance, emergency_decel=ctl.safety_emergency_decel,
+        ))  # fmt: skip
+
     u = 0.0
     if ahead:
-        j = min(ahead, key=lambda i: sim.x[i])
-        u = max(
-            u,
-            float(
-                critical_acceleration(
-                    sim.x[j] - p.length[j] - sim.x[vr],
-                    sim.v[vr],
-                    sim.v[j],
-                    delay=ctl.safety_delay_cav,
-                    min_distance=ctl.safety_min_distance,
-                    emergency_decel=ctl.safety_emergency_decel,
-                )
-            ),
-        )
+        u = max(u, critical(vr, min(ahead, key=lambda i: sim.x[i]), ctl.safety_delay_cav))
     if behind:
         f = max(behind, key=lambda i: sim.x[i])
         delay = ctl.safety_delay_cav if p.kind[f] == Kind.CAV else ctl.safety_delay_hdv
-        u = max(
-            u,
-            float(
-                critical_acceleration(
-                    sim.x[vr] - p.length[vr] - sim.x[f],
-                    sim.v[f],
-                    sim.v[vr],
-                    delay=delay,
-                    min_distance=ctl.safety_min_distance,
-                    emergency_decel=ctl.safety_emergency_decel,
-                )
-            ),
-        )
+        u = max(u, critical(f, vr, delay))
     expect_safety = env.options.action_period * min(u / ctl.safety_emergency_decel, 1.0)
     if sim.origin[vr] == sim.target[vr]:
         assert info["safety"] == pytest.approx(expect_safety)
