@@ -30,7 +30,7 @@ from hcomc.envs.merge_env import MergeEnv
 from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
 from hcomc.sim.engine import Simulation
-from hcomc.sim.ensemble import advance_ensemble
+from hcomc.sim.ensemble import TypedListCache, advance_ensemble
 
 _END = np.iinfo(np.int64).max
 _INFO_KEYS = ("seed", "merged", "collision", "lane_end", "timeout")
@@ -63,9 +63,7 @@ class MergeVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.episodes: list[MergeEpisode | None] = [None] * self.num_envs
         self._params = parameters(self.config, self.options.action_period)
-        self._mains: List | None = None
-        self._twins: List | None = None
-        self._listed: list[MergeEpisode] = []
+        self._runs = TypedListCache()  # the episodes' runs and twins, for the kernels
         self._rngs = [seeding.np_random(k)[0] for k in range(self.num_envs)]
         self._ended = np.zeros(self.num_envs, dtype=bool)
 
@@ -180,14 +178,7 @@ class MergeVectorEnv(VectorEnv):
     def _lists(self, episodes: list[MergeEpisode]) -> tuple[List, List]:
         """Compiled lists of the episodes' runs and twins, kept between steps: only the
         places of new episodes are replaced."""
-        if self._mains is None or self._twins is None or len(self._listed) != len(episodes):
-            self._mains = List([e.sim.core for e in episodes])
-            self._twins = List([e.twin.core for e in episodes])
-            self._listed = list(episodes)
-        mains, twins = self._mains, self._twins
-        for k, e in enumerate(episodes):
-            if self._listed[k] is not e:
-                mains[k], twins[k], self._listed[k] = e.sim.core, e.twin.core, e
+        mains, twins = self._runs.lists(episodes, lambda e: e.sim.core, lambda e: e.twin.core)
         return mains, twins
 
     @staticmethod

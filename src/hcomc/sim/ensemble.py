@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numba
 import numpy as np
@@ -43,24 +44,45 @@ _advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
 
 _END = np.iinfo(np.int64).max  # "no goal": to the run's end
 
-_LAST: list[tuple[list[weakref.ref[Simulation]], List, List]] = []
+
+class TypedListCache:
+    """Compiled (numba typed) lists of values taken from the same places across calls.
+
+    Called again with as many keys, only the places whose key changed are converted again,
+    since each entry costs microseconds to convert (a learning environment passes the same
+    runs in the same places every step, with a few new episodes). Keys are held weakly; the
+    lists hold the values until the next call or :meth:`clear`.
+    """
+
+    def __init__(self) -> None:
+        self._keys: list[weakref.ref[Any]] = []
+        self._lists: tuple[List, ...] = ()
+
+    def lists(self, keys: Sequence[Any], *columns: Callable[[Any], Any]) -> tuple[List, ...]:
+        """One list per column function, entry k being ``column(keys[k])``."""
+        if not self._lists or len(self._keys) != len(keys):
+            self._lists = tuple(List([column(key) for key in keys]) for column in columns)
+            self._keys = [weakref.ref(key) for key in keys]
+            return self._lists
+        for k, key in enumerate(keys):
+            if self._keys[k]() is not key:
+                self._keys[k] = weakref.ref(key)
+                for values, column in zip(self._lists, columns, strict=True):
+                    values[k] = column(key)
+        return self._lists
+
+    def clear(self) -> None:
+        """Drop the lists (and the values they hold)."""
+        self._keys, self._lists = [], ()
+
+
+_BATCH_LISTS = TypedListCache()  # the compiled loop's states and generators of the last batch
 
 
 def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
-    """The compiled loop's lists of the runs' states and generators. The last batch's lists
-    are kept and only the places whose run changed are replaced (a learning environment
-    passes the same runs in the same places every step, with a few new episodes), since
-    each entry costs microseconds to convert. They hold the last batch's states until the
-    next batch (or the end of :func:`run_ensemble`)."""
-    if _LAST and len(_LAST[0][0]) == len(runs):
-        refs, cores, rngs = _LAST[0]
-        for k, run in enumerate(runs):
-            if refs[k]() is not run:
-                refs[k], cores[k], rngs[k] = weakref.ref(run), run.core, run.rng
-        return cores, rngs
-    cores = List([s.core for s in runs])
-    rngs = List([s.rng for s in runs])
-    _LAST[:] = [([weakref.ref(s) for s in runs], cores, rngs)]
+    """The compiled loop's lists of the runs' states and generators (kept from the last
+    batch: see :class:`TypedListCache`)."""
+    cores, rngs = _BATCH_LISTS.lists(runs, lambda s: s.core, lambda s: s.rng)
     return cores, rngs
 
 
@@ -77,7 +99,7 @@ def run_ensemble(
     as runs finish.
     """
     advance_ensemble(sims, None, threads=threads, progress=progress)
-    _LAST.clear()  # a finished batch's states need not outlive it
+    _BATCH_LISTS.clear()  # a finished batch's states need not outlive it
     return [s.log for s in sims]
 
 
@@ -180,4 +202,4 @@ class _Batch:
         self._update()
 
 
-__all__ = ["advance_ensemble", "run_ensemble"]
+__all__ = ["TypedListCache", "advance_ensemble", "run_ensemble"]
