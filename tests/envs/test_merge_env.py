@@ -16,6 +16,7 @@ import hcomc.envs  # noqa: F401 (registers hcomc/Merge-v0)
 from hcomc.config import ConfigError, load_config
 from hcomc.control.base import find_key_vehicles
 from hcomc.envs import MergeEnv
+from hcomc.envs.episode import SEED_TRIES, NoVMCError
 from hcomc.envs.multi_agent import MergeParallelEnv
 from hcomc.envs.observation import N_EGO, N_OBS, N_ROLE, OBS_NAMES
 from hcomc.envs.policies import FIFO, HCOMC, evaluate, summary
@@ -45,6 +46,37 @@ def rollout(env: MergeEnv, seed: int, policy=drive) -> list[tuple[np.ndarray, fl
 def test_gymnasium_env_checker_passes() -> None:
     check_env(gym.make("hcomc/Merge-v0").unwrapped, skip_render_check=True)
     check_env(MergeEnv("C2", agent="vmc"), skip_render_check=True)
+
+
+NO_VMC_SEED = 18
+"""A C1 seed whose VR has no VMC when it enters the control zone."""
+
+
+def test_a_seed_without_vmc_is_skipped_only_when_drawn(monkeypatch: pytest.MonkeyPatch) -> None:
+    env = MergeEnv("C1", agent="vmc")
+    with pytest.raises(NoVMCError, match=f"seed {NO_VMC_SEED}: VR has no VMC"):
+        env.reset(seed=NO_VMC_SEED)
+    expected, _ = MergeEnv("C1", agent="vmc").reset(seed=5)
+    drawn = iter([NO_VMC_SEED, 5])
+    monkeypatch.setattr("hcomc.envs.merge_env.draw_seed", lambda rng: next(drawn))
+    obs, info = env.reset()
+    assert info["seed"] == 5
+    np.testing.assert_array_equal(obs, expected)
+    monkeypatch.setattr("hcomc.envs.merge_env.draw_seed", lambda rng: NO_VMC_SEED)
+    with pytest.raises(NoVMCError, match=f"{SEED_TRIES} drawn seeds in a row"):
+        env.reset()
+
+
+def test_vector_env_skips_drawn_seeds_without_vmc(monkeypatch: pytest.MonkeyPatch) -> None:
+    envs = MergeVectorEnv(2, agent="vmc")
+    drawn = iter([NO_VMC_SEED, 7, 5])  # both runs' seeds, then sub-environment 0's next
+    monkeypatch.setattr("hcomc.envs.vector.draw_seed", lambda rng: next(drawn))
+    obs, info = envs.reset()
+    assert info["seed"].tolist() == [5, 7]
+    for k, seed in enumerate((5, 7)):
+        np.testing.assert_array_equal(obs[k], MergeEnv("C1", agent="vmc").reset(seed=seed)[0])
+    with pytest.raises(NoVMCError):
+        envs.reset(seed=[NO_VMC_SEED, 7])  # given seeds are not replaced
 
 
 def test_pettingzoo_parallel_api_test_passes() -> None:

@@ -13,6 +13,7 @@ environments; they advance many episodes' runs together with
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +60,11 @@ def apply_action(sim: Simulation, params: np.ndarray, i: int, action: np.ndarray
     end) into lane 1, from a main lane to the other. ``params``: :func:`batch.parameters`.
     """
     apply_one(sim.core, i, float(action[0]), float(action[1]), params)
+
+
+class NoVMCError(RuntimeError):
+    """The agent drives VMC, and VR has none when it enters the control zone (no mainline
+    vehicle to merge in front of): this seed's run has no episode for the agent."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -133,7 +139,7 @@ class MergeEpisode:
         self.vr = group.vr
         self.ego = group.vr if self.options.agent == "vr" else group.vmc
         if self.ego < 0:
-            raise RuntimeError(
+            raise NoVMCError(
                 f"seed {self.seed}: VR has no VMC to drive when it enters the control zone"
             )
         self.t_start = self.sim.t
@@ -292,4 +298,26 @@ class MergeEpisode:
         return self.sim.log, self.twin.log
 
 
-__all__ = ["MergeEpisode", "Outcome", "StepResult", "apply_action"]
+SEED_TRIES = 100
+"""Drawn seeds an environment tries in a row for one episode before it gives up (a seed whose
+VR has no VMC, when the agent drives VMC, is skipped)."""
+
+
+def start_drawn(
+    options: EnvOptions, config: ScenarioConfig, draw: Callable[[], int]
+) -> tuple[MergeEpisode, np.ndarray]:
+    """A started episode (and its first observation) on the next drawn seed that has one for
+    the agent: seeds whose VR has no VMC are skipped when the agent drives VMC."""
+    for _ in range(SEED_TRIES):
+        episode = MergeEpisode(options, config, draw())
+        try:
+            return episode, episode.start()
+        except NoVMCError:
+            continue
+    raise NoVMCError(
+        f"{SEED_TRIES} drawn seeds in a row: VR has no VMC when it enters the control zone; "
+        "allowed: agent 'vr', or a scenario with mainline traffic beside the ramp"
+    )
+
+
+__all__ = ["MergeEpisode", "NoVMCError", "Outcome", "StepResult", "apply_action", "start_drawn"]

@@ -13,7 +13,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.episode import MergeEpisode, start_drawn
 from hcomc.envs.observation import observation_bounds
 from hcomc.envs.options import EnvOptions, RewardWeights
 from hcomc.rng import draw_seed
@@ -40,8 +40,10 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
 
     ``reset(seed=s)`` starts the scenario's run with seed ``s`` (the same traffic as
     ``hcomc simulate CONDITION --seed s``); without a seed the next seed comes from the
-    environment's generator, itself seeded by the first ``reset(seed=...)``. Episodes are
-    bit-reproducible: the same seed and actions give the same observations and rewards.
+    environment's generator, itself seeded by the first ``reset(seed=...)`` (with
+    ``agent="vmc"``, a drawn seed whose VR has no VMC is skipped for the next one; a given one
+    raises :class:`~hcomc.envs.episode.NoVMCError`). Episodes are bit-reproducible: the same
+    seed and actions give the same observations and rewards.
     """
 
     metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (gymnasium's API)
@@ -71,10 +73,14 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Start the run of ``seed`` and advance it to VR's control-zone entry."""
         super().reset(seed=seed)
-        run_seed = seed if seed is not None else draw_seed(self.np_random)
-        self.episode = MergeEpisode(self.options, self.config, run_seed)
-        obs = self.episode.start()
-        return obs, {"seed": run_seed, "t": self.episode.sim.t, "ego": self.episode.ego}
+        if seed is not None:  # this seed's run, or its clear error
+            self.episode = MergeEpisode(self.options, self.config, seed)
+            obs = self.episode.start()
+        else:
+            self.episode, obs = start_drawn(self.options, self.config,
+                                            lambda: draw_seed(self.np_random))  # fmt: skip
+        e = self.episode
+        return obs, {"seed": e.seed, "t": e.sim.t, "ego": e.ego}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Drive one action period."""

@@ -15,6 +15,7 @@ action and returns its first observation with reward 0).
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -25,7 +26,7 @@ from numba.typed import List
 
 from hcomc.envs.batch import N_TERMS, apply_batch, outcomes, parameters, step_terms_batch
 from hcomc.envs.batch import rewards as step_rewards
-from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.episode import MergeEpisode, NoVMCError, start_drawn
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
@@ -82,29 +83,41 @@ class MergeVectorEnv(VectorEnv):
             int(s) if seed is not None else self._next_seed(k)
             for k, s in enumerate(seeds if seed is not None else range(self.num_envs))
         ]
-        obs = self._start(list(range(self.num_envs)), run_seeds)
+        obs = self._start(list(range(self.num_envs)), run_seeds, drawn=seed is None)
         self._ended[:] = False
-        infos = self._infos([{"seed": s} for s in run_seeds])
+        infos = self._infos([{"seed": e.seed} for e in self._current()])
         return np.stack(obs), infos
 
     def _next_seed(self, k: int) -> int:
         return draw_seed(self._rngs[k])
 
-    def _start(self, which: list[int], seeds: list[int]) -> list[np.ndarray]:
+    def _start(self, which: list[int], seeds: list[int], *, drawn: bool) -> list[np.ndarray]:
         """New episodes for sub-environments ``which``, advanced together to their start."""
         new = [MergeEpisode(self.options, self.config, s) for s in seeds]
         advance_ensemble([e.sim for e in new], [_END] * len(new),
                          until_key_vehicles=[True] * len(new), threads=self.threads)  # fmt: skip
-        return self._begin(which, new)
+        return self._begin(which, new, drawn=drawn)
 
-    def _begin(self, which: list[int], new: list[MergeEpisode]) -> list[np.ndarray]:
-        """Twins and first observations of new episodes that reached VR's entry."""
+    def _begin(self, which: list[int], new: list[MergeEpisode], *, drawn: bool) -> list[np.ndarray]:
+        """Twins and first observations of new episodes that reached VR's entry. An episode
+        on a ``drawn`` seed without a VMC for the agent is replaced by one on the next drawn
+        seed, as :meth:`MergeEnv.reset` does."""
         behind = [e for e in new if e.make_twin()]  # twins that are not copies
         advance_ensemble([e.twin for e in behind], [e.sim.step_index for e in behind],
                          threads=self.threads)  # fmt: skip
-        for k, episode in zip(which, new, strict=True):
+        firsts = []
+        for k, fresh in zip(which, new, strict=True):
+            episode = fresh
+            try:
+                first = episode.begin()
+            except NoVMCError:
+                if not drawn:
+                    raise
+                draw = functools.partial(self._next_seed, k)
+                episode, first = start_drawn(self.options, self.config, draw)
             self.episodes[k] = episode
-        return [e.begin() for e in new]
+            firsts.append(first)
+        return firsts
 
     # --------------------------------------------------------------------- step
     def step(
@@ -150,7 +163,7 @@ class MergeVectorEnv(VectorEnv):
         finished = np.array([e.sim.finished for e in episodes])
         o = outcomes(terms, before, t_start, finished, lane_end_ends=episodes[0].lane_end_ends,
                      max_time=self.options.max_episode_time)  # fmt: skip
-        firsts = self._begin(restart, [new[k] for k in restart])
+        firsts = self._begin(restart, [new[k] for k in restart], drawn=True)
         going = np.ones(n, dtype=bool)
         going[restart] = False  # a restarting sub-environment: its old episode has ended
         for k in np.flatnonzero(going).tolist():
