@@ -99,7 +99,9 @@ def test_allocate_shapes_dtypes_and_fill() -> None:
     assert (log.n_steps, log.n_vehicles, log.n_recorded, log.vehicle_steps) == (T, N, 0, 0)
     assert log.meta == {}
     assert log.dt == 0.1
-    assert log.nbytes == 5 * T * N * 4 + 2 * T * N + T * 8 + N * (1 + 4 + 4)
+    # cells, row times, kind/length/width, the slot tables (slot, span: 24 B per vehicle;
+    # owner: 8 B per column)
+    assert log.nbytes == 5 * T * N * 4 + 2 * T * N + T * 8 + N * (1 + 4 + 4) + N * 24 + N * 8
     assert log.events.shape == (0,)
     assert log.events.dtype == EVENT_DTYPE
 

@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import ConfigError, load_config
-from hcomc.sim import log_io
+from hcomc.sim import core_build, log_io
+from hcomc.sim.core_build import FIRST_SLOTS
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
 from hcomc.sim.log_events import EventTable
@@ -28,7 +29,7 @@ from hcomc.sim.log_layout import (
 )
 
 
-def _allocate(n_steps: int, n_vehicles: int) -> SimulationLog:
+def _allocate(n_steps: int, n_vehicles: int, slots: int | None = None) -> SimulationLog:
     return SimulationLog.allocate(
         n_steps,
         n_vehicles,
@@ -36,6 +37,7 @@ def _allocate(n_steps: int, n_vehicles: int) -> SimulationLog:
         kind=np.arange(n_vehicles) % 2,
         length=np.full(n_vehicles, 4.5),
         width=np.full(n_vehicles, 1.8),
+        slots=slots,
     )
 
 
@@ -44,17 +46,22 @@ def _allocate(n_steps: int, n_vehicles: int) -> SimulationLog:
 
 def test_cell_costs_22_bytes_and_the_one_hour_figure() -> None:
     assert BYTES_PER_CELL == 5 * 4 + 1 + 1
-    # 1 hour at 0.1 s (36 001 rows incl. t = 0) x 2000 slots: cells + t + per-vehicle
-    assert bytes_needed(36_001, 2000) == 36_001 * 2000 * 22 + 36_001 * 8 + 2000 * 9
-    assert bytes_needed(36_001, 2000) == 1_584_350_008
-    assert SimulationLog.bytes_needed(12_001, 2000) / 2**30 == pytest.approx(0.49189, abs=1e-5)
+    # 1 hour at 0.1 s (36 001 rows incl. t = 0) x 2000 columns: cells + t + per vehicle
+    # (kind, length, width; slot and span) + per column (owner)
+    one_hour = 36_001 * 2000 * 22 + 36_001 * 8 + 2000 * (9 + 24) + 2000 * 8
+    assert bytes_needed(36_001, 2000) == one_hour == 1_584_414_008
+    assert SimulationLog.bytes_needed(12_001, 2000) / 2**30 == pytest.approx(0.49195, abs=1e-5)
+    # the same 2000 vehicles, at most 40 on the road at once: 40 slot columns
+    assert bytes_needed(36_001, 2000, 40) == 36_001 * 40 * 22 + 36_001 * 8 + 2000 * 33 + 40 * 8
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(0, 40), st.integers(0, 40))
-def test_bytes_needed_is_the_allocated_size(n_steps: int, n_vehicles: int) -> None:
-    log = _allocate(n_steps, n_vehicles)
-    assert log.nbytes == bytes_needed(n_steps, n_vehicles)
+@given(st.integers(0, 40), st.integers(0, 40), st.none() | st.integers(0, 40))
+def test_bytes_needed_is_the_allocated_size(
+    n_steps: int, n_vehicles: int, slots: int | None
+) -> None:
+    log = _allocate(n_steps, n_vehicles, slots)
+    assert log.nbytes == bytes_needed(n_steps, n_vehicles, slots)
     for name in ARRAY_FIELDS:
         arr = getattr(log, name)
         assert arr.dtype == DTYPES[name], name
@@ -91,14 +98,37 @@ def test_float32_positions_resolve_the_shipped_roads_to_half_a_millimetre() -> N
 
 def test_engine_refuses_exactly_above_the_allocated_size() -> None:
     config = load_config("C1", duration=20.0, warmup=0.0, log_interval=0.2)
-    n = Simulation(config, 0).log.n_vehicles
+    log = Simulation(config, 0).log
+    n, slots = log.n_vehicles, log.n_slots
     rows = round(20.0 / 0.2) + 1
-    need = bytes_needed(rows, n) / 2**30
+    need = bytes_needed(rows, n, slots) / 2**30
     sim = Simulation(config.model_copy(update={"log_memory_limit": need * (1 + 1e-9)}), 0)
-    assert sim.log.nbytes == bytes_needed(rows, n)
+    assert sim.log.nbytes == bytes_needed(rows, n, slots)
     assert sim.log.n_steps == rows
-    with pytest.raises(ConfigError, match=rf"\({rows} rows x {n} vehicles\)"):
+    with pytest.raises(ConfigError, match=rf"\({rows} rows x {slots} vehicles on the road"):
         Simulation(config.model_copy(update={"log_memory_limit": need * (1 - 1e-6)}), 0)
+
+
+def test_a_log_that_grows_its_columns_logs_the_same_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A log starting with 4 slot columns doubles them as vehicles enter (4, 8, 16, 32):
+    the same cells as a log that never grows, and the limit checked again at each growth."""
+    config = load_config("C1", duration=60.0, log_interval=0.1)
+    plain = Simulation(config, 0)
+    plain.run()
+    assert FIRST_SLOTS > plain.log.n_slots > 8  # about 20 vehicles on the road at once
+    monkeypatch.setattr(core_build, "FIRST_SLOTS", 4)
+    grown = Simulation(config, 0)
+    assert grown.log.n_slots == 4
+    grown.run()
+    for name in CELL_FIELDS:
+        np.testing.assert_array_equal(getattr(grown.log, name), getattr(plain.log, name))
+    np.testing.assert_array_equal(grown.log.slot, plain.log.slot)
+    np.testing.assert_array_equal(grown.log.span, plain.log.span)
+    rows, n = grown.log.n_steps, grown.log.n_vehicles
+    limit = bytes_needed(rows, n, 6) / 2**30  # room for 4 columns, not for 8
+    sim = Simulation(config.model_copy(update={"log_memory_limit": limit}), 0)
+    with pytest.raises(ConfigError, match=rf"\({rows} rows x 8 vehicles on the road"):
+        sim.run()
 
 
 # ---------------------------------------------------------------------- conversion

@@ -32,6 +32,7 @@ from hcomc.sim.core_state import (
     WARMUP,
     command,
 )
+from hcomc.sim.log_slots import rows_of
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -82,6 +83,12 @@ def _is_ramp(c, i: int) -> bool:
     return bool(np.any(queue == i))
 
 
+@njit(cache=True, inline="always")
+def _rows(c, store: np.ndarray, i: int, r0: int, r1: int) -> np.ndarray:
+    """Vehicle i's cells of one of run ``c``'s log columns over rows ``[r0, r1)``."""
+    return rows_of(store, c.log_slot, c.log_span, i, r0, r1)
+
+
 @njit(cache=True)
 def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarray, terms):
     """Observation (into ``out``) and reward terms (into ``terms``, see :data:`N_TERMS`) of
@@ -102,13 +109,15 @@ def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarra
         coefs = p[P_FUEL:]
         for i in (vr, group[VMC]):
             if i >= 0:
-                fuel += fuel_over_rows(c.log_v, c.log_a, r0, r1, i, p[P_LOG_DT], coefs)
+                fuel += fuel_over_rows(_rows(c, c.log_v, i, r0, r1), _rows(c, c.log_a, i, r0, r1),
+                                       p[P_LOG_DT], coefs)  # fmt: skip
         for r in range(4):
             i = vr if r == 0 else group[(VMC, VMR, VNR)[r - 1]]
             if i < 0:
                 continue
-            g = gain_over_rows(c.log_v, c.log_a, ref.log_a, r0, r1, i, p[P_LOG_DT],
-                               _is_ramp(c, i), c.matrix[:, i], c.iidm[i])  # fmt: skip
+            g = gain_over_rows(_rows(c, c.log_v, i, r0, r1), _rows(c, c.log_a, i, r0, r1),
+                               _rows(ref, ref.log_a, i, r0, r1), p[P_LOG_DT], _is_ramp(c, i),
+                               c.matrix[:, i], c.iidm[i])  # fmt: skip
             if r == 0:
                 own = g
             else:

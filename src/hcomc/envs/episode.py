@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -86,6 +87,11 @@ class StepResult:
     terminated: bool
     truncated: bool
     info: dict[str, object]
+
+
+def _rows(cells: Any, r0: int, r1: int, i: int) -> np.ndarray:
+    """Vehicle i's cells of one (T, N) log array over rows ``[r0, r1)``, as float64."""
+    return np.asarray(cells[r0:r1, i], dtype=np.float64)
 
 
 class MergeEpisode:
@@ -273,7 +279,8 @@ class MergeEpisode:
         if i < 0 or r1 <= r0:
             return 0.0
         log, p = self.sim.log, self.kernel_params
-        return fuel_over_rows(log.v, log.a, r0, r1, i, p[P_LOG_DT], p[P_FUEL:])
+        return fuel_over_rows(_rows(log.v, r0, r1, i), _rows(log.a, r0, r1, i), p[P_LOG_DT],
+                              p[P_FUEL:])  # fmt: skip
 
     def gain_of(self, i: int, r0: int, r1: int) -> float:
         """Eq. 17's ``a_new - a_ori`` of vehicle i integrated over log rows ``[r0, r1)``
@@ -283,7 +290,8 @@ class MergeEpisode:
             return 0.0
         s = self.sim
         return gain_over_rows(
-            s.log.v, s.log.a, self.twin.log.a, r0, r1, i, self.kernel_params[P_LOG_DT],
+            _rows(s.log.v, r0, r1, i), _rows(s.log.a, r0, r1, i),
+            _rows(self.twin.log.a, r0, r1, i), self.kernel_params[P_LOG_DT],
             bool(self.ramp[i]), s.arrays.matrix[:, i], bool(s.arrays.iidm[i]),
         )  # fmt: skip
 

@@ -45,6 +45,7 @@ from hcomc.sim.core_state import (
     DT,
     ERRORS,
     FLUSH,
+    GROW_LOG,
     HAS_PLANS,
     INNOV_CURSOR,
     KICK,
@@ -61,6 +62,7 @@ from hcomc.sim.core_state import (
     CoreArrays,
     push_history,
 )
+from hcomc.sim.log_slots import claim_slots
 from hcomc.sim.perception import advance_errors_of
 from hcomc.sim.small import nonzero
 
@@ -90,15 +92,21 @@ def step_finish(
 
 # --------------------------------------------------------------------------- record
 @njit(cache=True)
-def record_row(c: CoreArrays, k: int, t: float) -> None:
-    """Write log row k for the vehicles on the road; the others keep the log's fill (NaN,
-    lane -1, inactive: :meth:`SimulationLog.allocate`), so a row costs what is on the road."""
+def record_row(c: CoreArrays, k: int, t: float) -> bool:
+    """Write log row k for the vehicles on the road, each in its slot column
+    (:func:`hcomc.sim.log_slots.claim_slots`); the other cells keep the log's fill (NaN,
+    lane -1, inactive), so a row costs what is on the road. False, writing nothing, when the
+    log needs more columns first."""
+    if not claim_slots(c.active, c.log_slot, c.log_span, c.log_owner, k):
+        return False
     c.log_t[k] = t
     for i in range(c.x.size):
         if c.active[i]:
-            c.log_active[k, i] = True
-            c.log_x[k, i], c.log_y[k, i], c.log_v[k, i] = c.x[i], c.y[i], c.v[i]
-            c.log_a[k, i], c.log_heading[k, i], c.log_lane[k, i] = c.a[i], c.heading[i], c.lane[i]
+            s = c.log_slot[i]
+            c.log_active[k, s] = True
+            c.log_x[k, s], c.log_y[k, s], c.log_v[k, s] = c.x[i], c.y[i], c.v[i]
+            c.log_a[k, s], c.log_heading[k, s], c.log_lane[k, s] = c.a[i], c.heading[i], c.lane[i]
+    return True
 
 
 # ----------------------------------------------------------------------------- loop
@@ -164,6 +172,7 @@ def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator
         k = c.counters[STEP] - c.flags[N_WARMUP]
         if log_rows and k > 0 and k % c.flags[LOG_EVERY] == 0:
             t_row = -warmup + c.counters[STEP] * dt
-            record_row(c, c.counters[ROWS], t_row)
+            if not record_row(c, c.counters[ROWS], t_row):
+                return GROW_LOG  # the row is written once the log has grown
             c.counters[ROWS] += 1
     return DONE

@@ -23,25 +23,36 @@ INNOVATION_STEPS = 64
 by the compiled loop or by the engine's Python step)."""
 
 
+FIRST_SLOTS = 64
+"""Slot columns a run's log starts with (:mod:`hcomc.sim.log_slots`; it doubles them when
+more vehicles are on the road at once, up to one per vehicle)."""
+
+
 def allocate_log(
     config: ScenarioConfig, seed: int, demand: Demand, fleet: Fleet, rows: int
 ) -> SimulationLog:
-    """The empty log of a run (``rows`` logging rows, one column per vehicle of the demand)
-    with the run's manifest; a clear error when it would exceed ``log_memory_limit``."""
-    n = demand.n
-    need = SimulationLog.bytes_needed(rows, n) / 2**30
-    if need > config.log_memory_limit:
-        raise ConfigError(
-            f"key 'log_memory_limit' = {config.log_memory_limit} GiB: this run's log needs "
-            f"{need:.2f} GiB ({rows} rows x {n} vehicles); allowed: a larger "
-            "log_memory_limit, a coarser log_interval or a shorter duration"
-        )
+    """The empty log of a run (``rows`` logging rows, slot columns for its vehicles) with
+    the run's manifest; a clear error when it would exceed ``log_memory_limit``."""
+    slots = min(demand.n, FIRST_SLOTS)
+    check_log_memory(config, rows, demand.n, slots)
     meta = build_manifest(seed=seed, config=config,
                           extra={"dt": config.dt, "log_interval": config.log_interval})  # fmt: skip
     return SimulationLog.allocate(
-        rows, n, dt=config.log_interval, kind=demand.kind, length=fleet.length,
-        width=fleet.width, meta=meta,
+        rows, demand.n, dt=config.log_interval, kind=demand.kind, length=fleet.length,
+        width=fleet.width, meta=meta, slots=slots,
     )  # fmt: skip
+
+
+def check_log_memory(config: ScenarioConfig, rows: int, vehicles: int, slots: int) -> None:
+    """Raise a clear ``ConfigError`` when a log of ``rows`` rows and ``slots`` columns (that
+    many vehicles on the road at once) would exceed ``log_memory_limit``."""
+    need = SimulationLog.bytes_needed(rows, vehicles, slots) / 2**30
+    if need > config.log_memory_limit:
+        raise ConfigError(
+            f"key 'log_memory_limit' = {config.log_memory_limit} GiB: this run's log needs "
+            f"{need:.2f} GiB ({rows} rows x {slots} vehicles on the road at once); allowed: "
+            "a larger log_memory_limit, a coarser log_interval or a shorter duration"
+        )
 
 
 def build_arrays(
@@ -116,7 +127,16 @@ def build_arrays(
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
         consts=consts, flags=flags, lc_params=lane_change_params(config.lane_change),
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
-        innov=np.zeros((innov_steps, 2, n)), log_t=log.t, log_x=log.x, log_y=log.y,
-        log_v=log.v, log_a=log.a, log_heading=log.heading, log_lane=log.lane,
-        log_active=log.active,
+        innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
+        log_slot=log.slot, log_span=log.span,
     )  # fmt: skip
+
+
+def log_columns(log: SimulationLog) -> dict[str, np.ndarray]:
+    """The :class:`CoreArrays` fields of ``log``'s slot columns (the same buffers)."""
+    cells = log.cells
+    return {
+        "log_x": cells["x"], "log_y": cells["y"], "log_v": cells["v"], "log_a": cells["a"],
+        "log_heading": cells["heading"], "log_lane": cells["lane"],
+        "log_active": cells["active"], "log_owner": log.owner,
+    }  # fmt: skip

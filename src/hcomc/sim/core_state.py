@@ -10,7 +10,7 @@ Python reads and writes the state through the :class:`CoreArrays`.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -30,7 +30,7 @@ STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS = ran
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER, CAV_GAME,
  HAS_PLANS) = range(9)  # fmt: skip
 # reasons run_steps returns
-DONE, NEED_PYTHON, FLUSH = range(3)
+DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -88,7 +88,7 @@ class CoreArrays(NamedTuple):
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
-    log_t: np.ndarray  # the run's log (SimulationLog's arrays, the same buffers)
+    log_t: np.ndarray  # the run's log (SimulationLog's stored arrays, the same buffers)
     log_x: np.ndarray
     log_y: np.ndarray
     log_v: np.ndarray
@@ -96,6 +96,9 @@ class CoreArrays(NamedTuple):
     log_heading: np.ndarray
     log_lane: np.ndarray
     log_active: np.ndarray
+    log_slot: np.ndarray  # the log's slot tables (hcomc.sim.log_slots)
+    log_span: np.ndarray
+    log_owner: np.ndarray
 
 
 @structref.register
@@ -115,6 +118,16 @@ class Core(structref.StructRefProxy):
 
 structref.define_constructor(Core, CoreType, list(CoreArrays._fields))
 structref.define_boxing(CoreType, Core)
+
+
+@njit(cache=True)
+def set_log_columns(
+    c: Any, x: np.ndarray, y: np.ndarray, v: np.ndarray, a: np.ndarray,
+    heading: np.ndarray, lane: np.ndarray, active: np.ndarray, owner: np.ndarray,
+) -> None:  # fmt: skip
+    """Point the run's state at its log's new (wider) slot columns."""
+    c.log_x, c.log_y, c.log_v, c.log_a, c.log_heading = x, y, v, a, heading
+    c.log_lane, c.log_active, c.log_owner = lane, active, owner
 
 
 # ----------------------------------------------------------------------------- events

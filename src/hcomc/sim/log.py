@@ -1,17 +1,21 @@
 """Simulation log: preallocated struct-of-arrays trajectories plus a table of events.
 
-The engine writes one row per logging step with :meth:`SimulationLog.record` (a handful
-of vectorised numpy operations, no Python loop over vehicles) and appends rare discrete
+The engine writes one row per logging step (compiled: :func:`hcomc.sim.core.record_row`;
+from Python: :meth:`SimulationLog.record`) and appends rare discrete
 events (insertions, lane changes, merges, collisions, plan fallbacks ...) with
 :meth:`SimulationLog.add_event`. Metrics, tables and figures read the log afterwards.
 
-The trajectories are ``T`` logging rows x ``N`` vehicle slots: ``t`` (T,) float64 and
-``x, y, v, a, heading`` (float32), ``lane`` (int8), ``active`` (bool), each a plain
-C-contiguous (T, N) numpy array, plus per-slot ``kind``, ``length``, ``width``. The layout,
-the reasons for each dtype and the memory figures are in :mod:`hcomc.sim.log_layout`; the
-events in :mod:`hcomc.sim.log_events`. Files (``.npz``, ``.parquet``, written atomically
-and read back exactly) are handled by :mod:`hcomc.sim.log_io` behind
-:meth:`SimulationLog.save` and :meth:`SimulationLog.load`.
+The trajectories read as ``T`` logging rows x ``N`` vehicles: ``t`` (T,) float64 and
+``x, y, v, a, heading`` (float32), ``lane`` (int8), ``active`` (bool), each indexed like a
+(T, N) numpy array, plus per-vehicle ``kind``, ``length``, ``width``. A log built from plain
+(T, N) arrays stores them as they are. The engine's log stores its cells in slot columns that
+vehicles leaving the road hand on to vehicles entering it, so its memory follows the number
+of vehicles on the road at once, not the number over the run (:mod:`hcomc.sim.log_slots`);
+its ``x`` ... ``active`` are read views of the same (T, N) shape. The layout, the reasons
+for each dtype and the memory figures are in :mod:`hcomc.sim.log_layout`; the events in
+:mod:`hcomc.sim.log_events`. Files (``.npz``, ``.parquet``, written atomically and read
+back exactly) are handled by :mod:`hcomc.sim.log_io` behind :meth:`SimulationLog.save`
+and :meth:`SimulationLog.load`.
 """
 
 from __future__ import annotations
@@ -29,11 +33,20 @@ from hcomc.sim.log_events import EVENT_DTYPE, EventKind, EventTable
 from hcomc.sim.log_layout import (
     ARRAY_FIELDS,
     CELL_FIELDS,
+    DTYPES,
+    FILL,
     STATE_FIELDS,
     VEHICLE_FIELDS,
     allocate_rows,
     as_layout,
     bytes_needed,
+)
+from hcomc.sim.log_slots import (
+    OPEN,
+    VehicleCells,
+    claim_slots,
+    empty_slots,
+    identity_slots,
 )
 
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
@@ -110,33 +123,83 @@ class SimulationLog:
             if np.shape(given[name]) != shape:
                 raise ValueError(f"{name} has shape {np.shape(given[name])}, expected {shape}")
         arrays = {name: as_layout(name, given[name]) for name in ARRAY_FIELDS}
+        self._setup(dt, arrays, identity_slots(n_vehicles), meta, n_recorded, events)
+
+    def _setup(
+        self,
+        dt: float,
+        arrays: dict[str, np.ndarray],
+        slots: tuple[np.ndarray, np.ndarray, np.ndarray],
+        meta: dict[str, Any] | None,
+        n_recorded: int,
+        events: np.ndarray | None,
+    ) -> None:
         self.dt: float = dt
         self.t: FloatArray = arrays["t"]
-        self.x: np.ndarray = arrays["x"]
-        self.y: np.ndarray = arrays["y"]
-        self.v: np.ndarray = arrays["v"]
-        self.a: np.ndarray = arrays["a"]
-        self.heading: np.ndarray = arrays["heading"]
-        self.lane: np.ndarray = arrays["lane"]
-        self.active: BoolArray = arrays["active"]
+        self._cells: dict[str, np.ndarray] = {name: arrays[name] for name in CELL_FIELDS}
+        self.slot, self.span, self.owner = slots
+        self._one_per_vehicle = self.owner.size == self.slot.size and bool(
+            (self.slot == np.arange(self.slot.size)).all() and (self.span[:, 0] == 0).all()
+            and (self.span[:, 1] == OPEN).all()
+        )  # fmt: skip
         self.kind: np.ndarray = arrays["kind"]
         self.length: np.ndarray = arrays["length"]
         self.width: np.ndarray = arrays["width"]
         self.meta: dict[str, Any] = {} if meta is None else meta
+        n_steps = self.t.size
         if not 0 <= n_recorded <= n_steps:
             raise ValueError(f"n_recorded must be in [0, {n_steps}], got {n_recorded}")
         self._n_recorded = int(n_recorded)
-        self._event_table = EventTable(n_vehicles, events)
+        self._event_table = EventTable(self.slot.size, events)
+
+    @classmethod
+    def from_slots(
+        cls,
+        *,
+        dt: float,
+        t: FloatArray,
+        cells: dict[str, np.ndarray],
+        slot: np.ndarray,
+        span: np.ndarray,
+        owner: np.ndarray,
+        kind: np.ndarray,
+        length: np.ndarray,
+        width: np.ndarray,
+        meta: dict[str, Any] | None = None,
+        n_recorded: int = 0,
+        events: np.ndarray | None = None,
+    ) -> SimulationLog:
+        """A log stored in slot columns (:mod:`hcomc.sim.log_slots`): ``cells`` maps each of
+        ``x, y, v, a, heading, lane, active`` to a (T, S) array; ``slot`` (N,), ``span``
+        (N, 2) and ``owner`` (S,) say which vehicle a column holds when."""
+        n_vehicles, n_slots = np.shape(slot)[0], np.shape(owner)[0]
+        arrays = {"t": as_layout("t", t)}
+        for name in CELL_FIELDS:
+            if np.shape(cells[name]) != (arrays["t"].size, n_slots):
+                raise ValueError(f"{name} has shape {np.shape(cells[name])}, "
+                                 f"expected {(arrays['t'].size, n_slots)}")  # fmt: skip
+            arrays[name] = as_layout(name, cells[name])
+        for name, value in (("kind", kind), ("length", length), ("width", width)):
+            if np.shape(value) != (n_vehicles,):
+                raise ValueError(f"{name} has shape {np.shape(value)}, expected ({n_vehicles},)")
+            arrays[name] = as_layout(name, value)
+        if np.shape(span) != (n_vehicles, 2):
+            raise ValueError(f"span has shape {np.shape(span)}, expected ({n_vehicles}, 2)")
+        tables = tuple(np.ascontiguousarray(a, dtype=np.int64) for a in (slot, span, owner))
+        log = cls.__new__(cls)
+        log._setup(float(dt), arrays, tables, meta, n_recorded, events)  # type: ignore[arg-type]
+        return log
 
     # ------------------------------------------------------------------ construction
     @staticmethod
-    def bytes_needed(n_steps: int, n_vehicles: int) -> int:
-        """Exact memory of the arrays of a (T x N) log [bytes], events excluded.
+    def bytes_needed(n_steps: int, n_vehicles: int, n_slots: int | None = None) -> int:
+        """Exact memory of the arrays of a log of T rows, N vehicles and S slot columns
+        (default S = N) [bytes], events excluded.
 
         Equals :attr:`nbytes` of the log :meth:`allocate` would build; see
         :func:`hcomc.sim.log_layout.bytes_needed`.
         """
-        return bytes_needed(n_steps, n_vehicles)
+        return bytes_needed(n_steps, n_vehicles, n_slots)
 
     @classmethod
     def allocate(
@@ -149,6 +212,7 @@ class SimulationLog:
         length: FloatArray,
         width: FloatArray,
         meta: dict[str, Any] | None = None,
+        slots: int | None = None,
     ) -> SimulationLog:
         """Preallocate an empty log.
 
@@ -157,15 +221,20 @@ class SimulationLog:
         n_steps : int
             Number of logging rows T (>= 0).
         n_vehicles : int
-            Number of vehicle slots N (>= 0).
+            Number of vehicles N (>= 0).
         dt : float
             Logging interval [s] (> 0).
         kind : array_like of int, shape (N,)
-            Vehicle type per slot, 0 = HDV, 1 = CAV.
+            Vehicle type per vehicle, 0 = HDV, 1 = CAV.
         length, width : array_like of float, shape (N,)
             Vehicle dimensions [m] (finite, > 0).
         meta : dict or None
             JSON-serialisable run metadata. Stored by reference.
+        slots : int or None
+            None: one column per vehicle. A number S: that many slot columns, which
+            vehicles leaving the road hand on to vehicles entering it
+            (:mod:`hcomc.sim.log_slots`); :meth:`record` adds columns when more vehicles
+            are on the road at once.
 
         Returns
         -------
@@ -195,53 +264,140 @@ class SimulationLog:
             arr = per_vehicle[name].astype(np.float64)
             if arr.size and not (np.isfinite(arr).all() and (arr > 0).all()):
                 raise ValueError(f"{name} must be finite and > 0 [m]")
-        rows = allocate_rows(n_steps, n_vehicles)
-        return cls(
-            dt=dt,
-            meta=meta,
-            t=rows["t"],
-            x=rows["x"],
-            y=rows["y"],
-            v=rows["v"],
-            a=rows["a"],
-            heading=rows["heading"],
-            lane=rows["lane"],
-            active=rows["active"],
-            kind=per_vehicle["kind"],
-            length=per_vehicle["length"],
-            width=per_vehicle["width"],
-        )
+        if slots is None:
+            rows = allocate_rows(n_steps, n_vehicles)
+            return cls(
+                dt=dt, meta=meta, t=rows["t"], x=rows["x"], y=rows["y"], v=rows["v"],
+                a=rows["a"], heading=rows["heading"], lane=rows["lane"], active=rows["active"],
+                kind=per_vehicle["kind"], length=per_vehicle["length"],
+                width=per_vehicle["width"],
+            )  # fmt: skip
+        if slots < 0:
+            raise ValueError(f"slots must be >= 0, got {slots}")
+        rows = allocate_rows(n_steps, int(slots))
+        slot, span, owner = empty_slots(n_vehicles, int(slots))
+        return cls.from_slots(
+            dt=dt, t=rows.pop("t"), cells=rows, slot=slot, span=span, owner=owner, meta=meta,
+            kind=per_vehicle["kind"], length=per_vehicle["length"], width=per_vehicle["width"],
+        )  # fmt: skip
+
+    # ------------------------------------------------------------------ cells
+    def _view(self, name: str) -> Any:
+        store = self._cells[name]
+        if self._one_per_vehicle:
+            return store
+        return VehicleCells(store, self.slot, self.span, FILL[name])
+
+    @property
+    def x(self) -> Any:
+        """(T, N) longitudinal position [m]; NaN where the vehicle is not on the road."""
+        return self._view("x")
+
+    @property
+    def y(self) -> Any:
+        """(T, N) lateral position [m]."""
+        return self._view("y")
+
+    @property
+    def v(self) -> Any:
+        """(T, N) speed [m/s]."""
+        return self._view("v")
+
+    @property
+    def a(self) -> Any:
+        """(T, N) acceleration [m/s^2]."""
+        return self._view("a")
+
+    @property
+    def heading(self) -> Any:
+        """(T, N) heading [rad]."""
+        return self._view("heading")
+
+    @property
+    def lane(self) -> Any:
+        """(T, N) lane index, -1 where the vehicle is not on the road."""
+        return self._view("lane")
+
+    @property
+    def active(self) -> Any:
+        """(T, N) whether the vehicle is on the road."""
+        return self._view("active")
+
+    @property
+    def cells(self) -> dict[str, np.ndarray]:
+        """The stored (T, S) arrays by name (S = N for a log with one column per vehicle);
+        which vehicle a column holds when is :attr:`slot`, :attr:`span`, :attr:`owner`."""
+        return self._cells
+
+    @property
+    def one_column_per_vehicle(self) -> bool:
+        """Whether vehicle i is column i at every row (``x`` ... are then plain arrays)."""
+        return self._one_per_vehicle
+
+    def logged_vehicles(self) -> np.ndarray:
+        """(N,) bool: the vehicles on the road at one logged row at least."""
+        if self._one_per_vehicle:
+            return np.asarray(self._cells["active"].any(axis=0))
+        return (self.slot >= 0) & (self.span[:, 0] < self.n_steps)
+
+    def owners(self) -> np.ndarray:
+        """(T, S) int64: the vehicle each stored cell belongs to, -1 for none."""
+        grid = np.full((self.n_steps, self.owner.size), -1, dtype=np.int64)
+        for i in np.flatnonzero(self.slot >= 0).tolist():
+            first, end = self.span[i]
+            grid[first : min(end, self.n_steps), self.slot[i]] = i
+        return grid
+
+    def grow_slots(self, n_slots: int) -> None:
+        """Widen a slot-column log to ``n_slots`` columns (new columns free and unwritten)."""
+        if self._one_per_vehicle:
+            raise ValueError("a log with one column per vehicle has no slots to grow")
+        old = self.owner.size
+        if n_slots <= old:
+            return
+        for name in CELL_FIELDS:
+            wide = np.full((self.n_steps, n_slots), FILL[name], dtype=DTYPES[name])
+            wide[:, :old] = self._cells[name]
+            self._cells[name] = wide
+        self.owner = np.concatenate([self.owner, np.full(n_slots - old, -1, dtype=np.int64)])
 
     # ------------------------------------------------------------------ sizes
     @property
     def n_steps(self) -> int:
         """Number of allocated rows T."""
-        return int(self.x.shape[0])
+        return int(self.t.size)
 
     @property
     def n_vehicles(self) -> int:
-        """Number of vehicle slots N."""
-        return int(self.x.shape[1])
+        """Number of vehicles N."""
+        return int(self.slot.size)
+
+    @property
+    def n_slots(self) -> int:
+        """Number of stored columns S (N for a log with one column per vehicle)."""
+        return int(self.owner.size)
 
     @property
     def n_recorded(self) -> int:
-        """Number of rows written so far (highest recorded row index + 1)."""
+        """Number of rows already written (highest recorded row index + 1)."""
         return self._n_recorded
 
     @property
     def vehicle_steps(self) -> int:
         """Number of active (step, vehicle) cells."""
-        return int(np.count_nonzero(self.active))
+        return int(np.count_nonzero(self._cells["active"]))
 
     @property
     def nbytes(self) -> int:
         """Memory held by the log's arrays [bytes] (events excluded)."""
-        return int(sum(getattr(self, name).nbytes for name in ARRAY_FIELDS))
+        arrays = [self.t, *self._cells.values(), self.kind, self.length, self.width,
+                  self.slot, self.span, self.owner]  # fmt: skip
+        return int(sum(arr.nbytes for arr in arrays))
 
     def __repr__(self) -> str:
         return (
             f"SimulationLog(n_steps={self.n_steps}, n_vehicles={self.n_vehicles}, "
-            f"dt={self.dt}, n_recorded={self.n_recorded}, "
+            f"n_slots={self.n_slots}, dt={self.dt}, n_recorded={self.n_recorded}, "
             f"vehicle_steps={self.vehicle_steps}, n_events={len(self._event_table)})"
         )
 
@@ -261,7 +417,9 @@ class SimulationLog:
         """Write logging row *k*.
 
         Values of inactive vehicles are replaced by NaN (floats) and -1 (lane), so a row
-        never carries stale state. Rewriting a row overwrites it completely.
+        never carries stale state. In a log with one column per vehicle rewriting a row
+        overwrites it completely; a slot-column log is written row after row (a vehicle
+        that left the road does not come back), adding columns when it needs them.
 
         Parameters
         ----------
@@ -271,36 +429,42 @@ class SimulationLog:
             Simulation time of the row [s].
         x, y, v, a, heading : numpy.ndarray, shape (N,)
             Position [m], lateral position [m], speed [m/s], acceleration [m/s^2],
-            heading [rad] of every slot (any value for inactive slots).
+            heading [rad] of every vehicle (any value for inactive ones).
         lane : numpy.ndarray of int, shape (N,)
-            Lane index of every slot.
+            Lane index of every vehicle.
         active : numpy.ndarray of bool, shape (N,)
-            Which slots are on the road.
+            Which vehicles are on the road.
 
         Raises
         ------
         IndexError
             If *k* is outside [0, T).
         """
-        if not 0 <= k < self.x.shape[0]:
-            raise IndexError(f"row {k} outside the log's {self.x.shape[0]} rows")
+        if not 0 <= k < self.n_steps:
+            raise IndexError(f"row {k} outside the log's {self.n_steps} rows")
+        mask = np.asarray(active).astype(bool)
         self.t[k] = t
-        self.active[k] = active
-        mask = self.active[k]  # bool view: accepts any truthy input dtype
-        self.x[k] = np.where(mask, x, np.nan)
-        self.y[k] = np.where(mask, y, np.nan)
-        self.v[k] = np.where(mask, v, np.nan)
-        self.a[k] = np.where(mask, a, np.nan)
-        self.heading[k] = np.where(mask, heading, np.nan)
-        self.lane[k] = np.where(mask, lane, -1)
+        values = {"x": x, "y": y, "v": v, "a": a, "heading": heading, "lane": lane}
+        if self._one_per_vehicle:
+            self._cells["active"][k] = mask
+            for name, value in values.items():
+                self._cells[name][k] = np.where(mask, value, FILL[name])
+        else:
+            while not claim_slots(mask, self.slot, self.span, self.owner, k):
+                self.grow_slots(max(2 * self.n_slots, 1))
+            on = np.flatnonzero(mask)
+            cols = self.slot[on]
+            self._cells["active"][k, cols] = True
+            for name, value in values.items():
+                self._cells[name][k, cols] = np.asarray(value)[on]
         if k >= self._n_recorded:
             self._n_recorded = k + 1
 
     def mark_recorded(self, n: int) -> None:
         """Declare rows ``0 .. n-1`` written (by a compiled writer that fills the arrays
         directly, as :func:`hcomc.sim.core.record_row` does)."""
-        if not 0 <= n <= self.x.shape[0]:
-            raise IndexError(f"{n} rows outside the log's {self.x.shape[0]} rows")
+        if not 0 <= n <= self.n_steps:
+            raise IndexError(f"{n} rows outside the log's {self.n_steps} rows")
         self._n_recorded = max(self._n_recorded, n)
 
     def add_event(
@@ -337,7 +501,8 @@ class SimulationLog:
         self._event_table.add(t, kind, vehicle, other, x, value)
 
     def finish(self, n: int | None = None) -> SimulationLog:
-        """Trim the log to its first *n* rows, releasing the memory of the rest.
+        """Trim the log to its first *n* rows (and a slot-column log to the columns it
+        used), releasing the memory of the rest.
 
         Parameters
         ----------
@@ -352,9 +517,12 @@ class SimulationLog:
         n = self._n_recorded if n is None else int(n)
         if not 0 <= n <= self.n_steps:
             raise ValueError(f"cannot trim to {n} rows, log has {self.n_steps}")
-        if n != self.n_steps:
-            for name in ("t", *CELL_FIELDS):
-                setattr(self, name, getattr(self, name)[:n].copy())
+        used = self.n_slots if self._one_per_vehicle else int(self.slot.max(initial=-1)) + 1
+        if n != self.n_steps or used != self.n_slots:
+            self.t = self.t[:n].copy()
+            self.owner = self.owner[:used].copy()
+            for name in CELL_FIELDS:
+                self._cells[name] = self._cells[name][:n, :used].copy()
         self._n_recorded = min(self._n_recorded, n)
         return self
 
@@ -399,19 +567,23 @@ class SimulationLog:
     # ------------------------------------------------------------------ long format
     def long_columns(self) -> dict[str, np.ndarray]:
         """Columns of :meth:`to_frame` as arrays (also the Parquet file's table)."""
-        steps, vehicles = np.nonzero(self.active)
-        cols: dict[str, np.ndarray] = {
+        steps, cols = np.nonzero(self._cells["active"])
+        vehicles = cols
+        if not self._one_per_vehicle:  # stored by slot: the cells' vehicles, then their order
+            vehicles = self.owners()[steps, cols]
+            order = np.lexsort((vehicles, steps))
+            steps, cols, vehicles = steps[order], cols[order], vehicles[order]
+        out: dict[str, np.ndarray] = {
             "step": steps.astype(np.int64),
             "t": self.t[steps],
             "vehicle": vehicles.astype(np.int64),
             "kind": self.kind[vehicles],
         }
-        for name in STATE_FIELDS:
-            cols[name] = getattr(self, name)[steps, vehicles]
-        cols["lane"] = self.lane[steps, vehicles]
-        cols["length"] = self.length[vehicles]
-        cols["width"] = self.width[vehicles]
-        return cols
+        for name in (*STATE_FIELDS, "lane"):
+            out[name] = self._cells[name][steps, cols]
+        out["length"] = self.length[vehicles]
+        out["width"] = self.width[vehicles]
+        return out
 
     def to_frame(self) -> pd.DataFrame:
         """Long-format trajectories: one row per active (step, vehicle) cell.

@@ -1,6 +1,7 @@
 """Files of a :class:`~hcomc.sim.log.SimulationLog`: ``.npz`` and ``.parquet``, atomic.
 
-``.npz`` holds all arrays, events and metadata in one compressed archive. ``.parquet``
+``.npz`` holds all arrays (the stored slot columns and their tables, see
+:mod:`hcomc.sim.log_slots`), events and metadata in one compressed archive. ``.parquet``
 holds the long-format frame of :meth:`SimulationLog.to_frame`, with the run metadata in
 the Parquet schema metadata and the events in a sibling ``<stem>.events.parquet``; the two
 files share a random token so a log and an events file that do not belong together are
@@ -22,12 +23,15 @@ import numpy as np
 
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.log_events import EVENT_DTYPE
-from hcomc.sim.log_layout import ARRAY_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
+from hcomc.sim.log_layout import ARRAY_FIELDS, CELL_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
+from hcomc.sim.log_slots import identity_slots
 from hcomc.sim.manifest import atomic_paths, json_default
 
 __all__ = ["events_path", "read_log", "write_log"]
 
-_FORMAT_VERSION = 1
+_FORMAT_VERSION = 2  # 2: slot columns and their tables; 1 (one column per vehicle) is read
+_READABLE = (1, 2)
+_TABLES = ("slot", "span", "owner")
 _PARQUET_META_KEY = b"hcomc.simulation_log"
 _PARQUET_EVENTS_META_KEY = b"hcomc.simulation_log.events"
 
@@ -45,6 +49,7 @@ def _header(log: SimulationLog) -> dict[str, Any]:
         "format_version": _FORMAT_VERSION,
         "n_steps": log.n_steps,
         "n_vehicles": log.n_vehicles,
+        "n_slots": log.n_slots,
         "dt": log.dt,
         "n_recorded": log.n_recorded,
         "meta": log.meta,
@@ -72,7 +77,9 @@ def write_log(log: SimulationLog, path: str | os.PathLike[str]) -> Path:
 
 def _write_npz(log: SimulationLog, path: Path) -> None:
     header = json.dumps(_header(log), default=json_default)
-    arrays = {name: getattr(log, name) for name in ARRAY_FIELDS}
+    tables = {"slot": log.slot, "span": log.span, "owner": log.owner}
+    per_vehicle = {"kind": log.kind, "length": log.length, "width": log.width}
+    arrays: dict[str, Any] = {"t": log.t, **log.cells, **per_vehicle, **tables}
     with atomic_paths(path) as (tmp,), tmp.open("wb") as fh:
         # A file object, not a name: numpy would append ".npz" to the temp name.
         np.savez_compressed(fh, header=np.array(header), events=log.events, **arrays)
@@ -91,6 +98,9 @@ def _write_parquet(log: SimulationLog, path: Path) -> None:
     header["kind"] = _b64(log.kind, "<i1")
     header["length"] = _b64(log.length, "<f4")
     header["width"] = _b64(log.width, "<f4")
+    header["slot"] = _b64(log.slot, "<i8")
+    header["span"] = _b64(log.span, "<i8")
+    header["owner"] = _b64(log.owner, "<i8")
     header_json = json.dumps(header, default=json_default).encode("utf-8")
     table = pa.table(log.long_columns())
     table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
@@ -119,7 +129,7 @@ def read_log(path: str | os.PathLike[str]) -> SimulationLog:
 
 def _check_version(header: dict[str, Any], path: Path) -> None:
     version = header.get("format_version")
-    if version != _FORMAT_VERSION:
+    if version not in _READABLE:
         raise ValueError(f"{path}: unsupported simulation log format version {version!r}")
 
 
@@ -128,14 +138,14 @@ def _read_npz(path: Path) -> SimulationLog:
         header = json.loads(str(data["header"]))
         _check_version(header, path)
         arrays = {name: data[name] for name in ARRAY_FIELDS}
+        tables = {name: data[name] for name in _TABLES} if "slot" in data else None
         events = data["events"]
-    return SimulationLog(
-        dt=header["dt"],
-        meta=header["meta"],
-        n_recorded=header["n_recorded"],
-        events=events,
-        **arrays,
-    )
+    common = {"dt": header["dt"], "meta": header["meta"], "n_recorded": header["n_recorded"],
+              "events": events}  # fmt: skip
+    if tables is None:  # format 1: one column per vehicle
+        return SimulationLog(**common, **arrays)
+    cells = {name: arrays.pop(name) for name in CELL_FIELDS}
+    return SimulationLog.from_slots(**common, **arrays, cells=cells, **tables)
 
 
 def _read_parquet(path: Path) -> SimulationLog:
@@ -159,23 +169,34 @@ def _read_parquet(path: Path) -> SimulationLog:
         events[name] = ev_table.column(name).to_numpy()
 
     n_steps, n_vehicles = int(header["n_steps"]), int(header["n_vehicles"])
-    arrays = allocate_rows(n_steps, n_vehicles)
+    n_slots = int(header.get("n_slots", n_vehicles))
+    arrays = allocate_rows(n_steps, n_slots)
     arrays["t"][:] = _unb64(header["t"], "<f8")
     steps = table.column("step").to_numpy()
     vehicles = table.column("vehicle").to_numpy()
-    arrays["active"][steps, vehicles] = True
+    if "slot" in header:
+        slot = _unb64(header["slot"], "<i8")
+        tables = {"slot": slot, "span": _unb64(header["span"], "<i8").reshape(-1, 2),
+                  "owner": _unb64(header["owner"], "<i8")}  # fmt: skip
+    else:  # format 1: one column per vehicle
+        slot, span, owner = identity_slots(n_vehicles)
+        tables = {"slot": slot, "span": span, "owner": owner}
+    columns = slot[vehicles]
+    arrays["active"][steps, columns] = True
     for name in (*STATE_FIELDS, "lane"):
         column = table.column(name).to_numpy()
         if column.dtype.kind != DTYPES[name].kind:
             raise ValueError(f"{path}: column {name!r} has dtype {column.dtype}")
-        arrays[name][steps, vehicles] = column  # float64 columns are rounded to float32
-    return SimulationLog(
+        arrays[name][steps, columns] = column  # float64 columns are rounded to float32
+    return SimulationLog.from_slots(
         dt=header["dt"],
         meta=header["meta"],
         n_recorded=header["n_recorded"],
         events=events,
+        t=arrays.pop("t"),
+        cells=arrays,
         kind=_unb64(header["kind"], "<i1"),
         length=_unb64(header["length"], "<f4"),
         width=_unb64(header["width"], "<f4"),
-        **arrays,
+        **tables,
     )

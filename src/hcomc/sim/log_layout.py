@@ -74,6 +74,7 @@ __all__ = [
     "ARRAY_FIELDS",
     "BYTES_PER_CELL",
     "BYTES_PER_ROW",
+    "BYTES_PER_SLOT",
     "BYTES_PER_VEHICLE",
     "CELL_FIELDS",
     "DTYPES",
@@ -117,26 +118,33 @@ BYTES_PER_CELL: Final = sum(DTYPES[name].itemsize for name in CELL_FIELDS)
 """Bytes of one (row, vehicle) cell over all (T, N) arrays (22)."""
 BYTES_PER_ROW: Final = DTYPES["t"].itemsize
 """Bytes per row outside the cells (the row time, 8)."""
-BYTES_PER_VEHICLE: Final = sum(DTYPES[name].itemsize for name in VEHICLE_FIELDS)
-"""Bytes per vehicle slot outside the cells (kind, length, width: 9)."""
+BYTES_PER_VEHICLE: Final = sum(DTYPES[name].itemsize for name in VEHICLE_FIELDS) + 3 * 8
+"""Bytes per vehicle outside the cells (kind, length, width: 9; its column and the rows it
+holds it, ``slot`` and ``span`` of :mod:`hcomc.sim.log_slots`: 24)."""
+BYTES_PER_SLOT: Final = 8
+"""Bytes per stored column outside the cells (its current vehicle, ``owner``)."""
 
 
-def bytes_needed(n_steps: int, n_vehicles: int) -> int:
-    """Exact memory of the arrays of a (T x N) log [bytes], events excluded.
+def bytes_needed(n_steps: int, n_vehicles: int, n_slots: int | None = None) -> int:
+    """Exact memory of the arrays of a log of T rows, N vehicles and S stored columns
+    (default S = N: one column per vehicle) [bytes], events excluded.
 
     Equal to :attr:`SimulationLog.nbytes` of ``SimulationLog.allocate(n_steps, n_vehicles,
-    ...)``; computed without allocating anything.
+    ..., slots=n_slots)``; computed without allocating anything.
 
-    >>> round(bytes_needed(36_001, 2000) / 2**30, 4)  # 1 hour at 0.1 s, 2000 slots [GiB]
-    1.4755
+    >>> round(bytes_needed(36_001, 2000) / 2**30, 4)  # 1 hour at 0.1 s, 2000 columns [GiB]
+    1.4756
     """
     n_steps, n_vehicles = int(n_steps), int(n_vehicles)
-    if n_steps < 0 or n_vehicles < 0:
-        raise ValueError(f"n_steps and n_vehicles must be >= 0, got {n_steps}, {n_vehicles}")
+    n_slots = n_vehicles if n_slots is None else int(n_slots)
+    if n_steps < 0 or n_vehicles < 0 or n_slots < 0:
+        raise ValueError(f"n_steps, n_vehicles and n_slots must be >= 0, got {n_steps}, "
+                         f"{n_vehicles}, {n_slots}")  # fmt: skip
     return (
-        n_steps * n_vehicles * BYTES_PER_CELL
+        n_steps * n_slots * BYTES_PER_CELL
         + n_steps * BYTES_PER_ROW
         + n_vehicles * BYTES_PER_VEHICLE
+        + n_slots * BYTES_PER_SLOT
     )
 
 

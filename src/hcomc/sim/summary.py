@@ -18,12 +18,17 @@ def summarise(log: SimulationLog) -> dict[str, Any]:
     """
     events = log.events
     kinds = events["kind"]
-    seen = log.active.any(axis=0)
+    seen = log.logged_vehicles()
+    # Statistics over the cells of vehicles on the road are taken over the stored columns:
+    # every stored cell outside a vehicle's time on the road holds the fill value (inactive,
+    # NaN), so this needs no (T, N) array, however many vehicles the run had.
+    cells = log.cells
     speed = {}
     for lane in Lane:
-        cells = log.active & (log.lane == lane)
+        on = cells["active"] & (cells["lane"] == lane)
         key = "ramp" if lane == Lane.RAMP else f"lane_{int(lane)}"
-        speed[key] = float(np.mean(log.v[cells])) if cells.any() else None
+        speed[key] = float(np.mean(cells["v"][on])) if on.any() else None
+    v, a = cells["v"].astype(np.float64), cells["a"].astype(np.float64)
     return {
         "vehicles": int(seen.sum()),
         "cavs": int((seen & (log.kind == Kind.CAV)).sum()),
@@ -32,9 +37,7 @@ def summarise(log: SimulationLog) -> dict[str, Any]:
         "ramp_waits": int((kinds == EventKind.RAMP_WAIT).sum()),
         "lane_changes": int((kinds == EventKind.LANE_CHANGE_START).sum()),
         "mean_speed": speed,
-        "fuel_l": float(
-            fuel_consumed(log.v.astype(np.float64), log.a.astype(np.float64), log.dt, axis=None)
-        ),
+        "fuel_l": float(fuel_consumed(v, a, log.dt, axis=None)),
         "vehicle_steps": int(log.meta.get("vehicle_steps", log.vehicle_steps)),
         "duration_s": float(log.t[-1] - log.t[0]) if log.t.size else 0.0,
     }

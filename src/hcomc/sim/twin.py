@@ -19,7 +19,9 @@ import numpy as np
 from hcomc.road import Lane
 from hcomc.sim import core_state as layout
 from hcomc.sim.engine import Simulation
-from hcomc.sim.log import EventKind
+from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.log_layout import CELL_FIELDS, FILL
+from hcomc.sim.log_slots import OPEN
 
 # the state arrays a step changes (everything else is built from config and demand alike)
 _STATE = (
@@ -31,7 +33,25 @@ _PER_VEHICLE = (
     "x", "y", "v", "a", "heading", "lane", "origin", "target", "lc_t0", "lc_x0", "lc_xf",
     "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "w_gap", "w_ttc",
 )  # fmt: skip
-_LOG = ("t", "x", "y", "v", "a", "heading", "lane", "active")
+
+
+def _copy_log_without(src: SimulationLog, dst: SimulationLog, rows: int, gone: np.ndarray) -> None:
+    """Copy the first ``rows`` rows of ``src`` into the empty ``dst`` (with its slot tables),
+    leaving the vehicles ``gone`` out: their cells back to the fill, their slots free."""
+    dst.grow_slots(src.n_slots)
+    dst.t[:rows] = src.t[:rows]
+    for name in CELL_FIELDS:
+        dst.cells[name][:rows, : src.n_slots] = src.cells[name][:rows]
+    np.copyto(dst.slot, src.slot)
+    np.copyto(dst.span, src.span)
+    dst.owner[: src.n_slots] = src.owner
+    for i in gone[src.slot[gone] >= 0].tolist():
+        s, (first, end) = dst.slot[i], dst.span[i]
+        for name in CELL_FIELDS:
+            dst.cells[name][first : min(end, rows), s] = FILL[name]
+        if end == OPEN:
+            dst.owner[s] = -1
+        dst.slot[i], dst.span[i] = -1, 0
 
 
 def can_twin(sim: Simulation) -> bool:
@@ -83,12 +103,8 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     steps = np.round((inserted["t"] + sim.config.warmup) / sim.dt).astype(np.int64)
     dst.counters[layout.VEHICLE_STEPS] -= int((sim.step_index - steps).sum())
     twin.rng.bit_generator.state = sim.rng.bit_generator.state
-    rows = sim.rows_recorded
-    for name in _LOG:
-        getattr(twin.log, name)[:rows] = getattr(sim.log, name)[:rows]
-    for name in ("x", "y", "v", "a", "heading"):
-        getattr(twin.log, name)[:rows, ramp] = np.nan
-    twin.log.lane[:rows, ramp], twin.log.active[:rows, ramp] = -1, False
+    _copy_log_without(sim.log, twin.log, sim.rows_recorded, ramp)
+    twin.adopt_log_columns()
     twin.log.add_events(events[~_involving(events, is_ramp)])
     twin._stage = sim._stage
     return twin

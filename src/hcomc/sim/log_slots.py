@@ -1,0 +1,217 @@
+"""Slot columns of a :class:`~hcomc.sim.log.SimulationLog`: a vehicle that left the road
+hands its column on to the next vehicle that enters.
+
+A run's log is read as ``T`` rows x ``N`` vehicles, but only the vehicles on the road at a
+row have anything to store there: in a 1-hour run about 1 % of the (row, vehicle) cells.
+The engine's log therefore stores its cells in ``S`` *slot columns* (S = the most vehicles
+on the road at once, not N), and three small tables say which vehicle a slot holds when:
+
+=========== ======== ========================================================================
+array       shape    meaning
+=========== ======== ========================================================================
+``slot``    (N,)     column of vehicle i, -1 when it has not been logged yet
+``span``    (N, 2)   rows ``[first, end)`` vehicle i holds its column; ``end`` = :data:`OPEN`
+                     while it is on the road
+``owner``   (S,)     vehicle holding slot s now, -1 when free
+=========== ======== ========================================================================
+
+At each logged row the vehicles that left since the last one free their slot (their span
+ends at this row) and each vehicle on the road without a slot takes the lowest free one, in
+vehicle order (:func:`claim_slots`). Cells of a slot outside its holders' spans keep the
+log's fill value, so vehicle i's cell at row k is the slot cell when k lies in its span and
+the fill value otherwise (:func:`cell_of`). :class:`VehicleCells` gives the (T, N) view that
+readers index like the plain array it replaces.
+
+A log made from plain (T, N) arrays (:meth:`SimulationLog.allocate` without ``slots``, or
+the constructor) keeps one column per vehicle: ``slot = arange(N)``, every span ``[0,
+OPEN)``, and its ``x`` ... ``active`` are the arrays themselves.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+__all__ = ["OPEN", "VehicleCells", "cell_of", "claim_slots", "identity_slots", "rows_of"]
+
+OPEN = np.iinfo(np.int64).max
+"""End row of the span of a vehicle still holding its slot."""
+
+
+def identity_slots(n_vehicles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``slot, span, owner`` of a log with one column per vehicle (vehicle i in column i)."""
+    slot = np.arange(n_vehicles, dtype=np.int64)
+    span = np.zeros((n_vehicles, 2), dtype=np.int64)
+    span[:, 1] = OPEN
+    return slot, span, slot.copy()
+
+
+def empty_slots(n_vehicles: int, n_slots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``slot, span, owner`` of an empty slot-column log: no vehicle logged, every slot free."""
+    return (
+        np.full(n_vehicles, -1, dtype=np.int64),
+        np.zeros((n_vehicles, 2), dtype=np.int64),
+        np.full(n_slots, -1, dtype=np.int64),
+    )
+
+
+@njit(cache=True)
+def claim_slots(
+    active: np.ndarray, slot: np.ndarray, span: np.ndarray, owner: np.ndarray, k: int
+) -> bool:
+    """The slot bookkeeping of log row ``k`` (see the module doc); False, changing nothing,
+    when there are fewer free slots than vehicles entering (the log must grow first).
+
+    Raises ``ValueError`` for a vehicle back on the road after its span ended (the engine
+    never re-inserts a vehicle).
+    """
+    free = 0
+    for s in range(owner.size):
+        if owner[s] < 0:
+            free += 1
+    entering = 0
+    for i in range(active.size):
+        if slot[i] < 0:
+            entering += 1 if active[i] else 0
+        elif span[i, 1] == OPEN and not active[i]:
+            free += 1
+        elif active[i] and span[i, 1] != OPEN:
+            raise ValueError("a vehicle re-entered the road after its log span ended")
+    if entering > free:
+        return False
+    for i in range(active.size):
+        if slot[i] >= 0 and span[i, 1] == OPEN and not active[i]:
+            span[i, 1] = k
+            owner[slot[i]] = -1
+    s = 0
+    for i in range(active.size):
+        if active[i] and slot[i] < 0:
+            while owner[s] >= 0:
+                s += 1
+            owner[s], slot[i] = i, s
+            span[i, 0], span[i, 1] = k, OPEN
+    return True
+
+
+@njit(cache=True, inline="always")
+def cell_of(store: np.ndarray, slot: np.ndarray, span: np.ndarray, k: int, i: int) -> Any:
+    """Vehicle i's cell at row k of one slot-column array ``store`` (T, S); NaN outside its
+    span (for float arrays, whose fill value it is)."""
+    s = slot[i]
+    if s < 0 or k < span[i, 0] or k >= span[i, 1]:
+        return np.nan
+    return store[k, s]
+
+
+@njit(cache=True)
+def rows_of(
+    store: np.ndarray, slot: np.ndarray, span: np.ndarray, i: int, r0: int, r1: int
+) -> np.ndarray:
+    """Vehicle i's float cells over rows ``[r0, r1)`` (float64, NaN outside its span)."""
+    out = np.empty(max(r1 - r0, 0))
+    for k in range(r0, r1):
+        out[k - r0] = cell_of(store, slot, span, k, i)
+    return out
+
+
+class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
+    """Read-only (T, N) view of one slot-column array: indexing, numpy functions and
+    operators behave as on the plain (T, N) array it stands for.
+
+    Indexing gathers only the cells asked for (``log.x[k]``, ``log.v[r0:r1, i]``,
+    ``log.x[rows, ids]`` ...); anything else (``np.where(log.active, ...)``, methods such as
+    ``.any(axis=0)``) builds the whole (T, N) array first.
+    """
+
+    __array_priority__ = 20
+
+    def __init__(
+        self, store: np.ndarray, slot: np.ndarray, span: np.ndarray, fill: float | int | bool
+    ) -> None:
+        self._store, self._slot, self._span, self._fill = store, slot, span, fill
+        self.shape: tuple[int, int] = (store.shape[0], slot.size)
+        self.dtype: np.dtype = store.dtype
+
+    ndim = 2
+
+    @property
+    def size(self) -> int:
+        return self.shape[0] * self.shape[1]
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def __repr__(self) -> str:
+        return f"VehicleCells(shape={self.shape}, dtype={self.dtype})"
+
+    def __getitem__(self, key: Any) -> Any:
+        key = _plain(key)
+        if _selects_rows(key):  # log.x[k], log.x[r0:r1], log.x[rows]: every vehicle
+            return self._rows(key[0] if isinstance(key, tuple) else key)
+        n_rows, n_vehicles = self.shape
+        idx = np.int32 if max(n_rows, n_vehicles) < 2**31 else np.int64
+        rows = np.broadcast_to(np.arange(n_rows, dtype=idx)[:, None], self.shape)[key]
+        vehicles = np.broadcast_to(np.arange(n_vehicles, dtype=idx)[None, :], self.shape)[key]
+        slots = self._slot[vehicles]
+        inside = (slots >= 0) & (rows >= self._span[vehicles, 0]) & (rows < self._span[vehicles, 1])
+        return self._gather(rows, slots, inside)
+
+    def _rows(self, key: Any) -> Any:
+        """Every vehicle's cells at the rows ``key`` selects (int, slice, 1-D index)."""
+        rows = np.arange(self.shape[0])[key]
+        r = np.asarray(rows)[..., None]
+        slots = self._slot
+        inside = (slots >= 0) & (r >= self._span[:, 0]) & (r < self._span[:, 1])
+        return self._gather(r, slots, inside)
+
+    def _gather(self, rows: np.ndarray, slots: np.ndarray, inside: np.ndarray) -> Any:
+        fill = np.array(self._fill, dtype=self.dtype)
+        if self._store.shape[1] == 0:  # no column: nothing was logged
+            return np.full(inside.shape, fill)[()]
+        out = np.where(inside, self._store[rows, np.maximum(slots, 0)], fill)
+        return out[()] if out.ndim == 0 else out
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        whole = self[:, :]
+        return whole if dtype is None else whole.astype(dtype)
+
+    def __array_ufunc__(self, ufunc: Any, method: str, *inputs: Any, **kwargs: Any) -> Any:
+        return getattr(ufunc, method)(*_plain(inputs), **_plain(kwargs))
+
+    def __array_function__(self, func: Any, types: Any, args: Any, kwargs: Any) -> Any:
+        return func(*_plain(args), **_plain(kwargs))
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(np.asarray(self), name)  # e.g. .any(axis=0), .astype(float)
+
+
+def _plain(x: Any) -> Any:
+    """``x`` with every :class:`VehicleCells` in it (also inside tuples, lists and dicts)
+    replaced by its plain array."""
+    if isinstance(x, VehicleCells):
+        return np.asarray(x)
+    if isinstance(x, list | tuple):
+        return type(x)(_plain(y) for y in x)
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    return x
+
+
+def _selects_rows(key: Any) -> bool:
+    """Whether ``key`` indexes rows only (an int, a slice or a 1-D integer array)."""
+    if isinstance(key, tuple):
+        if len(key) != 1:
+            whole = isinstance(key[1], slice) and key[1] == slice(None)
+            return len(key) == 2 and whole and _selects_rows(key[0])
+        key = key[0]
+    if isinstance(key, int | np.integer | slice):
+        return True
+    return (
+        isinstance(key, np.ndarray | list)
+        and np.asarray(key).ndim == 1
+        and (np.asarray(key).dtype.kind in "iu")
+    )
