@@ -313,7 +313,10 @@ class ScenarioConfig(_Frozen):
         8.0,
         gt=0,
         le=1024,
-        description="a run whose log would need more memory than this is refused [GiB]",
+        description=(
+            "a run whose log would need more memory than this is refused, or stopped when its "
+            "log must grow beyond it [GiB]"
+        ),
     )
     road: RoadParams = Field(default_factory=RoadParams)
     demand: DemandParams = Field(default_factory=DemandParams)

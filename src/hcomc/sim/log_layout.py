@@ -1,7 +1,8 @@
 """Array layout of a :class:`~hcomc.sim.log.SimulationLog`: names, dtypes, fill values, sizes.
 
 This module is the one home of the log's column dtypes. A log of ``T`` logging rows and
-``N`` vehicle slots holds:
+``N`` vehicles reads as (the engine's log stores the (T, N) arrays in slot columns,
+:mod:`hcomc.sim.log_slots`):
 
 =========== ========= ======== ======================================= ==============
 array       shape     dtype    meaning                                 unused cell
@@ -19,7 +20,7 @@ array       shape     dtype    meaning                                 unused ce
 ``width``   (N,)      float32  vehicle width [m]                       -
 =========== ========= ======== ======================================= ==============
 
-The (T, N) arrays are plain C-contiguous numpy arrays, one row per logging step, so a row
+The stored arrays are plain C-contiguous numpy arrays, one row per logging step, so a row
 is one contiguous block that a compiled kernel can write directly.
 
 **Why these dtypes.** The simulation integrates in float64; the log only stores results.
@@ -45,10 +46,13 @@ is one contiguous block that a compiled kernel can write directly.
   float32 (spacing 0.24 ms at 3600 s) would not.
 * ``lane`` int8 and ``active`` bool: one byte each, the smallest plain numpy types.
 
-**Memory.** A (row, vehicle) cell costs :data:`BYTES_PER_CELL` = 22 bytes; a row adds 8
-bytes (``t``), a vehicle slot 9 bytes (``kind``, ``length``, ``width``). Events are stored
-apart (:mod:`hcomc.sim.log_events`, 41 bytes each). :func:`bytes_needed` gives the exact
-size of the arrays before allocating them; for a 1-hour run with 2000 vehicle slots:
+**Memory.** A stored cell costs :data:`BYTES_PER_CELL` = 22 bytes; a row adds 8 bytes
+(``t``), a vehicle 33 (``kind``, ``length``, ``width``; its column and rows, ``slot`` and
+``span``), a stored column 8 (``owner``). The engine's log stores S slot columns, S = the
+most vehicles on the road at once (:mod:`hcomc.sim.log_slots`); a log with one column per
+vehicle stores S = N. Events are stored apart (:mod:`hcomc.sim.log_events`, 41 bytes each).
+:func:`bytes_needed` gives the exact size of the arrays before allocating them; for 1 hour
+with 2000 columns (2000 vehicles on the road at once, or one column each):
 
 ============== ======== =========
 log interval   rows     arrays
@@ -59,6 +63,8 @@ log interval   rows     arrays
 0.5 s           7 201   0.30 GiB
 1.0 s           3 601   0.15 GiB
 ============== ======== =========
+
+A 1-hour Condition 1 run of 2020 vehicles holds at most 38 at once: 0.028 GiB at 0.1 s.
 
 The logging interval is the scenario key ``log_interval``: it must be a multiple of the
 simulation step ``dt``, and the engine logs every ``log_interval / dt``-th step.
