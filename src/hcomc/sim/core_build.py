@@ -4,6 +4,8 @@ perception."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from hcomc.config import ConfigError, ScenarioConfig
@@ -53,6 +55,24 @@ def check_log_memory(config: ScenarioConfig, rows: int, vehicles: int, slots: in
             f"{need:.2f} GiB ({rows} rows x {slots} vehicles on the road at once); allowed: "
             "a larger log_memory_limit, a coarser log_interval or a shorter duration"
         )
+
+
+def widen_log(config: ScenarioConfig, log: SimulationLog) -> None:
+    """Double ``log``'s slot columns (more vehicles are on the road at once than it has
+    columns), within ``log_memory_limit``."""
+    slots = min(2 * log.n_slots, log.n_vehicles)
+    if slots <= log.n_slots:
+        raise RuntimeError("the log has a column per vehicle and still no free one")
+    check_log_memory(config, log.n_steps, log.n_vehicles, slots)
+    log.grow_slots(slots)
+
+
+def adopt_log_columns(arrays: CoreArrays, core: Any, log: SimulationLog) -> CoreArrays:
+    """Point a run's compiled state ``core`` at ``log``'s current slot columns (after they
+    grew); returns ``arrays`` with the same fields replaced."""
+    columns = log_columns(log)
+    layout.set_log_columns(core, *columns.values())
+    return arrays._replace(**columns)
 
 
 def build_arrays(

@@ -45,7 +45,7 @@ from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import allocate_log, build_arrays, check_log_memory, log_columns
+from hcomc.sim.core_build import adopt_log_columns, allocate_log, build_arrays, widen_log
 from hcomc.sim.core_state import Core
 from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sim.execution import (
@@ -273,26 +273,10 @@ class Simulation:
         rows = int(self.arrays.counters[layout.ROWS])
         if rows >= self.log.n_steps:
             raise IndexError(f"row {rows} outside the log's {self.log.n_steps} rows")
-        while not core.record_row(self.core, rows, self.t):
-            self._widen_log()
+        while not core.record_row(self.core, rows, self.t):  # more vehicles than columns
+            widen_log(self.config, self.log)
+            self.arrays = adopt_log_columns(self.arrays, self.core, self.log)
         self.arrays.counters[layout.ROWS] = rows + 1
-
-    def _widen_log(self) -> None:
-        """Double the log's slot columns (more vehicles are on the road at once than it has
-        columns), within ``log_memory_limit``."""
-        log = self.log
-        slots = min(2 * log.n_slots, log.n_vehicles)
-        if slots <= log.n_slots:
-            raise RuntimeError("the log has a column per vehicle and still no free one")
-        check_log_memory(self.config, log.n_steps, log.n_vehicles, slots)
-        log.grow_slots(slots)
-        self.adopt_log_columns()
-
-    def adopt_log_columns(self) -> None:
-        """Point the compiled state at the log's current slot columns (after they grew)."""
-        columns = log_columns(self.log)
-        self.arrays = self.arrays._replace(**columns)
-        layout.set_log_columns(self.core, *columns.values())
 
     def flush_events(self) -> None:
         """Move the compiled step's buffered events into the log, in order (the compiled

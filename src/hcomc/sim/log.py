@@ -33,13 +33,12 @@ from hcomc.sim.log_events import EVENT_DTYPE, EventKind, EventTable
 from hcomc.sim.log_layout import (
     ARRAY_FIELDS,
     CELL_FIELDS,
-    DTYPES,
     FILL,
-    STATE_FIELDS,
     VEHICLE_FIELDS,
     allocate_rows,
     as_layout,
     bytes_needed,
+    vehicle_arrays,
 )
 from hcomc.sim.log_slots import (
     OPEN,
@@ -47,9 +46,17 @@ from hcomc.sim.log_slots import (
     claim_slots,
     empty_slots,
     identity_slots,
+    owner_grid,
+    widen,
 )
 
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
+
+
+def _cell_view(name: str, doc: str) -> Any:
+    """The property ``log.<name>``: the stored array of a log with one column per vehicle,
+    else a (T, N) :class:`~hcomc.sim.log_slots.VehicleCells` read view."""
+    return property(lambda log: log._view(name), doc=doc)
 
 
 class SimulationLog:
@@ -105,9 +112,6 @@ class SimulationLog:
         n_recorded: int = 0,
         events: np.ndarray | None = None,
     ) -> None:
-        dt = float(dt)
-        if not (math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt (logging interval) must be finite and > 0 [s], got {dt}")
         given = {
             "t": t, "x": x, "y": y, "v": v, "a": a, "heading": heading, "lane": lane,
             "active": active, "kind": kind, "length": length, "width": width,
@@ -134,6 +138,9 @@ class SimulationLog:
         n_recorded: int,
         events: np.ndarray | None,
     ) -> None:
+        dt = float(dt)
+        if not (math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt (logging interval) must be finite and > 0 [s], got {dt}")
         self.dt: float = dt
         self.t: FloatArray = arrays["t"]
         self._cells: dict[str, np.ndarray] = {name: arrays[name] for name in CELL_FIELDS}
@@ -187,7 +194,7 @@ class SimulationLog:
             raise ValueError(f"span has shape {np.shape(span)}, expected ({n_vehicles}, 2)")
         tables = tuple(np.ascontiguousarray(a, dtype=np.int64) for a in (slot, span, owner))
         log = cls.__new__(cls)
-        log._setup(float(dt), arrays, tables, meta, n_recorded, events)  # type: ignore[arg-type]
+        log._setup(dt, arrays, tables, meta, n_recorded, events)  # type: ignore[arg-type]
         return log
 
     # ------------------------------------------------------------------ construction
@@ -251,19 +258,7 @@ class SimulationLog:
         n_steps, n_vehicles = int(n_steps), int(n_vehicles)
         if n_steps < 0 or n_vehicles < 0:
             raise ValueError(f"n_steps and n_vehicles must be >= 0, got {n_steps}, {n_vehicles}")
-        per_vehicle: dict[str, np.ndarray] = {}
-        for name, value in (("kind", kind), ("length", length), ("width", width)):
-            arr = np.asarray(value)
-            if arr.shape != (n_vehicles,):
-                raise ValueError(f"{name} must have shape ({n_vehicles},), got {arr.shape}")
-            per_vehicle[name] = arr
-        kind_arr = per_vehicle["kind"]
-        if kind_arr.size and not ((kind_arr == 0) | (kind_arr == 1)).all():
-            raise ValueError(f"kind must be 0 (HDV) or 1 (CAV), got values {np.unique(kind_arr)}")
-        for name in ("length", "width"):
-            arr = per_vehicle[name].astype(np.float64)
-            if arr.size and not (np.isfinite(arr).all() and (arr > 0).all()):
-                raise ValueError(f"{name} must be finite and > 0 [m]")
+        per_vehicle = vehicle_arrays(n_vehicles, kind=kind, length=length, width=width)
         if slots is None:
             rows = allocate_rows(n_steps, n_vehicles)
             return cls(
@@ -288,40 +283,15 @@ class SimulationLog:
             return store
         return VehicleCells(store, self.slot, self.span, FILL[name])
 
-    @property
-    def x(self) -> Any:
-        """(T, N) longitudinal position [m]; NaN where the vehicle is not on the road."""
-        return self._view("x")
-
-    @property
-    def y(self) -> Any:
-        """(T, N) lateral position [m]."""
-        return self._view("y")
-
-    @property
-    def v(self) -> Any:
-        """(T, N) speed [m/s]."""
-        return self._view("v")
-
-    @property
-    def a(self) -> Any:
-        """(T, N) acceleration [m/s^2]."""
-        return self._view("a")
-
-    @property
-    def heading(self) -> Any:
-        """(T, N) heading [rad]."""
-        return self._view("heading")
-
-    @property
-    def lane(self) -> Any:
-        """(T, N) lane index, -1 where the vehicle is not on the road."""
-        return self._view("lane")
-
-    @property
-    def active(self) -> Any:
-        """(T, N) whether the vehicle is on the road."""
-        return self._view("active")
+    x = _cell_view(
+        "x", "(T, N) longitudinal position [m]; NaN where the vehicle is not on the road."
+    )
+    y = _cell_view("y", "(T, N) lateral position [m].")
+    v = _cell_view("v", "(T, N) speed [m/s].")
+    a = _cell_view("a", "(T, N) acceleration [m/s^2].")
+    heading = _cell_view("heading", "(T, N) heading [rad].")
+    lane = _cell_view("lane", "(T, N) lane index, -1 where the vehicle is not on the road.")
+    active = _cell_view("active", "(T, N) whether the vehicle is on the road.")
 
     @property
     def cells(self) -> dict[str, np.ndarray]:
@@ -342,24 +312,13 @@ class SimulationLog:
 
     def owners(self) -> np.ndarray:
         """(T, S) int64: the vehicle each stored cell belongs to, -1 for none."""
-        grid = np.full((self.n_steps, self.owner.size), -1, dtype=np.int64)
-        for i in np.flatnonzero(self.slot >= 0).tolist():
-            first, end = self.span[i]
-            grid[first : min(end, self.n_steps), self.slot[i]] = i
-        return grid
+        return owner_grid(self.slot, self.span, self.n_steps, self.n_slots)
 
     def grow_slots(self, n_slots: int) -> None:
         """Widen a slot-column log to ``n_slots`` columns (new columns free and unwritten)."""
         if self._one_per_vehicle:
             raise ValueError("a log with one column per vehicle has no slots to grow")
-        old = self.owner.size
-        if n_slots <= old:
-            return
-        for name in CELL_FIELDS:
-            wide = np.full((self.n_steps, n_slots), FILL[name], dtype=DTYPES[name])
-            wide[:, :old] = self._cells[name]
-            self._cells[name] = wide
-        self.owner = np.concatenate([self.owner, np.full(n_slots - old, -1, dtype=np.int64)])
+        self._cells, self.owner = widen(self._cells, self.owner, n_slots)
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -450,6 +409,9 @@ class SimulationLog:
             for name, value in values.items():
                 self._cells[name][k] = np.where(mask, value, FILL[name])
         else:
+            if k < self._n_recorded:
+                raise ValueError(f"row {k}: a slot-column log is written row after row "
+                                 f"({self._n_recorded} rows written)")  # fmt: skip
             while not claim_slots(mask, self.slot, self.span, self.owner, k):
                 self.grow_slots(max(2 * self.n_slots, 1))
             on = np.flatnonzero(mask)
@@ -567,23 +529,9 @@ class SimulationLog:
     # ------------------------------------------------------------------ long format
     def long_columns(self) -> dict[str, np.ndarray]:
         """Columns of :meth:`to_frame` as arrays (also the Parquet file's table)."""
-        steps, cols = np.nonzero(self._cells["active"])
-        vehicles = cols
-        if not self._one_per_vehicle:  # stored by slot: the cells' vehicles, then their order
-            vehicles = self.owners()[steps, cols]
-            order = np.lexsort((vehicles, steps))
-            steps, cols, vehicles = steps[order], cols[order], vehicles[order]
-        out: dict[str, np.ndarray] = {
-            "step": steps.astype(np.int64),
-            "t": self.t[steps],
-            "vehicle": vehicles.astype(np.int64),
-            "kind": self.kind[vehicles],
-        }
-        for name in (*STATE_FIELDS, "lane"):
-            out[name] = self._cells[name][steps, cols]
-        out["length"] = self.length[vehicles]
-        out["width"] = self.width[vehicles]
-        return out
+        from hcomc.sim.log_io import long_columns  # the long format lives in log_io
+
+        return long_columns(self)
 
     def to_frame(self) -> pd.DataFrame:
         """Long-format trajectories: one row per active (step, vehicle) cell.
@@ -600,33 +548,10 @@ class SimulationLog:
 
     # ------------------------------------------------------------------ persistence
     def save(self, path: str | os.PathLike[str]) -> Path:
-        """Write the log to ``.npz`` or ``.parquet``, atomically.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            Target file; the suffix selects the format. For Parquet the events go to the
-            sibling ``<stem>.events.parquet``. The directory must exist.
-
-        Returns
-        -------
-        pathlib.Path
-            The target path.
-
-        Raises
-        ------
-        ValueError
-            On an unsupported suffix.
-        TypeError
-            If :attr:`meta` is not JSON-serialisable.
-
-        Notes
-        -----
-        Data are written to temporary files in the target directory and moved into
-        place with :func:`os.replace`; an interrupted save leaves existing files intact
-        and no temporary file behind. For Parquet the two files share a random token,
-        so :meth:`load` detects a log and events file that do not belong together.
-        """
+        """Write the log to ``path`` (``.npz``, or ``.parquet`` with the events in the sibling
+        ``<stem>.events.parquet``; the directory must exist), atomically: an interrupted save
+        leaves existing files intact. Returns the path; ``ValueError`` on another suffix,
+        ``TypeError`` if :attr:`meta` is not JSON-serialisable (:mod:`hcomc.sim.log_io`)."""
         from hcomc.sim.log_io import write_log  # the file formats live in log_io
 
         return write_log(self, path)
@@ -640,24 +565,9 @@ class SimulationLog:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> SimulationLog:
-        """Read a log written by :meth:`save` (``.npz`` or ``.parquet``).
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            File to read.
-
-        Returns
-        -------
-        SimulationLog
-            Arrays, events, ``dt``, ``n_recorded`` and ``meta`` as saved.
-
-        Raises
-        ------
-        ValueError
-            On an unsupported suffix, an unknown format version, or (Parquet) an events
-            file that does not belong to the log file.
-        """
+        """Read a log written by :meth:`save`: arrays, events, ``dt``, ``n_recorded`` and
+        ``meta`` as saved. ``ValueError`` on another suffix, an unknown format version, or a
+        Parquet events file that does not belong to the log file."""
         from hcomc.sim.log_io import read_log
 
         return read_log(path)

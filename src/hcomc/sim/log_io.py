@@ -27,7 +27,7 @@ from hcomc.sim.log_layout import ARRAY_FIELDS, CELL_FIELDS, DTYPES, STATE_FIELDS
 from hcomc.sim.log_slots import identity_slots
 from hcomc.sim.manifest import atomic_paths, json_default
 
-__all__ = ["events_path", "read_log", "write_log"]
+__all__ = ["events_path", "long_columns", "read_log", "write_log"]
 
 _FORMAT_VERSION = 2  # 2: slot columns and their tables; 1 (one column per vehicle) is read
 _READABLE = (1, 2)
@@ -54,6 +54,29 @@ def _header(log: SimulationLog) -> dict[str, Any]:
         "n_recorded": log.n_recorded,
         "meta": log.meta,
     }
+
+
+def long_columns(log: SimulationLog) -> dict[str, np.ndarray]:
+    """One array per column of :meth:`SimulationLog.to_frame`: a row per active (step,
+    vehicle) cell, ordered by step then vehicle."""
+    cells = log.cells
+    steps, cols = np.nonzero(cells["active"])
+    vehicles = cols
+    if not log.one_column_per_vehicle:  # stored by slot: the cells' vehicles, then their order
+        vehicles = log.owners()[steps, cols]
+        order = np.lexsort((vehicles, steps))
+        steps, cols, vehicles = steps[order], cols[order], vehicles[order]
+    out: dict[str, np.ndarray] = {
+        "step": steps.astype(np.int64),
+        "t": log.t[steps],
+        "vehicle": vehicles.astype(np.int64),
+        "kind": log.kind[vehicles],
+    }
+    for name in (*STATE_FIELDS, "lane"):
+        out[name] = cells[name][steps, cols]
+    out["length"] = log.length[vehicles]
+    out["width"] = log.width[vehicles]
+    return out
 
 
 def events_path(path: str | os.PathLike[str]) -> Path:

@@ -90,6 +90,7 @@ __all__ = [
     "allocate_rows",
     "as_layout",
     "bytes_needed",
+    "vehicle_arrays",
 ]
 
 STATE_FIELDS: Final = ("x", "y", "v", "a", "heading")
@@ -160,6 +161,26 @@ def allocate_rows(n_steps: int, n_vehicles: int) -> dict[str, np.ndarray]:
     for name in CELL_FIELDS:
         arrays[name] = np.full((n_steps, n_vehicles), FILL[name], dtype=DTYPES[name])
     return arrays
+
+
+def vehicle_arrays(
+    n_vehicles: int, *, kind: np.ndarray, length: np.ndarray, width: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The per-vehicle arrays ``kind, length, width``, checked: shape (N,), kind 0 (HDV) or
+    1 (CAV), finite positive dimensions [m]; ``ValueError`` otherwise."""
+    out: dict[str, np.ndarray] = {}
+    for name, value in (("kind", kind), ("length", length), ("width", width)):
+        arr = np.asarray(value)
+        if arr.shape != (n_vehicles,):
+            raise ValueError(f"{name} must have shape ({n_vehicles},), got {arr.shape}")
+        out[name] = arr
+    if out["kind"].size and not ((out["kind"] == 0) | (out["kind"] == 1)).all():
+        raise ValueError(f"kind must be 0 (HDV) or 1 (CAV), got values {np.unique(out['kind'])}")
+    for name in ("length", "width"):
+        arr = out[name].astype(np.float64)
+        if arr.size and not (np.isfinite(arr).all() and (arr > 0).all()):
+            raise ValueError(f"{name} must be finite and > 0 [m]")
+    return out
 
 
 def as_layout(name: str, arr: np.ndarray) -> np.ndarray:

@@ -34,7 +34,12 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["OPEN", "VehicleCells", "cell_of", "claim_slots", "identity_slots", "rows_of"]
+from hcomc.sim.log_layout import FILL
+
+__all__ = [
+    "OPEN", "VehicleCells", "cell_of", "claim_slots", "empty_slots", "identity_slots",
+    "owner_grid", "rows_of", "widen",
+]  # fmt: skip
 
 OPEN = np.iinfo(np.int64).max
 """End row of the span of a vehicle still holding its slot."""
@@ -55,6 +60,30 @@ def empty_slots(n_vehicles: int, n_slots: int) -> tuple[np.ndarray, np.ndarray, 
         np.zeros((n_vehicles, 2), dtype=np.int64),
         np.full(n_slots, -1, dtype=np.int64),
     )
+
+
+def owner_grid(slot: np.ndarray, span: np.ndarray, n_rows: int, n_slots: int) -> np.ndarray:
+    """(T, S) int64: the vehicle each stored cell belongs to, -1 for none."""
+    grid = np.full((n_rows, n_slots), -1, dtype=np.int64)
+    for i in np.flatnonzero(slot >= 0).tolist():
+        first, end = span[i]
+        grid[first : min(end, n_rows), slot[i]] = i
+    return grid
+
+
+def widen(
+    cells: dict[str, np.ndarray], owner: np.ndarray, n_slots: int
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Slot columns ``cells`` and ``owner`` widened to ``n_slots`` columns (new ones free,
+    holding the fill value); unchanged when they already have as many."""
+    old = owner.size
+    if n_slots <= old:
+        return cells, owner
+    wide = {}
+    for name, store in cells.items():
+        wide[name] = np.full((store.shape[0], n_slots), FILL[name], dtype=store.dtype)
+        wide[name][:, :old] = store
+    return wide, np.concatenate([owner, np.full(n_slots - old, -1, dtype=np.int64)])
 
 
 @njit(cache=True)

@@ -18,6 +18,7 @@ import numpy as np
 
 from hcomc.road import Lane
 from hcomc.sim import core_state as layout
+from hcomc.sim.core_build import adopt_log_columns
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.log_layout import CELL_FIELDS, FILL
@@ -104,7 +105,7 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     dst.counters[layout.VEHICLE_STEPS] -= int((sim.step_index - steps).sum())
     twin.rng.bit_generator.state = sim.rng.bit_generator.state
     _copy_log_without(sim.log, twin.log, sim.rows_recorded, ramp)
-    twin.adopt_log_columns()
+    twin.arrays = adopt_log_columns(twin.arrays, twin.core, twin.log)
     twin.log.add_events(events[~_involving(events, is_ramp)])
     twin._stage = sim._stage
     return twin
