@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from hcomc._typing import FloatArray
-from hcomc.metrics.speed_field import lane_profile_at
+from hcomc.metrics.speed_field import lane_profile_of
 from hcomc.metrics.window import (
     A_TOL,
     EPS_T,
@@ -91,15 +91,17 @@ def deviations(
     if vr >= 0 and vr in keys:
         col = int(np.searchsorted(keys, vr))
         valid[:, col] = False
-        row_ids = np.arange(*rows.indices(log.n_steps))
         t = times(log)[rows]
         after = log.active[rows, vr] & (t >= window.t_merge - EPS_T)  # NaN t_merge: never
+        lanes, xs = log.lane[rows, vr], log.x[rows, vr]
+        ref = [getattr(reference, name)[rows] for name in ("x", "active", "lane", "v", "a")]
         for k in np.flatnonzero(after):
-            lane = int(log.lane[row_ids[k], vr])
+            lane = int(lanes[k])
             if lane not in (1, 2):
                 continue
-            x_vr = np.array([float(log.x[row_ids[k], vr])])
-            v_lane, a_lane = lane_profile_at(reference, int(row_ids[k]), lane, x_vr, clamp=True)
+            x_vr = np.array([float(xs[k])])
+            rx, ractive, rlane, rv, ra = (arr[k] for arr in ref)
+            v_lane, a_lane = lane_profile_of(rx, ractive, rlane, lane, x_vr, True, rv, ra)
             if np.isfinite(v_lane[0]):
                 v_u[k, col], a_u[k, col] = v_lane[0], a_lane[0]
                 valid[k, col] = True

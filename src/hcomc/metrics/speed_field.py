@@ -37,6 +37,7 @@ __all__ = [
     "DT_BIN",
     "DX_BIN",
     "lane_profile_at",
+    "lane_profile_of",
     "lane_speed_field",
     "low_speed_region_volume",
     "reference_speed",
@@ -155,22 +156,34 @@ def lane_profile_at(
     their range: NaN, or with ``clamp=True`` the nearest vehicle's value. NaN everywhere if
     the lane is empty in that row.
     """
-    on = np.flatnonzero(log.active[row] & (log.lane[row] == lane))
+    profile = lane_profile_of(log.x[row], log.active[row], log.lane[row], lane, x, clamp,
+                       log.v[row], log.a[row])  # fmt: skip
+    return profile[0], profile[1]
+
+
+def lane_profile_of(
+    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int, x: FloatArray,
+    clamp: bool, *value_rows: np.ndarray,
+) -> list[FloatArray]:  # fmt: skip
+    """:func:`lane_profile_at` on one logged row's arrays (N,) (``log.x[row]``,
+    ``log.active[row]``, ``log.lane[row]``): each of ``value_rows`` (e.g. ``log.v[row]``)
+    interpolated at ``x`` between the active vehicles of ``lane``. Callers that visit many
+    rows read the arrays once and pass their rows."""
+    on = np.flatnonzero(active_row & (lane_row == lane))
     x = np.asarray(x, dtype=np.float64)
     if on.size == 0:
-        nan = np.full(x.shape, np.nan)
-        return nan, nan.copy()
-    xs = log.x[row, on].astype(np.float64)
+        return [np.full(x.shape, np.nan) for _ in value_rows]
+    xs = x_row[on].astype(np.float64)
     order = np.argsort(xs, kind="stable")
     xs = xs[order]
     out = []
-    for values in (log.v[row, on], log.a[row, on]):
-        ys = values.astype(np.float64)[order]
+    for values in value_rows:
+        ys = values[on].astype(np.float64)[order]
         if clamp:
             out.append(np.interp(x, xs, ys))
         else:
             out.append(np.interp(x, xs, ys, left=np.nan, right=np.nan))
-    return out[0], out[1]
+    return out
 
 
 def lane_speed_field(
@@ -201,8 +214,9 @@ def lane_speed_field(
     it = _time_bin(log, window, rows, n_t, dt_bin)
     sums = np.zeros((n_t, n_x))
     counts = np.zeros((n_t, n_x))
-    for k, row in enumerate(range(*rows.indices(log.n_steps))):
-        v, _ = lane_profile_at(log, row, lane, centres)
+    xs, active, lanes, speeds = log.x[rows], log.active[rows], log.lane[rows], log.v[rows]
+    for k in range(xs.shape[0]):  # the window's rows, read once
+        (v,) = lane_profile_of(xs[k], active[k], lanes[k], lane, centres, False, speeds[k])
         ok = np.isfinite(v)
         sums[it[k], ok] += v[ok]
         counts[it[k], ok] += 1.0

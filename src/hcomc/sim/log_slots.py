@@ -177,6 +177,8 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
 
     def __getitem__(self, key: Any) -> Any:
         key = _plain(key)
+        if isinstance(key, int | np.integer):  # log.x[k]: one row, the commonest read
+            return self._row(int(key))
         if _selects_rows(key):  # log.x[k], log.x[r0:r1], log.x[rows]: every vehicle
             return self._rows(key[0] if isinstance(key, tuple) else key)
         n_rows, n_vehicles = self.shape
@@ -186,6 +188,18 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
         slots = self._slot[vehicles]
         inside = (slots >= 0) & (rows >= self._span[vehicles, 0]) & (rows < self._span[vehicles, 1])
         return self._gather(rows, slots, inside)
+
+    def _row(self, k: int) -> np.ndarray:
+        """Every vehicle's cell at row ``k`` (negative: from the end)."""
+        n_rows = self.shape[0]
+        if not -n_rows <= k < n_rows:
+            raise IndexError(f"row {k} is out of bounds for {n_rows} rows")
+        k = k + n_rows if k < 0 else k
+        slot, span = self._slot, self._span
+        inside = np.flatnonzero((slot >= 0) & (span[:, 0] <= k) & (span[:, 1] > k))
+        out = np.full(slot.size, self._fill, dtype=self.dtype)
+        out[inside] = self._store[k, slot[inside]]
+        return out
 
     def _rows(self, key: Any) -> Any:
         """Every vehicle's cells at the rows ``key`` selects (int, slice, 1-D index)."""
