@@ -179,6 +179,8 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
         key = _plain(key)
         if isinstance(key, int | np.integer):  # log.x[k]: one row, the commonest read
             return self._row(int(key))
+        if isinstance(key, tuple) and len(key) == 2 and all(_is_int(k) for k in key):
+            return self._cell(int(key[0]), int(key[1]))
         if _selects_rows(key):  # log.x[k], log.x[r0:r1], log.x[rows]: every vehicle
             return self._rows(key[0] if isinstance(key, tuple) else key)
         n_rows, n_vehicles = self.shape
@@ -188,6 +190,16 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
         slots = self._slot[vehicles]
         inside = (slots >= 0) & (rows >= self._span[vehicles, 0]) & (rows < self._span[vehicles, 1])
         return self._gather(rows, slots, inside)
+
+    def _cell(self, k: int, i: int) -> Any:
+        """Vehicle i's cell at row k (negative indices count from the end)."""
+        (n_rows, n_vehicles), slot, span = self.shape, self._slot, self._span
+        if not (-n_rows <= k < n_rows and -n_vehicles <= i < n_vehicles):
+            raise IndexError(f"index ({k}, {i}) is out of bounds for shape {self.shape}")
+        k, i = k % n_rows, i % n_vehicles
+        if slot[i] < 0 or not span[i, 0] <= k < span[i, 1]:
+            return self.dtype.type(self._fill)
+        return self._store[k, slot[i]]
 
     def _row(self, k: int) -> np.ndarray:
         """Every vehicle's cell at row ``k`` (negative: from the end)."""
@@ -242,6 +254,10 @@ def _plain(x: Any) -> Any:
     if isinstance(x, dict):
         return {k: _plain(v) for k, v in x.items()}
     return x
+
+
+def _is_int(key: Any) -> bool:
+    return isinstance(key, int | np.integer) and not isinstance(key, bool | np.bool_)
 
 
 def _selects_rows(key: Any) -> bool:

@@ -74,16 +74,18 @@ def write_fcd(log: SimulationLog, path: Path, config: ScenarioConfig) -> Path:
     types = {int(Kind.HDV): "hdv", int(Kind.CAV): "cav"}
     for k in range(log.n_recorded):
         lines.append(f'    <timestep time="{log.t[k] + config.warmup:.3f}">')
+        xs, ys, lanes, headings = log.x[k], log.y[k], log.lane[k], log.heading[k]
+        vs, accs = log.v[k], log.a[k]  # each row read once
         for i in np.flatnonzero(log.active[k]).tolist():
-            x, y = float(log.x[k, i]), float(log.y[k, i])
-            lane = int(log.lane[k, i])
+            x, y = float(xs[i]), float(ys[i])
+            lane = int(lanes[i])
             edge = edge_at(config, x, lane)
-            angle = 90.0 - math.degrees(float(log.heading[k, i]))
+            angle = 90.0 - math.degrees(float(headings[i]))
             lines.append(
                 f'        <vehicle id="v{i}" x="{x:.4f}" y="{y:.4f}" angle="{angle:.6f}" '
-                f'type="{types[int(log.kind[i])]}" speed="{float(log.v[k, i]):.6f}" '
+                f'type="{types[int(log.kind[i])]}" speed="{float(vs[i]):.6f}" '
                 f'pos="{x - edge.x0:.4f}" lane="{edge.id}_{sumo_lane_of(edge, lane)}" '
-                f'slope="0.00" acceleration="{float(log.a[k, i]):.6f}"/>'
+                f'slope="0.00" acceleration="{float(accs[i]):.6f}"/>'
             )
         lines.append("    </timestep>")
     lines.append("</fcd-export>")
