@@ -134,11 +134,10 @@ def main() -> None:
 
     runs, worst = [], []
     for interval in args.intervals:
-        log_rows(args.duration, args.dt, interval)  # checks the interval
+        rows = log_rows(args.duration, args.dt, interval)  # also checks the interval
         run = {"log_interval_s": interval, "every_kth_step": round(interval / args.dt)}
         run.update(_child("run", args.duration, args.dt, interval, args.headway))
         runs.append(run)
-        rows = log_rows(args.duration, args.dt, interval)
         need = SimulationLog.bytes_needed(rows, args.vehicles)
         case: dict[str, object] = {"log_interval_s": interval, "rows": rows,
                                    "vehicles_on_road": args.vehicles, "bytes_needed": need,

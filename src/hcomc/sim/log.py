@@ -53,6 +53,21 @@ from hcomc.sim.log_slots import (
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
 
 
+def _conformed(
+    given: dict[str, Any], n_steps: int, n_vehicles: int, n_slots: int
+) -> dict[str, np.ndarray]:
+    """Every array of a log (:data:`ARRAY_FIELDS`) from ``given``, checked against its shape
+    (``t`` (T,), the stored cells (T, S), per-vehicle arrays (N,)) and in the layout's dtype;
+    ``ValueError`` naming the first array of another shape."""
+    expected: dict[str, tuple[int, ...]] = {"t": (n_steps,)}
+    expected.update(dict.fromkeys(CELL_FIELDS, (n_steps, n_slots)))
+    expected.update(dict.fromkeys(VEHICLE_FIELDS, (n_vehicles,)))
+    for name, shape in expected.items():
+        if np.shape(given[name]) != shape:
+            raise ValueError(f"{name} has shape {np.shape(given[name])}, expected {shape}")
+    return {name: as_layout(name, given[name]) for name in ARRAY_FIELDS}
+
+
 def _cell_view(name: str, doc: str) -> Any:
     """The property ``log.<name>``: the stored array of a log with one column per vehicle,
     else a (T, N) :class:`~hcomc.sim.log_slots.VehicleCells` read view."""
@@ -120,13 +135,7 @@ class SimulationLog:
         if len(x_shape) != 2:
             raise ValueError(f"x must be two-dimensional (rows x vehicles), got shape {x_shape}")
         n_steps, n_vehicles = x_shape
-        expected: dict[str, tuple[int, ...]] = {"t": (n_steps,)}
-        expected.update(dict.fromkeys(CELL_FIELDS, (n_steps, n_vehicles)))
-        expected.update(dict.fromkeys(VEHICLE_FIELDS, (n_vehicles,)))
-        for name, shape in expected.items():
-            if np.shape(given[name]) != shape:
-                raise ValueError(f"{name} has shape {np.shape(given[name])}, expected {shape}")
-        arrays = {name: as_layout(name, given[name]) for name in ARRAY_FIELDS}
+        arrays = _conformed(given, n_steps, n_vehicles, n_vehicles)
         self._setup(dt, arrays, identity_slots(n_vehicles), meta, n_recorded, events)
 
     def _setup(
@@ -180,16 +189,8 @@ class SimulationLog:
         ``x, y, v, a, heading, lane, active`` to a (T, S) array; ``slot`` (N,), ``span``
         (N, 2) and ``owner`` (S,) say which vehicle a column holds when."""
         n_vehicles, n_slots = np.shape(slot)[0], np.shape(owner)[0]
-        arrays = {"t": as_layout("t", t)}
-        for name in CELL_FIELDS:
-            if np.shape(cells[name]) != (arrays["t"].size, n_slots):
-                raise ValueError(f"{name} has shape {np.shape(cells[name])}, "
-                                 f"expected {(arrays['t'].size, n_slots)}")  # fmt: skip
-            arrays[name] = as_layout(name, cells[name])
-        for name, value in (("kind", kind), ("length", length), ("width", width)):
-            if np.shape(value) != (n_vehicles,):
-                raise ValueError(f"{name} has shape {np.shape(value)}, expected ({n_vehicles},)")
-            arrays[name] = as_layout(name, value)
+        given = {"t": t, **cells, "kind": kind, "length": length, "width": width}
+        arrays = _conformed(given, int(np.size(t)), n_vehicles, n_slots)
         if np.shape(span) != (n_vehicles, 2):
             raise ValueError(f"span has shape {np.shape(span)}, expected ({n_vehicles}, 2)")
         tables = tuple(np.ascontiguousarray(a, dtype=np.int64) for a in (slot, span, owner))
