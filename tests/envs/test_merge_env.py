@@ -16,7 +16,9 @@ import hcomc.envs  # noqa: F401 (registers hcomc/Merge-v0)
 from hcomc.config import ConfigError, load_config
 from hcomc.control.base import find_key_vehicles
 from hcomc.envs import MergeEnv
-from hcomc.envs.episode import SEED_TRIES, NoVMCError
+from hcomc.envs import episode as episode_module
+from hcomc.envs import vector as vector_module
+from hcomc.envs.episode import SEED_TRIES, MergeEpisode, NoVMCError
 from hcomc.envs.multi_agent import MergeParallelEnv
 from hcomc.envs.observation import N_EGO, N_OBS, N_ROLE, OBS_NAMES
 from hcomc.envs.policies import FIFO, HCOMC, evaluate, summary
@@ -127,7 +129,9 @@ def test_reward_terms_against_independent_computations() -> None:
     ep = env.episode
     for _ in range(12):
         obs, reward, _term, _trunc, info = env.step(drive(obs))
-    sim, twin, g, cfg = ep.sim, ep.twin, ep.group, env.config
+    sim, g, cfg = ep.sim, ep.group, env.config
+    twin = Simulation(cfg, 1, counterfactual=True)  # the undisturbed run, simulated
+    twin.run_to(sim.step_index)
     r1 = sim.rows_recorded
     r0 = r1 - round(env.options.action_period / cfg.log_interval)
     dt = cfg.log_interval
@@ -188,20 +192,42 @@ def test_lane_end_and_timeout_end_the_episode_with_their_penalties() -> None:
     assert not steps[-1][2]
 
 
-def test_vector_env_is_bit_identical_to_single_envs_with_autoreset() -> None:
+@pytest.mark.parametrize("late_twins", [False, True])
+def test_vector_env_is_bit_identical_to_single_envs_with_autoreset(
+    late_twins: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The twins deferred while VR is short of the acceleration lane are made ahead of the
+    period it may reach the lane in; with ``late_twins`` none is made ahead, so they are
+    simulated anew after that period. Either way the episodes are the single ones."""
+    made_late: list[bool] = []
+    if late_twins:
+        monkeypatch.setattr(episode_module, "ramp_may_reach", lambda c, horizon: False)
+        monkeypatch.setattr(vector_module, "twins_due", lambda *args: None)
+    settle, make_due = MergeEpisode.settle_twin, MergeEpisode.make_due_twin
+
+    def settle_spy(episode: MergeEpisode, untouched: bool) -> bool:
+        made_late.append(settle(episode, untouched))  # True: simulated anew
+        return made_late[-1]
+
+    def make_due_spy(episode: MergeEpisode) -> None:
+        made_late.append(True)
+        make_due(episode)
+
+    monkeypatch.setattr(MergeEpisode, "settle_twin", settle_spy)
+    monkeypatch.setattr(MergeEpisode, "make_due_twin", make_due_spy)
     n = 3
     envs = gym.make_vec("hcomc/Merge-v0", num_envs=n, vectorization_mode="vector_entry_point",
-                        action_period=1.0, max_episode_time=8.0)  # fmt: skip
+                        action_period=1.0, max_episode_time=10.0)  # fmt: skip
     assert isinstance(envs, MergeVectorEnv)
     obs, _ = envs.reset(seed=10)
-    singles = [MergeEnv("C1", action_period=1.0, max_episode_time=8.0) for _ in range(n)]
+    singles = [MergeEnv("C1", action_period=1.0, max_episode_time=10.0) for _ in range(n)]
     first = [e.reset(seed=10 + k)[0] for k, e in enumerate(singles)]
     np.testing.assert_array_equal(obs, np.stack(first))
     rng = np.random.default_rng(0)
     ended = [False] * n
     episodes = 0
     for _ in range(40):
-        actions = rng.uniform(-1, 1, (n, 2)).astype(np.float32)
+        actions = rng.uniform([0, -1], [1, 1], (n, 2)).astype(np.float32)  # VR drives on
         vobs, vrew, vterm, vtrunc, vinfo = envs.step(actions)
         for k, env in enumerate(singles):
             if ended[k]:
@@ -222,6 +248,8 @@ def test_vector_env_is_bit_identical_to_single_envs_with_autoreset() -> None:
             ended[k] = te or tr
             episodes += te or tr
     assert episodes >= 3 * n  # the autoreset was exercised
+    assert any(made_late)  # twins were deferred, and made when VR drew near the lane
+    assert not all(made_late)
 
 
 def test_controller_policy_episode_is_the_controllers_run() -> None:

@@ -1,5 +1,6 @@
 """The undisturbed twin copied from a run equals the simulated undisturbed run, bit for bit,
-to the end of the run."""
+to the end of the run; an episode whose twin is deferred is the episode whose twin was made
+at once."""
 
 from __future__ import annotations
 
@@ -7,8 +8,11 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
+from hcomc.envs import episode as episode_module
+from hcomc.envs.episode import MergeEpisode
+from hcomc.envs.merge_env import MergeEnv
 from hcomc.sim.engine import Simulation
-from hcomc.sim.twin import can_twin, undisturbed_twin
+from hcomc.sim.twin import can_twin, ramp_may_reach, ramp_untouched, undisturbed_twin
 
 END = 10**12
 FIELDS = ("t", "x", "y", "v", "a", "heading", "lane", "active")
@@ -63,3 +67,94 @@ def test_a_run_built_on_drawn_demand_is_the_run_of_its_seed(counterfactual: bool
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
     assert a.meta["config"] == b.meta["config"]
     assert a.meta["seed"] == b.meta["seed"]
+
+
+# ---------------------------------------------------------------- the deferred twin
+def _play(seed: int, policy, *, defer: bool) -> tuple[list, MergeEpisode]:
+    """One episode of hcomc/Merge-v0 (C1, 1 s periods) with the twin deferred or not: its
+    observations, rewards and ends."""
+    env = MergeEnv("C1", action_period=1.0)
+    episode = MergeEpisode(env.options, env.config, seed, defer_twin=defer)
+    obs = episode.start()
+    steps = []
+    while True:
+        episode.run_period(episode.apply(policy(obs)))
+        r = episode.evaluate()
+        steps.append((r.obs, r.reward, r.terminated, r.truncated, r.info))
+        if r.terminated or r.truncated:
+            return steps, episode
+        obs = r.obs
+
+
+def _random(seed: int):
+    rng = np.random.default_rng(seed)
+    return lambda obs: rng.uniform(-1, 1, 2)
+
+
+def _merging(obs: np.ndarray) -> np.ndarray:
+    return np.array([0.3, 1.0])  # accelerate, and merge as soon as the lane allows
+
+
+def _assert_same_episode(a: list, b: list) -> None:
+    assert len(a) == len(b)
+    for (oa, ra, ta, ua, ia), (ob, rb, tb, ub, ib) in zip(a, b, strict=True):
+        np.testing.assert_array_equal(oa, ob)
+        assert (ra, ta, ua) == (rb, tb, ub)
+        assert ia == ib
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+@pytest.mark.parametrize("policy", ["random", "merging"])
+def test_a_deferred_twin_gives_the_episode_of_the_twin_made_at_once(
+    seed: int, policy: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Bit for bit: observations, rewards, ends, infos, and both logs run to the end. The
+    twin is made before the period a ramp vehicle might reach the acceleration lane in, or
+    (the check before the period disabled) simulated anew after the period that broke the
+    standing-in: all three ways give the same episode."""
+    pick = (lambda: _random(seed)) if policy == "random" else (lambda: _merging)
+    eager, e_ep = _play(seed, pick(), defer=False)
+    deferred, d_ep = _play(seed, pick(), defer=True)
+    _assert_same_episode(eager, deferred)
+    made: list[bool] = []
+    original = MergeEpisode.settle_twin
+
+    def spy(self: MergeEpisode, untouched: bool) -> bool:
+        made.append(original(self, untouched))
+        return made[-1]
+
+    monkeypatch.setattr(MergeEpisode, "settle_twin", spy)
+    monkeypatch.setattr(episode_module, "ramp_may_reach", lambda c, horizon: False)
+    late, l_ep = _play(seed, pick(), defer=True)
+    _assert_same_episode(eager, late)
+    assert made  # the twin was pending for at least one period
+    if policy == "merging":
+        assert any(made)  # ... and simulated anew once VR reached the acceleration lane
+        assert not d_ep.twin_pending
+    expected = e_ep.finish()  # the logs run to the end, the agent's vehicle back on its model
+    for ep in (d_ep, l_ep):
+        for got, want in zip(ep.finish(), expected, strict=True):
+            for name in FIELDS:
+                np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_no_ramp_vehicle_gets_further_than_ramp_may_reach_allows(seed: int) -> None:
+    """Whenever :func:`ramp_may_reach` says no ramp vehicle can reach the acceleration lane
+    within the next period, none does (random actions, every period of an episode)."""
+    env = MergeEnv("C1", action_period=1.0)
+    episode = MergeEpisode(env.options, env.config, seed, defer_twin=False)
+    episode.start()
+    rng = np.random.default_rng(seed)
+    sim, said_no, period = episode.sim, 0, env.options.action_period
+    for _ in range(40):
+        safe = not ramp_may_reach(sim.core, period)
+        episode.run_period(episode.apply(rng.uniform(-0.2, 1, 2)))
+        if safe:
+            said_no += 1
+            assert ramp_untouched(sim.core)
+        result = episode.evaluate()
+        if result.terminated or result.truncated:
+            break
+    assert said_no >= 3
+    assert not ramp_untouched(sim.core)  # VR did reach the acceleration lane

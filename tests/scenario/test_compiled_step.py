@@ -74,3 +74,36 @@ def test_an_ensemble_gives_each_run_bit_identical_results() -> None:
             np.testing.assert_array_equal(
                 np.asarray(a.events.tolist()), np.asarray(b.events.tolist())
             )
+
+
+def test_typed_list_cache_follows_its_keys_as_they_change_grow_and_shrink() -> None:
+    """Entry k of each list is always its column of key k; places whose key stayed are not
+    converted again."""
+    from hcomc.sim.ensemble import TypedListCache
+
+    class Key:
+        def __init__(self, value: float) -> None:
+            self.value = value
+
+    converted: list[float] = []
+
+    def column(key: Key) -> float:
+        converted.append(key.value)
+        return key.value
+
+    def twice(key: Key) -> float:
+        return 2.0 * key.value
+
+    keys = [Key(float(k)) for k in range(12)]
+    cache = TypedListCache()
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        size = int(rng.integers(1, 12))
+        picked = [keys[k] for k in rng.choice(12, size=size, replace=False)]
+        previous = list(cache._keys)
+        converted.clear()
+        values, doubled = cache.lists(picked, column, twice)
+        assert list(values) == [k.value for k in picked]
+        assert list(doubled) == [2.0 * k.value for k in picked]
+        kept = sum(1 for k, key in enumerate(picked) if k < len(previous) and previous[k]() is key)
+        assert len(converted) == (size if not previous else size - kept)

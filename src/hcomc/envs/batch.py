@@ -33,6 +33,7 @@ from hcomc.sim.core_state import (
     command,
 )
 from hcomc.sim.log_slots import rows_of
+from hcomc.sim.twin import ramp_may_reach, ramp_untouched
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -147,6 +148,22 @@ def apply_batch(cores, egos, actions, drive, p):
     for k in range(len(cores)):
         if drive[k]:
             apply_one(cores[k], egos[k], actions[k, 0], actions[k, 1], p)
+
+
+@njit(cache=True)
+def twins_due(cores, pending, horizon: float, out):
+    """:func:`~hcomc.sim.twin.ramp_may_reach` within ``horizon`` [s] of every run whose
+    ``pending`` flag is set (False for the others)."""
+    for k in range(len(cores)):
+        out[k] = pending[k] and ramp_may_reach(cores[k], horizon)
+
+
+@njit(cache=True)
+def ramps_untouched(cores, pending, out):
+    """:func:`~hcomc.sim.twin.ramp_untouched` of every run whose ``pending`` flag is set
+    (False for the others)."""
+    for k in range(len(cores)):
+        out[k] = pending[k] and ramp_untouched(cores[k])
 
 
 class Outcomes(NamedTuple):

@@ -5,9 +5,11 @@ The agent's vehicle (VR, or VMC) is driven through :meth:`Simulation.command` an
 :meth:`Simulation.start_lane_change`; everything else is the engine's. The twin is the same
 scenario and seed without the ramp vehicle (``counterfactual=True``), advanced in lockstep:
 Eq. 17's acceleration changes are measured against it, as the metrics' disturbance measures
-are. :class:`MergeEpisode` is shared by the single, the vector and the multi-agent
-environments; they advance many episodes' runs together with
-:func:`hcomc.sim.ensemble.advance_ensemble`.
+are. When the agent drives VR, the twin is made only once a ramp vehicle may reach the
+acceleration lane: until then the undisturbed run's mainline is the run's own
+(:mod:`hcomc.sim.twin`), so the run stands in for it, with the same rewards bit for bit.
+:class:`MergeEpisode` is shared by the single, the vector and the multi-agent environments;
+they advance many episodes' runs together with :func:`hcomc.sim.ensemble.advance_ensemble`.
 """
 
 from __future__ import annotations
@@ -47,7 +49,7 @@ from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.twin import undisturbed_twin
+from hcomc.sim.twin import can_twin, ramp_may_reach, ramp_untouched, undisturbed_twin
 
 _END = np.iinfo(np.int64).max
 
@@ -96,12 +98,24 @@ def _rows(cells: Any, r0: int, r1: int, i: int) -> np.ndarray:
 
 class MergeEpisode:
     """One episode of ``options`` with ``seed``; call :meth:`start` (or let a batch advance
-    :attr:`sim` until its key vehicles, then :meth:`begin`)."""
+    :attr:`sim` until its key vehicles, then :meth:`begin`).
 
-    def __init__(self, options: EnvOptions, config: ScenarioConfig, seed: int) -> None:
+    ``defer_twin`` (default: when the agent drives VR) lets :attr:`sim` stand in for the
+    twin while no ramp vehicle can have reached the acceleration lane (:attr:`twin_pending`);
+    an environment whose agents drive mainline vehicles must not defer it.
+    """
+
+    def __init__(
+        self, options: EnvOptions, config: ScenarioConfig, seed: int, *,
+        defer_twin: bool | None = None,
+    ) -> None:  # fmt: skip
         self.options, self.config, self.seed = options, config, int(seed)
         self.sim = Simulation(config, seed)
         self.twin: Simulation = self.sim  # set by make_twin()
+        self.twin_pending = False  # sim stands in for the twin (see make_twin)
+        driven_vr = options.controller is None and options.agent == "vr"
+        self.defer_twin = driven_vr if defer_twin is None else defer_twin
+        self._checked_collisions = 0  # collisions when the pending twin was last checked
         self.period_steps = round(options.action_period / config.dt)
         self.is_cav = self.sim.fleet.kind == Kind.CAV
         self.obs = np.zeros(N_OBS, dtype=np.float32)
@@ -123,9 +137,19 @@ class MergeEpisode:
         return self.begin()
 
     def make_twin(self) -> bool:
-        """Make the undisturbed twin once :attr:`sim` has reached VR's entry: copied from its
-        state (:func:`hcomc.sim.twin.undisturbed_twin`) when that is exact, else a new
+        """The undisturbed twin, once :attr:`sim` has reached VR's entry: deferred (with
+        ``defer_twin``, while :func:`~hcomc.sim.twin.can_twin` holds), else copied from its
+        state (:func:`~hcomc.sim.twin.undisturbed_twin`) when that is exact, else a new
         undisturbed run; True when the twin must still be advanced to :attr:`sim`'s step."""
+        if self.defer_twin and can_twin(self.sim):
+            self.twin, self.twin_pending = self.sim, True
+            self._checked_collisions = self.sim.collisions
+            return False
+        return self._twin_now()
+
+    def _twin_now(self) -> bool:
+        """:meth:`make_twin` without deferring it."""
+        self.twin_pending = False
         try:
             self.twin = undisturbed_twin(self.sim)
             return False
@@ -133,11 +157,44 @@ class MergeEpisode:
             self.twin = Simulation(self.config, self.seed, counterfactual=True)
             return True
 
+    def twin_due(self) -> bool:
+        """Whether the pending twin must be made before the next period: a ramp vehicle
+        might reach the acceleration lane within it (:func:`~hcomc.sim.twin.ramp_may_reach`)."""
+        return self.twin_pending and ramp_may_reach(self.sim.core, self.options.action_period)
+
+    def make_due_twin(self) -> None:
+        """Make the pending twin now (copied from :attr:`sim`'s state: the check after the
+        last period passed)."""
+        if self._twin_now():
+            self.twin.run_to(self.sim.step_index)
+
+    def settle_twin(self, untouched: bool) -> bool:
+        """After a period with the twin pending (``untouched``:
+        :func:`~hcomc.sim.twin.ramp_untouched` of :attr:`sim` now): keep it pending while
+        :func:`~hcomc.sim.twin.can_twin` still holds, which makes the period's rows of
+        :attr:`sim` those of the undisturbed run; else simulate the twin anew (True: it must
+        be advanced to :attr:`sim`'s step before the period's terms are read)."""
+        s = self.sim
+        new_collision = s.collisions != self._checked_collisions
+        if untouched and not s.finished and (not new_collision or can_twin(s)):
+            self._checked_collisions = s.collisions  # none of them involves the ramp
+            return False
+        self.twin_pending = False
+        self.twin = Simulation(self.config, self.seed, counterfactual=True)
+        return True
+
+    def run_period(self, target: int) -> None:
+        """Advance :attr:`sim` and the twin to step ``target`` (one episode)."""
+        self.sim.run_to(target)
+        if not self.twin_pending or self.settle_twin(ramp_untouched(self.sim.core)):
+            self.twin.run_to(target)
+
     def begin(self) -> np.ndarray:
         """Pick the agent once :attr:`sim` has identified VR's key vehicles and the twin has
         reached the same step; returns the first observation."""
         group = self.sim.key_group
-        if group is None or self.twin is self.sim or self.twin.step_index != self.sim.step_index:
+        made = self.twin_pending or self.twin is not self.sim
+        if group is None or not made or self.twin.step_index != self.sim.step_index:
             raise RuntimeError(
                 f"seed {self.seed}: no ramp vehicle entered the control zone within the run "
                 f"({self.config.duration} s); allowed: a longer 'duration'"
@@ -168,6 +225,8 @@ class MergeEpisode:
     def apply(self, action: np.ndarray) -> int:
         """Command the agent's vehicle for the next period (:func:`apply_action`; not used
         when a controller drives VR); returns the step to advance to."""
+        if self.twin_due():
+            self.make_due_twin()
         if self.driven:
             apply_action(self.sim, self.kernel_params, self.ego, action)
         return self.sim.step_index + self.period_steps
@@ -301,6 +360,8 @@ class MergeEpisode:
         ``(log, reference)`` for :func:`hcomc.metrics.compute_metrics`."""
         if self.ego >= 0 and self.driven:
             self.sim.command(self.ego, math.nan)
+        if self.twin_pending:
+            self._twin_now()  # copied, or simulated anew by run_to below
         self.sim.run_to(_END)
         self.twin.run_to(_END)
         return self.sim.log, self.twin.log

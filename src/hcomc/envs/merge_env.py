@@ -87,9 +87,7 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
         episode = self.episode
         if episode is None or episode.done:
             raise RuntimeError("call reset() before step() (the episode has ended)")
-        target = episode.apply(np.asarray(action, dtype=np.float64))
-        episode.sim.run_to(target)
-        episode.twin.run_to(target)
+        episode.run_period(episode.apply(np.asarray(action, dtype=np.float64)))
         result = episode.evaluate()
         return result.obs, result.reward, result.terminated, result.truncated, result.info
 

@@ -88,7 +88,8 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             run_seed = int(seed)
         else:
             run_seed = draw_seed(self._rng)
-        episode = MergeEpisode(self.options, self.config, run_seed)
+        # the agents drive mainline CAVs: the twin differs from the run from the first step
+        episode = MergeEpisode(self.options, self.config, run_seed, defer_twin=False)
         episode.start()
         episode.sim.log.meta["agent"] = {"role": "CAVs in the control zone", "vehicle": -1,
                                          "t_start": float(episode.t_start)}  # fmt: skip

@@ -24,13 +24,20 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numba.typed import List
 
-from hcomc.envs.batch import N_TERMS, apply_batch, outcomes, parameters, step_terms_batch
+from hcomc.envs.batch import (
+    N_TERMS,
+    apply_batch,
+    outcomes,
+    parameters,
+    ramps_untouched,
+    step_terms_batch,
+    twins_due,
+)
 from hcomc.envs.batch import rewards as step_rewards
 from hcomc.envs.episode import MergeEpisode, NoVMCError, start_drawn
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
-from hcomc.sim.engine import Simulation
 from hcomc.sim.ensemble import TypedListCache, advance_ensemble
 
 _END = np.iinfo(np.int64).max
@@ -125,33 +132,34 @@ class MergeVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """One action period of every sub-environment (restarting those that ended).
 
-        All runs advance in one compiled call, each sub-environment's run and twin in the same
-        places every step (a restarting one: its new run, and its old twin standing still).
+        All runs advance in one compiled call: each sub-environment's run (a restarting one:
+        its new run) in the same place every step, then the twins that are made.
         """
         actions = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
         n = self.num_envs
         restart = np.flatnonzero(self._ended).tolist()
         new = {k: MergeEpisode(self.options, self.config, self._next_seed(k)) for k in restart}
         episodes = self._current()
-        mains, twins = self._lists(episodes)
-        drive = np.array([e.driven and k not in new for k, e in enumerate(episodes)])
+        going = np.ones(n, dtype=bool)
+        going[restart] = False  # a restarting sub-environment: its old episode has ended
+        self._make_due_twins(episodes, going)
+        mains, _ = self._lists(episodes)
+        drive = np.array([e.driven for e in episodes]) & going
         egos = np.array([e.ego for e in episodes], dtype=np.int64)
         apply_batch(mains, egos, actions, drive, self._params)
-        runs: list[Simulation] = []
-        goals: list[int] = []
-        keys: list[bool] = []
-        for k, episode in enumerate(episodes):
-            if k in new:
-                runs += [new[k].sim, episode.twin]
-                goals += [_END, episode.twin.step_index]
-                keys += [True, False]
-            else:
-                target = episode.sim.step_index + episode.period_steps
-                runs += [episode.sim, episode.twin]
-                goals += [target, target]
-                keys += [False, False]
+        targets = [e.sim.step_index + e.period_steps for e in episodes]
+        runs = [new[k].sim if k in new else e.sim for k, e in enumerate(episodes)]
+        goals = [_END if k in new else targets[k] for k in range(n)]
+        keys = [k in new for k in range(n)]
+        for k in np.flatnonzero(going).tolist():
+            if not episodes[k].twin_pending:
+                runs.append(episodes[k].twin)
+                goals.append(targets[k])
+                keys.append(False)
         advance_ensemble(runs, goals, until_key_vehicles=keys, threads=self.threads,
                          flush=False)  # the episodes count collisions, not events  # fmt: skip
+        self._settle_twins(episodes, going, targets)
+        mains, twins = self._lists(episodes)
         vrs = np.array([e.vr for e in episodes], dtype=np.int64)
         r0s = np.array([e.rows_scored for e in episodes], dtype=np.int64)
         obs = np.zeros((n, *self._obs_shape), dtype=np.float32)
@@ -164,8 +172,6 @@ class MergeVectorEnv(VectorEnv):
         o = outcomes(terms, before, t_start, finished, lane_end_ends=episodes[0].lane_end_ends,
                      max_time=self.options.max_episode_time)  # fmt: skip
         firsts = self._begin(restart, [new[k] for k in restart], drawn=True)
-        going = np.ones(n, dtype=bool)
-        going[restart] = False  # a restarting sub-environment: its old episode has ended
         for k in np.flatnonzero(going).tolist():
             episode = episodes[k]
             episode.obs[:], episode.group = obs[k], groups[k]
@@ -181,6 +187,35 @@ class MergeVectorEnv(VectorEnv):
                 "timeout": o.timeout}  # fmt: skip
         seeds = np.array([e.seed for e in self._current()])
         return obs, reward, terminated, truncated, self._step_infos(info, going, seeds)
+
+    def _make_due_twins(self, episodes: list[MergeEpisode], going: np.ndarray) -> None:
+        """Make the pending twins of the going episodes that a ramp vehicle might reach the
+        acceleration lane in within the coming period (:meth:`MergeEpisode.twin_due`)."""
+        pending = going & np.array([e.twin_pending for e in episodes])
+        if not pending.any():
+            return
+        mains, _ = self._lists(episodes)
+        due = np.zeros(self.num_envs, dtype=bool)
+        twins_due(mains, pending, self.options.action_period, due)
+        for k in np.flatnonzero(due).tolist():
+            episodes[k].make_due_twin()
+
+    def _settle_twins(
+        self, episodes: list[MergeEpisode], going: np.ndarray, targets: list[int]
+    ) -> None:
+        """After the period: :meth:`MergeEpisode.settle_twin` of the going episodes whose
+        twin is pending; the twins it had to simulate anew advance together to the period's
+        end."""
+        pending = going & np.array([e.twin_pending for e in episodes])
+        if not pending.any():
+            return
+        mains, _ = self._lists(episodes)
+        untouched = np.zeros(self.num_envs, dtype=bool)
+        ramps_untouched(mains, pending, untouched)
+        behind = [k for k in np.flatnonzero(pending).tolist()
+                  if episodes[k].settle_twin(bool(untouched[k]))]  # fmt: skip
+        advance_ensemble([episodes[k].twin for k in behind], [targets[k] for k in behind],
+                         threads=self.threads)  # fmt: skip
 
     def _current(self) -> list[MergeEpisode]:
         episodes = [e for e in self.episodes if e is not None]

@@ -48,10 +48,11 @@ _END = np.iinfo(np.int64).max  # "no goal": to the run's end
 class TypedListCache:
     """Compiled (numba typed) lists of values taken from the same places across calls.
 
-    Called again with as many keys, only the places whose key changed are converted again,
-    since each entry costs microseconds to convert (a learning environment passes the same
-    runs in the same places every step, with a few new episodes). Keys are held weakly; the
-    lists hold the values until the next call or :meth:`clear`.
+    Called again, only the places whose key changed are converted again, and a longer or
+    shorter list of keys appends or drops places at the end, since each entry costs
+    microseconds to convert (a learning environment passes its episodes' runs in the same
+    places every step, with a few new episodes and a varying tail of twins). Keys are held
+    weakly; the lists hold the values until the next call or :meth:`clear`.
     """
 
     def __init__(self) -> None:
@@ -60,15 +61,23 @@ class TypedListCache:
 
     def lists(self, keys: Sequence[Any], *columns: Callable[[Any], Any]) -> tuple[List, ...]:
         """One list per column function, entry k being ``column(keys[k])``."""
-        if not self._lists or len(self._keys) != len(keys):
+        if len(self._lists) != len(columns) or not self._keys or not keys:
             self._lists = tuple(List([column(key) for key in keys]) for column in columns)
             self._keys = [weakref.ref(key) for key in keys]
             return self._lists
-        for k, key in enumerate(keys):
+        kept = min(len(keys), len(self._keys))
+        for k in range(kept):
+            key = keys[k]
             if self._keys[k]() is not key:
                 self._keys[k] = weakref.ref(key)
                 for values, column in zip(self._lists, columns, strict=True):
                     values[k] = column(key)
+        for values, column in zip(self._lists, columns, strict=True):
+            for _ in range(len(values) - len(keys)):
+                values.pop()
+            for key in keys[kept:]:
+                values.append(column(key))
+        self._keys = self._keys[: len(keys)] + [weakref.ref(key) for key in keys[kept:]]
         return self._lists
 
     def clear(self) -> None:

@@ -10,11 +10,17 @@ state, the random generator and the log copied, the ramp vehicles' columns and e
 out. Learning environments use it to start each episode's reference run at the cost of a
 copy; a test checks that the twin and the simulated undisturbed run agree bit for bit to the
 end of the run.
+
+The same argument lets an environment put off making the twin: while :func:`can_twin` holds,
+the undisturbed run's mainline *is* the run's own, log rows included.
+:func:`ramp_may_reach` says when that may end within the next stretch of time, and
+:func:`ramp_untouched` checks afterwards that it did not.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from hcomc.road import Lane
 from hcomc.sim import core_state as layout
@@ -55,19 +61,59 @@ def _copy_log_without(src: SimulationLog, dst: SimulationLog, rows: int, gone: n
         dst.slot[i], dst.span[i] = -1, 0
 
 
+@njit(cache=True)
+def ramp_untouched(c) -> bool:
+    """Whether every ramp vehicle released so far in run ``c`` is still on the ramp before
+    the acceleration lane and keeping its lane: the state part of :func:`can_twin`."""
+    start, first = c.consts[layout.ACCEL_START], c.queue_start[layout.RAMP]
+    for q in range(first, first + c.queue_pos[layout.RAMP]):
+        i = c.queues[q]
+        on_ramp = c.active[i] and c.lane[i] == layout.RAMP and c.origin[i] == c.target[i]
+        if not (on_ramp and c.x[i] < start):
+            return False
+    return True
+
+
+@njit(cache=True)
+def ramp_may_reach(c, horizon: float) -> bool:
+    """Whether a ramp vehicle of run ``c`` might reach the acceleration lane within
+    ``horizon`` [s]: a released one from its position and speed, one due for release by then
+    from its release point and speed, each at its maximum acceleration all the way.
+
+    Car following never exceeds that acceleration, an environment's actions are capped at it
+    and no vehicle reverses, so False means none will unless driven harder from outside; a
+    caller that relies on it checks afterwards with :func:`ramp_untouched`.
+    """
+    start = c.consts[layout.ACCEL_START]
+    t = -c.consts[layout.WARMUP] + c.counters[layout.STEP] * c.consts[layout.DT]
+    first, end = c.queue_start[layout.RAMP], c.queue_start[layout.RAMP + 1]
+    released = first + c.queue_pos[layout.RAMP]
+    for q in range(first, end):
+        i = c.queues[q]
+        if q < released:
+            if not c.active[i]:
+                continue
+            x, v = c.x[i], c.v[i]
+        elif c.d_t[i] <= t + horizon + 1e-9:
+            x, v = c.d_x[i], c.d_v[i]
+        else:
+            continue
+        if x + v * horizon + 0.5 * c.matrix[3, i] * horizon * horizon >= start:
+            return True
+    return False
+
+
 def can_twin(sim: Simulation) -> bool:
     """Whether ``sim``'s undisturbed run can be made from its state now: no plan, and every
     ramp vehicle released so far still on the ramp before the acceleration lane, keeping its
     lane, in no collision."""
     if sim.counterfactual or sim.plans or sim.decisions or sim.finished:
         return False
+    if not ramp_untouched(sim.core):
+        return False
     sim.flush_events()  # the collision events below must be in the log
-    c, ramp = sim.arrays, sim.demand.lane == Lane.RAMP
-    released = np.flatnonzero(ramp)[: int(c.queue_pos[Lane.RAMP])]
-    start = sim.config.road.accel_lane_start
-    keeping = c.origin[released] == c.target[released]
-    ok = c.active[released] & (c.lane[released] == Lane.RAMP) & keeping & (c.x[released] < start)
-    return bool(ok.all()) and not _involving(sim.log.events_of(EventKind.COLLISION), ramp).any()
+    ramp = sim.demand.lane == Lane.RAMP
+    return not _involving(sim.log.events_of(EventKind.COLLISION), ramp).any()
 
 
 def _marked(ids: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -111,4 +157,4 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     return twin
 
 
-__all__ = ["can_twin", "undisturbed_twin"]
+__all__ = ["can_twin", "ramp_may_reach", "ramp_untouched", "undisturbed_twin"]
