@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hcomc.config import load_config
 from hcomc.metrics import (
@@ -34,6 +36,7 @@ from hcomc.metrics import (
     speed_field,
     stabilisation_time,
 )
+from hcomc.metrics.speed_field import interp_into, lane_profile_of
 from hcomc.models.fuel import fuel_consumed, fuel_rate
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -538,3 +541,55 @@ def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
     assert values["average_acceleration"] == 0.0
     assert values["stabilisation_time"] == 0.0
     assert values["lsrv"] == 0.0
+
+
+# ------------------------------------------------------------- lane profile (compiled)
+_coords = st.floats(-50.0, 50.0, allow_nan=False).map(lambda v: round(v, 1))  # many ties
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    xp=st.lists(_coords, min_size=1, max_size=12).map(sorted),
+    fp=st.lists(st.floats(-1e3, 1e3, allow_nan=False), min_size=12, max_size=12),
+    x=st.lists(st.one_of(_coords, st.just(math.nan)), min_size=1, max_size=20),
+    clamp=st.booleans(),
+)
+def test_interp_into_is_numpy_interp_bit_for_bit(
+    xp: list[float], fp: list[float], x: list[float], clamp: bool
+) -> None:
+    """Knots with ties, queries on knots, outside the range and NaN: the compiled
+    interpolation the lane profiles use gives numpy's values exactly."""
+    xp_a, fp_a, x_a = np.array(xp), np.array(fp[: len(xp)]), np.array(x)
+    left, right = (fp_a[0], fp_a[-1]) if clamp else (math.nan, math.nan)
+    out = np.empty(x_a.size)
+    interp_into(x_a, xp_a, fp_a, left, right, out)
+    np.testing.assert_array_equal(out, np.interp(x_a, xp_a, fp_a, left=left, right=right))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    x=st.lists(st.integers(0, 40).map(float), min_size=1, max_size=15),
+    data=st.data(),
+)
+def test_lane_profile_is_numpys_interpolation_between_the_lanes_vehicles(
+    x: list[float], data: st.DataObject
+) -> None:
+    """One row of float32 cells: the profile equals np.interp over the active vehicles of the
+    lane, sorted stably by position (the definition, written in numpy)."""
+    n = len(x)
+    active = np.array(data.draw(st.lists(st.booleans(), min_size=n, max_size=n)))
+    lanes = np.array(data.draw(st.lists(st.integers(0, 2), min_size=n, max_size=n)), np.int8)
+    v = np.array(data.draw(st.lists(st.floats(0, 40, width=32), min_size=n, max_size=n)),
+                 dtype=np.float32)  # fmt: skip
+    xs = np.array(x, dtype=np.float32)
+    at = np.linspace(-5.0, 45.0, 23)
+    for clamp in (False, True):
+        (got,) = lane_profile_of(xs, active, lanes, 1, at, clamp, v)
+        on = np.flatnonzero(active & (lanes == 1))
+        if on.size == 0:
+            assert np.isnan(got).all()
+            continue
+        order = np.argsort(xs[on].astype(np.float64), kind="stable")
+        xp, fp = xs[on].astype(np.float64)[order], v[on].astype(np.float64)[order]
+        edge = {} if clamp else {"left": math.nan, "right": math.nan}
+        np.testing.assert_array_equal(got, np.interp(at, xp, fp, **edge))

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from hcomc._typing import FloatArray
 from hcomc.metrics.window import (
@@ -161,29 +162,125 @@ def lane_profile_at(
     return profile[0], profile[1]
 
 
+@njit(cache=True)
+def _last_at_or_below(key: float, xp: np.ndarray) -> int:
+    """The largest j with ``xp[j] <= key`` (``xp`` ascending, ``xp[0] <= key``): the
+    interval :func:`numpy.interp` interpolates in."""
+    lo, hi = 0, xp.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if key >= xp[mid]:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo - 1
+
+
+@njit(cache=True)
+def interp_into(
+    x: np.ndarray, xp: np.ndarray, fp: np.ndarray, left: float, right: float, out: np.ndarray
+) -> None:
+    """``out[:] = numpy.interp(x, xp, fp, left, right)``, value for value: numpy's
+    arithmetic and special cases (an exact knot or the last one gives its ``fp``; a NaN from
+    an infinite slope is retried from the right knot; one knot has its own rule) for
+    ascending ``xp`` (ties allowed)."""
+    n = xp.size
+    for i in range(x.size):
+        xv = x[i]
+        if n == 1:  # numpy's own branch for one knot (a NaN query gets fp[0] there)
+            out[i] = left if xv < xp[0] else (right if xv > xp[0] else fp[0])
+        elif math.isnan(xv):
+            out[i] = xv
+        elif xv < xp[0]:
+            out[i] = left
+        elif xv > xp[n - 1]:
+            out[i] = right
+        else:
+            j = _last_at_or_below(xv, xp)
+            if j == n - 1 or xp[j] == xv:
+                out[i] = fp[j]
+                continue
+            slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+            value = slope * (xv - xp[j]) + fp[j]
+            if math.isnan(value):
+                value = slope * (xv - xp[j + 1]) + fp[j + 1]
+                if math.isnan(value) and fp[j] == fp[j + 1]:
+                    value = fp[j]
+            out[i] = value
+
+
+@njit(cache=True)
+def lane_vehicles(
+    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The active vehicles of ``lane`` in one logged row, sorted by position (ties in
+    vehicle order), and their positions as float64."""
+    count = 0
+    for i in range(x_row.size):
+        count += active_row[i] and lane_row[i] == lane
+    on = np.empty(count, dtype=np.int64)
+    m = 0
+    for i in range(x_row.size):
+        if active_row[i] and lane_row[i] == lane:
+            on[m] = i
+            m += 1
+    xs = np.empty(count)
+    for m in range(count):
+        xs[m] = x_row[on[m]]
+    order = np.argsort(xs, kind="mergesort")  # stable
+    return on[order], xs[order]
+
+
+@njit(cache=True)
+def _profile_into(
+    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int,
+    x: np.ndarray, clamp: bool, values: np.ndarray, out: np.ndarray,
+) -> None:  # fmt: skip
+    """One row's lane profile of ``values`` at ``x`` into ``out`` (see :func:`lane_profile_of`)."""
+    on, xs = lane_vehicles(x_row, active_row, lane_row, lane)
+    if on.size == 0:
+        out[:] = math.nan
+        return
+    ys = np.empty(on.size)
+    for m in range(on.size):
+        ys[m] = values[on[m]]
+    left, right = (ys[0], ys[-1]) if clamp else (math.nan, math.nan)
+    interp_into(x, xs, ys, left, right, out)
+
+
 def lane_profile_of(
     x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int, x: FloatArray,
     clamp: bool, *value_rows: np.ndarray,
 ) -> list[FloatArray]:  # fmt: skip
     """:func:`lane_profile_at` on one logged row's arrays (N,) (``log.x[row]``,
     ``log.active[row]``, ``log.lane[row]``): each of ``value_rows`` (e.g. ``log.v[row]``)
-    interpolated at ``x`` between the active vehicles of ``lane``. Callers that visit many
-    rows read the arrays once and pass their rows."""
-    on = np.flatnonzero(active_row & (lane_row == lane))
-    x = np.asarray(x, dtype=np.float64)
-    if on.size == 0:
-        return [np.full(x.shape, np.nan) for _ in value_rows]
-    xs = x_row[on].astype(np.float64)
-    order = np.argsort(xs, kind="stable")
-    xs = xs[order]
+    interpolated at ``x`` between the active vehicles of ``lane`` (sorted by position, ties
+    in vehicle order), as :func:`numpy.interp` does. Callers that visit many rows read the
+    arrays once and pass their rows."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    row = (np.asarray(x_row), np.asarray(active_row), np.asarray(lane_row), int(lane))
     out = []
     for values in value_rows:
-        ys = values[on].astype(np.float64)[order]
-        if clamp:
-            out.append(np.interp(x, xs, ys))
-        else:
-            out.append(np.interp(x, xs, ys, left=np.nan, right=np.nan))
+        profile = np.empty(x.shape)
+        _profile_into(*row, x.reshape(-1), bool(clamp), np.asarray(values), profile.reshape(-1))
+        out.append(profile)
     return out
+
+
+@njit(cache=True)
+def _field_sums(
+    xs: np.ndarray, active: np.ndarray, lanes: np.ndarray, speeds: np.ndarray, lane: int,
+    centres: np.ndarray, it: np.ndarray, sums: np.ndarray, counts: np.ndarray,
+) -> None:  # fmt: skip
+    """Add each row's lane profile at ``centres`` (its finite samples) to the row's time bin
+    ``it[k]`` of ``sums`` and ``counts``."""
+    v = np.empty(centres.size)
+    for k in range(xs.shape[0]):
+        _profile_into(xs[k], active[k], lanes[k], lane, centres, False, speeds[k], v)
+        for b in range(centres.size):
+            if np.isfinite(v[b]):
+                sums[it[k], b] += v[b]
+                counts[it[k], b] += 1.0
 
 
 def lane_speed_field(
@@ -215,11 +312,8 @@ def lane_speed_field(
     sums = np.zeros((n_t, n_x))
     counts = np.zeros((n_t, n_x))
     xs, active, lanes, speeds = log.x[rows], log.active[rows], log.lane[rows], log.v[rows]
-    for k in range(xs.shape[0]):  # the window's rows, read once
-        (v,) = lane_profile_of(xs[k], active[k], lanes[k], lane, centres, False, speeds[k])
-        ok = np.isfinite(v)
-        sums[it[k], ok] += v[ok]
-        counts[it[k], ok] += 1.0
+    _field_sums(xs, active, lanes, speeds, int(lane), centres, np.asarray(it, dtype=np.int64),
+                sums, counts)  # fmt: skip
     with np.errstate(invalid="ignore", divide="ignore"):
         V = np.where(counts > 0, sums / counts, np.nan)
     return x_edges, t_edges, V
