@@ -113,11 +113,20 @@ class Core(structref.StructRefProxy):
     """The compiled kernels' handle on one run's :class:`CoreArrays` (the same buffers)."""
 
     def __new__(cls, arrays: CoreArrays) -> Core:
-        return structref.StructRefProxy.__new__(cls, *arrays)
+        # numba's own constructor path compiles anew in every process (about 2.5 s); this
+        # one is compiled once and then loaded from numba's cache
+        core: Core = _new_core(*arrays)
+        return core
 
 
 structref.define_constructor(Core, CoreType, list(CoreArrays._fields))
 structref.define_boxing(CoreType, Core)
+
+
+@njit(cache=True)
+def _new_core(*arrays: Any) -> Any:
+    """A :class:`Core` over ``arrays`` (the fields of :class:`CoreArrays`, in order)."""
+    return Core(*arrays)
 
 
 @njit(cache=True)

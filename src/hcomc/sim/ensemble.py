@@ -52,7 +52,9 @@ class TypedListCache:
     shorter list of keys appends or drops places at the end, since each entry costs
     microseconds to convert (a learning environment passes its episodes' runs in the same
     places every step, with a few new episodes and a varying tail of twins). Keys are held
-    weakly; the lists hold the values until the next call or :meth:`clear`.
+    weakly; the lists hold the values until the next call or :meth:`clear`. The lists are
+    built and changed by cached compiled functions (:func:`_list_of` …): numba's own
+    Python-side list methods compile anew in every process, about a second each.
     """
 
     def __init__(self) -> None:
@@ -62,7 +64,7 @@ class TypedListCache:
     def lists(self, keys: Sequence[Any], *columns: Callable[[Any], Any]) -> tuple[List, ...]:
         """One list per column function, entry k being ``column(keys[k])``."""
         if len(self._lists) != len(columns) or not self._keys or not keys:
-            self._lists = tuple(List([column(key) for key in keys]) for column in columns)
+            self._lists = tuple(_typed_list([column(key) for key in keys]) for column in columns)
             self._keys = [weakref.ref(key) for key in keys]
             return self._lists
         kept = min(len(keys), len(self._keys))
@@ -71,18 +73,54 @@ class TypedListCache:
             if self._keys[k]() is not key:
                 self._keys[k] = weakref.ref(key)
                 for values, column in zip(self._lists, columns, strict=True):
-                    values[k] = column(key)
+                    _list_set(values, k, column(key))
         for values, column in zip(self._lists, columns, strict=True):
-            for _ in range(len(values) - len(keys)):
-                values.pop()
+            for _ in range(len(self._keys) - len(keys)):
+                _list_pop(values)
             for key in keys[kept:]:
-                values.append(column(key))
+                _list_append(values, column(key))
         self._keys = self._keys[: len(keys)] + [weakref.ref(key) for key in keys[kept:]]
         return self._lists
 
     def clear(self) -> None:
         """Drop the lists (and the values they hold)."""
         self._keys, self._lists = [], ()
+
+
+def _typed_list(values: list[Any]) -> List:
+    """A compiled list of ``values`` (all of one type)."""
+    if not values:
+        return List()
+    out = _list_of(values[0])
+    for value in values[1:]:
+        _list_append(out, value)
+    return out
+
+
+@njit(cache=True)
+def _list_of(first):
+    """A compiled list holding ``first``, typed by it."""
+    values = List()
+    values.append(first)
+    return values
+
+
+@njit(cache=True)
+def _list_append(values, item):
+    """Append ``item`` to a compiled list."""
+    values.append(item)
+
+
+@njit(cache=True)
+def _list_set(values, k, item):
+    """Replace entry k of a compiled list."""
+    values[k] = item
+
+
+@njit(cache=True)
+def _list_pop(values):
+    """Drop the last entry of a compiled list."""
+    values.pop()
 
 
 _BATCH_LISTS = TypedListCache()  # the compiled loop's states and generators of the last batch
