@@ -19,19 +19,24 @@ about quadratically with the vehicles on a lane and makes the on-ramp scene many
 slower) and with the exported options unchanged (``sumo_checked_steps_per_s``,
 ``ratio_checked``; collisions detected and counted, as our engine does).
 
-``--reproduce-seeds S`` also runs ``hcomc reproduce --seeds S --workers 1`` and compares its
-wall time with the time SUMO needs for the same vehicle-steps (the sum of
+``--reproduce-seeds S`` also runs ``hcomc reproduce --seeds S --workers W``
+(``--reproduce-workers``, default 1; ``reproduce``'s own default is every core) and compares
+its wall time with the time SUMO needs for the same vehicle-steps (the sum of
 ``vehicle_steps`` in the run manifests) at the reproduced scene size (Condition 1 as
 configured, 120 s including the warm-up, collision detection off). Its wall time includes
 everything ``reproduce`` does (undisturbed reference runs, metrics, tables, report figures,
-process start); ``hcomc_runs_wall_s`` is the part spent inside the runs.
+process start); ``hcomc_runs_wall_s`` is the part spent inside the runs, and
+``hcomc_decisions_s`` the merge controllers' decisions alone (every plan of every run, seeded
+and paper scenario: the tables' mean decision time times the plans), a floor under
+``reproduce``'s time that no faster simulation can lower.
 
 ``--ensemble N`` (default 100) runs N Condition 1 runs as one ensemble
 (:func:`hcomc.sim.ensemble.run_ensemble`, on every core) and compares their aggregate
 vehicle-steps/s with SUMO's single-run rate on the same scene.
 
     python benchmarks/vs_sumo.py [--json] [--sizes 100 500 2000] [--repeats 3]
-                                 [--reproduce-seeds 1] [--ensemble 100]
+                                 [--reproduce-seeds 1 [--reproduce-workers 1]]
+                                 [--ensemble 100]
 """
 
 from __future__ import annotations
@@ -302,13 +307,13 @@ def numba_threads() -> int:
 
 
 # --------------------------------------------------------------------------- reproduce
-def reproduce(seeds: int, repeats: int, tmp: Path) -> dict[str, object]:
-    """``hcomc reproduce --seeds S --workers 1`` against SUMO at the same vehicle-steps."""
+def reproduce(seeds: int, workers: int, repeats: int, tmp: Path) -> dict[str, object]:
+    """``hcomc reproduce --seeds S --workers W`` against SUMO at the same vehicle-steps."""
     out = tmp / "reproduce"
     hcomc = shutil.which("hcomc")
     cmd = [hcomc] if hcomc else [sys.executable, "-m", "hcomc"]
     start = time.perf_counter()
-    _run([*cmd, "reproduce", "--seeds", str(seeds), "--workers", "1", "--out", str(out)])
+    _run([*cmd, "reproduce", "--seeds", str(seeds), "--workers", str(workers), "--out", str(out)])
     wall = time.perf_counter() - start
     manifests = sorted((out / "manifests").glob("*.json"))
     vehicle_steps = sum(json.loads(p.read_text())["vehicle_steps"] for p in manifests)
@@ -318,14 +323,19 @@ def reproduce(seeds: int, repeats: int, tmp: Path) -> dict[str, object]:
     args = ["-c", str(exported.sumocfg), *NO_COLLISION_CHECK]
     sumo = [time_sumo(args, steps) for _ in range(repeats)]
     runs = pd.read_csv(out / "runs.csv")
+    every = pd.concat([runs, pd.read_csv(out / "paper_scenario.csv")])
+    plans = every["replans"].fillna(0) + every["decision_ms"].notna()
     rate = median_rate(sumo)
     sumo_s = vehicle_steps / rate
     return {
         "seeds": seeds,
+        "workers": workers,
         "runs": len(manifests),
         "vehicle_steps": vehicle_steps,
         "hcomc_wall_s": round(wall, 2),
         "hcomc_runs_wall_s": round(float(runs["wall_s"].sum()), 2),
+        "hcomc_decisions": int(plans.sum()),
+        "hcomc_decisions_s": round(float((plans * every["decision_ms"].fillna(0)).sum()) / 1e3, 2),
         "sumo_vehicles": round(sumo[0].vehicle_steps / steps),
         "sumo_steps_per_s": round(rate),
         "sumo_wall_s": round(sumo_s, 2),
@@ -345,6 +355,12 @@ def main() -> None:
         help="also compare 'hcomc reproduce --seeds S' (0: skip)",
     )
     parser.add_argument(
+        "--reproduce-workers",
+        type=int,
+        default=1,
+        help="worker processes of that 'hcomc reproduce' (its own default: every core)",
+    )
+    parser.add_argument(
         "--ensemble",
         type=int,
         default=100,
@@ -354,12 +370,15 @@ def main() -> None:
     args = parser.parse_args()
     if min(args.sizes) < 2 or args.repeats < 1 or min(args.reproduce_seeds, args.ensemble) < 0:
         parser.error("--sizes must be >= 2, --repeats >= 1, --reproduce-seeds and --ensemble >= 0")
+    if args.reproduce_workers < 1:
+        parser.error("--reproduce-workers must be >= 1")
     try:
         with tempfile.TemporaryDirectory(prefix="hcomc-vs-sumo-") as name:
             tmp = Path(name)
             rows = compare(make_scenes(args.sizes, args.duration, tmp), args.repeats)
             seeds = args.reproduce_seeds
-            repro = reproduce(seeds, args.repeats, tmp) if seeds else None
+            workers = args.reproduce_workers
+            repro = reproduce(seeds, workers, args.repeats, tmp) if seeds else None
             batch = ensemble(args.ensemble, args.repeats, tmp) if args.ensemble else None
     except (ConfigError, SumoMissingError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -396,10 +415,11 @@ def report(
         )
     if repro is not None:
         print(
-            f"reproduce --seeds {repro['seeds']} --workers 1: {repro['runs']} runs, "
-            f"{repro['vehicle_steps']:,} vehicle-steps in {repro['hcomc_wall_s']} s "
-            f"({repro['hcomc_runs_wall_s']} s inside the runs); SUMO at "
-            f"{repro['sumo_steps_per_s']:,} veh-steps/s needs {repro['sumo_wall_s']} s; "
+            f"reproduce --seeds {repro['seeds']} --workers {repro['workers']}: "
+            f"{repro['runs']} runs, {repro['vehicle_steps']:,} vehicle-steps in "
+            f"{repro['hcomc_wall_s']} s ({repro['hcomc_runs_wall_s']} s inside the runs, "
+            f"{repro['hcomc_decisions']:,} decisions taking {repro['hcomc_decisions_s']} s); "
+            f"SUMO at {repro['sumo_steps_per_s']:,} veh-steps/s needs {repro['sumo_wall_s']} s; "
             f"ratio SUMO time / hcomc time {repro['ratio']}"
         )
 
