@@ -82,11 +82,11 @@ def deviations(
     """
     check_reference(log, reference)
     keys = window.key_vehicles
-    a = log.a[rows][:, keys].astype(np.float64)
-    v = log.v[rows][:, keys].astype(np.float64)
-    a_u = reference.a[rows][:, keys].astype(np.float64)
-    v_u = reference.v[rows][:, keys].astype(np.float64)
-    valid = log.active[rows][:, keys] & reference.active[rows][:, keys]
+    a = log.a[rows, keys].astype(np.float64)
+    v = log.v[rows, keys].astype(np.float64)
+    a_u = reference.a[rows, keys].astype(np.float64)
+    v_u = reference.v[rows, keys].astype(np.float64)
+    valid = log.active[rows, keys] & reference.active[rows, keys]
     vr = window.vr
     if vr >= 0 and vr in keys:
         col = int(np.searchsorted(keys, vr))

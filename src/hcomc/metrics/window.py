@@ -227,10 +227,10 @@ def key_pairs(
     if keys.size < 2 or n_rows == 0:
         empty = np.empty((n_rows, 0))
         return empty, empty, np.empty((n_rows, 0), dtype=bool)
-    act = log.active[rows][:, keys]
-    x = log.x[rows][:, keys].astype(np.float64)
-    v = log.v[rows][:, keys].astype(np.float64)
-    lane = log.lane[rows][:, keys].astype(np.int64)
+    act = log.active[rows, keys]
+    x = log.x[rows, keys].astype(np.float64)
+    v = log.v[rows, keys].astype(np.float64)
+    lane = log.lane[rows, keys].astype(np.int64)
     length = np.broadcast_to(log.length[keys].astype(np.float64), x.shape)
     lane_key = np.where(act, lane, np.iinfo(np.int64).max)
     x_key = np.where(act, x, np.inf)

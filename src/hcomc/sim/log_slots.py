@@ -183,6 +183,8 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
             return self._cell(int(key[0]), int(key[1]))
         if _selects_rows(key):  # log.x[k], log.x[r0:r1], log.x[rows]: every vehicle
             return self._rows(key[0] if isinstance(key, tuple) else key)
+        if _rows_and_vehicles(key):  # log.x[r0:r1, ids]: a window of a few vehicles
+            return self._block(key[0], np.asarray(key[1]))
         n_rows, n_vehicles = self.shape
         idx = np.int32 if max(n_rows, n_vehicles) < 2**31 else np.int64
         rows = np.broadcast_to(np.arange(n_rows, dtype=idx)[:, None], self.shape)[key]
@@ -219,13 +221,28 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
         r = np.asarray(rows)[..., None]
         slots = self._slot
         inside = (slots >= 0) & (r >= self._span[:, 0]) & (r < self._span[:, 1])
-        return self._gather(r, slots, inside)
+        return self._gather(key if isinstance(key, slice) else r, slots, inside)
 
-    def _gather(self, rows: np.ndarray, slots: np.ndarray, inside: np.ndarray) -> Any:
+    def _block(self, rows: slice, vehicles: np.ndarray) -> np.ndarray:
+        """The cells of ``vehicles`` (1-D indices) at the rows ``rows`` selects: (R, K)."""
+        r = np.arange(self.shape[0])[rows][:, None]
+        slots, span = self._slot[vehicles], self._span[vehicles]
+        inside = (slots >= 0) & (r >= span[:, 0]) & (r < span[:, 1])
+        out: np.ndarray = self._gather(rows, slots, inside)
+        return out
+
+    def _gather(self, rows: np.ndarray | slice, slots: np.ndarray, inside: np.ndarray) -> Any:
+        """The stored cells at ``rows`` (an index broadcast against ``slots``, or a slice of
+        rows: the rows are then taken whole first, a view) and ``slots``, the fill outside
+        ``inside``."""
         fill = np.array(self._fill, dtype=self.dtype)
         if self._store.shape[1] == 0:  # no column: nothing was logged
             return np.full(inside.shape, fill)[()]
-        out = np.where(inside, self._store[rows, np.maximum(slots, 0)], fill)
+        columns = np.maximum(slots, 0)
+        cells = (
+            self._store[rows][:, columns] if isinstance(rows, slice) else self._store[rows, columns]
+        )
+        out = np.where(inside, cells, fill)
         return out[()] if out.ndim == 0 else out
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
@@ -258,6 +275,18 @@ def _plain(x: Any) -> Any:
 
 def _is_int(key: Any) -> bool:
     return isinstance(key, int | np.integer) and not isinstance(key, bool | np.bool_)
+
+
+def _rows_and_vehicles(key: Any) -> bool:
+    """Whether ``key`` is a row slice and a 1-D integer array of vehicles."""
+    if not (isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], slice)):
+        return False
+    vehicles = key[1]
+    return (
+        isinstance(vehicles, np.ndarray | list)
+        and np.asarray(vehicles).ndim == 1
+        and np.asarray(vehicles).dtype.kind in "iu"
+    )
 
 
 def _selects_rows(key: Any) -> bool:
