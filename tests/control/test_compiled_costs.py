@@ -14,14 +14,8 @@ import pytest
 
 from hcomc.config import IDMParams, load_config
 from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import (
-    AHEAD,
-    BEHIND,
-    VMC,
-    VR,
-    _fuel_to_distance_kernel,
-    _pairwise_sum,
-)
+from hcomc.control.hcomc.problem import AHEAD, BEHIND, VMC, VR
+from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, _pairwise_sum
 from hcomc.control.lane_change_cost import (
     GAME_DEFAULT,
     GameParams,

@@ -37,6 +37,24 @@ class Problem(Protocol):
         ...
 
 
+@runtime_checkable
+class RowProblem(Protocol):
+    """A :class:`Problem` that also scores one row at a time without population overhead.
+
+    Simulated annealing asks for one row per call; a problem whose :meth:`Problem.evaluate`
+    carries per-call population machinery (index arrays, gathers, per-population set-up)
+    may offer this fast path. It must return exactly what ``evaluate(x[None])`` and
+    ``scalarise`` give, bit for bit (a NaN's sign and payload aside: IEEE 754 leaves them
+    open, and no optimiser observes them): optimisers use it only as a faster route to the
+    same decisions, and fall back to ``evaluate`` + ``scalarise`` for problems without it.
+    """
+
+    def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        """Objectives of row ``x`` (n_var,) into ``F`` (n_obj,), its constraints into ``G``
+        (n_constr,) (contiguous float64 buffers), and its scalarised cost returned."""
+        ...
+
+
 @dataclass(frozen=True, slots=True)
 class ParetoResult:
     """What an optimiser returns.

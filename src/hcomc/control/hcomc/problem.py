@@ -74,10 +74,21 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     resolve_starts,
     rollout,
+    rollout_one,
+    vmc_tracks,
     warm_up,
+    warm_up_instant,
+)
+from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, common_distance_fuel
+from hcomc.control.hcomc.rollout_layout import N_G
+from hcomc.control.hcomc.rollout_score import (
+    objective_rows,
+    objectives_into,
+    penalised_cost,
+    penalised_costs,
 )
 from hcomc.control.lane_change_cost import GAME_DEFAULT, GameVehicle, simulate_sv
-from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate, fuel_rate_scalar
+from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.safety.critical import SafetyIndex
 
 OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
@@ -93,6 +104,9 @@ CONSTRAINTS = (
 SEQUENCES = ("ahead", "behind")
 AHEAD, BEHIND = 0, 1
 _G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
+_FUEL_COEFFICIENTS = np.array(FUEL_DEFAULT.coefficients(), dtype=np.float64)
+_FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64))
+"""U_fuel's roles: VR alone, or VR and the cooperating vehicle (indexed by its presence)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -223,6 +237,8 @@ class MergeProblem:
         self._fuel_no_merge = tuple(
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
+        # evaluate_row's per-sequence constants, prepared on first use
+        self._row_cache: dict[int, tuple[object, ...]] = {}
 
     # ------------------------------------------------------------------ evaluate
     def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
@@ -245,14 +261,14 @@ class MergeProblem:
         out = rollout(
             state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
             starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
-            lateral[rows], self.consts, self.n_steps, cf,
+            lateral[rows], self.consts, self.n_steps, cf, resolved=True,
         )  # fmt: skip
         xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
         G[rows, : g.shape[1]] = g
         allowed = self.lateral_allowed[which]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
         fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[which])
-        return np.column_stack([np.minimum(u_safe, 1e3), fuel, -u_eff]), out
+        return objective_rows(u_safe, fuel, u_eff), out
 
     def predict(self, X: FloatArray) -> Prediction:
         """Roll out every candidate row of ``X`` and compute its objectives and constraints."""
@@ -306,9 +322,59 @@ class MergeProblem:
         reference fuel is VR's cruise fuel over the window, the threshold
         ``control.safety_threshold``.
         """
-        gate = 10.0 * np.maximum(F[:, 0] - self.safety.threshold, 0.0)
-        penalty = gate + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
-        return F[:, 1] / self._fuel_ref + F[:, 2] + penalty
+        F = np.ascontiguousarray(F, dtype=np.float64)
+        G = np.ascontiguousarray(G, dtype=np.float64)
+        costs: FloatArray = penalised_costs(F, G, self.safety.threshold, self._fuel_ref)
+        return costs  # the formula's one home: rollout_score.penalised_cost
+
+    # ------------------------------------------------------------ single row (SA)
+    def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        """One candidate ``x`` (5,): its objectives into ``F`` (3,), its constraints into ``G``
+        (7,), and its :meth:`scalarise` cost returned, equal bit for bit to
+        ``evaluate(x[None])`` and ``scalarise`` of them (``optim.base.RowProblem``; a NaN's
+        sign and payload aside, which IEEE 754 leaves open and no optimiser observes).
+
+        Simulated annealing asks for one row at a time, where :meth:`evaluate`'s population
+        machinery (masks, index arrays, gathers, the per-call pre-pass of VMC) costs more
+        than the rollout itself; here one compiled call (:func:`_score_row`) rolls out and
+        scores the row with the same kernels, on per-sequence constants prepared once per
+        problem. ``F`` and ``G`` must be contiguous float64 arrays.
+        """
+        x = np.asarray(x, dtype=np.float64)
+        lateral = bool(x[3] >= 0.5)  # the rules of _sequences, for one row
+        which = BEHIND if x[4] >= 0.5 and not lateral else AHEAD
+        no_behind = which == BEHIND and self.states[BEHIND] is None
+        if no_behind:
+            which = AHEAD
+        lateral_violation = 1.0 if lateral and not self.lateral_allowed[which] else 0.0
+        row = (x, lateral, lateral_violation, 1.0 if no_behind else 0.0)
+        args = (*self._row_constants(which), *row, self.safety.threshold, self._fuel_ref, F, G)
+        cost: float = _score_row(*args)
+        return cost
+
+    def _row_constants(self, which: int) -> tuple[object, ...]:
+        """The arguments of :func:`_score_row` that depend on the planning instant and the
+        sequence alone, prepared on first use (population optimisers never need them)."""
+        cached = self._row_cache.get(which)
+        if cached is not None:
+            return cached
+        state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
+        # evaluate_row scores "behind" rows only when that group exists
+        assert state is not None
+        assert cf is not None
+        assert starts is not None
+        tracks = vmc_tracks(
+            state.x, state.v, state.a, state.present, state.coop, state.params, self.consts,
+            self.n_steps,
+        )  # fmt: skip
+        constants = (
+            state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
+            starts, self.consts, self.n_steps, cf, tracks,
+            _FUEL_ROLES[int(bool(state.present[VMC]))], self._fuel_no_merge[which],
+            _FUEL_COEFFICIENTS, self.dt,
+        )  # fmt: skip
+        self._row_cache[which] = constants
+        return constants
 
     # ----------------------------------------------------------------- helpers
     def _fuel(
@@ -324,13 +390,13 @@ class MergeProblem:
         cooperating vehicle's minus its fuel in the counterfactual ``cf`` (``cf_fuel``,
         computed when None; the problem computes it once per sequence at set-up)."""
         with_vmc = bool(state.present[VMC])
-        fuel = self._fuel_to_distance(cf, (VR, VMC) if with_vmc else (VR,), X, V, A)
-        total = fuel[0]
-        if with_vmc:
-            if cf_fuel is None:
-                cf_fuel = self._counterfactual_fuel(cf)
-            total = total + fuel[1] - cf_fuel
-        return total / 1000.0
+        if with_vmc and cf_fuel is None:
+            cf_fuel = self._counterfactual_fuel(cf)
+        fuel: FloatArray = common_distance_fuel(
+            cf, _FUEL_ROLES[int(with_vmc)], X, V, A, self.dt,
+            0.0 if cf_fuel is None else cf_fuel, _FUEL_COEFFICIENTS,
+        )  # fmt: skip
+        return fuel
 
     def _counterfactual_fuel(self, cf: FloatArray) -> float:
         """The cooperating vehicle's fuel [mL] over its own distance in the counterfactual."""
@@ -353,84 +419,25 @@ class MergeProblem:
 
 
 @njit(cache=True)
-def _block_sum(a: FloatArray, lo: int, n: int) -> float:
-    """numpy's pairwise sum of ``a[lo:lo + n]`` for n <= 128: in order below 8 values, else
-    eight partial sums combined as a tree, then the remainder in order."""
-    if n < 8:
-        res = 0.0
-        for i in range(lo, lo + n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i, m = 8, n - n % 8
-    while i < m:
-        j = lo + i
-        r0, r1, r2, r3 = r0 + a[j], r1 + a[j + 1], r2 + a[j + 2], r3 + a[j + 3]
-        r4, r5, r6, r7 = r4 + a[j + 4], r5 + a[j + 5], r6 + a[j + 6], r7 + a[j + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
-@njit(cache=True)
-def _pairwise_sum(a: FloatArray, n: int) -> float:
-    """Sum of ``a[:n]`` in numpy's pairwise order, so that it equals ``ndarray.sum`` bit for
-    bit: blocks of up to 128 values (:func:`_block_sum`), longer runs split in two at half
-    the length rounded down to a multiple of 8 and the halves added. The split is walked with
-    an explicit stack (numba cannot cache a recursive function)."""
-    if n <= 128:
-        return _block_sum(a, 0, n)
-    node_lo = np.empty(64, dtype=np.int64)  # pending nodes: start, length, stage
-    node_n = np.empty(64, dtype=np.int64)
-    stage = np.empty(64, dtype=np.int64)
-    sums = np.empty(64)  # finished nodes' sums, in order
-    node_lo[0], node_n[0], stage[0] = 0, n, 0
-    top, done = 0, 0
-    while top >= 0:
-        lo, m = node_lo[top], node_n[top]
-        if m <= 128:
-            sums[done] = _block_sum(a, lo, m)
-            done += 1
-            top -= 1
-            continue
-        half = m // 2
-        half -= half % 8
-        if stage[top] == 2:  # both halves summed
-            sums[done - 2] = sums[done - 2] + sums[done - 1]
-            done -= 1
-            top -= 1
-            continue
-        child_lo, child_n = (lo, half) if stage[top] == 0 else (lo + half, m - half)
-        stage[top] += 1
-        top += 1
-        node_lo[top], node_n[top], stage[top] = child_lo, child_n, 0
-    return float(sums[0])
-
-
-@njit(cache=True)
-def _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2, positive):
-    """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed
-    times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still missing."""
-    C, K1 = X.shape[0], X.shape[1]
-    out = np.empty((roles.size, C))
-    rate = np.empty(K1 - 1)
-    for i in range(roles.size):
-        r = roles[i]
-        distance = cf[0, K1 - 1, r] - cf[0, 0, r]
-        for c in range(C):
-            for k in range(1, K1):
-                rate[k - 1] = fuel_rate_scalar(
-                    V[c, k, r], A[c, k, r], b0, b1, b2, b3, c0, c1, c2, positive
-                )
-            v_end = max(V[c, K1 - 1, r], 1.0)
-            cruise = fuel_rate_scalar(v_end, 0.0, b0, b1, b2, b3, c0, c1, c2, positive)
-            rest = distance - (X[c, K1 - 1, r] - X[c, 0, r])
-            out[i, c] = _pairwise_sum(rate, K1 - 1) * dt + cruise * rest / v_end
-    return out
+def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
+               roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
+               sequence_violation, threshold, fuel_ref, F, G):  # fmt: skip
+    """:meth:`MergeProblem.evaluate_row` compiled: the row's rollout (:func:`rollout_one`),
+    U_fuel, the objectives into ``F`` and the constraints into ``G`` as :meth:`MergeProblem.
+    evaluate` writes them (kernel parts, then the lateral and sequence flags), and the cost."""
+    plan = np.empty(3)
+    plan[0], plan[1], plan[2] = x[0], x[1], x[2]
+    X, V, A, _, u_safe, u_eff, g = rollout_one(
+        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, n_steps, cf,
+        tracks,
+    )  # fmt: skip
+    fuel = common_distance_fuel(cf, roles, X, V, A, dt, cf_fuel, coefficients)
+    objectives_into(u_safe, fuel[0], u_eff, F)
+    G[:] = 0.0
+    G[:N_G] = g
+    G[_G_LATERAL] = lateral_violation
+    G[_G_SEQUENCE] = sequence_violation
+    return penalised_cost(F, G, threshold, fuel_ref)
 
 
 def default_starts() -> FloatArray:
@@ -441,8 +448,16 @@ def default_starts() -> FloatArray:
 @functools.cache  # once per process
 def load_prediction_kernels() -> None:
     """Load (or compile) the kernels of a decision once per process, so that no timed
-    decision pays for it: the rollout, U_fuel's and the lane-change game's SV simulation."""
+    decision pays for it: the rollout (population and single row), U_fuel's and the
+    lane-change game's SV simulation."""
     warm_up()
+    x, v, a, flags, params, consts, n_steps, cf = warm_up_instant()  # evaluate_row's kernel
+    starts = resolve_starts(x, v, params, np.full(N_STARTS, np.nan))
+    tracks = vmc_tracks(x, v, a, flags, flags, params, consts, n_steps)
+    row, F, G = np.array([800.0, 4.0, 6.0, 0.0, 0.0]), np.empty(3), np.empty(len(CONSTRAINTS))
+    _score_row(x, v, a, flags, flags, flags, params, starts, consts, n_steps, cf, tracks,
+               _FUEL_ROLES[1], 0.0, _FUEL_COEFFICIENTS, 0.5, row, False, 0.0, 0.0, 1.0, 1.0,
+               F, G)  # fmt: skip
     trajectory = np.zeros((1, 2, N_ROLES))
     roles = np.zeros(1, dtype=np.int64)
     coefficients = FUEL_DEFAULT.coefficients()

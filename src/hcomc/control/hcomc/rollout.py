@@ -32,13 +32,17 @@ Three passes per candidate population:
    Eq. 17 are taken.
 
 The kernels are compiled with numba: a population is evaluated per optimiser generation, which
-a numpy time-stepping loop cannot do within the decision-time budget. They are split by
-concern — array layouts (:mod:`~hcomc.control.hcomc.rollout_layout`), car following and
-integration (:mod:`~hcomc.control.hcomc.rollout_step`), accelerations of the roles
+a numpy time-stepping loop cannot do within the decision-time budget. Simulated annealing asks
+for one candidate at a time: :func:`rollout_one` scores one with the same per-candidate body,
+without the per-call work only a population needs. They are split by concern — array layouts
+(:mod:`~hcomc.control.hcomc.rollout_layout`), car following and integration
+(:mod:`~hcomc.control.hcomc.rollout_step`), accelerations of the roles
 (:mod:`~hcomc.control.hcomc.rollout_accel`), lane-change progress
 (:mod:`~hcomc.control.hcomc.rollout_lanes`), the passes
-(:mod:`~hcomc.control.hcomc.rollout_passes`) and scoring
-(:mod:`~hcomc.control.hcomc.rollout_score`) — and every equation is called from its one home
+(:mod:`~hcomc.control.hcomc.rollout_passes`), one candidate
+(:mod:`~hcomc.control.hcomc.rollout_candidate`), scoring
+(:mod:`~hcomc.control.hcomc.rollout_score`) and fuel
+(:mod:`~hcomc.control.hcomc.rollout_fuel`) — and every equation is called from its one home
 in :mod:`hcomc.models`, :mod:`hcomc.safety` and :mod:`hcomc.control.virtual_vehicle`, the
 same functions the engine executes.
 """
@@ -51,6 +55,12 @@ import numpy as np
 from numba import njit
 
 from hcomc._typing import FloatArray
+from hcomc.control.hcomc.rollout_candidate import (
+    candidate,
+    mode_index,
+    rollout_one,
+    vmc_tracks,
+)
 from hcomc.control.hcomc.rollout_layout import (
     C_A_MERG,
     C_ACCEL_END,
@@ -97,18 +107,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_passes import (
-    counterfactual,
-    joint_pass,
-    pre_pass,
-    vmc_pre_track,
-    vv0_cubic,
-)
-from hcomc.control.hcomc.rollout_score import (
-    created_pairs_safety,
-    efficiency_gain,
-    virtual_violation,
-)
+from hcomc.control.hcomc.rollout_passes import counterfactual, vmc_pre_track
 from hcomc.models.idm import equilibrium_gap
 
 __all__ = [
@@ -117,7 +116,8 @@ __all__ = [
     "G_NOT_MERGED", "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
     "N_STARTS", "P_A", "P_B", "P_C", "P_DELTA", "P_IIDM", "P_LEN", "P_S0", "P_T", "P_V0",
     "P_WID", "S_VV0_V", "S_VV0_X", "S_VV1_V", "S_VV1_X", "VMC", "VMF", "VMR", "VNF", "VNR",
-    "VR", "counterfactual", "resolve_starts", "rollout", "warm_up",
+    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_one", "vmc_tracks", "warm_up",
+    "warm_up_instant",
 ]  # fmt: skip
 
 _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0 (finite)
@@ -138,7 +138,6 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     u_eff = np.zeros(n_c)
     g = np.zeros((n_c, N_G))
     vvs = np.zeros((n_c, 3, 4))
-    coop_vmc = bool(coop[VMC] and present[VMC])
     # VMC's pre-pass trajectory depends on the mode only: once per mode, when a candidate has it
     tracks = np.empty((2, K + 1, 2))
     tracked = np.zeros(2, dtype=np.bool_)
@@ -147,29 +146,14 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     vr_acc = np.empty(max(K, 1))
     for c in range(n_c):
         plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
-        lat, lon = lateral[c] and coop_vmc, (not lateral[c]) and coop_vmc
-        mode = 1 if lat else 0
+        mode = mode_index(lateral[c], coop, present)
         if not tracked[mode]:
-            tracks[mode] = vmc_pre_track(x0, v0, a0, present, params, lat, consts, K)
+            tracks[mode] = vmc_pre_track(x0, v0, a0, present, params, mode == 1, consts, K)
             tracked[mode] = True
-        vv0_cubic(starts, horizon[c], cf, consts[C_DT], vvs[c, 0])
-        flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
-        n_known = pre_pass(x0, v0, a0, present, params, starts, vvs[c], plan, flags[0],
-                           consts, tracks[mode], S, lc, vr_acc)  # fmt: skip
-        k_merge[c], g[c, G_OVERRUN], g[c, G_COLLISION] = joint_pass(
-            x0, v0, a0, present, params, vvs[c], plan, lat, flags, consts,
-            X[c], Y[c], V[c], A[c], HEAD[c], S, lc, reach, vr_acc, n_known, cf,
+        k_merge[c], u_safe[c], u_eff[c] = candidate(
+            x0, v0, a0, present, cav, coop, params, starts, plan, lateral[c], consts, cf,
+            tracks[mode], X[c], Y[c], V[c], A[c], HEAD[c], g[c], vvs[c], S, lc, reach, vr_acc,
         )  # fmt: skip
-        g[c, G_VIRTUAL] = virtual_violation(vvs[c], horizon[c], flags, consts)
-        u_eff[c] = efficiency_gain(A[c], cf[2], present, consts[C_POLITENESS])
-        km = k_merge[c]
-        if km < 0:
-            g[c, G_NOT_MERGED] = 1.0
-            continue
-        u_safe[c] = created_pairs_safety(X[c, km], V[c, km], Y[c, km], present, cav, params,
-                                         lat, consts)  # fmt: skip
-        if u_safe[c] == np.inf:
-            g[c, G_UNSAFE] = 1.0
     vv0, vv1, vv2 = vvs[:, 0].copy(), vvs[:, 1].copy(), vvs[:, 2].copy()
     return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2
 
@@ -211,6 +195,8 @@ def rollout(
     consts: FloatArray,
     n_steps: int,
     cf: FloatArray,
+    *,
+    resolved: bool = False,
 ) -> tuple[np.ndarray, ...]:
     """Simulate every candidate; return trajectories, objectives and constraint parts.
 
@@ -230,6 +216,8 @@ def rollout(
     n_steps : prediction steps K.
     cf : (3, K + 1, 6) x, v and a of the no-merge :func:`counterfactual` (candidate-independent:
         the caller computes it once per planning instant, not once per population).
+    resolved : ``starts`` holds no NaN (:func:`resolve_starts` was applied once per planning
+        instant by the caller), so it is passed on as it is.
 
     Returns
     -------
@@ -245,9 +233,10 @@ def rollout(
         combinations of the key vehicles (oriented rectangles, Eq. 7).
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
     """
-    resolved = resolve_starts(x0, v0, params, starts)
+    if not resolved:
+        starts = resolve_starts(x0, v0, params, starts)
     out: tuple[np.ndarray, ...] = _rollout_kernel(
-        x0, v0, a0, present, cav, coop, params, resolved, merge_x, vr_dur, horizon, lateral,
+        x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_dur, horizon, lateral,
         consts, n_steps, cf,
     )  # fmt: skip
     return out
@@ -256,6 +245,18 @@ def rollout(
 @functools.cache  # once per process
 def warm_up() -> None:
     """Load (or compile) the kernels once per process, so decision times exclude it."""
+    x, v, a, flags, params, consts, n_steps, cf = warm_up_instant()
+    one = np.ones(1)
+    starts = np.full(N_STARTS, np.nan)
+    rollout(x, v, a, flags, flags, flags, params, starts, one * 800.0, one * 4.0, one * 6.0,
+            np.zeros(1, dtype=np.bool_), consts, n_steps, cf)  # fmt: skip
+
+
+def warm_up_instant() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                               np.ndarray, int, np.ndarray]:  # fmt: skip
+    """A small synthetic planning instant (x, v, a, present, params, consts, n_steps, cf)
+    with the argument types of real ones: calling a kernel on it loads (or compiles) the
+    variant that decisions use."""
     row = np.array([33.3, 1.0, 2.0, 1.4, 2.0, 4.0, 0.99, 5.0, 1.8, 0.0])
     params = np.tile(row, (N_ROLES, 1))
     consts = np.zeros(N_CONSTS)
@@ -263,9 +264,8 @@ def warm_up() -> None:
     consts[C_GAMMA], consts[C_EMERGENCY], consts[C_VV_DECEL] = 2.3, 9.0, 7.5
     consts[C_D], consts[C_A_MERG], consts[C_DELAY_CAV], consts[C_DELAY_HDV] = 2.0, 7.5, 0.5, 1.0
     x = np.array([400.0, 380.0, 480.0, 300.0, 450.0, 330.0])
-    one = np.ones(1)
     flags = np.ones(N_ROLES, dtype=np.bool_)
     v, a = np.full(N_ROLES, 25.0), np.zeros(N_ROLES)
-    cf = np.stack(counterfactual(x, v, a, flags, params, consts, 4))
-    rollout(x, v, a, flags, flags, flags, params, np.full(N_STARTS, np.nan), one * 800.0,
-            one * 4.0, one * 6.0, np.zeros(1, dtype=np.bool_), consts, 4, cf)  # fmt: skip
+    n_steps = 4
+    cf = np.stack(counterfactual(x, v, a, flags, params, consts, n_steps))
+    return x, v, a, flags, params, consts, n_steps, cf

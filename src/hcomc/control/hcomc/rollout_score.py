@@ -1,12 +1,19 @@
-"""Scoring of one predicted candidate: Eq. 15 at merge completion, Eq. 17 accumulated over the
-window, and the feasibility of its virtual vehicles.
+"""Scoring of predicted candidates: Eq. 15 at merge completion, Eq. 17 accumulated over the
+window, the feasibility of the virtual vehicles, the objective vector and the penalised scalar
+cost of single-objective optimisers (Eq. 16 over a common distance:
+:mod:`~hcomc.control.hcomc.rollout_fuel`).
 
 Eq. 15 is :func:`hcomc.safety.critical.critical_accel` and the cubics' extremes
-:func:`hcomc.control.virtual_vehicle.cubic_minima`, their one homes. Eq. 16 (fuel over a
-common distance) is computed by the caller from the trajectories.
+:func:`hcomc.control.virtual_vehicle.cubic_minima`, their one homes. The objective vector
+(:func:`objectives_into`) and the cost (:func:`penalised_cost`) are written once here and
+called both for whole populations (:meth:`hcomc.control.hcomc.problem.MergeProblem.evaluate`,
+``scalarise``) and for the single rows of simulated annealing (``evaluate_row``), so that both
+paths give the same values bit for bit.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -28,6 +35,10 @@ from hcomc.control.hcomc.rollout_layout import (
 )
 from hcomc.control.virtual_vehicle import cubic_minima
 from hcomc.safety.critical import critical_accel
+
+U_SAFE_CAP = 1e3
+"""Cap of the safety objective [m/s^2]: an unavoidable crash (U_safe = inf) is constrained
+away by ``unsafe``; capped, its objective stays finite for the optimisers' arithmetic."""
 
 
 @njit(cache=True)
@@ -124,3 +135,51 @@ def virtual_violation(
         if uses[i]:
             worst = max(worst, cubic_violation(vvs[i], horizon, consts[C_VV_DECEL]))
     return worst
+
+
+@njit(cache=True, inline="always")
+def _at_least_zero(value: float) -> float:
+    """``np.maximum(value, 0.0)`` of one value, numpy's semantics: NaN propagates and both
+    zeros give +0.0 (the cost must equal the array form's bit for bit, signed zeros too)."""
+    return value if value > 0.0 or math.isnan(value) else 0.0
+
+
+@njit(cache=True, inline="always")
+def objectives_into(u_safe: float, fuel: float, u_eff: float, out: np.ndarray) -> None:
+    """The objective vector (safety, fuel, efficiency) of one candidate into ``out`` (3,):
+    U_safe capped at :data:`U_SAFE_CAP` (``np.minimum``'s semantics: NaN propagates), U_fuel
+    and -U_eff, all minimised."""
+    out[0] = u_safe if u_safe < U_SAFE_CAP or math.isnan(u_safe) else U_SAFE_CAP
+    out[1] = fuel
+    out[2] = -u_eff
+
+
+@njit(cache=True)
+def objective_rows(u_safe: np.ndarray, fuel: np.ndarray, u_eff: np.ndarray) -> np.ndarray:
+    """:func:`objectives_into` of every candidate: (C, 3)."""
+    out = np.empty((u_safe.size, 3))
+    for c in range(u_safe.size):
+        objectives_into(u_safe[c], fuel[c], u_eff[c], out[c])
+    return out
+
+
+@njit(cache=True, inline="always")
+def penalised_cost(f: np.ndarray, g: np.ndarray, threshold: float, fuel_ref: float) -> float:
+    """Eq. 19 as one cost with the U_safe gate and the constraints as penalties (the formula
+    of :meth:`~hcomc.control.hcomc.problem.MergeProblem.scalarise`) for one row's objectives
+    ``f`` (3,) and constraints ``g``; the violations are summed in order, as numpy sums a
+    row of fewer than eight values."""
+    gate = 10.0 * _at_least_zero(f[0] - threshold)
+    violation = 0.0
+    for j in range(g.size):
+        violation += _at_least_zero(g[j])
+    return f[1] / fuel_ref + f[2] + (gate + 1000.0 * violation)
+
+
+@njit(cache=True)
+def penalised_costs(F: np.ndarray, G: np.ndarray, threshold: float, fuel_ref: float) -> np.ndarray:
+    """:func:`penalised_cost` of every row of ``F`` (n, 3) and ``G`` (n, n_constr): (n,)."""
+    out = np.empty(F.shape[0])
+    for i in range(F.shape[0]):
+        out[i] = penalised_cost(F[i], G[i], threshold, fuel_ref)
+    return out

@@ -1,0 +1,131 @@
+"""One candidate of the HCOMC prediction (:mod:`hcomc.control.hcomc.rollout`): passes 1 and 2
+and the scoring of a candidate plan, the body that the population kernel runs per candidate,
+and the single-candidate entry simulated annealing uses.
+
+Simulated annealing asks for one candidate at a time. The population kernel's per-call work
+that depends on the planning instant alone — VMC's pre-pass trajectory per mode — is then
+prepared once per problem (:func:`vmc_tracks`) and :func:`rollout_one` runs the same body
+(:func:`candidate`) on it, so that a row gives the values of the population path bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from hcomc.control.hcomc.rollout_layout import (
+    C_DT,
+    C_POLITENESS,
+    G_COLLISION,
+    G_NOT_MERGED,
+    G_OVERRUN,
+    G_UNSAFE,
+    G_VIRTUAL,
+    N_G,
+    N_PROGRESS,
+    N_ROLES,
+    N_STATE,
+    VMC,
+    VNR,
+    VR,
+)
+from hcomc.control.hcomc.rollout_passes import joint_pass, pre_pass, vmc_pre_track, vv0_cubic
+from hcomc.control.hcomc.rollout_score import (
+    created_pairs_safety,
+    efficiency_gain,
+    virtual_violation,
+)
+
+
+@njit(cache=True)
+def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
+              X, Y, V, A, HEAD, g, vvs, S, lc, reach, vr_acc):  # fmt: skip
+    """Passes 1 and 2 and the scoring of one candidate (``plan``: merge position, VR's
+    lane-change duration, horizon H; ``lateral``: its mode variable), the body shared by the
+    population kernel (:func:`hcomc.control.hcomc.rollout.rollout`) and the single-row entry
+    :func:`rollout_one`.
+
+    ``track`` is VMC's pre-pass trajectory of the candidate's mode (:func:`vmc_tracks`). The
+    trajectories go to ``X`` … ``HEAD`` (K + 1, 6) (``Y``, ``A``, ``HEAD`` zeroed by the
+    caller), the constraint parts to ``g`` (N_G,) (zeroed by the caller) and the cubics to
+    ``vvs`` (3, 4); ``S``, ``lc``, ``reach`` and ``vr_acc`` are scratch space. Returns
+    k_merge, U_safe and U_eff (see :func:`hcomc.control.hcomc.rollout.rollout`).
+    """
+    horizon = plan[2]
+    coop_vmc = bool(coop[VMC] and present[VMC])
+    lat, lon = lateral and coop_vmc, (not lateral) and coop_vmc
+    vv0_cubic(starts, horizon, cf, consts[C_DT], vvs[0])
+    flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
+    n_known = pre_pass(x0, v0, a0, present, params, starts, vvs, plan, flags[0], consts, track,
+                       S, lc, vr_acc)  # fmt: skip
+    k_merge, g[G_OVERRUN], g[G_COLLISION] = joint_pass(
+        x0, v0, a0, present, params, vvs, plan, lat, flags, consts,
+        X, Y, V, A, HEAD, S, lc, reach, vr_acc, n_known, cf,
+    )  # fmt: skip
+    g[G_VIRTUAL] = virtual_violation(vvs, horizon, flags, consts)
+    u_eff = efficiency_gain(A, cf[2], present, consts[C_POLITENESS])
+    if k_merge < 0:
+        g[G_NOT_MERGED] = 1.0
+        return k_merge, np.inf, u_eff
+    u_safe = created_pairs_safety(X[k_merge], V[k_merge], Y[k_merge], present, cav, params,
+                                  lat, consts)  # fmt: skip
+    if u_safe == np.inf:
+        g[G_UNSAFE] = 1.0
+    return k_merge, u_safe, u_eff
+
+
+@njit(cache=True)
+def mode_index(lateral: bool, coop: np.ndarray, present: np.ndarray) -> int:
+    """Index of VMC's pre-pass track for a candidate: 1 when it cooperates laterally."""
+    return 1 if lateral and coop[VMC] and present[VMC] else 0
+
+
+@njit(cache=True)
+def vmc_tracks(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, coop: np.ndarray,
+    params: np.ndarray, consts: np.ndarray, n_steps: int,
+) -> np.ndarray:  # fmt: skip
+    """VMC's pre-pass trajectories (2, K + 1, 2) of both modes (index 1: lateral), which
+    depend on the planning instant alone: computed once per problem for :func:`rollout_one`
+    (the population kernel computes them once per call). Without a cooperating VMC only the
+    longitudinal track is used, and only it is computed."""
+    tracks = np.zeros((2, n_steps + 1, 2))
+    tracks[0] = vmc_pre_track(x0, v0, a0, present, params, False, consts, n_steps)
+    if mode_index(True, coop, present) == 1:
+        tracks[1] = vmc_pre_track(x0, v0, a0, present, params, True, consts, n_steps)
+    return tracks
+
+
+@njit(cache=True)
+def rollout_one(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, cav: np.ndarray,
+    coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
+    consts: np.ndarray, n_steps: int, cf: np.ndarray, tracks: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, float, np.ndarray]:  # fmt: skip
+    """One candidate, as the population kernel (:func:`hcomc.control.hcomc.rollout.rollout`
+    with C = 1) computes it, without the per-call work a population needs and a single row
+    does not: VMC's pre-pass tracks come precomputed from :func:`vmc_tracks`; the cubics are
+    not returned.
+
+    ``starts`` must be resolved (:func:`~hcomc.control.hcomc.rollout.resolve_starts`);
+    ``plan`` (3,) holds the merge position, VR's lane-change duration and the horizon H;
+    ``lateral`` the mode. Returns ``X``, ``V``, ``A`` (1, K + 1, 6), k_merge, U_safe, U_eff
+    and the constraint parts ``g`` (N_G,): the values of the population kernel's row, bit
+    for bit.
+    """
+    K = n_steps
+    X = np.empty((1, K + 1, N_ROLES))
+    V = np.empty((1, K + 1, N_ROLES))
+    Y = np.zeros((K + 1, N_ROLES))
+    A = np.zeros((1, K + 1, N_ROLES))
+    HEAD = np.zeros((K + 1, N_ROLES))
+    g = np.zeros(N_G)
+    vvs = np.zeros((3, 4))
+    S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
+    vr_acc = np.empty(max(K, 1))
+    track = tracks[mode_index(lateral, coop, present)]
+    k_merge, u_safe, u_eff = candidate(
+        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
+        X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, reach, vr_acc,
+    )  # fmt: skip
+    return X, V, A, k_merge, u_safe, u_eff, g
