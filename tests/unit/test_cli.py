@@ -208,7 +208,7 @@ def test_run_accepts_the_table_spelling_of_a_controller():
         (["simulate", "C1", "--controller", "game", "--optimizer", "sa"],
          ["'--optimizer' = 'sa' does not apply", "'game'"], None),
         (["simulate", "C1", "--optimizer", "ga"],
-         ["'--optimizer' = 'ga'", "nsga2, nsga2-pymoo, pso, sa"], None),
+         ["'--optimizer' = 'ga'", "nsga2, nsga2-pymoo, pso, pso-pymoo, sa"], None),
         (["simulate", "C1", "--set", "cav_penetraton=0.5"],
          ["did you mean 'demand.cav_penetration'?"], None),
         (["simulate", "C1", "--set", "time_headway=1.0"], ["ambiguous", "'hdv.time_headway'"],

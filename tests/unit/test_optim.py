@@ -16,6 +16,7 @@ from hcomc._typing import FloatArray
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
+from hcomc.optim.pso import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, make_optimizer
 from hcomc.optim.selection import non_dominated, select_eq19
@@ -318,7 +319,9 @@ def test_warm_start_rows_open_the_first_population() -> None:
 # --------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("name", "budget", "tol"), [("pso", 960, 0.01), ("sa", 2000, 0.1)])
+@pytest.mark.parametrize(
+    ("name", "budget", "tol"), [("pso", 960, 0.01), ("pso-pymoo", 960, 0.01), ("sa", 2000, 0.1)]
+)
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_single_objective_reaches_known_optimum(name: str, budget: int, tol: float, seed: int):
     res = _run(name, PenalisedSphere(), budget, seed)
@@ -327,9 +330,10 @@ def test_single_objective_reaches_known_optimum(name: str, budget: int, tol: flo
     np.testing.assert_allclose(res.X[0, 1:], SPHERE_CENTRE[1:], atol=np.sqrt(tol))
 
 
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo"])
 @pytest.mark.parametrize("budget", [1, 10, 100, 360])
-def test_pso_respects_budget(budget: int) -> None:
-    res = _run("pso", PenalisedSphere(), budget, seed=0)
+def test_pso_respects_budget(name: str, budget: int) -> None:
+    res = _run(name, PenalisedSphere(), budget, seed=0)
     assert res.n_eval == 24 * max(1, budget // 24)
     assert res.n_eval <= budget + 24
 
@@ -360,7 +364,54 @@ def test_sa_hard_cap_when_scipy_overshoots_maxfun() -> None:
     assert res.n_eval == problem.n_rows == 10
 
 
-@pytest.mark.parametrize("name", ["pso", "sa"])
+class _RowSphere(PenalisedSphere):
+    """The sphere with the single-row fast path (``optim.base.RowProblem``) writing into the
+    optimiser's buffers; logs which path scored each row."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.paths: list[str] = []
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.paths.append("evaluate")
+        return PenalisedSphere.evaluate(self, X)
+
+    def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        self.paths.append("row")
+        f, g = PenalisedSphere.evaluate(self, x[None, :])
+        F[:], G[:] = f[0], g[0]
+        return float(self.scalarise(f, g)[0])
+
+
+class _NonFiniteRowSphere(_RowSphere, NonFiniteSphere):
+    """The row path with infinite and NaN costs."""
+
+
+@pytest.mark.parametrize(
+    ("row_cls", "plain_cls"),
+    [(_RowSphere, PenalisedSphere), (_NonFiniteRowSphere, NonFiniteSphere)],
+)
+@pytest.mark.parametrize("row_path", [True, False])
+def test_sa_row_path_used_when_offered_and_decides_the_same(
+    row_cls: type[_RowSphere], plain_cls: type[PenalisedSphere], row_path: bool
+) -> None:
+    # the row path is taken for every row when offered (unless switched off), and the result
+    # equals that of the plain problem: the best row is copied out of the reused buffers
+    initial = np.array([[2.0, -1.0, 0.0, 2.0]])
+    problem = row_cls()
+    res = AnnealingOptimizer(row_path=row_path).minimize(
+        problem, budget=200, rng=np.random.default_rng(3), initial=initial
+    )
+    ref = AnnealingOptimizer().minimize(
+        plain_cls(), budget=200, rng=np.random.default_rng(3), initial=initial
+    )
+    assert problem.paths == ["row" if row_path else "evaluate"] * 200
+    for name in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(res, name), getattr(ref, name))
+    assert res.n_eval == ref.n_eval == 200
+
+
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
 def test_single_objective_deterministic_per_seed(name: str) -> None:
     a, b = (_run(name, PenalisedSphere(), 240, seed=11) for _ in range(2))
     np.testing.assert_array_equal(a.X, b.X)
@@ -369,7 +420,7 @@ def test_single_objective_deterministic_per_seed(name: str) -> None:
     assert not np.array_equal(a.X, c.X)
 
 
-@pytest.mark.parametrize("name", ["pso", "sa"])
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
 def test_single_objective_returns_best_scalarised_row(name: str) -> None:
     # the returned row is the best of every evaluated row: compare with a recording problem
     class Recording(PenalisedSphere):
@@ -388,7 +439,7 @@ def test_single_objective_returns_best_scalarised_row(name: str) -> None:
     assert problem.scalarise(res.F, res.G)[0] == best
 
 
-@pytest.mark.parametrize("name", ["pso", "sa"])
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
 def test_single_objective_survives_non_finite_costs(name: str) -> None:
     problem = NonFiniteSphere()
     res = _run(name, problem, 240, seed=0)
@@ -449,13 +500,14 @@ def test_optimizer_consumes_only_the_given_rng(name: str) -> None:
 
 
 def test_registry() -> None:
-    assert set(OPTIMIZERS) == {"nsga2", "nsga2-pymoo", "pso", "sa"}
+    assert set(OPTIMIZERS) == {"nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa"}
     assert isinstance(make_optimizer("nsga2-pymoo", pop_size=8), NSGA2Optimizer)
-    assert isinstance(make_optimizer("pso", pop_size=8), PSOOptimizer)
+    assert isinstance(make_optimizer("pso", pop_size=8), CompiledPSOOptimizer)
+    assert isinstance(make_optimizer("pso-pymoo", pop_size=8), PSOOptimizer)
     assert isinstance(make_optimizer("sa"), AnnealingOptimizer)
     with pytest.raises(ValueError, match=r"option 'pop_size' does not apply to optimizer 'sa'"):
         make_optimizer("sa", pop_size=8)  # SA has no population: never silently ignored
-    allowed = "nsga2, nsga2-pymoo, pso, sa"
+    allowed = "nsga2, nsga2-pymoo, pso, pso-pymoo, sa"
     with pytest.raises(ValueError, match=rf"^unknown optimizer 'nope'; allowed: {allowed}$"):
         make_optimizer("nope")
 

@@ -50,7 +50,7 @@ out = Console(width=None if sys.stdout.isatty() else 200)
 err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
 CONTROLLERS = ("none", "fifo", "game", "hcomc")
-OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "sa")
+OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa")
 
 ConfigArg = Annotated[
     str,
@@ -70,7 +70,9 @@ SetOption = Annotated[
 SeedOption = Annotated[int | None, typer.Option(help="Random seed (default: the config's).")]
 Optimizer = Annotated[
     str | None,
-    typer.Option(help="HCOMC optimiser: nsga2, nsga2-pymoo, pso or sa (default: the config's)."),
+    typer.Option(
+        help="HCOMC optimiser: nsga2, nsga2-pymoo, pso, pso-pymoo or sa (default: the config's)."
+    ),
 ]
 
 

@@ -210,7 +210,8 @@ class PSOOptimizer:
     -----
     The returned solution is the best-scalarised row over every evaluation (tracked by the
     adapter, so no extra evaluation is spent), with its true ``F`` and ``G``; the first row seen
-    wins ties.
+    wins ties. Registered as ``pso-pymoo``: ``pso`` (:class:`~hcomc.optim.pso.
+    CompiledPSOOptimizer`) makes the same decisions without pymoo's per-individual objects.
     """
 
     pop_size: int = 24
@@ -218,7 +219,7 @@ class PSOOptimizer:
     c1: float = 2.0
     c2: float = 2.0
     adaptive: bool = True
-    name: str = field(default="pso", init=False)
+    name: str = field(default="pso-pymoo", init=False)
 
     def __post_init__(self) -> None:
         check_pop_size(self.pop_size)

@@ -10,12 +10,14 @@ from hcomc.config import ControlParams
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import Optimizer
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
+from hcomc.optim.pso import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 
 OPTIMIZERS: dict[str, Callable[..., Optimizer]] = {
     "nsga2": CompiledNSGA2Optimizer,  # makes the same decisions as "nsga2-pymoo", faster
     "nsga2-pymoo": NSGA2Optimizer,
-    "pso": PSOOptimizer,
+    "pso": CompiledPSOOptimizer,  # makes the same decisions as "pso-pymoo", faster
+    "pso-pymoo": PSOOptimizer,
     "sa": AnnealingOptimizer,
 }
 
@@ -48,5 +50,5 @@ def optimizer_from_config(control: ControlParams) -> Optimizer:
     return make_optimizer(control.optimizer, **options)
 
 
-POPULATION_BASED = frozenset({"nsga2", "nsga2-pymoo", "pso"})
+POPULATION_BASED = frozenset({"nsga2", "nsga2-pymoo", "pso", "pso-pymoo"})
 """Optimisers that take ``control.pop_size``."""

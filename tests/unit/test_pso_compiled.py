@@ -1,0 +1,495 @@
+"""The lean PSO against pymoo, its reference: same rows evaluated, same returned row.
+
+pymoo (``pso-pymoo``) is the oracle throughout: whole runs with pymoo's PSO on the same
+problems, budgets and generators (a shifted sphere, Rastrigin, a corner optimum that drives
+particles out of the box, a constrained problem, non-finite costs, odd swarm sizes, short and
+uneven budgets, warm starts, fixed and other weights, random boxes, and the HCOMC merge problem
+and controller), and the pieces with pymoo's own functions on random inputs (Latin hypercube
+sampling, improvement replacement with its duplicate check, the fuzzy adaptation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import cache
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from pymoo.algorithms.soo.nonconvex.pso import PSO
+from pymoo.core.population import Population
+from pymoo.core.problem import Problem as PymooProblem
+from pymoo.core.replacement import ImprovementReplacement
+from pymoo.operators.sampling.lhs import LHS, criterion_maxmin
+
+from hcomc._typing import FloatArray
+from hcomc.config import load_config
+from hcomc.control.hcomc.controller import HCOMCController
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.optim import pso
+from hcomc.optim.base import ParetoResult
+from hcomc.optim.pso import (
+    CompiledPSOOptimizer,
+    adapt,
+    improvement,
+    latin_hypercube,
+    min_distances,
+)
+from hcomc.optim.pymoo_backend import PSOOptimizer
+from hcomc.optim.registry import make_optimizer
+from hcomc.sim.engine import Simulation
+
+_EXP_OVERFLOW = "ignore:overflow encountered in exp:RuntimeWarning"
+"""pymoo's adaptation warns when all particles' mean distances are equal (w becomes 0)."""
+
+
+class _Scalar:
+    """A single-objective test problem on a box that keeps every evaluated population."""
+
+    n_obj = 1
+    n_constr = 0
+    objective_names = ("f",)
+
+    def __init__(self, xl: FloatArray, xu: FloatArray) -> None:
+        self.n_var = xl.size
+        self.xl, self.xu = xl, xu
+        self.xl.flags.writeable = False  # an in-place change by an optimiser would raise
+        self.xu.flags.writeable = False
+        self.evaluated: list[FloatArray] = []
+
+    def f(self, X: FloatArray) -> FloatArray:
+        raise NotImplementedError
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
+        return self.f(X)[:, None], np.zeros((X.shape[0], 0))
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        return F[:, 0] + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
+
+
+class Sphere(_Scalar):
+    """Shifted sphere on [-5, 5]^n, minimum 0 at (1, -2, 0.5, ...)."""
+
+    def __init__(self, n_var: int = 5, xl: float = -5.0, xu: float = 5.0) -> None:
+        super().__init__(np.full(n_var, xl), np.full(n_var, xu))
+        self.centre = np.resize([1.0, -2.0, 0.5], n_var)
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return ((X - self.centre) ** 2).sum(axis=1)
+
+
+class Rastrigin(_Scalar):
+    """Rastrigin on [-5.12, 5.12]^n: many local minima, global minimum 0 at the origin."""
+
+    def __init__(self, n_var: int = 6) -> None:
+        super().__init__(np.full(n_var, -5.12), np.full(n_var, 5.12))
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return 10.0 * X.shape[1] + (X**2 - 10.0 * np.cos(2.0 * np.pi * X)).sum(axis=1)
+
+
+class Corner(_Scalar):
+    """``sum(x)`` on [0, 1]^3: the optimum is a corner, so the best particles sit on the
+    bounds with velocities pointing out, which exhausts the 20 out-of-box retries."""
+
+    def __init__(self) -> None:
+        super().__init__(np.zeros(3), np.ones(3))
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return X.sum(axis=1)
+
+
+class NonFinite(Sphere):
+    """The sphere with an infinite cost where x0 > 2 and NaN where x1 < -3."""
+
+    def f(self, X: FloatArray) -> FloatArray:
+        f = super().f(X)
+        return np.where(X[:, 1] < -3.0, np.nan, np.where(X[:, 0] > 2.0, np.inf, f))
+
+
+class Constrained:
+    """Binh-Korn, two objectives and two constraints; ``scalarise`` penalises violations."""
+
+    n_var = 2
+    n_obj = 2
+    n_constr = 2
+    objective_names = ("f1", "f2")
+
+    def __init__(self) -> None:
+        self.xl, self.xu = np.zeros(2), np.array([5.0, 3.0])
+        self.evaluated: list[FloatArray] = []
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
+        x, y = X[:, 0], X[:, 1]
+        F = np.column_stack([4 * x**2 + 4 * y**2, (x - 5) ** 2 + (y - 5) ** 2])
+        G = np.column_stack([(x - 5) ** 2 + y**2 - 20, 7.7 - (x - 8) ** 2 - (y + 3) ** 2])
+        return F, G
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        return F.sum(axis=1) / 100.0 + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
+
+
+def _both(
+    make: Callable[[], Any],
+    budget: int,
+    seed: int,
+    *,
+    initial: FloatArray | None = None,
+    **options: Any,
+) -> tuple[ParetoResult, ParetoResult, Any, Any]:
+    p_ref, p_new = make(), make()
+    ref = PSOOptimizer(**options).minimize(
+        p_ref, budget=budget, rng=np.random.default_rng(seed), initial=initial
+    )
+    new = CompiledPSOOptimizer(**options).minimize(
+        p_new, budget=budget, rng=np.random.default_rng(seed), initial=initial
+    )
+    return ref, new, p_ref, p_new
+
+
+def _assert_same(ref: ParetoResult, new: ParetoResult, p_ref: Any, p_new: Any) -> None:
+    assert len(p_ref.evaluated) == len(p_new.evaluated)
+    for a, b in zip(p_ref.evaluated, p_new.evaluated, strict=True):
+        np.testing.assert_array_equal(a, b)  # the same rows, bit for bit, generation by generation
+    for name in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
+    assert ref.n_eval == new.n_eval == sum(X.shape[0] for X in p_new.evaluated)
+    assert (ref.algorithm, new.algorithm) == ("pso-pymoo", "pso")
+
+
+# --------------------------------------------------------------------------------------------
+# whole runs against pymoo
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+@pytest.mark.parametrize("make", [Sphere, Rastrigin], ids=["sphere", "rastrigin"])
+def test_runs_equal_pymoo_and_converge(make: Callable[[], _Scalar], seed: int) -> None:
+    ref, new, p_ref, p_new = _both(make, 960, seed, pop_size=24)
+    _assert_same(ref, new, p_ref, p_new)
+    assert len(p_new.evaluated) == 40
+    # converging: better than the best of the first (Latin hypercube) generation
+    assert new.F[0, 0] < make().f(p_new.evaluated[0]).min()
+    if make is Sphere:
+        assert new.F[0, 0] < 1e-3
+
+
+def test_out_of_box_retries_and_repair_equal_pymoo(monkeypatch: pytest.MonkeyPatch) -> None:
+    """On a corner optimum some moves exhaust the 20 retries and re-draw variables between
+    bound and old position (``repair_random_init``): the same draws as pymoo's."""
+    retries: list[int] = []
+    move = pso.move
+
+    def counting_move(*args: Any) -> tuple[FloatArray, FloatArray, int]:
+        out = move(*args)
+        retries.append(out[2])
+        return out
+
+    monkeypatch.setattr(pso, "move", counting_move)
+    for seed in (0, 1):
+        _assert_same(*_both(Corner, 480, seed, pop_size=16))
+    assert len(retries) == 2 * 29
+    assert max(retries) == 20  # some moves gave up: variables were re-drawn
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_constrained_problem_equals_pymoo(seed: int) -> None:
+    ref, new, p_ref, p_new = _both(Constrained, 300, seed, pop_size=20)
+    _assert_same(ref, new, p_ref, p_new)
+    assert new.feasible.all()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_non_finite_costs_equal_pymoo(seed: int) -> None:
+    ref, new, p_ref, p_new = _both(NonFinite, 480, seed, pop_size=24)
+    _assert_same(ref, new, p_ref, p_new)
+    costs = NonFinite().f(np.vstack(p_new.evaluated))
+    assert np.isnan(costs).any()  # both kinds were met
+    assert np.isinf(costs).any()
+    assert new.F[0, 0] == np.nanmin(costs)
+
+
+def test_all_costs_nan_equal_pymoo() -> None:
+    class AllNaN(Sphere):
+        def f(self, X: FloatArray) -> FloatArray:
+            return np.full(X.shape[0], np.nan)
+
+    ref, new, p_ref, p_new = _both(AllNaN, 120, 3, pop_size=10)
+    _assert_same(ref, new, p_ref, p_new)  # the first row seen is returned
+    np.testing.assert_array_equal(new.X[0], p_new.evaluated[0][0])
+
+
+@pytest.mark.filterwarnings(_EXP_OVERFLOW)
+@pytest.mark.parametrize(
+    ("pop_size", "budget", "options"),
+    [
+        (7, 100, {}),  # odd swarm, budget not a multiple: 14 generations
+        (5, 3, {}),  # budget < pop_size: one population
+        (24, 50, {}),  # two generations
+        (13, 260, {"adaptive": False}),
+        (10, 200, {"w": 0.5, "c1": 1.0, "c2": 3.0}),
+        (9, 180, {"w": 1.1, "c1": 2.5, "c2": 2.5, "adaptive": False}),
+        (2, 40, {}),  # the smallest swarm
+    ],
+)
+def test_budget_layout_and_parameters_equal_pymoo(
+    pop_size: int, budget: int, options: dict[str, Any]
+) -> None:
+    ref, new, p_ref, p_new = _both(Rastrigin, budget, pop_size, pop_size=pop_size, **options)
+    _assert_same(ref, new, p_ref, p_new)
+    assert new.n_eval == pop_size * max(1, budget // pop_size)
+
+
+@pytest.mark.parametrize("n_start", [1, 3, 12, 15])
+def test_warm_start_equals_pymoo(n_start: int) -> None:
+    initial = np.random.default_rng(n_start).uniform(-6.0, 6.0, (n_start, 5))  # some clipped
+    ref, new, p_ref, p_new = _both(Sphere, 240, 4, initial=initial, pop_size=12)
+    _assert_same(ref, new, p_ref, p_new)
+    first = p_new.evaluated[0]
+    k = min(n_start, 12)
+    np.testing.assert_array_equal(first[:k], np.clip(initial[:k], -5.0, 5.0))
+
+
+class FixedVariable(Sphere):
+    """The sphere with its third variable fixed (xl = xu = 0.5)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.xl.flags.writeable = self.xu.flags.writeable = True
+        self.xl[2] = self.xu[2] = 0.5
+        self.xl.flags.writeable = self.xu.flags.writeable = False
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in divide:RuntimeWarning")
+def test_fixed_variable_like_pymoo() -> None:
+    """A variable with xl = xu: fixed weights run as pymoo's; the fuzzy adaptation's
+    box-normalised distances are undefined, pymoo fails there and so does the lean PSO."""
+    ref, new, p_ref, p_new = _both(FixedVariable, 120, 0, pop_size=12, adaptive=False)
+    _assert_same(ref, new, p_ref, p_new)
+    assert (np.vstack(p_new.evaluated)[:, 2] == 0.5).all()
+    _assert_same(*_both(FixedVariable, 12, 0, pop_size=12))  # one generation: no adaptation
+    with pytest.raises(TypeError):
+        PSOOptimizer(pop_size=12).minimize(FixedVariable(), budget=24, rng=np.random.default_rng(0))
+    with pytest.raises(ValueError, match="xl < xu"):
+        CompiledPSOOptimizer(pop_size=12).minimize(
+            FixedVariable(), budget=24, rng=np.random.default_rng(0)
+        )
+
+
+@pytest.mark.filterwarnings(_EXP_OVERFLOW)
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n_var=st.integers(1, 6),
+    lo=st.floats(-1e3, 1e3),
+    width=st.floats(1e-3, 1e3),
+    pop_size=st.integers(2, 12),
+    n_gen=st.integers(1, 6),
+    adaptive=st.booleans(),
+)
+def test_random_boxes_equal_pymoo(
+    seed: int, n_var: int, lo: float, width: float, pop_size: int, n_gen: int, adaptive: bool
+) -> None:
+    def make() -> Sphere:
+        return Sphere(n_var, lo, lo + width)
+
+    budget = pop_size * n_gen
+    _assert_same(*_both(make, budget, seed, pop_size=pop_size, adaptive=adaptive))
+
+
+def test_deterministic_per_seed_and_seed_sensitive() -> None:
+    opt = CompiledPSOOptimizer(pop_size=12)
+    a, b, c = (
+        opt.minimize(Rastrigin(), budget=120, rng=np.random.default_rng(s)) for s in (7, 7, 8)
+    )
+    np.testing.assert_array_equal(a.X, b.X)
+    np.testing.assert_array_equal(a.F, b.F)
+    assert not np.array_equal(a.X, c.X)
+    assert make_optimizer("pso").name == "pso"
+    assert make_optimizer("pso-pymoo").name == "pso-pymoo"
+    with pytest.raises(ValueError, match="pop_size"):
+        CompiledPSOOptimizer(pop_size=1)
+
+
+# --------------------------------------------------------------------------------------------
+# the HCOMC merge problem and controller
+# --------------------------------------------------------------------------------------------
+
+
+@cache
+def _planning_instant(seed: int) -> tuple[Any, Any, Any]:
+    config = load_config("C1", control={"controller": "hcomc", "optimizer": "pso"})
+    sim = Simulation(config, seed)
+    assert sim.run_until_plan() is not None
+    view, group = sim.requests[0]
+    return config, view, group
+
+
+def _merge_problem(seed: int) -> MergeProblem:
+    config, view, group = _planning_instant(seed)
+    return HCOMCController(config).problem(view, group)[0]
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_merge_problem_runs_equal_pymoo(seed: int) -> None:
+    """On the HCOMC problem at the default budget (pop 40, 360 rows) the rows are identical."""
+    problem = _merge_problem(seed)
+    results = [
+        opt.minimize(problem, budget=360, rng=np.random.default_rng(seed))
+        for opt in (PSOOptimizer(pop_size=40), CompiledPSOOptimizer(pop_size=40))
+    ]
+    for name in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(results[0], name), getattr(results[1], name))
+    assert results[1].n_eval == 360
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_controller_plans_equal_pymoo(seed: int) -> None:
+    """``HCOMCController.plan`` with "pso" and "pso-pymoo": the same plan, also on a replan
+    (warm-started from the first plan's solution)."""
+    config, view, group = _planning_instant(seed)
+    plans = []
+    for name in ("pso-pymoo", "pso"):
+        controller = HCOMCController(config, make_optimizer(name, pop_size=40))
+        rng = np.random.default_rng(seed)
+        plans.append([controller.plan(view, group, rng) for _ in range(2)])
+    for ref, new in zip(*plans, strict=True):
+        for name in ("group", "mode", "t0", "fallback", "objectives", "sequence"):
+            assert getattr(ref, name) == getattr(new, name), name
+        for name in ("merge_x", "vr_duration", "horizon", "vv0", "vv1", "vv2"):
+            np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
+        for name in ("X", "F", "G", "feasible"):
+            np.testing.assert_array_equal(
+                getattr(ref.details.pareto, name), getattr(new.details.pareto, name)
+            )
+        assert ref.reason.replace("pso-pymoo", "pso") == new.reason
+
+
+# --------------------------------------------------------------------------------------------
+# pieces against pymoo's functions
+# --------------------------------------------------------------------------------------------
+
+
+def _pymoo_problem(xl: FloatArray, xu: FloatArray) -> PymooProblem:
+    return PymooProblem(n_var=xl.size, n_obj=1, xl=xl, xu=xu)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 30), n_var=st.integers(1, 6))
+def test_latin_hypercube_equals_pymoo(seed: int, n: int, n_var: int) -> None:
+    xl, xu = np.linspace(-3.0, 1.0, n_var), np.linspace(-1.0, 7.0, n_var)
+    a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+    expected = LHS()(_pymoo_problem(xl, xu), n, random_state=a).get("X")
+    np.testing.assert_array_equal(latin_hypercube(n, xl, xu, b), expected)
+    assert a.bit_generator.state == b.bit_generator.state  # the same number of draws
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    arrays(
+        np.float64,
+        st.tuples(st.integers(1, 3), st.integers(2, 30), st.integers(1, 6)),
+        elements=st.floats(0.0, 1.0) | st.integers(0, 3).map(float),
+    )
+)
+def test_min_distances_equal_pymoo_criterion(samples: FloatArray) -> None:
+    """The maxmin criterion bit for bit (a last-bit difference would rarely change which
+    Latin hypercube sample wins, so the values are compared directly)."""
+    expected = [criterion_maxmin(sample) for sample in samples]
+    np.testing.assert_array_equal(min_distances(samples), expected)
+
+
+_coarse = st.integers(0, 2).map(float)  # few values: equal positions and costs are common
+
+
+def _check_improvement(P_X: FloatArray, P_F: FloatArray, X: FloatArray, F: FloatArray) -> None:
+    pbest = Population.new(X=P_X, F=P_F[:, None])
+    off = Population.new(X=X, F=F[:, None])
+    problem = _pymoo_problem(np.zeros(2), np.full(2, 4.0))
+    expected = ImprovementReplacement().do(problem, pbest, off, return_indices=True)
+    np.testing.assert_array_equal(improvement(X, F, P_X, P_F), expected)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(1, 8).flatmap(
+        lambda n: st.tuples(
+            arrays(np.float64, (n, 2), elements=st.integers(1, 4).map(float)),
+            arrays(np.float64, n, elements=_coarse | st.just(np.nan)),
+            arrays(np.float64, (n, 2), elements=_coarse),
+            arrays(np.float64, n, elements=_coarse | st.just(np.nan) | st.just(np.inf)),
+        )
+    )
+)
+def test_improvement_equals_pymoo_replacement(
+    data: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+) -> None:
+    """Random sets with equal positions (new to new, new to best) and equal costs, NaN, inf."""
+    _check_improvement(*data)
+
+
+def test_improvement_rejects_duplicates() -> None:
+    P_X = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]])
+    X = np.array([[1.0, 1.0], [3.0, 0.0], [3.0, 0.0], [0.0, 3.0]])
+    P_F = np.ones(4)
+    F = np.zeros(4)
+    # 0 equals a personal best (another particle's), 2 equals the new position 1: both stay
+    np.testing.assert_array_equal(improvement(X, F, P_X, P_F), [False, True, False, True])
+    _check_improvement(P_X, P_F, X, F)
+    np.testing.assert_array_equal(improvement(X, F, P_X, np.full(4, np.nan)), [False] * 4)
+
+
+@pytest.mark.filterwarnings(_EXP_OVERFLOW)
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 12),
+    best=st.integers(0, 11),
+    spread=st.floats(0.01, 1.0),
+    c1=st.floats(1.5, 2.5),
+    c2=st.floats(1.5, 2.5),
+)
+def test_adapt_equals_pymoo(
+    seed: int, n: int, best: int, spread: float, c1: float, c2: float
+) -> None:
+    xl, xu = np.array([0.0, -1.0, 2.0]), np.array([1.0, 3.0, 2.5])
+    points = np.random.default_rng(seed).random((n, 3)) ** (1.0 / spread)  # clustered at 1
+    P_X = xl + points * (xu - xl)
+    s_x = P_X[best % n].copy()
+    algorithm = PSO(c1=c1, c2=c2)
+    algorithm.problem = _pymoo_problem(xl, xu)
+    algorithm.pop = Population.new(X=P_X)
+    algorithm.sbest = Population.new(X=np.tile(s_x, (n, 1)))
+    algorithm.random_state = np.random.default_rng(seed)
+    algorithm._adapt()
+    w, new_c1, new_c2 = adapt(P_X, s_x, c1, c2, xl, xu, np.random.default_rng(seed))
+    assert (w, new_c1, new_c2) == (algorithm.w, algorithm.c1, algorithm.c2)
+
+
+def test_adapt_equals_pymoo_in_every_state() -> None:
+    """Random swarms from spread out to clustered: every fuzzy state and the rescaling of
+    c1 + c2 > 4 occur, each with pymoo's values."""
+    states, rescaled = set(), False
+    xl, xu = np.zeros(2), np.ones(2)
+    rng = np.random.default_rng(0)
+    for case in range(300):
+        P_X = rng.random((8, 2)) ** (1.0 / rng.uniform(0.01, 1.0))
+        s_x = P_X[rng.integers(8)].copy()
+        c1, c2 = 2.5, rng.uniform(1.5, 2.5)
+        algorithm = PSO(c1=c1, c2=c2)
+        algorithm.problem = _pymoo_problem(xl, xu)
+        algorithm.pop = Population.new(X=P_X)
+        algorithm.sbest = Population.new(X=np.tile(s_x, (8, 1)))
+        algorithm.random_state = np.random.default_rng(case)
+        algorithm._adapt()
+        w, new_c1, new_c2 = adapt(P_X, s_x, c1, c2, xl, xu, np.random.default_rng(case))
+        assert (w, new_c1, new_c2) == (algorithm.w, algorithm.c1, algorithm.c2)
+        states.add(algorithm.strategy)
+        rescaled |= bool(np.isclose(algorithm.c1 + algorithm.c2, 4.0))
+    assert states == {1, 2, 3, 4}
+    assert rescaled
