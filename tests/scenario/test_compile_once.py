@@ -1,4 +1,5 @@
-"""A fresh process loads the engine's compiled code from numba's cache instead of compiling it.
+"""A fresh process loads the engine's compiled code from numba's cache instead of compiling it,
+and the serial and parallel ensemble loops do not share a cache entry.
 
 numba compiles some things anew in every process unless they are reached through cached
 functions: a structref's default constructor (``StructRefProxy.__new__``, about 2.5 s for the
@@ -61,3 +62,16 @@ def test_fresh_process_compiles_no_structref_constructor_or_typed_list_method() 
         "_length": "0",
         "_getitem": "0",
     }
+
+
+def test_serial_and_parallel_ensemble_loops_have_their_own_cache_entries() -> None:
+    # numba's cache keys an entry by function and signature, not by ``parallel``: a serial
+    # loop compiled from the parallel one's code shared its entry, so whichever was compiled
+    # first was loaded for both (the parallel ensemble then ran on one thread)
+    from hcomc.sim import ensemble
+
+    paths = {  # numba's cache index file of each function
+        dispatcher._cache._cache_file._index_path  # type: ignore[attr-defined]
+        for dispatcher in (ensemble._advance_batch, ensemble._advance_batch_serial)
+    }
+    assert len(paths) == 2

@@ -38,8 +38,17 @@ def _advance_batch(cores, rngs, stops, logging, reasons):
         reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
 
 
-# the same loop on one thread: no thread pool (safe in forked worker processes)
-_advance_batch_serial = njit(cache=True)(_advance_batch.py_func)
+@njit(cache=True)
+def _advance_batch_serial(cores, rngs, stops, logging, reasons):
+    """The same loop on the calling thread: no thread pool (safe in forked worker processes).
+
+    A function of its own, not ``njit(cache=True)(_advance_batch.py_func)``: numba's cache
+    keys an entry by the function and its signature, not by ``parallel``, so one function
+    compiled both ways loads whichever was cached first for both (the parallel ensemble then
+    ran on one thread, or forked workers started a thread pool).
+    """
+    for k in range(len(cores)):
+        reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
 
 
 _END = np.iinfo(np.int64).max  # "no goal": to the run's end
