@@ -37,7 +37,7 @@ import numpy as np
 from scipy.optimize import dual_annealing
 
 from hcomc._typing import FloatArray
-from hcomc.optim.base import ParetoResult, Problem, RowProblem, check_budget
+from hcomc.optim.base import BestRow, ParetoResult, Problem, RowProblem, check_budget
 from hcomc.rng import draw_seed
 
 _NONFINITE_COST = 1e300
@@ -60,8 +60,7 @@ class _Objective:
         self.problem = problem
         self.budget = budget
         self.n_calls = 0
-        self.best_cost = np.inf
-        self.best: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        self.best = BestRow()
         self._row = problem if row_path and isinstance(problem, RowProblem) else None
         self._F = np.empty(int(problem.n_obj))
         self._G = np.empty(int(problem.n_constr))
@@ -73,7 +72,7 @@ class _Objective:
         if self._row is not None:
             cost = float(self._row.evaluate_row(x, self._F, self._G))
             self.n_calls += 1
-            return self._track(cost, lambda: (np.array(x, dtype=np.float64), self._F, self._G))
+            return self._track(cost, lambda: (x, self._F, self._G))
         X = np.array(x, dtype=np.float64, copy=True).reshape(1, -1)
         F, G = self.problem.evaluate(X)
         F = np.asarray(F, dtype=np.float64).reshape(1, int(self.problem.n_obj))
@@ -83,14 +82,8 @@ class _Objective:
         return self._track(cost, lambda: (X[0], F[0], G[0]))
 
     def _track(self, cost: float, row: Callable[[], tuple[FloatArray, ...]]) -> float:
-        """Keep the row (copies of ``row()``'s x, F, G) if its cost beats the best so far;
-        return the cost SciPy sees. ``row`` is called only then: most rows are not kept."""
-        ranked = np.inf if np.isnan(cost) else cost
-        # strict: the first row seen wins ties; the very first row always sets best
-        if self.best is None or ranked < self.best_cost:
-            self.best_cost = ranked
-            x, f, g = (np.array(a, dtype=np.float64, copy=True) for a in row())
-            self.best = (x, f, g)
+        """Offer the row to the best so far; return the cost SciPy sees."""
+        self.best.offer_one(cost, row)
         return cost if np.isfinite(cost) else _NONFINITE_COST
 
 
@@ -154,14 +147,4 @@ class AnnealingOptimizer:
                 else np.clip(initial[0], lower, upper),
                 **{_RNG_KEYWORD: generator},
             )
-        assert objective.best is not None  # SciPy evaluates its starting point first
-        x, f, g = objective.best
-        G = g[None, :]
-        return ParetoResult(
-            X=x[None, :],
-            F=f[None, :],
-            G=G,
-            feasible=np.all(G <= 0.0, axis=1),
-            n_eval=objective.n_calls,
-            algorithm=self.name,
-        )
+        return objective.best.result(objective.n_calls, self.name)

@@ -8,6 +8,7 @@ Single-objective optimisers (PSO, SA) minimise ``problem.scalarise(F, G)`` inste
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -107,6 +108,42 @@ class Optimizer(Protocol):
         population is sampled as usual.
         """
         ...
+
+
+class BestRow:
+    """The best-scalarised row a single-objective optimiser (PSO, SA) has evaluated, kept with
+    its true objectives and constraints.
+
+    A NaN cost ranks as +inf; a row replaces the best only when strictly better, so the first
+    of equals stays; the first row offered always sets it (even at +inf).
+    """
+
+    def __init__(self) -> None:
+        self.cost = np.inf
+        self.row: tuple[FloatArray, FloatArray, FloatArray] | None = None
+
+    def offer(self, X: FloatArray, F: FloatArray, G: FloatArray, cost: FloatArray) -> None:
+        """Rows ``X``, ``F``, ``G`` (n, ...) with their costs (n,): the first of the lowest
+        may become the best."""
+        ranked = np.where(np.isnan(cost), np.inf, cost)
+        k = int(np.argmin(ranked))
+        self.offer_one(float(cost[k]), lambda: (X[k], F[k], G[k]))
+
+    def offer_one(self, cost: float, row: Callable[[], tuple[FloatArray, ...]]) -> None:
+        """One row's cost; ``row()`` gives its x, F and G, called (and copied) only when the
+        row becomes the best: most rows are not kept."""
+        ranked = np.inf if np.isnan(cost) else cost
+        if self.row is None or ranked < self.cost:
+            self.cost = ranked
+            x, f, g = (np.array(a, dtype=np.float64, copy=True) for a in row())
+            self.row = (x, f, g)
+
+    def result(self, n_eval: int, algorithm: str) -> ParetoResult:
+        """The best row as a one-row :class:`ParetoResult`."""
+        assert self.row is not None  # every optimiser evaluates at least one row
+        x, f, g = self.row
+        G = g[None, :]
+        return ParetoResult(x[None, :], f[None, :], G, np.all(G <= 0.0, axis=1), n_eval, algorithm)
 
 
 def check_budget(budget: int) -> None:

@@ -45,7 +45,14 @@ from numba import njit
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim import variation
-from hcomc.optim.base import ParetoResult, Problem, check_budget, check_pop_size, initial_rows
+from hcomc.optim.base import (
+    BestRow,
+    ParetoResult,
+    Problem,
+    check_budget,
+    check_pop_size,
+    initial_rows,
+)
 from hcomc.optim.variation import polynomial_mutation
 from hcomc.rng import draw_seed
 
@@ -134,7 +141,7 @@ def _outside(Xp: FloatArray, xl: FloatArray, xu: FloatArray) -> IntArray:
 
 
 @njit(cache=True)
-def _move(
+def move(
     X: FloatArray,
     P_X: FloatArray,
     s_x: FloatArray,
@@ -144,6 +151,16 @@ def _move(
     xu: FloatArray,
     rng: np.random.Generator,
 ) -> tuple[FloatArray, FloatArray, int]:
+    """Positions and velocities of the next generation, inside the box (pymoo's ``_infill``
+    before the perturbation of the best), and how many recomputation rounds it took.
+
+    Rows outside the box are recomputed from the old position with new random numbers, at most
+    20 times; a variable still outside is then drawn uniformly between its bound and its old
+    position (``repair_random_init``), the velocity is kept. One compiled kernel: on the merge
+    problem, whose best rows lie on bounds, a move takes about a dozen rounds, each a dozen
+    small numpy calls in pymoo's form. numba's ``Generator.random`` reads the same bit
+    generator as numpy's, so the draws are the same numbers.
+    """
     n, n_var = X.shape
     v_max = MAX_VELOCITY_RATE * (xu - xl)
     Xp, Vp = np.empty((n, n_var)), np.empty((n, n_var))
@@ -175,30 +192,6 @@ def _move(
     return Xp, Vp, retries
 
 
-def move(
-    X: FloatArray,
-    P_X: FloatArray,
-    s_x: FloatArray,
-    V: FloatArray,
-    params: tuple[float, float, float],
-    xl: FloatArray,
-    xu: FloatArray,
-    rng: np.random.Generator,
-) -> tuple[FloatArray, FloatArray, int]:
-    """Positions and velocities of the next generation, inside the box (pymoo's ``_infill``
-    before the perturbation of the best), and how many recomputation rounds it took.
-
-    Rows outside the box are recomputed from the old position with new random numbers, at most
-    20 times; a variable still outside is then drawn uniformly between its bound and its old
-    position (``repair_random_init``), the velocity is kept. One compiled kernel: on the merge
-    problem, whose best rows lie on bounds, a move takes about a dozen rounds, each a dozen
-    small numpy calls in pymoo's form. numba's ``Generator.random`` reads the same bit
-    generator as numpy's, so the draws are the same numbers.
-    """
-    w, c1, c2 = params
-    return _move(X, P_X, s_x, V, (float(w), float(c1), float(c2)), xl, xu, rng)
-
-
 @njit(cache=True)
 def _same(a: FloatArray, b: FloatArray) -> bool:
     """Euclidean distance 0: every squared difference is 0 (a sum of non-negative numbers
@@ -211,7 +204,13 @@ def _same(a: FloatArray, b: FloatArray) -> bool:
 
 
 @njit(cache=True)
-def _improvement(X: FloatArray, F: FloatArray, P_X: FloatArray, P_F: FloatArray) -> BoolArray:
+def improvement(X: FloatArray, F: FloatArray, P_X: FloatArray, P_F: FloatArray) -> BoolArray:
+    """Particles whose new position replaces their personal best (pymoo's
+    ``ImprovementReplacement`` without constraints): a strictly lower cost (never against or
+    with a NaN), and the new position is no duplicate, i.e. at euclidean distance > 0 from
+    every earlier new position and from every personal best (``DefaultDuplicateElimination
+    (epsilon=0)``, which pymoo applies to the new positions against themselves, then against
+    the personal bests)."""
     n = X.shape[0]
     out = np.zeros(n, dtype=np.bool_)
     for i in range(n):
@@ -224,16 +223,6 @@ def _improvement(X: FloatArray, F: FloatArray, P_X: FloatArray, P_F: FloatArray)
             dup = dup or _same(X[i], P_X[j])
         out[i] = not dup
     return out
-
-
-def improvement(X: FloatArray, F: FloatArray, P_X: FloatArray, P_F: FloatArray) -> BoolArray:
-    """Particles whose new position replaces their personal best (pymoo's
-    ``ImprovementReplacement`` without constraints): a strictly lower cost (never against or
-    with a NaN), and the new position is no duplicate, i.e. at euclidean distance > 0 from
-    every earlier new position and from every personal best (``DefaultDuplicateElimination
-    (epsilon=0)``, which pymoo applies to the new positions against themselves, then against
-    the personal bests)."""
-    return _improvement(X, F, P_X, P_F)
 
 
 def _norm_dist(A: FloatArray, B: FloatArray, xl: FloatArray, xu: FloatArray) -> FloatArray:
@@ -361,28 +350,24 @@ class CompiledPSOOptimizer:
         if first is None:
             first = latin_hypercube(self.pop_size, xl, xu, gen)
         n_rows = 0
-        best: tuple[float, FloatArray, FloatArray, FloatArray] | None = None
+        best = BestRow()
 
         def evaluate(X: FloatArray) -> FloatArray:
-            """Costs of rows ``X``; keeps the best-scalarised row (NaN as inf, strictly
-            better replaces, so the first of equals stays)."""
-            nonlocal n_rows, best
+            """Costs of rows ``X``, offered to the best row so far."""
+            nonlocal n_rows
             F, G = problem.evaluate(X)
             n = X.shape[0]
             F = np.asarray(F, dtype=np.float64).reshape(n, n_obj)
             G = np.asarray(G, dtype=np.float64).reshape(n, n_constr)
             n_rows += n
             cost = np.asarray(problem.scalarise(F, G), dtype=np.float64).reshape(-1)
-            ranked = np.where(np.isnan(cost), np.inf, cost)
-            k = int(np.argmin(ranked))
-            if best is None or ranked[k] < best[0]:
-                best = (float(ranked[k]), X[k].copy(), F[k].copy(), G[k].copy())
+            best.offer(X, F, G, cost)
             return cost
 
         X = first
         P_X, P_F = X.copy(), evaluate(X)
         V = gen.random((self.pop_size, n_var)) * (MAX_VELOCITY_RATE * (xu - xl))[None, :]
-        params = (self.w, self.c1, self.c2)
+        params = (float(self.w), float(self.c1), float(self.c2))  # one compiled signature
         for _ in range(n_gen - 1):
             s_x = P_X[int(np.argmin(P_F))].copy()  # social best: first minimum, NaN first
             X, V, _ = move(X, P_X, s_x, V, params, xl, xu, gen)
@@ -394,8 +379,4 @@ class CompiledPSOOptimizer:
             P_X[improved], P_F[improved] = X[improved], F[improved]
             if self.adaptive:
                 params = adapt(P_X, s_x, params[1], params[2], xl, xu, gen)
-        assert best is not None  # at least one population was evaluated
-        _, x, f, g = best
-        G = g[None, :]
-        feasible: BoolArray = np.all(G <= 0.0, axis=1)
-        return ParetoResult(x[None, :], f[None, :], G, feasible, n_rows, self.name)
+        return best.result(n_rows, self.name)

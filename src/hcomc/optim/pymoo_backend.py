@@ -31,8 +31,9 @@ from pymoo.operators.sampling.rnd import FloatRandomSampling
 from pymoo.optimize import minimize as _pymoo_minimize
 from pymoo.termination import get_termination
 
-from hcomc._typing import BoolArray, FloatArray
+from hcomc._typing import FloatArray
 from hcomc.optim.base import (
+    BestRow,
     ParetoResult,
     Problem,
     archive_front,
@@ -68,8 +69,7 @@ class _PymooProblem(_PymooBaseProblem):
         self.problem = problem
         self.scalar = scalar
         self.n_rows = 0
-        self.best_cost = np.inf
-        self.best: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        self.best = BestRow()
         self.archive: list[tuple[FloatArray, FloatArray, FloatArray]] = []
         super().__init__(
             n_var=int(problem.n_var),
@@ -93,17 +93,8 @@ class _PymooProblem(_PymooBaseProblem):
                 out["G"] = G
             return
         cost = np.asarray(self.problem.scalarise(F, G), dtype=np.float64).reshape(-1)
-        ranked = np.where(np.isnan(cost), np.inf, cost)
-        k = int(np.argmin(ranked))
-        # strict: on ties the row seen first is kept; a first all-inf/NaN batch still sets best
-        if self.best is None or ranked[k] < self.best_cost:
-            self.best_cost = float(ranked[k])
-            self.best = (X[k].copy(), F[k].copy(), G[k].copy())
+        self.best.offer(X, F, G, cost)
         out["F"] = cost[:, None]
-
-
-def _feasible(G: FloatArray) -> BoolArray:
-    return np.all(G <= 0.0, axis=1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -252,14 +243,4 @@ class PSOOptimizer:
             verbose=False,
             save_history=False,
         )
-        assert adapter.best is not None  # at least one population was evaluated
-        x, f, g = adapter.best
-        G = g[None, :]
-        return ParetoResult(
-            X=x[None, :],
-            F=f[None, :],
-            G=G,
-            feasible=_feasible(G),
-            n_eval=adapter.n_rows,
-            algorithm=self.name,
-        )
+        return adapter.best.result(adapter.n_rows, self.name)
