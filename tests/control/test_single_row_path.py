@@ -1,9 +1,12 @@
-"""The merge problem's single-row fast path equals ``evaluate`` + ``scalarise`` bit for bit.
+"""The merge problem's single-row path equals the population kernel bit for bit.
 
 Simulated annealing scores one row per call; :meth:`MergeProblem.evaluate_row` does that in
 one compiled call (:func:`~hcomc.control.hcomc.rollout.rollout_one` with VMC's pre-pass
-tracks prepared once per problem, U_fuel, the objectives, constraints and the cost). Here it
-is compared, byte for byte, with the population path on the 60 recorded planning instants
+tracks prepared once per problem, U_fuel, the objectives, constraints and the cost), and
+:meth:`MergeProblem.evaluate` runs the same body row by row for the population optimisers.
+Both are compared, byte for byte, with the population kernel (the objectives and
+constraints of :meth:`MergeProblem.predict`, which also returns the trajectories) and with
+``scalarise`` on the 60 recorded planning instants
 (C1-C5, ``benchmarks/data/decisions.pkl``), on both merge sequences, both modes, rows at the
 bounds and at the 0.5 thresholds, a problem without a vehicle to merge behind and one with
 lateral cooperation admitted; then whole SA decisions (``AnnealingOptimizer.minimize`` and
@@ -112,9 +115,15 @@ def _row(problem: MergeProblem, x: FloatArray) -> tuple[FloatArray, FloatArray, 
 
 
 def _assert_row_equals_population(problem: MergeProblem, X: FloatArray) -> None:
-    """Each row of ``X`` through the fast path equals the population path, byte for byte."""
-    F, G = problem.evaluate(X)
+    """Each row of ``X`` through the fast path, and ``evaluate`` of all of them (which scores
+    row by row with the same body), equal the population kernel that :meth:`MergeProblem.
+    predict` runs, byte for byte."""
+    prediction = problem.predict(X)
+    F, G = prediction.F, prediction.G
     cost = problem.scalarise(F, G)
+    F_eval, G_eval = problem.evaluate(X)
+    assert _bits(F_eval) == _bits(F)
+    assert _bits(G_eval) == _bits(G)
     for i, x in enumerate(X):
         f, g, c = _row(problem, x)
         assert _bits(f) == _bits(F[i]), (i, x, f, F[i])
@@ -170,7 +179,7 @@ _switch = st.one_of(_fraction, st.sampled_from([0.5, float(np.nextafter(0.5, 0.0
 def test_row_path_equals_single_row_evaluate(
     index: int, variant: int, u: tuple[float, ...]
 ) -> None:
-    """Any row, against ``evaluate`` of that row alone (what SA's fallback evaluates)."""
+    """Any row, against the population kernel on that row alone."""
     problem = _variants(_cached_problem(index))[variant]
     xl, xu = np.asarray(problem.xl), np.asarray(problem.xu)
     x = xl + np.array(u) * (xu - xl)

@@ -237,7 +237,7 @@ class MergeProblem:
         self._fuel_no_merge = tuple(
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
-        # evaluate_row's per-sequence constants, prepared on first use
+        # the per-sequence constants of the compiled scoring, prepared on first use
         self._row_cache: dict[int, tuple[object, ...]] = {}
 
     # ------------------------------------------------------------------ evaluate
@@ -300,17 +300,26 @@ class MergeProblem:
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5): those of
-        :meth:`predict`, without assembling the trajectories."""
-        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        :meth:`predict`, without assembling the trajectories.
+
+        An optimiser needs the scores only, so each sequence's rows are scored in one compiled
+        call (:func:`_score_rows`) by the single-row body of :meth:`evaluate_row`, on the
+        per-sequence constants prepared once per problem: no population of trajectories is
+        allocated and VMC's pre-pass tracks are not rolled out again per call. The values are
+        those of :meth:`predict` bit for bit (the tests hold both paths to it).
+        """
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
         seq, lateral, no_behind = self._sequences(X)
         F = np.zeros((X.shape[0], self.n_obj))
         G = np.zeros((X.shape[0], self.n_constr))
         for which in (AHEAD, BEHIND):
             rows = np.flatnonzero(seq == which)
-            scored = self._score(which, rows, X, lateral, G)
-            if scored is not None:
-                F[rows] = scored[0]
-        G[no_behind, _G_SEQUENCE] = 1.0
+            if rows.size == 0 or self.states[which] is None:
+                continue  # "behind" rows without a vehicle to merge behind were moved ahead
+            allowed = bool(self.lateral_allowed[which])
+            batch = (X, rows, lateral, allowed, no_behind, self.safety.threshold, self._fuel_ref)
+            args = (*self._row_constants(which), *batch, F, G)
+            _score_rows(*args)
         return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
@@ -334,11 +343,11 @@ class MergeProblem:
         ``evaluate(x[None])`` and ``scalarise`` of them (``optim.base.RowProblem``; a NaN's
         sign and payload aside, which IEEE 754 leaves open and no optimiser observes).
 
-        Simulated annealing asks for one row at a time, where :meth:`evaluate`'s population
-        machinery (masks, index arrays, gathers, the per-call pre-pass of VMC) costs more
-        than the rollout itself; here one compiled call (:func:`_score_row`) rolls out and
-        scores the row with the same kernels, on per-sequence constants prepared once per
-        problem. ``F`` and ``G`` must be contiguous float64 arrays.
+        Simulated annealing asks for one row at a time, where the machinery of a population
+        call (masks, index arrays) costs more than the rollout itself; here one compiled call
+        (:func:`_score_row`, the body :meth:`evaluate` runs per row too) rolls out and scores
+        the row, on per-sequence constants prepared once per problem. ``F`` and ``G`` must be
+        contiguous float64 arrays.
         """
         x = np.asarray(x, dtype=np.float64)
         lateral = bool(x[3] >= 0.5)  # the rules of _sequences, for one row
@@ -354,12 +363,12 @@ class MergeProblem:
 
     def _row_constants(self, which: int) -> tuple[object, ...]:
         """The arguments of :func:`_score_row` that depend on the planning instant and the
-        sequence alone, prepared on first use (population optimisers never need them)."""
+        sequence alone, prepared on first use."""
         cached = self._row_cache.get(which)
         if cached is not None:
             return cached
         state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
-        # evaluate_row scores "behind" rows only when that group exists
+        # "behind" rows are scored only when that group exists
         assert state is not None
         assert cf is not None
         assert starts is not None
@@ -440,6 +449,23 @@ def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, 
     return penalised_cost(F, G, threshold, fuel_ref)
 
 
+@njit(cache=True)
+def _score_rows(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
+                roles, cf_fuel, coefficients, dt, X, rows, lateral, allowed, no_behind,
+                threshold, fuel_ref, F, G):  # fmt: skip
+    """Rows ``rows`` of ``X`` (all of one sequence, whose constants come first as for
+    :func:`_score_row`) scored into the same rows of ``F`` and ``G``, each by
+    :func:`_score_row` (``allowed``: whether the sequence admits lateral cooperation;
+    ``no_behind``: per row of ``X``, a "behind" row moved ahead for want of a vehicle)."""
+    for q in range(rows.size):
+        r = rows[q]
+        lat = lateral[r]
+        _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
+                   roles, cf_fuel, coefficients, dt, X[r], lat,
+                   1.0 if lat and not allowed else 0.0, 1.0 if no_behind[r] else 0.0,
+                   threshold, fuel_ref, F[r], G[r])  # fmt: skip
+
+
 def default_starts() -> FloatArray:
     """Start states of VV0 and VV1 for a first plan: the Eq. 8 defaults (all NaN)."""
     return np.full(N_STARTS, np.nan)
@@ -458,6 +484,10 @@ def load_prediction_kernels() -> None:
     _score_row(x, v, a, flags, flags, flags, params, starts, consts, n_steps, cf, tracks,
                _FUEL_ROLES[1], 0.0, _FUEL_COEFFICIENTS, 0.5, row, False, 0.0, 0.0, 1.0, 1.0,
                F, G)  # fmt: skip
+    rows, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)  # evaluate's
+    _score_rows(x, v, a, flags, flags, flags, params, starts, consts, n_steps, cf, tracks,
+                _FUEL_ROLES[1], 0.0, _FUEL_COEFFICIENTS, 0.5, row[None], rows, lateral, True,
+                lateral, 1.0, 1.0, F[None], G[None])  # fmt: skip
     trajectory = np.zeros((1, 2, N_ROLES))
     roles = np.zeros(1, dtype=np.int64)
     coefficients = FUEL_DEFAULT.coefficients()
