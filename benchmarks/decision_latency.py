@@ -28,8 +28,9 @@ from hcomc.config import load_config  # noqa: E402
 from hcomc.control.hcomc.controller import HCOMCController  # noqa: E402
 from hcomc.sim.engine import Simulation  # noqa: E402
 
-OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa")
-"""Measured side by side: the compiled NSGA-II (the default), pymoo's, the lean PSO, pymoo's, SA."""
+OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy")
+"""Measured side by side: the compiled NSGA-II (the default), pymoo's, the lean PSO, pymoo's, SA
+on arrays, SciPy's."""
 
 
 def planning_instants(n_seeds: int) -> list:

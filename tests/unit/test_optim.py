@@ -18,7 +18,8 @@ from hcomc.optim.base import ParetoResult
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
 from hcomc.optim.pso import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
-from hcomc.optim.registry import OPTIMIZERS, make_optimizer
+from hcomc.optim.registry import OPTIMIZERS, POPULATION_BASED, make_optimizer
+from hcomc.optim.sa import CompiledAnnealingOptimizer
 from hcomc.optim.selection import non_dominated, select_eq19
 
 PAPER_THRESHOLD = 4.0  # the paper's Eq. 19 gate on U_safe [m/s^2]
@@ -320,7 +321,8 @@ def test_warm_start_rows_open_the_first_population() -> None:
 
 
 @pytest.mark.parametrize(
-    ("name", "budget", "tol"), [("pso", 960, 0.01), ("pso-pymoo", 960, 0.01), ("sa", 2000, 0.1)]
+    ("name", "budget", "tol"),
+    [("pso", 960, 0.01), ("pso-pymoo", 960, 0.01), ("sa", 2000, 0.1), ("sa-scipy", 2000, 0.1)],
 )
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_single_objective_reaches_known_optimum(name: str, budget: int, tol: float, seed: int):
@@ -338,9 +340,10 @@ def test_pso_respects_budget(name: str, budget: int) -> None:
     assert res.n_eval <= budget + 24
 
 
+@pytest.mark.parametrize("name", ["sa", "sa-scipy"])
 @pytest.mark.parametrize("budget", [1, 7, 100, 360])
-def test_sa_spends_exactly_the_budget(budget: int) -> None:
-    assert _run("sa", PenalisedSphere(), budget, seed=0).n_eval == budget
+def test_sa_spends_exactly_the_budget(name: str, budget: int) -> None:
+    assert _run(name, PenalisedSphere(), budget, seed=0).n_eval == budget
 
 
 class _CountingSphere(PenalisedSphere):
@@ -353,12 +356,13 @@ class _CountingSphere(PenalisedSphere):
         return super().evaluate(X)
 
 
-def test_sa_hard_cap_when_scipy_overshoots_maxfun() -> None:
+@pytest.mark.parametrize("optimizer", [AnnealingOptimizer, CompiledAnnealingOptimizer])
+def test_sa_hard_cap_when_scipy_overshoots_maxfun(optimizer: type[AnnealingOptimizer]) -> None:
     # With restart_temp_ratio 0.5 SciPy re-anneals after one chain: start point (1 call),
     # chain (2 n_var = 8 calls), re-anneal start (call 10), next chain's first call would be
     # the 11th: SciPy checks maxfun only after it, so maxfun=10 alone gives 11 calls.
     problem = _CountingSphere()
-    res = AnnealingOptimizer(restart_temp_ratio=0.5).minimize(
+    res = optimizer(restart_temp_ratio=0.5).minimize(
         problem, budget=10, rng=np.random.default_rng(0)
     )
     assert res.n_eval == problem.n_rows == 10
@@ -392,17 +396,21 @@ class _NonFiniteRowSphere(_RowSphere, NonFiniteSphere):
     [(_RowSphere, PenalisedSphere), (_NonFiniteRowSphere, NonFiniteSphere)],
 )
 @pytest.mark.parametrize("row_path", [True, False])
+@pytest.mark.parametrize("optimizer", [AnnealingOptimizer, CompiledAnnealingOptimizer])
 def test_sa_row_path_used_when_offered_and_decides_the_same(
-    row_cls: type[_RowSphere], plain_cls: type[PenalisedSphere], row_path: bool
+    row_cls: type[_RowSphere],
+    plain_cls: type[PenalisedSphere],
+    row_path: bool,
+    optimizer: type[AnnealingOptimizer],
 ) -> None:
     # the row path is taken for every row when offered (unless switched off), and the result
     # equals that of the plain problem: the best row is copied out of the reused buffers
     initial = np.array([[2.0, -1.0, 0.0, 2.0]])
     problem = row_cls()
-    res = AnnealingOptimizer(row_path=row_path).minimize(
+    res = optimizer(row_path=row_path).minimize(
         problem, budget=200, rng=np.random.default_rng(3), initial=initial
     )
-    ref = AnnealingOptimizer().minimize(
+    ref = optimizer().minimize(
         plain_cls(), budget=200, rng=np.random.default_rng(3), initial=initial
     )
     assert problem.paths == ["row" if row_path else "evaluate"] * 200
@@ -411,7 +419,7 @@ def test_sa_row_path_used_when_offered_and_decides_the_same(
     assert res.n_eval == ref.n_eval == 200
 
 
-@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa", "sa-scipy"])
 def test_single_objective_deterministic_per_seed(name: str) -> None:
     a, b = (_run(name, PenalisedSphere(), 240, seed=11) for _ in range(2))
     np.testing.assert_array_equal(a.X, b.X)
@@ -420,7 +428,7 @@ def test_single_objective_deterministic_per_seed(name: str) -> None:
     assert not np.array_equal(a.X, c.X)
 
 
-@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa", "sa-scipy"])
 def test_single_objective_returns_best_scalarised_row(name: str) -> None:
     # the returned row is the best of every evaluated row: compare with a recording problem
     class Recording(PenalisedSphere):
@@ -439,7 +447,7 @@ def test_single_objective_returns_best_scalarised_row(name: str) -> None:
     assert problem.scalarise(res.F, res.G)[0] == best
 
 
-@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa"])
+@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa", "sa-scipy"])
 def test_single_objective_survives_non_finite_costs(name: str) -> None:
     problem = NonFiniteSphere()
     res = _run(name, problem, 240, seed=0)
@@ -457,7 +465,7 @@ def test_optimizer_contract(name: str, problem_cls: type[ConstrainedDTLZ2]) -> N
     problem = problem_cls()
     xl, xu = problem.xl.copy(), problem.xu.copy()
     global_state = np.random.get_state()  # noqa: NPY002
-    optimizer = make_optimizer(name, **({"pop_size": 12} if name != "sa" else {}))
+    optimizer = make_optimizer(name, **({"pop_size": 12} if name in POPULATION_BASED else {}))
     budget = 60
     res = optimizer.minimize(problem, budget=budget, rng=np.random.default_rng(0))
 
@@ -500,14 +508,16 @@ def test_optimizer_consumes_only_the_given_rng(name: str) -> None:
 
 
 def test_registry() -> None:
-    assert set(OPTIMIZERS) == {"nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa"}
+    assert set(OPTIMIZERS) == {"nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy"}
     assert isinstance(make_optimizer("nsga2-pymoo", pop_size=8), NSGA2Optimizer)
     assert isinstance(make_optimizer("pso", pop_size=8), CompiledPSOOptimizer)
     assert isinstance(make_optimizer("pso-pymoo", pop_size=8), PSOOptimizer)
-    assert isinstance(make_optimizer("sa"), AnnealingOptimizer)
-    with pytest.raises(ValueError, match=r"option 'pop_size' does not apply to optimizer 'sa'"):
-        make_optimizer("sa", pop_size=8)  # SA has no population: never silently ignored
-    allowed = "nsga2, nsga2-pymoo, pso, pso-pymoo, sa"
+    assert isinstance(make_optimizer("sa"), CompiledAnnealingOptimizer)
+    assert isinstance(make_optimizer("sa-scipy"), AnnealingOptimizer)
+    for name in ("sa", "sa-scipy"):
+        with pytest.raises(ValueError, match=rf"option 'pop_size' does not apply to .* '{name}'"):
+            make_optimizer(name, pop_size=8)  # SA has no population: never silently ignored
+    allowed = "nsga2, nsga2-pymoo, pso, pso-pymoo, sa, sa-scipy"
     with pytest.raises(ValueError, match=rf"^unknown optimizer 'nope'; allowed: {allowed}$"):
         make_optimizer("nope")
 

@@ -50,7 +50,7 @@ out = Console(width=None if sys.stdout.isatty() else 200)
 err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
 CONTROLLERS = ("none", "fifo", "game", "hcomc")
-OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa")
+OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy")
 
 ConfigArg = Annotated[
     str,
@@ -71,7 +71,8 @@ SeedOption = Annotated[int | None, typer.Option(help="Random seed (default: the 
 Optimizer = Annotated[
     str | None,
     typer.Option(
-        help="HCOMC optimiser: nsga2, nsga2-pymoo, pso, pso-pymoo or sa (default: the config's)."
+        help="HCOMC optimiser: nsga2, nsga2-pymoo, pso, pso-pymoo, sa or sa-scipy (default: the "
+        "config's)."
     ),
 ]
 

@@ -246,12 +246,13 @@ class ControlParams(_Frozen):
             "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game)"
         ),
     )
-    optimizer: Literal["nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa"] = Field(
+    optimizer: Literal["nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy"] = Field(
         "nsga2",
         description=(
             "HCOMC optimiser; 'nsga2' = compiled NSGA-II, 'nsga2-pymoo' = the same algorithm "
             "through pymoo (identical results, slower); 'pso' / 'pso-pymoo' likewise for PSO; "
-            "'sa' = simulated annealing"
+            "'sa' = simulated annealing, 'sa-scipy' = the same through SciPy's dual_annealing "
+            "(identical results, slower)"
         ),
     )
     budget: int = Field(

@@ -1,1 +1,1 @@
-"""Optimisers behind one interface: NSGA-II and PSO (pymoo), SA (scipy dual_annealing)."""
+"""Optimisers behind one interface: NSGA-II, PSO and SA on arrays, and through pymoo / SciPy."""

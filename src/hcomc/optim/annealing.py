@@ -1,7 +1,9 @@
 """Simulated annealing: SciPy's ``dual_annealing`` behind our Optimizer interface.
 
 pymoo has no simulated annealing, so the SA baseline wraps SciPy's maintained generalized
-simulated annealing and minimises ``problem.scalarise(F, G)``.
+simulated annealing and minimises ``problem.scalarise(F, G)``. Registered as ``sa-scipy``, the
+reference of ``sa`` (:mod:`hcomc.optim.sa`), which runs the same annealing on arrays and makes
+the same decisions, without SciPy's per-call Python machinery.
 
 * ``no_local_search=True``: traditional generalized SA, no L-BFGS-B polishing (the
   finite-difference local search would spend evaluations on a non-smooth, simulated
@@ -103,7 +105,9 @@ class AnnealingOptimizer:
     Notes
     -----
     Returns the best-scalarised point over all calls with its true ``F`` and ``G``; see the
-    module docstring for the budget and seeding rules.
+    module docstring for the budget and seeding rules. Registered as ``sa-scipy``: ``sa``
+    (:class:`~hcomc.optim.sa.CompiledAnnealingOptimizer`) makes the same decisions without
+    SciPy's per-call Python machinery.
     """
 
     initial_temp: float = 5230.0
@@ -111,7 +115,7 @@ class AnnealingOptimizer:
     visit: float = 2.62
     accept: float = -5.0
     row_path: bool = True
-    name: str = field(default="sa", init=False)
+    name: str = field(default="sa-scipy", init=False)
 
     def minimize(
         self,

@@ -12,13 +12,15 @@ from hcomc.optim.base import Optimizer
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
 from hcomc.optim.pso import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
+from hcomc.optim.sa import CompiledAnnealingOptimizer
 
 OPTIMIZERS: dict[str, Callable[..., Optimizer]] = {
     "nsga2": CompiledNSGA2Optimizer,  # makes the same decisions as "nsga2-pymoo", faster
     "nsga2-pymoo": NSGA2Optimizer,
     "pso": CompiledPSOOptimizer,  # makes the same decisions as "pso-pymoo", faster
     "pso-pymoo": PSOOptimizer,
-    "sa": AnnealingOptimizer,
+    "sa": CompiledAnnealingOptimizer,  # makes the same decisions as "sa-scipy", faster
+    "sa-scipy": AnnealingOptimizer,
 }
 
 

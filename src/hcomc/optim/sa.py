@@ -1,0 +1,387 @@
+"""Simulated annealing on arrays that makes SciPy's decisions, without SciPy's per-call objects.
+
+:class:`CompiledAnnealingOptimizer` runs the generalized simulated annealing of
+:class:`~hcomc.optim.annealing.AnnealingOptimizer` (SciPy's ``dual_annealing`` with
+``no_local_search=True``, ``maxiter = maxfun = budget``) on plain arrays. SciPy spends about as
+much per call as the merge problem's compiled row evaluation: the strategy chain, the visiting
+distribution's dozen numpy calls on tiny arrays, its numpy-scalar arithmetic and the energy
+state's copies. Here one call is the generator's draws, one numba kernel for the move, the
+row's evaluation and plain float arithmetic for the acceptance. The run draws the same random
+numbers, in the same order and shapes, from the same generator (a fresh
+``numpy.random.default_rng(draw_seed(rng))``; ``random`` where SciPy asks ``uniform`` on
+[0, 1), the same numbers without the argument handling), and computes every value with the same
+floating-point operations in the same order, so for the same problem, budget, ``rng`` and
+``initial`` it evaluates the same rows and returns the same row as the SciPy optimiser (tests
+hold it to that).
+
+``fmod``, ``fabs`` and the four operations are exact or correctly rounded on any machine, but
+the last bit of ``exp`` and ``log`` depends on the implementation. numpy takes the C
+library's unless it has SIMD versions for the CPU (AVX-512); the kernels take the C library's
+only where a probe finds numpy's equal to it (:func:`numpy_exp_log_are_libm`), else the steps'
+scale goes through numpy's ufuncs as in SciPy. The acceptance probability decides a comparison
+only: it is taken with ``math`` and again with numpy's functions when the draw is too close to
+call (:func:`accepts`).
+
+The run, as SciPy makes it:
+
+1. the start is ``initial``'s first row (clipped) or uniform in the box, and is evaluated;
+2. chain ``i`` (from 0) runs at ``T = initial_temp (2^(qv-1) - 1) / ((2+i)^(qv-1) - 1)``:
+   ``n_var`` moves of every variable, then one move per variable, each by a distorted
+   Cauchy-Lorentz step of scale set by ``T``, wrapped into the box; a lower cost is taken, a
+   higher one with the generalized Metropolis probability at temperature ``T / (i + 1)``;
+3. once ``T`` falls below ``restart_temp_ratio * initial_temp`` the current point is
+   re-drawn uniformly in the box and evaluated (re-annealing), and ``i`` starts again at 0;
+4. the run ends after ``budget`` evaluations.
+
+Without local search SciPy's best energy, ``not_improved_idx`` and chain minimum never feed
+back into a move, so they are not kept; the best row is :class:`~hcomc.optim.base.BestRow`
+over every evaluation, on the true cost (non-finite costs are annealed as ``1e300``), exactly
+as the SciPy optimiser tracks it, and so are the budget's hard cap and the single-row path.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+from scipy.special import gammaln
+
+from hcomc._typing import FloatArray
+from hcomc.optim.annealing import _NONFINITE_COST, _Objective
+from hcomc.optim.base import ParetoResult, Problem, check_budget
+from hcomc.rng import draw_seed
+
+TAIL_LIMIT = 1.0e8  # SciPy's bound on a visiting step; larger steps are re-drawn below it
+MIN_VISIT_BOUND = 1.0e-10  # a coordinate this close to its lower bound is moved off it
+_CLOSE_CALL = 1e-9  # relative distance below which libm's acceptance probability is not trusted
+
+
+@njit(cache=True, error_model="numpy")
+def _wrap(x: float, lower: float, span: float) -> float:
+    """A coordinate moved back into ``[lower, lower + span)`` modulo ``span`` and off the lower
+    bound, with SciPy's operations (``fmod`` is exact, so any implementation agrees)."""
+    b = np.fmod(x - lower, span) + span
+    out = np.fmod(b, span) + lower
+    if abs(out - lower) < MIN_VISIT_BOUND:
+        out += MIN_VISIT_BOUND
+    return out
+
+
+@njit(cache=True)
+def _libm(x: FloatArray, z: FloatArray, logs: FloatArray, exps: FloatArray) -> None:
+    """``log(x)`` and ``exp(z)`` elementwise with the C library's functions, as kernels get."""
+    for k in range(x.size):
+        logs[k] = math.log(x[k])
+        exps[k] = math.exp(z[k])
+
+
+@functools.cache  # once per process
+def numpy_exp_log_are_libm() -> bool:
+    """Whether numpy's float64 ``exp`` and ``log`` give the C library's values on this CPU,
+    so that a compiled kernel may take them itself.
+
+    numpy calls the C library unless it has SIMD versions of its own for the CPU (AVX-512),
+    whose last bit differs from the C library's on a good share of arguments: a probe of
+    20,000 arguments of each over their whole range tells the two apart. Python's ``math``,
+    which the single-variable moves use, is the C library's too (checked on a share).
+    """
+    probe = np.random.default_rng(0)
+    x = np.concatenate([np.exp(probe.uniform(-700.0, 700.0, 10_000)), probe.random(10_000)])
+    z = probe.uniform(-745.0, 709.0, 20_000)
+    logs, exps = np.empty_like(x), np.empty_like(z)
+    _libm(x, z, logs, exps)
+    python = all(
+        math.log(a) == b and math.exp(c) == d
+        for a, b, c, d in zip(x[::10], logs[::10], z[::10], exps[::10], strict=True)
+    )
+    return bool(python and np.array_equal(np.log(x), logs) and np.array_equal(np.exp(z), exps))
+
+
+@njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
+def move_all(
+    x: FloatArray,
+    xy: FloatArray,
+    den: FloatArray,
+    samples: FloatArray,
+    sigma: float,
+    visit: float,
+    libm: bool,
+    box: FloatArray,
+    out: FloatArray,
+) -> None:
+    """SciPy's move of every variable, into ``out``: steps ``xy[:, 0] sigma / den`` with
+    ``den = exp((qv - 1) log|xy[:, 1]| / (3 - qv))`` (taken here when ``libm``, else given in
+    ``den[:, 1]``), steps beyond +-1e8 replaced by ``1e8 samples[0]`` or ``-1e8 samples[1]``,
+    added to ``x`` and wrapped into the box (``box`` = lower, span)."""
+    above, below = TAIL_LIMIT * samples[0], -TAIL_LIMIT * samples[1]
+    for k in range(x.size):
+        d = den[k, 1]
+        if libm:
+            d = math.exp((visit - 1.0) * math.log(abs(xy[k, 1])) / (3.0 - visit))
+        step = xy[k, 0] * sigma / d
+        if step > TAIL_LIMIT:
+            step = above
+        elif step < -TAIL_LIMIT:
+            step = below
+        out[k] = _wrap(step + x[k], box[0, k], box[1, k])
+
+
+@njit(cache=True, error_model="numpy")
+def move_one(x: FloatArray, k: int, step: float, box: FloatArray, out: FloatArray) -> None:
+    """SciPy's move of variable ``k`` alone by ``step`` (already limited), into ``out``."""
+    out[:] = x
+    out[k] = _wrap(step + x[k], box[0, k], box[1, k])
+
+
+class _Visiting:
+    """SciPy's ``VisitingDistribution`` for one run: its constants, the per-temperature scale
+    of the steps, and buffers so that a move allocates nothing but the generator's draws."""
+
+    def __init__(self, visit: float, box: FloatArray, gen: np.random.Generator) -> None:
+        self.visit, self.box, self.gen = float(visit), box, gen
+        self.libm = numpy_exp_log_are_libm()
+        # SciPy's constants, with its numpy scalar operations
+        factor2 = np.exp((4.0 - visit) * np.log(visit - 1.0))
+        factor3 = np.exp((2.0 - visit) * np.log(2.0) / (visit - 1.0))
+        self.factor4_p = np.sqrt(np.pi) * factor2 / (factor3 * (3.0 - visit))
+        factor5 = 1.0 / (visit - 1.0) - 0.5
+        d1 = 2.0 - factor5
+        self.factor6 = (
+            np.pi * (1.0 - factor5) / np.sin(np.pi * (1.0 - factor5)) / np.exp(gammaln(d1))
+        )
+        self.sigma = 1.0
+        n = box.shape[1]
+        self._buffers = tuple(np.empty((n, 2)) for _ in range(3))  # |xy|, its log, den
+        self._buffers1 = tuple(np.empty((1, 2)) for _ in range(3))
+
+    def set_temperature(self, temperature: float) -> None:
+        """The steps' scale at ``temperature`` (SciPy recomputes it on every call)."""
+        v = self.visit
+        factor1 = np.exp(np.log(temperature) / (v - 1.0))
+        factor4 = self.factor4_p * factor1
+        self.sigma = float(np.exp(-(v - 1.0) * np.log(self.factor6 / factor4) / (3.0 - v)))
+
+    def _den(self, xy: FloatArray, a: FloatArray, lg: FloatArray, den: FloatArray) -> FloatArray:
+        """``exp((qv - 1) log|y| / (3 - qv))`` of the normals ``xy`` by numpy, in column 1
+        (column 0 is computed alongside and not used: numpy computes each element of a
+        contiguous array alike, and one call on the draws is cheaper than taking a column).
+        The logarithm and the exponential write to another buffer, as in SciPy; the exact
+        operations in place."""
+        np.fabs(xy, out=a)
+        np.log(a, out=lg)
+        np.multiply(lg, self.visit - 1.0, out=lg)
+        np.divide(lg, 3.0 - self.visit, out=lg)
+        return np.exp(lg, out=den)
+
+    def _den_one(self, xy: FloatArray) -> float:
+        """``den`` of one pair of normals, with ``math`` where it is the C library's as numpy's
+        (and defined: numpy's is then taken for ``log 0`` and an overflow too)."""
+        if self.libm:
+            with contextlib.suppress(ValueError, OverflowError):
+                v = self.visit
+                return math.exp((v - 1.0) * math.log(abs(float(xy[0, 1]))) / (3.0 - v))
+        return float(self._den(xy, *self._buffers1)[0, 1])
+
+    def all(self, x: FloatArray, out: FloatArray) -> None:
+        """A move of every variable of ``x`` into ``out``: normals (n_var, 2), then two
+        uniforms for the tails."""
+        xy = self.gen.normal(size=(x.size, 2))
+        den = self._buffers[2] if self.libm else self._den(xy, *self._buffers)
+        samples = self.gen.random(2)  # uniform(size=2): 0 + 1 u is u
+        move_all(x, xy, den, samples, self.sigma, self.visit, self.libm, self.box, out)
+
+    def one(self, x: FloatArray, k: int, out: FloatArray) -> None:
+        """A move of variable ``k`` alone: normals (1, 2), a uniform only for a tail step."""
+        xy = self.gen.normal(size=(1, 2))
+        scaled, den = float(xy[0, 0]) * self.sigma, self._den_one(xy)
+        step = scaled / den if den != 0.0 else float(np.divide(scaled, den))  # inf as numpy's
+        if step > TAIL_LIMIT:
+            step = TAIL_LIMIT * self.gen.random()
+        elif step < -TAIL_LIMIT:
+            step = -TAIL_LIMIT * self.gen.random()
+        move_one(x, k, step, self.box, out)
+
+
+def accepts(r: float, e: float, current: float, temperature_step: float, accept: float) -> bool:
+    """SciPy's acceptance of a cost ``e`` not below ``current`` for the uniform draw ``r``:
+    ``r <= (1 - (1 - qa) (e - current) / T_step)^(1 / (1 - qa))``, 0 where the base is not
+    positive.
+
+    Only the comparison matters, so the power is taken with ``math`` (libm); where ``r`` is
+    within a relative 1e-9 of it, far beyond the few units in the last place by which numpy's
+    ``exp`` and ``log`` can differ from libm's, it is taken again with numpy's scalar
+    functions, as SciPy takes it, and that decides.
+    """
+    try:
+        base = 1.0 - ((1.0 - accept) * (e - current) / temperature_step)
+    except ZeroDivisionError:  # a temperature that underflowed to 0: numpy's inf or NaN
+        with np.errstate(all="ignore"):
+            base = float(1.0 - ((1.0 - accept) * (e - current) / np.float64(temperature_step)))
+    if base <= 0.0:  # a NaN base goes on, to a NaN probability, as in SciPy
+        return r <= 0.0
+    try:
+        p = math.exp(math.log(base) / (1.0 - accept))
+        close = abs(r - p) <= _CLOSE_CALL * p + 1e-300
+    except (OverflowError, ZeroDivisionError):  # outside SciPy's range of accept
+        close = True
+    if close:
+        with np.errstate(all="ignore"):
+            p = float(np.exp(np.log(np.float64(base)) / (1.0 - accept)))
+    return r <= p
+
+
+class _Cost(_Objective):
+    """The SciPy optimiser's objective (one row per call, counted, the best row tracked, a
+    non-finite cost annealed as ``1e300``) with a leaner single-row path: a row that cannot
+    become the best is not offered (:meth:`BestRow.offer_one` would keep the best: only a
+    strictly lower cost, NaN never, replaces it), and the cost is checked with ``math``."""
+
+    def __call__(self, x: FloatArray) -> float:
+        """Cost of one point for the annealing, counted and tracked."""
+        if self._row is None:
+            return super().__call__(x)
+        cost = float(self._row.evaluate_row(x, self._F, self._G))
+        self.n_calls += 1
+        best = self.best
+        if cost < best.cost or best.row is None:
+            best.offer_one(cost, lambda: (x, self._F, self._G))
+        return cost if math.isfinite(cost) else _NONFINITE_COST
+
+
+class _Annealing:
+    """One run's state: SciPy's current point and energy, its generator and evaluations."""
+
+    def __init__(
+        self,
+        opt: CompiledAnnealingOptimizer,
+        cost: _Cost,
+        lower: FloatArray,
+        upper: FloatArray,
+        gen: np.random.Generator,
+    ) -> None:
+        self.cost, self.lower, self.upper, self.gen = cost, lower, upper, gen
+        self.accept = float(opt.accept)
+        self.visiting = _Visiting(opt.visit, np.stack([lower, upper - lower]), gen)
+        self.x = np.empty(lower.size)
+        self.e = 0.0
+        self._trial = np.empty(lower.size)
+
+    def start(self, x0: FloatArray | None = None) -> None:
+        """SciPy's ``EnergyState.reset``: ``x0`` or a uniform point, evaluated. The cost SciPy
+        sees is always finite, so it never re-draws the point."""
+        if x0 is None:
+            self.x = self.gen.uniform(self.lower, self.upper, size=self.lower.size)
+        else:
+            self.x = np.array(x0, dtype=np.float64, copy=True)
+        self.e = self.cost(self.x)
+
+    def chain(self, step: int, temperature: float) -> bool:
+        """SciPy's ``StrategyChain.run`` without local search; True once the budget is spent."""
+        temperature_step = temperature / float(step + 1)
+        self.visiting.set_temperature(temperature)
+        n, cost = self.x.size, self.cost
+        if cost.n_calls >= cost.budget:
+            return True  # the hard cap (after a re-annealing start): SciPy would go one over
+        for j in range(2 * n):
+            trial = self._trial
+            if j < n:
+                self.visiting.all(self.x, trial)
+            else:
+                self.visiting.one(self.x, j - n, trial)
+            e = cost(trial)
+            if e < self.e or accepts(self.gen.random(), e, self.e, temperature_step, self.accept):
+                self.x, self._trial, self.e = trial, self.x, e
+            if cost.n_calls >= cost.budget:
+                return True
+        return False
+
+
+def _check(lower: FloatArray, upper: FloatArray, restart_temp_ratio: float) -> None:
+    """SciPy's checks of the box and the restart ratio, with its messages."""
+    if restart_temp_ratio <= 0.0 or restart_temp_ratio >= 1.0:
+        raise ValueError("Restart temperature ratio has to be in range (0, 1)")
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+        raise ValueError("Some bounds values are inf values or nan values")
+    if not np.all(lower < upper):
+        raise ValueError("Bounds are not consistent min < max")
+
+
+@functools.cache  # once per process
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernels of this module now."""
+    box, x, out = np.array([[0.0, 0.0], [1.0, 1.0]]), np.full(2, 0.5), np.empty(2)
+    move_all(x, np.ones((2, 2)), np.ones((2, 2)), np.full(2, 0.5), 0.1, 2.62, True, box, out)
+    numpy_exp_log_are_libm()
+    move_one(x, 1, 0.1, box, out)
+
+
+@dataclass(frozen=True, slots=True)
+class CompiledAnnealingOptimizer:
+    """Generalized simulated annealing on arrays; the same decisions as the SciPy optimiser.
+
+    Parameters
+    ----------
+    initial_temp, restart_temp_ratio, visit, accept : SciPy's annealing parameters (SciPy
+        defaults). SA has no population: ``pop_size`` is not an option (it is rejected).
+    row_path : score rows through the problem's single-row fast path when it offers one
+        (:class:`~hcomc.optim.base.RowProblem`); False scores them with ``evaluate`` and
+        ``scalarise`` on one-row populations (the same decisions, slower).
+
+    Notes
+    -----
+    Returns the best-scalarised row over every evaluation with its true ``F`` and ``G``; the
+    first row seen wins ties. ``n_eval == budget``.
+    """
+
+    initial_temp: float = 5230.0
+    restart_temp_ratio: float = 2e-5
+    visit: float = 2.62
+    accept: float = -5.0
+    row_path: bool = True
+    name: str = field(default="sa", init=False)
+
+    def __post_init__(self) -> None:
+        warm_up()  # load the compiled kernels now, not inside a timed decision
+
+    def minimize(
+        self,
+        problem: Problem,
+        *,
+        budget: int,
+        rng: np.random.Generator,
+        initial: FloatArray | None = None,
+    ) -> ParetoResult:
+        """Anneal with ``budget`` single-row evaluations; return the best row seen.
+
+        With ``initial``, the annealing starts from its first row (clipped to the bounds).
+        """
+        check_budget(budget)
+        lower = np.array(problem.xl, dtype=np.float64, copy=True)
+        upper = np.array(problem.xu, dtype=np.float64, copy=True)
+        x0 = None if initial is None or len(initial) == 0 else np.clip(initial[0], lower, upper)
+        if x0 is not None and len(x0) != len(lower):
+            raise ValueError("Bounds size does not match x0")
+        _check(lower, upper, self.restart_temp_ratio)
+        cost = _Cost(problem, budget, self.row_path)
+        run = _Annealing(self, cost, lower, upper, np.random.default_rng(draw_seed(rng)))
+        run.start(x0)
+        t1 = np.exp((self.visit - 1) * np.log(2.0)) - 1.0
+        restart = self.initial_temp * self.restart_temp_ratio
+        step = iteration = 0
+        while iteration < budget:  # SciPy's maxiter: never reached before maxfun
+            t2 = np.exp((self.visit - 1) * np.log(float(step) + 2.0)) - 1.0
+            temperature = float(self.initial_temp * t1 / t2)
+            if temperature < restart:  # re-annealing from a new random point
+                if cost.n_calls >= budget:
+                    break  # the hard cap
+                run.start()
+                step = 0
+                continue
+            if run.chain(step, temperature):
+                break
+            step, iteration = step + 1, iteration + 1
+        return cost.best.result(cost.n_calls, self.name)

@@ -1,0 +1,503 @@
+"""Simulated annealing on arrays against SciPy's, its reference: same rows, same returned row.
+
+SciPy (``sa-scipy``, :class:`AnnealingOptimizer`) is the oracle throughout: whole runs on the
+same problems, budgets and generators (a shifted sphere, Rastrigin, Rosenbrock, a constrained
+problem, infinite and NaN costs, budgets that end mid-chain or just after a re-annealing start,
+re-annealing by a high restart ratio and by a long run at the default one, other temperatures
+and visiting and acceptance parameters, warm starts, random boxes, the single-row path, and the
+HCOMC merge problem at recorded planning instants and the controller), each with the steps'
+scale taken by the kernels and by numpy's ufuncs; and the acceptance rule with SciPy's
+formula, close calls included.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from functools import cache
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+from unittest import mock
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hcomc._typing import FloatArray
+from hcomc.control.hcomc.controller import HCOMCController
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.optim import sa
+from hcomc.optim.annealing import AnnealingOptimizer
+from hcomc.optim.base import ParetoResult
+from hcomc.optim.registry import make_optimizer
+from hcomc.optim.sa import CompiledAnnealingOptimizer, accepts
+
+BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
+PATHS = ["kernel", "numpy"]
+"""Where the steps' scale ``exp(c log|y|)`` is taken: in the kernels (with the C library's
+functions, where they are numpy's on this machine) or by numpy's ufuncs."""
+
+
+@contextmanager
+def _exp_log(path: str) -> Iterator[None]:
+    """Run with the steps' scale taken by ``path`` (skipped where the kernels may not)."""
+    if path == "kernel" and not sa.numpy_exp_log_are_libm():
+        pytest.skip("numpy's exp and log are not the C library's on this CPU")
+    with mock.patch.object(sa, "numpy_exp_log_are_libm", return_value=path == "kernel"):
+        yield
+
+
+class _Scalar:
+    """A single-objective test problem on a box that keeps every evaluated row."""
+
+    n_obj = 1
+    n_constr = 0
+    objective_names = ("f",)
+
+    def __init__(self, xl: FloatArray, xu: FloatArray) -> None:
+        self.n_var = xl.size
+        self.xl, self.xu = xl, xu
+        self.xl.flags.writeable = False  # an in-place change by an optimiser would raise
+        self.xu.flags.writeable = False
+        self.evaluated: list[FloatArray] = []
+
+    def f(self, X: FloatArray) -> FloatArray:
+        raise NotImplementedError
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
+        return self.f(X)[:, None], np.zeros((X.shape[0], 0))
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        return F[:, 0] + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
+
+
+class Sphere(_Scalar):
+    """Shifted sphere on [xl, xu]^n, minimum 0 at (1, -2, 0.5, ...) in the default box."""
+
+    def __init__(self, n_var: int = 4, xl: float = -5.0, xu: float = 5.0) -> None:
+        super().__init__(np.full(n_var, xl), np.full(n_var, xu))
+        self.centre = np.resize([1.0, -2.0, 0.5], n_var)
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return ((X - self.centre) ** 2).sum(axis=1)
+
+
+class Rastrigin(_Scalar):
+    """Rastrigin on [-5.12, 5.12]^n: many local minima, global minimum 0 at the origin."""
+
+    def __init__(self, n_var: int = 5) -> None:
+        super().__init__(np.full(n_var, -5.12), np.full(n_var, 5.12))
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return 10.0 * X.shape[1] + (X**2 - 10.0 * np.cos(2.0 * np.pi * X)).sum(axis=1)
+
+
+class Rosenbrock(_Scalar):
+    """Rosenbrock on [-2, 2]^n: a narrow curved valley, minimum 0 at (1, ..., 1)."""
+
+    def __init__(self, n_var: int = 3) -> None:
+        super().__init__(np.full(n_var, -2.0), np.full(n_var, 2.0))
+
+    def f(self, X: FloatArray) -> FloatArray:
+        return (100.0 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1.0 - X[:, :-1]) ** 2).sum(axis=1)
+
+
+class NonFinite(Sphere):
+    """The sphere with an infinite cost where x0 > 2, NaN where x1 < -3, -inf where x2 > 4."""
+
+    def f(self, X: FloatArray) -> FloatArray:
+        f = np.where(X[:, 0] > 2.0, np.inf, super().f(X))
+        return np.where(X[:, 1] < -3.0, np.nan, np.where(X[:, 2] > 4.0, -np.inf, f))
+
+
+class AllNaN(Sphere):
+    def f(self, X: FloatArray) -> FloatArray:
+        return np.full(X.shape[0], np.nan)
+
+
+class Constrained:
+    """Binh-Korn, two objectives and two constraints; ``scalarise`` penalises violations."""
+
+    n_var = 2
+    n_obj = 2
+    n_constr = 2
+    objective_names = ("f1", "f2")
+
+    def __init__(self) -> None:
+        self.xl, self.xu = np.zeros(2), np.array([5.0, 3.0])
+        self.evaluated: list[FloatArray] = []
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
+        x, y = X[:, 0], X[:, 1]
+        F = np.column_stack([4 * x**2 + 4 * y**2, (x - 5) ** 2 + (y - 5) ** 2])
+        G = np.column_stack([(x - 5) ** 2 + y**2 - 20, 7.7 - (x - 8) ** 2 - (y + 3) ** 2])
+        return F, G
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        return F.sum(axis=1) / 100.0 + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
+
+
+class RowNonFinite(NonFinite):
+    """:class:`NonFinite` with the single-row path, writing into the optimiser's buffers."""
+
+    def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        f, g = NonFinite.evaluate(self, x[None, :])
+        F[:], G[:] = f[0], g[0]
+        return float(self.scalarise(f, g)[0])
+
+
+def _both(
+    make: Callable[[], Any],
+    budget: int,
+    seed: int,
+    path: str,
+    *,
+    initial: FloatArray | None = None,
+    **options: Any,
+) -> tuple[ParetoResult, ParetoResult, Any, Any]:
+    p_ref, p_new = make(), make()
+    ref = AnnealingOptimizer(**options).minimize(
+        p_ref, budget=budget, rng=np.random.default_rng(seed), initial=initial
+    )
+    with _exp_log(path):
+        new = CompiledAnnealingOptimizer(**options).minimize(
+            p_new, budget=budget, rng=np.random.default_rng(seed), initial=initial
+        )
+    return ref, new, p_ref, p_new
+
+
+def _assert_same(ref: ParetoResult, new: ParetoResult, p_ref: Any, p_new: Any) -> None:
+    assert len(p_ref.evaluated) == len(p_new.evaluated)
+    for a, b in zip(p_ref.evaluated, p_new.evaluated, strict=True):
+        np.testing.assert_array_equal(a, b)  # the same rows, bit for bit, call by call
+    for name in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
+    assert ref.n_eval == new.n_eval == len(p_new.evaluated)
+    assert (ref.algorithm, new.algorithm) == ("sa-scipy", "sa")
+
+
+def _same(make: Callable[[], Any], budget: int, seed: int, path: str, **kw: Any) -> Any:
+    """Run both, assert the same run, return the problem the new optimiser evaluated."""
+    ref, new, p_ref, p_new = _both(make, budget, seed, path, **kw)
+    _assert_same(ref, new, p_ref, p_new)
+    return p_new
+
+
+# --------------------------------------------------------------------------------------------
+# whole runs against SciPy
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize(
+    "make", [Sphere, Rastrigin, Rosenbrock], ids=["sphere", "rastrigin", "rosenbrock"]
+)
+def test_runs_equal_scipy_and_converge(make: Callable[[], _Scalar], seed: int, path: str) -> None:
+    ref, new, p_ref, p_new = _both(make, 1000, seed, path)
+    _assert_same(ref, new, p_ref, p_new)
+    assert new.n_eval == 1000
+    assert new.F[0, 0] < make().f(p_new.evaluated[0])[0]  # better than the start
+    if make is Sphere:
+        assert new.F[0, 0] < 0.1
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("budget", [1, 2, 5, 6, 7, 8, 13, 100, 359, 360])
+def test_budgets_equal_scipy(budget: int, path: str) -> None:
+    """The start, then chains of 6 calls on 3 variables: budgets that end on the start, mid
+    chain, mid full moves, mid single moves and at a chain's end."""
+    p_new = _same(lambda: Sphere(3), budget, budget, path)
+    assert len(p_new.evaluated) == budget
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize(
+    ("ratio", "budget", "n_var"),
+    [
+        (0.5, 10, 4),  # re-annealing after each chain; the budget ends on a start's call
+        (0.5, 100, 4),
+        (0.3, 97, 2),
+        (1e-2, 400, 3),
+        (2e-5, 5600, 2),  # the default ratio, reached after about 1250 chains
+    ],
+)
+def test_reannealing_equals_scipy(ratio: float, budget: int, n_var: int, path: str) -> None:
+    starts = []
+    start = sa._Annealing.start
+
+    def counting_start(self: Any, x0: FloatArray | None = None) -> None:
+        starts.append(x0 is None)
+        start(self, x0)
+
+    with mock.patch.object(sa._Annealing, "start", counting_start):
+        _same(lambda: Sphere(n_var), budget, 7, path, restart_temp_ratio=ratio)
+    assert len(starts) >= 2  # the run re-annealed
+    assert all(starts)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"initial_temp": 100.0},
+        {"initial_temp": 5e4, "visit": 2.9},
+        {"visit": 1.5},
+        {"visit": 2.99, "accept": -1e3},
+        {"accept": -20.0, "initial_temp": 1.0, "restart_temp_ratio": 0.05},
+        {"accept": -9999.0},
+    ],
+)
+def test_parameters_equal_scipy(options: dict[str, Any], path: str) -> None:
+    _same(Rastrigin, 300, 3, path, **options)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("width", [1e-9, 3e-10, 1e-10])
+def test_narrow_boxes_equal_scipy(width: float, path: str) -> None:
+    """Boxes so narrow that moves land within 1e-10 of the lower bound and are moved off it
+    (even out of the box, as SciPy does, when the box is narrower than that)."""
+    p_new = _same(lambda: Sphere(3, 2.0, 2.0 + width), 200, 1, path)
+    X = np.vstack(p_new.evaluated)
+    assert (X[1:] - 2.0 >= 1e-10).any()  # moved off the bound
+    assert (X[1:] - 2.0 < 1e-10 + 0.5 * width).any()
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("n_start", [0, 1, 3])
+def test_warm_start_equals_scipy(n_start: int, path: str) -> None:
+    """The first row (clipped to the box) is the start; no row, a random start."""
+    initial = np.random.default_rng(n_start).uniform(-7.0, 7.0, (n_start, 4))  # some clipped
+    p_new = _same(Sphere, 200, 4, path, initial=initial)
+    if n_start:
+        np.testing.assert_array_equal(p_new.evaluated[0][0], np.clip(initial[0], -5.0, 5.0))
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("seed", [0, 5])
+def test_constrained_problem_equals_scipy(seed: int, path: str) -> None:
+    ref, new, p_ref, p_new = _both(Constrained, 300, seed, path)
+    _assert_same(ref, new, p_ref, p_new)
+    assert new.feasible.all()
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_non_finite_costs_equal_scipy(seed: int, path: str) -> None:
+    """Costs of +inf, -inf and NaN are annealed as 1e300; the best row is the lowest true
+    cost (-inf), NaN never."""
+    p_new = _same(NonFinite, 400, seed, path)
+    costs = NonFinite().f(np.vstack(p_new.evaluated))
+    for kind in (np.isnan, np.isposinf, np.isneginf):
+        assert kind(costs).any()
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_all_costs_nan_equal_scipy(path: str) -> None:
+    p_new = _same(AllNaN, 60, 3, path)
+    assert len(p_new.evaluated) == 60
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("row_path", [True, False])
+def test_row_path_equals_scipy(row_path: bool, path: str) -> None:
+    """The single-row path (rows into reused buffers, the best copied out) and the fallback
+    through ``evaluate``: the same rows as SciPy's on either path."""
+    initial = np.array([[1.0, -1.0, 0.0, 2.0]])
+    for make in (RowNonFinite, NonFinite):
+        _same(make, 300, 9, path, initial=initial, row_path=row_path)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n_var=st.integers(1, 6),
+    lo=st.floats(-1e3, 1e3),
+    width=st.floats(1e-10, 1e4),
+    budget=st.integers(1, 300),
+    ratio=st.sampled_from([2e-5, 1e-3, 0.1, 0.6]),
+    visit=st.floats(1.1, 2.95),
+    accept=st.floats(-1e3, -5.0),
+    path=st.sampled_from(PATHS),
+)
+def test_random_boxes_equal_scipy(
+    seed: int,
+    n_var: int,
+    lo: float,
+    width: float,
+    budget: int,
+    ratio: float,
+    visit: float,
+    accept: float,
+    path: str,
+) -> None:
+    def make() -> Sphere:
+        return Sphere(n_var, lo, lo + width)
+
+    _same(make, budget, seed, path, restart_temp_ratio=ratio, visit=visit, accept=accept)
+
+
+@pytest.mark.parametrize(
+    ("xl", "xu", "ratio", "message"),
+    [
+        (0.0, 1.0, 1.0, "Restart temperature ratio"),
+        (0.0, 1.0, 0.0, "Restart temperature ratio"),
+        (0.0, np.inf, 0.5, "inf values or nan values"),
+        (1.0, 1.0, 0.5, "not consistent"),
+    ],
+)
+def test_invalid_settings_raise_like_scipy(xl: float, xu: float, ratio: float, message: str):
+    for optimizer in (AnnealingOptimizer, CompiledAnnealingOptimizer):
+        with pytest.raises(ValueError, match=message):
+            optimizer(restart_temp_ratio=ratio).minimize(
+                Sphere(2, xl, xu), budget=10, rng=np.random.default_rng(0)
+            )
+
+
+# --------------------------------------------------------------------------------------------
+# the acceptance rule
+# --------------------------------------------------------------------------------------------
+
+
+def _scipy_accepts(r: float, e: float, current: float, temperature_step: float, a: float):
+    """``StrategyChain.accept_reject``'s decision, as SciPy computes it."""
+    pqv_temp = 1.0 - ((1.0 - a) * (e - current) / np.float64(temperature_step))
+    pqv = 0.0 if pqv_temp <= 0.0 else np.exp(np.log(pqv_temp) / (1.0 - a))
+    return bool(r <= pqv)
+
+
+@settings(max_examples=500, deadline=None)
+@given(
+    e=st.floats(-1e6, 1e6),
+    rise=st.floats(0.0, 1e6) | st.sampled_from([0.0, 1e-300, 1e300]),
+    temperature_step=st.floats(1e-6, 1e4),
+    a=st.floats(-1e4, -5.0),
+    r=st.floats(0.0, 1.0, exclude_max=True),
+    nudge=st.sampled_from([None, -1, 0, 1]),
+)
+def test_accepts_equals_scipy(
+    e: float, rise: float, temperature_step: float, a: float, r: float, nudge: int | None
+) -> None:
+    """Random draws, and draws at SciPy's probability and one step either side of it (the
+    close calls, decided by numpy's functions)."""
+    current = e - rise
+    base = 1.0 - ((1.0 - a) * (e - current) / temperature_step)
+    if nudge is not None and base > 0.0:
+        p = float(np.exp(np.log(np.float64(base)) / (1.0 - a)))
+        r = p if nudge == 0 else float(np.nextafter(p, np.inf * nudge))
+    assert accepts(r, e, current, temperature_step, a) == _scipy_accepts(
+        r, e, current, temperature_step, a
+    )
+
+
+def test_close_calls_are_decided_by_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Where the C library's ``exp`` would be a few units in the last place off numpy's (as
+    it may be on another CPU), draws at and next to SciPy's probability are still decided as
+    SciPy decides them."""
+    off = SimpleNamespace(log=math.log, exp=lambda z: math.exp(z) * (1.0 + 8e-16))
+    monkeypatch.setattr(sa, "math", off)
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        e, rise, step, a = rng.normal(), rng.exponential(), rng.uniform(0.1, 10.0), -5.0
+        base = 1.0 - ((1.0 - a) * rise / step)
+        if base <= 0.0:
+            continue
+        p = float(np.exp(np.log(np.float64(base)) / (1.0 - a)))
+        for r in (float(np.nextafter(p, 0.0)), p, float(np.nextafter(p, 1.0))):
+            assert accepts(r, e, e - rise, step, a) == _scipy_accepts(r, e, e - rise, step, a)
+
+
+def test_accepts_zero_draw_and_non_positive_base() -> None:
+    assert accepts(0.0, 1e300, -1e300, 1.0, -5.0)  # the base is -inf: only r = 0 accepts
+    assert not accepts(1e-300, 1e300, -1e300, 1.0, -5.0)
+    assert accepts(0.99, 3.0, 3.0, 1.0, -5.0)  # no rise: probability 1
+
+
+# --------------------------------------------------------------------------------------------
+# the HCOMC merge problem and controller
+# --------------------------------------------------------------------------------------------
+
+
+@cache
+def _instants() -> tuple[Any, ...]:
+    """Recorded first planning instants of C1-C5 (``record_decisions.load_decisions``)."""
+    sys.path.insert(0, str(BENCHMARKS))  # record_decisions imports its sibling throughput.py
+    environ = dict(os.environ)  # the script pins its thread variables to 1 when imported
+    try:
+        from record_decisions import load_decisions
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+        os.environ.clear()  # the rest of the session must see the variables it started with
+        os.environ.update(environ)
+    return tuple((d.name, d.config, d.view, d.group) for d in load_decisions())
+
+
+def _problem(index: int) -> MergeProblem:
+    _, config, view, group = _instants()[index]
+    return HCOMCController(config).problem(view, group)[0]
+
+
+Calls = list[tuple[bytes, bytes, bytes]]
+
+
+def _run_merge(optimizer: Any, index: int, path: str) -> tuple[ParetoResult, Calls]:
+    """One decision at recorded instant ``index``, logging every row ``evaluate_row`` scores
+    with its F and G (warm-started at every third instant)."""
+    problem = _problem(index)
+    initial = None if index % 3 else problem.xl + 0.3 * (problem.xu - problem.xl)[None, :]
+    calls: Calls = []
+    method = MergeProblem.evaluate_row
+
+    def evaluate_row(self: MergeProblem, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        cost: float = method(self, x, F, G)
+        calls.append((x.tobytes(), F.tobytes(), G.tobytes()))
+        return cost
+
+    with _exp_log(path), mock.patch.object(MergeProblem, "evaluate_row", evaluate_row):
+        result = optimizer.minimize(
+            problem, budget=360, rng=np.random.default_rng(index), initial=initial
+        )
+    return result, calls
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("index", range(0, 60, 4))
+def test_merge_problem_runs_equal_scipy(index: int, path: str) -> None:
+    """Recorded planning instants at the default budget: the same rows with the same F and G,
+    the same result."""
+    ref, ref_calls = _run_merge(AnnealingOptimizer(), index, path)
+    new, new_calls = _run_merge(CompiledAnnealingOptimizer(), index, path)
+    assert len(new_calls) == new.n_eval == ref.n_eval == 360
+    assert new_calls == ref_calls
+    for name in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
+
+
+@pytest.mark.parametrize("index", [1, 13, 25, 37, 49])
+def test_controller_plans_equal_scipy(index: int) -> None:
+    """``HCOMCController.plan`` with "sa" and "sa-scipy": the same plan, also on a replan
+    (warm-started from the first plan's solution)."""
+    _, config, view, group = _instants()[index]
+    plans = []
+    for name in ("sa-scipy", "sa"):
+        controller = HCOMCController(config, make_optimizer(name))
+        rng = np.random.default_rng(index)
+        plans.append([controller.plan(view, group, rng) for _ in range(2)])
+    for ref, new in zip(*plans, strict=True):
+        for name in ("group", "mode", "t0", "fallback", "objectives", "sequence"):
+            assert getattr(ref, name) == getattr(new, name), name
+        for name in ("merge_x", "vr_duration", "horizon", "vv0", "vv1", "vv2"):
+            a, b = getattr(ref, name), getattr(new, name)
+            assert (a is None and b is None) or np.array_equal(a, b), name
+        for name in ("X", "F", "G", "feasible"):
+            np.testing.assert_array_equal(
+                getattr(ref.details.pareto, name), getattr(new.details.pareto, name)
+            )
+        assert ref.reason.replace("sa-scipy", "sa") == new.reason
