@@ -1,14 +1,19 @@
 """The compiled simulation step over the struct-of-arrays state of one run
 (:class:`hcomc.sim.core_state.Core`, fields as in :class:`~hcomc.sim.core_state.CoreArrays`).
-The step is split into kernels (here, :mod:`hcomc.sim.core_motion` and
-:mod:`hcomc.sim.core_lane_change`) that the engine composes in two ways:
+The step is split into kernels (here, :mod:`hcomc.sim.core_motion`,
+:mod:`hcomc.sim.core_lane_change` and :mod:`hcomc.sim.core_plans`) that the engine composes
+in two ways:
 
-* :func:`run_steps` advances many steps in one compiled call while nothing needs Python:
-  no live merge plan, no ramp vehicle entering the control zone, no game-confirmed lane
-  change; it writes log rows and events itself;
-* at a decision event the engine runs the same kernels one step at a time
-  (:func:`release`, :func:`step_accelerations`, :func:`start_lane_changes`,
-  :func:`step_finish`) with the controller's inputs in between.
+* :func:`run_steps` advances many steps in one compiled call while no controller decision is
+  due, live merge plans included (they are executed from the plan table of the compiled
+  state); it writes log rows and events itself and returns to Python when a ramp vehicle
+  enters the control zone (key vehicles, a first plan), when a live plan is due for a replan
+  (:func:`hcomc.sim.core_plans.due_plans`), or on every step of a run whose CAVs confirm
+  their lane changes by the game (Section III-B, in Python);
+* at a decision event the engine takes that one step in Python: release, key vehicles and
+  the controller's decision, then the same kernels as the compiled loop (:func:`step_body`,
+  or its parts :func:`step_front`, :func:`holding`, :func:`discretionary_changes`,
+  :func:`start_lane_changes` and :func:`step_back` around the game).
 
 Each equation is called from its one home (:mod:`hcomc.models`, :mod:`hcomc.safety`,
 :mod:`hcomc.sim.perception`, :mod:`hcomc.sim.mobil`, :mod:`hcomc.sim.neighbours`). Semantics
@@ -35,6 +40,14 @@ from hcomc.sim.core_motion import (
     release,
     step_accelerations,
 )
+from hcomc.sim.core_plans import (
+    due_plans,
+    execute_plans,
+    finish_plans,
+    following_mask,
+    holding_mask,
+    virtual_rows,
+)
 from hcomc.sim.core_state import (
     CAV_GAME,
     CONTROLLER,
@@ -46,11 +59,11 @@ from hcomc.sim.core_state import (
     ERRORS,
     FLUSH,
     GROW_LOG,
-    HAS_PLANS,
     INNOV_CURSOR,
     KICK,
     LOG_EVERY,
     N_EVENTS,
+    N_PLANS,
     N_WARMUP,
     NEED_PYTHON,
     PLATOON,
@@ -67,8 +80,9 @@ from hcomc.sim.perception import advance_errors_of
 from hcomc.sim.small import nonzero
 
 __all__ = [
-    "commanded_changes", "discretionary_changes", "follow_many", "push_history", "record_row",
-    "release", "run_steps", "start_lane_changes", "step_accelerations", "step_finish",
+    "commanded_changes", "discretionary_changes", "due_plans", "follow_many", "holding",
+    "push_history", "record_row", "release", "run_steps", "start_lane_changes",
+    "step_accelerations", "step_back", "step_body", "step_finish", "step_front",
 ]  # fmt: skip
 
 
@@ -109,12 +123,58 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
     return True
 
 
+# ---------------------------------------------------------------------- one step
+@njit(cache=True)
+def step_front(c: CoreArrays, ids: np.ndarray, t: float):
+    """The accelerations of a step (:func:`step_accelerations`) with the live plans' followers
+    and virtual leaders, then the lane changes the plans command now. Returns
+    ``(acc, changing, vehicle, lane, key, rank, lead)``."""
+    n_plans = c.counters[N_PLANS]
+    following = following_mask(c.plan_int, n_plans, c.x.size)
+    fol, vx, vv, va, vl = virtual_rows(c.plan_int, c.plan_f, n_plans, t, c.x, c.v, c.a, c.length)
+    acc, changing, vs, ls, ks, rank, lead = step_accelerations(
+        c, ids, t, following, fol, vx, vv, va, vl
+    )
+    if n_plans > 0:
+        execute_plans(c, ids, t, lead, vs, ls, ks, rank)
+    return acc, changing, vs, ls, ks, rank, lead
+
+
+@njit(cache=True)
+def holding(c: CoreArrays) -> np.ndarray:
+    """Vehicles that make no discretionary change now: held for a live plan
+    (:func:`hcomc.sim.core_plans.holding_mask`) or driven from outside. A vehicle that is
+    not an HDV is a CAV (:class:`hcomc.road.Kind` has these two)."""
+    return holding_mask(c.plan_int, c.counters[N_PLANS], ~c.is_hdv) | c.held
+
+
+@njit(cache=True)
+def step_back(
+    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
+) -> None:
+    """The end of a step (:func:`step_finish`), then the plans that ended are dropped."""
+    step_finish(c, ids, t, acc, vs, ls)
+    if c.counters[N_PLANS] > 0:
+        finish_plans(c)
+
+
+@njit(cache=True)
+def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
+    """One step of the vehicles ``ids`` after release and decisions, without the game."""
+    acc, changing, vs, ls, ks, rank, lead = step_front(c, ids, t)
+    if (c.counters[STEP] % c.flags[DECIDE_EVERY] == 0) and c.flags[PLATOON] == 0:
+        chosen, target = discretionary_changes(c, ids, changing, holding(c), lead, vs, ls, ks, rank)
+        start_lane_changes(c, chosen, target, t, np.empty(0))
+    step_back(c, ids, t, acc, vs, ls)
+
+
 # ----------------------------------------------------------------------------- loop
 @njit(cache=True)
-def needs_python(c: CoreArrays) -> bool:
-    """Whether this step needs the engine's Python side: a live plan, game-confirmed lane
-    changes, or a ramp vehicle entering the control zone (key vehicles, a plan)."""
-    if c.flags[HAS_PLANS] > 0 or c.flags[CAV_GAME] > 0:
+def needs_python(c: CoreArrays, t: float) -> bool:
+    """Whether the step at t needs the engine's Python side: a controller decision (a ramp
+    vehicle entering the control zone: key vehicles and a first plan; a live plan due for a
+    replan) or game-confirmed lane changes."""
+    if c.flags[CAV_GAME] > 0:
         return True
     for i in range(c.x.size):
         if (
@@ -125,27 +185,19 @@ def needs_python(c: CoreArrays) -> bool:
             and (not c.identified[i] or (c.flags[CONTROLLER] > 0 and not c.planned[i]))
         ):
             return True  # fmt: skip
-    return False
+    return c.counters[N_PLANS] > 0 and due_plans(c, t).size > 0
 
 
 @njit(cache=True)
 def step_alone(c: CoreArrays, t: float) -> None:
-    """One whole step after release with no controller inputs (the fast path)."""
+    """One whole step after release when no decision is due (the fast path; live plans are
+    executed from the plan table)."""
     ids = nonzero(c.active)
     if ids.size == 0:
         push_history(c)
         return
     c.counters[VEHICLE_STEPS] += ids.size
-    no_int = np.empty(0, dtype=np.int64)
-    no_float = np.empty(0)
-    no_plan = np.zeros(c.x.size, dtype=np.bool_)
-    acc, changing, vs, ls, ks, rank, lead = step_accelerations(
-        c, ids, t, no_plan, no_int, no_float, no_float, no_float, no_float
-    )
-    if (c.counters[STEP] % c.flags[DECIDE_EVERY] == 0) and c.flags[PLATOON] == 0:
-        chosen, target = discretionary_changes(c, ids, changing, c.held, lead, vs, ls, ks, rank)
-        start_lane_changes(c, chosen, target, t, no_float)
-    step_finish(c, ids, t, acc, vs, ls)
+    step_body(c, ids, t)
 
 
 @njit(cache=True)
@@ -166,7 +218,7 @@ def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator
             c.counters[INNOV_CURSOR] = 0
         t = -warmup + c.counters[STEP] * dt
         release(c, t)
-        if needs_python(c):
+        if needs_python(c, t):
             return NEED_PYTHON
         step_alone(c, t)
         k = c.counters[STEP] - c.flags[N_WARMUP]

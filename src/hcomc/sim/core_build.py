@@ -12,6 +12,7 @@ from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
 from hcomc.sim import core_state as layout
+from hcomc.sim.core_plans import N_FLOAT, N_INT
 from hcomc.sim.core_state import CoreArrays
 from hcomc.sim.demand import Demand
 from hcomc.sim.fleet import Fleet
@@ -104,7 +105,7 @@ def build_arrays(
     ]
     perceive = per.errors or max(per.taus) > 0
     f8, i8, b1 = np.float64, np.int64, np.bool_
-    consts = np.zeros(13)
+    consts = np.zeros(layout.N_CONSTS)
     consts[[layout.DT, layout.WARMUP, layout.WIDTH, layout.ACCEL_START, layout.ACCEL_END]] = (
         config.dt, config.warmup, road.lane_width, road.accel_lane_start, road.accel_lane_end
     )  # fmt: skip
@@ -114,17 +115,20 @@ def build_arrays(
     consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
     consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
-    flags = np.zeros(9, dtype=i8)
+    consts[layout.REPLAN_PERIOD] = config.control.replan_period
+    consts[layout.SQUARE] = 2.0
+    flags = np.zeros(layout.N_FLAGS, dtype=i8)
     flags[layout.PERCEIVE], flags[layout.ERRORS] = perceive, per.errors
     flags[layout.PLATOON] = config.scenario == "platoon"
     flags[layout.DECIDE_EVERY], flags[layout.LOG_EVERY] = decide_every, log_every
     flags[layout.N_WARMUP] = n_warmup
     flags[layout.CONTROLLER] = controlled
     flags[layout.CAV_GAME] = config.lane_change.cav_game
-    counters = np.zeros(7, dtype=i8)
+    counters = np.zeros(layout.N_COUNTERS, dtype=i8)
     innov_steps = INNOVATION_STEPS if per.errors else 0
     counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
     n_events = max(4096, 16 * n)
+    plan_rows = max(1, int(np.count_nonzero(demand.lane == Lane.RAMP)))  # one plan per VR
     return CoreArrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
@@ -145,7 +149,8 @@ def build_arrays(
         ev_t=np.zeros(n_events), ev_kind=np.zeros(n_events, dtype=i8),
         ev_vehicle=np.zeros(n_events, dtype=i8), ev_other=np.zeros(n_events, dtype=i8),
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
-        consts=consts, flags=flags, lc_params=lane_change_params(config.lane_change),
+        consts=consts, flags=flags, plan_int=np.zeros((plan_rows, N_INT), dtype=i8),
+        plan_f=np.zeros((plan_rows, N_FLOAT)), lc_params=lane_change_params(config.lane_change),
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
         innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
         log_slot=log.slot, log_span=log.span,

@@ -1,10 +1,11 @@
 """State of the compiled simulation step: the :class:`CoreArrays` and their layout.
 
 :class:`CoreArrays` holds every array the step reads or writes (per-vehicle parameters and
-state, the HDV perception buffers, the demand queues, the event buffer, counters, the log). The
-kernels of :mod:`hcomc.sim.core` receive them as one :class:`Core`, a compiled reference
-record over the same buffers: passing it costs one pointer, whatever the number of arrays
-(a tuple of arrays would be unpacked and reference-counted array by array at every call).
+state, the HDV perception buffers, the demand queues, the event buffer, counters, the plan
+table of the live merge plans, the log). The kernels of :mod:`hcomc.sim.core` receive them
+as one :class:`Core`, a compiled reference record over the same buffers: passing it costs one
+pointer, whatever the number of arrays (a tuple of arrays would be unpacked and
+reference-counted array by array at every call).
 Python reads and writes the state through the :class:`CoreArrays`.
 """
 
@@ -22,13 +23,16 @@ RAMP, MAIN_1, MAIN_2 = 0, 1, 2
 EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
 EV_FALLBACK = 8
 # counters
-STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS = range(7)
-# consts
+STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
+N_COUNTERS = 8
+# consts (SQUARE: the exponent 2.0, see hcomc.sim.core_plans.stopping_distance)
 (DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
- KICK, GAP_ERROR, TTC_ERROR) = range(13)  # fmt: skip
+ KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD, SQUARE) = range(15)  # fmt: skip
+N_CONSTS = 15
 # flags
-(PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER, CAV_GAME,
- HAS_PLANS) = range(9)  # fmt: skip
+(PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
+ CAV_GAME) = range(8)  # fmt: skip
+N_FLAGS = 8
 # reasons run_steps returns
 DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
 
@@ -82,9 +86,11 @@ class CoreArrays(NamedTuple):
     ev_other: np.ndarray
     ev_x: np.ndarray
     ev_value: np.ndarray
-    counters: np.ndarray  # int64, see STEP ... COLLISIONS
-    consts: np.ndarray  # float64, see DT ... TTC_ERROR
-    flags: np.ndarray  # int64, see PERCEIVE ... HAS_PLANS
+    counters: np.ndarray  # int64, see STEP ... N_PLANS
+    consts: np.ndarray  # float64, see DT ... SQUARE
+    flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
+    plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.core_plans), first N_PLANS
+    plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors

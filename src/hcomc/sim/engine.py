@@ -18,9 +18,12 @@ Every vehicle's deceleration is limited to ``lane_change.emergency_decel``; a co
 still happens is logged as an event, never hidden.
 
 The per-step work runs in compiled kernels (:mod:`hcomc.sim.core`); this class builds their
-state, runs many steps per compiled call while nothing needs Python, and steps one at a time
-with the controller in between at decision events (a ramp vehicle entering the control zone,
-live merge plans, game-confirmed lane changes).
+state and runs many steps per compiled call, live merge plans included (executed from the
+plan table of the compiled state, :mod:`hcomc.sim.core_plans`). It takes a step in Python
+only at a controller decision: a ramp vehicle entering the control zone (key vehicles, a
+first plan) or a live plan due for a replan; and on every step of a run whose CAVs confirm
+their lane changes by the game (Section III-B). Such a step runs the controller and then the
+compiled loop's own kernels, so where a step is taken does not change the run.
 """
 
 from __future__ import annotations
@@ -46,21 +49,15 @@ from hcomc.road import Kind, Lane
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_build import adopt_log_columns, allocate_log, build_arrays, widen_log
+from hcomc.sim.core_plans import add_plan, encode_plan
 from hcomc.sim.core_state import Core
 from hcomc.sim.demand import Demand, generate_demand
-from hcomc.sim.execution import (
-    ActivePlan,
-    game_confirms,
-    holding_lane,
-    plan_record,
-    virtual_leaders,
-)
+from hcomc.sim.execution import ActivePlan, game_confirms, plan_record, plan_views
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import Perception
 
-_NO_INT = np.empty(0, dtype=np.int64)
 _NO_FLOAT = np.empty(0)
 
 
@@ -116,7 +113,7 @@ class Simulation:
         self.counterfactual = counterfactual
         self.demand, self.fleet, self.controller = demand, fleet, controller
         self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
-        self.plans: list[ActivePlan] = []
+        self.python_steps = 0  # steps taken in Python (decision events)
         self.decisions: list[MergePlan] = []
         self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
         self.is_hdv = demand.kind == Kind.HDV
@@ -299,8 +296,13 @@ class Simulation:
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
-        """Advance the whole traffic state by one step ``dt``, consulting the controller."""
+        """Advance the whole traffic state by one step ``dt``, consulting the controller.
+
+        Everything after the key vehicles and the controller's decisions is the compiled
+        loop's step (:func:`hcomc.sim.core.step_body`, split around the lane-change game when
+        CAVs confirm their changes by it), so a step taken here equals one taken there."""
         c, t = self.arrays, self.t
+        self.python_steps += 1
         if c.flags[layout.ERRORS] and c.counters[layout.INNOV_CURSOR] >= c.innov.shape[0]:
             self._refill_innovations()
         if c.counters[layout.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
@@ -315,31 +317,23 @@ class Simulation:
         self._identify_key_vehicles(ids, changing, t)
         if self.controller is not None:
             self._plan_new(ids, changing, t)
-        following = np.zeros(self.x.size, dtype=bool)
-        following[[p.vr for p in self.plans if p.vr_following]] = True
-        vv = virtual_leaders(self.plans, t, self.x, self.v, self.a, self.fleet.length)
-        acc, changing, vs, ls, ks, rank, lead = core.step_accelerations(
-            self.core, ids, t, following, *vv
-        )
-        index = LaneIndex(vehicle=vs, lane=ls, key=ks, rank=rank)
-        if self.plans:
-            self._execute_plans(ids, index, lead, t)
+        if not self.config.lane_change.cav_game:
+            core.step_body(self.core, ids, t)
+            self.flush_events()
+            return
+        acc, changing, vs, ls, ks, rank, lead = core.step_front(self.core, ids, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
-            holding = holding_lane(self.plans, self.fleet.kind == Kind.CAV) | c.held
             chosen, target = core.discretionary_changes(
-                self.core, ids, changing, holding, lead, vs, ls, ks, rank
+                self.core, ids, changing, core.holding(self.core), lead, vs, ls, ks, rank
             )
-            if self.config.lane_change.cav_game and chosen.size:
+            if chosen.size:
                 keep = game_confirms(
                     self.x, self.v, self.lane, self.fleet, self.config, chosen, target, ids,
-                    lead, index,
+                    lead, LaneIndex(vehicle=vs, lane=ls, key=ks, rank=rank),
                 )  # fmt: skip
                 chosen, target = chosen[keep], target[keep]
             core.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
-        core.step_finish(self.core, ids, t, acc, vs, ls)
-        if self.plans:
-            self._finish_plans()
-        c.flags[layout.HAS_PLANS] = bool(self.plans)
+        core.step_back(self.core, ids, t, acc, vs, ls)
         self.flush_events()
 
     def _release(self, t: float) -> None:
@@ -353,6 +347,13 @@ class Simulation:
         return core.follow_many(self.core, ids, np.ascontiguousarray(leader, dtype=np.int64))
 
     # ---------------------------------------------------------------- plans
+    @property
+    def plans(self) -> list[ActivePlan]:
+        """The plans being executed, in the order they were made, with their progress (a
+        copy: the run executes them from the plan table of its compiled state)."""
+        c = self.arrays
+        return plan_views(c.plan_int, int(c.counters[layout.N_PLANS]), self.decisions)
+
     def _view(self, t: float) -> TrafficView:
         """Read-only copy of the state for a controller."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
@@ -387,7 +388,8 @@ class Simulation:
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Ask the controller for a plan when a ramp vehicle enters the control zone, and again
         every ``control.replan_period`` seconds while its plan may still change (receding
-        horizon, key vehicles re-identified)."""
+        horizon, key vehicles re-identified: :func:`hcomc.sim.core_plans.due_plans`). A new
+        plan replaces its VR's live plan in the plan table."""
         assert self.controller is not None
         new = ids[
             (self.lane[ids] == Lane.RAMP)
@@ -395,14 +397,9 @@ class Simulation:
             & ~self.planned[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
-        period = self.config.control.replan_period
-        on_ramp = (self.lane == Lane.RAMP) & (self.origin == self.target) & self.active
-        due = [
-            p.vr
-            for p in self.plans
-            if on_ramp[p.vr] and p.may_replan(t, period, self.x[p.vr], self.v[p.vr])
-        ]
-        for vr in [*new.tolist(), *due]:
+        due = core.due_plans(self.core, t)
+        c = self.arrays
+        for vr in [*new.tolist(), *due.tolist()]:
             self.planned[vr] = True
             view = self._view(t)
             group = find_key_vehicles(view, vr)
@@ -414,71 +411,16 @@ class Simulation:
                                value=int(plan.mode))  # fmt: skip
             if plan.fallback:
                 self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
-            cav = self.fleet.kind == Kind.CAV
-            self.plans = [p for p in self.plans if p.vr != vr]
-            self.plans.append(
-                ActivePlan(
-                    plan,
-                    vr_commanded=bool(cav[vr]) and bool(np.isfinite(plan.merge_x)),
-                    vmc_commanded=plan.mode != Mode.NONE,
-                    vnr_commanded=plan.vv2 is not None,
-                )
+            cav_vr = bool(self.fleet.kind[vr] == Kind.CAV)
+            row = encode_plan(
+                plan,
+                vr_commanded=cav_vr and bool(np.isfinite(plan.merge_x)),
+                vmc_commanded=plan.mode != Mode.NONE,
+                vnr_commanded=plan.vv2 is not None,
+                ident=len(self.decisions) - 1,
             )
-
-    def _execute_plans(self, ids: IntArray, index: LaneIndex, lead: IntArray, t: float) -> None:
-        """Start the lane changes the live plans command (see :mod:`hcomc.sim.execution`),
-        each when the MOBIL safety criterion holds; a failed command is logged as FALLBACK."""
-        accel_end = self.config.road.accel_lane_end
-        for p in self.plans:
-            g = p.plan.group
-            if p.plan.mode == Mode.LATERAL and p.vmc_commanded and not p.vmc_started:
-                started = self._command(ids, index, lead, t, g.vmc, Lane.MAIN_2, math.nan,
-                                        -math.inf, g)  # fmt: skip
-                if started > 0:
-                    p.vmc_started = True
-                else:
-                    p.vmc_commanded = p.vnr_commanded = False
-                    p.released = True
-            vr = g.vr
-            if (
-                not p.vr_commanded
-                or p.vr_started
-                or p.released
-                or self.origin[vr] != self.target[vr]
-                or self.x[vr] < p.plan.merge_x
-            ):
-                continue
-            release_x = accel_end - self._stopping_distance(vr)
-            started = self._command(ids, index, lead, t, vr, Lane.MAIN_1, p.plan.vr_duration,
-                                    release_x, g)  # fmt: skip
-            p.vr_started = started > 0
-            p.released = started < 0
-
-    def _command(
-        self, ids: IntArray, index: LaneIndex, lead: IntArray, t: float, i: int, target: int,
-        duration: float, release_x: float, group: MergeGroup,
-    ) -> int:  # fmt: skip
-        """One commanded lane change (see :func:`hcomc.sim.core.commanded_changes`)."""
-        result = core.commanded_changes(
-            self.core, ids, t, lead, index.vehicle, index.lane, index.key, index.rank,
-            np.array([i]), np.array([int(target)]), np.array([duration]),
-            np.array([release_x]), np.array([group.vr]), np.array([group.vmc]),
-        )  # fmt: skip
-        return int(result[0])
-
-    def _stopping_distance(self, i: int) -> float:
-        """Distance vehicle i needs to stop at the MOBIL safe deceleration, plus s0 [m]."""
-        b_safe = self.config.lane_change.safe_decel
-        return float(self.v[i] ** 2 / (2.0 * b_safe) + self.fleet.s0[i])
-
-    def _finish_plans(self) -> None:
-        """Drop plans whose merge is complete or whose key vehicles left."""
-        for p in self.plans:
-            g = p.plan.group
-            merged = self.lane[g.vr] == Lane.MAIN_1 and self.origin[g.vr] == self.target[g.vr]
-            gone = not self.active[g.vr] or (g.vmc >= 0 and not self.active[g.vmc])
-            p.done = merged or gone
-        self.plans = [p for p in self.plans if not p.done]
+            n = int(c.counters[layout.N_PLANS])
+            c.counters[layout.N_PLANS] = add_plan(c.plan_int, c.plan_f, n, *row)
 
 
 def simulate(

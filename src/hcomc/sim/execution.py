@@ -18,6 +18,10 @@ A plan ends when VR's merge completes or a key vehicle leaves the road, and is r
 new plan when the engine replans (every ``control.replan_period`` seconds until VR starts its
 lane change or a lateral cooperation has begun). While it is active, commanded vehicles and
 the connected (CAV) key vehicles make no discretionary (MOBIL) lane changes of their own.
+
+The engine executes these rules in its compiled step, from the plan table of its state
+(:mod:`hcomc.sim.core_plans`, their one implementation); the functions here apply the same
+kernels to a list of :class:`ActivePlan` (the SUMO co-simulation keeps its plans that way).
 """
 
 from __future__ import annotations
@@ -28,8 +32,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.control.base import MergePlan, Mode, virtual_states
+from hcomc.control.base import MergePlan
 from hcomc.road import Kind, Lane
+from hcomc.sim import core_plans as table
+from hcomc.sim.core_plans import commanded_mask, encode_plan, holding_mask, replan_due
 from hcomc.sim.plans import PlanRecord
 
 if TYPE_CHECKING:
@@ -62,49 +68,61 @@ class ActivePlan:
         return self.vr_commanded and not self.vr_started and not self.released
 
     def may_replan(self, t: float, period: float, x_vr: float, v_vr: float) -> bool:
-        """Receding horizon: replan every ``period`` s until a commanded lane change began.
+        """Receding horizon: replan every ``period`` s until a commanded lane change began
+        (:func:`hcomc.sim.core_plans.replan_due`).
 
         Within one period before its merge position VR keeps the plan it is about to execute
         (a replan cannot move the merge away at the last moment); if the change cannot start
         there (the MOBIL safety criterion fails), the plan has failed and replanning resumes
         until VR is released to gap acceptance.
         """
-        merge_x = self.plan.merge_x
-        committed = self.vr_commanded and merge_x - v_vr * period <= x_vr < merge_x
-        return (
-            period > 0.0
-            and not committed
-            and not self.vr_started
-            and not self.vmc_started
-            and not self.released
-            and t - self.plan.t0 >= period - 1e-9
-        )
+        return bool(
+            replan_due(self.vr_commanded, self.vr_started, self.vmc_started, self.released,
+                       float(self.plan.t0), float(self.plan.merge_x), float(t), float(period),
+                       float(x_vr), float(v_vr))
+        )  # fmt: skip
+
+
+def plan_table(plans: list[ActivePlan]) -> tuple[np.ndarray, np.ndarray]:
+    """The plan table (:mod:`hcomc.sim.core_plans`) of ``plans``, row k being ``plans[k]``."""
+    n = max(1, len(plans))
+    pi, pf = np.zeros((n, table.N_INT), dtype=np.int64), np.zeros((n, table.N_FLOAT))
+    for k, p in enumerate(plans):
+        ints, floats = encode_plan(p.plan, p.vr_commanded, p.vmc_commanded, p.vnr_commanded, k)
+        ints[[table.P_VR_STARTED, table.P_VMC_STARTED, table.P_RELEASED]] = (
+            p.vr_started, p.vmc_started, p.released
+        )  # fmt: skip
+        pi[k], pf[k] = ints, floats
+    return pi, pf
+
+
+def plan_views(plan_int: np.ndarray, n: int, decisions: list[MergePlan]) -> list[ActivePlan]:
+    """The first ``n`` rows of a plan table as :class:`ActivePlan` (copies), each with its
+    plan from ``decisions``."""
+    return [_view_of(row, decisions) for row in plan_int[:n]]
+
+
+def _view_of(row: np.ndarray, decisions: list[MergePlan]) -> ActivePlan:
+    return ActivePlan(
+        decisions[int(row[table.P_ID])], vr_commanded=bool(row[table.P_VR_CMD]),
+        vmc_commanded=bool(row[table.P_VMC_CMD]), vnr_commanded=bool(row[table.P_VNR_CMD]),
+        vr_started=bool(row[table.P_VR_STARTED]), vmc_started=bool(row[table.P_VMC_STARTED]),
+        released=bool(row[table.P_RELEASED]),
+    )  # fmt: skip
 
 
 def commanded(plans: list[ActivePlan], n: int) -> BoolArray:
     """Vehicles a live plan commands (excluded from MOBIL decisions)."""
-    mask = np.zeros(n, dtype=bool)
-    for p in plans:
-        g = p.plan.group
-        if p.vr_commanded and not p.vr_started and not p.released:
-            mask[g.vr] = True
-        if p.vmc_commanded:
-            mask[g.vmc] = True
-        if p.vnr_commanded:
-            mask[g.vnr] = True
-    return mask
+    pi, _ = plan_table(plans)
+    return commanded_mask(pi, len(plans), n)
 
 
 def holding_lane(plans: list[ActivePlan], is_cav: BoolArray) -> BoolArray:
     """Vehicles that make no discretionary (MOBIL) lane change now: those a live plan
     commands, and every connected (CAV) key vehicle of a live plan, which keeps its lane so
     that it does not cut into the gap the plan opens (an HDV key vehicle cannot be told)."""
-    mask = commanded(plans, is_cav.size)
-    for p in plans:
-        keys = p.plan.group.as_array()
-        keys = keys[keys >= 0]
-        mask[keys[is_cav[keys]]] = True
-    return mask
+    pi, _ = plan_table(plans)
+    return holding_mask(pi, len(plans), np.ascontiguousarray(is_cav, dtype=np.bool_))
 
 
 def virtual_leaders(
@@ -119,24 +137,16 @@ def virtual_leaders(
 
     VV0 leads a CAV VR that follows its plan on the ramp, VV1 a cooperating VMC in
     longitudinal mode (until VR's merge is complete), VV2 a CAV VNR in lateral mode (within
-    the horizon); their states are those of :func:`hcomc.control.base.virtual_states`.
+    the horizon); their states are those of :func:`hcomc.control.base.virtual_states`
+    (:func:`hcomc.sim.core_plans.virtual_rows`).
     """
-    rows: list[tuple[int, float, float, float, float]] = []
-    for p in plans:
-        plan, g = p.plan, p.plan.group
-        states = virtual_states(plan, t, x, v, a)
-        if p.vr_following and "vv0" in states and g.vmf >= 0:
-            rows.append((g.vr, *states["vv0"], float(length[g.vmf])))
-        if p.vmc_commanded and plan.mode == Mode.LONGITUDINAL and "vv1" in states:
-            rows.append((g.vmc, *states["vv1"], float(length[g.vr])))
-        if p.vnr_commanded and "vv2" in states:
-            rows.append((g.vnr, *states["vv2"], float(length[g.vmc])))
-    if not rows:
-        empty = np.empty(0)
-        return np.empty(0, dtype=np.int64), empty, empty, empty, empty
-    table = np.array([r[1:] for r in rows], dtype=np.float64)
-    followers = np.array([r[0] for r in rows], dtype=np.int64)
-    return followers, table[:, 0], table[:, 1], table[:, 2], table[:, 3]
+    pi, pf = plan_table(plans)
+    f8 = np.float64
+    return table.virtual_rows(
+        pi, pf, len(plans), float(t), np.ascontiguousarray(x, dtype=f8),
+        np.ascontiguousarray(v, dtype=f8), np.ascontiguousarray(a, dtype=f8),
+        np.ascontiguousarray(length, dtype=f8),
+    )  # fmt: skip
 
 
 def game_confirms(
