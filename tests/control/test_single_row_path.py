@@ -18,11 +18,8 @@ they replaced, special values included, so that the population path is unchanged
 from __future__ import annotations
 
 import dataclasses
-import os
-import sys
 from collections.abc import Callable
 from functools import cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,44 +28,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc._typing import FloatArray
-from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, TrafficView
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
 from hcomc.control.hcomc.problem import AHEAD, BEHIND, VMC, MergeProblem
 from hcomc.control.hcomc.rollout_score import objective_rows
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import RowProblem
-
-BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
-Instant = tuple[str, ScenarioConfig, TrafficView, MergeGroup]
-
-
-@cache
-def _instants() -> tuple[Instant, ...]:
-    """The 60 recorded first planning instants of C1-C5 (``record_decisions.load_decisions``)."""
-    sys.path.insert(0, str(BENCHMARKS))  # record_decisions imports its sibling throughput.py
-    environ = dict(os.environ)  # the script pins its thread variables to 1 when imported
-    try:
-        from record_decisions import load_decisions
-    finally:
-        sys.path.remove(str(BENCHMARKS))
-        # numba rereads NUMBA_NUM_THREADS at every compilation and refuses a change once its
-        # threads run: the rest of the test session must see the variables it started with
-        os.environ.clear()
-        os.environ.update(environ)
-    return tuple((d.name, d.config, d.view, d.group) for d in load_decisions())
-
-
-def _problem(index: int) -> MergeProblem:
-    """A fresh merge problem of recorded instant ``index`` (as the controller builds it)."""
-    _, config, view, group = _instants()[index]
-    return HCOMCController(config).problem(view, group)[0]
+from recorded_decisions import recorded_instants, recorded_problem
 
 
 @cache
 def _cached_problem(index: int) -> MergeProblem:
-    """:func:`_problem`, built once per test session (for the many hypothesis examples)."""
-    return _problem(index)
+    """:func:`recorded_problem`, built once per test session (for the many hypothesis
+    examples)."""
+    return recorded_problem(index)
 
 
 def _variants(problem: MergeProblem) -> list[MergeProblem]:
@@ -132,13 +104,13 @@ def _assert_row_equals_population(problem: MergeProblem, X: FloatArray) -> None:
 
 
 def test_merge_problem_offers_the_row_path() -> None:
-    assert isinstance(_problem(0), RowProblem)
+    assert isinstance(recorded_problem(0), RowProblem)
 
 
 @pytest.mark.parametrize("index", range(60))
 def test_row_path_equals_evaluate_on_recorded_instants(index: int) -> None:
     """200 rows per recorded instant and variant (12,000 per variant in all)."""
-    for k, problem in enumerate(_variants(_problem(index))):
+    for k, problem in enumerate(_variants(recorded_problem(index))):
         X = _rows(problem, 200, seed=1000 * index + k)
         _assert_row_equals_population(problem, X)
 
@@ -149,7 +121,7 @@ def test_rows_cover_both_sequences_modes_and_constraints() -> None:
     feasible and infeasible ones."""
     seen: dict[str, set[bool]] = {}
     for index in range(0, 60, 6):
-        for k, problem in enumerate(_variants(_problem(index))):
+        for k, problem in enumerate(_variants(recorded_problem(index))):
             X = _rows(problem, 200, seed=1000 * index + k)
             seq = problem.predict(X).sequence
             G = problem.evaluate(X)[1]
@@ -188,7 +160,7 @@ def test_row_path_equals_single_row_evaluate(
 
 def test_row_path_without_a_cooperating_vehicle() -> None:
     """U_fuel's VR-only branch (no VMC): not met at the recorded instants, so built here."""
-    problem = _problem(3)
+    problem = recorded_problem(3)
     state = problem.states[AHEAD]
     present = state.present.copy()
     present[VMC] = False
@@ -238,7 +210,7 @@ def test_objective_rows_equal_array_form(values: list[float], n: int) -> None:
 
 def test_scalarise_equals_array_form_on_evaluated_rows() -> None:
     for index in range(0, 60, 5):
-        problem = _problem(index)
+        problem = recorded_problem(index)
         F, G = problem.evaluate(_rows(problem, 300, seed=index))
         assert _bits(problem.scalarise(F, G)) == _bits(_scalarise_array_form(problem, F, G))
 
@@ -281,7 +253,7 @@ def test_sa_minimize_identical_with_and_without_row_path(
     _record(MergeProblem, "evaluate", slow_calls, monkeypatch.setattr)
     results = []
     for row_path in (True, False):
-        problem = _problem(index)
+        problem = recorded_problem(index)
         initial = None if index % 4 else _rows(problem, 3, seed=index)  # warm starts too
         results.append(
             AnnealingOptimizer(row_path=row_path).minimize(
@@ -298,7 +270,7 @@ def test_hcomc_plan_with_sa_identical_with_and_without_row_path(
     index: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Whole decisions, a replanned (warm-started) second decision included."""
-    name, config, view, group = _instants()[index]
+    name, config, view, group = recorded_instants()[index]
     config = config.model_copy(
         update={"control": config.control.model_copy(update={"optimizer": "sa"})}
     )

@@ -25,6 +25,7 @@ from pymoo.core.problem import Problem as PymooProblem
 from pymoo.core.replacement import ImprovementReplacement
 from pymoo.operators.sampling.lhs import LHS, criterion_maxmin
 
+import scalar_problems
 from hcomc._typing import FloatArray
 from hcomc.config import load_config
 from hcomc.control.hcomc.controller import HCOMCController
@@ -41,58 +42,20 @@ from hcomc.optim.pso import (
 from hcomc.optim.pymoo_backend import PSOOptimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.sim.engine import Simulation
+from scalar_problems import Rastrigin, ScalarProblem
 
 _EXP_OVERFLOW = "ignore:overflow encountered in exp:RuntimeWarning"
 """pymoo's adaptation warns when all particles' mean distances are equal (w becomes 0)."""
 
 
-class _Scalar:
-    """A single-objective test problem on a box that keeps every evaluated population."""
-
-    n_obj = 1
-    n_constr = 0
-    objective_names = ("f",)
-
-    def __init__(self, xl: FloatArray, xu: FloatArray) -> None:
-        self.n_var = xl.size
-        self.xl, self.xu = xl, xu
-        self.xl.flags.writeable = False  # an in-place change by an optimiser would raise
-        self.xu.flags.writeable = False
-        self.evaluated: list[FloatArray] = []
-
-    def f(self, X: FloatArray) -> FloatArray:
-        raise NotImplementedError
-
-    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        self.evaluated.append(np.array(X, copy=True))
-        return self.f(X)[:, None], np.zeros((X.shape[0], 0))
-
-    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
-        return F[:, 0] + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
-
-
-class Sphere(_Scalar):
-    """Shifted sphere on [-5, 5]^n, minimum 0 at (1, -2, 0.5, ...)."""
+class Sphere(scalar_problems.Sphere):
+    """The shared shifted sphere, 5 variables unless told (the size these runs use)."""
 
     def __init__(self, n_var: int = 5, xl: float = -5.0, xu: float = 5.0) -> None:
-        super().__init__(np.full(n_var, xl), np.full(n_var, xu))
-        self.centre = np.resize([1.0, -2.0, 0.5], n_var)
-
-    def f(self, X: FloatArray) -> FloatArray:
-        return ((X - self.centre) ** 2).sum(axis=1)
+        super().__init__(n_var, xl, xu)
 
 
-class Rastrigin(_Scalar):
-    """Rastrigin on [-5.12, 5.12]^n: many local minima, global minimum 0 at the origin."""
-
-    def __init__(self, n_var: int = 6) -> None:
-        super().__init__(np.full(n_var, -5.12), np.full(n_var, 5.12))
-
-    def f(self, X: FloatArray) -> FloatArray:
-        return 10.0 * X.shape[1] + (X**2 - 10.0 * np.cos(2.0 * np.pi * X)).sum(axis=1)
-
-
-class Corner(_Scalar):
+class Corner(ScalarProblem):
     """``sum(x)`` on [0, 1]^3: the optimum is a corner, so the best particles sit on the
     bounds with velocities pointing out, which exhausts the 20 out-of-box retries."""
 
@@ -168,8 +131,8 @@ def _assert_same(ref: ParetoResult, new: ParetoResult, p_ref: Any, p_new: Any) -
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
-@pytest.mark.parametrize("make", [Sphere, Rastrigin], ids=["sphere", "rastrigin"])
-def test_runs_equal_pymoo_and_converge(make: Callable[[], _Scalar], seed: int) -> None:
+@pytest.mark.parametrize("make", [Sphere, lambda: Rastrigin(6)], ids=["sphere", "rastrigin"])
+def test_runs_equal_pymoo_and_converge(make: Callable[[], ScalarProblem], seed: int) -> None:
     ref, new, p_ref, p_new = _both(make, 960, seed, pop_size=24)
     _assert_same(ref, new, p_ref, p_new)
     assert len(p_new.evaluated) == 40
@@ -240,7 +203,9 @@ def test_all_costs_nan_equal_pymoo() -> None:
 def test_budget_layout_and_parameters_equal_pymoo(
     pop_size: int, budget: int, options: dict[str, Any]
 ) -> None:
-    ref, new, p_ref, p_new = _both(Rastrigin, budget, pop_size, pop_size=pop_size, **options)
+    ref, new, p_ref, p_new = _both(
+        lambda: Rastrigin(6), budget, pop_size, pop_size=pop_size, **options
+    )
     _assert_same(ref, new, p_ref, p_new)
     assert new.n_eval == pop_size * max(1, budget // pop_size)
 
@@ -305,7 +270,7 @@ def test_random_boxes_equal_pymoo(
 def test_deterministic_per_seed_and_seed_sensitive() -> None:
     opt = CompiledPSOOptimizer(pop_size=12)
     a, b, c = (
-        opt.minimize(Rastrigin(), budget=120, rng=np.random.default_rng(s)) for s in (7, 7, 8)
+        opt.minimize(Rastrigin(6), budget=120, rng=np.random.default_rng(s)) for s in (7, 7, 8)
     )
     np.testing.assert_array_equal(a.X, b.X)
     np.testing.assert_array_equal(a.F, b.F)

@@ -13,12 +13,8 @@ formula, close calls included.
 from __future__ import annotations
 
 import math
-import os
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import cache
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 from unittest import mock
@@ -28,6 +24,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import scalar_problems
 from hcomc._typing import FloatArray
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import MergeProblem
@@ -36,8 +33,9 @@ from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.registry import make_optimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer, accepts
+from recorded_decisions import recorded_instants, recorded_problem
+from scalar_problems import Rastrigin, Rosenbrock, ScalarProblem
 
-BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
 PATHS = ["kernel", "numpy"]
 """Where the steps' scale ``exp(c log|y|)`` is taken: in the kernels (with the C library's
 functions, where they are numpy's on this machine) or by numpy's ufuncs."""
@@ -52,60 +50,11 @@ def _exp_log(path: str) -> Iterator[None]:
         yield
 
 
-class _Scalar:
-    """A single-objective test problem on a box that keeps every evaluated row."""
-
-    n_obj = 1
-    n_constr = 0
-    objective_names = ("f",)
-
-    def __init__(self, xl: FloatArray, xu: FloatArray) -> None:
-        self.n_var = xl.size
-        self.xl, self.xu = xl, xu
-        self.xl.flags.writeable = False  # an in-place change by an optimiser would raise
-        self.xu.flags.writeable = False
-        self.evaluated: list[FloatArray] = []
-
-    def f(self, X: FloatArray) -> FloatArray:
-        raise NotImplementedError
-
-    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        self.evaluated.append(np.array(X, copy=True))
-        return self.f(X)[:, None], np.zeros((X.shape[0], 0))
-
-    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
-        return F[:, 0] + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
-
-
-class Sphere(_Scalar):
-    """Shifted sphere on [xl, xu]^n, minimum 0 at (1, -2, 0.5, ...) in the default box."""
+class Sphere(scalar_problems.Sphere):
+    """The shared shifted sphere, 4 variables unless told (the size these runs use)."""
 
     def __init__(self, n_var: int = 4, xl: float = -5.0, xu: float = 5.0) -> None:
-        super().__init__(np.full(n_var, xl), np.full(n_var, xu))
-        self.centre = np.resize([1.0, -2.0, 0.5], n_var)
-
-    def f(self, X: FloatArray) -> FloatArray:
-        return ((X - self.centre) ** 2).sum(axis=1)
-
-
-class Rastrigin(_Scalar):
-    """Rastrigin on [-5.12, 5.12]^n: many local minima, global minimum 0 at the origin."""
-
-    def __init__(self, n_var: int = 5) -> None:
-        super().__init__(np.full(n_var, -5.12), np.full(n_var, 5.12))
-
-    def f(self, X: FloatArray) -> FloatArray:
-        return 10.0 * X.shape[1] + (X**2 - 10.0 * np.cos(2.0 * np.pi * X)).sum(axis=1)
-
-
-class Rosenbrock(_Scalar):
-    """Rosenbrock on [-2, 2]^n: a narrow curved valley, minimum 0 at (1, ..., 1)."""
-
-    def __init__(self, n_var: int = 3) -> None:
-        super().__init__(np.full(n_var, -2.0), np.full(n_var, 2.0))
-
-    def f(self, X: FloatArray) -> FloatArray:
-        return (100.0 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1.0 - X[:, :-1]) ** 2).sum(axis=1)
+        super().__init__(n_var, xl, xu)
 
 
 class NonFinite(Sphere):
@@ -198,9 +147,13 @@ def _same(make: Callable[[], Any], budget: int, seed: int, path: str, **kw: Any)
 @pytest.mark.parametrize("path", PATHS)
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize(
-    "make", [Sphere, Rastrigin, Rosenbrock], ids=["sphere", "rastrigin", "rosenbrock"]
+    "make",
+    [Sphere, lambda: Rastrigin(5), lambda: Rosenbrock(3)],
+    ids=["sphere", "rastrigin", "rosenbrock"],
 )
-def test_runs_equal_scipy_and_converge(make: Callable[[], _Scalar], seed: int, path: str) -> None:
+def test_runs_equal_scipy_and_converge(
+    make: Callable[[], ScalarProblem], seed: int, path: str
+) -> None:
     ref, new, p_ref, p_new = _both(make, 1000, seed, path)
     _assert_same(ref, new, p_ref, p_new)
     assert new.n_eval == 1000
@@ -256,7 +209,7 @@ def test_reannealing_equals_scipy(ratio: float, budget: int, n_var: int, path: s
     ],
 )
 def test_parameters_equal_scipy(options: dict[str, Any], path: str) -> None:
-    _same(Rastrigin, 300, 3, path, **options)
+    _same(lambda: Rastrigin(5), 300, 3, path, **options)
 
 
 @pytest.mark.parametrize("path", PATHS)
@@ -425,32 +378,13 @@ def test_accepts_zero_draw_and_non_positive_base() -> None:
 # --------------------------------------------------------------------------------------------
 
 
-@cache
-def _instants() -> tuple[Any, ...]:
-    """Recorded first planning instants of C1-C5 (``record_decisions.load_decisions``)."""
-    sys.path.insert(0, str(BENCHMARKS))  # record_decisions imports its sibling throughput.py
-    environ = dict(os.environ)  # the script pins its thread variables to 1 when imported
-    try:
-        from record_decisions import load_decisions
-    finally:
-        sys.path.remove(str(BENCHMARKS))
-        os.environ.clear()  # the rest of the session must see the variables it started with
-        os.environ.update(environ)
-    return tuple((d.name, d.config, d.view, d.group) for d in load_decisions())
-
-
-def _problem(index: int) -> MergeProblem:
-    _, config, view, group = _instants()[index]
-    return HCOMCController(config).problem(view, group)[0]
-
-
 Calls = list[tuple[bytes, bytes, bytes]]
 
 
 def _run_merge(optimizer: Any, index: int, path: str) -> tuple[ParetoResult, Calls]:
     """One decision at recorded instant ``index``, logging every row ``evaluate_row`` scores
     with its F and G (warm-started at every third instant)."""
-    problem = _problem(index)
+    problem = recorded_problem(index)
     initial = None if index % 3 else problem.xl + 0.3 * (problem.xu - problem.xl)[None, :]
     calls: Calls = []
     method = MergeProblem.evaluate_row
@@ -484,7 +418,7 @@ def test_merge_problem_runs_equal_scipy(index: int, path: str) -> None:
 def test_controller_plans_equal_scipy(index: int) -> None:
     """``HCOMCController.plan`` with "sa" and "sa-scipy": the same plan, also on a replan
     (warm-started from the first plan's solution)."""
-    _, config, view, group = _instants()[index]
+    _, config, view, group = recorded_instants()[index]
     plans = []
     for name in ("sa-scipy", "sa"):
         controller = HCOMCController(config, make_optimizer(name))
