@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import inspect
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -86,7 +87,7 @@ class _Objective:
     def _track(self, cost: float, row: Callable[[], tuple[FloatArray, ...]]) -> float:
         """Offer the row to the best so far; return the cost SciPy sees."""
         self.best.offer_one(cost, row)
-        return cost if np.isfinite(cost) else _NONFINITE_COST
+        return cost if math.isfinite(cost) else _NONFINITE_COST
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,6 +8,7 @@ Single-objective optimisers (PSO, SA) minimise ``problem.scalarise(F, G)`` inste
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
@@ -132,11 +133,11 @@ class BestRow:
     def offer_one(self, cost: float, row: Callable[[], tuple[FloatArray, ...]]) -> None:
         """One row's cost; ``row()`` gives its x, F and G, called (and copied) only when the
         row becomes the best: most rows are not kept."""
-        ranked = np.inf if np.isnan(cost) else cost
-        if self.row is None or ranked < self.cost:
-            self.cost = ranked
-            x, f, g = (np.array(a, dtype=np.float64, copy=True) for a in row())
-            self.row = (x, f, g)
+        if self.row is not None and not cost < self.cost:  # NaN never compares lower
+            return  # the common case, decided by one comparison (SA offers every row)
+        self.cost = math.inf if math.isnan(cost) else cost
+        x, f, g = (np.array(a, dtype=np.float64, copy=True) for a in row())
+        self.row = (x, f, g)
 
     def result(self, n_eval: int, algorithm: str) -> ParetoResult:
         """The best row as a one-row :class:`ParetoResult`."""

@@ -51,7 +51,7 @@ from numba import njit
 from scipy.special import gammaln
 
 from hcomc._typing import FloatArray
-from hcomc.optim.annealing import _NONFINITE_COST, _Objective
+from hcomc.optim.annealing import _Objective
 from hcomc.optim.base import ParetoResult, Problem, check_budget
 from hcomc.rng import draw_seed
 
@@ -234,31 +234,13 @@ def accepts(r: float, e: float, current: float, temperature_step: float, accept:
     return r <= p
 
 
-class _Cost(_Objective):
-    """The SciPy optimiser's objective (one row per call, counted, the best row tracked, a
-    non-finite cost annealed as ``1e300``) with a leaner single-row path: a row that cannot
-    become the best is not offered (:meth:`BestRow.offer_one` would keep the best: only a
-    strictly lower cost, NaN never, replaces it), and the cost is checked with ``math``."""
-
-    def __call__(self, x: FloatArray) -> float:
-        """Cost of one point for the annealing, counted and tracked."""
-        if self._row is None:
-            return super().__call__(x)
-        cost = float(self._row.evaluate_row(x, self._F, self._G))
-        self.n_calls += 1
-        best = self.best
-        if cost < best.cost or best.row is None:
-            best.offer_one(cost, lambda: (x, self._F, self._G))
-        return cost if math.isfinite(cost) else _NONFINITE_COST
-
-
 class _Annealing:
     """One run's state: SciPy's current point and energy, its generator and evaluations."""
 
     def __init__(
         self,
         opt: CompiledAnnealingOptimizer,
-        cost: _Cost,
+        cost: _Objective,
         lower: FloatArray,
         upper: FloatArray,
         gen: np.random.Generator,
@@ -366,7 +348,7 @@ class CompiledAnnealingOptimizer:
         if x0 is not None and len(x0) != len(lower):
             raise ValueError("Bounds size does not match x0")
         _check(lower, upper, self.restart_temp_ratio)
-        cost = _Cost(problem, budget, self.row_path)
+        cost = _Objective(problem, budget, self.row_path)
         run = _Annealing(self, cost, lower, upper, np.random.default_rng(draw_seed(rng)))
         run.start(x0)
         t1 = np.exp((self.visit - 1) * np.log(2.0)) - 1.0
