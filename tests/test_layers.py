@@ -1,7 +1,7 @@
 """Imports only run downwards through the package's layers.
 
 cli/sumo -> viz -> experiments/envs -> metrics -> sim -> control -> safety/models/optim ->
-config/road (plus the small utilities ``rng`` and ``_typing``). Imports under
+config/road (plus the small utilities ``rng``, ``_typing`` and ``_jit``). Imports under
 ``if TYPE_CHECKING:`` are for annotations only and do not count; imports inside functions
 do, since they run.
 """
@@ -32,6 +32,7 @@ LAYERS = {
     "road": 0,
     "rng": 0,
     "_typing": 0,
+    "_jit": 0,
 }
 ROOT_NAMES = {"__version__"}  # names defined in hcomc/__init__.py itself (layer 0)
 

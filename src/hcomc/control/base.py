@@ -32,8 +32,8 @@ from enum import IntEnum
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.road import KEY_ROLES, N_ROLES, VMC, VMF, VMR, VNF, VNR, VR, Kind, Lane
 
@@ -210,7 +210,7 @@ class MergeController(Protocol):
         ...
 
 
-@njit(cache=True)
+@kernel
 def nearest_in_lane(
     x: np.ndarray, lane: np.ndarray, active: np.ndarray, in_lane: int, x0: float, exclude: int
 ) -> tuple[int, int]:
@@ -233,7 +233,7 @@ def nearest_in_lane(
     return lead, follow
 
 
-@njit(cache=True)
+@kernel
 def key_vehicle_indices(x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int) -> np.ndarray:
     """The six key vehicles of Section II-A around ramp vehicle ``vr``, in role order VR, VMC,
     VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc)."""

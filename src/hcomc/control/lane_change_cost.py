@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.config import ControlParams, IDMParams, LaneChangeParams, RoadParams
 from hcomc.models.idm import idm_accel, iidm_accel
@@ -338,7 +338,7 @@ def simulate_sv(
     )  # fmt: skip
 
 
-@njit(cache=True)
+@kernel
 def _simulate_sv_kernel(
     x0, v_start, old_rear, old_v, new_rear, new_v, v0, T, a_max, b, s0, delta, iidm, dt,
     horizon, gamma, emergency_decel,

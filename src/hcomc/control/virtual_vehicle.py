@@ -11,9 +11,9 @@ with ``τ = t - t0``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -39,7 +39,7 @@ def cubic_coefficients(
     return broadcast_apply(_coefficients_array, horizon, x0, v0, xf, vf)
 
 
-@njit(cache=True)
+@kernel
 def cubic_into(h: float, x0: float, v0: float, xf: float, vf: float, out: np.ndarray) -> None:
     """Write the coefficients of one cubic into ``out`` (4,): the one implementation of
     :func:`cubic_coefficients` (Eq. 10)."""
@@ -49,7 +49,7 @@ def cubic_into(h: float, x0: float, v0: float, xf: float, vf: float, out: np.nda
     out[3] = (-2.0 * dx + (v0 + vf) * h) / (h * h * h)
 
 
-@njit(cache=True)
+@kernel
 def _coefficients_array(h, x0, v0, xf, vf):
     out = np.empty((h.size, 4))
     for i in range(h.size):
@@ -64,7 +64,7 @@ def cubic_state(b: FloatArray, tau: ArrayLike) -> tuple[FloatArray, FloatArray, 
     return out[..., 0], out[..., 1], out[..., 2]
 
 
-@njit(cache=True)
+@kernel
 def cubic_point(
     b1: float, b2: float, b3: float, b4: float, tau: float
 ) -> tuple[float, float, float]:
@@ -75,7 +75,7 @@ def cubic_point(
     return x, v, 2.0 * b3 + 6.0 * tau * b4
 
 
-@njit(cache=True)
+@kernel
 def _state_array(b1, b2, b3, b4, tau):
     out = np.empty((tau.size, 3))
     for i in range(tau.size):
@@ -94,7 +94,7 @@ def cubic_extremes(b: FloatArray, horizon: ArrayLike) -> tuple[FloatArray, Float
     return out[..., 0], out[..., 1]
 
 
-@njit(cache=True)
+@kernel
 def cubic_minima(b: np.ndarray, h: float) -> tuple[float, float]:
     """Minimum speed and acceleration of the cubic ``b`` (4,) on [0, h]: the one
     implementation of :func:`cubic_extremes`."""
@@ -107,7 +107,7 @@ def cubic_minima(b: np.ndarray, h: float) -> tuple[float, float]:
     return v_min, a_min
 
 
-@njit(cache=True)
+@kernel
 def _extremes_array(b1, b2, b3, b4, h):
     out = np.empty((h.size, 2))
     b = np.empty(4)

@@ -14,8 +14,8 @@ import math
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.envs.observation import observe, pair_safety
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.models.fuel import FUEL_DEFAULT
@@ -59,7 +59,7 @@ def parameters(config: ScenarioConfig, action_period: float) -> np.ndarray:
     return np.array([*head, *FUEL_DEFAULT.coefficients()], dtype=np.float64)
 
 
-@njit(cache=True)
+@kernel
 def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
     """Drive vehicle i with an action (see :func:`hcomc.envs.episode.apply_action`)."""
     a = min(max(accel, -1.0), 1.0)
@@ -77,20 +77,20 @@ def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
     start_lane_changes(c, np.array([i]), np.array([target]), t, np.array([math.nan]))
 
 
-@njit(cache=True)
+@kernel
 def _is_ramp(c, i: int) -> bool:
     """Whether vehicle i came from the ramp (is in the ramp's release queue)."""
     queue = c.queues[c.queue_start[RAMP] : c.queue_start[RAMP + 1]]
     return bool(np.any(queue == i))
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _rows(c, store: np.ndarray, i: int, r0: int, r1: int) -> np.ndarray:
     """Vehicle i's cells of one of run ``c``'s log columns over rows ``[r0, r1)``."""
     return rows_of(store, c.log_slot, c.log_span, i, r0, r1)
 
 
-@njit(cache=True)
+@kernel
 def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarray, terms):
     """Observation (into ``out``) and reward terms (into ``terms``, see :data:`N_TERMS`) of
     one episode after its run ``c`` and undisturbed twin ``ref`` advanced one period from
@@ -135,14 +135,14 @@ def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarra
     return group
 
 
-@njit(cache=True)
+@kernel
 def step_terms_batch(cores, refs, egos, vrs, r0s, p, obs, terms, groups):
     """:func:`step_terms` of every episode (rows of ``obs``, ``terms`` and ``groups``)."""
     for k in range(len(cores)):
         groups[k] = step_terms(cores[k], refs[k], egos[k], vrs[k], r0s[k], p, obs[k], terms[k])
 
 
-@njit(cache=True)
+@kernel
 def apply_batch(cores, egos, actions, drive, p):
     """:func:`apply_one` for every episode whose ``drive`` flag is set."""
     for k in range(len(cores)):
@@ -150,7 +150,7 @@ def apply_batch(cores, egos, actions, drive, p):
             apply_one(cores[k], egos[k], actions[k, 0], actions[k, 1], p)
 
 
-@njit(cache=True)
+@kernel
 def twins_due(cores, pending, horizon: float, out):
     """:func:`~hcomc.sim.twin.ramp_may_reach` within ``horizon`` [s] of every run whose
     ``pending`` flag is set (False for the others)."""
@@ -158,7 +158,7 @@ def twins_due(cores, pending, horizon: float, out):
         out[k] = pending[k] and ramp_may_reach(cores[k], horizon)
 
 
-@njit(cache=True)
+@kernel
 def ramps_untouched(cores, pending, out):
     """:func:`~hcomc.sim.twin.ramp_untouched` of every run whose ``pending`` flag is set
     (False for the others)."""

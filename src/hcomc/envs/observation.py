@@ -17,8 +17,8 @@ kernel), applied to VR's current position.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.base import key_vehicle_indices, nearest_in_lane
 from hcomc.road import KEY_ROLES, N_ROLES
 from hcomc.safety.critical import critical_accel
@@ -51,7 +51,7 @@ def observation_bounds(road_length: float) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-@njit(cache=True)
+@kernel
 def observe(
     out: np.ndarray, x: np.ndarray, v: np.ndarray, lane: np.ndarray, active: np.ndarray,
     is_cav: np.ndarray, origin: np.ndarray, target: np.ndarray, lc_x0: np.ndarray,
@@ -82,7 +82,7 @@ def observe(
     return group
 
 
-@njit(cache=True)
+@kernel
 def pair_safety(
     x: np.ndarray, v: np.ndarray, lane: np.ndarray, origin: np.ndarray, target: np.ndarray,
     active: np.ndarray, length: np.ndarray, is_cav: np.ndarray, ego: int, delay_cav: float,

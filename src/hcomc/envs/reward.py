@@ -6,13 +6,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.models.following import follow_accel
 from hcomc.models.fuel import fuel_rate_scalar
 
 
-@njit(cache=True)
+@kernel
 def fuel_over_rows(v: np.ndarray, a: np.ndarray, dt: float, coefs: np.ndarray) -> float:
     """Eq. 16: a vehicle's fuel over log rows with speeds ``v`` and accelerations ``a``
     [mL] (rows where it is absent, NaN, count 0; ``coefs`` as
@@ -28,7 +28,7 @@ def fuel_over_rows(v: np.ndarray, a: np.ndarray, dt: float, coefs: np.ndarray) -
     return total * dt
 
 
-@njit(cache=True)
+@kernel
 def gain_over_rows(
     v: np.ndarray, a: np.ndarray, ref_a: np.ndarray, dt: float, free_road: bool,
     p: np.ndarray, iidm: bool,

@@ -23,8 +23,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -103,7 +103,7 @@ def cah_acceleration(
     return broadcast_apply(_cah_array, s, v, v_l, a_l, a)
 
 
-@njit(cache=True)
+@kernel
 def cah_accel(s: float, v: float, v_l: float, a_l: float, a: float) -> float:
     """CAH acceleration of one vehicle [m/s^2]: the one implementation of
     :func:`cah_acceleration` (same arguments, positional)."""
@@ -119,7 +119,7 @@ def cah_accel(s: float, v: float, v_l: float, a_l: float, a: float) -> float:
     return a_lt - dvp * dvp / (2.0 * s_g)
 
 
-@njit(cache=True)
+@kernel
 def _cah_array(s, v, v_l, a_l, a):
     out = np.empty(s.size)
     for i in range(s.size):
@@ -180,7 +180,7 @@ def acc_acceleration(
     return broadcast_apply(_acc_array, a_idm, a_cah, b, c)
 
 
-@njit(cache=True)
+@kernel
 def acc_accel(a_idm: float, a_cah: float, b: float, c: float) -> float:
     """ACC acceleration of one vehicle, Eq. (3) [m/s^2]: the one implementation of
     :func:`acc_acceleration` (same arguments, positional)."""
@@ -189,7 +189,7 @@ def acc_accel(a_idm: float, a_cah: float, b: float, c: float) -> float:
     return (1.0 - c) * a_idm + c * (a_cah + b * math.tanh((a_idm - a_cah) / b))
 
 
-@njit(cache=True)
+@kernel
 def _acc_array(a_idm, a_cah, b, c):
     out = np.empty(a_idm.size)
     for i in range(a_idm.size):

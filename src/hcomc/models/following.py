@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.models._broadcast import broadcast_apply
 from hcomc.models.cav import acc_accel, cah_accel
@@ -22,7 +22,7 @@ from hcomc.models.idm import idm_accel, iidm_accel
 __all__ = ["follow_accel", "follow_acceleration"]
 
 
-@njit(cache=True)
+@kernel
 def follow_accel(
     s: float,
     v: float,
@@ -62,7 +62,7 @@ def follow_accel(
     return acc
 
 
-@njit(cache=True)
+@kernel
 def _follow_array(s, v, vl, al, v0, T, s0, a, b, delta, c, iidm):
     out = np.empty(s.size)
     for i in range(s.size):

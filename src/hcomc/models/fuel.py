@@ -27,9 +27,9 @@ import math
 from typing import Literal
 
 import numpy as np
-from numba import njit
 from pydantic import BaseModel, ConfigDict, Field
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -127,7 +127,7 @@ def fuel_rate(
     return broadcast_apply(_fuel_array, v, a, *params.coefficients())
 
 
-@njit(cache=True)
+@kernel
 def fuel_rate_scalar(
     v: float, a: float, b0: float, b1: float, b2: float, b3: float, c0: float, c1: float,
     c2: float, positive_only: float,
@@ -142,7 +142,7 @@ def fuel_rate_scalar(
     return max(rate, 0.0)
 
 
-@njit(cache=True)
+@kernel
 def _fuel_array(v, a, b0, b1, b2, b3, c0, c1, c2, positive_only):
     out = np.empty(v.size)
     for i in range(v.size):

@@ -27,8 +27,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -102,13 +102,13 @@ def desired_gap(
     return broadcast_apply(_desired_gap_array, v, dv, T, a, b, s0)
 
 
-@njit(cache=True)
+@kernel
 def desired_gap_scalar(v: float, dv: float, T: float, a: float, b: float, s0: float) -> float:
     """:func:`desired_gap` of one vehicle (Eq. 1) [m]."""
     return max(v * T + v * dv / (2.0 * math.sqrt(a * b)), 0.0) + s0
 
 
-@njit(cache=True)
+@kernel
 def _desired_gap_array(v, dv, T, a, b, s0):
     out = np.empty(v.size)
     for i in range(v.size):
@@ -185,7 +185,7 @@ def idm_acceleration(
     return broadcast_apply(_idm_array, s, v, dv, v0, T, a, b, s0, delta)
 
 
-@njit(cache=True)
+@kernel
 def idm_accel(
     s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float, delta: float
 ) -> float:
@@ -195,7 +195,7 @@ def idm_accel(
     return a * (1.0 - (v / v0) ** delta - z * z)
 
 
-@njit(cache=True)
+@kernel
 def _idm_array(s, v, dv, v0, T, a, b, s0, delta):
     out = np.empty(s.size)
     for i in range(s.size):
@@ -284,7 +284,7 @@ def iidm_acceleration(
     return broadcast_apply(_iidm_array, s, v, dv, v0, T, a, b, s0, delta)
 
 
-@njit(cache=True)
+@kernel
 def iidm_accel(
     s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float, delta: float
 ) -> float:
@@ -303,7 +303,7 @@ def iidm_accel(
     return a_free + a * (1.0 - z * z)
 
 
-@njit(cache=True)
+@kernel
 def _iidm_array(s, v, dv, v0, T, a, b, s0, delta):
     out = np.empty(s.size)
     for i in range(s.size):

@@ -23,8 +23,8 @@ from __future__ import annotations
 from math import comb, sqrt
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -185,7 +185,7 @@ def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, Float
     return p.reshape(xi.shape), dp.reshape(xi.shape), ddp.reshape(xi.shape)
 
 
-@njit(cache=True)
+@kernel
 def quintic_shape_scalar(xi: float) -> tuple[float, float, float]:
     """:func:`quintic_shape` of one ξ (clipped to [0, 1]): the one implementation of Eq. (4)'s
     normalised polynomial 10ξ³ − 15ξ⁴ + 6ξ⁵ and its first two derivatives."""
@@ -198,7 +198,7 @@ def quintic_shape_scalar(xi: float) -> tuple[float, float, float]:
     return p, dp, ddp
 
 
-@njit(cache=True)
+@kernel
 def _shape_array(xi):
     p, dp, ddp = np.empty(xi.size), np.empty(xi.size), np.empty(xi.size)
     for i in range(xi.size):
@@ -206,7 +206,7 @@ def _shape_array(xi):
     return p, dp, ddp
 
 
-@njit(cache=True)
+@kernel
 def lateral_state(
     x: float, x0: float, xf: float, y0: float, yf: float
 ) -> tuple[float, float, float]:
@@ -272,7 +272,7 @@ def lateral_offset(
     return out[..., 0], out[..., 1], out[..., 2]
 
 
-@njit(cache=True)
+@kernel
 def _lateral_array(x, x0, xf, y0, yf):
     out = np.empty((x.size, 3))
     for i in range(x.size):

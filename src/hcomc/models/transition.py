@@ -22,8 +22,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -128,14 +128,14 @@ def transition_gamma(tolerance: float) -> float:
     return float(transition_parameters(1.0, tolerance)[1])
 
 
-@njit(cache=True)
+@kernel
 def transition_psi(tau: float, duration: float, gamma: float) -> float:
     """Ψ(τ) of Eq. (14) for one vehicle, with λ = 2γ/T: the one implementation of
     :func:`transition_weight` (γ from :func:`transition_gamma`)."""
     return 0.5 * (math.tanh(2.0 * gamma / duration * tau - gamma) + 1.0)
 
 
-@njit(cache=True)
+@kernel
 def _weight_array(tau, duration, gamma):
     out = np.empty(tau.size)
     for i in range(tau.size):
@@ -179,13 +179,13 @@ def blend_acceleration(
     return broadcast_apply(_blend_array, a_ori, a_new, weight)
 
 
-@njit(cache=True)
+@kernel
 def blend(a_ori: float, a_new: float, weight: float) -> float:
     """Eq. (14) blend of one vehicle: the one implementation of :func:`blend_acceleration`."""
     return weight * a_new + (1.0 - weight) * a_ori
 
 
-@njit(cache=True)
+@kernel
 def _blend_array(a_ori, a_new, weight):
     out = np.empty(a_ori.size)
     for i in range(a_ori.size):

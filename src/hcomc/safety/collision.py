@@ -33,9 +33,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 
 __all__ = [
@@ -57,7 +57,7 @@ __all__ = [
 _PREFILTER_REL_SLACK = 1e-9
 
 
-@njit(cache=True)
+@kernel
 def _straddles(d1: float, d2: float) -> bool:
     """``d1 · d2 <= 0``: opposite signs, or either is zero (touching counts).
 
@@ -68,7 +68,7 @@ def _straddles(d1: float, d2: float) -> bool:
     return not ((d1 > 0.0 and d2 > 0.0) or (d1 < 0.0 and d2 < 0.0))
 
 
-@njit(cache=True)
+@kernel
 def segment_pair_intersects(
     p1x: float, p1y: float, p2x: float, p2y: float,
     q1x: float, q1y: float, q2x: float, q2y: float,
@@ -93,7 +93,7 @@ def segment_pair_intersects(
     return _straddles(d1, d2) and _straddles(d3, d4)
 
 
-@njit(cache=True)
+@kernel
 def point_in_quad(px: float, py: float, cx: np.ndarray, cy: np.ndarray) -> bool:
     """Whether point P lies in (or on) the convex quadrilateral with corners ``cx, cy`` (4,)
     in boundary order, either orientation: the one implementation behind
@@ -109,7 +109,7 @@ def point_in_quad(px: float, py: float, cx: np.ndarray, cy: np.ndarray) -> bool:
     return not (pos and neg)
 
 
-@njit(cache=True)
+@kernel
 def quads_collide(ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray) -> bool:
     """Whether two closed convex quadrilaterals (corners (4,) each, boundary order) share a
     point: an edge pair meets (Eq. 7) or one contains a corner of the other. The one
@@ -123,7 +123,7 @@ def quads_collide(ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray
     return point_in_quad(bx[0], by[0], ax, ay) or point_in_quad(ax[0], ay[0], bx, by)
 
 
-@njit(cache=True)
+@kernel
 def corners_into(
     x: float, y: float, c: float, s: float, length: float, width: float,
     cx: np.ndarray, cy: np.ndarray,
@@ -142,7 +142,7 @@ def corners_into(
     cx[3], cy[3] = rear_x + ws, rear_y - wc  # rear-right (u = -L, v = -W/2)
 
 
-@njit(cache=True)
+@kernel
 def _within(dx: float, dy: float, reach: float, scale: float) -> bool:
     """Bounding-circle test ``dx² + dy² <= reach²`` with the relative slack; NaN gives False.
 
@@ -153,7 +153,7 @@ def _within(dx: float, dy: float, reach: float, scale: float) -> bool:
     return dx * dx + dy * dy <= reach * reach
 
 
-@njit(cache=True)
+@kernel
 def vehicle_pair_collides(
     xa: float, ya: float, ha: float, la: float, wa: float,
     xb: float, yb: float, hb: float, lb: float, wb: float,
@@ -243,7 +243,7 @@ def rectangle_corners(
     return _corners_array(xb, yb, hb, lb, wb).reshape((*shape, 4, 2))
 
 
-@njit(cache=True)
+@kernel
 def _corners_array(x, y, h, length, width):
     out = np.empty((x.size, 4, 2))
     cx, cy = np.empty(4), np.empty(4)
@@ -304,7 +304,7 @@ def segments_intersect(p1: ArrayLike, p2: ArrayLike, q1: ArrayLike, q2: ArrayLik
     return _segments_array(*flat).reshape(shape)
 
 
-@njit(cache=True)
+@kernel
 def _segments_array(a1, a2, b1, b2):
     out = np.empty(a1.shape[0], dtype=np.bool_)
     for i in range(a1.shape[0]):
@@ -351,7 +351,7 @@ def point_in_rectangle(points: ArrayLike, corners: ArrayLike) -> BoolArray:
     return _points_array(flat_p, flat_c).reshape(shape)
 
 
-@njit(cache=True)
+@kernel
 def _points_array(p, c):
     out = np.empty(p.shape[0], dtype=np.bool_)
     for i in range(p.shape[0]):
@@ -391,7 +391,7 @@ def rectangles_collide(corners_a: ArrayLike, corners_b: ArrayLike) -> BoolArray:
     return _quads_array(flat_a, flat_b).reshape(shape)
 
 
-@njit(cache=True)
+@kernel
 def _quads_array(a, b):
     out = np.empty(a.shape[0], dtype=np.bool_)
     for i in range(a.shape[0]):
@@ -469,7 +469,7 @@ def vehicles_collide(
     return _vehicles_array(*flat).reshape(shape)
 
 
-@njit(cache=True)
+@kernel
 def _vehicles_array(xa, ya, ha, la, wa, xb, yb, hb, lb, wb):
     out = np.empty(xa.size, dtype=np.bool_)
     for i in range(xa.size):

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
@@ -56,7 +56,7 @@ def critical_acceleration(
     )
 
 
-@njit(cache=True)
+@kernel
 def critical_accel(
     d: float, v_r: float, v_f: float, delay: float, min_distance: float, emergency_decel: float
 ) -> float:
@@ -67,7 +67,7 @@ def critical_accel(
     return v_r * v_r / denom if denom > 0.0 else np.inf
 
 
-@njit(cache=True)
+@kernel
 def _critical_array(d, v_r, v_f, delay, min_distance, emergency_decel):
     out = np.empty(d.size)
     for i in range(d.size):

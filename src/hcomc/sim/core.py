@@ -24,8 +24,8 @@ Each equation is called from its one home (:mod:`hcomc.models`, :mod:`hcomc.safe
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.sim.core_lane_change import (
     commanded_changes,
     discretionary_changes,
@@ -86,7 +86,7 @@ __all__ = [
 ]  # fmt: skip
 
 
-@njit(cache=True)
+@kernel
 def step_finish(
     c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
 ) -> None:
@@ -105,7 +105,7 @@ def step_finish(
 
 
 # --------------------------------------------------------------------------- record
-@njit(cache=True)
+@kernel
 def record_row(c: CoreArrays, k: int, t: float) -> bool:
     """Write log row k for the vehicles on the road, each in its slot column
     (:func:`hcomc.sim.log_slots.claim_slots`); the other cells keep the log's fill (NaN,
@@ -124,7 +124,7 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
 
 
 # ---------------------------------------------------------------------- one step
-@njit(cache=True)
+@kernel
 def step_front(c: CoreArrays, ids: np.ndarray, t: float):
     """The accelerations of a step (:func:`step_accelerations`) with the live plans' followers
     and virtual leaders, then the lane changes the plans command now. Returns
@@ -140,7 +140,7 @@ def step_front(c: CoreArrays, ids: np.ndarray, t: float):
     return acc, changing, vs, ls, ks, rank, lead
 
 
-@njit(cache=True)
+@kernel
 def holding(c: CoreArrays) -> np.ndarray:
     """Vehicles that make no discretionary change now: held for a live plan
     (:func:`hcomc.sim.core_plans.holding_mask`) or driven from outside. A vehicle that is
@@ -148,7 +148,7 @@ def holding(c: CoreArrays) -> np.ndarray:
     return holding_mask(c.plan_int, c.counters[N_PLANS], ~c.is_hdv) | c.held
 
 
-@njit(cache=True)
+@kernel
 def step_back(
     c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
 ) -> None:
@@ -158,7 +158,7 @@ def step_back(
         finish_plans(c)
 
 
-@njit(cache=True)
+@kernel
 def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     """One step of the vehicles ``ids`` after release and decisions, without the game."""
     acc, changing, vs, ls, ks, rank, lead = step_front(c, ids, t)
@@ -169,7 +169,7 @@ def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
 
 
 # ----------------------------------------------------------------------------- loop
-@njit(cache=True)
+@kernel
 def needs_python(c: CoreArrays, t: float) -> bool:
     """Whether the step at t needs the engine's Python side: a controller decision (a ramp
     vehicle entering the control zone: key vehicles and a first plan; a live plan due for a
@@ -188,7 +188,7 @@ def needs_python(c: CoreArrays, t: float) -> bool:
     return c.counters[N_PLANS] > 0 and due_plans(c, t).size > 0
 
 
-@njit(cache=True)
+@kernel
 def step_alone(c: CoreArrays, t: float) -> None:
     """One whole step after release when no decision is due (the fast path; live plans are
     executed from the plan table)."""
@@ -200,7 +200,7 @@ def step_alone(c: CoreArrays, t: float) -> None:
     step_body(c, ids, t)
 
 
-@njit(cache=True)
+@kernel
 def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator) -> int:
     """Advance until step ``stop`` or until Python is needed; returns why it stopped.
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.sim.core_state import (
     ACCEL_END,
     ACCEL_START,
@@ -26,7 +26,7 @@ from hcomc.sim.small import nonzero, search_left
 
 
 # --------------------------------------------------------------------------- decide
-@njit(cache=True)
+@kernel
 def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
     """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide`) for the vehicles at
     positions ``cand_pos`` of ``ids``."""
@@ -43,7 +43,7 @@ def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
                         leader, follower, target, force, c.lc_params)  # fmt: skip
 
 
-@njit(cache=True)
+@kernel
 def commanded_changes(
     c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
     ks: np.ndarray, rank: np.ndarray, req_vehicle: np.ndarray, req_target: np.ndarray,
@@ -71,7 +71,7 @@ def commanded_changes(
     return out
 
 
-@njit(cache=True)
+@kernel
 def discretionary_changes(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
     vs: np.ndarray, ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
@@ -92,7 +92,7 @@ def discretionary_changes(
     return _mobil(c, ids, pos, lead, vs, ls, ks, rank, target, force)
 
 
-@njit(cache=True)
+@kernel
 def start_lane_changes(
     c: CoreArrays, chosen: np.ndarray, target: np.ndarray, t: float, duration: np.ndarray
 ) -> None:

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.models.following import follow_accel
 from hcomc.models.quintic import lateral_state
 from hcomc.models.transition import blend, transition_psi
@@ -48,7 +48,7 @@ _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
 # ---------------------------------------------------------------------------- release
-@njit(cache=True)
+@kernel
 def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
     """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
 
@@ -77,7 +77,7 @@ def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
     return True
 
 
-@njit(cache=True)
+@kernel
 def release(c: CoreArrays, t: float) -> None:
     """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue).
     Releasing twice at the same t is a no-op."""
@@ -92,7 +92,7 @@ def release(c: CoreArrays, t: float) -> None:
 
 
 # ------------------------------------------------------------------------- perceive
-@njit(cache=True)
+@kernel
 def follow_many(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
     """Car-following acceleration of each vehicle of ``ids`` behind its leader (-1: none),
     HDVs perceiving Eq. 2 (reaction delays and estimation errors) when the run has them.
@@ -131,14 +131,14 @@ def follow_many(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray) -> np.ndarr
     return out
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _follow_exact(matrix, iidm, i, s, v, vl, al):
     """Eq. 1/3 of vehicle i with exact inputs (lane end, virtual leaders)."""
     return follow_accel(s, v, vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
                         matrix[4, i], matrix[5, i], matrix[6, i], iidm[i])  # fmt: skip
 
 
-@njit(cache=True)
+@kernel
 def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its
@@ -173,7 +173,7 @@ def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
     return vs, ls, ks, rank, in_ori, in_tgt
 
 
-@njit(cache=True)
+@kernel
 def step_accelerations(
     c: CoreArrays, ids: np.ndarray, t: float, following: np.ndarray, vv_fol: np.ndarray,
     vv_x: np.ndarray, vv_v: np.ndarray, vv_a: np.ndarray, vv_len: np.ndarray,
@@ -207,7 +207,7 @@ def step_accelerations(
     return acc, changing, vs, ls, ks, rank, lead
 
 
-@njit(cache=True)
+@kernel
 def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
@@ -230,7 +230,7 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
         acc[k] = min(b, a_new[m]) if in_tgt[k] else b
 
 
-@njit(cache=True)
+@kernel
 def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len):
     """The lane end, virtual leaders, commanded accelerations, the emergency limit and
     scripted profiles."""
@@ -262,7 +262,7 @@ def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_le
 
 
 # ---------------------------------------------------------------------------- check
-@njit(cache=True)
+@kernel
 def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
     """Oriented-rectangle test (Eq. 7) of each entry against its next two leaders per lane;
     a pair is logged when its contact begins.
@@ -308,7 +308,7 @@ def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) ->
 
 
 # ------------------------------------------------------------------------ integrate
-@njit(cache=True)
+@kernel
 def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
     """Ballistic update; a vehicle that would reverse stops exactly at v = 0."""
     dt = c.consts[DT]
@@ -326,7 +326,7 @@ def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
             c.a[i] = ak
 
 
-@njit(cache=True)
+@kernel
 def lateral(c: CoreArrays, t: float) -> None:
     """Move changing vehicles along their quintic path; switch lane at the lane line."""
     width = c.consts[WIDTH]
@@ -350,7 +350,7 @@ def lateral(c: CoreArrays, t: float) -> None:
             c.heading[i] = 0.0
 
 
-@njit(cache=True)
+@kernel
 def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     """Exits past the road end; ramp vehicles waiting at the acceleration-lane end."""
     for i in ids:

@@ -22,8 +22,8 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.sim.core_lane_change import commanded_changes
 from hcomc.sim.core_state import (
@@ -94,13 +94,13 @@ def add_plan(plan_int: np.ndarray, plan_f: np.ndarray, n: int, ints: np.ndarray,
 
 
 # -------------------------------------------------------------------------- masks
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def vr_following(pi: np.ndarray, k: int) -> bool:
     """Whether plan k's VR is on the ramp following the plan (VV0, no lane-end braking)."""
     return pi[k, P_VR_CMD] != 0 and pi[k, P_VR_STARTED] == 0 and pi[k, P_RELEASED] == 0
 
 
-@njit(cache=True)
+@kernel
 def following_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
     """Vehicles (N,) that are a VR following its plan."""
     mask = np.zeros(n, dtype=np.bool_)
@@ -110,7 +110,7 @@ def following_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
     return mask
 
 
-@njit(cache=True)
+@kernel
 def commanded_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
     """Vehicles (N,) a live plan commands (excluded from MOBIL decisions)."""
     mask = np.zeros(n, dtype=np.bool_)
@@ -124,7 +124,7 @@ def commanded_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
     return mask
 
 
-@njit(cache=True)
+@kernel
 def holding_mask(pi: np.ndarray, n_plans: int, is_cav: np.ndarray) -> np.ndarray:
     """Vehicles that make no discretionary change for a plan: those it commands and every
     connected (CAV) key vehicle of a live plan (:func:`hcomc.sim.execution.holding_lane`)."""
@@ -138,7 +138,7 @@ def holding_mask(pi: np.ndarray, n_plans: int, is_cav: np.ndarray) -> np.ndarray
 
 
 # ------------------------------------------------------------------ virtual leaders
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _virtual(pf, k, col, tau, after, x, v, a):
     """(exists, x, v, a) of plan k's virtual vehicle at ``col``: its cubic within the horizon,
     after it the state of vehicle ``after`` (-1: the virtual vehicle has ended)."""
@@ -150,7 +150,7 @@ def _virtual(pf, k, col, tau, after, x, v, a):
     return False, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@kernel
 def virtual_rows(
     pi: np.ndarray, pf: np.ndarray, n_plans: int, t: float, x: np.ndarray, v: np.ndarray,
     a: np.ndarray, length: np.ndarray,
@@ -187,7 +187,7 @@ def virtual_rows(
 
 
 # ------------------------------------------------------------------------- replans
-@njit(cache=True)
+@kernel
 def replan_due(
     vr_commanded: bool, vr_started: bool, vmc_started: bool, released: bool, t0: float,
     merge_x: float, t: float, period: float, x_vr: float, v_vr: float,
@@ -208,7 +208,7 @@ def replan_due(
     )
 
 
-@njit(cache=True)
+@kernel
 def due_plans(c: CoreArrays, t: float) -> np.ndarray:
     """VRs (in table order) whose live plan is due for a replan at t: VR still on the ramp,
     keeping its lane, and :func:`replan_due`."""
@@ -232,7 +232,7 @@ def due_plans(c: CoreArrays, t: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------ execution
-@njit(cache=True)
+@kernel
 def _command(c, ids, t, lead, vs, ls, ks, rank, i, target, duration, release_x, vr, other):
     """One commanded lane change (:func:`hcomc.sim.core_lane_change.commanded_changes`)."""
     result = commanded_changes(
@@ -242,7 +242,7 @@ def _command(c, ids, t, lead, vs, ls, ks, rank, i, target, duration, release_x, 
     return result[0]
 
 
-@njit(cache=True)
+@kernel
 def stopping_distance(c: CoreArrays, i: int) -> float:
     """Distance vehicle i needs to stop at the MOBIL safe deceleration, plus s0 [m].
 
@@ -252,7 +252,7 @@ def stopping_distance(c: CoreArrays, i: int) -> float:
     return c.v[i] ** c.consts[SQUARE] / (2.0 * c.lc_params[_MOBIL_SAFE_DECEL]) + c.matrix[2, i]
 
 
-@njit(cache=True)
+@kernel
 def execute_plans(
     c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray,
     ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
@@ -288,7 +288,7 @@ def execute_plans(
         pi[k, P_RELEASED] = started < 0
 
 
-@njit(cache=True)
+@kernel
 def finish_plans(c: CoreArrays) -> None:
     """Drop the plans whose merge is complete (VR on lane 1, keeping it) or whose VR or VMC
     left the road; the others keep their order."""

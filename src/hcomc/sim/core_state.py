@@ -14,9 +14,10 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
 from numba.core import types
 from numba.experimental import structref
+
+from hcomc._jit import kernel
 
 # lanes and event kinds (IntEnums of hcomc.road and hcomc.sim.log, as plain ints)
 RAMP, MAIN_1, MAIN_2 = 0, 1, 2
@@ -129,13 +130,13 @@ structref.define_constructor(Core, CoreType, list(CoreArrays._fields))
 structref.define_boxing(CoreType, Core)
 
 
-@njit(cache=True)
+@kernel
 def _new_core(*arrays: Any) -> Any:
     """A :class:`Core` over ``arrays`` (the fields of :class:`CoreArrays`, in order)."""
     return Core(*arrays)
 
 
-@njit(cache=True)
+@kernel
 def set_log_columns(
     c: Any, x: np.ndarray, y: np.ndarray, v: np.ndarray, a: np.ndarray,
     heading: np.ndarray, lane: np.ndarray, active: np.ndarray, owner: np.ndarray,
@@ -146,7 +147,7 @@ def set_log_columns(
 
 
 # ----------------------------------------------------------------------------- events
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def add_event(
     c: CoreArrays, t: float, kind: int, i: int, other: int, x: float, value: float
 ) -> None:
@@ -157,7 +158,7 @@ def add_event(
     c.counters[N_EVENTS] = k + 1
 
 
-@njit(cache=True)
+@kernel
 def command(c: CoreArrays, i: int, accel: float) -> None:
     """Drive vehicle i from outside with acceleration ``accel`` [m/s^2] from the next step on
     (it then makes no lane change of its own); NaN hands it back to its model."""
@@ -165,12 +166,12 @@ def command(c: CoreArrays, i: int, accel: float) -> None:
     c.held[i] = not np.isnan(accel)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _centre(lane: int, width: float) -> float:
     return (lane - 1.0) * width
 
 
-@njit(cache=True)
+@kernel
 def push_history(c: CoreArrays) -> None:
     """End of a step: count it and store the state in the perception ring buffer."""
     c.counters[STEP] += 1

@@ -21,16 +21,17 @@ from typing import Any
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 from numba.typed import List
 
+from hcomc._jit import kernel
 from hcomc.sim.core import run_steps
 from hcomc.sim.core_state import DONE, STEP
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 
 
-@njit(cache=True, parallel=True)
+@kernel(parallel=True)
 def _advance_batch(cores, rngs, stops, logging, reasons):
     """Advance every run to its stop (or until it needs Python), one thread per run."""
     for j in prange(len(cores)):
@@ -38,11 +39,11 @@ def _advance_batch(cores, rngs, stops, logging, reasons):
         reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
 
 
-@njit(cache=True)
+@kernel
 def _advance_batch_serial(cores, rngs, stops, logging, reasons):
     """The same loop on the calling thread: no thread pool (safe in forked worker processes).
 
-    A function of its own, not ``njit(cache=True)(_advance_batch.py_func)``: numba's cache
+    A function of its own, not ``kernel(_advance_batch.py_func)``: numba's cache
     keys an entry by the function and its signature, not by ``parallel``, so one function
     compiled both ways loads whichever was cached first for both (the parallel ensemble then
     ran on one thread, or forked workers started a thread pool).
@@ -106,7 +107,7 @@ def _typed_list(values: list[Any]) -> List:
     return out
 
 
-@njit(cache=True)
+@kernel
 def _list_of(first):
     """A compiled list holding ``first``, typed by it."""
     values = List()
@@ -114,19 +115,19 @@ def _list_of(first):
     return values
 
 
-@njit(cache=True)
+@kernel
 def _list_append(values, item):
     """Append ``item`` to a compiled list."""
     values.append(item)
 
 
-@njit(cache=True)
+@kernel
 def _list_set(values, k, item):
     """Replace entry k of a compiled list."""
     values[k] = item
 
 
-@njit(cache=True)
+@kernel
 def _list_pop(values):
     """Drop the last entry of a compiled list."""
     values.pop()
@@ -213,7 +214,7 @@ def advance_ensemble(
             numba.set_num_threads(previous)
 
 
-@njit(cache=True)
+@kernel
 def _step_indices(cores, out):
     """Every run's step counter (what :attr:`Simulation.step_index` reads, for all at once)."""
     for k in range(len(cores)):

@@ -25,8 +25,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
 from hcomc.models.following import follow_accel
@@ -47,7 +47,7 @@ class Snapshot:
     a: FloatArray
 
 
-@njit(cache=True)
+@kernel
 def model_accels(
     matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray, x: np.ndarray, v: np.ndarray,
     a: np.ndarray, followers: np.ndarray, leaders: np.ndarray,
@@ -71,7 +71,7 @@ def model_accels(
     return s, acc
 
 
-@njit(cache=True)
+@kernel
 def mobil_decide(
     matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
     x: np.ndarray, v: np.ndarray, a: np.ndarray,
@@ -130,20 +130,20 @@ def mobil_decide(
     return _resolve(cand[sel], target[sel], new_lead[sel], new_fol[sel], mandatory[sel], x)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _gap(length: np.ndarray, x: np.ndarray, i: int, j: int) -> float:
     """Bumper gap of i to j [m], inf for j = -1."""
     return x[j] - length[j] - x[i] if j >= 0 else math.inf
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _after_of(after: np.ndarray, pos: np.ndarray, m: int, k: int) -> tuple[float, float]:
     """(acc1, acc3) of candidate k from the safety pass (``pos`` ascending)."""
     q = search_left(pos, k)
     return after[q], after[m + q]
 
 
-@njit(cache=True)
+@kernel
 def _resolve(ids, target, new_lead, new_fol, mandatory, x):
     """Drop changes that conflict with a higher-priority change of the same round."""
     if ids.size <= 1:

@@ -15,8 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray, IntArray
 from hcomc.sim.small import search_right, stable_argsort
 
@@ -24,7 +24,7 @@ OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
 
 
-@njit(cache=True)
+@kernel
 def sort_entries(
     vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -38,7 +38,7 @@ def sort_entries(
     return vehicle[order], lane[order], key[order], rank
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def neighbour(vehicle: np.ndarray, lane_of: np.ndarray, pos: int, lane: int) -> int:
     """Vehicle of sorted entry ``pos`` if it exists and lies in ``lane``, else -1."""
     if 0 <= pos < vehicle.size and lane_of[pos] == lane:
@@ -46,7 +46,7 @@ def neighbour(vehicle: np.ndarray, lane_of: np.ndarray, pos: int, lane: int) -> 
     return -1
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def lookup_one(
     key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray, lane: int, x: float
 ) -> tuple[int, int]:
@@ -58,7 +58,7 @@ def lookup_one(
     return neighbour(vehicle, lane_of, pos, lane), neighbour(vehicle, lane_of, pos - 1, lane)
 
 
-@njit(cache=True)
+@kernel
 def _neighbours_of(vehicle, lane_of, rank, entries, step):
     out = np.empty(entries.size, dtype=np.int64)
     for k in range(entries.size):
@@ -67,7 +67,7 @@ def _neighbours_of(vehicle, lane_of, rank, entries, step):
     return out
 
 
-@njit(cache=True)
+@kernel
 def _lookup_many(key, lane_of, vehicle, lane, x):
     leader = np.empty(x.size, dtype=np.int64)
     follower = np.empty(x.size, dtype=np.int64)

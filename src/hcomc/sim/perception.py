@@ -29,13 +29,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import HDVParams
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> float:
     """Column ``col`` of the ring buffer ``hist`` at ``t - tau`` (linear interpolation)."""
     size = hist.shape[0]
@@ -48,7 +48,7 @@ def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> flo
     return (1.0 - r) * now + r * hist[(step - j - 1) % size, col]
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def perceive_one(
     x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray,
     step: int, i: int, leader: int, leader_length: float, dt: float, taus: np.ndarray,
@@ -70,7 +70,7 @@ def perceive_one(
     return s, v, v - (dv if has else 0.0)
 
 
-@njit(cache=True)
+@kernel
 def advance_errors_of(
     w_gap: np.ndarray, w_ttc: np.ndarray, ids: np.ndarray, xi: np.ndarray, decay: float,
     kick: float,
@@ -81,7 +81,7 @@ def advance_errors_of(
         w_ttc[i] = decay * w_ttc[i] + kick * xi[1, i]
 
 
-@njit(cache=True)
+@kernel
 def _perceive_many(x_hist, v_hist, w_gap, w_ttc, step, ids, leader, length, dt, taus, ge, te, err):
     s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
     for k in range(ids.size):

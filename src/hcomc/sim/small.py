@@ -9,12 +9,13 @@ These loops give the same results (the sort is stable, as numpy's ``kind="stable
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from hcomc._jit import kernel
 
 _RUN = 24  # entries sorted by insertion before merging
 
 
-@njit(cache=True)
+@kernel
 def stable_argsort(keys: np.ndarray) -> np.ndarray:
     """Indices that sort ``keys`` ascending, equal keys in their original order."""
     n = keys.size
@@ -55,7 +56,7 @@ def stable_argsort(keys: np.ndarray) -> np.ndarray:
     return order
 
 
-@njit(cache=True)
+@kernel
 def nonzero(mask: np.ndarray) -> np.ndarray:
     """Indices where ``mask`` is true (``np.flatnonzero`` of a 1-D array)."""
     count = 0
@@ -70,7 +71,7 @@ def nonzero(mask: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def search_right(sorted_keys: np.ndarray, value: float) -> int:
     """``np.searchsorted(sorted_keys, value, side="right")``."""
     lo, hi = 0, sorted_keys.size
@@ -83,7 +84,7 @@ def search_right(sorted_keys: np.ndarray, value: float) -> int:
     return lo
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def search_left(sorted_keys: np.ndarray, value: float) -> int:
     """``np.searchsorted(sorted_keys, value, side="left")``."""
     lo, hi = 0, sorted_keys.size
@@ -96,7 +97,7 @@ def search_left(sorted_keys: np.ndarray, value: float) -> int:
     return lo
 
 
-@njit(cache=True)
+@kernel
 def unique(values: np.ndarray) -> np.ndarray:
     """Sorted distinct values (``np.unique`` of a 1-D array)."""
     if values.size == 0:
@@ -108,7 +109,7 @@ def unique(values: np.ndarray) -> np.ndarray:
     return ordered[nonzero(keep)]
 
 
-@njit(cache=True)
+@kernel
 def join(parts: tuple[np.ndarray, ...]) -> np.ndarray:
     """The 1-D arrays of ``parts`` one after the other (``np.concatenate``)."""
     n = 0

@@ -20,8 +20,8 @@ the undisturbed run's mainline *is* the run's own, log rows included.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.road import Lane
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_build import adopt_log_columns
@@ -61,7 +61,7 @@ def _copy_log_without(src: SimulationLog, dst: SimulationLog, rows: int, gone: n
         dst.slot[i], dst.span[i] = -1, 0
 
 
-@njit(cache=True)
+@kernel
 def ramp_untouched(c) -> bool:
     """Whether every ramp vehicle released so far in run ``c`` is still on the ramp before
     the acceleration lane and keeping its lane: the state part of :func:`can_twin`."""
@@ -74,7 +74,7 @@ def ramp_untouched(c) -> bool:
     return True
 
 
-@njit(cache=True)
+@kernel
 def ramp_may_reach(c, horizon: float) -> bool:
     """Whether a ramp vehicle of run ``c`` might reach the acceleration lane within
     ``horizon`` [s]: a released one from its position and speed, one due for release by then

@@ -46,8 +46,8 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.control.hcomc.rollout import (
@@ -427,7 +427,7 @@ class MergeProblem:
         )
 
 
-@njit(cache=True)
+@kernel
 def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
                roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
                sequence_violation, threshold, fuel_ref, F, G):  # fmt: skip
@@ -449,7 +449,7 @@ def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, 
     return penalised_cost(F, G, threshold, fuel_ref)
 
 
-@njit(cache=True)
+@kernel
 def _score_rows(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
                 roles, cf_fuel, coefficients, dt, X, rows, lateral, allowed, no_behind,
                 threshold, fuel_ref, F, G):  # fmt: skip

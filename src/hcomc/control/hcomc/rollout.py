@@ -52,8 +52,8 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.control.hcomc.rollout_candidate import (
     candidate,
@@ -123,7 +123,7 @@ __all__ = [
 _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0 (finite)
 
 
-@njit(cache=True)
+@kernel
 def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_dur, horizon,
                     lateral, consts, n_steps, cf):  # fmt: skip
     """The compiled body of :func:`rollout` (same arguments, ``starts`` resolved)."""

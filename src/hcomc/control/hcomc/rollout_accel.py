@@ -14,8 +14,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     L_LATERAL,
     L_VMC_DONE,
@@ -44,7 +44,7 @@ from hcomc.control.hcomc.rollout_step import (
 from hcomc.models.transition import blend, transition_psi
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def vr_accel(
     S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray, t: float,
     horizon: float, vr_dur: float, controlled: bool, accel_end: float, gamma: float,
@@ -67,7 +67,7 @@ def vr_accel(
     return blend(free_road(params, VR, S[R_V, VR]), a_new, w)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def vmc_accel(
     S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray, t: float,
     horizon: float, vmc_dur: float, gamma: float, longitudinal: bool, joint: bool,
@@ -87,7 +87,7 @@ def vmc_accel(
     return min(acc, behind(S, params, VMC, VR))
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def vnr_accel(
     S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray, t: float,
     horizon: float, cooperates: bool, joint: bool,
@@ -100,7 +100,7 @@ def vnr_accel(
     return acc
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def accelerations(
     S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray, t: float,
     horizon: float, vr_dur: float, flags: tuple[bool, bool, bool],

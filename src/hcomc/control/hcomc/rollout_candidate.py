@@ -11,8 +11,8 @@ prepared once per problem (:func:`vmc_tracks`) and :func:`rollout_one` runs the 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     C_DT,
     C_POLITENESS,
@@ -37,7 +37,7 @@ from hcomc.control.hcomc.rollout_score import (
 )
 
 
-@njit(cache=True)
+@kernel
 def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
               X, Y, V, A, HEAD, g, vvs, S, lc, reach, vr_acc):  # fmt: skip
     """Passes 1 and 2 and the scoring of one candidate (``plan``: merge position, VR's
@@ -74,13 +74,13 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
     return k_merge, u_safe, u_eff
 
 
-@njit(cache=True)
+@kernel
 def mode_index(lateral: bool, coop: np.ndarray, present: np.ndarray) -> int:
     """Index of VMC's pre-pass track for a candidate: 1 when it cooperates laterally."""
     return 1 if lateral and coop[VMC] and present[VMC] else 0
 
 
-@njit(cache=True)
+@kernel
 def vmc_tracks(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, coop: np.ndarray,
     params: np.ndarray, consts: np.ndarray, n_steps: int,
@@ -96,7 +96,7 @@ def vmc_tracks(
     return tracks
 
 
-@njit(cache=True)
+@kernel
 def rollout_one(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, cav: np.ndarray,
     coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,

@@ -11,13 +11,13 @@ rows of simulated annealing alike.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models.fuel import fuel_rate_scalar
 
 
-@njit(cache=True)
+@kernel
 def _block_sum(a: FloatArray, lo: int, n: int) -> float:
     """numpy's pairwise sum of ``a[lo:lo + n]`` for n <= 128: in order below 8 values, else
     eight partial sums combined as a tree, then the remainder in order."""
@@ -41,7 +41,7 @@ def _block_sum(a: FloatArray, lo: int, n: int) -> float:
     return res
 
 
-@njit(cache=True)
+@kernel
 def _pairwise_sum(a: FloatArray, n: int) -> float:
     """Sum of ``a[:n]`` in numpy's pairwise order, so that it equals ``ndarray.sum`` bit for
     bit: blocks of up to 128 values (:func:`_block_sum`), longer runs split in two at half
@@ -76,7 +76,7 @@ def _pairwise_sum(a: FloatArray, n: int) -> float:
     return float(sums[0])
 
 
-@njit(cache=True)
+@kernel
 def _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2, positive):
     """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed
     times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still missing."""
@@ -98,7 +98,7 @@ def _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2,
     return out
 
 
-@njit(cache=True)
+@kernel
 def common_distance_fuel(
     cf: np.ndarray,
     roles: np.ndarray,

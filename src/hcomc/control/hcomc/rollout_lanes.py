@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     L_LATERAL,
     L_VMC_DONE,
@@ -42,13 +42,13 @@ from hcomc.models.quintic import lateral_state
 from hcomc.safety.collision import vehicle_pair_collides
 
 
-@njit(cache=True)
+@kernel
 def path_end(x: float, v: float, duration: float, length: float) -> float:
     """Predicted end of a lane change starting at x: ``x + max(v T_lc, 3 L)`` [m]."""
     return x + max(v * duration, 3.0 * length)
 
 
-@njit(cache=True)
+@kernel
 def start_progress(
     lc: np.ndarray, lateral: bool, S: np.ndarray, vmc_dur: float, params: np.ndarray
 ) -> None:
@@ -61,7 +61,7 @@ def start_progress(
     lc[L_VMC_XF] = path_end(S[R_X, VMC], S[R_V, VMC], vmc_dur, params[VMC, P_LEN])
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def memberships(lc: np.ndarray, S: np.ndarray) -> None:
     """Which roles occupy lane 1 and lane 2 (a changing vehicle occupies both)."""
     for r in range(N_ROLES):
@@ -75,7 +75,7 @@ def memberships(lc: np.ndarray, S: np.ndarray) -> None:
             S[R_IN1, VMC] = 0.0
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def advance_progress(
     lc: np.ndarray, S: np.ndarray, t_next: float, merge_x: float, vr_dur: float, vr_len: float
 ) -> tuple[bool, bool]:
@@ -97,7 +97,7 @@ def advance_progress(
     return started, done
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def advance_vmc(lc: np.ndarray, S: np.ndarray) -> None:
     """VMC's part of :func:`advance_progress`: its lateral change ends once it passes the
     predicted end of its path."""
@@ -105,7 +105,7 @@ def advance_vmc(lc: np.ndarray, S: np.ndarray) -> None:
         lc[L_VMC_DONE] = 1.0
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def lateral_pose(
     lc: np.ndarray, S: np.ndarray, width: float, Y: np.ndarray, H: np.ndarray, k: int
 ) -> None:
@@ -126,7 +126,7 @@ def lateral_pose(
     Y[k, VNR] = width
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def collisions_at(
     X: np.ndarray, Y: np.ndarray, H: np.ndarray, k: int, S: np.ndarray, params: np.ndarray,
     reach: np.ndarray,

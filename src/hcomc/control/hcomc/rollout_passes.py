@@ -6,8 +6,8 @@ end states of the virtual vehicles VV1 and VV2, and the joint pass of every key 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_accel import accelerations, vmc_accel, vr_accel
 from hcomc.control.hcomc.rollout_lanes import (
     advance_progress,
@@ -60,7 +60,7 @@ from hcomc.control.hcomc.rollout_step import (
 from hcomc.control.virtual_vehicle import cubic_into
 
 
-@njit(cache=True)
+@kernel
 def counterfactual(
     x0: np.ndarray,
     v0: np.ndarray,
@@ -91,14 +91,14 @@ def counterfactual(
     return X, V, A
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def record(S: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, k: int) -> None:
     """Write the roles' x, v and a into row k of X, V, A."""
     for r in range(N_ROLES):
         X[k, r], V[k, r], A[k, r] = S[R_X, r], S[R_V, r], S[R_A, r]
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def step(
     k: int, S: np.ndarray, lc: np.ndarray, params: np.ndarray, vvs: np.ndarray,
     plan: np.ndarray, flags: tuple[bool, bool, bool], consts: np.ndarray, joint: bool,
@@ -128,7 +128,7 @@ def step(
     return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
 
 
-@njit(cache=True)
+@kernel
 def vmc_pre_track(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     lateral: bool, consts: np.ndarray, n_steps: int,
@@ -159,7 +159,7 @@ def vmc_pre_track(
     return track
 
 
-@njit(cache=True)
+@kernel
 def pre_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
@@ -201,7 +201,7 @@ def pre_pass(
     return n_known
 
 
-@njit(cache=True)
+@kernel
 def joint_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
@@ -243,7 +243,7 @@ def joint_pass(
     return k_merge, overrun, float(collisions)
 
 
-@njit(cache=True)
+@kernel
 def vv0_cubic(
     starts: np.ndarray, horizon: float, cf: np.ndarray, dt: float, out: np.ndarray
 ) -> None:

@@ -16,8 +16,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     C_A_MERG,
     C_D,
@@ -41,7 +41,7 @@ U_SAFE_CAP = 1e3
 away by ``unsafe``; capped, its objective stays finite for the optimisers' arithmetic."""
 
 
-@njit(cache=True)
+@kernel
 def _lanes_at_merge(y: np.ndarray, lateral: bool, width: float) -> np.ndarray:
     """Lane of each role when VR's merge ends (VMC counts in lane 2 once its centre crossed)."""
     lane = LANE0.copy()
@@ -51,7 +51,7 @@ def _lanes_at_merge(y: np.ndarray, lateral: bool, width: float) -> np.ndarray:
     return lane
 
 
-@njit(cache=True)
+@kernel
 def _nearest(r: int, lane: np.ndarray, x: np.ndarray, present: np.ndarray, ahead: bool) -> int:
     """Nearest present role in role r's lane ahead of (or behind) it, -1 if none."""
     best, best_d = -1, np.inf
@@ -64,7 +64,7 @@ def _nearest(r: int, lane: np.ndarray, x: np.ndarray, present: np.ndarray, ahead
     return best
 
 
-@njit(cache=True)
+@kernel
 def created_pairs_safety(
     x: np.ndarray,
     v: np.ndarray,
@@ -100,7 +100,7 @@ def created_pairs_safety(
     return worst
 
 
-@njit(cache=True)
+@kernel
 def efficiency_gain(A: np.ndarray, Ac: np.ndarray, present: np.ndarray, politeness: float) -> float:
     """Eq. 17 accumulated against the no-merge counterfactual [m/s^2].
 
@@ -117,14 +117,14 @@ def efficiency_gain(A: np.ndarray, Ac: np.ndarray, present: np.ndarray, politene
     return (gain_vr + politeness * others) / K
 
 
-@njit(cache=True)
+@kernel
 def cubic_violation(b: np.ndarray, horizon: float, max_decel: float) -> float:
     """How far a cubic virtual vehicle leaves v >= 0 and a >= -b_max on [0, H] (<= 0: ok)."""
     v_min, a_min = cubic_minima(b, horizon)
     return max(-v_min, -a_min - max_decel)
 
 
-@njit(cache=True)
+@kernel
 def virtual_violation(
     vvs: np.ndarray, horizon: float, uses: tuple[bool, bool, bool], consts: np.ndarray
 ) -> float:
@@ -137,14 +137,14 @@ def virtual_violation(
     return worst
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def _at_least_zero(value: float) -> float:
     """``np.maximum(value, 0.0)`` of one value, numpy's semantics: NaN propagates and both
     zeros give +0.0 (the cost must equal the array form's bit for bit, signed zeros too)."""
     return value if value > 0.0 or math.isnan(value) else 0.0
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def objectives_into(u_safe: float, fuel: float, u_eff: float, out: np.ndarray) -> None:
     """The objective vector (safety, fuel, efficiency) of one candidate into ``out`` (3,):
     U_safe capped at :data:`U_SAFE_CAP` (``np.minimum``'s semantics: NaN propagates), U_fuel
@@ -154,7 +154,7 @@ def objectives_into(u_safe: float, fuel: float, u_eff: float, out: np.ndarray) -
     out[2] = -u_eff
 
 
-@njit(cache=True)
+@kernel
 def objective_rows(u_safe: np.ndarray, fuel: np.ndarray, u_eff: np.ndarray) -> np.ndarray:
     """:func:`objectives_into` of every candidate: (C, 3)."""
     out = np.empty((u_safe.size, 3))
@@ -163,7 +163,7 @@ def objective_rows(u_safe: np.ndarray, fuel: np.ndarray, u_eff: np.ndarray) -> n
     return out
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def penalised_cost(f: np.ndarray, g: np.ndarray, threshold: float, fuel_ref: float) -> float:
     """Eq. 19 as one cost with the U_safe gate and the constraints as penalties (the formula
     of :meth:`~hcomc.control.hcomc.problem.MergeProblem.scalarise`) for one row's objectives
@@ -176,7 +176,7 @@ def penalised_cost(f: np.ndarray, g: np.ndarray, threshold: float, fuel_ref: flo
     return f[1] / fuel_ref + f[2] + (gate + 1000.0 * violation)
 
 
-@njit(cache=True)
+@kernel
 def penalised_costs(F: np.ndarray, G: np.ndarray, threshold: float, fuel_ref: float) -> np.ndarray:
     """:func:`penalised_cost` of every row of ``F`` (n, 3) and ``G`` (n, n_constr): (n,)."""
     out = np.empty(F.shape[0])

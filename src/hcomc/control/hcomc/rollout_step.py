@@ -10,10 +10,11 @@ the engine's integration scheme. The roles' state is one (7, 6) array ``S`` (row
 from __future__ import annotations
 
 import numpy as np
-from numba import carray, njit, types
+from numba import carray, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     LANE0,
     N_ROLES,
@@ -39,7 +40,7 @@ from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.models.following import follow_accel
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def follow_role(params: np.ndarray, r: int, s: float, v: float, vl: float, al: float) -> float:
     """Car-following acceleration of role r (parameter row ``params[r]``) [m/s^2].
 
@@ -52,13 +53,13 @@ def follow_role(params: np.ndarray, r: int, s: float, v: float, vl: float, al: f
     )  # fmt: skip
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def free_road(params: np.ndarray, r: int, v: float) -> float:
     """Acceleration of role r without a leader [m/s^2]."""
     return follow_role(params, r, np.inf, v, v, 0.0)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def leader(S: np.ndarray, r: int, lane: int) -> int:
     """Nearest present key vehicle strictly ahead of role r in ``lane`` (1 or 2), -1 if none."""
     row = R_IN1 if lane == 1 else R_IN2
@@ -69,7 +70,7 @@ def leader(S: np.ndarray, r: int, lane: int) -> int:
     return best
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def behind(S: np.ndarray, params: np.ndarray, r: int, j: int) -> float:
     """Acceleration of role r behind role j (free road for j = -1) [m/s^2]."""
     if j < 0:
@@ -78,7 +79,7 @@ def behind(S: np.ndarray, params: np.ndarray, r: int, j: int) -> float:
     return follow_role(params, r, gap, S[R_V, r], S[R_V, j], S[R_A, j])
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def behind_virtual(
     S: np.ndarray, params: np.ndarray, r: int, vvs: np.ndarray, i: int, tau: float,
     lead_len: float,
@@ -89,7 +90,7 @@ def behind_virtual(
     return follow_role(params, r, xv - lead_len - S[R_X, r], S[R_V, r], vv, av)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
     """Ballistic step of every present role with its acceleration ``S[R_ACC]`` (floored at
     the emergency deceleration), stopping exactly at v = 0 (as the engine)."""
@@ -98,7 +99,7 @@ def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
             integrate_role(S, r, dt, emergency)
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
     """The ballistic step of :func:`integrate` for role r alone."""
     ar = max(S[R_ACC, r], -emergency)
@@ -114,7 +115,7 @@ def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
         S[R_A, r] = ar
 
 
-@njit(cache=True)
+@kernel
 def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) -> np.ndarray:
     """The state ``S`` (7, 6) of the roles at planning time (lane rows at their start lanes)."""
     S = np.empty((N_STATE, N_ROLES))
@@ -122,7 +123,7 @@ def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) 
     return S
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def reset_state(
     S: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray
 ) -> None:
@@ -145,7 +146,7 @@ def _as_pointer(typingctx, address):
     return types.voidptr(address), codegen
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def borrow(a: np.ndarray) -> np.ndarray:
     """A view of the C-contiguous array ``a`` that does not own its memory.
 
