@@ -213,6 +213,16 @@ def test_report_content(report: Path, runs: pd.DataFrame, png: bytes) -> None:
     assert "docs/reproduction.md" in text
 
 
+def test_report_takes_the_claims_already_computed(runs: pd.DataFrame, tmp_path: Path) -> None:
+    """``reproduce`` passes its claims (with the paper scenario's "uniform" column): the page
+    is the one the report computes itself, apart from the creation time in its header."""
+    uniform = runs[runs["seed"] == 0]
+    own = write_report(tmp_path / "own", runs).read_text(encoding="utf-8")
+    given = write_report(tmp_path / "given", runs, claim_frame=claims(runs, uniform))
+    created = re.compile(r"\d{4}-\d\d-\d\dT[\d:.]+(?:\+00:00|Z)?")
+    assert created.sub("", given.read_text(encoding="utf-8")) == created.sub("", own)
+
+
 def test_report_rejects_bad_input(runs: pd.DataFrame, tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="lsrv"):
         write_report(tmp_path, runs.drop(columns="lsrv"))
