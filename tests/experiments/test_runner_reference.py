@@ -10,6 +10,8 @@ from hcomc.experiments.runner import (
     ALL_CONFIGURATIONS,
     CONFIGURATIONS,
     RunSpec,
+    batches_by_reference,
+    grid,
     run_one,
     undisturbed_log,
 )
@@ -40,6 +42,29 @@ def test_undisturbed_run_is_shared_and_keyed_by_non_control_overrides() -> None:
     assert undisturbed_log(other) is not undisturbed_log(fifo)
     assert undisturbed_log(other).n_recorded == 501
     assert not undisturbed_log(fifo).meta.get("key_groups")  # nothing merges in it
+
+
+def test_batches_keep_runs_of_one_undisturbed_run_together() -> None:
+    """A worker process simulates each undisturbed run once: the runs that share one fill
+    consecutive places of the chunks, every spec exactly once, in spec order within a key."""
+    specs = [
+        *grid(["C1", "C2"], ["FIFO", "Game", "HCOMC"], range(5), FAST),
+        *grid(["C1"], ["FIFO", "HCOMC"], range(2), {"duration": 50.0}),
+    ]
+    chunks = batches_by_reference(specs, 4)
+    order = [i for chunk in chunks for i in chunk]
+    assert sorted(order) == list(range(len(specs)))
+    assert [len(chunk) for chunk in chunks[:-1]] == [4] * (len(chunks) - 1)
+    keys = [specs[i].reference_key() for i in order]
+    runs_of = {key: [i for i in order if specs[i].reference_key() == key] for key in keys}
+    assert len(runs_of) == 2 * 5 + 2
+    for key, members in runs_of.items():
+        first = keys.index(key)
+        assert keys[first : first + len(members)] == [key] * len(members)  # consecutive
+        assert members == sorted(members)
+        assert {specs[i].configuration for i in members} == (
+            {"FIFO", "HCOMC"} if '"duration": 50.0' in key[2] else {"FIFO", "Game", "HCOMC"}
+        )
 
 
 def test_baselines_plan_once_as_published_and_replan_in_their_r_variants() -> None:

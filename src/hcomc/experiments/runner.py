@@ -296,6 +296,14 @@ def batches(n: int, size: int) -> list[list[int]]:
     return [list(range(k, min(k + size, n))) for k in range(0, n, size)]
 
 
+def batches_by_reference(specs: Sequence[RunSpec], size: int) -> list[list[int]]:
+    """Indices of ``specs`` in chunks of at most ``size``, runs that share an undisturbed run
+    next to each other (in spec order otherwise), so that a worker process simulates each
+    undisturbed run once for all of its configurations instead of once per chunk it meets."""
+    order = sorted(range(len(specs)), key=lambda i: _reference_key(specs[i]))
+    return [[order[k] for k in chunk] for chunk in batches(len(order), size)]
+
+
 def run_grid(
     specs: Sequence[RunSpec],
     *,
@@ -318,7 +326,7 @@ def run_grid(
         if progress is not None:
             progress(done, len(specs))
 
-    chunks = batches(len(specs), batch_size)
+    chunks = batches_by_reference(specs, batch_size)
     if workers <= 1:
         for chunk in chunks:
             for i, result in zip(chunk, run_batch([specs[i] for i in chunk]), strict=True):

@@ -33,7 +33,13 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 import hcomc
 from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
-from hcomc.experiments.runner import _SPAWN, CONFIGURATIONS, RunSpec, batches, run_batch
+from hcomc.experiments.runner import (
+    _SPAWN,
+    CONFIGURATIONS,
+    RunSpec,
+    batches_by_reference,
+    run_batch,
+)
 from hcomc.experiments.tables import mean_ci
 from hcomc.sim.manifest import atomic_paths, write_json_atomic
 
@@ -248,8 +254,10 @@ BATCH_SIZE = 4
 killed sweep loses at most the batches that were running; small batches keep that small."""
 
 
-def _chunks(todo: list[int]) -> list[list[int]]:
-    return [[todo[k] for k in chunk] for chunk in batches(len(todo), BATCH_SIZE)]
+def _chunks(runs, todo: list[int]) -> list[list[int]]:
+    """The runs still to do in batches, runs of one undisturbed run together."""
+    chunks = batches_by_reference([runs[i] for i in todo], BATCH_SIZE)
+    return [[todo[k] for k in chunk] for chunk in chunks]
 
 
 def _store_batch(chunk, results, store) -> None:
@@ -259,10 +267,10 @@ def _store_batch(chunk, results, store) -> None:
 
 def _run_local(runs, todo, store, workers: int, restarts: int) -> None:
     if workers <= 1:
-        for chunk in _chunks(todo):
+        for chunk in _chunks(runs, todo):
             _store_batch(chunk, run_batch([runs[i] for i in chunk]), store)
         return
-    pending = _chunks(todo)
+    pending = _chunks(runs, todo)
     for _ in range(restarts + 1):
         finished: set[int] = set()
         try:
@@ -304,7 +312,7 @@ def _run_dask(scheduler: str, runs, todo, store) -> None:
 
     client = connect(scheduler)
     try:
-        chunks = _chunks(todo)
+        chunks = _chunks(runs, todo)
         futures = {
             client.submit(run_batch, [runs[i] for i in chunk], pure=False, retries=2): k
             for k, chunk in enumerate(chunks)
