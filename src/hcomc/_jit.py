@@ -15,10 +15,11 @@ Use it bare (``@kernel``) or with numba's other options (``@kernel(inline="alway
 from __future__ import annotations
 
 from functools import partial
+from typing import Any
 
 from numba import njit
 
-kernel = partial(njit, cache=True, error_model="numpy")
+kernel: Any = partial(njit, cache=True, error_model="numpy")
 """numba's ``njit`` with hcomc's compilation policy (module docstring)."""
 
 __all__ = ["kernel"]
