@@ -38,6 +38,9 @@ from hcomc.optim.pso import (
     improvement,
     latin_hypercube,
     min_distances,
+    numpy_sums_are_pairwise,
+    pairwise_sum,
+    swarm_spread,
 )
 from hcomc.optim.pymoo_backend import PSOOptimizer
 from hcomc.optim.registry import make_optimizer
@@ -434,6 +437,49 @@ def test_adapt_equals_pymoo(
     algorithm._adapt()
     w, new_c1, new_c2 = adapt(P_X, s_x, c1, c2, xl, xu, np.random.default_rng(seed))
     assert (w, new_c1, new_c2) == (algorithm.w, algorithm.c1, algorithm.c2)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.one_of(st.integers(1, 300), st.integers(300, 5000)),
+    scale=st.integers(0, 12),
+)
+def test_pairwise_sum_is_numpys_sum(seed: int, n: int, scale: int) -> None:
+    """The compiled sum rounds as ``np.sum`` on runs of any length (where numpy's summation
+    is the pairwise one; otherwise the swarm's spread is left to numpy, see below)."""
+    rng = np.random.default_rng(seed)
+    a = rng.standard_normal(n) * 10.0 ** rng.integers(-scale, scale + 1, n)
+    assert numpy_sums_are_pairwise() == (pairwise_sum(a, 0, n) == a.sum())
+    rows = a[: n - n % 7].reshape(-1, 7) if n >= 7 else a[None, :]
+    assert all(
+        (pairwise_sum(row.copy(), 0, row.size) == s) == numpy_sums_are_pairwise()
+        for row, s in zip(rows, rows.sum(axis=1), strict=True)
+    )
+    assert pairwise_sum(a, 3, 0) == 0.0
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(1, 40),
+    n_var=st.integers(1, 12),
+    spread=st.floats(0.01, 1.0),
+)
+def test_swarm_spread_equals_numpy_in_pymoos_layout(
+    seed: int, n: int, n_var: int, spread: float
+) -> None:
+    """The compiled spreads equal the whole-array numpy ones bit for bit (n = 1 included:
+    0 / 0 is NaN in both)."""
+    rng = np.random.default_rng(seed)
+    xl = rng.uniform(-5.0, 5.0, n_var)
+    xu = xl + rng.uniform(1e-3, 10.0, n_var)
+    P_X = xl + rng.random((n, n_var)) ** (1.0 / spread) * (xu - xl)
+    s_x = P_X[rng.integers(n)].copy()
+    mD, g_D = swarm_spread(P_X, s_x, xl, xu)
+    ref_mD, ref_g_D = pso._spread_numpy(P_X, s_x, xl, xu)
+    np.testing.assert_array_equal(mD, ref_mD)
+    assert g_D == ref_g_D or (np.isnan(g_D) and np.isnan(ref_g_D))
 
 
 def test_adapt_equals_pymoo_in_every_state() -> None:

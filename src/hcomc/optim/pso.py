@@ -41,8 +41,8 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim import variation
 from hcomc.optim.base import (
@@ -62,7 +62,7 @@ _LHS_ITERATIONS = 20  # Latin hypercube samples drawn; the one of largest minimu
 _PERTURB_ROW_PROB = 0.9  # probability that the best particle's mutation happens at all
 
 
-@njit(cache=True)
+@kernel
 def min_distances(samples: FloatArray) -> FloatArray:
     """The smallest pairwise euclidean distance between the rows of each sample (k, n, n_var),
     pymoo's maxmin criterion: as scipy's ``cdist`` computes a distance (squared absolute
@@ -95,7 +95,7 @@ def latin_hypercube(n: int, xl: FloatArray, xu: FloatArray, rng: np.random.Gener
     return out
 
 
-@njit(cache=True)
+@kernel
 def _equation(
     X: FloatArray,
     P_X: FloatArray,
@@ -129,7 +129,7 @@ def _equation(
             Xp[i, j] = X[i, j] + v
 
 
-@njit(cache=True)
+@kernel
 def _outside(Xp: FloatArray, xl: FloatArray, xu: FloatArray) -> IntArray:
     """Rows with a variable outside the box, ascending (NaN is not outside)."""
     out = np.zeros(Xp.shape[0], dtype=np.bool_)
@@ -140,7 +140,7 @@ def _outside(Xp: FloatArray, xl: FloatArray, xu: FloatArray) -> IntArray:
     return np.flatnonzero(out)
 
 
-@njit(cache=True)
+@kernel
 def move(
     X: FloatArray,
     P_X: FloatArray,
@@ -192,7 +192,7 @@ def move(
     return Xp, Vp, retries
 
 
-@njit(cache=True)
+@kernel
 def _same(a: FloatArray, b: FloatArray) -> bool:
     """Euclidean distance 0: every squared difference is 0 (a sum of non-negative numbers
     cannot round to 0 otherwise); NaN never is."""
@@ -203,7 +203,7 @@ def _same(a: FloatArray, b: FloatArray) -> bool:
     return True
 
 
-@njit(cache=True)
+@kernel
 def improvement(X: FloatArray, F: FloatArray, P_X: FloatArray, P_F: FloatArray) -> BoolArray:
     """Particles whose new position replaces their personal best (pymoo's
     ``ImprovementReplacement`` without constraints): a strictly lower cost (never against or
@@ -235,6 +235,140 @@ def _norm_dist(A: FloatArray, B: FloatArray, xl: FloatArray, xu: FloatArray) -> 
     return out
 
 
+def _spread_numpy(
+    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray
+) -> tuple[FloatArray, float]:
+    """:func:`swarm_spread` as pymoo computes it, whole-array numpy."""
+    n = P_X.shape[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mD = _norm_dist(P_X, P_X, xl, xu).sum(axis=1) / (n - 1)
+        # pymoo averages the (n, n) distances of n copies of s_x to the bests: n equal rows;
+        # the same n^2 values in the same layout give the same rounding
+        g_D = np.tile(_norm_dist(s_x[None, :], P_X, xl, xu)[0], n).mean()
+    return mD, float(g_D)
+
+
+@kernel
+def _block_sum(a: FloatArray, start: int, n: int) -> float:
+    """numpy's sum of a run of at most 128 terms: fewer than 8 from 0 in order, else 8
+    interleaved partial sums combined pairwise, then the rest in order."""
+    if n < 8:
+        total = 0.0
+        for i in range(start, start + n):
+            total += a[i]
+        return total
+    r0, r1, r2, r3 = a[start], a[start + 1], a[start + 2], a[start + 3]
+    r4, r5, r6, r7 = a[start + 4], a[start + 5], a[start + 6], a[start + 7]
+    i = start + 8
+    while i < start + n - n % 8:
+        r0, r1, r2, r3 = r0 + a[i], r1 + a[i + 1], r2 + a[i + 2], r3 + a[i + 3]
+        r4, r5, r6, r7 = r4 + a[i + 4], r5 + a[i + 5], r6 + a[i + 6], r7 + a[i + 7]
+        i += 8
+    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    for k in range(i, start + n):
+        total += a[k]
+    return total
+
+
+@kernel
+def pairwise_sum(a: FloatArray, start: int, n: int) -> float:
+    """The sum of ``a[start:start + n]`` as numpy sums a contiguous float64 run (``np.sum``,
+    ``ndarray.sum(axis=-1)``): numpy's pairwise summation, the same rounding. Runs of up to
+    128 terms are summed as :func:`_block_sum` does; longer runs are split in two at a
+    multiple of 8 and the halves' sums added. The halving tree is walked with an explicit
+    stack (left half first), since numba's disk cache does not keep recursive functions."""
+    if n <= 128:
+        return _block_sum(a, start, n)
+    depth = 2 * (64 - 7)  # each split at least halves the run
+    task_start = np.empty(2 * depth, dtype=np.int64)
+    task_n = np.empty(2 * depth, dtype=np.int64)  # -1: add the two sums on top of `sums`
+    sums = np.empty(depth)
+    tasks, top = 1, 0
+    task_start[0], task_n[0] = start, n
+    while tasks > 0:
+        tasks -= 1
+        s, m = task_start[tasks], task_n[tasks]
+        if m < 0:
+            top -= 1
+            sums[top - 1] = sums[top - 1] + sums[top]
+        elif m <= 128:
+            sums[top] = _block_sum(a, s, m)
+            top += 1
+        else:
+            half = m // 2
+            half -= half % 8
+            task_start[tasks], task_n[tasks] = 0, -1  # popped last: left + right
+            task_start[tasks + 1], task_n[tasks + 1] = s + half, m - half
+            task_start[tasks + 2], task_n[tasks + 2] = s, half  # popped first
+            tasks += 3
+    return sums[0]
+
+
+@kernel
+def _distance(p: FloatArray, q: FloatArray, width: FloatArray, terms: FloatArray) -> float:
+    """Box-normalised euclidean distance of two rows, as :func:`_norm_dist` rounds it."""
+    for k in range(p.size):
+        d = (p[k] - q[k]) / width[k]
+        terms[k] = d * d
+    return float(np.sqrt(pairwise_sum(terms, 0, terms.size)))
+
+
+@kernel
+def _spread_kernel(
+    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray
+) -> tuple[FloatArray, float]:
+    n = P_X.shape[0]
+    width = xu - xl
+    terms, row, mD = np.empty(P_X.shape[1]), np.empty(n), np.empty(n)
+    for i in range(n):
+        for j in range(n):
+            row[j] = _distance(P_X[i], P_X[j], width, terms)
+        mD[i] = pairwise_sum(row, 0, n) / (n - 1)
+    for j in range(n):
+        row[j] = _distance(s_x, P_X[j], width, terms)
+    copies = np.empty(n * n)
+    for k in range(n):
+        copies[k * n : (k + 1) * n] = row
+    return mD, pairwise_sum(copies, 0, n * n) / (n * n)
+
+
+@functools.cache  # once per process
+def numpy_sums_are_pairwise() -> bool:
+    """Whether numpy sums float64 runs as :func:`pairwise_sum` does, bit for bit, here.
+
+    numpy's summation order is an implementation detail; a probe of 1-D sums of every length
+    up to 600 and of row sums of (n, m) arrays, with terms of mixed magnitudes, must agree
+    everywhere, or the swarm's spread is left to numpy.
+    """
+    probe = np.random.default_rng(0)
+    for n in range(1, 601):
+        a = probe.standard_normal(n) * 10.0 ** probe.integers(-8, 9, n)
+        if pairwise_sum(a, 0, n) != a.sum():
+            return False
+    for shape in ((576, 5), (24, 24), (40, 13), (3, 200)):
+        A = probe.standard_normal(shape) * 10.0 ** probe.integers(-8, 9, shape)
+        sums = A.sum(axis=1)
+        if any(pairwise_sum(A[i].copy(), 0, shape[1]) != sums[i] for i in range(shape[0])):
+            return False
+    return True
+
+
+def swarm_spread(
+    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray
+) -> tuple[FloatArray, float]:
+    """pymoo's two spreads of ``PSO._adapt`` (box-normalised euclidean distances): each
+    personal best's mean distance to all personal bests (itself included, divided by n - 1)
+    and the mean distance of the social best ``s_x`` to them, with pymoo's rounding.
+
+    One compiled pass where numpy's sums are the pairwise summation of :func:`pairwise_sum`
+    (:func:`numpy_sums_are_pairwise`), else numpy's arrays in pymoo's layout.
+    """
+    if numpy_sums_are_pairwise():
+        mD, g_D = _spread_kernel(P_X, s_x, xl, xu)
+        return mD, float(g_D)
+    return _spread_numpy(P_X, s_x, xl, xu)
+
+
 def _memberships(f: float) -> list[float]:
     """Fuzzy memberships of the evolutionary factor ``f`` in the four states (exploration,
     exploitation, convergence, jumping out), pymoo's piecewise-linear functions."""
@@ -264,12 +398,7 @@ def adapt(
     to [1.5, 2.5] and rescaled to a sum of at most 4 (``c2`` rescaled with the new ``c1``, as
     pymoo does), and ``w = 1 / (1 + 1.5 exp(-2.6 f))``.
     """
-    n = P_X.shape[0]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mD = _norm_dist(P_X, P_X, xl, xu).sum(axis=1) / (n - 1)
-        # pymoo averages the (n, n) distances of n copies of s_x to the bests: n equal rows;
-        # the same n^2 values in the same layout give the same rounding
-        g_D = np.tile(_norm_dist(s_x[None, :], P_X, xl, xu)[0], n).mean()
+    mD, g_D = swarm_spread(P_X, s_x, xl, xu)
     lo, hi = mD.min(), mD.max()
     f = (g_D - lo) / (hi - lo + 1e-32)
     if np.isnan(f):  # pymoo fails here too (its memberships of NaN are None)
@@ -300,6 +429,7 @@ def warm_up() -> None:
     Xp, _, _ = move(X, X, X[0], X, (0.9, 2.0, 2.0), xl, xu, rng)
     improvement(Xp, np.zeros(3), X, np.ones(3))
     latin_hypercube(3, xl, xu, rng)
+    swarm_spread(X, X[0], xl, xu)
 
 
 @dataclass(frozen=True, slots=True)
