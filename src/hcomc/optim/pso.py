@@ -12,8 +12,9 @@ in the same order and shapes, from a generator seeded like pymoo's
 (``numpy.random.default_rng(seed)``; numba's ``Generator.random`` reads the same bit generator
 and gives the same numbers), and computes every floating-point value with the same operations
 in the same order (numpy itself where the last bit depends on numpy's implementation: ``np.exp``,
-``np.power``, sums of more than a few terms), so for the same problem, budget and ``rng`` it
-evaluates the same rows and returns the same row as the pymoo optimiser (tests hold it to that).
+``np.power``; the sums of the swarm's spread follow numpy's pairwise summation, checked against
+numpy once per process), so for the same problem, budget and ``rng`` it evaluates the same rows
+and returns the same row as the pymoo optimiser (tests hold it to that).
 
 One generation, as pymoo's ``PSO._infill`` and ``_advance`` do it:
 
