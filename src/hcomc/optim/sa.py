@@ -47,9 +47,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 from scipy.special import gammaln
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.optim.annealing import _Objective
 from hcomc.optim.base import ParetoResult, Problem, check_budget
@@ -60,7 +60,7 @@ MIN_VISIT_BOUND = 1.0e-10  # a coordinate this close to its lower bound is moved
 _CLOSE_CALL = 1e-9  # relative distance below which libm's acceptance probability is not trusted
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def _wrap(x: float, lower: float, span: float) -> float:
     """A coordinate moved back into ``[lower, lower + span)`` modulo ``span`` and off the lower
     bound, with SciPy's operations (``fmod`` is exact, so any implementation agrees)."""
@@ -71,7 +71,7 @@ def _wrap(x: float, lower: float, span: float) -> float:
     return out
 
 
-@njit(cache=True)
+@kernel
 def _libm(x: FloatArray, z: FloatArray, logs: FloatArray, exps: FloatArray) -> None:
     """``log(x)`` and ``exp(z)`` elementwise with the C library's functions, as kernels get."""
     for k in range(x.size):
@@ -101,7 +101,7 @@ def numpy_exp_log_are_libm() -> bool:
     return bool(python and np.array_equal(np.log(x), logs) and np.array_equal(np.exp(z), exps))
 
 
-@njit(cache=True, error_model="numpy")  # x / 0 is inf, as in numpy
+@kernel  # x / 0 is inf, as in numpy
 def move_all(
     x: FloatArray,
     xy: FloatArray,
@@ -130,7 +130,7 @@ def move_all(
         out[k] = _wrap(step + x[k], box[0, k], box[1, k])
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def move_one(x: FloatArray, k: int, step: float, box: FloatArray, out: FloatArray) -> None:
     """SciPy's move of variable ``k`` alone by ``step`` (already limited), into ``out``."""
     out[:] = x
