@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.log_layout import CELL_FIELDS
-from hcomc.sim.log_slots import OPEN, VehicleCells
+from hcomc.sim.log_slots import OPEN, VehicleCells, active_columns
 
 
 def _pair(seed: int, n_rows: int, n_vehicles: int, slots: int) -> tuple[SimulationLog, ...]:
@@ -121,3 +121,26 @@ def test_files_keep_the_slot_columns(tmp_path, suffix: str) -> None:
         np.testing.assert_array_equal(getattr(back, name), getattr(packed, name))
     for name in CELL_FIELDS:
         _same(getattr(back, name), getattr(plain, name))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(0, 2**31), st.integers(1, 25), st.integers(0, 15), st.integers(0, 4),
+    st.data(),
+)  # fmt: skip
+def test_active_columns_list_each_rows_vehicles_on_the_road_in_vehicle_order(
+    seed: int, n_rows: int, n_vehicles: int, slots: int, data: st.DataObject
+) -> None:
+    packed, plain = _pair(seed, n_rows, n_vehicles, slots)
+    r0 = data.draw(st.integers(0, n_rows))
+    r1 = data.draw(st.integers(r0, n_rows))
+    for log in (packed, plain):
+        start, vehicle, column = active_columns(log.cells["active"], log.slot, log.span, r0, r1)
+        assert start.tolist()[0] == 0
+        assert start.size == r1 - r0 + 1
+        for k in range(r0, r1):
+            on = slice(start[k - r0], start[k - r0 + 1])
+            np.testing.assert_array_equal(vehicle[on], np.flatnonzero(plain.active[k]))
+            np.testing.assert_array_equal(column[on], log.slot[vehicle[on]])
+            for name in CELL_FIELDS:  # the cells the columns point to are the vehicles'
+                _same(log.cells[name][k, column[on]], getattr(plain, name)[k, vehicle[on]])

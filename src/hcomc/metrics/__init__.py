@@ -11,7 +11,8 @@ Lower level: every metric is a function ``metric(log, window, ...) -> float`` of
 :func:`key_window` or :func:`merge_window`). Modules: :mod:`~hcomc.metrics.window` (window,
 key vehicles, tolerances), :mod:`~hcomc.metrics.paper` (critical distance, average
 acceleration, stabilisation time, fuel), :mod:`~hcomc.metrics.speed_field` (speed fields,
-LSRV), :mod:`~hcomc.metrics.surrogate` (TTC, DRAC, PET, collisions),
+LSRV), :mod:`~hcomc.metrics.lane_profile` (the lane profile of a logged row, behind LSRV and
+VR's undisturbed counterpart), :mod:`~hcomc.metrics.surrogate` (TTC, DRAC, PET, collisions),
 :mod:`~hcomc.metrics.core` (registry).
 """
 

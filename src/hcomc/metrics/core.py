@@ -19,14 +19,28 @@ and edge cases.
 
 from __future__ import annotations
 
+import functools
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from hcomc.metrics.paper import average_acceleration, critical_distance, fuel, stabilisation_time
+from hcomc.metrics.paper import (
+    average_acceleration,
+    critical_distance,
+    disturbance_metrics,
+    fuel,
+    stabilisation_time,
+)
 from hcomc.metrics.speed_field import low_speed_region_volume
-from hcomc.metrics.surrogate import collisions, key_collisions, max_drac, min_ttc, pet_at_merge
+from hcomc.metrics.surrogate import (
+    closing_metrics,
+    collisions,
+    key_collisions,
+    max_drac,
+    min_ttc,
+    pet_at_merge,
+)
 from hcomc.metrics.window import MetricWindow, key_window
 from hcomc.sim.log import SimulationLog
 
@@ -61,7 +75,12 @@ class MetricSpec:
     @property
     def needs_reference(self) -> bool:
         """True if the metric compares with the undisturbed run."""
-        return "reference" in inspect.signature(self.func).parameters
+        return _takes_reference(self.func)
+
+
+@functools.cache
+def _takes_reference(func: Callable[..., float]) -> bool:
+    return "reference" in inspect.signature(func).parameters
 
 
 _SPECS = (
@@ -139,8 +158,14 @@ def compute_metrics(
     """
     if window is None:
         window = key_window(log)
+    # Metrics reading the same table (the deviation cells, the key-vehicle pairs) come from
+    # one: the values their functions return.
+    shared = {**disturbance_metrics(log, window, reference), **closing_metrics(log, window)}
     out: dict[str, float] = {}
     for name, spec in METRICS.items():
+        if spec.func in shared:
+            out[name] = float(shared[spec.func])
+            continue
         kwargs = {"reference": reference} if spec.needs_reference else {}
         out[name] = float(spec.func(log, window, **kwargs))
     return out

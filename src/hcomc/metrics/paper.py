@@ -13,7 +13,7 @@ lane, which is its own approach, not a disturbance of the traffic), and its undi
 speed and acceleration are those of the undisturbed traffic of its current lane at its
 position: the linear interpolation, in x, between the reference run's vehicles of that lane
 around VR (the nearest one beyond the ends; see
-:func:`hcomc.metrics.speed_field.lane_profile_at`).
+:func:`hcomc.metrics.lane_profile.lane_profile_at`).
 
 A **deviation cell** (row, key vehicle) is *valid* if the row lies in the window, the vehicle
 is active in the factual run and its counterpart exists (another key vehicle: active in the
@@ -25,11 +25,13 @@ reference vehicle in it). Its deviations are ``da = a - a_u`` [m/s²] and ``dv =
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
-from hcomc.metrics.speed_field import lane_profile_of
+from hcomc.metrics.lane_profile import profile_along
 from hcomc.metrics.window import (
     A_TOL,
     EPS_T,
@@ -42,7 +44,7 @@ from hcomc.metrics.window import (
     times,
     window_rows,
 )
-from hcomc.models.fuel import FUEL_DEFAULT, FuelParams, fuel_consumed
+from hcomc.models.fuel import FUEL_DEFAULT, FuelParams, fuel_consumed, fuel_rate_scalar
 from hcomc.sim.log import SimulationLog
 
 __all__ = [
@@ -93,18 +95,15 @@ def deviations(
         valid[:, col] = False
         t = times(log)[rows]
         after = log.active[rows, vr] & (t >= window.t_merge - EPS_T)  # NaN t_merge: never
-        lanes, xs = log.lane[rows, vr], log.x[rows, vr]
-        ref = [getattr(reference, name)[rows] for name in ("x", "active", "lane", "v", "a")]
-        for k in np.flatnonzero(after):
-            lane = int(lanes[k])
-            if lane not in (1, 2):
-                continue
-            x_vr = np.array([float(xs[k])])
-            rx, ractive, rlane, rv, ra = (arr[k] for arr in ref)
-            v_lane, a_lane = lane_profile_of(rx, ractive, rlane, lane, x_vr, True, rv, ra)
-            if np.isfinite(v_lane[0]):
-                v_u[k, col], a_u[k, col] = v_lane[0], a_lane[0]
-                valid[k, col] = True
+        lanes = log.lane[rows, vr].astype(np.int64)
+        lanes[~(after & ((lanes == 1) | (lanes == 2)))] = -1  # no counterpart: not profiled
+        at = log.x[rows, vr].reshape(-1, 1)
+        v_lane, a_lane = profile_along(
+            reference, np.arange(log.n_steps)[rows], lanes, at, "v", "a", clamp=True
+        )[:, :, 0]
+        found = np.isfinite(v_lane)
+        v_u[found, col], a_u[found, col] = v_lane[found], a_lane[found]
+        valid[found, col] = True
     with np.errstate(invalid="ignore"):
         return a - a_u, v - v_u, valid & np.isfinite(a - a_u) & np.isfinite(v - v_u)
 
@@ -129,6 +128,11 @@ def average_acceleration(
     if reference is None:
         return math.nan
     da, _, valid = deviations(log, window, reference, window_rows(log, window))
+    return _mean_abs(da, valid)
+
+
+def _mean_abs(da: FloatArray, valid: np.ndarray) -> float:
+    """Mean ``abs(da)`` of the valid cells [m/s²], NaN without one."""
     return float(np.abs(da[valid]).mean()) if valid.any() else math.nan
 
 
@@ -165,8 +169,16 @@ def stabilisation_time(
     rows = post_merge_rows(log, window)
     if rows.stop <= rows.start:
         return math.nan
-    t = times(log)[rows]
     da, dv, valid = deviations(log, window, reference, rows)
+    return _settling_time(times(log)[rows], da, dv, valid, window, a_tol, v_tol, hold)
+
+
+def _settling_time(
+    t: FloatArray, da: FloatArray, dv: FloatArray, valid: np.ndarray, window: MetricWindow,
+    a_tol: float, v_tol: float, hold: float,
+) -> float:  # fmt: skip
+    """:func:`stabilisation_time` from the deviation cells of the post-merge rows (times
+    ``t`` [s])."""
     with np.errstate(invalid="ignore"):
         ok_cell = (np.abs(da) < a_tol) & (np.abs(dv) < v_tol)
     settled = np.all(~valid | ok_cell, axis=1)
@@ -181,11 +193,37 @@ def stabilisation_time(
     return float(window.t_end - window.t_merge)
 
 
+def disturbance_metrics(
+    log: SimulationLog, window: MetricWindow, reference: SimulationLog | None
+) -> dict[Callable[..., float], float]:
+    """:func:`average_acceleration` and :func:`stabilisation_time` (default tolerances),
+    keyed by function: the values they return, from one table of deviation cells.
+
+    The post-merge rows stabilisation time reads are the tail of the window rows average
+    acceleration reads, and a row's cells depend on that row alone, so the table of the
+    window rows serves both.
+    """
+    if not window.group or reference is None:  # no cell is read
+        return {
+            average_acceleration: average_acceleration(log, window, reference=reference),
+            stabilisation_time: stabilisation_time(log, window, reference=reference),
+        }
+    rows, post = window_rows(log, window), post_merge_rows(log, window)
+    da, dv, valid = deviations(log, window, reference, rows)
+    settling = math.nan  # VR did not merge, or after the last logged row
+    if window.merged and post.stop > post.start:
+        tail = slice(post.start - rows.start, post.stop - rows.start)
+        settling = _settling_time(times(log)[post], da[tail], dv[tail], valid[tail], window,
+                                  A_TOL, V_TOL, HOLD)  # fmt: skip
+    return {average_acceleration: _mean_abs(da, valid), stabilisation_time: settling}
+
+
 def fuel(log: SimulationLog, window: MetricWindow, *, params: FuelParams = FUEL_DEFAULT) -> float:
     """Total fuel consumption of all vehicles in the window [L] (paper "Fuel Cons.").
 
-    Definition: paper Eq. (16) via :func:`hcomc.models.fuel.fuel_consumed` over every
-    vehicle slot and the window rows, rectangle rule with the logging interval:
+    Definition: paper Eq. (16) (:func:`hcomc.models.fuel.fuel_consumed`, summing
+    :func:`~hcomc.models.fuel.fuel_rate_scalar`) over every vehicle slot and the window rows,
+    rectangle rule with the logging interval:
     ``F = log.dt / 1000 * Σ_rows Σ_vehicles fdot(v, a)``; inactive cells count as 0.
 
     Returns
@@ -194,5 +232,35 @@ def fuel(log: SimulationLog, window: MetricWindow, *, params: FuelParams = FUEL_
         Fuel [L].
     """
     rows = window_rows(log, window)
-    per_vehicle = fuel_consumed(log.v[rows], log.a[rows], log.dt, params, axis=0)
-    return float(np.sum(per_vehicle))
+    if log.n_vehicles == 1:  # numpy sums a lone column pairwise, not row after row
+        per_vehicle = fuel_consumed(log.v[rows], log.a[rows], log.dt, params, axis=0)
+        return float(np.sum(per_vehicle))
+    cells = log.cells
+    sums = _rate_sums(cells["v"], cells["a"], log.slot, log.span, rows.start, rows.stop,
+                      *params.coefficients())  # fmt: skip
+    return float(np.sum(sums * (log.dt / 1000.0)))
+
+
+@kernel
+def _rate_sums(
+    v: np.ndarray, a: np.ndarray, slot: np.ndarray, span: np.ndarray, r0: int, r1: int,
+    b0: float, b1: float, b2: float, b3: float, c0: float, c1: float, c2: float,
+    positive_only: float,
+) -> FloatArray:  # fmt: skip
+    """(N,) each vehicle's Eq. (16) rate [mL/s] summed over rows ``[r0, r1)`` of the stored
+    cells ``v``, ``a`` (T, S), row after row, NaN rates (cells not logged) as 0: the column
+    sums of ``numpy.nansum(fuel_rate(log.v[rows], log.a[rows]), axis=0)``, which numpy adds
+    row after row for two columns or more."""
+    sums = np.zeros(slot.size)
+    for i in range(slot.size):
+        s = slot[i]
+        if s < 0:
+            continue
+        total = 0.0
+        for k in range(max(r0, span[i, 0]), min(r1, span[i, 1])):
+            rate = fuel_rate_scalar(np.float64(v[k, s]), np.float64(a[k, s]), b0, b1, b2, b3,
+                                    c0, c1, c2, positive_only)  # fmt: skip
+            if not math.isnan(rate):
+                total += rate
+        sums[i] = total
+    return sums

@@ -9,7 +9,8 @@ Two fields are defined on the same kind of bins (``dx`` = 10 m by ``dt_bin`` = 0
   of that lane (NaN upstream of its first and downstream of its last vehicle); it is sampled
   at each bin's centre and averaged over the rows of the time bin (NaN if no row of the bin
   has a sample). The space between two vehicles so moves at a speed between theirs, which
-  is what a contour map of the traffic state shows.
+  is what a contour map of the traffic state shows. The profile is that of
+  :mod:`hcomc.metrics.lane_profile` (:func:`lane_profile_at`).
 
 LSRV compares the factual field with the **undisturbed** field of the same run without the
 merge (see :mod:`hcomc.metrics.window`), so speed changes that happen without the merge
@@ -21,9 +22,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
+from hcomc.metrics.lane_profile import (
+    interp_into,
+    lane_knots,
+    lane_profile_at,
+    lane_profile_of,
+    profile_from_knots,
+)
 from hcomc.metrics.window import (
     MetricWindow,
     check_reference,
@@ -33,10 +41,12 @@ from hcomc.metrics.window import (
 )
 from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
+from hcomc.sim.log_slots import active_columns
 
 __all__ = [
     "DT_BIN",
     "DX_BIN",
+    "interp_into",
     "lane_profile_at",
     "lane_profile_of",
     "lane_speed_field",
@@ -147,140 +157,62 @@ def reference_speed(log: SimulationLog, window: MetricWindow) -> float:
     return math.nan
 
 
-# --------------------------------------------------------------------------- lane profile
-def lane_profile_at(
-    log: SimulationLog, row: int, lane: int, x: FloatArray, *, clamp: bool = False
-) -> tuple[FloatArray, FloatArray]:
-    """Speed and acceleration of lane ``lane`` at positions ``x`` in one logged row.
-
-    Linear interpolation in x between the active vehicles of the lane (sorted by x). Outside
-    their range: NaN, or with ``clamp=True`` the nearest vehicle's value. NaN everywhere if
-    the lane is empty in that row.
-    """
-    profile = lane_profile_of(log.x[row], log.active[row], log.lane[row], lane, x, clamp,
-                       log.v[row], log.a[row])  # fmt: skip
-    return profile[0], profile[1]
-
-
-@njit(cache=True)
-def _last_at_or_below(key: float, xp: np.ndarray) -> int:
-    """The largest j with ``xp[j] <= key`` (``xp`` ascending, ``xp[0] <= key``): the
-    interval :func:`numpy.interp` interpolates in."""
-    lo, hi = 0, xp.size
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if key >= xp[mid]:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo - 1
-
-
-@njit(cache=True)
-def interp_into(
-    x: np.ndarray, xp: np.ndarray, fp: np.ndarray, left: float, right: float, out: np.ndarray
-) -> None:
-    """``out[:] = numpy.interp(x, xp, fp, left, right)``, value for value: numpy's
-    arithmetic and special cases (an exact knot or the last one gives its ``fp``; a NaN from
-    an infinite slope is retried from the right knot; one knot has its own rule) for
-    ascending ``xp`` (ties allowed)."""
-    n = xp.size
-    for i in range(x.size):
-        xv = x[i]
-        if n == 1:  # numpy's own branch for one knot (a NaN query gets fp[0] there)
-            out[i] = left if xv < xp[0] else (right if xv > xp[0] else fp[0])
-        elif math.isnan(xv):
-            out[i] = xv
-        elif xv < xp[0]:
-            out[i] = left
-        elif xv > xp[n - 1]:
-            out[i] = right
-        else:
-            j = _last_at_or_below(xv, xp)
-            if j == n - 1 or xp[j] == xv:
-                out[i] = fp[j]
-                continue
-            slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-            value = slope * (xv - xp[j]) + fp[j]
-            if math.isnan(value):
-                value = slope * (xv - xp[j + 1]) + fp[j + 1]
-                if math.isnan(value) and fp[j] == fp[j + 1]:
-                    value = fp[j]
-            out[i] = value
-
-
-@njit(cache=True)
-def lane_vehicles(
-    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """The active vehicles of ``lane`` in one logged row, sorted by position (ties in
-    vehicle order), and their positions as float64."""
-    count = 0
-    for i in range(x_row.size):
-        count += active_row[i] and lane_row[i] == lane
-    on = np.empty(count, dtype=np.int64)
-    m = 0
-    for i in range(x_row.size):
-        if active_row[i] and lane_row[i] == lane:
-            on[m] = i
-            m += 1
-    xs = np.empty(count)
-    for m in range(count):
-        xs[m] = x_row[on[m]]
-    order = np.argsort(xs, kind="mergesort")  # stable
-    return on[order], xs[order]
-
-
-@njit(cache=True)
-def _profile_into(
-    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int,
-    x: np.ndarray, clamp: bool, values: np.ndarray, out: np.ndarray,
-) -> None:  # fmt: skip
-    """One row's lane profile of ``values`` at ``x`` into ``out`` (see :func:`lane_profile_of`)."""
-    on, xs = lane_vehicles(x_row, active_row, lane_row, lane)
-    if on.size == 0:
-        out[:] = math.nan
-        return
-    ys = np.empty(on.size)
-    for m in range(on.size):
-        ys[m] = values[on[m]]
-    left, right = (ys[0], ys[-1]) if clamp else (math.nan, math.nan)
-    interp_into(x, xs, ys, left, right, out)
-
-
-def lane_profile_of(
-    x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int, x: FloatArray,
-    clamp: bool, *value_rows: np.ndarray,
-) -> list[FloatArray]:  # fmt: skip
-    """:func:`lane_profile_at` on one logged row's arrays (N,) (``log.x[row]``,
-    ``log.active[row]``, ``log.lane[row]``): each of ``value_rows`` (e.g. ``log.v[row]``)
-    interpolated at ``x`` between the active vehicles of ``lane`` (sorted by position, ties
-    in vehicle order), as :func:`numpy.interp` does. Callers that visit many rows read the
-    arrays once and pass their rows."""
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    row = (np.asarray(x_row), np.asarray(active_row), np.asarray(lane_row), int(lane))
-    out = []
-    for values in value_rows:
-        profile = np.empty(x.shape)
-        _profile_into(*row, x.reshape(-1), bool(clamp), np.asarray(values), profile.reshape(-1))
-        out.append(profile)
-    return out
-
-
-@njit(cache=True)
+@kernel
 def _field_sums(
-    xs: np.ndarray, active: np.ndarray, lanes: np.ndarray, speeds: np.ndarray, lane: int,
-    centres: np.ndarray, it: np.ndarray, sums: np.ndarray, counts: np.ndarray,
+    x_store: np.ndarray, lane_store: np.ndarray, v_store: np.ndarray, start: np.ndarray,
+    column: np.ndarray, r0: int, lanes: np.ndarray, centres: np.ndarray, it: np.ndarray,
+    sums: np.ndarray, counts: np.ndarray,
 ) -> None:  # fmt: skip
-    """Add each row's lane profile at ``centres`` (its finite samples) to the row's time bin
-    ``it[k]`` of ``sums`` and ``counts``."""
+    """Add each row's profile of lane ``lanes[q]`` at ``centres`` (its finite samples) to the
+    row's time bin ``it[k]`` of ``sums[q]`` and ``counts[q]`` (each (n_t, n_x)); row
+    ``r0 + k`` of the stored arrays is read through the roster ``start, column``
+    (:func:`~hcomc.sim.log_slots.active_columns`)."""
+    width = 0
+    for k in range(it.size):
+        width = max(width, start[k + 1] - start[k])
+    cols = np.empty(width, dtype=np.int64)
+    xs, ys = np.empty(width), np.empty(width)
     v = np.empty(centres.size)
-    for k in range(xs.shape[0]):
-        _profile_into(xs[k], active[k], lanes[k], lane, centres, False, speeds[k], v)
-        for b in range(centres.size):
-            if np.isfinite(v[b]):
-                sums[it[k], b] += v[b]
-                counts[it[k], b] += 1.0
+    for k in range(it.size):
+        r = r0 + k
+        candidates = column[start[k] : start[k + 1]]
+        for q in range(lanes.size):
+            m = lane_knots(candidates, x_store[r], lane_store[r], lanes[q], cols, xs)
+            if m == 0:
+                continue  # an empty lane samples nothing
+            profile_from_knots(m, cols, xs, v_store[r], centres, False, True, ys, v)
+            lane_sums, lane_counts = sums[q, it[k]], counts[q, it[k]]
+            for b in range(centres.size):
+                # Adding 0 for a sample that is not finite changes no sum (they start at +0
+                # and never become -0) and leaves the loop without a branch.
+                finite = np.isfinite(v[b])
+                lane_sums[b] += v[b] if finite else 0.0
+                lane_counts[b] += 1.0 if finite else 0.0
+
+
+def _lane_fields(
+    log: SimulationLog, window: MetricWindow, lanes: tuple[int, ...], x_min: float, dx: float,
+    dt_bin: float,
+) -> tuple[FloatArray, FloatArray, list[FloatArray]]:  # fmt: skip
+    """:func:`lane_speed_field` of each of ``lanes``, from one pass over the window rows:
+    ``(x_edges, t_edges, [V per lane])``."""
+    _check_bins(dx, dt_bin)
+    x_edges = _x_edges(x_min, road_of(log).length, dx)
+    t_edges = _t_edges(log, window, dt_bin)
+    n_x, n_t = x_edges.size - 1, t_edges.size - 1
+    centres = 0.5 * (x_edges[:-1] + x_edges[1:])
+    rows = window_rows(log, window)
+    it = _time_bin(log, window, rows, n_t, dt_bin)
+    sums = np.zeros((len(lanes), n_t, n_x))
+    counts = np.zeros((len(lanes), n_t, n_x))
+    cells = log.cells
+    start, _, column = active_columns(cells["active"], log.slot, log.span, rows.start, rows.stop)
+    _field_sums(cells["x"], cells["lane"], cells["v"], start, column, rows.start,
+                np.array(lanes, dtype=np.int64), centres, np.asarray(it, dtype=np.int64), sums,
+                counts)  # fmt: skip
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fields = [np.where(n > 0, total / n, np.nan) for total, n in zip(sums, counts, strict=True)]
+    return x_edges, t_edges, fields
 
 
 def lane_speed_field(
@@ -302,20 +234,7 @@ def lane_speed_field(
 
     Returns ``(x_edges, t_edges, V)`` shaped as in :func:`speed_field`.
     """
-    _check_bins(dx, dt_bin)
-    x_edges = _x_edges(x_min, road_of(log).length, dx)
-    t_edges = _t_edges(log, window, dt_bin)
-    n_x, n_t = x_edges.size - 1, t_edges.size - 1
-    centres = 0.5 * (x_edges[:-1] + x_edges[1:])
-    rows = window_rows(log, window)
-    it = _time_bin(log, window, rows, n_t, dt_bin)
-    sums = np.zeros((n_t, n_x))
-    counts = np.zeros((n_t, n_x))
-    xs, active, lanes, speeds = log.x[rows], log.active[rows], log.lane[rows], log.v[rows]
-    _field_sums(xs, active, lanes, speeds, int(lane), centres, np.asarray(it, dtype=np.int64),
-                sums, counts)  # fmt: skip
-    with np.errstate(invalid="ignore", divide="ignore"):
-        V = np.where(counts > 0, sums / counts, np.nan)
+    x_edges, t_edges, (V,) = _lane_fields(log, window, (int(lane),), x_min, dx, dt_bin)
     return x_edges, t_edges, V
 
 
@@ -352,15 +271,12 @@ def low_speed_region_volume(
         return math.nan
     check_reference(log, reference)
     x_min = road_of(log).control_zone_start
+    lanes = (Lane.MAIN_1, Lane.MAIN_2)
+    x_edges, t_edges, fields = _lane_fields(log, window, lanes, x_min, dx, dt_bin)
+    _, _, fields_u = _lane_fields(reference, window, lanes, x_min, dx, dt_bin)
+    area = np.outer(np.diff(t_edges), np.diff(x_edges))
     total = 0.0
-    for lane in (1, 2):
-        x_edges, t_edges, V = lane_speed_field(
-            log, window, lane=lane, x_min=x_min, dx=dx, dt_bin=dt_bin
-        )
-        _, _, V_u = lane_speed_field(
-            reference, window, lane=lane, x_min=x_min, dx=dx, dt_bin=dt_bin
-        )
-        area = np.outer(np.diff(t_edges), np.diff(x_edges))
+    for V, V_u in zip(fields, fields_u, strict=True):  # lane 1, then lane 2
         both = np.isfinite(V) & np.isfinite(V_u)
         total += float(np.sum(np.maximum(0.0, V_u[both] - V[both]) * area[both]))
     return total

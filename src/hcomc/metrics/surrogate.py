@@ -7,6 +7,7 @@ Pairs are the consecutive same-lane key-vehicle pairs of :mod:`hcomc.metrics.win
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -67,7 +68,13 @@ def min_ttc(
     float
         Minimum TTC [s]; ``inf`` if no pair ever closes.
     """
-    gap, closing, valid = key_pairs(log, window, window_rows(log, window))
+    return _min_ttc(*key_pairs(log, window, window_rows(log, window)), closing_speed)
+
+
+def _min_ttc(
+    gap: FloatArray, closing: FloatArray, valid: np.ndarray, closing_speed: float
+) -> float:
+    """:func:`min_ttc` of the pairs of :func:`~hcomc.metrics.window.key_pairs` [s]."""
     sel = valid & (closing > closing_speed)
     if not sel.any():
         return math.inf
@@ -97,13 +104,26 @@ def max_drac(
     float
         Maximum DRAC [m/s^2]; 0 if no pair ever closes.
     """
-    gap, closing, valid = key_pairs(log, window, window_rows(log, window))
+    return _max_drac(*key_pairs(log, window, window_rows(log, window)), closing_speed)
+
+
+def _max_drac(
+    gap: FloatArray, closing: FloatArray, valid: np.ndarray, closing_speed: float
+) -> float:
+    """:func:`max_drac` of the pairs of :func:`~hcomc.metrics.window.key_pairs` [m/s²]."""
     sel = valid & (closing > closing_speed)
     if not sel.any():
         return 0.0
     g, dv = gap[sel], closing[sel]
     drac = np.where(g > 0.0, dv * dv / (2.0 * np.where(g > 0.0, g, 1.0)), np.inf)
     return float(drac.max())
+
+
+def closing_metrics(log: SimulationLog, window: MetricWindow) -> dict[Callable[..., float], float]:
+    """:func:`min_ttc` and :func:`max_drac` (default closing speed), keyed by function: the
+    values they return, from one table of key-vehicle pairs."""
+    pairs = key_pairs(log, window, window_rows(log, window))
+    return {min_ttc: _min_ttc(*pairs, CLOSING_SPEED), max_drac: _max_drac(*pairs, CLOSING_SPEED)}
 
 
 def pet_at_merge(log: SimulationLog, window: MetricWindow) -> float:

@@ -20,7 +20,9 @@ ends at this row) and each vehicle on the road without a slot takes the lowest f
 vehicle order (:func:`claim_slots`). Cells of a slot outside its holders' spans keep the
 log's fill value, so vehicle i's cell at row k is the slot cell when k lies in its span and
 the fill value otherwise (:func:`cell_of`). :class:`VehicleCells` gives the (T, N) view that
-readers index like the plain array it replaces.
+readers index like the plain array it replaces (its reads gather the cells asked for with
+:func:`gather_cells`); kernels that visit many rows read the stored cells themselves, row by
+row through :func:`active_columns`, the columns of the vehicles on the road.
 
 A log made from plain (T, N) arrays (:meth:`SimulationLog.allocate` without ``slots``, or
 the constructor) keeps one column per vehicle: ``slot = arange(N)``, every span ``[0,
@@ -32,13 +34,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc.sim.log_layout import FILL
 
 __all__ = [
-    "OPEN", "VehicleCells", "cell_of", "claim_slots", "empty_slots", "identity_slots",
-    "owner_grid", "rows_of", "widen",
+    "OPEN", "VehicleCells", "active_columns", "cell_of", "claim_slots", "empty_slots",
+    "gather_cells", "identity_slots", "owner_grid", "rows_of", "widen",
 ]  # fmt: skip
 
 OPEN = np.iinfo(np.int64).max
@@ -86,7 +88,7 @@ def widen(
     return wide, np.concatenate([owner, np.full(n_slots - old, -1, dtype=np.int64)])
 
 
-@njit(cache=True)
+@kernel
 def claim_slots(
     active: np.ndarray, slot: np.ndarray, span: np.ndarray, owner: np.ndarray, k: int
 ) -> bool:
@@ -124,7 +126,7 @@ def claim_slots(
     return True
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def cell_of(store: np.ndarray, slot: np.ndarray, span: np.ndarray, k: int, i: int) -> Any:
     """Vehicle i's cell at row k of one slot-column array ``store`` (T, S); NaN outside its
     span (for float arrays, whose fill value it is)."""
@@ -134,7 +136,7 @@ def cell_of(store: np.ndarray, slot: np.ndarray, span: np.ndarray, k: int, i: in
     return store[k, s]
 
 
-@njit(cache=True)
+@kernel
 def rows_of(
     store: np.ndarray, slot: np.ndarray, span: np.ndarray, i: int, r0: int, r1: int
 ) -> np.ndarray:
@@ -143,6 +145,62 @@ def rows_of(
     for k in range(r0, r1):
         out[k - r0] = cell_of(store, slot, span, k, i)
     return out
+
+
+@kernel
+def gather_cells(
+    store: np.ndarray, slot: np.ndarray, span: np.ndarray, rows: np.ndarray,
+    vehicles: np.ndarray, out: np.ndarray,
+) -> None:  # fmt: skip
+    """``out[q, j]`` = vehicle ``vehicles[j]``'s cell at row ``rows[q]`` of ``store`` (T, S)
+    where the row lies in its span; other cells of ``out`` (R, K), filled by the caller with
+    the fill value, are left alone. Indices must be in range and non-negative."""
+    for j in range(vehicles.size):
+        i = vehicles[j]
+        s = slot[i]
+        if s < 0:
+            continue
+        first, end = span[i, 0], span[i, 1]
+        for q in range(rows.size):
+            k = rows[q]
+            if first <= k < end:
+                out[q, j] = store[k, s]
+
+
+@kernel
+def active_columns(
+    active: np.ndarray, slot: np.ndarray, span: np.ndarray, r0: int, r1: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vehicles on the road in rows ``[r0, r1)`` of a log, row by row in vehicle order,
+    and the columns their cells are stored in: ``(start, vehicle, column)``.
+
+    Row ``r0 + k``'s vehicles are ``vehicle[start[k]:start[k + 1]]`` (ascending) and their
+    cells ``store[r0 + k, column[start[k]:start[k + 1]]]`` of any stored array: exactly the
+    cells where the (T, N) view of ``active`` is True. A kernel that visits the rows of a
+    window so reads only the cells on the road (S per row at most, not N), in the order a
+    scan of the (T, N) row would meet them. ``r1 <= T``.
+    """
+    n_rows = max(r1 - r0, 0)
+    start = np.zeros(n_rows + 1, dtype=np.int64)
+    for i in range(slot.size):
+        s = slot[i]
+        if s >= 0:
+            for k in range(max(r0, span[i, 0]), min(r1, span[i, 1])):
+                if active[k, s]:
+                    start[k - r0 + 1] += 1
+    for k in range(n_rows):
+        start[k + 1] += start[k]
+    vehicle = np.empty(start[n_rows], dtype=np.int64)
+    column = np.empty(start[n_rows], dtype=np.int64)
+    fill = start[:n_rows].copy()
+    for i in range(slot.size):  # vehicle order: each row's entries come out ascending
+        s = slot[i]
+        if s >= 0:
+            for k in range(max(r0, span[i, 0]), min(r1, span[i, 1])):
+                if active[k, s]:
+                    vehicle[fill[k - r0]], column[fill[k - r0]] = i, s
+                    fill[k - r0] += 1
+    return start, vehicle, column
 
 
 class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
@@ -185,6 +243,8 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
             return self._rows(key[0] if isinstance(key, tuple) else key)
         if _rows_and_vehicles(key):  # log.x[r0:r1, ids]: a window of a few vehicles
             return self._block(key[0], np.asarray(key[1]))
+        if _rows_and_vehicle(key):  # log.x[r0:r1, i]: one vehicle's cells
+            return self._block(key[0], np.array([key[1]]))[:, 0]
         n_rows, n_vehicles = self.shape
         idx = np.int32 if max(n_rows, n_vehicles) < 2**31 else np.int64
         rows = np.broadcast_to(np.arange(n_rows, dtype=idx)[:, None], self.shape)[key]
@@ -217,18 +277,17 @@ class VehicleCells(np.lib.mixins.NDArrayOperatorsMixin):
 
     def _rows(self, key: Any) -> Any:
         """Every vehicle's cells at the rows ``key`` selects (int, slice, 1-D index)."""
-        rows = np.arange(self.shape[0])[key]
-        r = np.asarray(rows)[..., None]
-        slots = self._slot
-        inside = (slots >= 0) & (r >= self._span[:, 0]) & (r < self._span[:, 1])
-        return self._gather(key if isinstance(key, slice) else r, slots, inside)
+        if isinstance(key, int | np.integer):
+            return self._row(int(key))
+        return self._block(key, np.arange(self.shape[1]))
 
-    def _block(self, rows: slice, vehicles: np.ndarray) -> np.ndarray:
-        """The cells of ``vehicles`` (1-D indices) at the rows ``rows`` selects: (R, K)."""
-        r = np.arange(self.shape[0])[rows][:, None]
-        slots, span = self._slot[vehicles], self._span[vehicles]
-        inside = (slots >= 0) & (r >= span[:, 0]) & (r < span[:, 1])
-        out: np.ndarray = self._gather(rows, slots, inside)
+    def _block(self, rows: Any, vehicles: np.ndarray) -> np.ndarray:
+        """The cells of ``vehicles`` (1-D indices) at the rows ``rows`` selects (a slice or
+        1-D indices): (R, K)."""
+        rows = np.arange(self.shape[0])[rows]  # bounds checked, negatives resolved
+        vehicles = np.arange(self.shape[1])[vehicles]
+        out = np.full((rows.size, vehicles.size), self._fill, dtype=self.dtype)
+        gather_cells(self._store, self._slot, self._span, rows, vehicles, out)
         return out
 
     def _gather(self, rows: np.ndarray | slice, slots: np.ndarray, inside: np.ndarray) -> Any:
@@ -275,6 +334,12 @@ def _plain(x: Any) -> Any:
 
 def _is_int(key: Any) -> bool:
     return isinstance(key, int | np.integer) and not isinstance(key, bool | np.bool_)
+
+
+def _rows_and_vehicle(key: Any) -> bool:
+    """Whether ``key`` is a row slice and one vehicle index."""
+    pair = isinstance(key, tuple) and len(key) == 2
+    return pair and isinstance(key[0], slice) and _is_int(key[1])
 
 
 def _rows_and_vehicles(key: Any) -> bool:
