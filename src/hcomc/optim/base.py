@@ -16,7 +16,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.optim.selection import non_dominated
+from hcomc.optim.dominance import feasible_front
 
 
 @runtime_checkable
@@ -175,11 +175,10 @@ def initial_rows(
 def archive_front(F: FloatArray, G: FloatArray) -> IntArray:
     """Rows of the feasible (``G <= 0``), mutually non-dominated subset of evaluated rows, one
     per distinct objective vector (the first evaluated), in evaluation order; empty if none is
-    feasible. The set a multi-objective optimiser returns from its archive of evaluations."""
-    rows = np.flatnonzero(np.all(G <= 0.0, axis=1))
-    if rows.size == 0:
-        return rows
-    rows = rows[non_dominated(F[rows])]
-    # one row per distinct objective vector (duplicates carry no information)
-    _, distinct = np.unique(F[rows], axis=0, return_index=True)
-    return rows[np.sort(distinct)]
+    feasible. The set a multi-objective optimiser returns from its archive of evaluations
+    (duplicates carry no information); one compiled pass,
+    :func:`hcomc.optim.dominance.feasible_front`."""
+    F = np.ascontiguousarray(F, dtype=np.float64)
+    G = np.ascontiguousarray(G, dtype=np.float64)
+    rows: IntArray = feasible_front(F, G)
+    return rows

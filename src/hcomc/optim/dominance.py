@@ -1,4 +1,5 @@
-"""Compiled Pareto dominance kernels: relation, non-dominated ranks, crowding distance.
+"""Compiled Pareto dominance kernels: relation, non-dominated ranks, crowding distance, and the
+NSGA-II steps built on them (rank-and-crowding survival, tournaments, an archive's front).
 
 All objectives are minimised. Row ``i`` dominates row ``j`` when it is no worse in every
 objective and strictly better in at least one; identical rows do not dominate each other, and a
@@ -13,12 +14,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 
 
-@njit(cache=True)
+@kernel
 def relation(a: FloatArray, b: FloatArray) -> int:
     """1 if ``a`` dominates ``b``, -1 if ``b`` dominates ``a``, 0 otherwise (pymoo's order of
     comparison: the first strict difference in each direction decides)."""
@@ -35,45 +36,42 @@ def relation(a: FloatArray, b: FloatArray) -> int:
     return val
 
 
-@njit(cache=True)
-def _domination_matrix(F: FloatArray) -> np.ndarray:
+@kernel
+def pareto_ranks(F: FloatArray) -> IntArray:
+    """Non-dominated rank of every row (0 = not dominated by any row; rank k = dominated only by
+    rows of ranks < k), by peeling fronts (Deb's fast non-dominated sort), O(n^2 m)."""
     n = F.shape[0]
     dom = np.zeros((n, n), dtype=np.bool_)  # dom[i, j]: i dominates j
+    count = np.zeros(n, dtype=np.int64)  # how many rows dominate each row
     for i in range(n):
         for j in range(i + 1, n):
             r = relation(F[i], F[j])
             if r == 1:
                 dom[i, j] = True
+                count[j] += 1
             elif r == -1:
                 dom[j, i] = True
-    return dom
-
-
-@njit(cache=True)
-def pareto_ranks(F: FloatArray) -> IntArray:
-    """Non-dominated rank of every row (0 = not dominated by any row; rank k = dominated only by
-    rows of ranks < k), by peeling fronts (Deb's fast non-dominated sort), O(n^2 m)."""
-    n = F.shape[0]
-    dom = _domination_matrix(F)
-    count = np.zeros(n, dtype=np.int64)  # how many rows dominate each row
-    for i in range(n):
-        for j in range(n):
-            if dom[i, j]:
-                count[j] += 1
+                count[i] += 1
     rank = np.full(n, -1, dtype=np.int64)
-    front = np.flatnonzero(count == 0)
+    front, nxt = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    size = 0
+    for i in range(n):
+        if count[i] == 0:
+            front[size] = i
+            size += 1
     k = 0
-    while front.size > 0:
-        nxt = np.zeros(n, dtype=np.bool_)
-        for q in range(front.size):
+    while size > 0:
+        n_next = 0
+        for q in range(size):
             i = front[q]
             rank[i] = k
             for j in range(n):
                 if dom[i, j]:
                     count[j] -= 1
                     if count[j] == 0:
-                        nxt[j] = True
-        front = np.flatnonzero(nxt)
+                        nxt[n_next] = j
+                        n_next += 1
+        front, nxt, size = nxt, front, n_next
         k += 1
     # rows left unranked sit on a dominance cycle, possible only through NaN (comparisons with
     # NaN are skipped): they share the next rank, so that every row has one
@@ -81,7 +79,7 @@ def pareto_ranks(F: FloatArray) -> IntArray:
     return rank
 
 
-@njit(cache=True)
+@kernel
 def _dominates(a: FloatArray, b: FloatArray) -> bool:
     """``a`` no worse than ``b`` everywhere and better somewhere (False if a NaN is involved)."""
     better = False
@@ -93,7 +91,7 @@ def _dominates(a: FloatArray, b: FloatArray) -> bool:
     return better
 
 
-@njit(cache=True)
+@kernel
 def non_dominated_mask(F: FloatArray) -> BoolArray:
     """True for the rows that no other row dominates; a NaN in either row of a pair means
     neither dominates the other."""
@@ -106,7 +104,7 @@ def non_dominated_mask(F: FloatArray) -> BoolArray:
     return keep
 
 
-@njit(cache=True)
+@kernel
 def crowding_distance(F: FloatArray) -> FloatArray:
     """NSGA-II crowding distance of the rows of one front, as pymoo's ``"cd"``.
 
@@ -138,7 +136,7 @@ def crowding_distance(F: FloatArray) -> FloatArray:
     return total / m
 
 
-@njit(cache=True)
+@kernel
 def ranked_fronts(F: FloatArray, n_needed: int) -> tuple[IntArray, FloatArray, int]:
     """Ranks of all rows, and the crowding distance within its front of every row of the
     first fronts that together hold at least ``n_needed`` rows (NaN beyond); the rank of the
@@ -154,7 +152,7 @@ def ranked_fronts(F: FloatArray, n_needed: int) -> tuple[IntArray, FloatArray, i
     return rank, crowd, k - 1
 
 
-@njit(cache=True)
+@kernel
 def tournament(P: IntArray, F: FloatArray, cv: FloatArray, crowding: FloatArray) -> IntArray:
     """Winners of NSGA-II binary tournaments between rows ``P[i, 0]`` and ``P[i, 1]``.
 
@@ -183,6 +181,168 @@ def tournament(P: IntArray, F: FloatArray, cv: FloatArray, crowding: FloatArray)
     return S
 
 
+@kernel
+def survival_fronts(
+    F: FloatArray, cv: FloatArray, rows: IntArray, n_survive: int
+) -> tuple[IntArray, FloatArray, IntArray, FloatArray, IntArray]:
+    """The first half of NSGA-II's rank-and-crowding survival (pymoo's ``RankAndCrowding``) of
+    the population ``rows`` of ``F``, ``cv``: feasible rows (``cv <= 0``) front by front, then
+    infeasible rows; what is left to random tie-breaks and numpy's sorts is done by the caller.
+
+    Returns
+    -------
+    order : positions in ``rows``: the feasible rows of the fronts taken whole (front by front,
+        each in position order), those of the last front taken (position order), then every
+        infeasible row (position order).
+    key : what the caller sorts: crowding distance for the last front's entries of ``order``,
+        violation for the infeasible entries (NaN for the others).
+    rank, crowding : per position; -1 and NaN where not computed (infeasible rows, fronts after
+        the last one taken).
+    counts : rows in whole fronts, in the last front, to remove from it, and infeasible rows
+        taken, for :func:`survivors`.
+    """
+    n = rows.size
+    n_survive = min(n_survive, n)
+    feasible = np.empty(n, dtype=np.int64)
+    infeasible = np.empty(n, dtype=np.int64)
+    n_feas, n_infeas = 0, 0
+    for p in range(n):
+        if cv[rows[p]] <= 0.0:
+            feasible[n_feas] = p
+            n_feas += 1
+        else:  # NaN too
+            infeasible[n_infeas] = p
+            n_infeas += 1
+    n_feasible = min(n_feas, n_survive)
+    rank = np.full(n, -1, dtype=np.int64)
+    crowding = np.full(n, np.nan)
+    order = np.empty(n, dtype=np.int64)
+    key = np.full(n, np.nan)
+    n_inner, k = 0, 0
+    if n_feasible > 0:
+        Ff = np.empty((n_feas, F.shape[1]))
+        for q in range(n_feas):
+            Ff[q] = F[rows[feasible[q]]]
+        ranks, d, last = ranked_fronts(Ff, n_feasible)
+        for q in range(n_feas):
+            rank[feasible[q]], crowding[feasible[q]] = ranks[q], d[q]
+        for r in range(last):  # whole fronts, front by front, in position order
+            for q in range(n_feas):
+                if ranks[q] == r:
+                    order[k] = feasible[q]
+                    k += 1
+        n_inner = k
+        for q in range(n_feas):
+            if ranks[q] == last:
+                order[k], key[k] = feasible[q], d[q]
+                k += 1
+    n_front = k - n_inner
+    for q in range(n_infeas):
+        order[k], key[k] = infeasible[q], cv[rows[infeasible[q]]]
+        k += 1
+    counts = np.array([n_inner, n_front, n_inner + n_front - n_feasible, n_survive - n_feasible])
+    return order[:k], key[:k], rank, crowding, counts
+
+
+@kernel
+def survivors(
+    order: IntArray, counts: IntArray, perm: IntArray, by_crowding: IntArray, by_violation: IntArray
+) -> IntArray:
+    """Positions of the survivors, best first, from :func:`survival_fronts`' ``order`` and
+    ``counts``: the whole fronts, the last front cut to size, the least-violating infeasible rows.
+
+    The last front (when cut) keeps its rows of largest crowding: ``perm`` is the random
+    permutation of the front and ``by_crowding`` numpy's quicksort of its crowding distances in
+    that order, read from the end; ``by_violation`` is numpy's sort of the infeasible rows by
+    violation. Both sorts are numpy's because the order of ties is their own.
+    """
+    n_inner, n_front, n_remove, n_infeasible = counts
+    n_kept = n_front - max(n_remove, 0)
+    idx = np.empty(n_inner + n_kept + n_infeasible, dtype=np.int64)
+    idx[:n_inner] = order[:n_inner]
+    for q in range(n_kept):
+        j = perm[by_crowding[n_front - 1 - q]] if n_remove > 0 else q
+        idx[n_inner + q] = order[n_inner + j]
+    for q in range(n_infeasible):
+        idx[n_inner + n_kept + q] = order[n_inner + n_front + by_violation[q]]
+    return idx
+
+
+@kernel
+def survive_and_select(
+    F: FloatArray,
+    cv: FloatArray,
+    rows: IntArray,
+    crowding: FloatArray,
+    order: IntArray,
+    counts: IntArray,
+    perm: IntArray,
+    by_crowding: IntArray,
+    by_violation: IntArray,
+    P: IntArray,
+) -> tuple[IntArray, IntArray, IntArray]:
+    """:func:`survivors`, then the binary tournaments ``P`` between them (:func:`tournament`):
+    the survivors' positions in ``rows``, the winners (positions among the survivors, ``-1`` for
+    a tie) and the ties' indices, to be drawn by the caller in order."""
+    idx = survivors(order, counts, perm, by_crowding, by_violation)
+    n = idx.size
+    Fs = np.empty((n, F.shape[1]))
+    cvs, cds = np.empty(n), np.empty(n)
+    for q in range(n):
+        Fs[q], cvs[q], cds[q] = F[rows[idx[q]]], cv[rows[idx[q]]], crowding[idx[q]]
+    S = tournament(P, Fs, cvs, cds)
+    return idx, S, np.flatnonzero(S < 0)
+
+
+@kernel
+def feasible_front(F: FloatArray, G: FloatArray) -> IntArray:
+    """Rows of the feasible (every ``G <= 0``), mutually non-dominated subset of ``F``, one per
+    distinct objective vector (the first), in row order.
+
+    Rows are taken in order against the front so far: a row that some member is no worse than
+    everywhere (dominates or equals) is dropped, else it joins and drops the members it is no
+    worse than (which it then dominates). Domination is transitive and implies NaN-free rows,
+    so a row dominated by any earlier row is dominated by a member of the front, and the result
+    is the non-dominated set with the first of equal rows; a row with NaN neither dominates nor
+    equals any other, so each one stays. O(n |front| m).
+    """
+    n, m = F.shape
+    front = np.empty(n, dtype=np.int64)
+    beaten = np.empty(n, dtype=np.bool_)  # front members the new row is no worse than
+    size = 0
+    for i in range(n):
+        feasible = True
+        for c in range(G.shape[1]):
+            if not G[i, c] <= 0.0:
+                feasible = False
+                break
+        if not feasible:
+            continue
+        dropped = False
+        for q in range(size):
+            j = front[q]
+            member_le, row_le = True, True  # F[j] <= F[i] everywhere, F[i] <= F[j] everywhere
+            for c in range(m):
+                if not F[j, c] <= F[i, c]:
+                    member_le = False
+                if not F[i, c] <= F[j, c]:
+                    row_le = False
+            if member_le:
+                dropped = True
+                break
+            beaten[q] = row_le
+        if dropped:
+            continue
+        kept = 0
+        for q in range(size):
+            if not beaten[q]:
+                front[kept] = front[q]
+                kept += 1
+        front[kept] = i
+        size = kept + 1
+    return front[:size].copy()
+
+
 @functools.cache  # once per process
 def warm_up() -> None:
     """Compile (or load from numba's cache) every kernel of this module now."""
@@ -190,5 +350,9 @@ def warm_up() -> None:
     pareto_ranks(F)
     non_dominated_mask(F)
     crowding_distance(F)
-    ranked_fronts(F, 2)
-    tournament(np.array([[0, 1], [1, 2]], dtype=np.int64), F, np.zeros(3), np.ones(3))
+    feasible_front(F, np.zeros((3, 1)))
+    rows = np.arange(3)
+    order, _, _, crowding, counts = survival_fronts(F, np.zeros(3), rows, 2)
+    none = np.empty(0, dtype=np.int64)
+    P = np.array([[0, 1]], dtype=np.int64)
+    survive_and_select(F, np.zeros(3), rows, crowding, order, counts, none, none, none, P)

@@ -3,13 +3,16 @@
 :class:`CompiledNSGA2Optimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 NSGA2Optimizer` (pymoo 0.6's ``NSGA2`` with SBX, polynomial mutation, binary tournament by
 constraint violation, domination and crowding, rank-and-crowding survival with feasible rows
-first, no duplicate elimination) on plain arrays: non-dominated ranks, crowding distance and the
-tournaments are numba kernels (:mod:`hcomc.optim.dominance`), and so are SBX and polynomial
-mutation (:mod:`hcomc.optim.variation`, powers through numpy as pymoo computes them). It draws
-the same random numbers in the same order from a generator seeded like pymoo's, and computes
-every floating-point value with the same operations, so for the same problem, budget and ``rng``
-it evaluates the same rows and returns the same Pareto set as the pymoo optimiser (tests hold it
-to that), at a fraction of the per-generation cost.
+first, no duplicate elimination) on plain arrays. A generation costs a handful of compiled calls:
+survival (:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival with the
+tournaments (:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
+(:func:`hcomc.optim.variation.offspring`); Python draws the random numbers in between, the same
+numbers in the same order as pymoo from a generator seeded like pymoo's, and leaves to numpy the
+two sorts whose order of ties is numpy's own. Every floating-point value is computed with the
+same operations, so for the same problem, budget and ``rng`` it evaluates the same rows and
+returns the same Pareto set as the pymoo optimiser (tests hold it to that), at a fraction of the
+per-generation cost. Evaluated rows go into one preallocated archive, from which the Pareto set
+is taken in one compiled pass (:func:`hcomc.optim.base.archive_front`).
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
@@ -34,9 +37,12 @@ from hcomc.optim.base import (
     check_pop_size,
     initial_rows,
 )
-from hcomc.optim.dominance import ranked_fronts, tournament
-from hcomc.optim.variation import polynomial_mutation, sbx
+from hcomc.optim.dominance import survival_fronts, survive_and_select
+from hcomc.optim.variation import offspring
 from hcomc.rng import draw_seed
+
+_NONE = np.empty(0, dtype=np.int64)  # no permutation or sort (read only by the kernels)
+_NO_PAIRS = np.empty((0, 2), dtype=np.int64)  # no tournament
 
 
 def violation(G: FloatArray) -> FloatArray:
@@ -46,77 +52,79 @@ def violation(G: FloatArray) -> FloatArray:
     return np.maximum(0.0, G).sum(axis=1)
 
 
+def survive_and_mate(
+    F: FloatArray,
+    cv: FloatArray,
+    rows: IntArray,
+    n_survive: int,
+    n_matings: int,
+    rng: np.random.Generator,
+) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
+    """Rank-and-crowding survival with feasible rows first (pymoo's ``RankAndCrowding``), then
+    ``n_matings`` pairs of parents by binary tournament among the survivors (pymoo's
+    ``TournamentSelection``), drawing from ``rng`` as pymoo does.
+
+    Survival: feasible rows are taken front by front (rows of a front in position order); the
+    front that does not fit is cut by crowding distance, largest first, ties broken by a random
+    permutation. The remaining places go to infeasible rows by increasing violation.
+    Selection: pairs of survivors from concatenated random permutations compete as
+    :func:`hcomc.optim.dominance.tournament` decides; a tie is a fair coin.
+
+    Parameters
+    ----------
+    F, cv : objectives and violation of every evaluated row.
+    rows : the population, rows of ``F`` and ``cv``.
+
+    Returns
+    -------
+    The survivors (positions in ``rows``, best first), the parents (n_matings, 2) as positions
+    among the survivors, and the rank and crowding distance of every position of ``rows``
+    (-1 and NaN where not computed).
+    """
+    order, key, rank, crowding, counts = survival_fronts(F, cv, rows, n_survive)
+    n_inner, n_front, n_remove, n_infeasible = counts.tolist()
+    perm, by_crowding, by_violation, P = _NONE, _NONE, _NONE, _NO_PAIRS
+    if n_remove > 0:  # the front that does not fit: numpy's sort, from a random permutation
+        perm = rng.permutation(n_front)
+        by_crowding = key[n_inner : n_inner + n_front][perm].argsort(kind="quicksort")
+    if n_infeasible > 0:
+        by_violation = key[n_inner + n_front :].argsort()  # numpy's default, quicksort
+    if n_matings > 0:
+        n = min(n_survive, rows.size)
+        n_random = n_matings * 2 * 2
+        n_perms = -(-n_random // n)
+        P = np.concatenate([rng.permutation(n) for _ in range(n_perms)])[:n_random]
+        P = P.reshape(n_matings * 2, 2)
+    idx, S, ties = survive_and_select(
+        F, cv, rows, crowding, order, counts, perm, by_crowding, by_violation, P
+    )
+    for i in ties.tolist():
+        # a fair coin, the draw pymoo's ``rng.choice([a, b])`` makes (same stream)
+        S[i] = P[i, int(rng.integers(0, 2))]
+    return idx, S.reshape(n_matings, 2), rank, crowding
+
+
 @dataclass(slots=True)
 class Population:
-    """Survivors of a generation, best first, with rank and crowding for the tournament."""
+    """Rows of a population with rank and crowding, and each one's index among evaluated rows."""
 
     X: FloatArray
     F: FloatArray
     cv: FloatArray
     rank: IntArray
     crowding: FloatArray
-    row: IntArray  # index of each survivor among all evaluated rows
-
-    def take(self, idx: IntArray) -> Population:
-        """The rows ``idx``, in that order."""
-        return Population(
-            self.X[idx], self.F[idx], self.cv[idx], self.rank[idx], self.crowding[idx],
-            self.row[idx],
-        )  # fmt: skip
-
-    @staticmethod
-    def merge(a: Population, b: Population) -> Population:
-        """``a``'s rows then ``b``'s."""
-        return Population(
-            np.vstack([a.X, b.X]), np.vstack([a.F, b.F]), np.concatenate([a.cv, b.cv]),
-            np.concatenate([a.rank, b.rank]), np.concatenate([a.crowding, b.crowding]),
-            np.concatenate([a.row, b.row]),
-        )  # fmt: skip
+    row: IntArray
 
 
 def survive(pop: Population, n_survive: int, rng: np.random.Generator) -> Population:
-    """Rank-and-crowding survival with feasible rows first (pymoo's ``RankAndCrowding``).
-
-    Feasible rows are taken front by front (rows of a front in index order); the front that
-    does not fit is cut by crowding distance, largest first, ties broken by a random
-    permutation. The remaining places go to infeasible rows by increasing violation.
-    """
-    X, F, cv = pop.X, pop.F, pop.cv
-    n_survive = min(n_survive, X.shape[0])
-    feasible = cv <= 0.0
-    feas = np.flatnonzero(feasible)
-    infeas = np.flatnonzero(~feasible)
-    infeas = infeas[np.argsort(cv[infeas])]
-    rank = np.full(X.shape[0], -1, dtype=np.int64)
-    crowd = np.full(X.shape[0], np.nan)
-    idx = infeas[:n_survive]
-    n_feasible = min(feas.size, n_survive)
-    if n_feasible > 0:
-        ranks, d, last = ranked_fronts(F[feas].astype(np.float64), n_feasible)
-        rank[feas], crowd[feas] = ranks, d
-        inner = np.flatnonzero(ranks < last)  # whole fronts, front by front, in index order
-        inner = inner[np.argsort(ranks[inner], kind="stable")]
-        front = np.flatnonzero(ranks == last)
-        n_remove = inner.size + front.size - n_feasible
-        if n_remove > 0:  # the front that does not fit: largest crowding first
-            perm = rng.permutation(front.size)
-            front = front[np.flip(perm[np.argsort(d[front][perm], kind="quicksort")])[:-n_remove]]
-        idx = np.concatenate([feas[inner], feas[front], infeas[: n_survive - n_feasible]])
-    return Population(X, F, cv, rank, crowd, pop.row).take(idx)
-
-
-def select_parents(pop: Population, n_matings: int, rng: np.random.Generator) -> IntArray:
-    """(n_matings, 2) parent rows by binary tournament (pymoo's ``TournamentSelection``)."""
-    n = pop.X.shape[0]
-    n_random = n_matings * 2 * 2
-    n_perms = -(-n_random // n)
-    P = np.concatenate([rng.permutation(n) for _ in range(n_perms)])[:n_random]
-    P = P.reshape(n_matings * 2, 2)
-    S = tournament(P, pop.F, pop.cv, pop.crowding)
-    for i in np.flatnonzero(S < 0):
-        # a fair coin, the draw pymoo's ``rng.choice([a, b])`` makes (same stream)
-        S[i] = P[i, int(rng.integers(0, 2))]
-    return S.reshape(n_matings, 2)
+    """The survivors of ``pop``, best first, with their rank and crowding distance
+    (:func:`survive_and_mate` without mating)."""
+    F = np.ascontiguousarray(pop.F, dtype=np.float64)
+    cv = np.ascontiguousarray(pop.cv, dtype=np.float64)
+    idx, _, rank, crowding = survive_and_mate(F, cv, np.arange(cv.size), n_survive, 0, rng)
+    return Population(
+        pop.X[idx], pop.F[idx], pop.cv[idx], rank[idx], crowding[idx], pop.row[idx]
+    )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -162,36 +170,40 @@ class CompiledNSGA2Optimizer:
         gen = np.random.default_rng(draw_seed(rng))
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
-        archive: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        # the archive of every evaluated row, in evaluation order
+        n_rows = first.shape[0] + (n_gen - 1) * self.pop_size
+        X_all, F_all = np.empty((n_rows, n_var)), np.empty((n_rows, n_obj))
+        G_all, cv_all = np.empty((n_rows, n_constr)), np.empty(n_rows)
 
-        def evaluate(X: FloatArray) -> Population:
+        def evaluate(X: FloatArray, start: int) -> IntArray:
+            """Evaluate rows ``X`` into the archive from row ``start``; their archive rows."""
             F, G = problem.evaluate(X)
             n = X.shape[0]
             F = np.asarray(F, dtype=np.float64).reshape(n, n_obj)
             G = np.asarray(G, dtype=np.float64).reshape(n, n_constr)
-            start = sum(part[0].shape[0] for part in archive)
-            archive.append((X, F, G))
-            rank, crowding = np.full(n, -1, dtype=np.int64), np.full(n, np.nan)
-            return Population(X, F, violation(G), rank, crowding, np.arange(start, start + n))
+            end = start + n
+            X_all[start:end], F_all[start:end], G_all[start:end] = X, F, G
+            cv_all[start:end] = violation(G)  # on G as given: a sum's order follows its layout
+            return np.arange(start, end)
 
-        pop = survive(evaluate(first), first.shape[0], gen)
+        crossover = (self.crossover_eta, self.crossover_prob)
+        mutation = (self.mutation_eta, self.mutation_prob)
         n_matings = -(-self.pop_size // 2)
-        for _ in range(n_gen - 1):
-            parents = select_parents(pop, n_matings, gen)
-            children = sbx(
-                np.swapaxes(pop.X[parents], 0, 1), xl, xu, self.crossover_eta,
-                self.crossover_prob, gen,
-            )  # fmt: skip
-            mutated = polynomial_mutation(
-                children, xl, xu, self.mutation_eta, self.mutation_prob, gen
-            )
-            pop = survive(Population.merge(pop, evaluate(mutated[: self.pop_size])),
-                          self.pop_size, gen)  # fmt: skip
-        X, F, G = (np.concatenate(part) for part in zip(*archive, strict=True))
-        keep = archive_front(F, G)
+        rows = evaluate(first, 0)
+        n_done = rows.size
+        for g in range(n_gen):
+            mate = n_matings if g < n_gen - 1 else 0  # the last survivors do not mate
+            idx, parents, _, _ = survive_and_mate(F_all, cv_all, rows, self.pop_size, mate, gen)
+            rows = rows[idx]
+            if mate:
+                children = offspring(X_all[rows[parents].T], xl, xu, crossover, mutation, gen)
+                new = evaluate(children[: self.pop_size], n_done)
+                n_done += new.size
+                rows = np.concatenate([rows, new])
+        keep = archive_front(F_all, G_all)
         feasible: BoolArray = np.ones(keep.size, dtype=bool)
         if keep.size == 0:
             # the least-violating row of the final population (the first of equals)
-            keep = pop.row[[int(np.argmin(pop.cv))]]
+            keep = rows[[int(np.argmin(cv_all[rows]))]]
             feasible = np.zeros(1, dtype=bool)
-        return ParetoResult(X[keep], F[keep], G[keep], feasible, X.shape[0], self.name)
+        return ParetoResult(X_all[keep], F_all[keep], G_all[keep], feasible, n_rows, self.name)

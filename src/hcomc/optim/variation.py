@@ -1,11 +1,17 @@
 """SBX crossover and polynomial mutation for the compiled NSGA-II, with pymoo's exact values.
 
-The arithmetic runs in numba kernels; every power goes through numpy's ``np.power`` on
-contiguous arrays, because numpy's vectorised ``pow`` and the C library's (which compiled code
-calls) differ in the last bit on some inputs, and pymoo uses numpy's. Random numbers come from
-the caller's generator in the order pymoo draws them. With the same generator state these
-operators therefore return pymoo's ``SBX`` and ``PM`` offspring bit for bit (tests check it
+Random numbers are drawn from the caller's generator in Python, in the order and sizes pymoo
+draws them; the arithmetic runs in numba kernels, one call per operator, or one for a whole
+generation's offspring (:func:`offspring`). With the same generator state these operators
+return pymoo's ``SBX`` and ``PM`` offspring bit for bit (tests check it operator by operator and
 through whole runs).
+
+Powers: pymoo takes them with numpy's ``np.power``. numpy's float64 power is the C library's
+``pow``, which compiled code calls too, except in builds that bring SIMD versions of their own
+(SVML on AVX-512 CPUs), whose last bit differs on a good share of arguments. A probe
+(:func:`numpy_power_is_libm`) tells the two apart once per process: where numpy's power is the C
+library's, the kernels take powers themselves; elsewhere they call numpy's from object mode, so
+the values are numpy's either way.
 """
 
 from __future__ import annotations
@@ -13,8 +19,9 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
+from numba import config, objmode
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 
 _PROB_VAR = 0.5  # SBX: probability that a variable of a crossed mating is crossed
@@ -22,26 +29,67 @@ _PROB_BIN = 0.5  # SBX: probability of exchanging the two children's values of a
 _TOO_CLOSE = 1.0e-14  # SBX: parents closer than this in a variable are not crossed there
 
 
-def _pow(base: FloatArray, exponent: float) -> FloatArray:
+def _numpy_power(base: FloatArray, exponent: float) -> FloatArray:
     """numpy's power of a contiguous array with a contiguous exponent array (pymoo's layout)."""
     with np.errstate(all="ignore"):
         out: FloatArray = np.power(base, np.full(base.size, exponent))
     return out
 
 
-@njit(cache=True)
+@kernel  # numpy's error model: 0 ** -1 is inf, as in numpy's power
+def _power(base: FloatArray, exponent: float, libm: bool) -> FloatArray:
+    """``base ** exponent`` elementwise with numpy's values: the C library's ``pow`` when
+    ``libm`` (numpy's power is that function here), else numpy's own, called from object mode."""
+    if libm:
+        out = np.empty(base.size)
+        for k in range(base.size):
+            out[k] = base[k] ** exponent
+        return out
+    with objmode(out="float64[::1]"):
+        out = _numpy_power(base, exponent)
+    return out
+
+
+@functools.cache  # once per process
+def numpy_power_is_libm() -> bool:
+    """Whether numpy's float64 power gives the C library's values on this CPU, so that the
+    kernels may take powers themselves.
+
+    A probe of 20,000 bases over the ranges the operators meet (below and above 1, tiny and
+    huge) with exponents of either sign and size, the defaults' among them, compares every bit;
+    a SIMD power of numpy's own differs in the last bit on a good share of such arguments.
+    Where numba itself vectorises math functions (with Intel's SVML), kernels are not trusted
+    with powers.
+    """
+    if getattr(config, "USING_SVML", False):
+        return False
+    probe = np.random.default_rng(0)
+    base = np.concatenate(
+        [np.exp(probe.uniform(-300.0, 300.0, 5_000)), probe.random(5_000),
+         1.0 + probe.random(5_000) * 1e3, probe.uniform(0.5, 2.0, 5_000)]
+    )  # fmt: skip
+    exponents = [-16.0, 1.0 / 16.0, 21.0, 1.0 / 21.0, *probe.uniform(-40.0, 40.0, 4),
+                 *probe.uniform(0.0, 1.0, 2)]  # fmt: skip
+    for e in exponents:
+        ours, numpys = _power(base, float(e), True), _numpy_power(base, float(e))
+        if not np.array_equal(ours.view(np.int64), numpys.view(np.int64)):
+            return False
+    return True
+
+
+@kernel
 def _clamp(v: float, lo: float, hi: float) -> float:
     """``v`` within [lo, hi] (NaN stays NaN, as in pymoo's repairs)."""
     v = lo if v < lo else v
     return hi if v > hi else v
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def _sbx_bases(
     X: FloatArray, xl: FloatArray, xu: FloatArray, u_cross: FloatArray
-) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Crossed variables, their parent values and bounds, and the spread factors ``beta``
-    towards the lower (first half) and upper bound (second half)."""
+) -> tuple[BoolArray, FloatArray, FloatArray, FloatArray]:
+    """Crossed variables, their parent values, and the spread factors ``beta`` towards the lower
+    (first half) and upper bound (second half)."""
     _, n_matings, n_var = X.shape
     cross = u_cross < _PROB_VAR
     m = 0
@@ -51,23 +99,21 @@ def _sbx_bases(
                 cross[i, j] = False
             if cross[i, j]:
                 m += 1
-    p1, p2, lo, hi = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    p1, p2, beta = np.empty(m), np.empty(m), np.empty(2 * m)
     k = 0
     for i in range(n_matings):
         for j in range(n_var):
             if cross[i, j]:
-                p1[k], p2[k], lo[k], hi[k] = X[0, i, j], X[1, i, j], xl[j], xu[j]
+                p1[k], p2[k] = X[0, i, j], X[1, i, j]
+                y1, y2 = (p1[k], p2[k]) if p1[k] < p2[k] else (p2[k], p1[k])
+                delta = y2 - y1
+                beta[k] = 1.0 + (2.0 * (y1 - xl[j]) / delta)
+                beta[m + k] = 1.0 + (2.0 * (xu[j] - y2) / delta)
                 k += 1
-    beta = np.empty(2 * m)
-    for k in range(m):
-        y1, y2 = (p1[k], p2[k]) if p1[k] < p2[k] else (p2[k], p1[k])
-        delta = y2 - y1
-        beta[k] = 1.0 + (2.0 * (y1 - lo[k]) / delta)
-        beta[m + k] = 1.0 + (2.0 * (hi[k] - y2) / delta)
-    return cross, p1, p2, lo, hi, beta
+    return cross, p1, p2, beta
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def _sbx_alpha(pw: FloatArray, rand: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """``alpha = 2 - beta^-(eta+1)`` and the two candidate bases of ``beta_q``."""
     m = rand.size
@@ -80,7 +126,7 @@ def _sbx_alpha(pw: FloatArray, rand: FloatArray) -> tuple[FloatArray, FloatArray
     return alpha, low, high
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def _sbx_children(
     X: FloatArray,
     xl: FloatArray,
@@ -131,38 +177,52 @@ def _sbx_children(
     return out
 
 
-def sbx(
+@kernel
+def _sbx(
     X: FloatArray,
     xl: FloatArray,
     xu: FloatArray,
+    crossed_mating: BoolArray,
+    cross: BoolArray,
+    p1: FloatArray,
+    p2: FloatArray,
+    beta: FloatArray,
+    rand: FloatArray,
+    exchange: FloatArray,
     eta: float,
-    prob: float,
-    rng: np.random.Generator,
+    libm: bool,
 ) -> FloatArray:
-    """Simulated binary crossover of parent pairs ``X`` (2, n_matings, n_var) -> children
-    (2 n_matings, n_var): all first children, then all second children (pymoo's ``SBX``).
-
-    A mating is crossed with probability ``prob``, each of its variables with probability 1/2
-    (not when the parents are within 1e-14 or the bounds coincide); the two children's values of
-    a crossed variable are exchanged with probability 1/2; children are clamped to the bounds.
-    """
-    _, n_matings, n_var = X.shape
-    crossed_mating: BoolArray = np.asarray(rng.random(n_matings) < prob)
-    if not np.any(crossed_mating):
-        return np.ascontiguousarray(X.reshape(-1, n_var))
-    rng.random((n_matings, 1))  # pymoo's draw for the exchange probability (1: unused)
-    X = np.ascontiguousarray(X, dtype=np.float64)
-    cross, p1, p2, _, _, beta = _sbx_bases(X, xl, xu, rng.random((n_matings, n_var)))
-    rand = rng.random(p1.size)
-    alpha, low, high = _sbx_alpha(_pow(beta, -(eta + 1.0)), rand)
-    q_low, q_high = _pow(low, 1.0 / (eta + 1.0)), _pow(high, 1.0 / (eta + 1.0))
-    exchange = rng.random(p1.size)
+    """SBX children (2 * n_matings, n_var) of parents ``X`` from the bases and draws; the
+    parents themselves when no mating is crossed."""
+    if not crossed_mating.any():
+        return X.copy().reshape(-1, X.shape[2])
+    alpha, low, high = _sbx_alpha(_power(beta, -(eta + 1.0), libm), rand)
+    q_low = _power(low, 1.0 / (eta + 1.0), libm)
+    q_high = _power(high, 1.0 / (eta + 1.0), libm)
     return _sbx_children(
         X, xl, xu, cross, crossed_mating, p1, p2, alpha, rand, q_low, q_high, exchange
     )
 
 
-@njit(cache=True, error_model="numpy")
+def _sbx_draws(
+    X: FloatArray, xl: FloatArray, xu: FloatArray, prob: float, rng: np.random.Generator
+) -> tuple[BoolArray, BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """pymoo's ``SBX`` draws for parents ``X`` (2, n_matings, n_var), in its order, with the
+    crossed variables and bases they decide: crossed matings (probability ``prob``), then only
+    if any is crossed: the exchange probability (1: unused), crossed variables, ``rand`` and the
+    exchange of crossed values. Arguments of :func:`_sbx` after the bounds."""
+    _, n_matings, n_var = X.shape
+    crossed_mating: BoolArray = np.asarray(rng.random(n_matings) < prob)
+    if not crossed_mating.any():
+        none = np.empty(0)
+        return crossed_mating, np.zeros((n_matings, n_var), np.bool_), none, none, none, none, none
+    rng.random((n_matings, 1))  # pymoo's draw for the exchange probability (1: unused)
+    cross, p1, p2, beta = _sbx_bases(X, xl, xu, rng.random((n_matings, n_var)))
+    rand = rng.random(p1.size)
+    return crossed_mating, cross, p1, p2, beta, rand, rng.random(p1.size)
+
+
+@kernel
 def _pm_bases(
     X: FloatArray, xl: FloatArray, xu: FloatArray, mut: BoolArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -189,7 +249,7 @@ def _pm_bases(
     return x, lo, hi, xy
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def _pm_values(pw: FloatArray, rand: FloatArray) -> FloatArray:
     """The two candidate bases of the perturbation, towards the lower and the upper bound."""
     m = rand.size
@@ -201,19 +261,21 @@ def _pm_values(pw: FloatArray, rand: FloatArray) -> FloatArray:
     return val
 
 
-@njit(cache=True, error_model="numpy")
-def _pm_apply(
+@kernel
+def _pm(
     X: FloatArray,
     xl: FloatArray,
     xu: FloatArray,
     mut: BoolArray,
-    x: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
     rand: FloatArray,
-    pv: FloatArray,
+    rows: BoolArray,
+    eta: float,
+    libm: bool,
 ) -> FloatArray:
+    """Polynomial mutation of the variables ``mut`` of rows ``X``, kept in the rows ``rows``."""
     n, n_var = X.shape
+    x, lo, hi, xy = _pm_bases(X, xl, xu, mut)
+    pv = _power(_pm_values(_power(xy, eta + 1.0, libm), rand), 1.0 / (eta + 1.0), libm)
     m = rand.size
     out = X.copy()
     k = 0
@@ -226,8 +288,21 @@ def _pm_apply(
             k += 1
     for i in range(n):
         for j in range(n_var):
-            out[i, j] = _clamp(out[i, j], xl[j], xu[j])
+            out[i, j] = _clamp(out[i, j], xl[j], xu[j]) if rows[i] else X[i, j]
     return out
+
+
+def _pm_draws(
+    n: int, xl: FloatArray, xu: FloatArray, prob: float, rng: np.random.Generator
+) -> tuple[BoolArray, FloatArray, BoolArray]:
+    """pymoo's ``PM`` draws for ``n`` rows, in its order: mutated variables (probability
+    ``min(0.5, 1 / n_var)``, none where the bounds coincide), one number per mutated variable,
+    and the rows kept mutated (probability ``prob``)."""
+    n_var = xl.size
+    mut: BoolArray = np.asarray(rng.random((n, n_var)) < min(0.5, 1.0 / n_var))
+    rand = rng.random(np.count_nonzero(mut & (xl != xu)))
+    rows: BoolArray = np.asarray(rng.random(n) <= prob)
+    return mut, rand, rows
 
 
 def polynomial_mutation(
@@ -241,21 +316,69 @@ def polynomial_mutation(
     """Polynomial mutation (pymoo's ``PM``): each row with probability ``prob``, each of its
     variables with probability ``min(0.5, 1 / n_var)`` (not where the bounds coincide), within
     the bounds."""
-    n, n_var = X.shape
     X = np.ascontiguousarray(X, dtype=np.float64)
-    mut = rng.random((n, n_var)) < min(0.5, 1.0 / n_var)
-    x, lo, hi, xy = _pm_bases(X, xl, xu, mut)
-    rand = rng.random(x.size)
-    pv = _pow(_pm_values(_pow(xy, eta + 1.0), rand), 1.0 / (eta + 1.0))
-    mutated = _pm_apply(X, xl, xu, mut, x, lo, hi, rand, pv)
-    rows: BoolArray = np.asarray(rng.random(n) <= prob)
-    return np.where(rows[:, None], mutated, X)
+    mut, rand, rows = _pm_draws(X.shape[0], xl, xu, prob, rng)
+    return _pm(X, xl, xu, mut, rand, rows, float(eta), numpy_power_is_libm())
+
+
+@kernel
+def _offspring(
+    X: FloatArray,
+    xl: FloatArray,
+    xu: FloatArray,
+    crossed_mating: BoolArray,
+    cross: BoolArray,
+    p1: FloatArray,
+    p2: FloatArray,
+    beta: FloatArray,
+    rand: FloatArray,
+    exchange: FloatArray,
+    crossover_eta: float,
+    mut: BoolArray,
+    rand_mut: FloatArray,
+    rows: BoolArray,
+    mutation_eta: float,
+    libm: bool,
+) -> FloatArray:
+    """SBX children of parents ``X``, then their polynomial mutation, in one call."""
+    children = _sbx(
+        X, xl, xu, crossed_mating, cross, p1, p2, beta, rand, exchange, crossover_eta, libm
+    )
+    return _pm(children, xl, xu, mut, rand_mut, rows, mutation_eta, libm)
+
+
+def offspring(
+    X: FloatArray,
+    xl: FloatArray,
+    xu: FloatArray,
+    crossover: tuple[float, float],
+    mutation: tuple[float, float],
+    rng: np.random.Generator,
+) -> FloatArray:
+    """Offspring (2 n_matings, n_var) of parent pairs ``X`` (2, n_matings, n_var): simulated
+    binary crossover (pymoo's ``SBX``), all first children then all second children, each then
+    mutated (pymoo's ``PM``); ``crossover`` and ``mutation`` are (eta, probability).
+
+    A mating is crossed with probability ``prob``, each of its variables with probability 1/2
+    (not when the parents are within 1e-14 or the bounds coincide); the two children's values of
+    a crossed variable are exchanged with probability 1/2; children are clamped to the bounds.
+    Mutation is that of :func:`polynomial_mutation`.
+    """
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    sbx = _sbx_draws(X, xl, xu, crossover[1], rng)
+    pm = _pm_draws(2 * X.shape[1], xl, xu, mutation[1], rng)
+    return _offspring(
+        X, xl, xu, *sbx, float(crossover[0]), *pm, float(mutation[0]), numpy_power_is_libm()
+    )
 
 
 @functools.cache  # once per process
 def warm_up() -> None:
-    """Compile (or load from numba's cache) every kernel of this module now."""
+    """Compile (or load from numba's cache) every kernel of this module now, and probe the
+    power once."""
+    libm = numpy_power_is_libm()
     rng = np.random.default_rng(0)
     xl, xu = np.zeros(2), np.ones(2)
-    children = sbx(rng.random((2, 2, 2)), xl, xu, 15.0, 1.0, rng)
+    children = offspring(rng.random((2, 2, 2)), xl, xu, (15.0, 1.0), (20.0, 1.0), rng)
     polynomial_mutation(children, xl, xu, 20.0, 1.0, rng)
+    _power(np.ones(1), 2.0, not libm)  # the other branch's signature is the same: one compile

@@ -1,0 +1,222 @@
+"""The compiled NSGA-II's generation steps against pymoo's operators, one step at a time.
+
+Each step of a generation (rank-and-crowding survival with the tournaments that follow, SBX with
+polynomial mutation, the archive's Pareto set) is compared with the pymoo operator it reproduces,
+or with the code it replaced, on random inputs rich in ties: the same generator state in, the
+same values out bit for bit and the same generator state after. The powers are checked both
+ways, taken in the kernels and taken by numpy from object mode.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from pymoo.algorithms.moo.nsga2 import binary_tournament
+from pymoo.core.population import Population as PymooPopulation
+from pymoo.core.problem import Problem as PymooProblem
+from pymoo.operators.crossover.sbx import SBX
+from pymoo.operators.mutation.pm import PM
+from pymoo.operators.selection.tournament import TournamentSelection
+from pymoo.operators.survival.rank_and_crowding import RankAndCrowding
+
+from hcomc._typing import FloatArray, IntArray
+from hcomc.optim import variation
+from hcomc.optim.base import archive_front
+from hcomc.optim.nsga2 import survive_and_mate, violation
+from hcomc.optim.selection import non_dominated
+from hcomc.optim.variation import offspring, polynomial_mutation
+
+
+def _same_state(a: np.random.Generator, b: np.random.Generator) -> None:
+    """Both generators have drawn exactly the same numbers."""
+    assert a.bit_generator.state == b.bit_generator.state
+
+
+@pytest.fixture(params=[True, False], ids=["kernel-powers", "numpy-powers"])
+def powers(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> bool:
+    """Run a test with powers taken in the kernels (where numpy's are the C library's) and with
+    numpy's taken from object mode (the fallback elsewhere)."""
+    libm: bool = request.param
+    if libm and not variation.numpy_power_is_libm():
+        pytest.skip("numpy's power is not the C library's here")
+    monkeypatch.setattr(variation, "numpy_power_is_libm", lambda: libm)
+    return libm
+
+
+# --------------------------------------------------------------------------------------------
+# powers
+# --------------------------------------------------------------------------------------------
+
+
+def test_kernel_powers_are_numpys() -> None:
+    rng = np.random.default_rng(3)
+    base = np.concatenate([rng.random(2000), 1.0 + rng.random(2000) * 50.0,
+                           [0.0, -0.0, 1.0, np.inf, np.nan, -1.5, 1e-300, 1e300]])  # fmt: skip
+    for exponent in (-16.0, 1.0 / 16.0, 21.0, 1.0 / 21.0, 0.5, 2.0, -7.3, 31.0):
+        with np.errstate(all="ignore"):
+            expected = np.power(base, np.full(base.size, exponent))
+        np.testing.assert_array_equal(variation._power(base, exponent, False), expected)
+        if variation.numpy_power_is_libm():
+            np.testing.assert_array_equal(variation._power(base, exponent, True), expected)
+
+
+# --------------------------------------------------------------------------------------------
+# variation against pymoo's SBX and PM
+# --------------------------------------------------------------------------------------------
+
+
+def _bounds(n_var: int, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
+    xl = -rng.random(n_var) * 3.0
+    xu = xl + rng.random(n_var) * 5.0
+    same = rng.random(n_var) < 0.15
+    xu[same] = xl[same]  # coinciding bounds: never crossed nor mutated
+    return xl, xu
+
+
+def _parents(
+    n_matings: int, xl: FloatArray, xu: FloatArray, rng: np.random.Generator
+) -> FloatArray:
+    X = xl + (xu - xl) * rng.random((2, n_matings, xl.size))
+    same = rng.random(n_matings) < 0.2
+    X[1, same] = X[0, same]  # equal parents: never crossed
+    X[:, rng.random(n_matings) < 0.2, 0] = xl[0]  # on a bound
+    return X
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_offspring_equal_pymoo_sbx_then_pm(seed: int, powers: bool) -> None:
+    setup = np.random.default_rng(seed)
+    n_var, n_matings = int(setup.integers(1, 7)), int(setup.integers(1, 13))
+    xl, xu = _bounds(n_var, setup)
+    X = _parents(n_matings, xl, xu, setup)
+    crossover = (float(setup.uniform(2.0, 30.0)), float(setup.choice([0.0, 0.5, 0.9, 1.0])))
+    mutation = (float(setup.uniform(2.0, 30.0)), float(setup.choice([0.0, 0.6, 0.9, 1.0])))
+    problem = PymooProblem(n_var=n_var, n_obj=1, xl=xl, xu=xu)
+    pop = PymooPopulation.new(X=np.vstack([X[0], X[1]]))
+    pairs = np.column_stack([np.arange(n_matings), n_matings + np.arange(n_matings)])
+    ref_rng, new_rng = np.random.default_rng(seed + 100), np.random.default_rng(seed + 100)
+    children = SBX(eta=crossover[0], prob=crossover[1]).do(
+        problem, pop, pairs, random_state=ref_rng
+    )
+    expected = (
+        PM(eta=mutation[0], prob=mutation[1]).do(problem, children, random_state=ref_rng).get("X")
+    )
+    got = offspring(X, xl, xu, crossover, mutation, new_rng)
+    np.testing.assert_array_equal(got, expected)
+    _same_state(ref_rng, new_rng)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_polynomial_mutation_equals_pymoo_pm(seed: int, powers: bool) -> None:
+    setup = np.random.default_rng(seed)
+    n_var, n = int(setup.integers(1, 7)), int(setup.choice([1, 1, 5, 24]))  # PSO mutates one row
+    xl, xu = _bounds(n_var, setup)
+    X = xl + (xu - xl) * setup.random((n, n_var))
+    eta, prob = float(setup.uniform(5.0, 30.0)), float(setup.choice([0.5, 0.9, 1.0]))
+    problem = PymooProblem(n_var=n_var, n_obj=1, xl=xl, xu=xu)
+    ref_rng, new_rng = np.random.default_rng(seed), np.random.default_rng(seed)
+    expected = (
+        PM(eta=eta, prob=prob)
+        .do(problem, PymooPopulation.new(X=X.copy()), random_state=ref_rng)
+        .get("X")
+    )
+    np.testing.assert_array_equal(polynomial_mutation(X, xl, xu, eta, prob, new_rng), expected)
+    _same_state(ref_rng, new_rng)
+
+
+# --------------------------------------------------------------------------------------------
+# survival and selection against pymoo's RankAndCrowding and TournamentSelection
+# --------------------------------------------------------------------------------------------
+
+
+def _pymoo_survive_and_mate(
+    F: FloatArray, G: FloatArray, n_survive: int, n_matings: int, rng: np.random.Generator
+) -> tuple[IntArray, IntArray]:
+    """pymoo's survivors (indices of rows) and their parents (positions among the survivors)."""
+    n = F.shape[0]
+    problem = PymooProblem(n_var=1, n_obj=F.shape[1], n_ieq_constr=G.shape[1], xl=0.0, xu=1.0)
+    pop = PymooPopulation.new(X=np.arange(n, dtype=float)[:, None], F=F, G=G)  # pymoo's CV
+    survivors = RankAndCrowding().do(problem, pop, n_survive=n_survive, random_state=rng)
+    rows = survivors.get("X")[:, 0].astype(np.int64)
+    if n_matings == 0:
+        return rows, np.empty((0, 2), dtype=np.int64)
+    algorithm = SimpleNamespace(tournament_type="comp_by_dom_and_crowding", random_state=rng)
+    parents = TournamentSelection(func_comp=binary_tournament).do(
+        problem, survivors, n_matings, 2, to_pop=False, random_state=rng, algorithm=algorithm
+    )
+    return rows, parents.astype(np.int64)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_survive_and_mate_equal_pymoo(seed: int) -> None:
+    setup = np.random.default_rng(seed)
+    n, n_obj, n_constr = int(setup.integers(2, 60)), int(setup.integers(1, 4)), int(seed % 3)
+    F = setup.integers(0, 4, (n, n_obj)).astype(float)  # few values: ties in every rule
+    G = setup.integers(-3, 2, (n, n_constr)).astype(float) * (setup.random((n, n_constr)) < 0.4)
+    n_survive = int(setup.integers(1, n + 1))
+    n_matings = int(setup.integers(0, 2 * n_survive + 1))
+    ref_rng, new_rng = np.random.default_rng(seed), np.random.default_rng(seed)
+    rows, parents = _pymoo_survive_and_mate(F, G, n_survive, n_matings, ref_rng)
+    idx, mates, _, _ = survive_and_mate(
+        F, violation(G), np.arange(n), n_survive, n_matings, new_rng
+    )
+    np.testing.assert_array_equal(idx, rows)
+    np.testing.assert_array_equal(mates, parents)
+    _same_state(ref_rng, new_rng)
+
+
+def test_survive_and_mate_reads_the_population_through_rows() -> None:
+    """Rows of a larger archive in any order: the same decisions as on the gathered rows."""
+    setup = np.random.default_rng(5)
+    F, cv = setup.integers(0, 3, (50, 2)).astype(float), setup.integers(0, 2, 50) * 0.5
+    rows = setup.permutation(50)[:30]
+    a = survive_and_mate(F, cv, rows, 12, 6, np.random.default_rng(1))
+    b = survive_and_mate(F[rows], cv[rows], np.arange(30), 12, 6, np.random.default_rng(1))
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+# --------------------------------------------------------------------------------------------
+# the archive's Pareto set against the code it replaced
+# --------------------------------------------------------------------------------------------
+
+
+def _archive_front_by_sorting(F: FloatArray, G: FloatArray) -> IntArray:
+    """The replaced code: feasible rows, their non-dominated mask, then numpy's unique rows."""
+    rows = np.flatnonzero(np.all(G <= 0.0, axis=1))
+    if rows.size == 0:
+        return rows
+    rows = rows[non_dominated(F[rows])]
+    _, distinct = np.unique(F[rows], axis=0, return_index=True)
+    return rows[np.sort(distinct)]
+
+
+_values = st.sampled_from([0.0, -0.0, 1.0, 2.0, 3.0, np.inf, -np.inf, np.nan])
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.integers(0, 40).flatmap(
+        lambda n: st.tuples(
+            arrays(np.float64, st.tuples(st.just(n), st.integers(1, 3)), elements=_values),
+            arrays(np.float64, st.tuples(st.just(n), st.integers(0, 2)),
+                   elements=st.sampled_from([-1.0, 0.0, -0.0, 0.5, np.nan])),
+        )
+    )
+)  # fmt: skip
+def test_archive_front_equals_sorting_unique_rows(FG: tuple[FloatArray, FloatArray]) -> None:
+    F, G = FG
+    np.testing.assert_array_equal(archive_front(F, G), _archive_front_by_sorting(F, G))
+
+
+def test_archive_front_on_continuous_values() -> None:
+    rng = np.random.default_rng(2)
+    F = rng.random((400, 3))
+    F[rng.integers(0, 400, 40)] = F[rng.integers(0, 400, 40)]  # duplicates
+    G = rng.random((400, 2)) - 0.3
+    np.testing.assert_array_equal(archive_front(F, G), _archive_front_by_sorting(F, G))
