@@ -32,14 +32,13 @@ from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import MergeProblem
 from hcomc.optim import pso
 from hcomc.optim.base import ParetoResult
+from hcomc.optim.numpy_sum import numpy_sums_are_pairwise, pairwise_sum
 from hcomc.optim.pso import (
     CompiledPSOOptimizer,
     adapt,
     improvement,
     latin_hypercube,
     min_distances,
-    numpy_sums_are_pairwise,
-    pairwise_sum,
     swarm_spread,
 )
 from hcomc.optim.pymoo_backend import PSOOptimizer
