@@ -27,6 +27,7 @@ import pandas as pd
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecNormalize
 
 import hcomc
@@ -47,6 +48,8 @@ def train(args: argparse.Namespace) -> tuple[PPO, VecNormalize]:
     venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0)
     model = PPO("MlpPolicy", venv, n_steps=256, batch_size=256, seed=args.seed, device="cpu",
                 verbose=0)  # fmt: skip
+    # silent, and no folder: stable-baselines3's default logger makes one in the temp folder
+    model.set_logger(Logger(folder=None, output_formats=[]))
     model.learn(total_timesteps=args.timesteps)
     venv.training = False
     return model, venv

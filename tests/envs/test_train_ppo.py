@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import runpy
+import tempfile
 from pathlib import Path
 
 import pandas as pd
@@ -15,7 +16,10 @@ pytest.importorskip("stable_baselines3")  # the rl extra (installed by the test 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "train_ppo.py"
 
 
-def test_ppo_example_trains_and_compares(tmp_path: Path) -> None:
+def test_ppo_example_trains_and_compares(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    scratch = tmp_path / "temp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))  # where SB3's default logger writes
     main = runpy.run_path(str(EXAMPLE))["main"]
     table = main(["--timesteps", "2048", "--envs", "2", "--eval-seeds", "2", "--out",
                   str(tmp_path)])  # fmt: skip
@@ -32,3 +36,4 @@ def test_ppo_example_trains_and_compares(tmp_path: Path) -> None:
     assert run["timesteps"] == 2048
     assert run["train_seeds_from"] == 10_000
     assert (tmp_path / "comparison.md").read_text().startswith("| policy |")
+    assert not list(scratch.glob("SB3-*"))  # a silent logger of its own: no folder left behind
