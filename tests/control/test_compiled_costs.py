@@ -15,7 +15,7 @@ import pytest
 from hcomc.config import IDMParams, load_config
 from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem import AHEAD, BEHIND, VMC, VR
-from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, _pairwise_sum
+from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel
 from hcomc.control.lane_change_cost import (
     GAME_DEFAULT,
     GameParams,
@@ -26,6 +26,7 @@ from hcomc.control.lane_change_cost import (
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.models.idm import idm_acceleration, iidm_acceleration
 from hcomc.models.transition import blend_acceleration, transition_weight
+from hcomc.optim.numpy_sum import pairwise_sum
 from hcomc.sim.engine import Simulation
 
 
@@ -49,7 +50,7 @@ def test_pairwise_sum_is_numpys_sum(n):
     """Every block size, and the split above 128 values (several levels deep)."""
     rng = np.random.default_rng(n)
     a = rng.random(n + 3) * 10.0 ** rng.uniform(-4, 4, n + 3)
-    assert _pairwise_sum(a, n) == a[:n].sum()
+    assert pairwise_sum(a, 0, n) == a[:n].sum()
 
 
 @pytest.mark.parametrize("K", [1, 5, 8, 64, 127, 128, 129, 200, 700])

@@ -2,10 +2,11 @@
 
 numpy adds a contiguous run of float64 values by pairwise summation: runs of fewer than 8
 terms from 0 in order, runs of up to 128 in 8 interleaved partial sums combined pairwise and
-then the rest in order, longer runs split in two at a multiple of 8. Optimisers that must round
-exactly as pymoo's whole-array numpy code does (:mod:`hcomc.optim.pso`) sum with
-:func:`pairwise_sum` inside their kernels, where :func:`numpy_sums_are_pairwise` has found
-numpy's sums to be exactly these.
+then the rest in order, longer runs split in two at a multiple of 8. Kernels that must round
+exactly as whole-array numpy code does sum with :func:`pairwise_sum`: the merge prediction's
+U_fuel (:mod:`hcomc.control.hcomc.rollout_fuel`, equal to the array form it replaced) and PSO's
+adaptation (:mod:`hcomc.optim.pso`, as pymoo's numpy, where :func:`numpy_sums_are_pairwise` has
+found numpy's sums to be exactly these).
 """
 
 from __future__ import annotations
