@@ -33,7 +33,7 @@ from hcomc.optim.dominance import (
     relation,
     tournament,
 )
-from hcomc.optim.nsga2 import CompiledNSGA2Optimizer, Population, survive, violation
+from hcomc.optim.nsga2 import CompiledNSGA2Optimizer, survive_and_mate, violation
 from hcomc.optim.pymoo_backend import NSGA2Optimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.optim.selection import non_dominated
@@ -261,10 +261,9 @@ def test_tournament_rules() -> None:
 def test_survival_takes_feasible_fronts_then_least_violating() -> None:
     F = np.array([[0.0, 1.0], [1.0, 0.0], [2.0, 2.0], [0.0, 0.0], [3.0, 3.0], [5.0, 5.0]])
     cv = np.array([0.0, 0.0, 0.0, 3.0, 1.0, 0.0])
-    n = F.shape[0]
-    pop = Population(F.copy(), F, cv, np.zeros(n, dtype=np.int64), np.zeros(n), np.arange(n))
-    out = survive(pop, 5, np.random.default_rng(0))
+    rows = np.arange(F.shape[0])
+    idx, _, rank, crowding = survive_and_mate(F, cv, rows, 5, 0, np.random.default_rng(0))
     # feasible: front {0, 1} (index order), then {2}, then {5}; infeasible by violation: 4
-    np.testing.assert_array_equal(out.row, [0, 1, 2, 5, 4])
-    np.testing.assert_array_equal(out.rank[:4], [0, 0, 1, 2])
-    assert np.isinf(out.crowding[:4]).all()  # fronts of <= 2 rows are all boundary
+    np.testing.assert_array_equal(rows[idx], [0, 1, 2, 5, 4])
+    np.testing.assert_array_equal(rank[idx][:4], [0, 0, 1, 2])
+    assert np.isinf(crowding[idx][:4]).all()  # fronts of <= 2 rows are all boundary

@@ -104,29 +104,6 @@ def survive_and_mate(
     return idx, S.reshape(n_matings, 2), rank, crowding
 
 
-@dataclass(slots=True)
-class Population:
-    """Rows of a population with rank and crowding, and each one's index among evaluated rows."""
-
-    X: FloatArray
-    F: FloatArray
-    cv: FloatArray
-    rank: IntArray
-    crowding: FloatArray
-    row: IntArray
-
-
-def survive(pop: Population, n_survive: int, rng: np.random.Generator) -> Population:
-    """The survivors of ``pop``, best first, with their rank and crowding distance
-    (:func:`survive_and_mate` without mating)."""
-    F = np.ascontiguousarray(pop.F, dtype=np.float64)
-    cv = np.ascontiguousarray(pop.cv, dtype=np.float64)
-    idx, _, rank, crowding = survive_and_mate(F, cv, np.arange(cv.size), n_survive, 0, rng)
-    return Population(
-        pop.X[idx], pop.F[idx], pop.cv[idx], rank[idx], crowding[idx], pop.row[idx]
-    )  # fmt: skip
-
-
 @dataclass(frozen=True, slots=True)
 class CompiledNSGA2Optimizer:
     """NSGA-II on arrays with numba kernels; the same decisions as the pymoo optimiser.
