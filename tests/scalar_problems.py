@@ -1,6 +1,7 @@
-"""Single-objective test problems on a box, shared by the tests that hold an optimiser on
-arrays to its reference implementation (PSO against pymoo, SA against SciPy): each problem
-keeps every batch of rows it evaluated, so that two runs can be compared call by call."""
+"""Test problems on a box, shared by the tests that hold an optimiser on arrays to its
+reference implementation (PSO against pymoo, SA against SciPy): single-objective ones and a
+constrained two-objective one, each keeping every batch of rows it evaluated, so that two
+runs can be compared call by call."""
 
 from __future__ import annotations
 
@@ -63,3 +64,26 @@ class Rosenbrock(ScalarProblem):
 
     def f(self, X: FloatArray) -> FloatArray:
         return (100.0 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1.0 - X[:, :-1]) ** 2).sum(axis=1)
+
+
+class Constrained:
+    """Binh-Korn, two objectives and two constraints; ``scalarise`` penalises violations."""
+
+    n_var = 2
+    n_obj = 2
+    n_constr = 2
+    objective_names = ("f1", "f2")
+
+    def __init__(self) -> None:
+        self.xl, self.xu = np.zeros(2), np.array([5.0, 3.0])
+        self.evaluated: list[FloatArray] = []
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        self.evaluated.append(np.array(X, copy=True))
+        x, y = X[:, 0], X[:, 1]
+        F = np.column_stack([4 * x**2 + 4 * y**2, (x - 5) ** 2 + (y - 5) ** 2])
+        G = np.column_stack([(x - 5) ** 2 + y**2 - 20, 7.7 - (x - 8) ** 2 - (y + 3) ** 2])
+        return F, G
+
+    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
+        return F.sum(axis=1) / 100.0 + 1000.0 * np.maximum(G, 0.0).sum(axis=1)

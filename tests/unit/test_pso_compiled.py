@@ -44,7 +44,7 @@ from hcomc.optim.pso import (
 from hcomc.optim.pymoo_backend import PSOOptimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.sim.engine import Simulation
-from scalar_problems import Rastrigin, ScalarProblem
+from scalar_problems import Constrained, Rastrigin, ScalarProblem
 
 _EXP_OVERFLOW = "ignore:overflow encountered in exp:RuntimeWarning"
 """pymoo's adaptation warns when all particles' mean distances are equal (w becomes 0)."""
@@ -74,29 +74,6 @@ class NonFinite(Sphere):
     def f(self, X: FloatArray) -> FloatArray:
         f = super().f(X)
         return np.where(X[:, 1] < -3.0, np.nan, np.where(X[:, 0] > 2.0, np.inf, f))
-
-
-class Constrained:
-    """Binh-Korn, two objectives and two constraints; ``scalarise`` penalises violations."""
-
-    n_var = 2
-    n_obj = 2
-    n_constr = 2
-    objective_names = ("f1", "f2")
-
-    def __init__(self) -> None:
-        self.xl, self.xu = np.zeros(2), np.array([5.0, 3.0])
-        self.evaluated: list[FloatArray] = []
-
-    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        self.evaluated.append(np.array(X, copy=True))
-        x, y = X[:, 0], X[:, 1]
-        F = np.column_stack([4 * x**2 + 4 * y**2, (x - 5) ** 2 + (y - 5) ** 2])
-        G = np.column_stack([(x - 5) ** 2 + y**2 - 20, 7.7 - (x - 8) ** 2 - (y + 3) ** 2])
-        return F, G
-
-    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
-        return F.sum(axis=1) / 100.0 + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
 
 
 def _both(

@@ -34,7 +34,7 @@ from hcomc.optim.base import ParetoResult
 from hcomc.optim.registry import make_optimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer, accepts
 from recorded_decisions import recorded_instants, recorded_problem
-from scalar_problems import Rastrigin, Rosenbrock, ScalarProblem
+from scalar_problems import Constrained, Rastrigin, Rosenbrock, ScalarProblem
 
 PATHS = ["kernel", "numpy"]
 """Where the steps' scale ``exp(c log|y|)`` is taken: in the kernels (with the C library's
@@ -68,29 +68,6 @@ class NonFinite(Sphere):
 class AllNaN(Sphere):
     def f(self, X: FloatArray) -> FloatArray:
         return np.full(X.shape[0], np.nan)
-
-
-class Constrained:
-    """Binh-Korn, two objectives and two constraints; ``scalarise`` penalises violations."""
-
-    n_var = 2
-    n_obj = 2
-    n_constr = 2
-    objective_names = ("f1", "f2")
-
-    def __init__(self) -> None:
-        self.xl, self.xu = np.zeros(2), np.array([5.0, 3.0])
-        self.evaluated: list[FloatArray] = []
-
-    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        self.evaluated.append(np.array(X, copy=True))
-        x, y = X[:, 0], X[:, 1]
-        F = np.column_stack([4 * x**2 + 4 * y**2, (x - 5) ** 2 + (y - 5) ** 2])
-        G = np.column_stack([(x - 5) ** 2 + y**2 - 20, 7.7 - (x - 8) ** 2 - (y + 3) ** 2])
-        return F, G
-
-    def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
-        return F.sum(axis=1) / 100.0 + 1000.0 * np.maximum(G, 0.0).sum(axis=1)
 
 
 class RowNonFinite(NonFinite):
