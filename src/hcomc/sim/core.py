@@ -44,9 +44,9 @@ from hcomc.sim.core_plans import (
     due_plans,
     execute_plans,
     finish_plans,
-    following_mask,
+    following_into,
     holding_mask,
-    virtual_rows,
+    virtual_rows_into,
 )
 from hcomc.sim.core_state import (
     CAV_GAME,
@@ -69,6 +69,11 @@ from hcomc.sim.core_state import (
     PLATOON,
     RAMP,
     ROWS,
+    S_FOLLOWING,
+    S_HOLDING,
+    S_IDS,
+    S_VV,
+    S_VV_FOL,
     STEP,
     VEHICLE_STEPS,
     WARMUP,
@@ -77,7 +82,7 @@ from hcomc.sim.core_state import (
 )
 from hcomc.sim.log_slots import claim_slots
 from hcomc.sim.perception import advance_errors_of
-from hcomc.sim.small import nonzero
+from hcomc.sim.small import nonzero_into
 
 __all__ = [
     "commanded_changes", "discretionary_changes", "due_plans", "follow_many", "holding",
@@ -97,10 +102,9 @@ def step_finish(
     lateral(c, t)
     bookkeeping(c, ids, t)
     if c.flags[ERRORS] > 0:
-        hdv = ids[nonzero(c.is_hdv[ids])]
         xi = c.innov[c.counters[INNOV_CURSOR]]
         c.counters[INNOV_CURSOR] += 1
-        advance_errors_of(c.w_gap, c.w_ttc, hdv, xi, c.consts[DECAY], c.consts[KICK])
+        advance_errors_of(c.w_gap, c.w_ttc, ids, c.is_hdv, xi, c.consts[DECAY], c.consts[KICK])
     push_history(c)
 
 
@@ -114,12 +118,16 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
     if not claim_slots(c.active, c.log_slot, c.log_span, c.log_owner, k):
         return False
     c.log_t[k] = t
-    for i in range(c.x.size):
-        if c.active[i]:
-            s = c.log_slot[i]
-            c.log_active[k, s] = True
-            c.log_x[k, s], c.log_y[k, s], c.log_v[k, s] = c.x[i], c.y[i], c.v[i]
-            c.log_a[k, s], c.log_heading[k, s], c.log_lane[k, s] = c.a[i], c.heading[i], c.lane[i]
+    active, slot, x, y, v, a = c.active, c.log_slot, c.x, c.y, c.v, c.a
+    heading, lane = c.heading, c.lane
+    log_x, log_y, log_v, log_a = c.log_x, c.log_y, c.log_v, c.log_a
+    log_heading, log_lane, log_active = c.log_heading, c.log_lane, c.log_active
+    for i in range(x.size):
+        if active[i]:
+            s = slot[i]
+            log_active[k, s] = True
+            log_x[k, s], log_y[k, s], log_v[k, s] = x[i], y[i], v[i]
+            log_a[k, s], log_heading[k, s], log_lane[k, s] = a[i], heading[i], lane[i]
     return True
 
 
@@ -130,10 +138,11 @@ def step_front(c: CoreArrays, ids: np.ndarray, t: float):
     and virtual leaders, then the lane changes the plans command now. Returns
     ``(acc, changing, vehicle, lane, key, rank, lead)``."""
     n_plans = c.counters[N_PLANS]
-    following = following_mask(c.plan_int, n_plans, c.x.size)
-    fol, vx, vv, va, vl = virtual_rows(c.plan_int, c.plan_f, n_plans, t, c.x, c.v, c.a, c.length)
+    following = following_into(c.plan_int, n_plans, c.scratch_b[S_FOLLOWING])
+    fol, rows = c.scratch_int[S_VV_FOL], c.scratch_f[S_VV : S_VV + 4]
+    m = virtual_rows_into(c.plan_int, c.plan_f, n_plans, t, c.x, c.v, c.a, c.length, fol, rows)
     acc, changing, vs, ls, ks, rank, lead = step_accelerations(
-        c, ids, t, following, fol, vx, vv, va, vl
+        c, ids, t, following, fol[:m], rows[0, :m], rows[1, :m], rows[2, :m], rows[3, :m]
     )
     if n_plans > 0:
         execute_plans(c, ids, t, lead, vs, ls, ks, rank)
@@ -144,8 +153,14 @@ def step_front(c: CoreArrays, ids: np.ndarray, t: float):
 def holding(c: CoreArrays) -> np.ndarray:
     """Vehicles that make no discretionary change now: held for a live plan
     (:func:`hcomc.sim.core_plans.holding_mask`) or driven from outside. A vehicle that is
-    not an HDV is a CAV (:class:`hcomc.road.Kind` has these two)."""
-    return holding_mask(c.plan_int, c.counters[N_PLANS], ~c.is_hdv) | c.held
+    not an HDV is a CAV (:class:`hcomc.road.Kind` has these two). A view of the step's
+    work row."""
+    out = c.scratch_b[S_HOLDING]
+    out[:] = c.held
+    n_plans = c.counters[N_PLANS]
+    if n_plans > 0:
+        out |= holding_mask(c.plan_int, n_plans, ~c.is_hdv)
+    return out
 
 
 @kernel
@@ -192,7 +207,8 @@ def needs_python(c: CoreArrays, t: float) -> bool:
 def step_alone(c: CoreArrays, t: float) -> None:
     """One whole step after release when no decision is due (the fast path; live plans are
     executed from the plan table)."""
-    ids = nonzero(c.active)
+    work = c.scratch_int[S_IDS]
+    ids = work[: nonzero_into(c.active, work)]
     if ids.size == 0:
         push_history(c)
         return

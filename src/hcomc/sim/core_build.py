@@ -129,6 +129,7 @@ def build_arrays(
     counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
     n_events = max(4096, 16 * n)
     plan_rows = max(1, int(np.count_nonzero(demand.lane == Lane.RAMP)))  # one plan per VR
+    work = max(4 * n + 1, 3 * plan_rows)  # entries, collision pairs, virtual rows
     return CoreArrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
@@ -154,6 +155,9 @@ def build_arrays(
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
         innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
         log_slot=log.slot, log_span=log.span,
+        scratch_int=np.zeros((layout.N_SCRATCH_INT, work), dtype=i8),
+        scratch_f=np.zeros((layout.N_SCRATCH_F, work)),
+        scratch_b=np.zeros((layout.N_SCRATCH_B, n), dtype=b1),
     )  # fmt: skip
 
 

@@ -31,6 +31,27 @@ from hcomc.sim.core_state import (
     PERCEIVE,
     RAMP,
     ROAD_LENGTH,
+    S_ACC,
+    S_BUFFER,
+    S_CHANGING,
+    S_CODES,
+    S_GAP,
+    S_IN_ORI,
+    S_IN_TGT,
+    S_KEY,
+    S_KS,
+    S_LANE,
+    S_LEAD,
+    S_LEADER_ACC,
+    S_LEADER_LENGTH,
+    S_LEADER_SPEED,
+    S_LS,
+    S_ORDER,
+    S_RANK,
+    S_SPEED,
+    S_VEH,
+    S_VS,
+    S_X,
     STEP,
     TTC_ERROR,
     WARMUP,
@@ -39,8 +60,8 @@ from hcomc.sim.core_state import (
     _centre,
     add_event,
 )  # fmt: skip
-from hcomc.sim.neighbours import lookup_one, neighbour, sort_entries
-from hcomc.sim.perception import perceive_one
+from hcomc.sim.neighbours import lookup_one, neighbours_into, sort_entries_into
+from hcomc.sim.perception import perceive_into
 from hcomc.sim.small import nonzero, search_left, unique
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
@@ -95,40 +116,39 @@ def release(c: CoreArrays, t: float) -> None:
 @kernel
 def follow_many(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray) -> np.ndarray:
     """Car-following acceleration of each vehicle of ``ids`` behind its leader (-1: none),
-    HDVs perceiving Eq. 2 (reaction delays and estimation errors) when the run has them.
+    HDVs perceiving Eq. 2 (reaction delays and estimation errors) when the run has them."""
+    out = np.empty(ids.size)
+    follow_into(c, ids, leaders, out)
+    return out
 
-    Written as three passes (exact inputs; the HDVs' perceived inputs; Eq. 1/3) so the hot
-    loops touch plain arrays only.
-    """
-    matrix, length, x, v, a = c.matrix, c.length, c.x, c.v, c.a
+
+@kernel
+def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.ndarray) -> None:
+    """:func:`follow_many` written into ``out[:ids.size]``, in three passes over plain arrays
+    (the step's work rows): the exact inputs, the HDVs' perceived inputs, Eq. 1/3."""
+    matrix, length, x, v, a, iidm = c.matrix, c.length, c.x, c.v, c.a, c.iidm
     n = ids.size
-    s, vi, vl, al = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    sf = c.scratch_f
+    s, vi, vl, al = sf[S_GAP, :n], sf[S_SPEED, :n], sf[S_LEADER_SPEED, :n], sf[S_LEADER_ACC, :n]
+    ll = sf[S_LEADER_LENGTH, :n]
     for k in range(n):
         i, j = ids[k], leaders[k]
         if j >= 0:
-            s[k], vl[k], al[k] = x[j] - length[j] - x[i], v[j], a[j]
+            s[k], vl[k], al[k], ll[k] = x[j] - length[j] - x[i], v[j], a[j], length[j]
         else:
-            s[k], vl[k], al[k] = math.inf, v[i], 0.0
+            s[k], vl[k], al[k], ll[k] = math.inf, v[i], 0.0, length[i]
         vi[k] = v[i]
     if c.flags[PERCEIVE] > 0:
-        step, dt, errors = c.counters[STEP], c.consts[DT], c.flags[ERRORS] > 0
-        gap_error, ttc_error = c.consts[GAP_ERROR], c.consts[TTC_ERROR]
-        x_hist, v_hist, w_gap, w_ttc, taus = c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.taus
-        for k in range(n):
-            i, j = ids[k], leaders[k]
-            if c.is_hdv[i]:
-                s[k], vi[k], vl[k] = perceive_one(
-                    x_hist, v_hist, w_gap, w_ttc, step, i, j, length[j if j >= 0 else i], dt,
-                    taus, gap_error, ttc_error, errors,
-                )  # fmt: skip
-    out = np.empty(n)
-    iidm = c.iidm
+        perceive_into(
+            c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.counters[STEP], c.consts[DT], c.taus, ids,
+            leaders, ll, c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0,
+            c.is_hdv, s, vi, vl,
+        )  # fmt: skip
     for k in range(n):
         i = ids[k]
         out[k] = follow_accel(s[k], vi[k], vl[k], al[k], matrix[0, i], matrix[1, i],
                               matrix[2, i], matrix[3, i], matrix[4, i], matrix[5, i],
                               matrix[6, i], iidm[i])  # fmt: skip
-    return out
 
 
 @kernel(inline="always")
@@ -142,21 +162,18 @@ def _follow_exact(matrix, iidm, i, s, v, vl, al):
 def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its
-    body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``."""
+    body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``, views of
+    the step's work rows."""
     width = c.consts[WIDTH]
     n = ids.size
-    n_ch = 0
-    for k in range(n):
-        n_ch += changing[k]
-    veh = np.empty(n + n_ch, dtype=np.int64)
-    lanes = np.empty(n + n_ch, dtype=np.int64)
-    xs = np.empty(n + n_ch)
-    in_ori = np.zeros(n, dtype=np.bool_)
-    in_tgt = np.zeros(n, dtype=np.bool_)
-    m = n
+    si, sf, sb = c.scratch_int, c.scratch_f, c.scratch_b
+    veh, lanes, xs = si[S_VEH], si[S_LANE], sf[S_X]
+    in_ori, in_tgt = sb[S_IN_ORI, :n], sb[S_IN_TGT, :n]
     for k in range(n):
         i = ids[k]
         veh[k], lanes[k], xs[k] = i, c.lane[i], c.x[i]
+        in_ori[k] = in_tgt[k] = False
+    m = n
     for k in range(n):  # changers' second entries follow all first entries, in ids order
         i = ids[k]
         if not changing[k]:
@@ -169,7 +186,10 @@ def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
             continue
         veh[m], lanes[m], xs[m] = i, (c.origin[i] if crossed else c.target[i]), c.x[i]
         m += 1
-    vs, ls, ks, rank = sort_entries(veh[:m], lanes[:m], xs[:m])
+    vs, ls, ks, rank = sort_entries_into(
+        veh[:m], lanes[:m], xs[:m], si[S_ORDER], si[S_BUFFER], si[S_RANK], si[S_VS], si[S_LS],
+        sf[S_KEY], sf[S_KS],
+    )  # fmt: skip
     return vs, ls, ks, rank, in_ori, in_tgt
 
 
@@ -187,21 +207,22 @@ def step_accelerations(
     (``following``); commanded vehicles also follow their virtual leaders (rows ``vv_*``);
     a vehicle driven from outside (``a_cmd`` not NaN) takes its command instead; every
     deceleration is limited to the emergency value; a scripted leader follows its
-    profile exactly. Returns ``(acc, changing, vehicle, lane, key, rank, lead)``.
+    profile exactly. Returns ``(acc, changing, vehicle, lane, key, rank, lead)``, views of
+    the step's work rows.
     """
     n = ids.size
-    changing = np.empty(n, dtype=np.bool_)
+    changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]
     vs, ls, ks, rank, in_ori, in_tgt = lane_index(c, ids, changing)
-    lead = np.empty(n, dtype=np.int64)
-    for k in range(n):
-        i = ids[k]
+    lead = c.scratch_int[S_LEAD, :n]
+    neighbours_into(vs, ls, rank, 1, lead)
+    for k in range(n):  # a changer's leader: the one ahead of it in its origin lane
         if changing[k]:
+            i = ids[k]
             lead[k] = lookup_one(ks, ls, vs, c.origin[i], c.x[i])[0]
-        else:
-            lead[k] = neighbour(vs, ls, rank[k] + 1, ls[rank[k]])
-    acc = follow_many(c, ids, lead)
+    acc = c.scratch_f[S_ACC, :n]
+    follow_into(c, ids, lead, acc)
     _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks)
     _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len)
     return acc, changing, vs, ls, ks, rank, lead
@@ -212,6 +233,8 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
     overlaps."""
+    if not changing.any():
+        return
     ch = nonzero(changing)
     n_ch = ch.size
     lead_new = np.empty(n_ch, dtype=np.int64)
@@ -271,7 +294,7 @@ def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) ->
     bumper centre is at x lies within ``[x - L - W/2, x + W/2]`` for any heading.
     """
     n = c.x.size
-    codes = np.empty(4 * vs.size + 1, dtype=np.int64)
+    codes = c.scratch_int[S_CODES]  # at most 2 pairs per entry
     m = 0
     for gap in (1, 2):
         for p in range(vs.size - gap):
@@ -294,6 +317,9 @@ def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) ->
             ):
                 codes[m] = min(i, j) * n + max(i, j)
                 m += 1
+    if m == 0:  # the usual step: nothing in contact, nothing begins
+        c.counters[N_COLLIDING] = 0
+        return
     now = unique(codes[:m])
     before = c.colliding[: c.counters[N_COLLIDING]]
     for code in now:

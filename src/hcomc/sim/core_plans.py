@@ -103,7 +103,13 @@ def vr_following(pi: np.ndarray, k: int) -> bool:
 @kernel
 def following_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
     """Vehicles (N,) that are a VR following its plan."""
-    mask = np.zeros(n, dtype=np.bool_)
+    return following_into(pi, n_plans, np.empty(n, dtype=np.bool_))
+
+
+@kernel
+def following_into(pi: np.ndarray, n_plans: int, mask: np.ndarray) -> np.ndarray:
+    """:func:`following_mask` written into ``mask`` (N,), which it returns."""
+    mask[:] = False
     for k in range(n_plans):
         if vr_following(pi, k):
             mask[pi[k, P_VR]] = True
@@ -163,6 +169,17 @@ def virtual_rows(
     horizon)."""
     fol = np.empty(3 * n_plans, dtype=np.int64)
     out = np.empty((4, 3 * n_plans))
+    m = virtual_rows_into(pi, pf, n_plans, t, x, v, a, length, fol, out)
+    return fol[:m], out[0, :m].copy(), out[1, :m].copy(), out[2, :m].copy(), out[3, :m].copy()
+
+
+@kernel
+def virtual_rows_into(
+    pi: np.ndarray, pf: np.ndarray, n_plans: int, t: float, x: np.ndarray, v: np.ndarray,
+    a: np.ndarray, length: np.ndarray, fol: np.ndarray, out: np.ndarray,
+) -> int:  # fmt: skip
+    """:func:`virtual_rows` written into ``fol`` and the rows of ``out`` (x, v, a, length;
+    at least ``3 n_plans`` wide); the number of rows."""
     m = 0
     for k in range(n_plans):
         tau = t - pf[k, F_T0]
@@ -183,7 +200,7 @@ def virtual_rows(
                 fol[m], out[0, m], out[1, m], out[2, m] = pi[k, P_VNR], xv, vv, av
                 out[3, m] = length[vmc]
                 m += 1
-    return fol[:m], out[0, :m].copy(), out[1, :m].copy(), out[2, :m].copy(), out[3, :m].copy()
+    return m
 
 
 # ------------------------------------------------------------------------- replans

@@ -36,6 +36,18 @@ N_CONSTS = 15
 N_FLAGS = 8
 # reasons run_steps returns
 DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
+# rows of the step's work arrays (scratch_int, scratch_f: width >= 4N + 1; scratch_b: N).
+# A step writes its per-vehicle and per-entry arrays into these rows instead of allocating
+# them; the arrays a kernel returns from them are valid until the same row is next written
+# (the next step)
+(S_IDS, S_LEAD, S_VEH, S_LANE, S_ORDER, S_BUFFER, S_RANK, S_VS, S_LS, S_CODES,
+ S_VV_FOL) = range(11)  # fmt: skip
+N_SCRATCH_INT = 11
+S_X, S_KEY, S_KS, S_ACC, S_VV = range(5)  # S_VV .. S_VV + 3: x, v, a, length of virtual rows
+S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # car following
+N_SCRATCH_F = 14
+S_CHANGING, S_IN_ORI, S_IN_TGT, S_FOLLOWING, S_HOLDING = range(5)
+N_SCRATCH_B = 5
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -106,6 +118,9 @@ class CoreArrays(NamedTuple):
     log_slot: np.ndarray  # the log's slot tables (hcomc.sim.log_slots)
     log_span: np.ndarray
     log_owner: np.ndarray
+    scratch_int: np.ndarray  # (N_SCRATCH_INT, >= 4N + 1) the step's work arrays
+    scratch_f: np.ndarray  # (N_SCRATCH_F, >= 4N + 1)
+    scratch_b: np.ndarray  # (N_SCRATCH_B, N) (S_CHANGING ...)
 
 
 @structref.register

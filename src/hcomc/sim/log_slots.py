@@ -98,19 +98,9 @@ def claim_slots(
     Raises ``ValueError`` for a vehicle back on the road after its span ended (the engine
     never re-inserts a vehicle).
     """
-    free = 0
-    for s in range(owner.size):
-        if owner[s] < 0:
-            free += 1
-    entering = 0
-    for i in range(active.size):
-        if slot[i] < 0:
-            entering += 1 if active[i] else 0
-        elif span[i, 1] == OPEN and not active[i]:
-            free += 1
-        elif active[i] and span[i, 1] != OPEN:
-            raise ValueError("a vehicle re-entered the road after its log span ended")
-    if entering > free:
+    if _unchanged(active, slot, span):  # the usual row: the same vehicles as at the last
+        return True
+    if not _room_for_entering(active, slot, span, owner):
         return False
     for i in range(active.size):
         if slot[i] >= 0 and span[i, 1] == OPEN and not active[i]:
@@ -124,6 +114,36 @@ def claim_slots(
             owner[s], slot[i] = i, s
             span[i, 0], span[i, 1] = k, OPEN
     return True
+
+
+@kernel(inline="always")
+def _unchanged(active: np.ndarray, slot: np.ndarray, span: np.ndarray) -> bool:
+    """Whether the vehicles on the road are exactly those holding a slot."""
+    i = 0
+    while i < active.size and active[i] == (slot[i] >= 0 and span[i, 1] == OPEN):
+        i += 1
+    return i == active.size
+
+
+@kernel(inline="always")
+def _room_for_entering(
+    active: np.ndarray, slot: np.ndarray, span: np.ndarray, owner: np.ndarray
+) -> bool:
+    """Whether the free slots and those of the vehicles that left suffice for the vehicles
+    entering; a vehicle back on the road after its span ended raises ``ValueError``."""
+    free = 0
+    for s in range(owner.size):
+        if owner[s] < 0:
+            free += 1
+    entering = 0
+    for i in range(active.size):
+        if slot[i] < 0:
+            entering += 1 if active[i] else 0
+        elif span[i, 1] == OPEN and not active[i]:
+            free += 1
+        elif active[i] and span[i, 1] != OPEN:
+            raise ValueError("a vehicle re-entered the road after its log span ended")
+    return entering <= free
 
 
 @kernel(inline="always")

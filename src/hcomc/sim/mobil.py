@@ -95,9 +95,10 @@ def mobil_decide(
         c = cand[k]
         new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, target[k], x[c])
         mandatory[k] = lane[k] == _RAMP or force[k]
-        s_o = _gap(length, x, c, leader[k])
-        s_c = _gap(length, x, c, new_lead[k])
-        s_n = _gap(length, x, new_fol[k], c) if new_fol[k] >= 0 else math.inf
+        lo, ln, fn = leader[k], new_lead[k], new_fol[k]
+        s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
+        s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
+        s_n = _gap(x[fn], x[c], length[c], fn >= 0)
         standing = leader[k] >= 0 and v[leader[k]] < 1.0
         clear = not standing or s_o >= 3.0 * length[c] + min_gap
         ok[k] = clear and s_c >= min_gap and s_n >= min_gap
@@ -131,9 +132,10 @@ def mobil_decide(
 
 
 @kernel(inline="always")
-def _gap(length: np.ndarray, x: np.ndarray, i: int, j: int) -> float:
-    """Bumper gap of i to j [m], inf for j = -1."""
-    return x[j] - length[j] - x[i] if j >= 0 else math.inf
+def _gap(x_i: float, x_j: float, length_j: float, exists: bool) -> float:
+    """Bumper gap [m] of a vehicle at ``x_i`` to one at ``x_j`` ahead of it, inf if there is
+    none (numbers, not arrays: called for every candidate)."""
+    return x_j - length_j - x_i if exists else math.inf
 
 
 @kernel(inline="always")

@@ -12,16 +12,20 @@ them for array callers.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray, IntArray
-from hcomc.sim.small import search_right, stable_argsort
+from hcomc.road import Lane
+from hcomc.sim.small import search_right, sort_runs, stable_argsort_into
 
 OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
+_RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
+_BY_LANE_FROM = 24  # entries; up to this many, one insertion sort is faster than by lane
 
 
 @kernel
@@ -30,12 +34,75 @@ def sort_entries(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Entries (vehicle, lane) at positions x sorted by ``lane * OFFSET + x`` (stable):
     ``(vehicle, lane, key, rank)`` with ``rank`` the sorted position of each given entry."""
-    key = lane * OFFSET + x
-    order = stable_argsort(key)
-    rank = np.empty(order.size, dtype=np.int64)
-    for p in range(order.size):
-        rank[order[p]] = p
-    return vehicle[order], lane[order], key[order], rank
+    n = vehicle.size
+    ints = np.empty((5, n), dtype=np.int64)
+    floats = np.empty((2, n))
+    return sort_entries_into(
+        vehicle, lane, x, ints[0], ints[1], ints[2], ints[3], ints[4], floats[0], floats[1]
+    )
+
+
+@kernel
+def sort_entries_into(
+    vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray, order: np.ndarray,
+    buffer: np.ndarray, rank: np.ndarray, vehicle_out: np.ndarray, lane_out: np.ndarray,
+    key: np.ndarray, key_out: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`sort_entries` in the caller's work arrays (each at least as long as
+    ``vehicle``); returns views of them."""
+    n = vehicle.size
+    key = key[:n]
+    for p in range(n):
+        key[p] = lane[p] * OFFSET + x[p]
+    if n <= _BY_LANE_FROM or not _order_by_lane(lane, key, order, buffer):
+        order = stable_argsort_into(key, order, buffer)
+    rank, vehicle_out, lane_out, key_out = rank[:n], vehicle_out[:n], lane_out[:n], key_out[:n]
+    for p in range(n):
+        q = order[p]
+        rank[q] = p
+        vehicle_out[p], lane_out[p], key_out[p] = vehicle[q], lane[q], key[q]
+    return vehicle_out, lane_out, key_out, rank
+
+
+@kernel
+def _order_by_lane(lane: np.ndarray, key: np.ndarray, order: np.ndarray, buffer: np.ndarray):
+    """The stable order of ``key`` in ``order[:n]``, found lane by lane: the entries are
+    partitioned by lane (ramp, lane 1, lane 2) in their given order and each lane is sorted
+    by :func:`~hcomc.sim.small.sort_runs`, linear for the entries of a lane (nearly in
+    reverse order of position). That is the stable order of all keys when every key of a
+    lane lies below every key of the next; False (``order`` then undefined) when a lane is
+    not 0-2 or the lanes' keys overlap, for the general sort."""
+    n = key.size
+    n_ramp = n_main = 0
+    for p in range(n):
+        if lane[p] == _RAMP:
+            n_ramp += 1
+        elif lane[p] == _MAIN_1:
+            n_main += 1
+        elif lane[p] != _MAIN_2:
+            return False
+    bounds = (0, n_ramp, n_ramp + n_main, n)
+    f_ramp, f_main, f_outer = bounds[0], bounds[1], bounds[2]
+    for p in range(n):
+        if lane[p] == _RAMP:
+            order[f_ramp] = p
+            f_ramp += 1
+        elif lane[p] == _MAIN_1:
+            order[f_main] = p
+            f_main += 1
+        else:
+            order[f_outer] = p
+            f_outer += 1
+    last = -math.inf
+    for q in range(3):
+        lo, hi = bounds[q], bounds[q + 1]
+        if lo == hi:
+            continue
+        sort_runs(key, order, buffer, lo, hi)
+        if not last < key[order[lo]]:
+            return False
+        last = key[order[hi - 1]]
+    return True
 
 
 @kernel(inline="always")
@@ -56,6 +123,21 @@ def lookup_one(
     """
     pos = search_right(key, lane * OFFSET + x)
     return neighbour(vehicle, lane_of, pos, lane), neighbour(vehicle, lane_of, pos - 1, lane)
+
+
+@kernel
+def neighbours_into(
+    vehicle: np.ndarray, lane_of: np.ndarray, rank: np.ndarray, step: int, out: np.ndarray
+) -> None:
+    """The vehicle ``step`` sorted entries away in the same lane (1: the leader, -1: the
+    follower; -1 if none) of each of the first ``out.size`` given entries, written into
+    ``out`` (:func:`neighbour` for each, without a compiled call per entry: one with array
+    arguments costs reference counting every time)."""
+    m = vehicle.size
+    for k in range(out.size):
+        p = rank[k]
+        q = p + step
+        out[k] = vehicle[q] if 0 <= q < m and lane_of[q] == lane_of[p] else -1
 
 
 @kernel

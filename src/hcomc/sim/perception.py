@@ -36,59 +36,95 @@ from hcomc.config import HDVParams
 
 
 @kernel(inline="always")
-def delayed(hist: np.ndarray, step: int, col: int, tau: float, dt: float) -> float:
-    """Column ``col`` of the ring buffer ``hist`` at ``t - tau`` (linear interpolation)."""
-    size = hist.shape[0]
+def delay_rows(step: int, tau: float, dt: float, size: int) -> tuple[int, int, float]:
+    """Where ``t - tau`` lies in a ring buffer of ``size`` rows at ``step``: the rows
+    ``n - j`` and ``n - j - 1`` and the weight ``r`` of the older (``tau = (j + r) dt``). The
+    same for every vehicle, so a step computes it once per delay."""
     lag = tau / dt
     j = math.floor(lag + 1e-9)
     r = max(lag - j, 0.0)
-    now = hist[(step - j) % size, col]
-    if r == 0.0:
-        return now
-    return (1.0 - r) * now + r * hist[(step - j - 1) % size, col]
+    return (step - j) % size, (step - j - 1) % size, r
 
 
 @kernel(inline="always")
-def perceive_one(
-    x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray,
-    step: int, i: int, leader: int, leader_length: float, dt: float, taus: np.ndarray,
-    gap_error: float, ttc_error: float, errors: bool,
+def interpolate(now: float, older: float, r: float) -> float:
+    """The state at ``(j + r) dt`` ago from the rows ``j`` and ``j + 1`` ago (linear)."""
+    if r == 0.0:
+        return now
+    return (1.0 - r) * now + r * older
+
+
+@kernel(inline="always")
+def perception_rows(step: int, taus: np.ndarray, dt: float, size: int):
+    """:func:`delay_rows` of the three reaction times ``taus`` (gap, speed, approach rate)."""
+    return (
+        delay_rows(step, taus[0], dt, size),
+        delay_rows(step, taus[1], dt, size),
+        delay_rows(step, taus[2], dt, size),
+    )
+
+
+@kernel(inline="always")
+def perceived(
+    x_i: float, x_l: float, leader_length: float, v_i: float, dv: float, has: bool,
+    w_gap: float, w_ttc: float, gap_error: float, ttc_error: float, errors: bool,
 ) -> tuple[float, float, float]:  # fmt: skip
-    """Delayed, noisy ``(s_est, v, v_leader_est)`` of HDV i behind ``leader`` (-1: none; the
-    gap is then infinite). ``taus`` = reaction times on gap, own speed and approach rate [s]."""
-    has = leader >= 0
-    lead = leader if has else i
-    x_i = delayed(x_hist, step, i, taus[0], dt)
-    x_l = delayed(x_hist, step, lead, taus[0], dt)
+    """Eq. 2: ``(s_est, v, v_leader_est)`` from the delayed positions ``x_i``, ``x_l``, the
+    delayed speed ``v_i`` and the delayed approach rate ``dv`` (``has``: a leader exists, else
+    the gap is infinite), with the driver's estimation errors ``w_gap``, ``w_ttc`` when
+    ``errors``."""
     s = x_l - leader_length - x_i if has else math.inf
-    v = delayed(v_hist, step, i, taus[1], dt)
-    dv = delayed(v_hist, step, i, taus[2], dt) - delayed(v_hist, step, lead, taus[2], dt)
     if errors:
         s_true = s if has else 0.0
-        dv = dv + s_true * ttc_error * w_ttc[i]
-        s = s * math.exp(gap_error * w_gap[i])
-    return s, v, v - (dv if has else 0.0)
+        dv = dv + s_true * ttc_error * w_ttc
+        s = s * math.exp(gap_error * w_gap)
+    return s, v_i, v_i - (dv if has else 0.0)
+
+
+@kernel
+def perceive_into(
+    x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray, step: int,
+    dt: float, taus: np.ndarray, ids: np.ndarray, leaders: np.ndarray,
+    leader_length: np.ndarray, gap_error: float, ttc_error: float, errors: bool,
+    only: np.ndarray, s: np.ndarray, v: np.ndarray, vl: np.ndarray,
+) -> None:  # fmt: skip
+    """Delayed, noisy ``(s_est, v, v_leader_est)`` of each vehicle ``ids[k]`` with
+    ``only[ids[k]]`` behind ``leaders[k]`` (-1: none), written into ``s[k], v[k], vl[k]``;
+    the other entries are left as they are. ``taus`` = reaction times on gap, own speed and
+    approach rate [s].
+
+    The per-vehicle helpers take numbers, not arrays: a compiled call with array arguments
+    inside the loop costs reference counting on every vehicle."""
+    (n0, p0, r0), (n1, p1, r1), (n2, p2, r2) = perception_rows(step, taus, dt, x_hist.shape[0])
+    for k in range(ids.size):
+        i, j = ids[k], leaders[k]
+        if not only[i]:
+            continue
+        has = j >= 0
+        lead = j if has else i
+        x_i = interpolate(x_hist[n0, i], x_hist[p0, i], r0)
+        x_l = interpolate(x_hist[n0, lead], x_hist[p0, lead], r0)
+        v_i = interpolate(v_hist[n1, i], v_hist[p1, i], r1)
+        dv = interpolate(v_hist[n2, i], v_hist[p2, i], r2) - interpolate(
+            v_hist[n2, lead], v_hist[p2, lead], r2
+        )
+        s[k], v[k], vl[k] = perceived(
+            x_i, x_l, leader_length[k], v_i, dv, has, w_gap[i], w_ttc[i], gap_error, ttc_error,
+            errors,
+        )  # fmt: skip
 
 
 @kernel
 def advance_errors_of(
-    w_gap: np.ndarray, w_ttc: np.ndarray, ids: np.ndarray, xi: np.ndarray, decay: float,
-    kick: float,
+    w_gap: np.ndarray, w_ttc: np.ndarray, ids: np.ndarray, is_hdv: np.ndarray, xi: np.ndarray,
+    decay: float, kick: float,
 ) -> None:  # fmt: skip
-    """One OU step of both error processes for vehicles ``ids`` with innovations ``xi`` (2, N)."""
+    """One OU step of both error processes for the HDVs among vehicles ``ids`` (``is_hdv``:
+    (N,) mask) with innovations ``xi`` (2, N)."""
     for i in ids:
-        w_gap[i] = decay * w_gap[i] + kick * xi[0, i]
-        w_ttc[i] = decay * w_ttc[i] + kick * xi[1, i]
-
-
-@kernel
-def _perceive_many(x_hist, v_hist, w_gap, w_ttc, step, ids, leader, length, dt, taus, ge, te, err):
-    s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
-    for k in range(ids.size):
-        s[k], v[k], vl[k] = perceive_one(
-            x_hist, v_hist, w_gap, w_ttc, step, ids[k], leader[k], length[k], dt, taus, ge, te, err
-        )
-    return s, v, vl
+        if is_hdv[i]:
+            w_gap[i] = decay * w_gap[i] + kick * xi[0, i]
+            w_ttc[i] = decay * w_ttc[i] + kick * xi[1, i]
 
 
 class Perception:
@@ -137,7 +173,9 @@ class Perception:
         if not self.errors:
             return
         xi = rng.standard_normal((2, self.is_hdv.size))
-        advance_errors_of(self.w_gap, self.w_ttc, _ints(ids), xi, self.decay, self.kick)
+        advance_errors_of(
+            self.w_gap, self.w_ttc, _ints(ids), self.is_hdv, xi, self.decay, self.kick
+        )
 
     @property
     def taus(self) -> FloatArray:
@@ -155,11 +193,14 @@ class Perception:
         ``leader`` is -1 where there is none: the gap is then infinite.
         """
         p = self.params
-        return _perceive_many(
-            self.x_hist, self.v_hist, self.w_gap, self.w_ttc, step, _ints(ids), _ints(leader),
-            np.ascontiguousarray(leader_length, dtype=np.float64), self.dt, self.taus,
-            p.gap_error, p.inverse_ttc_error, self.errors,
+        ids, leader = _ints(ids), _ints(leader)
+        s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
+        perceive_into(
+            self.x_hist, self.v_hist, self.w_gap, self.w_ttc, step, self.dt, self.taus, ids,
+            leader, np.ascontiguousarray(leader_length, dtype=np.float64), p.gap_error,
+            p.inverse_ttc_error, self.errors, np.ones(self.is_hdv.size, dtype=np.bool_), s, v, vl,
         )  # fmt: skip
+        return s, v, vl
 
 
 def _ints(a: IntArray) -> IntArray:

@@ -19,7 +19,18 @@ _RUN = 24  # entries sorted by insertion before merging
 def stable_argsort(keys: np.ndarray) -> np.ndarray:
     """Indices that sort ``keys`` ascending, equal keys in their original order."""
     n = keys.size
-    order = np.arange(n)
+    return stable_argsort_into(keys, np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64))
+
+
+@kernel
+def stable_argsort_into(keys: np.ndarray, order: np.ndarray, buffer: np.ndarray) -> np.ndarray:
+    """:func:`stable_argsort` in the caller's work arrays ``order`` and ``buffer`` (at least
+    ``keys.size`` long each); returns the first ``keys.size`` entries of the one that holds
+    the result."""
+    n = keys.size
+    order, buffer = order[:n], buffer[:n]
+    for i in range(n):
+        order[i] = i
     for start in range(0, n, _RUN):  # insertion sort of each run
         end = min(start + _RUN, n)
         for i in range(start + 1, end):
@@ -29,7 +40,6 @@ def stable_argsort(keys: np.ndarray) -> np.ndarray:
                 order[j + 1] = order[j]
                 j -= 1
             order[j + 1] = item
-    buffer = np.empty(n, dtype=np.int64)
     width = _RUN
     while width < n:  # bottom-up merges; the left run wins ties (stable)
         for lo in range(0, n, 2 * width):
@@ -57,18 +67,106 @@ def stable_argsort(keys: np.ndarray) -> np.ndarray:
 
 
 @kernel
+def sort_runs(keys: np.ndarray, order: np.ndarray, buffer: np.ndarray, lo: int, hi: int) -> None:
+    """Sort ``order[lo:hi]`` stably by ``keys[order[...]]`` (ties keep their order), in place;
+    ``buffer[lo:hi]`` is work space.
+
+    A natural merge sort: strictly descending runs are reversed (their keys are distinct, so
+    this keeps it stable), then adjacent ascending runs are merged, the left run winning
+    ties. Linear in the length for input made of a few runs, as the entries of one lane
+    are (vehicles in the order they entered: downstream first).
+    """
+    _reverse_descending_runs(keys, order, lo, hi)
+    merged = True
+    while merged:  # merge pairs of adjacent ascending runs until one is left
+        merged = False
+        i = lo
+        while i < hi:
+            mid = _run_end(keys, order, i, hi)
+            if mid >= hi:
+                break
+            end = _run_end(keys, order, mid, hi)
+            _merge(keys, order, buffer, i, mid, end)
+            merged = True
+            i = end
+
+
+@kernel(inline="always")
+def _reverse_descending_runs(keys: np.ndarray, order: np.ndarray, lo: int, hi: int) -> None:
+    """Reverse each strictly descending run of ``order[lo:hi]``."""
+    i = lo
+    while i < hi - 1:
+        j = i + 1
+        if keys[order[j]] < keys[order[i]]:
+            while j + 1 < hi and keys[order[j + 1]] < keys[order[j]]:
+                j += 1
+            a, b = i, j
+            while a < b:
+                order[a], order[b] = order[b], order[a]
+                a += 1
+                b -= 1
+        else:
+            while j + 1 < hi and keys[order[j + 1]] >= keys[order[j]]:
+                j += 1
+        i = j + 1
+
+
+@kernel(inline="always")
+def _run_end(keys: np.ndarray, order: np.ndarray, start: int, hi: int) -> int:
+    """End of the ascending run of ``order`` that begins at ``start``."""
+    end = start + 1
+    while end < hi and keys[order[end]] >= keys[order[end - 1]]:
+        end += 1
+    return end
+
+
+@kernel(inline="always")
+def _merge(
+    keys: np.ndarray, order: np.ndarray, buffer: np.ndarray, lo: int, mid: int, hi: int
+) -> None:
+    """Merge the ascending runs ``order[lo:mid]`` and ``order[mid:hi]`` in place (through
+    ``buffer``), the left run winning ties."""
+    a, b, k = lo, mid, lo
+    while a < mid and b < hi:
+        if keys[order[b]] < keys[order[a]]:
+            buffer[k] = order[b]
+            b += 1
+        else:
+            buffer[k] = order[a]
+            a += 1
+        k += 1
+    while a < mid:
+        buffer[k] = order[a]
+        a += 1
+        k += 1
+    while b < hi:
+        buffer[k] = order[b]
+        b += 1
+        k += 1
+    for k in range(lo, hi):
+        order[k] = buffer[k]
+
+
+@kernel
 def nonzero(mask: np.ndarray) -> np.ndarray:
     """Indices where ``mask`` is true (``np.flatnonzero`` of a 1-D array)."""
     count = 0
     for k in range(mask.size):
         count += mask[k]
     out = np.empty(count, dtype=np.int64)
+    nonzero_into(mask, out)
+    return out
+
+
+@kernel
+def nonzero_into(mask: np.ndarray, out: np.ndarray) -> int:
+    """:func:`nonzero` written into ``out`` (at least as long as the count); the count."""
     m = 0
     for k in range(mask.size):
         if mask[k]:
             out[m] = k
             m += 1
-    return out
+    return m
 
 
 @kernel(inline="always")
