@@ -50,7 +50,7 @@ class PackageCacheLocator(caching._CacheLocator):
     ``NUMBA_CACHE_DIR``), with the package's :func:`source_stamp` added to its freshness."""
 
     package = PACKAGE
-    _numbas: tuple[type, ...] = ()  # numba's locators, tried in its order
+    _numbas: tuple[Any, ...] = ()  # numba's locators, tried in its order
 
     def __init__(self, inner: Any) -> None:
         self._inner = inner
@@ -80,7 +80,7 @@ class PackageCacheLocator(caching._CacheLocator):
 
 def use_package_stamp(locator: type[PackageCacheLocator]) -> None:
     """Put ``locator`` before numba's cache locators (once)."""
-    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.61: private
+    impl = vars(caching).get("CacheImpl") or vars(caching)["_CacheImpl"]  # older numba: private
     classes = impl._locator_classes
     if locator not in classes:
         locator._numbas = tuple(c for c in classes if not issubclass(c, PackageCacheLocator))
