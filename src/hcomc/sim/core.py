@@ -136,7 +136,8 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
 def step_front(c: CoreArrays, ids: np.ndarray, t: float):
     """The accelerations of a step (:func:`step_accelerations`) with the live plans' followers
     and virtual leaders, then the lane changes the plans command now. Returns
-    ``(acc, changing, vehicle, lane, key, rank, lead)``."""
+    ``(acc, changing, vehicle, lane, key, rank, lead)``, views of the step's work rows (valid
+    until the next step)."""
     n_plans = c.counters[N_PLANS]
     following = following_into(c.plan_int, n_plans, c.scratch_b[S_FOLLOWING])
     fol, rows = c.scratch_int[S_VV_FOL], c.scratch_f[S_VV : S_VV + 4]
