@@ -158,7 +158,7 @@ def _follow_exact(matrix, iidm, i, s, v, vl, al):
                         matrix[4, i], matrix[5, i], matrix[6, i], iidm[i])  # fmt: skip
 
 
-@kernel
+@kernel(inline="always")  # its six views returned from a call would be reference-counted
 def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its

@@ -42,7 +42,7 @@ def sort_entries(
     )
 
 
-@kernel
+@kernel(inline="always")  # its four views returned from a call would be reference-counted
 def sort_entries_into(
     vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray, order: np.ndarray,
     buffer: np.ndarray, rank: np.ndarray, vehicle_out: np.ndarray, lane_out: np.ndarray,

@@ -43,24 +43,7 @@ def stable_argsort_into(keys: np.ndarray, order: np.ndarray, buffer: np.ndarray)
     width = _RUN
     while width < n:  # bottom-up merges; the left run wins ties (stable)
         for lo in range(0, n, 2 * width):
-            mid, hi = min(lo + width, n), min(lo + 2 * width, n)
-            i, j, k = lo, mid, lo
-            while i < mid and j < hi:
-                if keys[order[j]] < keys[order[i]]:
-                    buffer[k] = order[j]
-                    j += 1
-                else:
-                    buffer[k] = order[i]
-                    i += 1
-                k += 1
-            while i < mid:
-                buffer[k] = order[i]
-                i += 1
-                k += 1
-            while j < hi:
-                buffer[k] = order[j]
-                j += 1
-                k += 1
+            _merge_into(keys, order, buffer, lo, min(lo + width, n), min(lo + 2 * width, n))
         order, buffer = buffer, order
         width *= 2
     return order
@@ -126,25 +109,34 @@ def _merge(
 ) -> None:
     """Merge the ascending runs ``order[lo:mid]`` and ``order[mid:hi]`` in place (through
     ``buffer``), the left run winning ties."""
+    _merge_into(keys, order, buffer, lo, mid, hi)
+    for k in range(lo, hi):
+        order[k] = buffer[k]
+
+
+@kernel(inline="always")
+def _merge_into(
+    keys: np.ndarray, src: np.ndarray, dst: np.ndarray, lo: int, mid: int, hi: int
+) -> None:
+    """``dst[lo:hi]``: the ascending runs ``src[lo:mid]`` and ``src[mid:hi]`` merged, the left
+    run winning ties (stable)."""
     a, b, k = lo, mid, lo
     while a < mid and b < hi:
-        if keys[order[b]] < keys[order[a]]:
-            buffer[k] = order[b]
+        if keys[src[b]] < keys[src[a]]:
+            dst[k] = src[b]
             b += 1
         else:
-            buffer[k] = order[a]
+            dst[k] = src[a]
             a += 1
         k += 1
     while a < mid:
-        buffer[k] = order[a]
+        dst[k] = src[a]
         a += 1
         k += 1
     while b < hi:
-        buffer[k] = order[b]
+        dst[k] = src[b]
         b += 1
         k += 1
-    for k in range(lo, hi):
-        order[k] = buffer[k]
 
 
 @kernel
