@@ -144,3 +144,27 @@ def test_active_columns_list_each_rows_vehicles_on_the_road_in_vehicle_order(
             np.testing.assert_array_equal(column[on], log.slot[vehicle[on]])
             for name in CELL_FIELDS:  # the cells the columns point to are the vehicles'
                 _same(log.cells[name][k, column[on]], getattr(plain, name)[k, vehicle[on]])
+
+
+def test_a_scene_that_starts_full_widens_its_log_once(monkeypatch) -> None:
+    """141 vehicles on the road from the first row: the engine's log grows from its first 64
+    columns to one per vehicle in one step (not 64 -> 128 -> 141), and trimming keeps those
+    columns."""
+    from hcomc.config import load_config
+    from hcomc.sim.engine import Simulation
+
+    config = load_config(
+        "platoon", duration=2.0, warmup=0.0,
+        platoon={"followers": 140, "initial_speed": 25.0, "profile": [[0.0, 25.0]]},
+        road={"length": 10_000.0, "ramp_start": 1000.0, "accel_lane_start": 2000.0,
+              "accel_lane_end": 2250.0},
+    )  # fmt: skip
+    grown: list[int] = []
+    grow = SimulationLog.grow_slots
+    monkeypatch.setattr(
+        SimulationLog, "grow_slots", lambda log, n: (grown.append(n), grow(log, n))[1]
+    )
+    log = Simulation(config, 0).run()
+    assert grown == [141]
+    assert log.n_slots == 141
+    assert log.active[0].sum() == 141

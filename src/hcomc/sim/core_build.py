@@ -58,10 +58,12 @@ def check_log_memory(config: ScenarioConfig, rows: int, vehicles: int, slots: in
         )
 
 
-def widen_log(config: ScenarioConfig, log: SimulationLog) -> None:
-    """Double ``log``'s slot columns (more vehicles are on the road at once than it has
-    columns), within ``log_memory_limit``."""
-    slots = min(2 * log.n_slots, log.n_vehicles)
+def widen_log(config: ScenarioConfig, log: SimulationLog, on_road: int = 0) -> None:
+    """Widen ``log``'s slot columns when more vehicles are on the road at once than it has
+    columns: to twice as many, or at once to ``on_road`` (one column each) when that is more
+    (a scene that starts full widens once, not a doubling at a time), within
+    ``log_memory_limit``."""
+    slots = min(max(2 * log.n_slots, on_road), log.n_vehicles)
     if slots <= log.n_slots:
         raise RuntimeError("the log has a column per vehicle and still no free one")
     check_log_memory(config, log.n_steps, log.n_vehicles, slots)

@@ -271,7 +271,7 @@ class Simulation:
         if rows >= self.log.n_steps:
             raise IndexError(f"row {rows} outside the log's {self.log.n_steps} rows")
         while not core.record_row(self.core, rows, self.t):  # more vehicles than columns
-            widen_log(self.config, self.log)
+            widen_log(self.config, self.log, int(np.count_nonzero(self.arrays.active)))
             self.arrays = adopt_log_columns(self.arrays, self.core, self.log)
         self.arrays.counters[layout.ROWS] = rows + 1
 
