@@ -27,8 +27,8 @@ by the compiled loop or by the engine's Python step)."""
 
 
 FIRST_SLOTS = 64
-"""Slot columns a run's log starts with (:mod:`hcomc.sim.log_slots`; it doubles them when
-more vehicles are on the road at once, up to one per vehicle)."""
+"""Slot columns a run's log starts with (:mod:`hcomc.sim.log_slots`; :func:`widen_log` adds
+more when more vehicles are on the road at once, up to one per vehicle)."""
 
 
 def allocate_log(
