@@ -110,8 +110,9 @@ def test_engine_refuses_exactly_above_the_allocated_size() -> None:
 
 
 def test_a_log_that_grows_its_columns_logs_the_same_run(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A log starting with 4 slot columns doubles them as vehicles enter (4, 8, 16, 32):
-    the same cells as a log that never grows, and the limit checked again at each growth."""
+    """A log starting with 4 slot columns grows as vehicles enter (at once to the vehicles on
+    the road at its first row, then doubling): the same cells as a log that never grows, and
+    the limit checked again at each growth."""
     config = load_config("C1", duration=60.0, log_interval=0.1)
     plain = Simulation(config, 0)
     plain.run()
@@ -125,9 +126,11 @@ def test_a_log_that_grows_its_columns_logs_the_same_run(monkeypatch: pytest.Monk
     np.testing.assert_array_equal(grown.log.slot, plain.log.slot)
     np.testing.assert_array_equal(grown.log.span, plain.log.span)
     rows, n = grown.log.n_steps, grown.log.n_vehicles
-    limit = bytes_needed(rows, n, 6) / 2**30  # room for 4 columns, not for 8
+    first = int(plain.log.active[0].sum())  # on the road at the first row: more than 2 x 4
+    assert first > 8
+    limit = bytes_needed(rows, n, first - 1) / 2**30  # room for 4 columns, not for `first`
     sim = Simulation(config.model_copy(update={"log_memory_limit": limit}), 0)
-    with pytest.raises(ConfigError, match=rf"\({rows} rows x 8 vehicles on the road"):
+    with pytest.raises(ConfigError, match=rf"\({rows} rows x {first} vehicles on the road"):
         sim.run()
 
 
