@@ -130,9 +130,9 @@ def neighbours_into(
     vehicle: np.ndarray, lane_of: np.ndarray, rank: np.ndarray, step: int, out: np.ndarray
 ) -> None:
     """The vehicle ``step`` sorted entries away in the same lane (1: the leader, -1: the
-    follower; -1 if none) of each of the first ``out.size`` given entries, written into
-    ``out`` (:func:`neighbour` for each, without a compiled call per entry: one with array
-    arguments costs reference counting every time)."""
+    follower; -1 if none) of the entries at sorted positions ``rank[:out.size]``, written
+    into ``out`` (:func:`neighbour` for each, without a compiled call per entry: one with
+    array arguments costs reference counting every time)."""
     m = vehicle.size
     for k in range(out.size):
         p = rank[k]
@@ -143,9 +143,7 @@ def neighbours_into(
 @kernel
 def _neighbours_of(vehicle, lane_of, rank, entries, step):
     out = np.empty(entries.size, dtype=np.int64)
-    for k in range(entries.size):
-        pos = rank[entries[k]]
-        out[k] = neighbour(vehicle, lane_of, pos + step, lane_of[pos])
+    neighbours_into(vehicle, lane_of, rank[entries], step, out)
     return out
 
 
