@@ -55,6 +55,11 @@ class PackageCacheLocator(caching._CacheLocator):
     def __init__(self, inner: Any) -> None:
         self._inner = inner
 
+    def __getattr__(self, name: str) -> Any:
+        """Anything else numba asks (e.g. ``_py_file`` for its warning that a function
+        cannot be cached) is the wrapped locator's."""
+        return getattr(self._inner, name)
+
     def ensure_cache_path(self) -> None:
         self._inner.ensure_cache_path()
 

@@ -30,11 +30,14 @@ def _write(path: Path, text: str) -> None:
 
 
 def _run(root: Path) -> str:
-    out = subprocess.run(
+    return _process(root).stdout.strip()
+
+
+def _process(root: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
         [sys.executable, "-c", _RUN.format(root=str(root))],
         capture_output=True, text=True, check=True, timeout=600,
     )  # fmt: skip
-    return out.stdout.strip()
 
 
 def test_a_kernel_is_compiled_anew_when_a_callee_in_another_file_changes(tmp_path):
@@ -75,6 +78,33 @@ def test_a_kernel_is_compiled_anew_when_a_callee_in_another_file_changes(tmp_pat
         """,
     )
     assert _run(tmp_path) == "6.0"  # the caller's file is unchanged: numba alone says 4.0
+
+
+def test_a_kernel_that_cannot_be_cached_runs_with_numbas_warning(tmp_path):
+    """numba declines to cache a function that calls a ctypes function (a dynamic global) and
+    warns, naming the function's file: the locator must answer numba's questions about it."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    _write(
+        pkg / "caller.py",
+        """
+        import ctypes
+
+        from hcomc._jit import kernel
+
+        _fabs = ctypes.CDLL(None).fabs
+        _fabs.argtypes, _fabs.restype = [ctypes.c_double], ctypes.c_double
+
+        @kernel
+        def twice(x):
+            return 2.0 * _fabs(x)
+        """,
+    )
+    out = _process(tmp_path)
+    assert out.stdout.strip() == "2.0"
+    assert "Cannot cache compiled function" in out.stderr
+    assert str(pkg / "caller.py") in out.stderr
 
 
 def test_the_stamp_covers_every_source_file_of_the_package(tmp_path):
