@@ -24,7 +24,7 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     resolve_starts,
 )
-from hcomc.control.hcomc.rollout_layout import R_ACC, R_V, R_X
+from hcomc.control.hcomc.rollout_layout import R_ACC, R_FREE, R_V, R_X
 from hcomc.control.hcomc.rollout_score import created_pairs_safety, efficiency_gain
 from hcomc.control.hcomc.rollout_step import follow_role, integrate, new_state
 from hcomc.models.idm import equilibrium_gap
@@ -59,10 +59,29 @@ def _params(f: Fleet, i: int) -> np.ndarray:
     al=st.floats(-8.0, 3.0),
 )
 def test_role_following_is_the_engines(variant, kind, s, v, vl, al):
+    """Bit for bit, behind a leader and (with the free-road term then taken from ``R_FREE``)
+    on a free road at the same speed."""
     fleet = FLEETS[variant]
-    expected = follow(fleet, np.array([kind]), np.array([s]), np.array([v]), np.array([vl]),
-                      np.array([al]))[0]  # fmt: skip
-    assert follow_role(_params(fleet, kind)[None, :], 0, s, v, vl, al) == expected
+    ks = np.array([kind, kind])
+    expected = follow(fleet, ks, np.array([s, np.inf]), np.array([v, v]), np.array([vl, v]),
+                      np.array([al, 0.0]))  # fmt: skip
+    S = new_state(np.zeros(1), np.array([v]), np.zeros(1), np.ones(1, dtype=np.bool_))
+    params = _params(fleet, kind)[None, :]
+    assert np.isnan(S[R_FREE, 0])
+    assert follow_role(S, params, 0, s, vl, al) == expected[0]
+    assert not np.isnan(S[R_FREE, 0])  # taken once for the step
+    assert follow_role(S, params, 0, np.inf, v, 0.0) == expected[1]
+
+
+def test_a_new_speed_clears_the_free_road_term():
+    S = new_state(np.zeros(N_ROLES), np.full(N_ROLES, 20.0), np.zeros(N_ROLES),
+                  np.ones(N_ROLES, dtype=np.bool_))  # fmt: skip
+    params = np.tile(_params(FLEETS["idm"], 0), (N_ROLES, 1))
+    first = follow_role(S, params, VR, np.inf, 20.0, 0.0)
+    S[R_ACC] = 1.0
+    integrate(S, 0.5, 9.0)
+    assert np.isnan(S[R_FREE]).all()
+    assert follow_role(S, params, VR, np.inf, 20.5, 0.0) < first  # at the new speed
 
 
 def test_parameter_rows_carry_the_iidm_flag():

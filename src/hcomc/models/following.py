@@ -17,9 +17,14 @@ from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.models._broadcast import broadcast_apply
 from hcomc.models.cav import acc_accel, cah_accel
-from hcomc.models.idm import idm_accel, iidm_accel
+from hcomc.models.idm import (
+    idm_accel_given,
+    idm_free_power,
+    iidm_accel_given,
+    iidm_free_accel,
+)
 
-__all__ = ["follow_accel", "follow_acceleration"]
+__all__ = ["follow_accel", "follow_accel_given", "follow_acceleration", "free_term"]
 
 
 @kernel
@@ -51,12 +56,30 @@ def follow_accel(
     Without a leader the ACC reduces to the free-road (I)IDM: Kesting et al. (2010) define
     the CAH for a leader only.
     """
+    free = free_term(v, v0, a, b, delta, iidm)
+    return follow_accel_given(s, v, vl, al, v0, T, s0, a, b, c, iidm, free)
+
+
+@kernel(inline="always")
+def free_term(v: float, v0: float, a: float, b: float, delta: float, iidm: bool) -> float:
+    """The part of :func:`follow_accel` that depends on the own speed alone: the IDM's
+    ``(v / v0)^delta`` or the IIDM's free-road acceleration."""
+    return iidm_free_accel(v, v0, a, b, delta) if iidm else idm_free_power(v, v0, delta)
+
+
+@kernel
+def follow_accel_given(
+    s: float, v: float, vl: float, al: float, v0: float, T: float, s0: float, a: float,
+    b: float, c: float, iidm: bool, free: float,
+) -> float:  # fmt: skip
+    """:func:`follow_accel` with its :func:`free_term` ``free`` given (the same value): a
+    vehicle evaluated behind several leaders at one speed takes the power once."""
     finite = not math.isinf(s)
     dv = v - vl if finite else 0.0
     if iidm:
-        acc = iidm_accel(s, v, dv, v0, T, a, b, s0, delta)
+        acc = iidm_accel_given(s, v, dv, v0, T, a, b, s0, free)
     else:
-        acc = idm_accel(s, v, dv, v0, T, a, b, s0, delta)
+        acc = idm_accel_given(s, v, dv, T, a, b, s0, free)
     if c > 0.0 and finite:
         acc = acc_accel(acc, cah_accel(s, v, vl, al, a), b, c)
     return acc

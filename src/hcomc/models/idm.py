@@ -36,9 +36,13 @@ __all__ = [
     "desired_gap",
     "equilibrium_gap",
     "idm_accel",
+    "idm_accel_given",
     "idm_acceleration",
+    "idm_free_power",
     "iidm_accel",
+    "iidm_accel_given",
     "iidm_acceleration",
+    "iidm_free_accel",
 ]
 
 S_MIN: float = 1e-3
@@ -191,8 +195,23 @@ def idm_accel(
 ) -> float:
     """IDM acceleration of one vehicle, paper Eq. (1) [m/s^2]: the one implementation of
     :func:`idm_acceleration` (same arguments, positional)."""
+    return idm_accel_given(s, v, dv, T, a, b, s0, idm_free_power(v, v0, delta))
+
+
+@kernel(inline="always")
+def idm_free_power(v: float, v0: float, delta: float) -> float:
+    """The free-road term ``(v / v0)^delta`` of Eq. (1), which depends on the own speed alone."""
+    return (v / v0) ** delta
+
+
+@kernel
+def idm_accel_given(
+    s: float, v: float, dv: float, T: float, a: float, b: float, s0: float, power: float
+) -> float:
+    """:func:`idm_accel` with its free-road term ``power`` = :func:`idm_free_power` given, so
+    that a caller evaluating one vehicle behind several leaders takes the power once."""
     z = desired_gap_scalar(v, dv, T, a, b, s0) / max(s, S_MIN)
-    return a * (1.0 - (v / v0) ** delta - z * z)
+    return a * (1.0 - power - z * z)
 
 
 @kernel
@@ -290,14 +309,30 @@ def iidm_accel(
 ) -> float:
     """IIDM acceleration of one vehicle [m/s^2]: the one implementation of
     :func:`iidm_acceleration` (same arguments, positional)."""
+    return iidm_accel_given(s, v, dv, v0, T, a, b, s0, iidm_free_accel(v, v0, a, b, delta))
+
+
+@kernel(inline="always")
+def iidm_free_accel(v: float, v0: float, a: float, b: float, delta: float) -> float:
+    """The IIDM's free-road acceleration [m/s^2], which depends on the own speed alone."""
+    if v <= v0:
+        return a * (1.0 - (min(v, v0) / v0) ** delta)
+    return -b * (1.0 - (v0 / max(v, v0)) ** (a / b * delta))
+
+
+@kernel
+def iidm_accel_given(
+    s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float,
+    a_free: float,
+) -> float:  # fmt: skip
+    """:func:`iidm_accel` with its free-road acceleration ``a_free`` =
+    :func:`iidm_free_accel` given."""
     z = desired_gap_scalar(v, dv, T, a, b, s0) / max(s, S_MIN)
     if v <= v0:
-        a_free = a * (1.0 - (min(v, v0) / v0) ** delta)
         if z < 1.0:
             # a_free >= 0 is floored inside the exponent, so z^inf -> 0 at v = v0
             return a_free * (1.0 - min(z, 1.0) ** (a * 2.0 / max(a_free, _A_FREE_FLOOR)))
         return a * (1.0 - z * z)
-    a_free = -b * (1.0 - (v0 / max(v, v0)) ** (a / b * delta))
     if z < 1.0:
         return a_free
     return a_free + a * (1.0 - z * z)

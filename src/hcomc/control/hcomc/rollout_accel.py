@@ -25,7 +25,6 @@ from hcomc.control.hcomc.rollout_layout import (
     P_LEN,
     R_ACC,
     R_PRESENT,
-    R_V,
     R_X,
     VMC,
     VMF,
@@ -53,10 +52,10 @@ def vr_accel(
     """VR: on the ramp free road capped by VV0 (CAV) or the lane end (HDV); while merging the
     Eq. 14 blend from the free road to its lane-1 leader; after the merge that leader."""
     if not lc[L_VR_STARTED]:
-        acc = free_road(params, VR, S[R_V, VR])
+        acc = free_road(S, params, VR)
         if not controlled:
             gap = accel_end - S[R_X, VR]
-            return min(acc, follow_role(params, VR, gap, S[R_V, VR], 0.0, 0.0))
+            return min(acc, follow_role(S, params, VR, gap, 0.0, 0.0))
         if t <= horizon:
             return min(acc, behind_virtual(S, params, VR, vvs, 0, t, params[VMF, P_LEN]))
         return min(acc, behind(S, params, VR, VMF))
@@ -64,7 +63,7 @@ def vr_accel(
     if lc[L_VR_DONE]:
         return a_new
     w = transition_psi(t - lc[L_VR_T0], vr_dur, gamma)
-    return blend(free_road(params, VR, S[R_V, VR]), a_new, w)
+    return blend(free_road(S, params, VR), a_new, w)
 
 
 @kernel(inline="always")

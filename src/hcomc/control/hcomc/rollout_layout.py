@@ -60,8 +60,10 @@ N_G = 5
 N_PROGRESS = 9
 
 # rows of the state of the roles during one pass: position, speed, acceleration, commanded
-# acceleration of the next step, lane-1 and lane-2 membership and presence (flags 0.0 / 1.0)
-R_X, R_V, R_A, R_ACC, R_IN1, R_IN2, R_PRESENT = range(7)
-N_STATE = 7
+# acceleration of the next step, lane-1 and lane-2 membership and presence (flags 0.0 / 1.0),
+# and the free-road term of the car-following model at the current speed (NaN until taken:
+# a role evaluated behind several leaders in one step takes its power once)
+R_X, R_V, R_A, R_ACC, R_IN1, R_IN2, R_PRESENT, R_FREE = range(8)
+N_STATE = 8
 
 LANE0 = np.array([0, 1, 1, 1, 2, 2])  # lanes of the roles at planning time (0 = ramp)

@@ -33,6 +33,7 @@ from hcomc.control.hcomc.rollout_layout import (
     P_LEN,
     R_A,
     R_ACC,
+    R_FREE,
     R_PRESENT,
     R_V,
     R_X,
@@ -83,7 +84,7 @@ def counterfactual(
         record(S, X, V, A, k)
         if k == n_steps:
             break
-        S[R_ACC, VR] = free_road(params, VR, S[R_V, VR])
+        S[R_ACC, VR] = free_road(S, params, VR)
         for r in (VMC, VMR, VNR):
             if S[R_PRESENT, r]:
                 S[R_ACC, r] = behind(S, params, r, leader(S, r, LANE0[r]))
@@ -125,6 +126,7 @@ def step(
             cf[1, k + 1, VNR],
             cf[2, k + 1, VNR],
         )
+        S[R_FREE, VNR] = np.nan
     return advance_progress(lc, S, (k + 1) * dt, plan[0], plan[1], params[VR, P_LEN])
 
 
@@ -171,7 +173,7 @@ def pre_pass(
 
     Nobody else enters VR's or VMC's accelerations in this pass, so only VR (with VMF, which
     keeps its speed) is rolled out here; VMC's states come from ``vmc_track``
-    (:func:`vmc_pre_track` of the candidate's mode). ``S`` (7, 6) and ``lc`` (9,) are
+    (:func:`vmc_pre_track` of the candidate's mode). ``S`` (8, 6) and ``lc`` (9,) are
     scratch space.
 
     Until VR starts its change its acceleration depends on VR, VV0 and VMF alone, as in the
@@ -213,7 +215,7 @@ def joint_pass(
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m] and the number of colliding
-    (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (7, 6), ``lc`` (9,) and
+    (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (8, 6), ``lc`` (9,) and
     ``reach`` (6,) are scratch space; VR's accelerations of the first ``n_known`` steps are
     those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
     counterfactual (:func:`step`).

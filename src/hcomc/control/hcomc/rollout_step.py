@@ -3,11 +3,13 @@
 Every equation is called from its one home: car following (Eq. 1, the IIDM, Eq. 3) from
 :func:`hcomc.models.following.follow_accel`, the virtual vehicles' cubics (Eq. 9) from
 :func:`hcomc.control.virtual_vehicle.cubic_point`. The ballistic step with a stop at v = 0 is
-the engine's integration scheme. The roles' state is one (7, 6) array ``S`` (rows ``R_*`` of
+the engine's integration scheme. The roles' state is one (8, 6) array ``S`` (rows ``R_*`` of
 :mod:`hcomc.control.hcomc.rollout_layout`), so that the compiled kernels pass few arrays.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import carray, types
@@ -30,6 +32,7 @@ from hcomc.control.hcomc.rollout_layout import (
     P_V0,
     R_A,
     R_ACC,
+    R_FREE,
     R_IN1,
     R_IN2,
     R_PRESENT,
@@ -37,26 +40,33 @@ from hcomc.control.hcomc.rollout_layout import (
     R_X,
 )
 from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.models.following import follow_accel
+from hcomc.models.following import follow_accel_given, free_term
 
 
 @kernel(inline="always")
-def follow_role(params: np.ndarray, r: int, s: float, v: float, vl: float, al: float) -> float:
-    """Car-following acceleration of role r (parameter row ``params[r]``) [m/s^2].
+def follow_role(S: np.ndarray, params: np.ndarray, r: int, s: float, vl: float, al: float) -> float:
+    """Car-following acceleration of role r at its speed ``S[R_V, r]`` (parameter row
+    ``params[r]``) [m/s^2].
 
     ``s`` is the gap to the leader (``inf``: free road); IDM or IIDM per ``params[r, P_IIDM]``.
+    The free-road term is taken once per step and role (row ``R_FREE``, NaN until taken).
     """
     p = params
-    return follow_accel(
-        s, v, vl, al, p[r, P_V0], p[r, P_T], p[r, P_S0], p[r, P_A], p[r, P_B], p[r, P_DELTA],
-        p[r, P_C], p[r, P_IIDM] > 0.5,
+    free = S[R_FREE, r]
+    if math.isnan(free):
+        free = free_term(S[R_V, r], p[r, P_V0], p[r, P_A], p[r, P_B], p[r, P_DELTA],
+                         p[r, P_IIDM] > 0.5)  # fmt: skip
+        S[R_FREE, r] = free
+    return follow_accel_given(
+        s, S[R_V, r], vl, al, p[r, P_V0], p[r, P_T], p[r, P_S0], p[r, P_A], p[r, P_B],
+        p[r, P_C], p[r, P_IIDM] > 0.5, free,
     )  # fmt: skip
 
 
 @kernel(inline="always")
-def free_road(params: np.ndarray, r: int, v: float) -> float:
+def free_road(S: np.ndarray, params: np.ndarray, r: int) -> float:
     """Acceleration of role r without a leader [m/s^2]."""
-    return follow_role(params, r, np.inf, v, v, 0.0)
+    return follow_role(S, params, r, np.inf, S[R_V, r], 0.0)
 
 
 @kernel(inline="always")
@@ -74,9 +84,9 @@ def leader(S: np.ndarray, r: int, lane: int) -> int:
 def behind(S: np.ndarray, params: np.ndarray, r: int, j: int) -> float:
     """Acceleration of role r behind role j (free road for j = -1) [m/s^2]."""
     if j < 0:
-        return free_road(params, r, S[R_V, r])
+        return free_road(S, params, r)
     gap = S[R_X, j] - params[j, P_LEN] - S[R_X, r]
-    return follow_role(params, r, gap, S[R_V, r], S[R_V, j], S[R_A, j])
+    return follow_role(S, params, r, gap, S[R_V, j], S[R_A, j])
 
 
 @kernel(inline="always")
@@ -87,7 +97,7 @@ def behind_virtual(
     """Acceleration of role r behind the cubic virtual vehicle ``vvs[i]`` at ``tau`` (length
     ``lead_len``) [m/s^2]."""
     xv, vv, av = cubic_point(vvs[i, 0], vvs[i, 1], vvs[i, 2], vvs[i, 3], tau)
-    return follow_role(params, r, xv - lead_len - S[R_X, r], S[R_V, r], vv, av)
+    return follow_role(S, params, r, xv - lead_len - S[R_X, r], vv, av)
 
 
 @kernel(inline="always")
@@ -113,11 +123,12 @@ def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
         S[R_X, r] += v * dt + 0.5 * ar * dt * dt
         S[R_V, r] = v1
         S[R_A, r] = ar
+    S[R_FREE, r] = np.nan  # a new speed
 
 
 @kernel
 def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) -> np.ndarray:
-    """The state ``S`` (7, 6) of the roles at planning time (lane rows at their start lanes)."""
+    """The state ``S`` (8, 6) of the roles at planning time (lane rows at their start lanes)."""
     S = np.empty((N_STATE, N_ROLES))
     reset_state(S, x, v, a, present)
     return S
@@ -127,13 +138,14 @@ def new_state(x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray) 
 def reset_state(
     S: np.ndarray, x: np.ndarray, v: np.ndarray, a: np.ndarray, present: np.ndarray
 ) -> None:
-    """Overwrite ``S`` (7, 6) with the state of :func:`new_state`."""
+    """Overwrite ``S`` (8, 6) with the state of :func:`new_state`."""
     S[:] = 0.0
     for r in range(N_ROLES):
         S[R_X, r], S[R_V, r], S[R_A, r] = x[r], v[r], a[r]
         S[R_IN1, r] = 1.0 if LANE0[r] == 1 else 0.0
         S[R_IN2, r] = 1.0 if LANE0[r] == 2 else 0.0
         S[R_PRESENT, r] = 1.0 if present[r] else 0.0
+        S[R_FREE, r] = np.nan
 
 
 @intrinsic
