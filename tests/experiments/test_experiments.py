@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import math
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -70,9 +72,17 @@ def test_summary_and_paper_table_layout():
 
 def test_results_identical_with_one_and_two_workers():
     specs = grid(["C1"], ["FIFO", "HCOMC"], [0, 1], SHORT)
-    one = run_grid(specs, workers=1).drop(columns=["wall_s", "decision_ms"])
-    two = run_grid(specs, workers=2).drop(columns=["wall_s", "decision_ms"])
+    after = [partial(math.hypot, 3.0, 4.0), partial(pow, 2, 10)]  # tasks queued behind the runs
+    done: dict[int, dict[int, float]] = {1: {}, 2: {}}
+    frames = {
+        n: run_grid(specs, workers=n, after=after, on_after=done[n].__setitem__).drop(
+            columns=["wall_s", "decision_ms"]
+        )
+        for n in (1, 2)
+    }
+    one, two = frames[1], frames[2]
     pd.testing.assert_frame_equal(one, two)
+    assert done[1] == done[2] == {0: 5.0, 1: 1024}
     assert set(one["configuration"]) == {"FIFO", "HCOMC"}
     assert one.groupby("seed")["key_vehicles"].nunique().eq(1).all()  # same vehicles
     # (HCOMC, seed 1) leaves VR waiting at the acceleration-lane end within these 60 s
@@ -118,6 +128,9 @@ def test_reproduce_writes_every_output(tmp_path):
     for name in ("runs.csv", "runs.parquet", "table2.md", "table3.md", "claims.csv",
                  "paper_scenario.csv", "report.html"):  # fmt: skip
         assert (tmp_path / name).stat().st_size > 100, name
+    report = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert report.count("data:image/png;base64,") == 2  # Fig. 2 (drawn by a worker), metrics
+    assert "Fig. 2: Condition 2, seed 0" in report
     runs = pd.read_parquet(tmp_path / "runs.parquet")
     assert len(runs) == 5 * len(ALL_CONFIGURATIONS)
     assert (pd.read_csv(tmp_path / "runs.csv")["seed"] == 0).all()

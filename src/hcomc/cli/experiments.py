@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Annotated, Any, cast
 
@@ -45,11 +46,16 @@ def _workers(workers: int | None) -> int:
     return workers
 
 
-def _progress_grid(specs: list, workers: int, on_result: Any = None) -> Any:
+def _progress_grid(
+    specs: list, workers: int, on_result: Any = None, after: Any = (), on_after: Any = None
+) -> Any:
     from hcomc.experiments.runner import run_grid
 
     with _progress("runs", len(specs)) as update:
-        return run_grid(specs, workers=workers, on_result=on_result, progress=update)
+        return run_grid(
+            specs, workers=workers, on_result=on_result, progress=update, after=after,
+            on_after=on_after,
+        )  # fmt: skip
 
 
 def _frame_table(frame: Any, title: str) -> Table:
@@ -111,17 +117,21 @@ def run(
         out.print(escape(f"{name}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
 
 
-def _write_report(out_dir: Path, runs: Any, claim_frame: Any = None) -> Path:
-    """results/report.html with the tables, claims, Fig. 2 for C2 and the metric plots."""
-    from hcomc.viz.figures import contour_figure, metrics_figure
-    from hcomc.viz.inputs import controller_logs
+CONTOUR_CONDITION = "C2"
+"""The condition of the report's speed contour maps (the paper's Fig. 2)."""
+
+
+def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: bytes) -> Path:
+    """results/report.html with the tables, claims, Fig. 2 (``contour``: the PNG of
+    :func:`hcomc.viz.report.contour_png` for the first seed) and the metric plots."""
+    from hcomc.viz.figures import metrics_figure
     from hcomc.viz.report import figure_png, write_report
 
     seed = int(runs["seed"].min())
     figures = {
         f"Speed contour maps of both lanes as in the paper's Fig. 2: Condition 2, seed {seed}, "
         "FIFO, Game and HCOMC":
-            figure_png(contour_figure(controller_logs("C2", seed=seed))),
+            contour,
         "The paper's metrics by condition and configuration (mean, 95 % CI over seeds; a "
         "bar marked n=k rests on the k seeds that give a value)":
             figure_png(metrics_figure(runs)),
@@ -168,6 +178,7 @@ def reproduce(
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, grid
     from hcomc.experiments.tables import claims, paper_table, to_markdown
     from hcomc.sim.manifest import atomic_paths, write_json_atomic
+    from hcomc.viz.report import contour_png
 
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
@@ -192,7 +203,13 @@ def reproduce(
         name = f"{row['condition']}-{row['configuration']}-{tag}.json"
         write_json_atomic(out_dir / "manifests" / name, manifest)
 
-    both = _progress_grid([*seeded, *uniform], n_workers, on_result=save_manifest)
+    # the report's Fig. 2 is drawn by a worker process while the last runs finish
+    contour: dict[int, bytes] = {}
+    figure_2 = partial(contour_png, CONTOUR_CONDITION, min(s.seed for s in seeded))
+    both = _progress_grid(
+        [*seeded, *uniform], n_workers, on_result=save_manifest, after=[figure_2],
+        on_after=contour.__setitem__,
+    )  # fmt: skip
     runs = both.iloc[: len(seeded)].reset_index(drop=True)
     paper_runs = both.iloc[len(seeded) :].reset_index(drop=True)
     table2, table3 = paper_table(runs, "II"), paper_table(runs, "III")
@@ -213,7 +230,7 @@ def reproduce(
         tmp[3].write_text(to_markdown(table3), encoding="utf-8")
         claim_rows.to_csv(tmp[4], index=False)
         paper_runs.to_csv(tmp[5], index=False)
-    report = _write_report(out_dir, runs, claim_rows)
+    report = _write_report(out_dir, runs, claim_rows, contour[0])
     note = "ours: mean ± 95 % CI over seeds (paper value)"
     out.print(_frame_table(table2, f"Table II — optimisers · {note}"))
     out.print(_frame_table(table3, f"Table III — controllers · {note}"))

@@ -311,9 +311,17 @@ def run_grid(
     progress: Callable[[int, int], None] | None = None,
     on_result: Callable[[int, dict[str, Any], dict[str, Any]], None] | None = None,
     batch_size: int = 16,
+    after: Sequence[Callable[[], Any]] = (),
+    on_after: Callable[[int, Any], None] | None = None,
 ) -> pd.DataFrame:
     """Run every spec (in ``workers`` processes, ``batch_size`` runs per ensemble) and return
-    the rows in spec order."""
+    the rows in spec order.
+
+    ``after`` holds other tasks (picklable, without arguments, e.g. a report figure) queued
+    behind the runs: a worker process with no run left takes one while the others finish
+    their last runs, instead of the caller doing it alone afterwards. Task ``i``'s result
+    goes to ``on_after(i, result)``. With one worker they run after the runs.
+    """
     rows: list[dict[str, Any] | None] = [None] * len(specs)
     done = 0
 
@@ -326,18 +334,27 @@ def run_grid(
         if progress is not None:
             progress(done, len(specs))
 
+    def deliver(i: int, result: Any) -> None:
+        if on_after is not None:
+            on_after(i, result)
+
     chunks = batches_by_reference(specs, batch_size)
     if workers <= 1:
         for chunk in chunks:
             for i, result in zip(chunk, run_batch([specs[i] for i in chunk]), strict=True):
                 collect(i, result)
+        for i, task in enumerate(after):
+            deliver(i, task())
     else:  # one core per worker process: the processes share the cores
         with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
             futures = {
                 pool.submit(run_batch, [specs[i] for i in chunk], threads=1): chunk
                 for chunk in chunks
             }
+            tasks = {pool.submit(task): i for i, task in enumerate(after)}  # queued last
             for future in as_completed(futures):
                 for i, result in zip(futures[future], future.result(), strict=True):
                     collect(i, result)
+            for future in as_completed(tasks):
+                deliver(tasks[future], future.result())
     return pd.DataFrame(rows)

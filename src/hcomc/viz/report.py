@@ -28,7 +28,7 @@ from hcomc.sim.manifest import atomic_paths, build_manifest
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["REQUIRED_COLUMNS", "figure_png", "write_report"]
+__all__ = ["REQUIRED_COLUMNS", "contour_png", "figure_png", "write_report"]
 
 #: Columns a results frame needs for the report's tables.
 REQUIRED_COLUMNS = ("condition", "configuration", "seed", "mode", *PAPER_METRICS)
@@ -87,6 +87,16 @@ def figure_png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_FIGURE_DPI)
     return buffer.getvalue()
+
+
+def contour_png(scenario: str, seed: int) -> bytes:
+    """The report's speed contour maps (paper Fig. 2) of one scenario and seed, simulated with
+    FIFO, Game and HCOMC, as PNG bytes: a self-contained task that ``hcomc reproduce`` hands
+    to a worker process while the last runs finish."""
+    from hcomc.viz.figures import contour_figure
+    from hcomc.viz.inputs import controller_logs
+
+    return figure_png(contour_figure(controller_logs(scenario, seed=seed)))
 
 
 def _e(value: Any) -> str:
