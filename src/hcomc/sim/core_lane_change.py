@@ -21,7 +21,6 @@ from hcomc.sim.core_state import (
     add_event,
 )  # fmt: skip
 from hcomc.sim.mobil import mobil_decide
-from hcomc.sim.neighbours import neighbour
 from hcomc.sim.small import nonzero, search_left
 
 
@@ -38,7 +37,8 @@ def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
     for k in range(n):
         p = cand_pos[k]
         cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
-        follower[k] = neighbour(vs, ls, rank[p] - 1, ls[rank[p]])
+        q = rank[p] - 1  # neighbour() written out: no compiled call with arrays per candidate
+        follower[k] = vs[q] if q >= 0 and ls[q] == ls[rank[p]] else -1
     return mobil_decide(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
                         leader, follower, target, force, c.lc_params)  # fmt: skip
 

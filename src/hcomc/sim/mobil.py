@@ -29,10 +29,10 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
-from hcomc.models.following import follow_accel
+from hcomc.models.following import follow_accel_given, free_term
 from hcomc.road import Lane
 from hcomc.sim.fleet import Fleet
-from hcomc.sim.neighbours import LaneIndex, lookup_one
+from hcomc.sim.neighbours import LaneIndex, lookup_into
 from hcomc.sim.small import join, nonzero, search_left
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
@@ -50,10 +50,16 @@ class Snapshot:
 @kernel
 def model_accels(
     matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray, x: np.ndarray, v: np.ndarray,
-    a: np.ndarray, followers: np.ndarray, leaders: np.ndarray,
+    a: np.ndarray, followers: np.ndarray, leaders: np.ndarray, free: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Gap of each follower to its leader (inf for -1) and its model acceleration behind it
-    (exact perception: the decision, not the control); (inf, 0) where the follower is -1."""
+    (exact perception: the decision, not the control); (inf, 0) where the follower is -1.
+
+    ``free`` (N,) holds each vehicle's free-road term
+    (:func:`~hcomc.models.following.free_term`) at its speed, NaN until taken here: a vehicle
+    evaluated behind several leaders (MOBIL asks up to six accelerations of three vehicles
+    per candidate) takes its power once.
+    """
     n = followers.size
     s, acc = np.full(n, math.inf), np.zeros(n)
     for k in range(n):
@@ -64,9 +70,12 @@ def model_accels(
             s[k], vl, al = x[j] - length[j] - x[i], v[j], a[j]
         else:
             vl, al = v[i], 0.0
-        acc[k] = follow_accel(
+        if math.isnan(free[i]):
+            free[i] = free_term(v[i], matrix[0, i], matrix[3, i], matrix[4, i], matrix[5, i],
+                                iidm[i])  # fmt: skip
+        acc[k] = follow_accel_given(
             s[k], v[i], vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
-            matrix[4, i], matrix[5, i], matrix[6, i], iidm[i],
+            matrix[4, i], matrix[6, i], iidm[i], free[i],
         )  # fmt: skip
     return s, acc
 
@@ -91,9 +100,9 @@ def mobil_decide(
     new_fol = np.empty(n, dtype=np.int64)
     mandatory = np.empty(n, dtype=np.bool_)
     ok = np.zeros(n, dtype=np.bool_)
+    lookup_into(key, lane_of, vehicle, target, x[cand], new_lead, new_fol)
     for k in range(n):  # 1. the gap criteria, which need no model acceleration
         c = cand[k]
-        new_lead[k], new_fol[k] = lookup_one(key, lane_of, vehicle, target[k], x[c])
         mandatory[k] = lane[k] == _RAMP or force[k]
         lo, ln, fn = leader[k], new_lead[k], new_fol[k]
         s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
@@ -105,9 +114,10 @@ def mobil_decide(
     # 2. the deceleration criteria: candidate and new follower after the change
     pos = nonzero(ok)
     m = pos.size
+    free = np.full(x.size, math.nan)  # free-road terms, shared by both passes
     _, after = model_accels(
         matrix, iidm, length, x, v, a,
-        join((cand[pos], new_fol[pos])), join((new_lead[pos], cand[pos])),
+        join((cand[pos], new_fol[pos])), join((new_lead[pos], cand[pos])), free,
     )  # fmt: skip
     for q in range(m):
         ok[pos[q]] = after[q] >= -b_safe and after[m + q] >= -b_safe
@@ -117,7 +127,7 @@ def mobil_decide(
     _, before = model_accels(
         matrix, iidm, length, x, v, a,
         join((cand[disc], new_fol[disc], follower[disc], follower[disc])),
-        join((leader[disc], new_lead[disc], cand[disc], leader[disc])),
+        join((leader[disc], new_lead[disc], cand[disc], leader[disc])), free,
     )  # fmt: skip
     d = disc.size
     for q in range(d):

@@ -148,11 +148,33 @@ def _neighbours_of(vehicle, lane_of, rank, entries, step):
 
 
 @kernel
+def lookup_into(
+    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray, lane: np.ndarray,
+    x: np.ndarray, leader: np.ndarray, follower: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`lookup_one` of every position ``x`` in its ``lane``, written into ``leader``
+    and ``follower``: the same search and neighbours written in one loop, without a compiled
+    call with array arguments (reference counting) per position."""
+    m = key.size
+    for k in range(x.size):
+        value = lane[k] * OFFSET + x[k]
+        lo, hi = 0, m  # search_right
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if value < key[mid]:
+                hi = mid
+            else:
+                lo = mid + 1
+        ahead, behind = lo, lo - 1  # neighbour() of both
+        leader[k] = vehicle[ahead] if ahead < m and lane_of[ahead] == lane[k] else -1
+        follower[k] = vehicle[behind] if behind >= 0 and lane_of[behind] == lane[k] else -1
+
+
+@kernel
 def _lookup_many(key, lane_of, vehicle, lane, x):
     leader = np.empty(x.size, dtype=np.int64)
     follower = np.empty(x.size, dtype=np.int64)
-    for k in range(x.size):
-        leader[k], follower[k] = lookup_one(key, lane_of, vehicle, lane[k], x[k])
+    lookup_into(key, lane_of, vehicle, lane, x, leader, follower)
     return leader, follower
 
 
