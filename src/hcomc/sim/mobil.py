@@ -33,7 +33,7 @@ from hcomc.models.following import follow_accel_given, free_term
 from hcomc.road import Lane
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.neighbours import LaneIndex, lookup_into
-from hcomc.sim.small import join, nonzero, search_left
+from hcomc.sim.small import nonzero
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
@@ -45,39 +45,6 @@ class Snapshot:
     x: FloatArray
     v: FloatArray
     a: FloatArray
-
-
-@kernel
-def model_accels(
-    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray, x: np.ndarray, v: np.ndarray,
-    a: np.ndarray, followers: np.ndarray, leaders: np.ndarray, free: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Gap of each follower to its leader (inf for -1) and its model acceleration behind it
-    (exact perception: the decision, not the control); (inf, 0) where the follower is -1.
-
-    ``free`` (N,) holds each vehicle's free-road term
-    (:func:`~hcomc.models.following.free_term`) at its speed, NaN until taken here: a vehicle
-    evaluated behind several leaders (MOBIL asks up to six accelerations of three vehicles
-    per candidate) takes its power once.
-    """
-    n = followers.size
-    s, acc = np.full(n, math.inf), np.zeros(n)
-    for k in range(n):
-        i, j = followers[k], leaders[k]
-        if i < 0:
-            continue
-        if j >= 0:
-            s[k], vl, al = x[j] - length[j] - x[i], v[j], a[j]
-        else:
-            vl, al = v[i], 0.0
-        if math.isnan(free[i]):
-            free[i] = free_term(v[i], matrix[0, i], matrix[3, i], matrix[4, i], matrix[5, i],
-                                iidm[i])  # fmt: skip
-        acc[k] = follow_accel_given(
-            s[k], v[i], vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
-            matrix[4, i], matrix[6, i], iidm[i], free[i],
-        )  # fmt: skip
-    return s, acc
 
 
 @kernel
@@ -101,39 +68,44 @@ def mobil_decide(
     mandatory = np.empty(n, dtype=np.bool_)
     ok = np.zeros(n, dtype=np.bool_)
     lookup_into(key, lane_of, vehicle, target, x[cand], new_lead, new_fol)
-    for k in range(n):  # 1. the gap criteria, which need no model acceleration
-        c = cand[k]
+    free = np.full(x.size, math.nan)  # each vehicle's free-road term, taken once
+
+    def accel(i: int, j: int) -> float:  # a closure: inlined, no call with arrays
+        """Model acceleration of i behind j (free road for j = -1; 0 for i = -1)."""
+        if i < 0:
+            return 0.0
+        if j >= 0:
+            s, vl, al = x[j] - length[j] - x[i], v[j], a[j]
+        else:
+            s, vl, al = math.inf, v[i], 0.0
+        if math.isnan(free[i]):
+            free[i] = free_term(v[i], matrix[0, i], matrix[3, i], matrix[4, i], matrix[5, i],
+                                iidm[i])  # fmt: skip
+        return follow_accel_given(
+            s, v[i], vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
+            matrix[4, i], matrix[6, i], iidm[i], free[i],
+        )  # fmt: skip
+
+    for k in range(n):
+        c, lo, ln, fn, fo = cand[k], leader[k], new_lead[k], new_fol[k], follower[k]
         mandatory[k] = lane[k] == _RAMP or force[k]
-        lo, ln, fn = leader[k], new_lead[k], new_fol[k]
+        # 1. the gap criteria, which need no model acceleration
         s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
         s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
         s_n = _gap(x[fn], x[c], length[c], fn >= 0)
-        standing = leader[k] >= 0 and v[leader[k]] < 1.0
+        standing = lo >= 0 and v[lo] < 1.0
         clear = not standing or s_o >= 3.0 * length[c] + min_gap
-        ok[k] = clear and s_c >= min_gap and s_n >= min_gap
-    # 2. the deceleration criteria: candidate and new follower after the change
-    pos = nonzero(ok)
-    m = pos.size
-    free = np.full(x.size, math.nan)  # free-road terms, shared by both passes
-    _, after = model_accels(
-        matrix, iidm, length, x, v, a,
-        join((cand[pos], new_fol[pos])), join((new_lead[pos], cand[pos])), free,
-    )  # fmt: skip
-    for q in range(m):
-        ok[pos[q]] = after[q] >= -b_safe and after[m + q] >= -b_safe
-    # 3. the incentive of discretionary changes (rows: candidate before, new follower before,
-    #    old follower after, old follower before)
-    disc = nonzero(ok & ~mandatory)
-    _, before = model_accels(
-        matrix, iidm, length, x, v, a,
-        join((cand[disc], new_fol[disc], follower[disc], follower[disc])),
-        join((leader[disc], new_lead[disc], cand[disc], leader[disc])), free,
-    )  # fmt: skip
-    d = disc.size
-    for q in range(d):
-        k = disc[q]
-        acc0, acc2, acc4, acc5 = before[q], before[d + q], before[2 * d + q], before[3 * d + q]
-        acc1, acc3 = _after_of(after, pos, m, k)
+        if not (clear and s_c >= min_gap and s_n >= min_gap):
+            continue
+        # 2. the deceleration criteria: candidate and new follower after the change
+        acc1, acc3 = accel(c, ln), accel(fn, c)
+        if not (acc1 >= -b_safe and acc3 >= -b_safe):
+            continue
+        if mandatory[k]:
+            ok[k] = True
+            continue
+        # 3. the incentive of a discretionary change
+        acc0, acc2, acc4, acc5 = accel(c, lo), accel(fn, ln), accel(fo, c), accel(fo, lo)
         gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
         side = bias if target[k] == _MAIN_2 else -bias
         ok[k] = gain > threshold + side
@@ -146,13 +118,6 @@ def _gap(x_i: float, x_j: float, length_j: float, exists: bool) -> float:
     """Bumper gap [m] of a vehicle at ``x_i`` to one at ``x_j`` ahead of it, inf if there is
     none (numbers, not arrays: called for every candidate)."""
     return x_j - length_j - x_i if exists else math.inf
-
-
-@kernel(inline="always")
-def _after_of(after: np.ndarray, pos: np.ndarray, m: int, k: int) -> tuple[float, float]:
-    """(acc1, acc3) of candidate k from the safety pass (``pos`` ascending)."""
-    q = search_left(pos, k)
-    return after[q], after[m + q]
 
 
 @kernel
