@@ -74,7 +74,8 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     resolve_starts,
     rollout,
-    rollout_one,
+    rollout_into,
+    rollout_work,
     vmc_tracks,
     warm_up,
     warm_up_instant,
@@ -434,12 +435,24 @@ def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, 
     """:meth:`MergeProblem.evaluate_row` compiled: the row's rollout (:func:`rollout_one`),
     U_fuel, the objectives into ``F`` and the constraints into ``G`` as :meth:`MergeProblem.
     evaluate` writes them (kernel parts, then the lateral and sequence flags), and the cost."""
+    return _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks,
+                       roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
+                       sequence_violation, threshold, fuel_ref, F, G,
+                       rollout_work(n_steps))  # fmt: skip
+
+
+@kernel
+def _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks, roles,
+                cf_fuel, coefficients, dt, x, lateral, lateral_violation, sequence_violation,
+                threshold, fuel_ref, F, G, work):  # fmt: skip
+    """The body of :func:`_score_row`, rolling out into the arrays ``work`` of
+    :func:`rollout_work` (which a population reuses from row to row)."""
     plan = np.empty(3)
     plan[0], plan[1], plan[2] = x[0], x[1], x[2]
-    X, V, A, _, u_safe, u_eff, g = rollout_one(
-        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, n_steps, cf,
-        tracks,
-    )  # fmt: skip
+    _, u_safe, u_eff = rollout_into(
+        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, tracks, work
+    )
+    X, V, A, g = work[0], work[1], work[3], work[5]
     fuel = common_distance_fuel(cf, roles, X, V, A, dt, cf_fuel, coefficients)
     objectives_into(u_safe, fuel[0], u_eff, F)
     G[:] = 0.0
@@ -455,15 +468,17 @@ def _score_rows(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps,
                 threshold, fuel_ref, F, G):  # fmt: skip
     """Rows ``rows`` of ``X`` (all of one sequence, whose constants come first as for
     :func:`_score_row`) scored into the same rows of ``F`` and ``G``, each by
-    :func:`_score_row` (``allowed``: whether the sequence admits lateral cooperation;
-    ``no_behind``: per row of ``X``, a "behind" row moved ahead for want of a vehicle)."""
+    :func:`_score_row`'s body (``allowed``: whether the sequence admits lateral cooperation;
+    ``no_behind``: per row of ``X``, a "behind" row moved ahead for want of a vehicle); the
+    rollout's arrays are allocated once for all rows."""
+    work = rollout_work(n_steps)
     for q in range(rows.size):
         r = rows[q]
         lat = lateral[r]
-        _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
-                   roles, cf_fuel, coefficients, dt, X[r], lat,
-                   1.0 if lat and not allowed else 0.0, 1.0 if no_behind[r] else 0.0,
-                   threshold, fuel_ref, F[r], G[r])  # fmt: skip
+        _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks, roles,
+                    cf_fuel, coefficients, dt, X[r], lat, 1.0 if lat and not allowed else 0.0,
+                    1.0 if no_behind[r] else 0.0, threshold, fuel_ref, F[r], G[r],
+                    work)  # fmt: skip
 
 
 def default_starts() -> FloatArray:

@@ -58,7 +58,9 @@ from hcomc._typing import FloatArray
 from hcomc.control.hcomc.rollout_candidate import (
     candidate,
     mode_index,
+    rollout_into,
     rollout_one,
+    rollout_work,
     vmc_tracks,
 )
 from hcomc.control.hcomc.rollout_layout import (
@@ -116,8 +118,8 @@ __all__ = [
     "G_NOT_MERGED", "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
     "N_STARTS", "P_A", "P_B", "P_C", "P_DELTA", "P_IIDM", "P_LEN", "P_S0", "P_T", "P_V0",
     "P_WID", "S_VV0_V", "S_VV0_X", "S_VV1_V", "S_VV1_X", "VMC", "VMF", "VMR", "VNF", "VNR",
-    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_one", "vmc_tracks", "warm_up",
-    "warm_up_instant",
+    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_into", "rollout_one",
+    "rollout_work", "vmc_tracks", "warm_up", "warm_up_instant",
 ]  # fmt: skip
 
 _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0 (finite)

@@ -97,6 +97,37 @@ def vmc_tracks(
 
 
 @kernel
+def rollout_work(n_steps: int) -> tuple[np.ndarray, ...]:
+    """The arrays one candidate's rollout writes (:func:`rollout_into`), allocated once for
+    many rows: ``X``, ``V`` (1, K + 1, 6), ``Y`` (K + 1, 6), ``A`` (1, K + 1, 6), ``HEAD``
+    (K + 1, 6), ``g`` (N_G,), the cubics (3, 4) and the passes' scratch space."""
+    K = n_steps
+    return (
+        np.empty((1, K + 1, N_ROLES)), np.empty((1, K + 1, N_ROLES)), np.empty((K + 1, N_ROLES)),
+        np.empty((1, K + 1, N_ROLES)), np.empty((K + 1, N_ROLES)), np.empty(N_G),
+        np.empty((3, 4)), np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES),
+        np.empty(max(K, 1)),
+    )  # fmt: skip
+
+
+@kernel
+def rollout_into(
+    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, cav: np.ndarray,
+    coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
+    consts: np.ndarray, cf: np.ndarray, tracks: np.ndarray, work: tuple[np.ndarray, ...],
+) -> tuple[int, float, float]:  # fmt: skip
+    """:func:`rollout_one` into the arrays ``work`` of :func:`rollout_work` (reused from row
+    to row: a population allocates them once); returns k_merge, U_safe and U_eff."""
+    X, V, Y, A, HEAD, g, vvs, S, lc, reach, vr_acc = work
+    Y[:], A[:], HEAD[:], g[:], vvs[:] = 0.0, 0.0, 0.0, 0.0, 0.0  # as freshly allocated
+    track = tracks[mode_index(lateral, coop, present)]
+    return candidate(
+        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
+        X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, reach, vr_acc,
+    )  # fmt: skip
+
+
+@kernel
 def rollout_one(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, cav: np.ndarray,
     coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
@@ -113,19 +144,8 @@ def rollout_one(
     and the constraint parts ``g`` (N_G,): the values of the population kernel's row, bit
     for bit.
     """
-    K = n_steps
-    X = np.empty((1, K + 1, N_ROLES))
-    V = np.empty((1, K + 1, N_ROLES))
-    Y = np.zeros((K + 1, N_ROLES))
-    A = np.zeros((1, K + 1, N_ROLES))
-    HEAD = np.zeros((K + 1, N_ROLES))
-    g = np.zeros(N_G)
-    vvs = np.zeros((3, 4))
-    S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
-    vr_acc = np.empty(max(K, 1))
-    track = tracks[mode_index(lateral, coop, present)]
-    k_merge, u_safe, u_eff = candidate(
-        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
-        X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, reach, vr_acc,
-    )  # fmt: skip
-    return X, V, A, k_merge, u_safe, u_eff, g
+    work = rollout_work(n_steps)
+    k_merge, u_safe, u_eff = rollout_into(
+        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, tracks, work
+    )
+    return work[0], work[1], work[3], k_merge, u_safe, u_eff, work[5]
