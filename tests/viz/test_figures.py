@@ -333,3 +333,23 @@ def test_core_modules_do_not_import_matplotlib() -> None:
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
+
+
+def test_controller_logs_are_the_runs_of_those_configurations() -> None:
+    """Fig. 2's runs are the runner's: FIFO and Game plan once (FIFO-R, Game-R replan) and the
+    caller's overrides (``hcomc reproduce --set``) apply to every run."""
+    from hcomc.experiments.runner import RunSpec, make_simulation
+    from hcomc.viz.inputs import controller_logs
+
+    overrides = {"duration": 40.0, "demand": {"cav_penetration": 0.8}}
+    logs = controller_logs("C2", seed=3, configurations=("FIFO", "Game"), overrides=overrides)
+    for label, log in logs.items():
+        spec = RunSpec("C2", label, 3, overrides)
+        config = load_config("C2", **spec.config_overrides())
+        assert config.control.replan_period == 0.0  # as published
+        assert config.demand.cav_penetration == 0.8
+        ours = make_simulation(config, 3, "hcomc")
+        ours.run()
+        np.testing.assert_array_equal(log.x, ours.log.x)
+        np.testing.assert_array_equal(log.t, ours.log.t)
+        assert log.t[-1] <= 40.0 + 1e-9 < 60.0

@@ -205,7 +205,7 @@ def reproduce(
 
     # the report's Fig. 2 is drawn by a worker process while the last runs finish
     contour: dict[int, bytes] = {}
-    figure_2 = partial(contour_png, CONTOUR_CONDITION, min(s.seed for s in seeded))
+    figure_2 = partial(contour_png, CONTOUR_CONDITION, min(s.seed for s in seeded), overrides)
     both = _progress_grid(
         [*seeded, *uniform], n_workers, on_result=save_manifest, after=[figure_2],
         on_after=contour.__setitem__,

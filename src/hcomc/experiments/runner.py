@@ -65,6 +65,21 @@ def _replan_override(label: str) -> dict[str, float]:
     return {"replan_period": REPLAN_PERIOD[label]} if label in REPLAN_PERIOD else {}
 
 
+def configuration_overrides(configuration: str, overrides: dict[str, Any]) -> dict[str, Any]:
+    """``overrides`` (nested, as :func:`hcomc.config.nest_overrides` gives them) with the
+    controller, optimiser and replanning period of a configuration label: what every run of
+    that configuration is loaded with (:meth:`RunSpec.config_overrides`, the report's
+    figures)."""
+    controller, optimizer = ALL_CONFIGURATIONS[configuration]
+    control = {
+        **overrides.get("control", {}),
+        **_replan_override(configuration),
+        "controller": controller,
+        "optimizer": optimizer,
+    }
+    return {**overrides, "control": control}
+
+
 ENGINES = ("hcomc", "sumo")
 """Simulation engines: our own, or SUMO co-simulation (optional extra ``hcomc[sumo]``)."""
 
@@ -81,14 +96,7 @@ class RunSpec:
 
     def config_overrides(self) -> dict[str, Any]:
         """Top-level config overrides, with the configuration's controller and optimiser."""
-        controller, optimizer = ALL_CONFIGURATIONS[self.configuration]
-        control = {
-            **self.overrides.get("control", {}),
-            **_replan_override(self.configuration),
-            "controller": controller,
-            "optimizer": optimizer,
-        }
-        return {**self.overrides, "control": control}
+        return configuration_overrides(self.configuration, self.overrides)
 
     def reference_key(self) -> tuple[str, int, str]:
         """What the undisturbed run depends on: condition, seed, non-control overrides."""

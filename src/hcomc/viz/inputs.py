@@ -174,8 +174,11 @@ def controller_logs(
     seed: int | None = None,
     configurations: Sequence[str] = CONTOUR_CONFIGURATIONS,
     duration: float | None = None,
+    overrides: dict[str, Any] | None = None,
 ) -> dict[str, SimulationLog]:
-    """Simulate one scenario and seed with several configurations (common random numbers).
+    """Simulate one scenario and seed with several configurations (common random numbers),
+    each as ``hcomc run`` and ``hcomc reproduce`` run it (FIFO and Game plan once, FIFO-R
+    and Game-R replan: :func:`hcomc.experiments.runner.configuration_overrides`).
 
     Parameters
     ----------
@@ -187,6 +190,9 @@ def controller_logs(
         Labels of :data:`hcomc.experiments.runner.CONFIGURATIONS`.
     duration : float or None
         Measured duration [s]; default the config's.
+    overrides : dict or None
+        Config overrides of every run (nested, as :func:`hcomc.config.nest_overrides` gives
+        them), e.g. those of ``hcomc reproduce --set``.
 
     Returns
     -------
@@ -201,7 +207,7 @@ def controller_logs(
         On an unknown configuration label.
     """
     from hcomc.config import load_config
-    from hcomc.experiments.runner import CONFIGURATIONS
+    from hcomc.experiments.runner import CONFIGURATIONS, configuration_overrides
     from hcomc.sim.engine import simulate
 
     unknown = [c for c in configurations if c not in CONFIGURATIONS]
@@ -209,14 +215,12 @@ def controller_logs(
         raise ValueError(
             f"unknown configuration(s) {unknown}; allowed: {', '.join(CONFIGURATIONS)}"
         )
+    settings = {**(overrides or {})}
+    if duration is not None:
+        settings["duration"] = duration
     logs: dict[str, SimulationLog] = {}
     for label in configurations:
-        controller, optimizer = CONFIGURATIONS[label]
-        config = load_config(
-            scenario,
-            duration=duration,
-            control={"controller": controller, "optimizer": optimizer},
-        )
+        config = load_config(scenario, **configuration_overrides(label, settings))
         logs[label] = simulate(config, seed)
     return logs
 

@@ -89,14 +89,15 @@ def figure_png(fig: Figure) -> bytes:
     return buffer.getvalue()
 
 
-def contour_png(scenario: str, seed: int) -> bytes:
+def contour_png(scenario: str, seed: int, overrides: dict[str, Any] | None = None) -> bytes:
     """The report's speed contour maps (paper Fig. 2) of one scenario and seed, simulated with
-    FIFO, Game and HCOMC, as PNG bytes: a self-contained task that ``hcomc reproduce`` hands
-    to a worker process while the last runs finish."""
+    FIFO, Game and HCOMC as the runs were (with their config ``overrides``), as PNG bytes: a
+    self-contained task that ``hcomc reproduce`` hands to a worker process while the last
+    runs finish."""
     from hcomc.viz.figures import contour_figure
     from hcomc.viz.inputs import controller_logs
 
-    return figure_png(contour_figure(controller_logs(scenario, seed=seed)))
+    return figure_png(contour_figure(controller_logs(scenario, seed=seed, overrides=overrides)))
 
 
 def _e(value: Any) -> str:
