@@ -72,8 +72,9 @@ def test_summary_and_paper_table_layout():
 
 def test_results_identical_with_one_and_two_workers():
     specs = grid(["C1"], ["FIFO", "HCOMC"], [0, 1], SHORT)
-    after = [partial(math.hypot, 3.0, 4.0), partial(pow, 2, 10)]  # tasks queued behind the runs
-    done: dict[int, dict[int, float]] = {1: {}, 2: {}}
+    # tasks queued behind the runs; one fails: its exception is handed over, the rows returned
+    after = [partial(math.hypot, 3.0, 4.0), partial(pow, 2, 10), partial(math.sqrt, -1.0)]
+    done: dict[int, dict[int, object]] = {1: {}, 2: {}}
     frames = {
         n: run_grid(specs, workers=n, after=after, on_after=done[n].__setitem__).drop(
             columns=["wall_s", "decision_ms"]
@@ -82,6 +83,10 @@ def test_results_identical_with_one_and_two_workers():
     }
     one, two = frames[1], frames[2]
     pd.testing.assert_frame_equal(one, two)
+    for n in (1, 2):
+        failed = done[n].pop(2)
+        assert isinstance(failed, ValueError)
+        assert "math domain error" in str(failed)
     assert done[1] == done[2] == {0: 5.0, 1: 1024}
     assert set(one["configuration"]) == {"FIFO", "HCOMC"}
     assert one.groupby("seed")["key_vehicles"].nunique().eq(1).all()  # same vehicles

@@ -121,11 +121,15 @@ CONTOUR_CONDITION = "C2"
 """The condition of the report's speed contour maps (the paper's Fig. 2)."""
 
 
-def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: bytes) -> Path:
+def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: Any) -> Path:
     """results/report.html with the tables, claims, Fig. 2 (``contour``: the PNG of
-    :func:`hcomc.viz.report.contour_png` for the first seed) and the metric plots."""
+    :func:`hcomc.viz.report.contour_png` for the first seed, or the exception it raised in
+    its worker, raised here once the tables are saved) and the metric plots."""
     from hcomc.viz.figures import metrics_figure
     from hcomc.viz.report import figure_png, write_report
+
+    if isinstance(contour, BaseException):
+        raise contour
 
     seed = int(runs["seed"].min())
     figures = {
@@ -204,7 +208,7 @@ def reproduce(
         write_json_atomic(out_dir / "manifests" / name, manifest)
 
     # the report's Fig. 2 is drawn by a worker process while the last runs finish
-    contour: dict[int, bytes] = {}
+    contour: dict[int, Any] = {}  # the PNG, or the exception drawing it raised
     figure_2 = partial(contour_png, CONTOUR_CONDITION, min(s.seed for s in seeded), overrides)
     both = _progress_grid(
         [*seeded, *uniform], n_workers, on_result=save_manifest, after=[figure_2],

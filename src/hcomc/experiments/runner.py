@@ -328,7 +328,9 @@ def run_grid(
     ``after`` holds other tasks (picklable, without arguments, e.g. a report figure) queued
     behind the runs: a worker process with no run left takes one while the others finish
     their last runs, instead of the caller doing it alone afterwards. Task ``i``'s result
-    goes to ``on_after(i, result)``. With one worker they run after the runs.
+    goes to ``on_after(i, result)``; a task that raises hands its exception instead, so that
+    the runs' rows are returned (and can be saved) either way. With one worker they run after
+    the runs.
     """
     rows: list[dict[str, Any] | None] = [None] * len(specs)
     done = 0
@@ -352,7 +354,11 @@ def run_grid(
             for i, result in zip(chunk, run_batch([specs[i] for i in chunk]), strict=True):
                 collect(i, result)
         for i, task in enumerate(after):
-            deliver(i, task())
+            try:
+                outcome: Any = task()
+            except Exception as failure:  # handed to the caller, as from a worker
+                outcome = failure
+            deliver(i, outcome)
     else:  # one core per worker process: the processes share the cores
         with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
             futures = {
@@ -363,6 +369,7 @@ def run_grid(
             for future in as_completed(futures):
                 for i, result in zip(futures[future], future.result(), strict=True):
                     collect(i, result)
-            for future in as_completed(tasks):
-                deliver(tasks[future], future.result())
+            for task_done in as_completed(tasks):
+                raised = task_done.exception()
+                deliver(tasks[task_done], task_done.result() if raised is None else raised)
     return pd.DataFrame(rows)
