@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow, kernel
 from hcomc.sim.core_state import (
     ACCEL_END,
     ACCEL_START,
@@ -21,6 +21,7 @@ from hcomc.sim.core_state import (
     add_event,
 )  # fmt: skip
 from hcomc.sim.mobil import mobil_decide
+from hcomc.sim.neighbours import neighbour
 from hcomc.sim.small import nonzero, search_left
 
 
@@ -34,11 +35,11 @@ def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
     lanes = np.empty(n, dtype=np.int64)
     leader = np.empty(n, dtype=np.int64)
     follower = np.empty(n, dtype=np.int64)
+    vb, lb = borrow(vs), borrow(ls)  # no reference counting per call (hcomc._jit.borrow)
     for k in range(n):
         p = cand_pos[k]
         cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
-        q = rank[p] - 1  # neighbour() written out: no compiled call with arrays per candidate
-        follower[k] = vs[q] if q >= 0 and ls[q] == ls[rank[p]] else -1
+        follower[k] = neighbour(vb, lb, rank[p] - 1, lb[rank[p]])
     return mobil_decide(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
                         leader, follower, target, force, c.lc_params)  # fmt: skip
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow, kernel
 from hcomc._typing import FloatArray, IntArray
 from hcomc.road import Lane
 from hcomc.sim.small import search_right, sort_runs, stable_argsort_into
@@ -131,13 +131,12 @@ def neighbours_into(
 ) -> None:
     """The vehicle ``step`` sorted entries away in the same lane (1: the leader, -1: the
     follower; -1 if none) of the entries at sorted positions ``rank[:out.size]``, written
-    into ``out`` (:func:`neighbour` for each, without a compiled call per entry: one with
-    array arguments costs reference counting every time)."""
-    m = vehicle.size
+    into ``out`` (:func:`neighbour` of each, on borrowed views: see
+    :func:`hcomc._jit.borrow`)."""
+    vehicle, lane_of = borrow(vehicle), borrow(lane_of)
     for k in range(out.size):
         p = rank[k]
-        q = p + step
-        out[k] = vehicle[q] if 0 <= q < m and lane_of[q] == lane_of[p] else -1
+        out[k] = neighbour(vehicle, lane_of, p + step, lane_of[p])
 
 
 @kernel
@@ -153,21 +152,10 @@ def lookup_into(
     x: np.ndarray, leader: np.ndarray, follower: np.ndarray,
 ) -> None:  # fmt: skip
     """:func:`lookup_one` of every position ``x`` in its ``lane``, written into ``leader``
-    and ``follower``: the same search and neighbours written in one loop, without a compiled
-    call with array arguments (reference counting) per position."""
-    m = key.size
+    and ``follower`` (on borrowed views: see :func:`hcomc._jit.borrow`)."""
+    key, lane_of, vehicle = borrow(key), borrow(lane_of), borrow(vehicle)
     for k in range(x.size):
-        value = lane[k] * OFFSET + x[k]
-        lo, hi = 0, m  # search_right
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if value < key[mid]:
-                hi = mid
-            else:
-                lo = mid + 1
-        ahead, behind = lo, lo - 1  # neighbour() of both
-        leader[k] = vehicle[ahead] if ahead < m and lane_of[ahead] == lane[k] else -1
-        follower[k] = vehicle[behind] if behind >= 0 and lane_of[behind] == lane[k] else -1
+        leader[k], follower[k] = lookup_one(key, lane_of, vehicle, lane[k], x[k])
 
 
 @kernel

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow, kernel
 from hcomc.control.hcomc.rollout_accel import accelerations, vmc_accel, vr_accel
 from hcomc.control.hcomc.rollout_lanes import (
     advance_progress,
@@ -50,7 +50,6 @@ from hcomc.control.hcomc.rollout_layout import (
 )
 from hcomc.control.hcomc.rollout_step import (
     behind,
-    borrow,
     free_road,
     integrate,
     integrate_role,

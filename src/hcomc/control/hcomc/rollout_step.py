@@ -13,9 +13,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import carray, types
-from numba.core import cgutils
-from numba.extending import intrinsic
 
 from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
@@ -147,25 +144,3 @@ def reset_state(
         S[R_IN2, r] = 1.0 if LANE0[r] == 2 else 0.0
         S[R_PRESENT, r] = 1.0 if present[r] else 0.0
         S[R_FREE, r] = np.nan
-
-
-@intrinsic
-def _as_pointer(typingctx, address):
-    """The integer ``address`` as a raw data pointer (for :func:`borrow`)."""
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], cgutils.voidptr_t)
-
-    return types.voidptr(address), codegen
-
-
-@kernel(inline="always")
-def borrow(a: np.ndarray) -> np.ndarray:
-    """A view of the C-contiguous array ``a`` that does not own its memory.
-
-    Numba counts the references to an owning array atomically each time an inlined helper
-    receives it; in the per-step loops of the passes that took about a quarter of the
-    kernel's time. A borrowed view is not counted. The caller must keep ``a`` alive while
-    the view is used (the passes borrow their arguments and the caller's scratch arrays).
-    """
-    return carray(_as_pointer(a.ctypes.data), a.shape, a.dtype)  # type: ignore[call-arg]
