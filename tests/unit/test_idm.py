@@ -208,3 +208,49 @@ def test_acceleration_non_increasing_in_approach_rate(
     lo, hi = min(dv1, dv2), max(dv1, dv2)
     a_lo, a_hi = model(s, v, np.array([lo, hi]), **p)
     assert a_hi <= a_lo + 1e-12 * max(1.0, abs(a_lo))
+
+
+# --------------------------------------------------------------------------------------------
+# the power of the free-road term
+# --------------------------------------------------------------------------------------------
+
+_U = 2.0**-53  # unit roundoff of float64
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    base=st.floats(min_value=1e-3, max_value=4.0, allow_nan=False),
+    n=st.integers(min_value=1, max_value=16),
+)
+def test_power_of_a_whole_exponent_is_within_the_product_bound(base: float, n: int) -> None:
+    """A whole exponent n is the product of n factors: relative error at most
+    gamma_(n-1) = (n-1)u / (1 - (n-1)u) against the exact power (rational arithmetic)."""
+    from fractions import Fraction
+
+    from hcomc.models.idm import power
+
+    exact = Fraction(base) ** n
+    error = abs(Fraction(power(base, float(n))) - exact) / exact
+    bound = (n - 1) * _U / (1 - (n - 1) * _U)
+    assert error <= Fraction(bound)
+
+
+@given(
+    base=st.floats(min_value=0.0, max_value=4.0, allow_nan=False),
+    exponent=st.one_of(
+        st.floats(min_value=0.01, max_value=20.0).filter(lambda e: e != int(e)),
+        st.sampled_from([0.5, 16.5, 17.0, 20.0]),
+    ),
+)
+def test_power_of_other_exponents_is_the_c_librarys(base: float, exponent: float) -> None:
+    from hcomc.models.idm import power
+
+    assert power(base, exponent) == base**exponent  # Python's float power is libm's pow
+
+
+@pytest.mark.parametrize("base", [0.0, 1.0, 0.5, 2.0])
+def test_power_exact_cases(base: float) -> None:
+    from hcomc.models.idm import power
+
+    for n in range(1, 17):
+        assert power(base, float(n)) == base**n  # powers of two and 0, 1 are exact

@@ -43,6 +43,7 @@ __all__ = [
     "iidm_accel_given",
     "iidm_acceleration",
     "iidm_free_accel",
+    "power",
 ]
 
 S_MIN: float = 1e-3
@@ -201,7 +202,29 @@ def idm_accel(
 @kernel(inline="always")
 def idm_free_power(v: float, v0: float, delta: float) -> float:
     """The free-road term ``(v / v0)^delta`` of Eq. (1), which depends on the own speed alone."""
-    return (v / v0) ** delta
+    return power(v / v0, delta)
+
+
+@kernel(inline="always")
+def power(base: float, exponent: float) -> float:
+    """``base ** exponent``, a whole exponent n in 1 … 16 (the default delta = 4) by binary
+    powering: the product of n factors, within (n - 1) 2^-53 of the exact power (2 ulp for
+    n = 4), at a fraction of the cost of the C library's ``pow``, which takes the others.
+
+    The car-following powers are taken for every vehicle at every step of the simulation and
+    of the HCOMC prediction, where ``pow`` was the largest single cost.
+    """
+    if 1.0 <= exponent <= 16.0 and exponent == math.floor(exponent):
+        n = int(exponent)
+        result = 1.0
+        while True:
+            if n & 1:
+                result *= base
+            n >>= 1
+            if n == 0:
+                return result
+            base *= base
+    return base**exponent
 
 
 @kernel
@@ -316,8 +339,8 @@ def iidm_accel(
 def iidm_free_accel(v: float, v0: float, a: float, b: float, delta: float) -> float:
     """The IIDM's free-road acceleration [m/s^2], which depends on the own speed alone."""
     if v <= v0:
-        return a * (1.0 - (min(v, v0) / v0) ** delta)
-    return -b * (1.0 - (v0 / max(v, v0)) ** (a / b * delta))
+        return a * (1.0 - power(min(v, v0) / v0, delta))
+    return -b * (1.0 - power(v0 / max(v, v0), a / b * delta))
 
 
 @kernel
