@@ -250,12 +250,17 @@ def _spread_numpy(
     return mD, float(g_D)
 
 
-@kernel
+@kernel(inline="always")  # called n^2 times per spread: no call with array arguments
 def _distance(p: FloatArray, q: FloatArray, width: FloatArray, terms: FloatArray) -> float:
     """Box-normalised euclidean distance of two rows, as :func:`_norm_dist` rounds it."""
     for k in range(p.size):
         d = (p[k] - q[k]) / width[k]
         terms[k] = d * d
+    if terms.size < 8:  # numpy's pairwise sum of fewer than eight terms: the plain loop
+        total = 0.0
+        for k in range(terms.size):
+            total += terms[k]
+        return float(np.sqrt(total))
     return float(np.sqrt(pairwise_sum(terms, 0, terms.size)))
 
 
@@ -265,16 +270,20 @@ def _spread_kernel(
 ) -> tuple[FloatArray, float]:
     n = P_X.shape[0]
     width = xu - xl
-    terms, row, mD = np.empty(P_X.shape[1]), np.empty(n), np.empty(n)
+    terms, D, mD = np.empty(P_X.shape[1]), np.empty((n, n)), np.empty(n)
     for i in range(n):
-        for j in range(n):
-            row[j] = _distance(P_X[i], P_X[j], width, terms)
-        mD[i] = pairwise_sum(row, 0, n) / (n - 1)
-    for j in range(n):
-        row[j] = _distance(s_x, P_X[j], width, terms)
+        D[i, i] = _distance(P_X[i], P_X[i], width, terms)
+        for j in range(i + 1, n):
+            # a - b is exactly -(b - a): the distance matrix is symmetric bit for bit
+            d = _distance(P_X[i], P_X[j], width, terms)
+            D[i, j], D[j, i] = d, d
+    for i in range(n):
+        mD[i] = pairwise_sum(D[i], 0, n) / (n - 1)
     copies = np.empty(n * n)
-    for k in range(n):
-        copies[k * n : (k + 1) * n] = row
+    for j in range(n):
+        copies[j] = _distance(s_x, P_X[j], width, terms)
+    for k in range(1, n):
+        copies[k * n : (k + 1) * n] = copies[:n]
     return mD, pairwise_sum(copies, 0, n * n) / (n * n)
 
 
