@@ -144,7 +144,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     tracks = np.empty((2, K + 1, 2))
     tracked = np.zeros(2, dtype=np.bool_)
     plan = np.empty(3)
-    S, lc, reach = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES)
+    S, lc, box = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty((4, N_ROLES))
     vr_acc = np.empty(max(K, 1))
     for c in range(n_c):
         plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
@@ -154,7 +154,7 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
             tracked[mode] = True
         k_merge[c], u_safe[c], u_eff[c] = candidate(
             x0, v0, a0, present, cav, coop, params, starts, plan, lateral[c], consts, cf,
-            tracks[mode], X[c], Y[c], V[c], A[c], HEAD[c], g[c], vvs[c], S, lc, reach, vr_acc,
+            tracks[mode], X[c], Y[c], V[c], A[c], HEAD[c], g[c], vvs[c], S, lc, box, vr_acc,
         )  # fmt: skip
     vv0, vv1, vv2 = vvs[:, 0].copy(), vvs[:, 1].copy(), vvs[:, 2].copy()
     return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2

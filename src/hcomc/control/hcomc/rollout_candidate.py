@@ -39,7 +39,7 @@ from hcomc.control.hcomc.rollout_score import (
 
 @kernel
 def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
-              X, Y, V, A, HEAD, g, vvs, S, lc, reach, vr_acc):  # fmt: skip
+              X, Y, V, A, HEAD, g, vvs, S, lc, box, vr_acc):  # fmt: skip
     """Passes 1 and 2 and the scoring of one candidate (``plan``: merge position, VR's
     lane-change duration, horizon H; ``lateral``: its mode variable), the body shared by the
     population kernel (:func:`hcomc.control.hcomc.rollout.rollout`) and the single-row entry
@@ -48,7 +48,7 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
     ``track`` is VMC's pre-pass trajectory of the candidate's mode (:func:`vmc_tracks`). The
     trajectories go to ``X`` … ``HEAD`` (K + 1, 6) (``Y``, ``A``, ``HEAD`` zeroed by the
     caller), the constraint parts to ``g`` (N_G,) (zeroed by the caller) and the cubics to
-    ``vvs`` (3, 4); ``S``, ``lc``, ``reach`` and ``vr_acc`` are scratch space. Returns
+    ``vvs`` (3, 4); ``S``, ``lc``, ``box`` and ``vr_acc`` are scratch space. Returns
     k_merge, U_safe and U_eff (see :func:`hcomc.control.hcomc.rollout.rollout`).
     """
     horizon = plan[2]
@@ -60,7 +60,7 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
                        S, lc, vr_acc)  # fmt: skip
     k_merge, g[G_OVERRUN], g[G_COLLISION] = joint_pass(
         x0, v0, a0, present, params, vvs, plan, lat, flags, consts,
-        X, Y, V, A, HEAD, S, lc, reach, vr_acc, n_known, cf,
+        X, Y, V, A, HEAD, S, lc, box, vr_acc, n_known, cf,
     )  # fmt: skip
     g[G_VIRTUAL] = virtual_violation(vvs, horizon, flags, consts)
     u_eff = efficiency_gain(A, cf[2], present, consts[C_POLITENESS])
@@ -105,7 +105,8 @@ def rollout_work(n_steps: int) -> tuple[np.ndarray, ...]:
     return (
         np.empty((1, K + 1, N_ROLES)), np.empty((1, K + 1, N_ROLES)), np.empty((K + 1, N_ROLES)),
         np.empty((1, K + 1, N_ROLES)), np.empty((K + 1, N_ROLES)), np.empty(N_G),
-        np.empty((3, 4)), np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty(N_ROLES),
+        np.empty((3, 4)), np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS),
+        np.empty((4, N_ROLES)),
         np.empty(max(K, 1)),
     )  # fmt: skip
 
@@ -118,12 +119,12 @@ def rollout_into(
 ) -> tuple[int, float, float]:  # fmt: skip
     """:func:`rollout_one` into the arrays ``work`` of :func:`rollout_work` (reused from row
     to row: a population allocates them once); returns k_merge, U_safe and U_eff."""
-    X, V, Y, A, HEAD, g, vvs, S, lc, reach, vr_acc = work
+    X, V, Y, A, HEAD, g, vvs, S, lc, box, vr_acc = work
     Y[:], A[:], HEAD[:], g[:], vvs[:] = 0.0, 0.0, 0.0, 0.0, 0.0  # as freshly allocated
     track = tracks[mode_index(lateral, coop, present)]
     return candidate(
         x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
-        X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, reach, vr_acc,
+        X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, box, vr_acc,
     )  # fmt: skip
 
 

@@ -129,32 +129,37 @@ def lateral_pose(
 @kernel(inline="always")
 def collisions_at(
     X: np.ndarray, Y: np.ndarray, H: np.ndarray, k: int, S: np.ndarray, params: np.ndarray,
-    reach: np.ndarray,
+    box: np.ndarray,
 ) -> int:  # fmt: skip
-    """Number of colliding key pairs at step k (``reach`` (6,) is scratch space).
+    """Number of colliding key pairs at step k (``box`` (4, 6) is scratch space).
 
     Axis-aligned bounding boxes first: a rectangle of length L and width W at heading h lies
     within x in [x - L - W/2, x + W/2] and y within W/2 + L |sin h| of its front-bumper
     reference point, so only pairs whose boxes overlap can collide; those get the exact Eq. 7
-    test of :func:`hcomc.safety.collision.vehicle_pair_collides`.
+    test of :func:`hcomc.safety.collision.vehicle_pair_collides`. The boxes of the present
+    roles are taken once per step (columns of ``box``: y reach, x front, x rear, role).
     """
+    n = 0
     for r in range(N_ROLES):
-        h = H[k, r]  # L |sin h| is exactly 0 at h = 0 (every role off a lane change)
-        reach[r] = 0.5 * params[r, P_WID] + (params[r, P_LEN] * abs(math.sin(h)) if h else 0.0)
+        if S[R_PRESENT, r]:
+            h = H[k, r]  # L |sin h| is exactly 0 at h = 0 (every role off a lane change)
+            w = 0.5 * params[r, P_WID]
+            box[0, n] = w + (params[r, P_LEN] * abs(math.sin(h)) if h else 0.0)
+            box[1, n] = X[k, r] + w
+            box[2, n] = X[k, r] - params[r, P_LEN] - w
+            box[3, n] = r
+            n += 1
     count = 0
-    for i in range(N_ROLES):
-        for j in range(i + 1, N_ROLES):
-            if not (S[R_PRESENT, i] and S[R_PRESENT, j]):
-                continue
-            li, lj = params[i, P_LEN], params[j, P_LEN]
-            wi, wj = 0.5 * params[i, P_WID], 0.5 * params[j, P_WID]
+    for p in range(n):
+        for q in range(p + 1, n):
+            i, j = int(box[3, p]), int(box[3, q])
             if (
-                abs(Y[k, i] - Y[k, j]) <= reach[i] + reach[j]
-                and X[k, i] + wi >= X[k, j] - lj - wj
-                and X[k, j] + wj >= X[k, i] - li - wi
+                box[1, p] >= box[2, q]
+                and box[1, q] >= box[2, p]
+                and abs(Y[k, i] - Y[k, j]) <= box[0, p] + box[0, q]
                 and vehicle_pair_collides(
-                    X[k, i], Y[k, i], H[k, i], li, params[i, P_WID],
-                    X[k, j], Y[k, j], H[k, j], lj, params[j, P_WID],
+                    X[k, i], Y[k, i], H[k, i], params[i, P_LEN], params[i, P_WID],
+                    X[k, j], Y[k, j], H[k, j], params[j, P_LEN], params[j, P_WID],
                 )
             ):  # fmt: skip
                 count += 1

@@ -207,7 +207,7 @@ def joint_pass(
     x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
     vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
-    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, reach: np.ndarray, vr_acc: np.ndarray,
+    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, box: np.ndarray, vr_acc: np.ndarray,
     n_known: int, cf: np.ndarray,
 ) -> tuple[int, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
@@ -215,12 +215,12 @@ def joint_pass(
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m] and the number of colliding
     (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (8, 6), ``lc`` (9,) and
-    ``reach`` (6,) are scratch space; VR's accelerations of the first ``n_known`` steps are
+    ``box`` (4, 6) are scratch space; VR's accelerations of the first ``n_known`` steps are
     those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
     counterfactual (:func:`step`).
     """
     n_steps = X.shape[0] - 1
-    S, lc, reach = borrow(S), borrow(lc), borrow(reach)
+    S, lc, box = borrow(S), borrow(lc), borrow(box)
     params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
     X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
     vr_acc, cf = borrow(vr_acc), borrow(cf)
@@ -230,7 +230,7 @@ def joint_pass(
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
         lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
-        collisions += collisions_at(X, Y, HEAD, k, S, params, reach)
+        collisions += collisions_at(X, Y, HEAD, k, S, params, box)
         if k == n_steps:
             break
         vr_known = vr_acc[k] if k < n_known else np.nan
