@@ -1,7 +1,7 @@
 """The merge problem's single-row path equals the population kernel bit for bit.
 
 Simulated annealing scores one row per call; :meth:`MergeProblem.evaluate_row` does that in
-one compiled call (:func:`~hcomc.control.hcomc.rollout.rollout_one` with VMC's pre-pass
+one compiled call (:func:`~hcomc.control.hcomc.rollout.rollout_into` with VMC's pre-pass
 tracks prepared once per problem, U_fuel, the objectives, constraints and the cost), and
 :meth:`MergeProblem.evaluate` runs the same body row by row for the population optimisers.
 Both are compared, byte for byte, with the population kernel (the objectives and

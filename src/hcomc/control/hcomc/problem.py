@@ -432,7 +432,7 @@ class MergeProblem:
 def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
                roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
                sequence_violation, threshold, fuel_ref, F, G):  # fmt: skip
-    """:meth:`MergeProblem.evaluate_row` compiled: the row's rollout (:func:`rollout_one`),
+    """:meth:`MergeProblem.evaluate_row` compiled: the row's rollout (:func:`rollout_into`),
     U_fuel, the objectives into ``F`` and the constraints into ``G`` as :meth:`MergeProblem.
     evaluate` writes them (kernel parts, then the lateral and sequence flags), and the cost."""
     return _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks,

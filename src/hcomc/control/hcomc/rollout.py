@@ -33,7 +33,7 @@ Three passes per candidate population:
 
 The kernels are compiled with numba: a population is evaluated per optimiser generation, which
 a numpy time-stepping loop cannot do within the decision-time budget. Simulated annealing asks
-for one candidate at a time: :func:`rollout_one` scores one with the same per-candidate body,
+for one candidate at a time: :func:`rollout_into` scores one with the same per-candidate body,
 without the per-call work only a population needs. They are split by concern — array layouts
 (:mod:`~hcomc.control.hcomc.rollout_layout`), car following and integration
 (:mod:`~hcomc.control.hcomc.rollout_step`), accelerations of the roles
@@ -59,7 +59,6 @@ from hcomc.control.hcomc.rollout_candidate import (
     candidate,
     mode_index,
     rollout_into,
-    rollout_one,
     rollout_work,
     vmc_tracks,
 )
@@ -118,8 +117,8 @@ __all__ = [
     "G_NOT_MERGED", "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
     "N_STARTS", "P_A", "P_B", "P_C", "P_DELTA", "P_IIDM", "P_LEN", "P_S0", "P_T", "P_V0",
     "P_WID", "S_VV0_V", "S_VV0_X", "S_VV1_V", "S_VV1_X", "VMC", "VMF", "VMR", "VNF", "VNR",
-    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_into", "rollout_one",
-    "rollout_work", "vmc_tracks", "warm_up", "warm_up_instant",
+    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_into", "rollout_work",
+    "vmc_tracks", "warm_up", "warm_up_instant",
 ]  # fmt: skip
 
 _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0 (finite)

@@ -4,7 +4,7 @@ and the single-candidate entry simulated annealing uses.
 
 Simulated annealing asks for one candidate at a time. The population kernel's per-call work
 that depends on the planning instant alone — VMC's pre-pass trajectory per mode — is then
-prepared once per problem (:func:`vmc_tracks`) and :func:`rollout_one` runs the same body
+prepared once per problem (:func:`vmc_tracks`) and :func:`rollout_into` runs the same body
 (:func:`candidate`) on it, so that a row gives the values of the population path bit for bit.
 """
 
@@ -43,7 +43,7 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
     """Passes 1 and 2 and the scoring of one candidate (``plan``: merge position, VR's
     lane-change duration, horizon H; ``lateral``: its mode variable), the body shared by the
     population kernel (:func:`hcomc.control.hcomc.rollout.rollout`) and the single-row entry
-    :func:`rollout_one`.
+    :func:`rollout_into`.
 
     ``track`` is VMC's pre-pass trajectory of the candidate's mode (:func:`vmc_tracks`). The
     trajectories go to ``X`` … ``HEAD`` (K + 1, 6) (``Y``, ``A``, ``HEAD`` zeroed by the
@@ -86,7 +86,7 @@ def vmc_tracks(
     params: np.ndarray, consts: np.ndarray, n_steps: int,
 ) -> np.ndarray:  # fmt: skip
     """VMC's pre-pass trajectories (2, K + 1, 2) of both modes (index 1: lateral), which
-    depend on the planning instant alone: computed once per problem for :func:`rollout_one`
+    depend on the planning instant alone: computed once per problem for :func:`rollout_into`
     (the population kernel computes them once per call). Without a cooperating VMC only the
     longitudinal track is used, and only it is computed."""
     tracks = np.zeros((2, n_steps + 1, 2))
@@ -117,8 +117,16 @@ def rollout_into(
     coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
     consts: np.ndarray, cf: np.ndarray, tracks: np.ndarray, work: tuple[np.ndarray, ...],
 ) -> tuple[int, float, float]:  # fmt: skip
-    """:func:`rollout_one` into the arrays ``work`` of :func:`rollout_work` (reused from row
-    to row: a population allocates them once); returns k_merge, U_safe and U_eff."""
+    """One candidate, as the population kernel (:func:`hcomc.control.hcomc.rollout.rollout`
+    with C = 1) computes it, without the per-call work a population needs and a single row
+    does not: VMC's pre-pass tracks come precomputed from :func:`vmc_tracks`.
+
+    ``starts`` must be resolved (:func:`~hcomc.control.hcomc.rollout.resolve_starts`);
+    ``plan`` (3,) holds the merge position, VR's lane-change duration and the horizon H;
+    ``lateral`` the mode. The trajectories, constraint parts and cubics go to the arrays
+    ``work`` of :func:`rollout_work` (reused from row to row: a population allocates them
+    once); returns k_merge, U_safe and U_eff: the values of the population kernel's row, bit
+    for bit."""
     X, V, Y, A, HEAD, g, vvs, S, lc, box, vr_acc = work
     Y[:], A[:], HEAD[:], g[:], vvs[:] = 0.0, 0.0, 0.0, 0.0, 0.0  # as freshly allocated
     track = tracks[mode_index(lateral, coop, present)]
@@ -126,27 +134,3 @@ def rollout_into(
         x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, track,
         X[0], Y, V[0], A[0], HEAD, g, vvs, S, lc, box, vr_acc,
     )  # fmt: skip
-
-
-@kernel
-def rollout_one(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, cav: np.ndarray,
-    coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
-    consts: np.ndarray, n_steps: int, cf: np.ndarray, tracks: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, float, float, np.ndarray]:  # fmt: skip
-    """One candidate, as the population kernel (:func:`hcomc.control.hcomc.rollout.rollout`
-    with C = 1) computes it, without the per-call work a population needs and a single row
-    does not: VMC's pre-pass tracks come precomputed from :func:`vmc_tracks`; the cubics are
-    not returned.
-
-    ``starts`` must be resolved (:func:`~hcomc.control.hcomc.rollout.resolve_starts`);
-    ``plan`` (3,) holds the merge position, VR's lane-change duration and the horizon H;
-    ``lateral`` the mode. Returns ``X``, ``V``, ``A`` (1, K + 1, 6), k_merge, U_safe, U_eff
-    and the constraint parts ``g`` (N_G,): the values of the population kernel's row, bit
-    for bit.
-    """
-    work = rollout_work(n_steps)
-    k_merge, u_safe, u_eff = rollout_into(
-        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, tracks, work
-    )
-    return work[0], work[1], work[3], k_merge, u_safe, u_eff, work[5]
