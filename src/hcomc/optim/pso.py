@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow, kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim import variation
 from hcomc.optim.base import (
@@ -256,21 +256,18 @@ def _distance(p: FloatArray, q: FloatArray, width: FloatArray, terms: FloatArray
     for k in range(p.size):
         d = (p[k] - q[k]) / width[k]
         terms[k] = d * d
-    if terms.size < 8:  # numpy's pairwise sum of fewer than eight terms: the plain loop
-        total = 0.0
-        for k in range(terms.size):
-            total += terms[k]
-        return float(np.sqrt(total))
     return float(np.sqrt(pairwise_sum(terms, 0, terms.size)))
 
 
 @kernel
 def _spread_kernel(
-    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray
+    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray, scratch: FloatArray
 ) -> tuple[FloatArray, float]:
+    """:func:`swarm_spread` compiled; ``scratch`` (n_var,) holds a distance's terms."""
     n = P_X.shape[0]
     width = xu - xl
-    terms, D, mD = np.empty(P_X.shape[1]), np.empty((n, n)), np.empty(n)
+    D, mD = np.empty((n, n)), np.empty(n)
+    terms = borrow(scratch)  # n^2 sums without reference counting (the caller keeps it)
     for i in range(n):
         D[i, i] = _distance(P_X[i], P_X[i], width, terms)
         for j in range(i + 1, n):
@@ -298,7 +295,7 @@ def swarm_spread(
     (:func:`numpy_sums_are_pairwise`), else numpy's arrays in pymoo's layout.
     """
     if numpy_sums_are_pairwise():
-        mD, g_D = _spread_kernel(P_X, s_x, xl, xu)
+        mD, g_D = _spread_kernel(P_X, s_x, xl, xu, np.empty(P_X.shape[1]))
         return mD, float(g_D)
     return _spread_numpy(P_X, s_x, xl, xu)
 
