@@ -124,10 +124,36 @@ def borrow(a: np.ndarray) -> np.ndarray:
     return carray(_as_pointer(a.ctypes.data), a.shape, a.dtype)  # type: ignore[call-arg]
 
 
+def _borrowed_views(typingctx: Any, arrays: Any) -> Any:
+    """Typing and code of :data:`borrow_all`."""
+    members = getattr(arrays, "types", None)
+    if members is None or not all(isinstance(t, types.Array) for t in members):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        views = []
+        for k, typ in enumerate(members):
+            view = context.make_array(typ)(context, builder, builder.extract_value(args[0], k))
+            view.meminfo = cgutils.get_null_value(view.meminfo.type)
+            view.parent = cgutils.get_null_value(view.parent.type)
+            views.append(view._getvalue())
+        return context.make_tuple(builder, arrays, views)
+
+    return arrays(arrays), codegen
+
+
+borrow_all: Any = intrinsic(_borrowed_views)
+"""``borrow_all(arrays)`` in a kernel: the arrays of the tuple ``arrays`` as views that do
+not own their memory, typed as they are (:func:`borrow` of each, for any layout), so that
+their reference counts are no-ops. The caller must keep the arrays alive while the views
+are used."""
+
+
 __all__ = [
     "PACKAGE",
     "PackageCacheLocator",
     "borrow",
+    "borrow_all",
     "kernel",
     "source_stamp",
     "use_package_stamp",

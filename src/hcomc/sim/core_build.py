@@ -4,8 +4,6 @@ perception."""
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from hcomc.config import ConfigError, ScenarioConfig
@@ -13,7 +11,7 @@ from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_plans import N_FLOAT, N_INT
-from hcomc.sim.core_state import CoreArrays
+from hcomc.sim.core_state import Core, CoreArrays
 from hcomc.sim.demand import Demand
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import SimulationLog
@@ -70,12 +68,12 @@ def widen_log(config: ScenarioConfig, log: SimulationLog, on_road: int = 0) -> N
     log.grow_slots(slots)
 
 
-def adopt_log_columns(arrays: CoreArrays, core: Any, log: SimulationLog) -> CoreArrays:
+def adopt_log_columns(arrays: CoreArrays, core: Core, log: SimulationLog) -> CoreArrays:
     """Point a run's compiled state ``core`` at ``log``'s current slot columns (after they
     grew); returns ``arrays`` with the same fields replaced."""
-    columns = log_columns(log)
-    layout.set_log_columns(core, *columns.values())
-    return arrays._replace(**columns)
+    arrays = arrays._replace(**log_columns(log))
+    core.adopt(arrays)
+    return arrays
 
 
 def build_arrays(

@@ -5,7 +5,8 @@ state, the HDV perception buffers, the demand queues, the event buffer, counters
 table of the live merge plans, the log). The kernels of :mod:`hcomc.sim.core` receive them
 as one :class:`Core`, a compiled reference record over the same buffers: passing it costs one
 pointer, whatever the number of arrays (a tuple of arrays would be unpacked and
-reference-counted array by array at every call).
+reference-counted array by array at every call). Its fields are borrowed views
+(:func:`hcomc._jit.borrow_all`), so reading one in a kernel counts no reference either.
 Python reads and writes the state through the :class:`CoreArrays`.
 """
 
@@ -17,7 +18,7 @@ import numpy as np
 from numba.core import types
 from numba.experimental import structref
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow_all, kernel
 
 # lanes and event kinds (IntEnums of hcomc.road and hcomc.sim.log, as plain ints)
 RAMP, MAIN_1, MAIN_2 = 0, 1, 2
@@ -132,13 +133,29 @@ class CoreType(types.StructRef):
 
 
 class Core(structref.StructRefProxy):
-    """The compiled kernels' handle on one run's :class:`CoreArrays` (the same buffers)."""
+    """The compiled kernels' handle on one run's :class:`CoreArrays` (the same buffers).
+
+    Its fields are views that do not own their memory: an owning array's reference count
+    is changed atomically each time a kernel reads it from the record or passes it on, and
+    in the step's loops that was about a quarter of the time. The handle keeps the arrays
+    it borrows alive itself (:meth:`adopt`)."""
+
+    _arrays: CoreArrays
 
     def __new__(cls, arrays: CoreArrays) -> Core:
         # numba's own constructor path compiles anew in every process (about 2.5 s); this
         # one is compiled once and then loaded from numba's cache
         core: Core = _new_core(*arrays)
+        core._arrays = arrays
         return core
+
+    def adopt(self, arrays: CoreArrays) -> None:
+        """Point the handle at ``arrays``' log columns (after the log grew), which it then
+        keeps alive instead of the old ones."""
+        set_log_columns(self, arrays.log_x, arrays.log_y, arrays.log_v, arrays.log_a,
+                        arrays.log_heading, arrays.log_lane, arrays.log_active,
+                        arrays.log_owner)  # fmt: skip
+        self._arrays = arrays
 
 
 structref.define_constructor(Core, CoreType, list(CoreArrays._fields))
@@ -147,8 +164,9 @@ structref.define_boxing(CoreType, Core)
 
 @kernel
 def _new_core(*arrays: Any) -> Any:
-    """A :class:`Core` over ``arrays`` (the fields of :class:`CoreArrays`, in order)."""
-    return Core(*arrays)
+    """A :class:`Core` over borrowed views of ``arrays`` (the fields of :class:`CoreArrays`,
+    in order)."""
+    return Core(*borrow_all(arrays))
 
 
 @kernel
@@ -156,7 +174,10 @@ def set_log_columns(
     c: Any, x: np.ndarray, y: np.ndarray, v: np.ndarray, a: np.ndarray,
     heading: np.ndarray, lane: np.ndarray, active: np.ndarray, owner: np.ndarray,
 ) -> None:  # fmt: skip
-    """Point the run's state at its log's new (wider) slot columns."""
+    """Point the run's state at borrowed views of its log's new (wider) slot columns (use
+    :meth:`Core.adopt`, which keeps them alive)."""
+    x, y, v, a, heading, lane, active, owner = borrow_all((x, y, v, a, heading, lane, active,
+                                                           owner))  # fmt: skip
     c.log_x, c.log_y, c.log_v, c.log_a, c.log_heading = x, y, v, a, heading
     c.log_lane, c.log_active, c.log_owner = lane, active, owner
 
