@@ -180,7 +180,7 @@ def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     acc, changing, vs, ls, ks, rank, lead = step_front(c, ids, t)
     if (c.counters[STEP] % c.flags[DECIDE_EVERY] == 0) and c.flags[PLATOON] == 0:
         chosen, target = discretionary_changes(c, ids, changing, holding(c), lead, vs, ls, ks, rank)
-        start_lane_changes(c, chosen, target, t, np.empty(0))
+        start_lane_changes(c, chosen, target, t, c.consts[:0])  # empty: their own durations
     step_back(c, ids, t, acc, vs, ls)
 
 

@@ -17,31 +17,46 @@ from hcomc.sim.core_state import (
     MAIN_1,
     MAIN_2,
     RAMP,
+    S_CAND,
+    S_CAND_FOLLOWER,
+    S_CAND_LANE,
+    S_CAND_LEADER,
+    S_CAND_TARGET,
+    S_FORCE,
+    S_MOBIL,
+    S_MOBIL_B,
+    S_MOBIL_F,
+    S_POS,
+    S_SELECTED,
     CoreArrays,
     add_event,
 )  # fmt: skip
-from hcomc.sim.mobil import mobil_decide
+from hcomc.sim.mobil import mobil_decide_into
 from hcomc.sim.neighbours import neighbour
-from hcomc.sim.small import nonzero, search_left
+from hcomc.sim.small import nonzero_into, search_left
 
 
 # --------------------------------------------------------------------------- decide
 @kernel
 def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
-    """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide`) for the vehicles at
-    positions ``cand_pos`` of ``ids``."""
+    """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide_into`) for the vehicles at
+    positions ``cand_pos`` of ``ids``: ``(vehicles, targets)`` accepted, views of the step's
+    work rows."""
     n = cand_pos.size
-    cand = np.empty(n, dtype=np.int64)
-    lanes = np.empty(n, dtype=np.int64)
-    leader = np.empty(n, dtype=np.int64)
-    follower = np.empty(n, dtype=np.int64)
+    si = c.scratch_int
+    cand, lanes = si[S_CAND, :n], si[S_CAND_LANE, :n]
+    leader, follower = si[S_CAND_LEADER, :n], si[S_CAND_FOLLOWER, :n]
     vb, lb = borrow(vs), borrow(ls)  # no reference counting per call (hcomc._jit.borrow)
     for k in range(n):
         p = cand_pos[k]
         cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
         follower[k] = neighbour(vb, lb, rank[p] - 1, lb[rank[p]])
-    return mobil_decide(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
-                        leader, follower, target, force, c.lc_params)  # fmt: skip
+    work = si[S_MOBIL : S_MOBIL + 4]
+    m = mobil_decide_into(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
+                          leader, follower, target, force, c.lc_params, work,
+                          c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
+                          c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2])  # fmt: skip
+    return work[0, :m], work[1, :m]
 
 
 @kernel
@@ -79,17 +94,19 @@ def discretionary_changes(
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
     holding its lane for a plan; ramp vehicles on the acceleration lane only)."""
-    sel = np.zeros(ids.size, dtype=np.bool_)
+    sel = c.scratch_b[S_SELECTED, : ids.size]
     for k in range(ids.size):
         i = ids[k]
         ramp = c.lane[i] == RAMP
         on_accel = ramp and c.consts[ACCEL_START] <= c.x[i] <= c.consts[ACCEL_END]
         sel[k] = not changing[k] and not c.scripted[i] and (not ramp or on_accel) and not holding[i]
-    pos = nonzero(sel)
-    target = np.empty(pos.size, dtype=np.int64)
+    pos = c.scratch_int[S_POS]
+    pos = pos[: nonzero_into(sel, pos)]
+    target = c.scratch_int[S_CAND_TARGET, : pos.size]
     for k in range(pos.size):
         target[k] = MAIN_2 if c.lane[ids[pos[k]]] == MAIN_1 else MAIN_1
-    force = np.zeros(pos.size, dtype=np.bool_)
+    force = c.scratch_b[S_FORCE, : pos.size]
+    force[:] = False
     return _mobil(c, ids, pos, lead, vs, ls, ks, rank, target, force)
 
 

@@ -33,6 +33,8 @@ from hcomc.sim.core_state import (
     ROAD_LENGTH,
     S_ACC,
     S_BUFFER,
+    S_CHANGER_IDS,
+    S_CHANGERS,
     S_CHANGING,
     S_CODES,
     S_GAP,
@@ -46,6 +48,8 @@ from hcomc.sim.core_state import (
     S_LEADER_LENGTH,
     S_LEADER_SPEED,
     S_LS,
+    S_NEW_ACC,
+    S_NEW_LEADER,
     S_ORDER,
     S_RANK,
     S_SPEED,
@@ -62,7 +66,7 @@ from hcomc.sim.core_state import (
 )  # fmt: skip
 from hcomc.sim.neighbours import lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import perceive_into
-from hcomc.sim.small import nonzero, search_left, unique
+from hcomc.sim.small import nonzero_into, search_left, unique
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -235,13 +239,15 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
     overlaps."""
     if not changing.any():
         return
-    ch = nonzero(changing)
+    ch = c.scratch_int[S_CHANGERS]
+    ch = ch[: nonzero_into(changing, ch)]
     n_ch = ch.size
-    lead_new = np.empty(n_ch, dtype=np.int64)
+    changers, lead_new = c.scratch_int[S_CHANGER_IDS, :n_ch], c.scratch_int[S_NEW_LEADER, :n_ch]
     for m in range(n_ch):
-        i = ids[ch[m]]
+        i = changers[m] = ids[ch[m]]
         lead_new[m] = lookup_one(ks, ls, vs, c.target[i], c.x[i])[0]
-    a_new = follow_many(c, ids[ch], lead_new)
+    a_new = c.scratch_f[S_NEW_ACC, :n_ch]
+    follow_into(c, changers, lead_new, a_new)
     for m in range(n_ch):
         k = ch[m]
         i = ids[k]

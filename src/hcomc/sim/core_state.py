@@ -43,12 +43,20 @@ DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
 # (the next step)
 (S_IDS, S_LEAD, S_VEH, S_LANE, S_ORDER, S_BUFFER, S_RANK, S_VS, S_LS, S_CODES,
  S_VV_FOL) = range(11)  # fmt: skip
-N_SCRATCH_INT = 11
+# MOBIL's candidates (hcomc.sim.core_lane_change) and its work rows S_MOBIL .. S_MOBIL + 3
+# (hcomc.sim.mobil.mobil_decide_into); the changers of the Eq. 14 blend and their new leaders
+S_POS, S_CAND, S_CAND_LANE, S_CAND_LEADER, S_CAND_FOLLOWER, S_CAND_TARGET = range(11, 17)
+S_MOBIL = 17
+S_CHANGERS, S_CHANGER_IDS, S_NEW_LEADER = range(21, 24)
+N_SCRATCH_INT = 24
 S_X, S_KEY, S_KS, S_ACC, S_VV = range(5)  # S_VV .. S_VV + 3: x, v, a, length of virtual rows
 S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # car following
-N_SCRATCH_F = 14
+S_MOBIL_F = 14  # .. S_MOBIL_F + 1: MOBIL's work rows over the vehicles
+S_NEW_ACC = 16  # the changers' accelerations behind their target-lane leaders
+N_SCRATCH_F = 17
 S_CHANGING, S_IN_ORI, S_IN_TGT, S_FOLLOWING, S_HOLDING = range(5)
-N_SCRATCH_B = 5
+S_SELECTED, S_FORCE, S_MOBIL_B = range(5, 8)  # S_MOBIL_B .. S_MOBIL_B + 1: MOBIL's flags
+N_SCRATCH_B = 9
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged

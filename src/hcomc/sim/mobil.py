@@ -26,14 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hcomc._jit import kernel
+from hcomc._jit import borrow, kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
 from hcomc.models.following import follow_accel_given, free_term
 from hcomc.road import Lane
 from hcomc.sim.fleet import Fleet
-from hcomc.sim.neighbours import LaneIndex, lookup_into
-from hcomc.sim.small import nonzero
+from hcomc.sim.neighbours import LaneIndex, lookup_one
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
@@ -60,15 +59,38 @@ def mobil_decide(
     ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
     ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
     """
+    n = cand.size
+    ints, flags = np.empty((4, n), dtype=np.int64), np.empty((2, n), dtype=np.bool_)
+    floats = np.empty((2, x.size))
+    m = mobil_decide_into(matrix, iidm, length, x, v, a, key, lane_of, vehicle, cand, lane,
+                          leader, follower, target, force, params, ints, flags,
+                          floats)  # fmt: skip
+    return ints[0, :m].copy(), ints[1, :m].copy()
+
+
+@kernel
+def mobil_decide_into(
+    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
+    x: np.ndarray, v: np.ndarray, a: np.ndarray,
+    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray,
+    cand: np.ndarray, lane: np.ndarray, leader: np.ndarray, follower: np.ndarray,
+    target: np.ndarray, force: np.ndarray, params: np.ndarray,
+    ints: np.ndarray, flags: np.ndarray, floats: np.ndarray,
+) -> int:  # fmt: skip
+    """:func:`mobil_decide` in the caller's work arrays (the simulation step's, so that a
+    step allocates nothing): ``ints`` (4, >= n) and ``flags`` (2, >= n) for the n
+    candidates, ``floats`` (2, >= N) for the vehicles. Returns the number m of accepted
+    changes, whose vehicles and targets are ``ints[0, :m]`` and ``ints[1, :m]``."""
     min_gap, b_safe, politeness = params[0], params[1], params[2]
     threshold, bias = params[3], params[4]
     n = cand.size
-    new_lead = np.empty(n, dtype=np.int64)
-    new_fol = np.empty(n, dtype=np.int64)
-    mandatory = np.empty(n, dtype=np.bool_)
-    ok = np.zeros(n, dtype=np.bool_)
-    lookup_into(key, lane_of, vehicle, target, x[cand], new_lead, new_fol)
-    free = np.full(x.size, math.nan)  # each vehicle's free-road term, taken once
+    new_lead, new_fol = ints[2, :n], ints[3, :n]
+    mandatory, ok = flags[0, :n], flags[1, :n]
+    kb, lb, vb = borrow(key), borrow(lane_of), borrow(vehicle)
+    for k in range(n):
+        new_lead[k], new_fol[k] = lookup_one(kb, lb, vb, target[k], x[cand[k]])
+    free = floats[0, : x.size]
+    free[:] = math.nan  # each vehicle's free-road term, taken once
 
     def accel(i: int, j: int) -> float:  # a closure: inlined, no call with arrays
         """Model acceleration of i behind j (free road for j = -1; 0 for i = -1)."""
@@ -87,6 +109,7 @@ def mobil_decide(
         )  # fmt: skip
 
     for k in range(n):
+        ok[k] = False
         c, lo, ln, fn, fo = cand[k], leader[k], new_lead[k], new_fol[k], follower[k]
         mandatory[k] = lane[k] == _RAMP or force[k]
         # 1. the gap criteria, which need no model acceleration
@@ -109,8 +132,15 @@ def mobil_decide(
         gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
         side = bias if target[k] == _MAIN_2 else -bias
         ok[k] = gain > threshold + side
-    sel = nonzero(ok)
-    return _resolve(cand[sel], target[sel], new_lead[sel], new_fol[sel], mandatory[sel], x)
+    ids, targets = ints[0], ints[1]
+    m = 0
+    for k in range(n):  # the accepted, in order (m <= k: the rows are compacted in place)
+        if ok[k]:
+            ids[m], targets[m] = cand[k], target[k]
+            new_lead[m], new_fol[m], mandatory[m] = new_lead[k], new_fol[k], mandatory[k]
+            m += 1
+    return _resolve_into(ids[:m], targets[:m], new_lead[:m], new_fol[:m], mandatory[:m], x,
+                         floats[1, : x.size], ok[:m])  # fmt: skip
 
 
 @kernel(inline="always")
@@ -122,14 +152,25 @@ def _gap(x_i: float, x_j: float, length_j: float, exists: bool) -> float:
 
 @kernel
 def _resolve(ids, target, new_lead, new_fol, mandatory, x):
-    """Drop changes that conflict with a higher-priority change of the same round."""
+    """Drop changes that conflict with a higher-priority change of the same round:
+    ``(vehicles, targets)`` kept (:func:`_resolve_into` on copies)."""
+    ids, target = ids.copy(), target.copy()
+    m = _resolve_into(ids, target, new_lead, new_fol, mandatory, x, np.empty(x.size),
+                      np.empty(ids.size, dtype=np.bool_))  # fmt: skip
+    return ids[:m], target[:m]
+
+
+@kernel
+def _resolve_into(ids, target, new_lead, new_fol, mandatory, x, priority, keep):
+    """Drop changes that conflict with a higher-priority change of the same round, in place:
+    the m kept are ``ids[:m]``, ``target[:m]``, in order. ``priority`` (N,) and ``keep``
+    (as long as ``ids``) are work arrays."""
     if ids.size <= 1:
-        return ids, target
+        return ids.size
     # priority: ramp vehicles first, then further downstream first
-    priority = np.full(x.size, -np.inf)
+    priority[:] = -np.inf
     for k in range(ids.size):
         priority[ids[k]] = mandatory[k] * 1e9 + x[ids[k]]
-    keep = np.ones(ids.size, dtype=np.bool_)
     for k in range(ids.size):
         mine = priority[ids[k]]
         lead = new_lead[k] if new_lead[k] >= 0 else ids[k]
@@ -142,8 +183,12 @@ def _resolve(ids, target, new_lead, new_fol, mandatory, x):
                 if other > mine or (other == mine and m < k):
                     beaten = True
         keep[k] = not beaten
-    sel = nonzero(keep)
-    return ids[sel], target[sel]
+    m = 0
+    for k in range(ids.size):
+        if keep[k]:
+            ids[m], target[m] = ids[k], target[k]
+            m += 1
+    return m
 
 
 def decide(
