@@ -15,12 +15,13 @@ alternate within one process, ``--repeats`` times, and the median is reported, s
 machine affects both alike. Before each timed run, of either engine, the garbage of the
 earlier ones is collected (``gc.collect()``): without it the first hcomc run after SUMO's
 2,000-vehicle scene ran at about half the rate of the next ones (measured: 6.3 against
-10.7-11.9 M vehicle-steps/s on the 100-vehicle line, and 12.1 M with the collection). SUMO's vehicle-steps are the number of vehicles on the road after
-each step, summed. SUMO runs each scene twice: with collision detection off (the headline
-``sumo_steps_per_s`` and ``ratio``; with continuous lane changes SUMO's collision check grows
-about quadratically with the vehicles on a lane and makes the on-ramp scene many times
-slower) and with the exported options unchanged (``sumo_checked_steps_per_s``,
-``ratio_checked``; collisions detected and counted, as our engine does).
+10.7-11.9 M vehicle-steps/s on the 100-vehicle line, and 12.1 M with the collection).
+SUMO's vehicle-steps are the number of vehicles on the road after each step, summed. SUMO
+runs each scene twice: with collision detection off (the headline ``sumo_steps_per_s`` and
+``ratio``; with continuous lane changes SUMO's collision check grows about quadratically with
+the vehicles on a lane and makes the on-ramp scene many times slower) and with the exported
+options unchanged (``sumo_checked_steps_per_s``, ``ratio_checked``; collisions detected and
+counted, as our engine does).
 
 ``--reproduce-seeds S`` also runs ``hcomc reproduce --seeds S --workers W``
 (``--reproduce-workers``, default 1; ``reproduce``'s own default is every core) and compares
