@@ -47,28 +47,6 @@ class Snapshot:
 
 
 @kernel
-def mobil_decide(
-    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
-    x: np.ndarray, v: np.ndarray, a: np.ndarray,
-    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray,
-    cand: np.ndarray, lane: np.ndarray, leader: np.ndarray, follower: np.ndarray,
-    target: np.ndarray, force: np.ndarray, params: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Accepted changes among candidates (see the module docstring): ``(vehicles, targets)``.
-
-    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
-    ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
-    """
-    n = cand.size
-    ints, flags = np.empty((4, n), dtype=np.int64), np.empty((2, n), dtype=np.bool_)
-    floats = np.empty((2, x.size))
-    m = mobil_decide_into(matrix, iidm, length, x, v, a, key, lane_of, vehicle, cand, lane,
-                          leader, follower, target, force, params, ints, flags,
-                          floats)  # fmt: skip
-    return ints[0, :m].copy(), ints[1, :m].copy()
-
-
-@kernel
 def mobil_decide_into(
     matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
     x: np.ndarray, v: np.ndarray, a: np.ndarray,
@@ -77,10 +55,15 @@ def mobil_decide_into(
     target: np.ndarray, force: np.ndarray, params: np.ndarray,
     ints: np.ndarray, flags: np.ndarray, floats: np.ndarray,
 ) -> int:  # fmt: skip
-    """:func:`mobil_decide` in the caller's work arrays (the simulation step's, so that a
-    step allocates nothing): ``ints`` (4, >= n) and ``flags`` (2, >= n) for the n
-    candidates, ``floats`` (2, >= N) for the vehicles. Returns the number m of accepted
-    changes, whose vehicles and targets are ``ints[0, :m]`` and ``ints[1, :m]``."""
+    """Accepted changes among the n candidates (see the module docstring), in the caller's
+    work arrays (the simulation step's, so that a step allocates nothing): ``ints``
+    (4, >= n) and ``flags`` (2, >= n) for the candidates, ``floats`` (2, >= N) for the
+    vehicles. Returns the number m of accepted changes, whose vehicles and targets are
+    ``ints[0, :m]`` and ``ints[1, :m]``.
+
+    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
+    ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
+    """
     min_gap, b_safe, politeness = params[0], params[1], params[2]
     threshold, bias = params[3], params[4]
     n = cand.size
@@ -216,12 +199,14 @@ def decide(
     if target is None:
         target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
     force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
-    return mobil_decide(
+    ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
+    m = mobil_decide_into(
         fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a,
         index.key, index.lane, index.vehicle, cand, lane,
         _ints(leader), _ints(follower),
-        _ints(target), force, lane_change_params(params),
+        _ints(target), force, lane_change_params(params), ints, flags, np.empty((2, snap.x.size)),
     )  # fmt: skip
+    return ints[0, :m].copy(), ints[1, :m].copy()
 
 
 def lane_change_params(params: LaneChangeParams) -> FloatArray:
