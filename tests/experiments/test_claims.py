@@ -1,20 +1,29 @@
-"""Paired claims: the paper's list, median paired differences and bootstrap intervals."""
+"""Paired claims: the paper's list, median paired differences, bootstrap intervals, sign
+tests, Holm's adjustment and the verdicts."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
-from hcomc.experiments.tables import (
-    BOOTSTRAP_RESAMPLES,
-    BOOTSTRAP_SEED,
+from hcomc.experiments.claims import (
+    COLUMNS,
+    GROUPS,
     Claim,
     ModeClaim,
+    ci_verdict,
     claims,
-    median_ci,
+    holm,
     paper_claims,
+    sign_test,
+    verdict_counts,
 )
+from hcomc.experiments.tables import BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED, median_ci
 
 
 def _runs() -> pd.DataFrame:
@@ -100,3 +109,134 @@ def test_claims_on_the_uniform_scenario() -> None:
     table = claims(runs, uniform).set_index(["condition", "claim"])
     assert table.loc[("C1", "HCOMC critical distance higher than FIFO"), "uniform"] == "no"
     assert table.loc[("C2", "HCOMC chooses lateral cooperation"), "uniform"] == "yes"
+
+
+def test_sign_test_is_the_exact_binomial_test() -> None:
+    # 3 of 4 non-zero differences in one direction: P(X >= 3) + P(X <= 1) = 10/16
+    assert sign_test(3, 1) == pytest.approx(10 / 16)
+    assert sign_test(1, 3) == sign_test(3, 1)
+    assert sign_test(5, 0) == pytest.approx(2 / 32)
+    assert sign_test(0, 0) == 1.0  # nothing but ties: no evidence either way
+    # 25 of 30: two-sided tail 2 * sum_{k>=25} C(30, k) / 2^30
+    tail = sum(math.comb(30, k) for k in range(25, 31)) / 2**30
+    assert sign_test(25, 5) == pytest.approx(2 * tail)
+
+
+@given(st.lists(st.floats(0.0, 1.0), min_size=1, max_size=40))
+def test_holm_matches_its_definition(p: list[float]) -> None:
+    values = np.array(p)
+    adjusted = holm(values)
+    m = len(p)
+    order = np.argsort(values, kind="stable")
+    expected = np.empty(m)
+    running = 0.0
+    for i, j in enumerate(order):  # step down: (m - i) p_(i), monotone, capped at 1
+        running = max(running, min(1.0, (m - i) * values[j]))
+        expected[j] = running
+    np.testing.assert_allclose(adjusted, expected, rtol=0, atol=1e-15)
+    assert (adjusted >= values - 1e-15).all()
+    # rejections at alpha are a step-down: all p below the first failure, in order
+    rejected = adjusted < 0.05
+    if rejected.any() and not rejected.all():
+        assert values[rejected].max() <= values[~rejected].min()
+
+
+def test_holm_leaves_nan_out_of_the_family() -> None:
+    adjusted = holm(np.array([0.01, np.nan, 0.02]))
+    assert np.isnan(adjusted[1])
+    np.testing.assert_allclose(adjusted[[0, 2]], [0.02, 0.02])  # m = 2, not 3
+
+
+@pytest.mark.parametrize(
+    ("low", "high", "expect", "verdict"),
+    [
+        (1.0, 3.0, "higher", "holds"),
+        (1.0, 3.0, "lower", "reversed"),
+        (-3.0, -1.0, "lower", "holds"),
+        (-3.0, -1.0, "higher", "reversed"),
+        (0.0, 3.0, "higher", "undecided"),  # a CI touching 0 does not exclude it
+        (-1.0, 3.0, "lower", "undecided"),
+        (float("nan"), float("nan"), "lower", "undecided"),
+    ],
+)
+def test_ci_verdict(low: float, high: float, expect: str, verdict: str) -> None:
+    assert ci_verdict(low, high, expect) == verdict
+
+
+def _strong_runs(n: int = 30) -> pd.DataFrame:
+    """C1, FIFO and HCOMC over n seeds: HCOMC's critical distance larger in every seed,
+    its average acceleration larger (the paper: smaller) in every seed, its fuel equal; HCOMC
+    chooses longitudinal cooperation in every run but two."""
+    rows = []
+    for seed in range(n):
+        for conf, cd, acc in (("HCOMC", 120.0 + seed, 0.05), ("FIFO", 100.0, 0.02 + 1e-4 * seed)):
+            mode = "longitudinal" if seed >= 2 else "lateral"
+            rows.append({"condition": "C1", "configuration": conf, "seed": seed,
+                         "critical_distance": cd, "average_acceleration": acc,
+                         "stabilisation_time": 10.0, "lsrv": 5.0, "fuel": 8.0,
+                         "mode": mode})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_verdicts_follow_the_ci_and_the_holm_corrected_sign_test() -> None:
+    table = claims(_strong_runs())
+    assert list(table.columns) == list(COLUMNS)
+    rows = table.set_index("claim")
+    cd = rows.loc["HCOMC critical distance higher than FIFO"]
+    assert (cd["holds"], cd["against"], cd["n"]) == (30, 0, 30)
+    assert cd["verdict"] == "holds"
+    assert cd["p_value"] == pytest.approx(2 * 0.5**30)
+    assert cd["group"] == GROUPS["table3"]
+    acc = rows.loc["HCOMC average acceleration lower than FIFO"]
+    assert (acc["holds"], acc["against"]) == (0, 30)
+    assert (acc["verdict"], acc["verdict_holm"]) == ("reversed", "reversed")
+    fuel = rows.loc["HCOMC fuel lower than FIFO"]  # all ties
+    assert (fuel["p_value"], fuel["verdict"], fuel["verdict_holm"]) == (1.0, "undecided",
+                                                                        "undecided")  # fmt: skip
+    # Holm over the whole family: m finite p-values, smallest times m
+    m = int(table["p_value"].notna().sum())
+    assert m == len(table)
+    np.testing.assert_allclose(table["p_holm"], holm(table["p_value"]))
+    assert cd["p_holm"] == pytest.approx(min(1.0, m * cd["p_value"]))
+    assert cd["verdict_holm"] == "holds"
+    # the mode claim: 28 of 30 runs longitudinal, exact binomial test against 1/2
+    mode = rows.loc["HCOMC chooses longitudinal cooperation"]
+    assert (mode["holds"], mode["n"]) == (28, 30)
+    binom = 2 * sum(math.comb(30, k) for k in range(28, 31)) / 2**30
+    assert mode["p_value"] == pytest.approx(binom)
+    assert (mode["verdict"], mode["verdict_holm"]) == ("holds", "holds")
+    assert mode["ours"] == "longitudinal: 28, lateral: 2"
+
+
+def test_a_weak_effect_holds_by_its_ci_but_not_after_holm() -> None:
+    """22 of 30 seeds in the paper's direction: the CI of the median clears 0 and the sign
+    test alone is significant, but not after Holm's correction over the claims of the runs:
+    the two verdict columns answer different questions."""
+    runs = _strong_runs()
+    hcomc = runs["configuration"] == "HCOMC"
+    runs.loc[hcomc, "critical_distance"] = [101.0 + s if s < 22 else 99.5 for s in range(30)]
+    table = claims(runs)
+    row = table.set_index("claim").loc["HCOMC critical distance higher than FIFO"]
+    assert (row["holds"], row["against"]) == (22, 8)
+    assert row["ci_low"] > 0
+    assert row["verdict"] == "holds"
+    assert row["p_value"] == pytest.approx(sign_test(22, 8))
+    assert row["p_value"] < 0.05 < row["p_holm"]
+    assert row["verdict_holm"] == "undecided"
+
+
+def test_a_mode_chosen_in_few_runs_is_reversed() -> None:
+    runs = _strong_runs()
+    runs["mode"] = "lateral"  # never longitudinal: significantly below one half
+    row = claims(runs).set_index("claim").loc["HCOMC chooses longitudinal cooperation"]
+    assert (row["holds"], row["verdict"], row["verdict_holm"]) == (0, "reversed", "reversed")
+
+
+def test_verdict_counts() -> None:
+    table = claims(_strong_runs())
+    counts = verdict_counts(table)
+    assert list(counts.columns) == ["holds", "reversed", "undecided"]
+    assert counts.loc["all"].sum() == len(table)
+    assert counts.loc[GROUPS["mode"], "holds"] == 1
+    holm_counts = verdict_counts(table, "verdict_holm")
+    assert holm_counts.loc["all"].sum() == len(table)

@@ -13,8 +13,9 @@ from scipy import stats
 from typer.testing import CliRunner
 
 from hcomc.cli import app
+from hcomc.experiments.claims import claims
 from hcomc.experiments.runner import ALL_CONFIGURATIONS, RunSpec, grid, run_grid
-from hcomc.experiments.tables import claims, mean_ci, paper_table, summary
+from hcomc.experiments.tables import mean_ci, paper_table, summary
 
 SHORT = {"duration": 60.0}
 

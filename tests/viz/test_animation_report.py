@@ -17,8 +17,8 @@ from matplotlib.figure import Figure
 from PIL import Image
 
 from hcomc.config import load_config
+from hcomc.experiments.claims import claims
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.experiments.tables import claims
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import SimulationLog
 from hcomc.viz.animation import animate

@@ -1,20 +1,16 @@
-"""Summaries of a results table: mean and 95 % CI, the paper's Tables II-III, and its claims.
+"""Summaries of a results table: mean and 95 % CI, median and bootstrap CI, the paper's
+Tables II-III side by side with ours, and merge success.
 
-Claims are the comparative statements of the paper's Section IV (text and Tables II-III),
-each evaluated on paired runs (the same seed; the same condition unless the claim compares
-conditions). For a claim "A lower (higher) than B" on a metric the per-seed difference is
-``d = value_A - value_B``; the claim reports the **median paired difference**, its **95 %
-bootstrap confidence interval** (percentile method, 2000 resamples of the seeds from a fixed
-generator, so deterministic), **k of n** seeds where it holds (n counts the seeds where both
-values are defined; ties, differences within 1e-9 relative, do not hold) and the paper's
-values. Nothing here is written by
-hand: every number comes from the runs, the paper's values from
+Tables II and III compare the configurations of a condition on the same seeds: a metric's
+mean and CI in a condition are taken over the seeds on which *every* configuration of that
+table has a finite value (n = seeds common to all rows of the condition), so the rows of a
+condition are comparable. Merge success (runs in which VR merged, k of n) counts every run.
+The claims built on the same runs are :mod:`hcomc.experiments.claims`. Nothing here is
+written by hand: every number comes from the runs, the paper's values from
 :mod:`hcomc.experiments.paper`.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -71,6 +67,81 @@ def summary(runs: pd.DataFrame, metrics: tuple[str, ...] = PAPER_METRICS) -> pd.
     return pd.DataFrame(records)
 
 
+REPLANNING = {"FIFO": "FIFO-R", "Game": "Game-R"}
+"""The baselines as published (one plan) -> their replanning variants (not in the paper)."""
+
+TABLE_CAPTION = (
+    "ours: mean ± 95 % CI (paper value in brackets); n = seeds common to all rows of the "
+    "condition (every row has a finite value on them), per metric in column order when they "
+    "differ; merged: runs in which VR merged, k/n"
+)
+"""What a cell of :func:`paper_table` means (the caption wherever the tables are shown)."""
+
+
+def table_rows(runs: pd.DataFrame, which: str) -> list[tuple[str, str, str, tuple | None]]:
+    """``(condition, model, configuration, paper values or None)`` of every row of Table II
+    ("II": optimisers, C1-C3) or III ("III": controllers, C1-C5) the runs have, in order.
+
+    Table III lists the replanning baselines (FIFO-R, Game-R) under the paper's FIFO and
+    Game values, and after a condition's HCOMC every other configuration of the runs that
+    neither table names (e.g. a variant of HCOMC), without a paper value.
+    """
+    reference, names = (TABLE_II, TABLE_II_ROWS) if which == "II" else (TABLE_III, TABLE_III_ROWS)
+    present = set(zip(runs["condition"], runs["configuration"], strict=True))
+    named = {*TABLE_II_ROWS.values(), *TABLE_III_ROWS.values(), *REPLANNING.values()}
+    rows: list[tuple[str, str, str, tuple | None]] = []
+    for (cond, model), values in reference.items():
+        rows.append((cond, model, names[model], values))
+        if which == "III" and model in REPLANNING:
+            rows.append((cond, REPLANNING[model], REPLANNING[model], values))
+        if which == "III" and model == "HCOMC":
+            others = pd.unique(runs.loc[runs["condition"] == cond, "configuration"])
+            rows += [(cond, str(c), str(c), None) for c in others if c not in named]
+    return [row for row in rows if (row[0], row[2]) in present]
+
+
+def _merged(part: pd.DataFrame) -> float:
+    """Runs of ``part`` in which VR merged (NaN without a ``merged`` column)."""
+    return float(part["merged"].eq(True).sum()) if "merged" in part else float("nan")
+
+
+def table_summary(runs: pd.DataFrame, which: str) -> pd.DataFrame:
+    """Table II or III as numbers: one row per :func:`table_rows` entry.
+
+    Columns: ``table``, ``condition``, ``model``, ``configuration``, ``runs`` (rows of the
+    cell), ``merged`` (runs with ``merged`` true; NaN when the runs have no such column) and
+    per paper metric ``m``: ``m`` (mean over the seeds common to all rows of the condition),
+    ``m_ci`` (half-width of its 95 % t interval), ``m_n`` (those seeds) and ``m_paper``.
+    """
+    rows = table_rows(runs, which)
+    records = []
+    for cond in dict.fromkeys(r[0] for r in rows):
+        mine = [r for r in rows if r[0] == cond]
+        confs = [r[2] for r in mine]
+        part = runs[(runs["condition"] == cond) & runs["configuration"].isin(confs)]
+        stats_of: dict[str, dict[str, tuple[float, float, int]]] = {c: {} for c in confs}
+        for m in PAPER_METRICS:
+            if m not in part:
+                wide = pd.DataFrame(columns=confs, dtype=np.float64)
+            else:
+                wide = part.groupby(["seed", "configuration"])[m].first().unstack()
+                wide = wide.reindex(columns=confs).astype(np.float64)
+            common = wide[np.isfinite(wide.to_numpy()).all(axis=1)]
+            for c in confs:
+                stats_of[c][m] = mean_ci(common[c])
+        for _, model, conf, paper in mine:
+            cell = part[part["configuration"] == conf]
+            rec: dict[str, object] = {
+                "table": which, "condition": cond, "model": model, "configuration": conf,
+                "runs": len(cell), "merged": _merged(cell),
+            }  # fmt: skip
+            for i, m in enumerate(PAPER_METRICS):
+                rec[m], rec[f"{m}_ci"], rec[f"{m}_n"] = stats_of[conf][m]
+                rec[f"{m}_paper"] = paper[i] if paper is not None else float("nan")
+            records.append(rec)
+    return pd.DataFrame(records)
+
+
 def _fmt(value: float, half: float, digits: int) -> str:
     if not np.isfinite(value):
         return "—"
@@ -78,59 +149,49 @@ def _fmt(value: float, half: float, digits: int) -> str:
     return f"{value:.{digits}f}{ci}"
 
 
-REPLANNING = {"FIFO": "FIFO-R", "Game": "Game-R"}
-"""The baselines as published (one plan) -> their replanning variants (not in the paper)."""
+def _seeds(row: pd.Series) -> str:
+    """The n of a row: one number when every metric has the same, else one per metric."""
+    ns = [str(int(row[f"{m}_n"])) for m in PAPER_METRICS]
+    return ns[0] if len(set(ns)) == 1 else " · ".join(ns)
+
+
+def format_table(table: pd.DataFrame) -> pd.DataFrame:
+    """A :func:`table_summary` frame in the paper's layout: Condition, Model, merged (when
+    known), n and each metric as "mean ± CI (paper)" (see :data:`TABLE_CAPTION`)."""
+    out = []
+    for _, row in table.iterrows():
+        rec: dict[str, object] = {"Condition": row["condition"], "Model": row["model"]}
+        if np.isfinite(row["merged"]):
+            rec["merged"] = f"{int(row['merged'])}/{int(row['runs'])}"
+        rec["n"] = _seeds(row)
+        for m in PAPER_METRICS:
+            paper = row[f"{m}_paper"]
+            shown = f"{paper:g}" if np.isfinite(paper) else "—"
+            rec[LABELS[m]] = f"{_fmt(row[m], row[f'{m}_ci'], DIGITS[m])} ({shown})"
+        out.append(rec)
+    return pd.DataFrame(out)
 
 
 def paper_table(runs: pd.DataFrame, which: str) -> pd.DataFrame:
-    """Table II ("II": optimisers, C1-C3) or III ("III": controllers, C1-C5) in the paper's
-    layout: one row per condition and model, each metric as "ours (paper)". Table III also
-    lists the replanning baselines (FIFO-R, Game-R) under the paper's FIFO and Game values."""
-    reference, rows = (TABLE_II, TABLE_II_ROWS) if which == "II" else (TABLE_III, TABLE_III_ROWS)
-    summ = summary(runs).set_index(["condition", "configuration"])
-    out = []
-    for (cond, model), paper_values in reference.items():
-        confs = [(model, rows[model])]
-        if which == "III" and model in REPLANNING:
-            confs.append((REPLANNING[model], REPLANNING[model]))
-        for label, conf in confs:
-            if (cond, conf) not in summ.index:
-                continue
-            s = summ.loc[(cond, conf)]
-            rec = {"Condition": cond, "Model": label, "n": int(s[f"{PAPER_METRICS[0]}_n"])}
-            for m, p in zip(PAPER_METRICS, paper_values, strict=True):
-                rec[LABELS[m]] = f"{_fmt(s[m], s[f'{m}_ci'], DIGITS[m])} ({p:g})"
-            out.append(rec)
-    return pd.DataFrame(out)
+    """Table II ("II") or III ("III") in the paper's layout: :func:`format_table` of
+    :func:`table_summary`."""
+    return format_table(table_summary(runs, which))
+
+
+def merge_success(runs: pd.DataFrame) -> pd.DataFrame:
+    """Runs in which VR merged, "k/n", per condition (rows) and configuration (columns, in
+    order of appearance); empty when the runs have no ``merged`` column."""
+    if "merged" not in runs:
+        return pd.DataFrame()
+    grouped = runs.groupby(["condition", "configuration"], sort=False)["merged"]
+    cells = grouped.agg(lambda s: f"{int(s.eq(True).sum())}/{len(s)}")
+    wide = cells.unstack().reindex(columns=list(pd.unique(runs["configuration"])))
+    return wide.fillna("—").rename_axis(index="condition", columns=None).reset_index()
 
 
 BOOTSTRAP_RESAMPLES = 2000
 BOOTSTRAP_SEED = 20250715  # fixed: the same runs always give the same interval
 TIE_TOLERANCE = 1e-9  # paired values closer than this (relative, at least 1) are equal
-
-
-@dataclass(frozen=True)
-class Claim:
-    """A comparative statement of the paper: metric of cell A lower/higher than of cell B.
-
-    A cell is (condition, configuration); ``paper_a`` and ``paper_b`` are the paper's values.
-    """
-
-    text: str
-    metric: str
-    a: tuple[str, str]
-    b: tuple[str, str]
-    expect: str  # "lower" or "higher"
-    paper_a: float
-    paper_b: float
-
-
-@dataclass(frozen=True)
-class ModeClaim:
-    """HCOMC's chosen cooperation mode in a condition."""
-
-    condition: str
-    mode: str
 
 
 def median_ci(diff: np.ndarray) -> tuple[float, float, float]:
@@ -143,182 +204,6 @@ def median_ci(diff: np.ndarray) -> tuple[float, float, float]:
     samples = rng.choice(d, size=(BOOTSTRAP_RESAMPLES, d.size), replace=True)
     low, high = np.percentile(np.median(samples, axis=1), [2.5, 97.5])
     return float(np.median(d)), float(low), float(high)
-
-
-_T2_MODEL = {"HCOMC": "NSGA-II", "HCOMC-PSO": "PSO", "HCOMC-SA": "SA"}
-
-
-def _paper_value(cell: tuple[str, str], metric: str) -> float:
-    cond, conf = cell
-    i = PAPER_METRICS.index(metric)
-    if (cond, conf) in TABLE_III:
-        return TABLE_III[(cond, conf)][i]
-    return TABLE_II[(cond, _T2_MODEL[conf])][i]
-
-
-def _pairwise(
-    metric: str, a: tuple[str, str], b: tuple[str, str], names: dict[str, str] | None = None
-) -> Claim | None:
-    """The claim the paper's tables make about cells A and B on ``metric`` (None if tied);
-    ``names`` maps configurations to the paper's model names in the text."""
-    pa, pb = _paper_value(a, metric), _paper_value(b, metric)
-    if pa == pb:
-        return None
-    expect = "lower" if pa < pb else "higher"
-    name = metric.replace("_", " ")
-    label_a, label_b = ((names or {}).get(c, c) for c in (a[1], b[1]))
-    if a[0] == b[0]:
-        text = f"{label_a} {name} {expect} than {label_b}"
-    else:
-        text = f"{label_a} {name} {expect} in {a[0]} than in {b[0]}"
-    return Claim(text, metric, a, b, expect, pa, pb)
-
-
-def paper_claims() -> list[Claim | ModeClaim]:
-    """The comparative claims of Section IV, in the direction the paper's tables give.
-
-    * The same HCOMC claims against FIFO-R and Game-R, the baselines replanning every second
-      as HCOMC does (not in the paper: it separates HCOMC's method from replanning alone).
-    * Sections IV-A to IV-D with Table III: HCOMC versus FIFO and versus Game on critical
-      distance, average acceleration, stabilisation time, LSRV and fuel in every condition
-      (the text: HCOMC improves safety in all conditions, stability and rapidity "almost
-      under all", traffic efficiency, and fuel except in C2, where it uses more). Where the
-      table has HCOMC worse (average acceleration vs FIFO in C2, fuel in C2) the claim says
-      so.
-    * Section IV-A: HCOMC's VMC cooperates laterally in C2, longitudinally in C1 and C3.
-    * Section IV-C: fewer CAVs, larger LSRV: C1 (90 %) < C4 (60 %) < C5 (30 %) for each
-      controller (two paired claims per controller).
-    * Table II: NSGA-II versus PSO and SA on all five metrics in C1 and C3 (longitudinal
-      cooperation, where the text says NSGA-II is best) and, in C2 (lateral cooperation), on
-      the three metrics the text discusses: LSRV ("NSGA-II also performs the best"), critical
-      distance and fuel (NSGA-II "performs inferior ... only about 1 %").
-    """
-    out: list[Claim | ModeClaim | None] = []
-    for cond in ("C1", "C2", "C3", "C4", "C5"):
-        for metric in PAPER_METRICS:
-            for base in ("FIFO", "Game"):
-                out.append(_pairwise(metric, (cond, "HCOMC"), (cond, base)))
-    # the same claims against the baselines replanning as HCOMC does (paper's values kept)
-    out += [
-        replace(c, text=f"{c.text}-R", b=(c.b[0], REPLANNING[c.b[1]]))
-        for c in list(out)
-        if isinstance(c, Claim) and c.b[1] in REPLANNING
-    ]
-    out += [ModeClaim("C1", "longitudinal"), ModeClaim("C2", "lateral"),
-            ModeClaim("C3", "longitudinal")]  # fmt: skip
-    for conf in ("FIFO", "Game", "HCOMC"):
-        for more, fewer in (("C1", "C4"), ("C4", "C5")):
-            out.append(_pairwise("lsrv", (fewer, conf), (more, conf)))
-    c2 = ("critical_distance", "lsrv", "fuel")  # the three the text discusses for C2
-    for cond, metrics in (("C1", PAPER_METRICS), ("C3", PAPER_METRICS), ("C2", c2)):
-        for metric in metrics:
-            for rival in ("HCOMC-PSO", "HCOMC-SA"):
-                out.append(_pairwise(metric, (cond, "HCOMC"), (cond, rival), _T2_MODEL))
-    return [c for c in out if c is not None]
-
-
-def _values(runs: pd.DataFrame, cell: tuple[str, str], metric: str) -> pd.Series:
-    part = runs[(runs["condition"] == cell[0]) & (runs["configuration"] == cell[1])]
-    return part.groupby("seed")[metric].first()
-
-
-def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, float] | None:
-    """Paired differences A - B by seed: median, bootstrap CI, k of n, means."""
-    if claim.metric not in runs:
-        return None
-    a, b = _values(runs, claim.a, claim.metric), _values(runs, claim.b, claim.metric)
-    if a.empty or b.empty:
-        return None
-    a, b = a.align(b, join="inner")
-    both = (a.notna() & b.notna()).to_numpy()
-    va, vb = a.to_numpy(dtype=np.float64)[both], b.to_numpy(dtype=np.float64)[both]
-    diff = va - vb
-    # float round-off (e.g. two stabilisation times from differently summed row times) is a tie
-    scale = np.maximum(1.0, np.maximum(np.abs(va), np.abs(vb)))
-    diff[np.abs(diff) <= TIE_TOLERANCE * scale] = 0.0
-    holds = diff < 0 if claim.expect == "lower" else diff > 0
-    median, low, high = median_ci(diff)
-    nan = float("nan")
-    return {
-        "median_diff": median,
-        "ci_low": low,
-        "ci_high": high,
-        "holds": int(holds.sum()),
-        "n": int(diff.size),
-        "mean_a": float(a[both].mean()) if both.any() else nan,
-        "mean_b": float(b[both].mean()) if both.any() else nan,
-    }
-
-
-def _evaluate_mode(runs: pd.DataFrame, claim: ModeClaim) -> dict[str, float | str] | None:
-    part = runs[(runs["condition"] == claim.condition) & (runs["configuration"] == "HCOMC")]
-    if part.empty or "mode" not in part:
-        return None
-    counts = part["mode"].value_counts().to_dict()
-    return {
-        "holds": int((part["mode"] == claim.mode).sum()),
-        "n": len(part),
-        "ours": ", ".join(f"{k}: {v}" for k, v in counts.items()),
-    }
-
-
-def _row(runs: pd.DataFrame, claim: Claim | ModeClaim) -> dict[str, object] | None:
-    nan = float("nan")
-    if isinstance(claim, ModeClaim):
-        res = _evaluate_mode(runs, claim)
-        if res is None:
-            return None
-        return {
-            "claim": f"HCOMC chooses {claim.mode} cooperation",
-            "condition": claim.condition,
-            "metric": "mode",
-            "paper": claim.mode,
-            "paper_diff": nan,
-            "median_diff": nan,
-            "ci_low": nan,
-            "ci_high": nan,
-            "holds": res["holds"],
-            "n": res["n"],
-            "ours": res["ours"],
-        }
-    result = _evaluate(runs, claim)
-    if result is None:
-        return None
-    same = claim.a[0] == claim.b[0]
-    return {
-        "claim": claim.text,
-        "condition": claim.a[0] if same else f"{claim.a[0]}/{claim.b[0]}",
-        "metric": claim.metric,
-        "paper": f"{claim.paper_a:g} vs {claim.paper_b:g}",
-        "paper_diff": claim.paper_a - claim.paper_b,
-        **{k: result[k] for k in ("median_diff", "ci_low", "ci_high", "holds", "n")},
-        "ours": f"{result['mean_a']:.4g} vs {result['mean_b']:.4g}",
-    }
-
-
-def claims(runs: pd.DataFrame, uniform: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Every claim of :func:`paper_claims` the runs can evaluate, one row each.
-
-    Columns: ``claim``, ``condition``, ``metric``, ``paper`` (the paper's "A vs B", or the
-    mode), ``paper_diff`` (A - B in the paper), ``median_diff`` (median over seeds of the
-    paired A - B), ``ci_low`` and ``ci_high`` (its 95 % bootstrap CI), ``holds`` (k),
-    ``n``, ``ours`` (our means "A vs B", or the mode counts), ``share`` (k / n) and, when
-    ``uniform`` (runs of the deterministic paper scenario) is given, ``uniform``: "yes" or
-    "no" for the claim on those runs, "" if undefined there.
-    """
-    records: list[dict[str, object]] = []
-    for claim in paper_claims():
-        rec = _row(runs, claim)
-        if rec is None:
-            continue
-        k, n = int(rec["holds"]), int(rec["n"])  # type: ignore[call-overload]
-        rec["share"] = k / n if n else float("nan")
-        if uniform is not None:
-            check = _row(uniform, claim)
-            defined = check is not None and int(check["n"]) > 0  # type: ignore[call-overload]
-            rec["uniform"] = ("yes" if check["holds"] else "no") if defined else ""  # type: ignore[index]
-        records.append(rec)
-    return pd.DataFrame(records)
 
 
 def to_markdown(frame: pd.DataFrame) -> str:

@@ -21,8 +21,9 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from hcomc.experiments.claims import claims
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.experiments.tables import claims, paper_table
+from hcomc.experiments.tables import paper_table
 from hcomc.sim.manifest import atomic_paths, build_manifest
 
 if TYPE_CHECKING:
