@@ -178,9 +178,10 @@ def reproduce(
     and the replanning baselines FIFO-R, Game-R), seeded runs plus the deterministic paper
     scenario. --set changes a config value for every run (e.g. a sensitivity check)."""
     from hcomc.config import nest_overrides
+    from hcomc.experiments.claims import claims
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, grid
-    from hcomc.experiments.tables import claims, paper_table, to_markdown
+    from hcomc.experiments.tables import paper_table, to_markdown
     from hcomc.sim.manifest import atomic_paths, write_json_atomic
     from hcomc.viz.report import contour_png
 
