@@ -15,8 +15,13 @@ Modules
 :mod:`hcomc.viz.inputs`
     Loading a figure's input from files and :func:`~hcomc.viz.inputs.make_figure`, the
     one-call entry point for ``hcomc plot``.
+:mod:`hcomc.viz.replay`
+    The interactive replay of runs in the browser: :func:`replay` builds the page (and
+    :func:`~hcomc.viz.replay.write_replay` writes it); no matplotlib.
 
-The public names below are imported lazily on first access, so ``import hcomc.viz`` is cheap.
+The public names below are imported lazily on first access, so ``import hcomc.viz`` is cheap
+(:func:`replay` is bound at import, so that the name is the function and not its package;
+importing it costs only the standard library).
 """
 
 from __future__ import annotations
@@ -24,12 +29,15 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from hcomc.viz.replay import replay
+
 __all__ = [
     "FIGURE_KINDS",
     "contour_figure",
     "make_figure",
     "metrics_figure",
     "pareto_figure",
+    "replay",
     "save_figure",
     "timespace_figure",
     "trajectories_figure",
