@@ -9,7 +9,8 @@ reads back directly.
   speed pos lane slope acceleration/>``. ``x, y`` is the front bumper centre, ``angle`` the
   navigation angle in degrees (90 = along +x), ``time`` SUMO's clock (our t + warmup), ``id``
   ``v<slot>``, ``type`` ``hdv``/``cav``. Reading takes the vehicle kind from ``type`` (a type
-  id containing "cav" is a CAV), the lane from y, drops the warm-up rows (t < 0) and derives the
+  id containing "cav" is a CAV), the lane from y (a vehicle exactly on a lane line is in the
+  lane it moves into, as in the engine), drops the warm-up rows (t < 0) and derives the
   acceleration from the speeds when the file has none.
 * **highD** (Krajewski et al. 2018): ``tracks.csv``, ``tracksMeta.csv``, ``recordingMeta.csv``
   in one directory. ``x, y`` is the upper-left corner of the bounding box in image axes (y
@@ -284,8 +285,38 @@ def _uniform_dt(times: np.ndarray, source: Path, element: str) -> float:
     return dt
 
 
-def _lane_of_y(y: np.ndarray, config: ScenarioConfig) -> np.ndarray:
-    return np.rint(y / config.road.lane_width).astype(np.int64) + 1
+def _lane_of_y(
+    y: np.ndarray, vehicle: np.ndarray, row: np.ndarray, heading: np.ndarray,
+    config: ScenarioConfig,
+) -> np.ndarray:  # fmt: skip
+    """Lane of each sample from its lateral position ``y`` [m], as the engine assigns it:
+    the nearest lane centre, and a sample exactly on a lane line in the lane the vehicle is
+    moving into (the engine switches a changing vehicle's lane when its centre reaches the
+    line). The direction is that of the vehicle's lateral motion between its samples before
+    and after (``vehicle``, ``row`` identify them), or of its ``heading`` [rad] where those
+    do not tell; a sample on a line without either keeps the nearest even lane index."""
+    u = y / config.road.lane_width
+    lane = np.rint(u)
+    tie = u - np.floor(u) == 0.5
+    if tie.any():
+        moving = _lateral_motion(y, vehicle, row)
+        moving = np.where(moving == 0.0, np.sign(heading), moving)
+        lane = np.where(tie & (moving > 0), np.ceil(u), lane)
+        lane = np.where(tie & (moving < 0), np.floor(u), lane)
+    return lane.astype(np.int64) + 1
+
+
+def _lateral_motion(y: np.ndarray, vehicle: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """Sign of each sample's lateral motion: ``y`` of the vehicle's next sample minus that
+    of its previous one (the sample itself where there is none)."""
+    order = np.lexsort((row, vehicle))
+    ys, vs = y[order], vehicle[order]
+    before, after = ys.copy(), ys.copy()
+    same = vs[1:] == vs[:-1]
+    before[1:][same], after[:-1][same] = ys[:-1][same], ys[1:][same]
+    out = np.empty_like(y, dtype=np.float64)
+    out[order] = np.sign(after - before)
+    return out
 
 
 def _slot_ids(names: list[str]) -> dict[str, int]:
@@ -346,8 +377,9 @@ def read_fcd(path: Path, config: ScenarioConfig) -> tuple[SimulationLog, dict[st
     col = frame["id"].map(slots).to_numpy()
     heading = np.radians(90.0 - frame["angle"].to_numpy())
     y = frame["y"].to_numpy()
+    lane = _lane_of_y(y, col, row, heading, config)
     _fill(log, row, col, frame["x"].to_numpy(), y, frame["v"].to_numpy(), heading,
-          frame["a"].to_numpy(), _lane_of_y(y, config), path, config)  # fmt: skip
+          frame["a"].to_numpy(), lane, path, config)  # fmt: skip
     return log, {vid: slots[vid] for vid in ids}
 
 
