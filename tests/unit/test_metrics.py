@@ -17,6 +17,7 @@ from hcomc.config import load_config
 from hcomc.metrics import (
     KEY_ROLES,
     METRICS,
+    OUTCOME_FIELDS,
     MetricWindow,
     average_acceleration,
     collisions,
@@ -37,7 +38,6 @@ from hcomc.metrics import (
     stabilisation_time,
 )
 from hcomc.metrics.speed_field import interp_into, lane_profile_of
-from hcomc.models.fuel import fuel_consumed, fuel_rate
 from hcomc.sim.log import EventKind, SimulationLog
 
 LENGTH = 5.0  # vehicle length [m]
@@ -190,12 +190,14 @@ def test_constant_speed_platoon() -> None:
     assert math.isnan(average_acceleration(log, w))
     assert math.isnan(low_speed_region_volume(log, w))
     assert math.isnan(stabilisation_time(log, w))
+    assert math.isnan(fuel(log, w))
     assert critical_distance(log, w) == pytest.approx(25.0, abs=1e-4)
     assert min_ttc(log, w) == math.inf
     assert max_drac(log, w) == 0.0
     assert collisions(log, w) == 0.0
-    # Fuel: 8 vehicles x 101 rows x 0.1 s at f(25, 0) = 1.23955625 mL/s.
-    assert fuel(log, w) == pytest.approx(8 * 101 * 0.1 * 1.23955625e-3, rel=1e-9)
+    # Fuel: 8 vehicles, each over the 250 m it covers undisturbed in the 10 s window, at
+    # f(25, 0) = 1.23955625 mL/s: 1.23955625 x 250 / 25 mL each.
+    assert fuel(log, w, reference=log) == pytest.approx(8 * 10.0 * 1.23955625e-3, rel=1e-6)
 
 
 def test_missing_roles_are_ignored() -> None:
@@ -235,8 +237,11 @@ def test_stabilisation_needs_the_full_hold() -> None:
     log, ref = braking(a_rows=[*range(50, 60), *range(75, 80)], slows=False), cruising()
     w = merge_window(log, 0, PLATOON_GROUP)
     assert stabilisation_time(log, w, reference=ref) == pytest.approx(3.0, abs=1e-9)
-    # A 1 s hold is met at t = 6 s already.
-    assert stabilisation_time(log, w, reference=ref, hold=1.0) == pytest.approx(1.0, abs=1e-9)
+    # The 1.5 s quiet spell would meet a 1 s hold, but the braking after it counts: the
+    # final settling is at t = 8 s whatever the hold.
+    assert stabilisation_time(log, w, reference=ref, hold=1.0) == pytest.approx(3.0, abs=1e-9)
+    # A 7.5 s hold no longer fits after t = 8 s: censored at the window end.
+    assert stabilisation_time(log, w, reference=ref, hold=7.5) == pytest.approx(10.0)
 
 
 def test_stabilisation_speed_criterion() -> None:
@@ -362,40 +367,37 @@ def _static(xs: list[float], lanes: list[int], speeds: np.ndarray, dt: float) ->
 
 
 def test_lsrv_slow_second_on_the_control_zone() -> None:
-    """Lane-1 vehicles at 450 and 1050 m, 5 m/s below the undisturbed 25 m/s for 1 s.
-
-    The field is defined between them: centres 455 .. 1045 m, 60 bins of 10 m; two 0.5 s
-    bins of deficit 5 m/s: LSRV = 5 x 10 x 0.5 x 60 x 2 = 3000 m^2."""
-    speeds = np.full((41, 2), 25.0)
-    speeds[10:20] = 20.0  # t in [1, 2)
-    log = _static([450.0, 1050.0], [1, 1], speeds, 0.1)
-    ref = _static([450.0, 1050.0], [1, 1], np.full((41, 2), 25.0), 0.1)
-    w = MetricWindow(group=roles(0, 1), t_start=0.0, t_merge=1.0, t_end=4.0)
-    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(3000.0)
+    """Lane-1 vehicles at 450 and 1050 m, 5 m/s below their undisturbed 25 m/s for 1 s; VR
+    (2) waits on the ramp. Lane 1's mean spacing over the 1100 m merge area: 1100 / 2 =
+    550 m. LSRV = 2 vehicles x 5 m/s x 1 s x 550 m = 5500 m²."""
+    speeds = np.full((41, 3), 25.0)
+    speeds[10:20, :2] = 20.0  # t in [1, 2)
+    log = _static([450.0, 1050.0, 800.0], [1, 1, 0], speeds, 0.1)
+    ref = _static([450.0, 1050.0, 800.0], [1, 1, 0], np.full((41, 3), 25.0), 0.1)
+    w = MetricWindow(group=roles(2, 0), t_start=0.0, t_merge=1.0, t_end=4.0)
+    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(5500.0)
     assert low_speed_region_volume(ref, w, reference=ref) == 0.0
     # faster than undisturbed counts 0
     assert low_speed_region_volume(ref, w, reference=log) == 0.0
 
 
-def test_lsrv_interpolates_between_vehicles_and_sums_lanes() -> None:
-    """One 0.5 s row. Lane 1: 450 m at 20 m/s, 1050 m at 26 m/s (undisturbed: both 26):
-    deficit 6 (1050 - x) / 600 at the centres 455 .. 1045 sums to 180 m/s, x 10 m x 0.5 s
-    = 900 m^2. Lane 2: 500 and 700 m at 20 instead of 25 m/s: 20 bins x 5 x 10 x 0.5 =
-    500 m^2. Traffic upstream of the control zone (x < 400 m) does not count."""
-    xs = [450.0, 1050.0, 500.0, 700.0]
-    lanes = [1, 1, 2, 2]
-    log = _static(xs, lanes, np.array([[20.0, 26.0, 20.0, 20.0]]), 0.5)
-    ref = _static(xs, lanes, np.array([[26.0, 26.0, 25.0, 25.0]]), 0.5)
+def test_lsrv_sums_lanes_each_with_its_spacing() -> None:
+    """One 0.5 s row. Lane 1: 450 m at 20 instead of 26 m/s, 1050 m at 26 (2 vehicles:
+    spacing 550 m): 6 x 550 x 0.5 = 1650 m². Lane 2: 500 and 700 m at 20 instead of 25 m/s
+    and one more lane-2 vehicle at 900 m (3 vehicles: spacing 1100 / 3 m): 2 x 5 x 1100 / 3
+    x 0.5 = 5500 / 3 m². Traffic upstream of the control zone (x < 400 m) does not count.
+    VR (0) is compared with the undisturbed lane 1 at its position: 26 m/s there too."""
+    xs = [450.0, 1050.0, 500.0, 700.0, 900.0, 300.0]
+    lanes = [1, 1, 2, 2, 2, 1]
+    log = _static(xs, lanes, np.array([[20.0, 26.0, 20.0, 20.0, 25.0, 1.0]]), 0.5)
+    ref = _static(xs, lanes, np.array([[26.0, 26.0, 25.0, 25.0, 25.0, 26.0]]), 0.5)
     w = MetricWindow(group=roles(0), t_start=0.0, t_merge=0.0, t_end=0.0)
-    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(1400.0)
-    upstream = _static([100.0, 390.0], [1, 1], np.array([[1.0, 1.0]]), 0.5)
-    free = _static([100.0, 390.0], [1, 1], np.array([[26.0, 26.0]]), 0.5)
-    assert low_speed_region_volume(upstream, w, reference=free) == 0.0
+    assert low_speed_region_volume(log, w, reference=ref) == pytest.approx(1650.0 + 5500 / 3)
     x_edges, t_edges, V = lane_speed_field(log, w, lane=2, x_min=400.0)
     assert x_edges[0] == 400.0
     assert x_edges[-1] == 1500.0
     np.testing.assert_allclose(t_edges, [0.0, 0.5])
-    assert np.isfinite(V[0]).sum() == 20
+    assert np.isfinite(V[0]).sum() == 40
 
 
 # ------------------------------------------------------------------- TTC, DRAC, crit. dist.
@@ -445,21 +447,7 @@ def test_pet_at_merge() -> None:
     assert math.isnan(pet_at_merge(log, no_merge))
 
 
-# ------------------------------------------------------------------- fuel, collisions
-def test_fuel_equals_fuel_consumed_over_window() -> None:
-    log = braking()
-    log.active[:40, 6] = False  # vehicle 6 enters late: its cells are NaN before
-    log.v[:40, 6] = np.nan
-    log.a[:40, 6] = np.nan
-    log.lane[:40, 6] = -1
-    w = MetricWindow(group=PLATOON_GROUP, t_start=3.0, t_merge=5.0, t_end=12.0)
-    rows = slice(30, 121)
-    expected = float(np.sum(fuel_consumed(log.v[rows], log.a[rows], 0.1, axis=0)))
-    assert fuel(log, w) == pytest.approx(expected, rel=1e-12)
-    rates = fuel_rate(log.v[rows].astype(float), log.a[rows].astype(float))
-    assert fuel(log, w) == pytest.approx(np.nansum(rates) * 0.1 / 1000.0, rel=1e-12)
-
-
+# ------------------------------------------------------------------- collisions
 def test_collisions_counted_only_inside_window() -> None:
     log = platoon()
     log.add_event(0.5, EventKind.COLLISION, 0, other=1)  # before the window
@@ -479,6 +467,7 @@ def test_registry_specs() -> None:
         "critical_distance": ("m", "larger"),
         "average_acceleration": ("m/s²", "smaller"),
         "stabilisation_time": ("s", "smaller"),
+        "stabilisation_time_entry": ("s", "smaller"),
         "lsrv": ("m²", "smaller"),
         "fuel": ("L", "smaller"),
         "min_ttc": ("s", "larger"),
@@ -491,34 +480,49 @@ def test_registry_specs() -> None:
     assert all(name == spec.name and spec.description for name, spec in METRICS.items())
 
 
+def _is_nan(value: object) -> bool:
+    return isinstance(value, float) and math.isnan(value)
+
+
+REFERENCED = {"average_acceleration", "stabilisation_time", "stabilisation_time_entry", "lsrv",
+              "fuel"}  # fmt: skip
+"""The metrics that compare with the undisturbed run."""
+
+
 def test_compute_metrics_floats_and_documented_nans() -> None:
     log = merge_scene()
     w = merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
     values = compute_metrics(log, w, reference=log)
-    assert list(values) == list(METRICS)
-    assert all(type(val) is float for val in values.values())
-    assert not any(math.isnan(val) for val in values.values())
+    assert list(values) == [*METRICS, *OUTCOME_FIELDS]
+    assert all(type(values[name]) is float for name in METRICS)
+    assert not any(math.isnan(values[name]) for name in METRICS)
     for name, spec in METRICS.items():
         kwargs = {"reference": log} if spec.needs_reference else {}
         assert spec.func(log, w, **kwargs) == pytest.approx(values[name])
+    assert {name for name, spec in METRICS.items() if spec.needs_reference} == REFERENCED
     # Lane 1: VMR-VMC and VMC-VR gaps 25 m; lane 2: 30 m.
     assert values["critical_distance"] == pytest.approx(25.0, abs=1e-4)
     assert values["pet"] == pytest.approx(1.25)
     # compared with itself: no disturbance
     assert values["stabilisation_time"] == pytest.approx(0.0, abs=1e-9)
+    assert values["stabilisation_time_entry"] == 0.0
     assert values["average_acceleration"] == 0.0
     assert values["lsrv"] == 0.0
     assert values["min_ttc"] == math.inf
     assert values["collisions"] == 0.0
-    # without the undisturbed run the three disturbance metrics are NaN
-    nan = {name for name, val in compute_metrics(log, w).items() if math.isnan(val)}
-    assert nan == {"average_acceleration", "stabilisation_time", "lsrv"}
+    # the outcome: VR merged 1.5 s after its entry, ahead of VMC, without waiting
+    assert (values["merged"], values["sequence"], values["ramp_wait"]) == (True, "ahead", 0.0)
+    assert values["merge_time"] == pytest.approx(1.5)
+    # without the undisturbed run the metrics that compare with it are NaN
+    nan = {name for name, val in compute_metrics(log, w).items() if _is_nan(val)}
+    assert nan == REFERENCED
 
     no_merge = MetricWindow(group=w.group, t_start=w.t_start, t_merge=math.nan, t_end=w.t_end)
     values = compute_metrics(log, no_merge, reference=log)
-    assert all(type(val) is float for val in values.values())
-    nan = {name for name, val in values.items() if math.isnan(val)}
-    assert nan == {"critical_distance", "stabilisation_time", "pet"}
+    assert all(type(values[name]) is float for name in METRICS)
+    nan = {name for name, val in values.items() if _is_nan(val)}
+    assert nan == {*REFERENCED, "critical_distance", "pet", "merge_time"}
+    assert (values["merged"], values["sequence"]) == (False, "")
 
 
 def test_key_window_reads_the_engine_key_group() -> None:
@@ -526,9 +530,7 @@ def test_key_window_reads_the_engine_key_group() -> None:
     log.meta["key_groups"] = [{"t": 0.0, **roles(0, 1, 2, 3, 4, 5)}]
     w = key_window(log)
     assert w == merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
-    assert compute_metrics(log, reference=log) == pytest.approx(
-        compute_metrics(log, w, reference=log)
-    )
+    assert compute_metrics(log, reference=log) == compute_metrics(log, w, reference=log)
 
 
 def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
@@ -538,9 +540,14 @@ def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
     assert (w.t_start, w.t_end) == (0.0, 10.0)
     assert not w.merged
     values = compute_metrics(log, reference=log)
-    assert values["average_acceleration"] == 0.0
-    assert values["stabilisation_time"] == 0.0
-    assert values["lsrv"] == 0.0
+    for name in ("average_acceleration", "stabilisation_time", "stabilisation_time_entry",
+                 "lsrv"):  # fmt: skip
+        assert values[name] == 0.0, name
+    # every vehicle over the 250 m it covers in the 10 s, at 25 m/s
+    assert values["fuel"] == pytest.approx(8 * 10.0 * 1.23955625e-3, rel=1e-6)
+    assert (values["merged"], values["sequence"]) == (False, "")
+    assert math.isnan(values["merge_time"])
+    assert math.isnan(values["ramp_wait"])
 
 
 # ------------------------------------------------------------- lane profile (compiled)

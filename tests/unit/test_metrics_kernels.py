@@ -17,6 +17,7 @@ from hcomc.config import load_config
 from hcomc.metrics import (
     KEY_ROLES,
     METRICS,
+    OUTCOME_FIELDS,
     MetricWindow,
     compute_metrics,
     deviations,
@@ -28,7 +29,7 @@ from hcomc.metrics.lane_profile import interp_ascending_into, interp_into, lane_
 from hcomc.metrics.paper import disturbance_metrics
 from hcomc.metrics.surrogate import closing_metrics
 from hcomc.metrics.window import EPS_T, key_pairs, road_of, window_rows
-from hcomc.models.fuel import fuel_consumed
+from hcomc.models.fuel import fuel_rate
 from hcomc.sim.log import SimulationLog
 
 DT = 0.1  # logging interval of the random logs [s]
@@ -192,26 +193,67 @@ def dense_lane_field(
     dx=st.sampled_from([7.0, 10.0, 60.0]),
     dt_bin=st.sampled_from([0.1, 0.3, 0.5]),
 )
-def test_lane_speed_field_and_lsrv_follow_their_definitions(
+def test_lane_speed_field_follows_its_definition(
     seed: int, n_rows: int, n_vehicles: int, x_min: float, dx: float, dt_bin: float
 ) -> None:
     packed, plain = random_logs(seed, n_rows, n_vehicles)
-    ref_packed, ref_plain = random_logs(seed + 1, n_rows, n_vehicles, slots=1)
     window = random_window(np.random.default_rng(seed), n_rows, n_vehicles)
-    for log, ref in ((packed, ref_packed), (plain, ref_plain)):
-        total = 0.0
+    for log in (packed, plain):
         for lane in (1, 2):
             x_edges, t_edges, V = lane_speed_field(log, window, lane=lane, x_min=x_min, dx=dx,
                                                    dt_bin=dt_bin)  # fmt: skip
             same(V, dense_lane_field(plain, window, lane, x_edges, t_edges))
-            V_u = dense_lane_field(ref_plain, window, lane, x_edges, t_edges)
-            area = np.outer(np.diff(t_edges), np.diff(x_edges))
-            both = np.isfinite(V) & np.isfinite(V_u)
-            total += float(np.sum(np.maximum(0.0, V_u[both] - V[both]) * area[both]))
-        # the LSRV definition's bins start at the control zone (400 m on C1)
-        if x_min == road_of(log).control_zone_start:
-            got = low_speed_region_volume(log, window, reference=ref, dx=dx, dt_bin=dt_bin)
-            assert got == total
+
+
+def dense_lsrv(log: SimulationLog, ref: SimulationLog, window: MetricWindow) -> float:
+    """:func:`low_speed_region_volume` by its definition on the (T, N) arrays, cell by cell:
+    each vehicle against its own reference cell, VR from its merge on against the reference
+    lane interpolated (clamped) at its position, weighted by the lane's mean spacing."""
+    if not window.group:
+        return 0.0
+    if not window.merged:
+        return math.nan
+    road = road_of(log)
+    lo, hi = road.control_zone_start, road.length
+    rows = range(*window_rows(log, window).indices(log.n_steps))
+    x, v, lane, act = (np.asarray(getattr(log, n)) for n in ("x", "v", "lane", "active"))
+    x_u, v_u, lane_u, act_u = (np.asarray(getattr(ref, n)) for n in ("x", "v", "lane", "active"))
+    spacing = {}
+    for k in (1, 2):
+        count = sum(int(np.sum(act_u[r] & (lane_u[r] == k) & (x_u[r] >= lo) & (x_u[r] <= hi)))
+                    for r in rows)  # fmt: skip
+        spacing[k] = (hi - lo) / max(count / max(len(rows), 1), 1.0)
+    total = 0.0
+    for r in rows:
+        for i in range(log.n_vehicles):
+            if not (act[r, i] and lane[r, i] in (1, 2) and lo <= float(x[r, i]) <= hi):
+                continue
+            if i == window.vr:
+                if log.t[r] < window.t_merge - EPS_T:
+                    continue
+                on = stable_lane(ref, r, int(lane[r, i]))
+                if on.size == 0:
+                    continue
+                xp = x_u[r, on].astype(np.float64)
+                mine = float(np.interp(float(x[r, i]), xp, v_u[r, on].astype(np.float64)))
+            elif act_u[r, i]:
+                mine = float(v_u[r, i])
+            else:
+                continue
+            total += spacing[int(lane[r, i])] * max(0.0, mine - float(v[r, i])) * log.dt
+    return total
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31), n_rows=st.integers(1, 30), n_vehicles=st.integers(0, 14))
+def test_lsrv_follows_its_definition(seed: int, n_rows: int, n_vehicles: int) -> None:
+    packed, plain = random_logs(seed, n_rows, n_vehicles)
+    ref_packed, ref_plain = random_logs(seed + 1, n_rows, n_vehicles, slots=1)
+    window = random_window(np.random.default_rng(seed), n_rows, n_vehicles)
+    want = dense_lsrv(plain, ref_plain, window)
+    for log, ref in ((packed, ref_packed), (plain, ref_plain), (packed, ref_plain)):
+        got = low_speed_region_volume(log, window, reference=ref)
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-9, nan_ok=True)
 
 
 # ------------------------------------------------------------------- deviations
@@ -294,18 +336,58 @@ def test_key_pairs_follow_their_definition(seed: int, n_rows: int, n_vehicles: i
             same(got, expected)
 
 
-@settings(max_examples=40, deadline=None)
+def dense_fuel(log: SimulationLog, ref: SimulationLog, window: MetricWindow) -> float:
+    """:func:`fuel` by its definition on the (T, N) arrays, vehicle by vehicle [L]."""
+    if window.group and not window.merged:
+        return math.nan
+    rows = list(range(*window_rows(log, window).indices(log.n_steps)))
+    x, v, a = (np.asarray(getattr(log, n)).astype(np.float64) for n in "xva")
+    act, act_u = np.asarray(log.active), np.asarray(ref.active)
+    x_u, v_u = np.asarray(ref.x).astype(np.float64), np.asarray(ref.v).astype(np.float64)
+    road_end = road_of(log).length
+
+    def cruise(rest: float, speed: float) -> float:
+        speed = max(speed, 1.0)
+        return float(fuel_rate(speed, 0.0)) * rest / speed if rest > 0 else 0.0
+
+    total = 0.0
+    for i in range(log.n_vehicles):
+        on_u = [r for r in rows if act_u[r, i]]
+        on = [r for r in rows if act[r, i]]
+        distance = float(x_u[on_u[-1], i]) - float(x_u[on_u[0], i]) if on_u else math.nan
+        if not on:
+            total += cruise(distance, float(v_u[on_u[0], i])) if on_u else 0.0
+            continue
+        x0 = x[on[0], i]
+        target = distance if on_u else road_end - x0
+        spent = 0.0
+        for j, r in enumerate(on):
+            covered = x[r, i] - x0
+            if covered >= target:
+                break
+            if j + 1 == len(on):
+                spent += cruise(target - covered, v[r, i])
+                break
+            rate = float(fuel_rate(v[r, i], a[r, i])) * log.dt
+            step = x[on[j + 1], i] - x[r, i]
+            if covered + step >= target:
+                spent += rate * (target - covered) / step
+                break
+            spent += rate
+        total += spent
+    return total / 1000.0
+
+
+@settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**31), n_rows=st.integers(1, 30), n_vehicles=st.integers(0, 14))
-def test_fuel_is_fuel_consumed_over_the_dense_window(
-    seed: int, n_rows: int, n_vehicles: int
-) -> None:
+def test_fuel_follows_its_definition(seed: int, n_rows: int, n_vehicles: int) -> None:
     packed, plain = random_logs(seed, n_rows, n_vehicles)
+    ref_packed, ref_plain = random_logs(seed + 1, n_rows, n_vehicles, slots=1)
     window = random_window(np.random.default_rng(seed), n_rows, n_vehicles)
-    rows = window_rows(plain, window)
-    v, a = np.asarray(plain.v)[rows], np.asarray(plain.a)[rows]
-    want = float(np.sum(fuel_consumed(v, a, DT, axis=0)))
-    assert fuel(packed, window) == want
-    assert fuel(plain, window) == want
+    want = dense_fuel(plain, ref_plain, window)
+    for log, ref in ((packed, ref_packed), (plain, ref_plain), (packed, ref_plain)):
+        got = fuel(log, window, reference=ref)
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-15, nan_ok=True)
 
 
 # ------------------------------------------------------------------- shared tables
@@ -321,7 +403,9 @@ def test_compute_metrics_gives_what_each_metric_function_returns(seed: int) -> N
     for reference in (ref_packed, None):
         values = compute_metrics(packed, window, reference=reference)
         twin = compute_metrics(plain, window, reference=reference)
-        same(list(values.values()), list(twin.values()))
+        same([values[name] for name in METRICS], [twin[name] for name in METRICS])
+        for name in OUTCOME_FIELDS:
+            same(values[name], twin[name])
         for name, spec in METRICS.items():
             kwargs = {"reference": reference} if spec.needs_reference else {}
             same(values[name], float(spec.func(packed, window, **kwargs)))
@@ -342,7 +426,7 @@ def test_empty_logs_and_windows(slots: int | None) -> None:
     unlogged = MetricWindow(group=group, t_start=0.0, t_merge=0.0, t_end=0.3)
     for window in (empty, unlogged):
         assert np.isnan(lane_speed_field(log, window, lane=1)[2]).all()
-        assert fuel(log, window) == 0.0
+        assert fuel(log, window, reference=log) == 0.0
         assert low_speed_region_volume(log, window, reference=log) == 0.0
     da, dv, valid = deviations(log, unlogged, log, slice(0, 0))
     assert da.shape == dv.shape == valid.shape == (0, 3)

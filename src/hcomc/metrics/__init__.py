@@ -10,28 +10,33 @@ Lower level: every metric is a function ``metric(log, window, ...) -> float`` of
 :class:`~hcomc.sim.log.SimulationLog` and the :class:`MetricWindow` of one merge (built by
 :func:`key_window` or :func:`merge_window`). Modules: :mod:`~hcomc.metrics.window` (window,
 key vehicles, tolerances), :mod:`~hcomc.metrics.paper` (critical distance, average
-acceleration, stabilisation time, fuel), :mod:`~hcomc.metrics.speed_field` (speed fields,
-LSRV), :mod:`~hcomc.metrics.lane_profile` (the lane profile of a logged row, behind LSRV and
-VR's undisturbed counterpart), :mod:`~hcomc.metrics.surrogate` (TTC, DRAC, PET, collisions),
-:mod:`~hcomc.metrics.core` (registry).
+acceleration, stabilisation times), :mod:`~hcomc.metrics.lsrv` (LSRV),
+:mod:`~hcomc.metrics.fuel_distance` (fuel over a common distance),
+:mod:`~hcomc.metrics.outcome` (merged, merge time, ramp wait, sequence),
+:mod:`~hcomc.metrics.speed_field` (speed fields for the figures),
+:mod:`~hcomc.metrics.lane_profile` (the lane profile of a logged row, behind the lane speed
+field and VR's undisturbed counterpart), :mod:`~hcomc.metrics.surrogate` (TTC, DRAC, PET,
+collisions), :mod:`~hcomc.metrics.core` (registry).
 """
 
 from __future__ import annotations
 
 from hcomc.metrics.core import METRICS, MetricSpec, compute_metrics
+from hcomc.metrics.fuel_distance import fuel
+from hcomc.metrics.lsrv import low_speed_region_volume
+from hcomc.metrics.outcome import OUTCOME_FIELDS, MergeOutcome, merge_outcome, realised_sequence
 from hcomc.metrics.paper import (
     average_acceleration,
     critical_distance,
     deviations,
-    fuel,
     stabilisation_time,
+    stabilisation_time_entry,
 )
 from hcomc.metrics.speed_field import (
     DT_BIN,
     DX_BIN,
     lane_profile_at,
     lane_speed_field,
-    low_speed_region_volume,
     reference_speed,
     speed_field,
 )
@@ -62,7 +67,9 @@ __all__ = [
     "HOLD",
     "KEY_ROLES",
     "METRICS",
+    "OUTCOME_FIELDS",
     "V_TOL",
+    "MergeOutcome",
     "MetricSpec",
     "MetricWindow",
     "average_acceleration",
@@ -77,11 +84,14 @@ __all__ = [
     "lane_speed_field",
     "low_speed_region_volume",
     "max_drac",
+    "merge_outcome",
     "merge_window",
     "min_ttc",
     "pet_at_merge",
+    "realised_sequence",
     "reference_speed",
     "road_of",
     "speed_field",
     "stabilisation_time",
+    "stabilisation_time_entry",
 ]

@@ -3,18 +3,22 @@
 * ``critical_distance`` [m, larger is better]: :func:`hcomc.metrics.paper.critical_distance`
 * ``average_acceleration`` [m/s², smaller]: :func:`hcomc.metrics.paper.average_acceleration`
 * ``stabilisation_time`` [s, smaller]: :func:`hcomc.metrics.paper.stabilisation_time`
-* ``lsrv`` [m², smaller]: :func:`hcomc.metrics.speed_field.low_speed_region_volume`
-* ``fuel`` [L, smaller]: :func:`hcomc.metrics.paper.fuel`
+* ``stabilisation_time_entry`` [s, smaller]:
+  :func:`hcomc.metrics.paper.stabilisation_time_entry`
+* ``lsrv`` [m², smaller]: :func:`hcomc.metrics.lsrv.low_speed_region_volume`
+* ``fuel`` [L, smaller]: :func:`hcomc.metrics.fuel_distance.fuel`
 * ``min_ttc`` [s, larger]: :func:`hcomc.metrics.surrogate.min_ttc`
 * ``max_drac`` [m/s², smaller]: :func:`hcomc.metrics.surrogate.max_drac`
 * ``pet`` [s, larger]: :func:`hcomc.metrics.surrogate.pet_at_merge`
 * ``collisions`` [count, smaller]: :func:`hcomc.metrics.surrogate.collisions`
 * ``key_collisions`` [count, smaller]: :func:`hcomc.metrics.surrogate.key_collisions`
 
-Average acceleration, stabilisation time and LSRV measure the merge's disturbance against
-the undisturbed run (same scenario and seed, no ramp vehicle released); they are NaN when
-no ``reference`` log is given. Each function's docstring gives the exact definition, units
-and edge cases.
+Average acceleration, the stabilisation times, LSRV and fuel compare with the undisturbed run
+(same scenario and seed, no ramp vehicle released); they are NaN when no ``reference`` log is
+given. A run whose ramp vehicle never merged is an outcome, not an undisturbed run: every
+metric that measures the merge (the five above, critical distance, PET) is NaN for it, and
+:func:`compute_metrics` adds the merge's outcome (:mod:`hcomc.metrics.outcome`). Each
+function's docstring gives the exact definition, units and edge cases.
 """
 
 from __future__ import annotations
@@ -25,14 +29,16 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
+from hcomc.metrics.fuel_distance import fuel
+from hcomc.metrics.lsrv import low_speed_region_volume
+from hcomc.metrics.outcome import OUTCOME_FIELDS, merge_outcome
 from hcomc.metrics.paper import (
     average_acceleration,
     critical_distance,
     disturbance_metrics,
-    fuel,
     stabilisation_time,
+    stabilisation_time_entry,
 )
-from hcomc.metrics.speed_field import low_speed_region_volume
 from hcomc.metrics.surrogate import (
     closing_metrics,
     collisions,
@@ -44,7 +50,7 @@ from hcomc.metrics.surrogate import (
 from hcomc.metrics.window import MetricWindow, key_window
 from hcomc.sim.log import SimulationLog
 
-__all__ = ["METRICS", "MetricSpec", "compute_metrics"]
+__all__ = ["METRICS", "OUTCOME_FIELDS", "MetricSpec", "compute_metrics"]
 
 
 @dataclass(frozen=True)
@@ -94,15 +100,23 @@ _SPECS = (
     ),
     MetricSpec(
         "stabilisation_time", "s", "smaller", stabilisation_time,
-        "merge until all key vehicles hold abs(a - a_u) < 0.05 m/s² and abs(v - v_u) < 0.5 "
-        "m/s for 2 s (censored at the window end)",
+        "merge until all key vehicles stay within abs(a - a_u) < 0.05 m/s² and abs(v - v_u) "
+        "< 0.5 m/s for the rest of the window (final settling; censored at the window end)",
+    ),
+    MetricSpec(
+        "stabilisation_time_entry", "s", "smaller", stabilisation_time_entry,
+        "the same final settling from VR's control-zone entry, braking before the merge "
+        "included",
     ),
     MetricSpec(
         "lsrv", "m²", "smaller", low_speed_region_volume,
-        "Σ lanes 1, 2 ∫∫ max(0, v_undisturbed - v) dx dt on 10 m x 0.5 s bins, control zone "
-        "and downstream",
+        "Σ lanes 1, 2: each vehicle's max(0, v_u - v) dt against itself undisturbed, merge "
+        "area, times the lane's mean undisturbed spacing",
     ),
-    MetricSpec("fuel", "L", "smaller", fuel, "Eq. 16 fuel of all vehicles over the window"),
+    MetricSpec(
+        "fuel", "L", "smaller", fuel,
+        "Eq. 16 fuel of every vehicle over the distance it covers undisturbed in the window",
+    ),
     MetricSpec(
         "min_ttc", "s", "larger", min_ttc,
         "min gap / closing speed of consecutive same-lane key vehicles",
@@ -134,8 +148,8 @@ def compute_metrics(
     window: MetricWindow | None = None,
     *,
     reference: SimulationLog | None = None,
-) -> dict[str, float]:
-    """Evaluate every metric of :data:`METRICS` on one run.
+) -> dict[str, float | bool | str]:
+    """Evaluate every metric of :data:`METRICS` on one run, and the merge's outcome.
 
     Parameters
     ----------
@@ -148,24 +162,28 @@ def compute_metrics(
         is measured on the same vehicles.
     reference : SimulationLog or None
         The undisturbed run: the same scenario and seed simulated with
-        ``Simulation(config, seed, counterfactual=True)``. Without it the disturbance
-        metrics (average acceleration, stabilisation time, LSRV) are NaN.
+        ``Simulation(config, seed, counterfactual=True)``. Without it the metrics that
+        compare with it (average acceleration, stabilisation times, LSRV, fuel) are NaN.
 
     Returns
     -------
-    dict of str to float
-        Registry key -> value, in registry order.
+    dict
+        Registry key -> value (float), in registry order, then the
+        :class:`~hcomc.metrics.outcome.MergeOutcome` fields :data:`OUTCOME_FIELDS`:
+        ``merged`` (bool), ``merge_time`` [s], ``ramp_wait`` [s] (floats) and ``sequence``
+        (str).
     """
     if window is None:
         window = key_window(log)
     # Metrics reading the same table (the deviation cells, the key-vehicle pairs) come from
     # one: the values their functions return.
     shared = {**disturbance_metrics(log, window, reference), **closing_metrics(log, window)}
-    out: dict[str, float] = {}
+    out: dict[str, float | bool | str] = {}
     for name, spec in METRICS.items():
         if spec.func in shared:
             out[name] = float(shared[spec.func])
             continue
         kwargs = {"reference": reference} if spec.needs_reference else {}
         out[name] = float(spec.func(log, window, **kwargs))
+    out.update(merge_outcome(log, window).as_dict())
     return out

@@ -1,6 +1,6 @@
-r"""The lane profile of one logged row: the one implementation behind the speed fields of
-LSRV (:mod:`hcomc.metrics.speed_field`) and VR's undisturbed counterpart
-(:mod:`hcomc.metrics.paper`).
+r"""The lane profile of one logged row: the one implementation behind the lane speed fields
+(:mod:`hcomc.metrics.speed_field`) and VR's undisturbed counterpart
+(:mod:`hcomc.metrics.paper`, used by the disturbance metrics and LSRV).
 
 Definition: in a logged row, lane ``lane``'s profile of a per-vehicle value (speed [m/s],
 acceleration [m/s²]) at positions ``x`` [m] is :func:`numpy.interp` of ``x`` over the

@@ -1,10 +1,10 @@
-r"""Space-time speed fields of the mainline and the low-speed region volume (LSRV).
+r"""Space-time speed fields of the mainline, for the figures.
 
 Two fields are defined on the same kind of bins (``dx`` = 10 m by ``dt_bin`` = 0.5 s):
 
-* :func:`speed_field` (for plots): the mean speed of the logged cells (row, vehicle) that
-  fall in each bin; NaN for empty bins. At highway headways most bins are empty.
-* :func:`lane_speed_field` (for LSRV): in every logged row the lane's speed profile
+* :func:`speed_field`: the mean speed of the logged cells (row, vehicle) that fall in each
+  bin; NaN for empty bins. At highway headways most bins are empty.
+* :func:`lane_speed_field`: in every logged row the lane's speed profile
   ``v(x)`` is the linear interpolation, in ``x``, between the speeds of the active vehicles
   of that lane (NaN upstream of its first and downstream of its last vehicle); it is sampled
   at each bin's centre and averaged over the rows of the time bin (NaN if no row of the bin
@@ -12,9 +12,7 @@ Two fields are defined on the same kind of bins (``dx`` = 10 m by ``dt_bin`` = 0
   is what a contour map of the traffic state shows. The profile is that of
   :mod:`hcomc.metrics.lane_profile` (:func:`lane_profile_at`).
 
-LSRV compares the factual field with the **undisturbed** field of the same run without the
-merge (see :mod:`hcomc.metrics.window`), so speed changes that happen without the merge
-(vehicles adjusting to their desired speed, lane changes elsewhere) cancel out.
+LSRV is not computed on these fields but vehicle by vehicle (:mod:`hcomc.metrics.lsrv`).
 """
 
 from __future__ import annotations
@@ -32,13 +30,7 @@ from hcomc.metrics.lane_profile import (
     lane_profile_of,
     profile_from_knots,
 )
-from hcomc.metrics.window import (
-    MetricWindow,
-    check_reference,
-    road_of,
-    times,
-    window_rows,
-)
+from hcomc.metrics.window import MetricWindow, road_of, times, window_rows
 from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.log_slots import active_columns
@@ -50,7 +42,6 @@ __all__ = [
     "lane_profile_at",
     "lane_profile_of",
     "lane_speed_field",
-    "low_speed_region_volume",
     "reference_speed",
     "speed_field",
 ]
@@ -236,47 +227,3 @@ def lane_speed_field(
     """
     x_edges, t_edges, (V,) = _lane_fields(log, window, (int(lane),), x_min, dx, dt_bin)
     return x_edges, t_edges, V
-
-
-def low_speed_region_volume(
-    log: SimulationLog,
-    window: MetricWindow,
-    *,
-    reference: SimulationLog | None = None,
-    dx: float = DX_BIN,
-    dt_bin: float = DT_BIN,
-) -> float:
-    r"""Low-speed region volume LSRV [m²] (paper "LSRV"; smaller is better).
-
-    Definition, summed over lanes 1 and 2, on the bins of :func:`lane_speed_field` with
-    ``x_min = road.control_zone_start`` (the cooperative control zone, the acceleration lane
-    and everything downstream) over the window ``[t_start, t_end]``:
-
-    .. math::
-
-       \mathrm{LSRV} = \sum_{\text{lane}} \sum_{\text{bins}}
-           \max(0,\; V^{u}_{b} - V_{b})\, \Delta x_b\, \Delta t_b
-
-    with ``V_b`` the factual bin speed, ``V^u_b`` the bin speed of the undisturbed
-    reference (same run, no merge) and ``Δx_b``, ``Δt_b`` the bin widths [m], [s]. Bins where
-    either field is NaN contribute 0. Units: m/s · m · s = m². A run identical to its
-    reference scores exactly 0.
-
-    Returns
-    -------
-    float
-        LSRV [m²], >= 0; NaN without a reference.
-    """
-    if reference is None:
-        return math.nan
-    check_reference(log, reference)
-    x_min = road_of(log).control_zone_start
-    lanes = (Lane.MAIN_1, Lane.MAIN_2)
-    x_edges, t_edges, fields = _lane_fields(log, window, lanes, x_min, dx, dt_bin)
-    _, _, fields_u = _lane_fields(reference, window, lanes, x_min, dx, dt_bin)
-    area = np.outer(np.diff(t_edges), np.diff(x_edges))
-    total = 0.0
-    for V, V_u in zip(fields, fields_u, strict=True):  # lane 1, then lane 2
-        both = np.isfinite(V) & np.isfinite(V_u)
-        total += float(np.sum(np.maximum(0.0, V_u[both] - V[both]) * area[both]))
-    return total

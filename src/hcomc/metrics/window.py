@@ -212,6 +212,21 @@ def check_reference(log: SimulationLog, reference: SimulationLog) -> None:
         raise ValueError("reference log row times differ from the log's; allowed: same config")
 
 
+def reference_or_score(
+    log: SimulationLog, window: MetricWindow, reference: SimulationLog | None
+) -> SimulationLog | float:
+    """The checked reference a disturbance metric compares the run with, or the score of a
+    run there is nothing to compare: 0 for a run without a ramp vehicle (empty group:
+    nothing merges, nothing is disturbed); NaN without a reference, or if VR never merged
+    (an outcome, not an undisturbed run)."""
+    if not window.group:
+        return 0.0
+    if reference is None:
+        return math.nan
+    check_reference(log, reference)
+    return reference if window.merged else math.nan
+
+
 def key_pairs(
     log: SimulationLog, window: MetricWindow, rows: slice
 ) -> tuple[FloatArray, FloatArray, np.ndarray]:
