@@ -31,7 +31,8 @@ import numpy as np
 import pandas as pd
 
 from hcomc.config import load_config
-from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.metrics.outcome import realised_sequence
+from hcomc.sim.log import SimulationLog
 
 _SPAWN = multiprocessing.get_context("spawn")
 """Worker processes start afresh: a fork would copy the parallel ensemble's thread pool."""
@@ -180,19 +181,6 @@ def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
         "replans": len(plans) - 1,
         "decision_ms": float(np.mean([p.decision_ms for p in plans])),
     }
-
-
-def realised_sequence(log: SimulationLog, vr: int, vmc: int) -> str:
-    """Where VR merged relative to the VMC identified at control-zone entry: "ahead" or
-    "behind" (its position at VR's merge completion), "" without a merge or a VMC."""
-    merges = log.events_of(EventKind.MERGE)
-    t = merges["t"][merges["vehicle"] == vr]
-    if vmc < 0 or t.size == 0:
-        return ""
-    row = int(np.argmin(np.abs(log.t - t[0])))
-    if not log.active[row, vmc]:
-        return ""
-    return "ahead" if log.x[row, vr] > log.x[row, vmc] else "behind"
 
 
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
