@@ -38,7 +38,7 @@ group = {role: vehicle for role, vehicle in first.items() if role != "t"}  # rol
 print("key vehicles:", group)
 reference = Simulation(config, seed=4, counterfactual=True).run()
 metrics = compute_metrics(log, reference=reference)
-print({name: round(value, 3) for name, value in metrics.items()})
+print({k: round(v, 3) if isinstance(v, float) else v for k, v in metrics.items()})
 
 # %% 4. Tables for pandas
 frame = log.to_frame()  # one row per (logged time, vehicle on the road)

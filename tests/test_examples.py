@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hcomc.metrics import METRICS
+from hcomc.metrics import METRICS, OUTCOME_FIELDS
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "notebook_api.py"
 
@@ -28,7 +28,8 @@ def test_overrides_resolve_to_their_homes(cells):
 
 def test_metrics_cell_gives_every_paper_metric_for_the_logged_merge(cells):
     metrics, log, group = cells["metrics"], cells["log"], cells["group"]
-    assert list(metrics) == list(METRICS)
+    assert list(metrics) == [*METRICS, *OUTCOME_FIELDS]
+    assert metrics["merged"] is True
     assert group["VR"] >= 0
     assert metrics["fuel"] > 0
     assert metrics["collisions"] == 0

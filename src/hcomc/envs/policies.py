@@ -82,7 +82,7 @@ class EpisodeResult:
     collision: bool
     lane_end: bool
     timeout: bool
-    metrics: dict[str, float] = field(default_factory=dict)
+    metrics: dict[str, float | bool | str] = field(default_factory=dict)
 
     def row(self) -> dict[str, Any]:
         """Flat record for a table."""

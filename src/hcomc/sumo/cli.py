@@ -182,7 +182,8 @@ def metrics(
         Path | None,
         typer.Option(
             help="The same scenario without the ramp vehicle (same format): the undisturbed "
-            "run the disturbance metrics need (average acceleration, stabilisation time, LSRV)."
+            "run the metrics that compare with it need (average acceleration, stabilisation "
+            "times, LSRV, fuel)."
         ),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the rows as JSON.")] = False,

@@ -125,7 +125,7 @@ class MergeScore:
     """Metrics of one ramp vehicle's merge."""
 
     group: MergeGroup
-    metrics: dict[str, float]
+    metrics: dict[str, float | bool | str]
 
 
 def aligned_reference(
@@ -178,8 +178,8 @@ def score_merges(
 
     A given group may omit roles: the missing ones are found as our engine finds them.
     ``reference`` is the undisturbed run (same scenario without the ramp vehicle, aligned with
-    :func:`aligned_reference`); without it the disturbance metrics (average acceleration,
-    stabilisation time, LSRV) are NaN.
+    :func:`aligned_reference`); without it the metrics that compare with it (average
+    acceleration, stabilisation times, LSRV, fuel) are NaN.
     """
     wanted = groups if groups is not None else {vr: {} for vr in ramp_vehicles(log)}
     scores = []
