@@ -16,6 +16,7 @@ import numpy as np
 from hcomc.envs.episode import MergeEpisode, start_drawn
 from hcomc.envs.observation import observation_bounds
 from hcomc.envs.options import EnvOptions, RewardWeights
+from hcomc.envs.render import RENDER_MODES, check_render_mode, render_frame
 from hcomc.rng import draw_seed
 from hcomc.sim.log import SimulationLog
 
@@ -44,9 +45,13 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
     ``agent="vmc"``, a drawn seed whose VR has no VMC is skipped for the next one; a given one
     raises :class:`~hcomc.envs.episode.NoVMCError`). Episodes are bit-reproducible: the same
     seed and actions give the same observations and rewards.
+
+    ``render_mode="rgb_array"``: :meth:`render` returns the frame of the road around the
+    agent's vehicle (:func:`hcomc.envs.render.render_frame`).
     """
 
-    metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (gymnasium's API)
+    # gymnasium's API; render_fps is set per environment from its action period
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 2}  # noqa: RUF012
 
     def __init__(
         self,
@@ -58,7 +63,9 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
         action_period: float = 0.5,
         max_episode_time: float = 60.0,
         reward: RewardWeights | dict[str, float] | None = None,
+        render_mode: str | None = None,
     ) -> None:
+        self.render_mode = check_render_mode(render_mode)
         self.options = EnvOptions.of(
             scenario, overrides=overrides, reward=reward, agent=agent, controller=controller,
             action_period=action_period, max_episode_time=max_episode_time,
@@ -67,6 +74,7 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
         self.action_space = action_space()
         self.observation_space = observation_space(self.options)
         self.episode: MergeEpisode | None = None
+        self.metadata = {**self.metadata, "render_fps": 1.0 / self.options.action_period}
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -90,6 +98,15 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
         episode.run_period(episode.apply(np.asarray(action, dtype=np.float64)))
         result = episode.evaluate()
         return result.obs, result.reward, result.terminated, result.truncated, result.info
+
+    def render(self) -> np.ndarray | None:
+        """The (160, 640, 3) RGB frame of the road around the agent's vehicle now, to scale
+        (``render_mode="rgb_array"``; None without a render mode)."""
+        if self.render_mode is None:
+            return None
+        if self.episode is None:
+            raise RuntimeError("call reset() before render()")
+        return render_frame(self.episode.sim, self.config, self.episode.ego)
 
     def episode_logs(self) -> tuple[SimulationLog, SimulationLog]:
         """The episode's log and its undisturbed reference, each run to the scenario's end

@@ -30,6 +30,7 @@ from hcomc.envs.episode import MergeEpisode, apply_action
 from hcomc.envs.merge_env import action_space, observation_space
 from hcomc.envs.observation import N_OBS
 from hcomc.envs.options import EnvOptions, RewardWeights
+from hcomc.envs.render import RENDER_MODES, check_render_mode, render_frame
 from hcomc.rng import draw_seed
 from hcomc.road import Kind
 
@@ -43,7 +44,7 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
     """Every CAV in the control zone is an agent. Options as ``hcomc/Merge-v0``
     (:class:`~hcomc.envs.merge_env.MergeEnv`) except ``agent`` and ``controller``."""
 
-    metadata: dict[str, Any] = {"name": "hcomc_merge_v0", "render_modes": []}  # noqa: RUF012
+    metadata: dict[str, Any] = {"name": "hcomc_merge_v0", "render_modes": list(RENDER_MODES)}  # noqa: RUF012
 
     def __init__(
         self,
@@ -53,7 +54,9 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         action_period: float = 0.5,
         max_episode_time: float = 60.0,
         reward: RewardWeights | dict[str, float] | None = None,
+        render_mode: str | None = None,
     ) -> None:
+        self.render_mode = check_render_mode(render_mode)
         self.options = EnvOptions.of(
             scenario, overrides=overrides, reward=reward, action_period=action_period,
             max_episode_time=max_episode_time,
@@ -187,6 +190,15 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         if not self.agents:
             e.done = True
         return obs, rew, term, trunc, info
+
+    def render(self) -> np.ndarray | None:
+        """The RGB frame of the road around VR now (``render_mode="rgb_array"``, see
+        :func:`hcomc.envs.render.render_frame`); None without a render mode."""
+        if self.render_mode is None:
+            return None
+        if self.episode is None:
+            raise RuntimeError("call reset() before render()")
+        return render_frame(self.episode.sim, self.config, self.episode.vr)
 
     def episode_logs(self) -> tuple[Any, Any]:
         """The episode's log and undisturbed reference, run to the scenario's end."""

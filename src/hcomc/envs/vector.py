@@ -36,6 +36,7 @@ from hcomc.envs.batch import (
 from hcomc.envs.batch import rewards as step_rewards
 from hcomc.envs.episode import MergeEpisode, NoVMCError, start_drawn
 from hcomc.envs.merge_env import MergeEnv
+from hcomc.envs.render import RENDER_MODES, render_frame
 from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
 from hcomc.sim.ensemble import TypedListCache, advance_ensemble
@@ -55,13 +56,17 @@ class MergeVectorEnv(VectorEnv):
     **kwargs : the options of :class:`~hcomc.envs.merge_env.MergeEnv`.
     """
 
-    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
+    metadata: dict[str, Any] = {  # noqa: RUF012
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+        "render_modes": list(RENDER_MODES),
+    }
 
     def __init__(self, num_envs: int = 8, *, threads: int | None = None, **kwargs: Any) -> None:
         if int(num_envs) < 1:
             raise ValueError(f"key 'num_envs' = {num_envs}: allowed: an integer >= 1")
         template = MergeEnv(**kwargs)
         self.options, self.config = template.options, template.config
+        self.render_mode = template.render_mode
         self.num_envs = int(num_envs)
         self.threads = threads
         self.single_observation_space = template.observation_space
@@ -250,6 +255,14 @@ class MergeVectorEnv(VectorEnv):
                 out[key] = np.array([d.get(key, 0) for d in details])
                 out[f"_{key}"] = mask
         return out
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """Each sub-environment's frame now (``render_mode="rgb_array"``, as
+        :meth:`MergeEnv.render`); None without a render mode."""
+        if self.render_mode is None:
+            return None
+        episodes = self._current()
+        return tuple(render_frame(e.sim, self.config, e.ego) for e in episodes)
 
     def episode_logs(self, k: int) -> tuple[Any, Any]:
         """Log and undisturbed reference of sub-environment k's current episode, run to the
