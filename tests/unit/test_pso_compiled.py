@@ -1,11 +1,13 @@
-"""The lean PSO against pymoo, its reference: same rows evaluated, same returned row.
+"""The lean PSO against pymoo, its reference: same rows evaluated, same returned set.
 
 pymoo (``pso-pymoo``) is the oracle throughout: whole runs with pymoo's PSO on the same
 problems, budgets and generators (a shifted sphere, Rastrigin, a corner optimum that drives
 particles out of the box, a constrained problem, non-finite costs, odd swarm sizes, short and
 uneven budgets, warm starts, fixed and other weights, random boxes, and the HCOMC merge problem
 and controller), and the pieces with pymoo's own functions on random inputs (Latin hypercube
-sampling, improvement replacement with its duplicate check, the fuzzy adaptation).
+sampling, improvement replacement with its duplicate check, the fuzzy adaptation). Every run
+also returns the set every optimiser returns: the feasible non-dominated subset of the rows it
+evaluated (the best-scalarised row when none is feasible), checked on a recording of them.
 """
 
 from __future__ import annotations
@@ -44,7 +46,14 @@ from hcomc.optim.pso import (
 from hcomc.optim.pymoo_backend import PSOOptimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.sim.engine import Simulation
-from scalar_problems import Constrained, Rastrigin, ScalarProblem
+from scalar_problems import (
+    Constrained,
+    Rastrigin,
+    ScalarProblem,
+    assert_holds_best_scalarised,
+    assert_returns_expected_set,
+    recording,
+)
 
 _EXP_OVERFLOW = "ignore:overflow encountered in exp:RuntimeWarning"
 """pymoo's adaptation warns when all particles' mean distances are equal (w becomes 0)."""
@@ -88,9 +97,11 @@ def _both(
     ref = PSOOptimizer(**options).minimize(
         p_ref, budget=budget, rng=np.random.default_rng(seed), initial=initial
     )
+    recorded = recording(p_new)
     new = CompiledPSOOptimizer(**options).minimize(
-        p_new, budget=budget, rng=np.random.default_rng(seed), initial=initial
+        recorded, budget=budget, rng=np.random.default_rng(seed), initial=initial
     )
+    assert_returns_expected_set(new, recorded)
     return ref, new, p_ref, p_new
 
 
@@ -153,7 +164,9 @@ def test_non_finite_costs_equal_pymoo(seed: int) -> None:
     costs = NonFinite().f(np.vstack(p_new.evaluated))
     assert np.isnan(costs).any()  # both kinds were met
     assert np.isinf(costs).any()
-    assert new.F[0, 0] == np.nanmin(costs)
+    # the lowest cost, and every NaN row: NaN neither dominates nor equals any row
+    assert new.F[np.isfinite(new.F[:, 0]), 0].tolist() == [np.nanmin(costs)]
+    assert np.isnan(new.F[:, 0]).sum() == np.isnan(costs).sum()
 
 
 def test_all_costs_nan_equal_pymoo() -> None:
@@ -162,8 +175,8 @@ def test_all_costs_nan_equal_pymoo() -> None:
             return np.full(X.shape[0], np.nan)
 
     ref, new, p_ref, p_new = _both(AllNaN, 120, 3, pop_size=10)
-    _assert_same(ref, new, p_ref, p_new)  # the first row seen is returned
-    np.testing.assert_array_equal(new.X[0], p_new.evaluated[0][0])
+    _assert_same(ref, new, p_ref, p_new)  # every row: none dominates another
+    np.testing.assert_array_equal(new.X, np.vstack(p_new.evaluated))
 
 
 @pytest.mark.filterwarnings(_EXP_OVERFLOW)
@@ -281,15 +294,21 @@ def _merge_problem(seed: int) -> MergeProblem:
 
 @pytest.mark.parametrize("seed", [0, 3])
 def test_merge_problem_runs_equal_pymoo(seed: int) -> None:
-    """On the HCOMC problem at the default budget (pop 40, 360 rows) the rows are identical."""
-    problem = _merge_problem(seed)
+    """On the HCOMC problem at the default budget (pop 40, 360 rows) the sets are identical:
+    the feasible non-dominated subset of every row evaluated, holding the best-scalarised."""
+    problems = [recording(_merge_problem(seed)) for _ in range(2)]
     results = [
         opt.minimize(problem, budget=360, rng=np.random.default_rng(seed))
-        for opt in (PSOOptimizer(pop_size=40), CompiledPSOOptimizer(pop_size=40))
+        for opt, problem in zip(
+            (PSOOptimizer(pop_size=40), CompiledPSOOptimizer(pop_size=40)), problems, strict=True
+        )
     ]
     for name in ("X", "F", "G", "feasible"):
         np.testing.assert_array_equal(getattr(results[0], name), getattr(results[1], name))
     assert results[1].n_eval == 360
+    assert_returns_expected_set(results[1], problems[1])
+    assert_holds_best_scalarised(results[1], problems[1])
+    assert results[1].X.shape[0] > 1
 
 
 @pytest.mark.parametrize("seed", [0, 1])

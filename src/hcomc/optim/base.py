@@ -3,13 +3,18 @@
 A problem evaluates a whole population in one call: ``evaluate(X)`` with ``X`` of shape
 ``(n, n_var)`` returns objectives ``F`` ``(n, n_obj)`` (all minimised) and inequality
 constraints ``G`` ``(n, n_constr)``, feasible where ``G <= 0`` (pymoo's convention).
-Single-objective optimisers (PSO, SA) minimise ``problem.scalarise(F, G)`` instead.
+Single-objective optimisers (PSO, SA) search on ``problem.scalarise(F, G)`` instead.
+
+Every optimiser returns the same kind of set, so that a caller's selection rule (the HCOMC
+controller's Eq. 19, paper Section III-C-2) is applied alike to all of them and a comparison of
+optimisers (paper Section IV, Table II) compares their searches, not their selection rules: the
+feasible, mutually non-dominated subset of every row it evaluated (:func:`archive_front`),
+kept in an :class:`Archive` allocated once for the budget.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -63,9 +68,11 @@ class ParetoResult:
 
     Attributes
     ----------
-    X : (p, n_var) decision vectors of the returned set: the feasible non-dominated solutions
-        for a multi-objective optimiser, the best solution for a single-objective one; if no
-        evaluated solution is feasible, the least-violating one(s).
+    X : (p, n_var) decision vectors of the returned set: the feasible, mutually non-dominated
+        subset of every row the optimiser evaluated (:func:`archive_front`: one per distinct
+        objective vector, in evaluation order), whether it searched on the objectives
+        (NSGA-II) or on a scalarisation of them (PSO, SA); if no evaluated row is feasible,
+        one row: NSGA-II's least-violating row, PSO's and SA's best-scalarised row.
     F : (p, n_obj) their objectives.
     G : (p, n_constr) their constraints.
     feasible : (p,) whether each returned solution satisfies every constraint.
@@ -111,40 +118,80 @@ class Optimizer(Protocol):
         ...
 
 
-class BestRow:
-    """The best-scalarised row a single-objective optimiser (PSO, SA) has evaluated, kept with
-    its true objectives and constraints.
+class Archive:
+    """Every row an optimiser evaluates, in evaluation order, and the best-scalarised one.
 
-    A NaN cost ranks as +inf; a row replaces the best only when strictly better, so the first
-    of equals stays; the first row offered always sets it (even at +inf).
+    The arrays hold ``capacity`` rows (the budget), allocated once, so that keeping a row is a
+    copy into place (or, for a row-at-a-time optimiser, scoring straight into its row:
+    :meth:`keep`); a library optimiser that evaluates more rows than planned grows them.
+    The best-scalarised row is tracked by index: a NaN cost ranks as +inf, a row replaces
+    the best only when strictly better (so the first of equals stays), and the first row
+    offered always sets it (even at +inf).
+
+    Attributes
+    ----------
+    X, F, G : (capacity, n_var / n_obj / n_constr) the rows; the first :attr:`size` are kept.
+    size : rows kept.
+    best : index of the best-scalarised row (-1 before any).
     """
 
-    def __init__(self) -> None:
-        self.cost = np.inf
-        self.row: tuple[FloatArray, FloatArray, FloatArray] | None = None
+    def __init__(self, capacity: int, n_var: int, n_obj: int, n_constr: int) -> None:
+        rows = max(1, int(capacity))
+        self.X = np.empty((rows, int(n_var)))
+        self.F = np.empty((rows, int(n_obj)))
+        self.G = np.empty((rows, int(n_constr)))
+        self.size = 0
+        self.best = -1
+        self.best_cost = math.inf
 
-    def offer(self, X: FloatArray, F: FloatArray, G: FloatArray, cost: FloatArray) -> None:
-        """Rows ``X``, ``F``, ``G`` (n, ...) with their costs (n,): the first of the lowest
-        may become the best."""
-        ranked = np.where(np.isnan(cost), np.inf, cost)
-        k = int(np.argmin(ranked))
-        self.offer_one(float(cost[k]), lambda: (X[k], F[k], G[k]))
+    def add(
+        self, X: FloatArray, F: FloatArray, G: FloatArray, cost: FloatArray | None = None
+    ) -> None:
+        """Rows ``X``, ``F``, ``G`` (n, ...) kept; with their scalarised costs (n,), the first
+        of the lowest is offered as the best."""
+        n = X.shape[0]
+        rows = slice(self._reserve(n), self.size)
+        self.X[rows], self.F[rows], self.G[rows] = X, F, G
+        if cost is not None:
+            k = int(np.argmin(np.where(np.isnan(cost), np.inf, cost)))
+            self.offer(rows.start + k, float(cost[k]))
 
-    def offer_one(self, cost: float, row: Callable[[], tuple[FloatArray, ...]]) -> None:
-        """One row's cost; ``row()`` gives its x, F and G, called (and copied) only when the
-        row becomes the best: most rows are not kept."""
-        if self.row is not None and not cost < self.cost:  # NaN never compares lower
-            return  # the common case, decided by one comparison (SA offers every row)
-        self.cost = math.inf if math.isnan(cost) else cost
-        x, f, g = (np.array(a, dtype=np.float64, copy=True) for a in row())
-        self.row = (x, f, g)
+    def keep(self, k: int, cost: float) -> None:
+        """Row ``k == size`` (within the capacity), which the caller wrote in place into
+        ``X[k]``, ``F[k]`` and ``G[k]`` (row views are contiguous: a row-at-a-time optimiser
+        scores straight into them), is kept, and its scalarised cost offered."""
+        self.size = k + 1
+        if self.best < 0 or cost < self.best_cost:  # SA keeps every row: no call otherwise
+            self.offer(k, cost)
+
+    def offer(self, k: int, cost: float) -> None:
+        """Row ``k``'s scalarised cost: it becomes the best if strictly lower."""
+        if self.best >= 0 and not cost < self.best_cost:  # NaN never compares lower
+            return
+        self.best = k
+        self.best_cost = math.inf if math.isnan(cost) else cost
+
+    def _reserve(self, n: int) -> int:
+        start = self.size
+        if start + n > self.X.shape[0]:
+            rows = max(start + n, 2 * self.X.shape[0])
+            self.X, self.F, self.G = (
+                np.concatenate([a, np.empty((rows - a.shape[0], a.shape[1]))])
+                for a in (self.X, self.F, self.G)
+            )
+        self.size = start + n
+        return start
 
     def result(self, n_eval: int, algorithm: str) -> ParetoResult:
-        """The best row as a one-row :class:`ParetoResult`."""
-        assert self.row is not None  # every optimiser evaluates at least one row
-        x, f, g = self.row
-        G = g[None, :]
-        return ParetoResult(x[None, :], f[None, :], G, np.all(G <= 0.0, axis=1), n_eval, algorithm)
+        """The returned set: :func:`archive_front` of the kept rows, or, when none of them
+        is feasible, the best-scalarised row alone (``feasible`` False)."""
+        n = self.size
+        keep = archive_front(self.F[:n], self.G[:n])
+        if keep.size == 0:
+            assert self.best >= 0  # every row evaluated was offered with its cost
+            keep = np.array([self.best])
+        X, F, G = self.X[keep], self.F[keep], self.G[keep]
+        return ParetoResult(X, F, G, np.all(G <= 0.0, axis=1), n_eval, algorithm)
 
 
 def check_budget(budget: int) -> None:

@@ -14,7 +14,7 @@ and gives the same numbers), and computes every floating-point value with the sa
 in the same order (numpy itself where the last bit depends on numpy's implementation: ``np.exp``,
 ``np.power``; the sums of the swarm's spread follow numpy's pairwise summation, checked against
 numpy once per process), so for the same problem, budget and ``rng`` it evaluates the same rows
-and returns the same row as the pymoo optimiser (tests hold it to that).
+and returns the same set as the pymoo optimiser (tests hold it to that).
 
 One generation, as pymoo's ``PSO._infill`` and ``_advance`` do it:
 
@@ -28,12 +28,20 @@ One generation, as pymoo's ``PSO._infill`` and ``_advance`` do it:
 4. fuzzy adaptation of ``w``, ``c1``, ``c2`` from the swarm's spread (:func:`adapt`).
 
 The social best is the personal best of lowest cost, ``np.argmin`` (so a NaN cost, which never
-improves, would be chosen: pymoo's rule, kept). Budget, seeding, warm start and the returned
-row are those of the pymoo optimiser: ``n_gen = max(1, budget // pop_size)`` generations of
-``pop_size`` rows, the first a Latin hypercube sample (or the warm-start rows); one integer seed
-(:func:`hcomc.rng.draw_seed`) drawn from the caller's generator after the warm-start rows; the
-best-scalarised row of every evaluation (NaN as inf, the first seen wins ties) with its true
-``F`` and ``G``.
+improves, would be chosen: pymoo's rule, kept). Budget, seeding and warm start are those of
+the pymoo optimiser: ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows,
+the first a Latin hypercube sample (or the warm-start rows); one integer seed
+(:func:`hcomc.rng.draw_seed`) drawn from the caller's generator after the warm-start rows.
+
+What is returned, and why: PSO searches on the scalarised cost, but returns what every
+optimiser here returns, the feasible, mutually non-dominated subset of every row it evaluated
+(:func:`hcomc.optim.base.archive_front`: one per distinct objective vector, in evaluation order,
+with its true ``F`` and ``G``), taken from an :class:`~hcomc.optim.base.Archive` allocated once
+for the budget; only when no evaluated row is feasible, its best-scalarised row (NaN as inf,
+the first seen wins ties). The controller's selection rule (Eq. 19, paper Section III-C-2) then
+picks from PSO's set as it does from NSGA-II's, so that the comparison of NSGA-II, PSO and SA
+(paper Section IV, Table II) compares the optimisers' searches under one selection rule rather
+than Eq. 19's min-max normalisation against PSO's fixed-scale scalarisation.
 """
 
 from __future__ import annotations
@@ -47,7 +55,7 @@ from hcomc._jit import borrow, kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.optim import variation
 from hcomc.optim.base import (
-    BestRow,
+    Archive,
     ParetoResult,
     Problem,
     check_budget,
@@ -375,9 +383,9 @@ class CompiledPSOOptimizer:
 
     Notes
     -----
-    Minimises ``problem.scalarise(F, G)`` as one unconstrained objective (the constraint
-    penalty is inside ``scalarise``) and returns the best-scalarised row over every evaluation
-    with its true ``F`` and ``G``; the first row seen wins ties.
+    Searches on ``problem.scalarise(F, G)`` as one unconstrained objective (the constraint
+    penalty is inside ``scalarise``) and returns the feasible non-dominated subset of every
+    evaluated row, or the best-scalarised row when none is feasible (see the module docstring).
     """
 
     pop_size: int = 24
@@ -400,7 +408,8 @@ class CompiledPSOOptimizer:
         rng: np.random.Generator,
         initial: FloatArray | None = None,
     ) -> ParetoResult:
-        """Run ``max(1, budget // pop_size)`` generations and return the best row seen."""
+        """Run ``max(1, budget // pop_size)`` generations; return the feasible non-dominated
+        set of every row evaluated."""
         check_budget(budget)
         n_gen = max(1, budget // self.pop_size)
         xl = np.array(problem.xl, dtype=np.float64, copy=True)
@@ -410,19 +419,16 @@ class CompiledPSOOptimizer:
         gen = np.random.default_rng(draw_seed(rng))
         if first is None:
             first = latin_hypercube(self.pop_size, xl, xu, gen)
-        n_rows = 0
-        best = BestRow()
+        archive = Archive(first.shape[0] + (n_gen - 1) * self.pop_size, n_var, n_obj, n_constr)
 
         def evaluate(X: FloatArray) -> FloatArray:
-            """Costs of rows ``X``, offered to the best row so far."""
-            nonlocal n_rows
+            """Costs of rows ``X``; the rows kept in the archive."""
             F, G = problem.evaluate(X)
             n = X.shape[0]
             F = np.asarray(F, dtype=np.float64).reshape(n, n_obj)
             G = np.asarray(G, dtype=np.float64).reshape(n, n_constr)
-            n_rows += n
             cost = np.asarray(problem.scalarise(F, G), dtype=np.float64).reshape(-1)
-            best.offer(X, F, G, cost)
+            archive.add(X, F, G, cost)
             return cost
 
         X = first
@@ -440,4 +446,4 @@ class CompiledPSOOptimizer:
             P_X[improved], P_F[improved] = X[improved], F[improved]
             if self.adaptive:
                 params = adapt(P_X, s_x, params[1], params[2], xl, xu, gen)
-        return best.result(n_rows, self.name)
+        return archive.result(archive.size, self.name)

@@ -2,7 +2,17 @@
 
 This is the only module that imports pymoo. A private adapter,
 :class:`_PymooProblem`, wraps our vectorised :class:`~hcomc.optim.base.Problem` as a
-``pymoo.core.problem.Problem``: one ``problem.evaluate(X)`` call per population, rows counted.
+``pymoo.core.problem.Problem``: one ``problem.evaluate(X)`` call per population, every row
+kept in an :class:`~hcomc.optim.base.Archive` allocated once for the budget.
+
+What is returned, and why: both optimisers return the same kind of set, the feasible, mutually
+non-dominated subset of every row they evaluated (:func:`hcomc.optim.base.archive_front`: one
+per distinct objective vector, in evaluation order), NSGA-II searching on the objectives and
+PSO on the scalarised cost. When no evaluated row is feasible, NSGA-II returns pymoo's
+least-violating row and PSO its best-scalarised row. The controller's selection rule (Eq. 19,
+paper Section III-C-2) then picks from either set alike, so that the comparison of NSGA-II,
+PSO and SA (paper Section IV, Table II) compares the optimisers' searches under one selection
+rule.
 
 Budget layout: ``budget`` counts evaluated rows. Both optimisers run
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows (the first generation
@@ -33,7 +43,7 @@ from pymoo.termination import get_termination
 
 from hcomc._typing import FloatArray
 from hcomc.optim.base import (
-    BestRow,
+    Archive,
     ParetoResult,
     Problem,
     archive_front,
@@ -54,30 +64,37 @@ def _as_2d(a: Any, n_cols: int) -> FloatArray:
 
 
 class _PymooProblem(_PymooBaseProblem):
-    """pymoo view of one of our problems: vectorised, counting evaluated rows.
+    """pymoo view of one of our problems: vectorised, keeping every evaluated row.
 
     Parameters
     ----------
     problem : our problem; its bounds are copied, never modified.
+    capacity : rows the run is planned to evaluate (the archive's first allocation).
     scalar : if True, expose one objective ``problem.scalarise(F, G)`` and no constraints
-        (single-objective optimisers; the penalty is inside ``scalarise``), and remember the
-        best-scalarised row seen with its true ``F`` and ``G``. Otherwise expose ``F`` and
-        ``G`` as they are.
+        (single-objective optimisers; the penalty is inside ``scalarise``), and track the
+        best-scalarised row. Otherwise expose ``F`` and ``G`` as they are.
+
+    Every evaluated row is kept, with its true ``F`` and ``G``, in :attr:`archive`
+    (:class:`~hcomc.optim.base.Archive`), in evaluation order.
     """
 
-    def __init__(self, problem: Problem, *, scalar: bool = False) -> None:
+    def __init__(self, problem: Problem, capacity: int, *, scalar: bool = False) -> None:
         self.problem = problem
         self.scalar = scalar
-        self.n_rows = 0
-        self.best = BestRow()
-        self.archive: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        n_var, n_obj, n_constr = int(problem.n_var), int(problem.n_obj), int(problem.n_constr)
+        self.archive = Archive(capacity, n_var, n_obj, n_constr)
         super().__init__(
-            n_var=int(problem.n_var),
-            n_obj=1 if scalar else int(problem.n_obj),
-            n_ieq_constr=0 if scalar else int(problem.n_constr),
+            n_var=n_var,
+            n_obj=1 if scalar else n_obj,
+            n_ieq_constr=0 if scalar else n_constr,
             xl=np.array(problem.xl, dtype=np.float64, copy=True),
             xu=np.array(problem.xu, dtype=np.float64, copy=True),
         )
+
+    @property
+    def n_rows(self) -> int:
+        """Rows evaluated so far."""
+        return self.archive.size
 
     def _evaluate(self, x: FloatArray, out: dict[str, Any], *args: Any, **kwargs: Any) -> None:
         X = np.asarray(x, dtype=np.float64)
@@ -85,15 +102,14 @@ class _PymooProblem(_PymooBaseProblem):
         n = X.shape[0]
         F = np.asarray(F, dtype=np.float64).reshape(n, int(self.problem.n_obj))
         G = np.asarray(G, dtype=np.float64).reshape(n, int(self.problem.n_constr))
-        self.n_rows += n
         if not self.scalar:
-            self.archive.append((X.copy(), F, G))
+            self.archive.add(X, F, G)
             out["F"] = F
             if self.n_ieq_constr > 0:
                 out["G"] = G
             return
         cost = np.asarray(self.problem.scalarise(F, G), dtype=np.float64).reshape(-1)
-        self.best.offer(X, F, G, cost)
+        self.archive.add(X, F, G, cost)
         out["F"] = cost[:, None]
 
 
@@ -140,7 +156,7 @@ class NSGA2Optimizer:
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
         check_budget(budget)
-        adapter = _PymooProblem(problem)
+        adapter = _PymooProblem(problem, self.pop_size * _n_gen(budget, self.pop_size))
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = NSGA2(
             pop_size=self.pop_size,
@@ -157,7 +173,9 @@ class NSGA2Optimizer:
             verbose=False,
             save_history=False,
         )
-        X, F, G = (np.concatenate(part) for part in zip(*adapter.archive, strict=True))
+        archive = adapter.archive
+        n = archive.size
+        X, F, G = archive.X[:n], archive.F[:n], archive.G[:n]
         keep = archive_front(F, G)
         if keep.size == 0:
             # pymoo's least-infeasible individual (res.opt is None when nothing is feasible)
@@ -199,10 +217,11 @@ class PSOOptimizer:
 
     Notes
     -----
-    The returned solution is the best-scalarised row over every evaluation (tracked by the
-    adapter, so no extra evaluation is spent), with its true ``F`` and ``G``; the first row seen
-    wins ties. Registered as ``pso-pymoo``: ``pso`` (:class:`~hcomc.optim.pso.
-    CompiledPSOOptimizer`) makes the same decisions without pymoo's per-individual objects.
+    Returns the feasible, mutually non-dominated subset of every evaluated row (kept by the
+    adapter, so no extra evaluation is spent), with its true ``F`` and ``G``; when none is
+    feasible, the best-scalarised row (the first row seen wins ties). Registered as
+    ``pso-pymoo``: ``pso`` (:class:`~hcomc.optim.pso.CompiledPSOOptimizer`) makes the same
+    decisions without pymoo's per-individual objects.
     """
 
     pop_size: int = 24
@@ -223,9 +242,11 @@ class PSOOptimizer:
         rng: np.random.Generator,
         initial: FloatArray | None = None,
     ) -> ParetoResult:
-        """Run ``max(1, budget // pop_size)`` generations and return the best row seen."""
+        """Run ``max(1, budget // pop_size)`` generations; return the feasible non-dominated
+        set of every row evaluated."""
         check_budget(budget)
-        adapter = _PymooProblem(problem, scalar=True)
+        capacity = self.pop_size * _n_gen(budget, self.pop_size)
+        adapter = _PymooProblem(problem, capacity, scalar=True)
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = PSO(
             pop_size=self.pop_size,
@@ -243,4 +264,4 @@ class PSOOptimizer:
             verbose=False,
             save_history=False,
         )
-        return adapter.best.result(adapter.n_rows, self.name)
+        return adapter.archive.result(adapter.n_rows, self.name)

@@ -11,7 +11,7 @@ numbers, in the same order and shapes, from the same generator (a fresh
 ``numpy.random.default_rng(draw_seed(rng))``; ``random`` where SciPy asks ``uniform`` on
 [0, 1), the same numbers without the argument handling), and computes every value with the same
 floating-point operations in the same order, so for the same problem, budget, ``rng`` and
-``initial`` it evaluates the same rows and returns the same row as the SciPy optimiser (tests
+``initial`` it evaluates the same rows and returns the same set as the SciPy optimiser (tests
 hold it to that).
 
 ``fmod``, ``fabs`` and the four operations are exact or correctly rounded on any machine, but
@@ -34,9 +34,22 @@ The run, as SciPy makes it:
 4. the run ends after ``budget`` evaluations.
 
 Without local search SciPy's best energy, ``not_improved_idx`` and chain minimum never feed
-back into a move, so they are not kept; the best row is :class:`~hcomc.optim.base.BestRow`
-over every evaluation, on the true cost (non-finite costs are annealed as ``1e300``), exactly
-as the SciPy optimiser tracks it, and so are the budget's hard cap and the single-row path.
+back into a move, so they are not kept. The objective wrapper is the SciPy optimiser's own
+(:class:`~hcomc.optim.annealing._Objective`), so rows are counted, capped at the budget, scored
+(through the single-row path when the problem offers one) and kept exactly as there: in an
+:class:`~hcomc.optim.base.Archive` of ``budget`` rows allocated once, the single-row path
+scoring straight into the archive's row, the best-scalarised row tracked by index on the true
+cost (non-finite costs are annealed as ``1e300``).
+
+What is returned, and why: SA anneals the scalarised cost, but returns what every optimiser
+here returns, the feasible, mutually non-dominated subset of every row it evaluated
+(:func:`hcomc.optim.base.archive_front`: one per distinct objective vector, in evaluation order,
+with its true ``F`` and ``G``); only when no evaluated row is feasible, its best-scalarised row
+(NaN as inf, the first seen wins ties). The controller's selection rule (Eq. 19, paper Section
+III-C-2) then picks from SA's set as it does from NSGA-II's, so that the comparison of NSGA-II,
+PSO and SA (paper Section IV, Table II) compares the optimisers' searches under one selection
+rule. A warm start anneals from ``initial``'s first row (for a replan seeded with the previous
+set, its first member in evaluation order).
 """
 
 from __future__ import annotations
@@ -315,8 +328,8 @@ class CompiledAnnealingOptimizer:
 
     Notes
     -----
-    Returns the best-scalarised row over every evaluation with its true ``F`` and ``G``; the
-    first row seen wins ties. ``n_eval == budget``.
+    Returns the feasible non-dominated subset of every evaluated row, or the best-scalarised
+    row when none is feasible (see the module docstring). ``n_eval == budget``.
     """
 
     initial_temp: float = 5230.0
@@ -337,7 +350,8 @@ class CompiledAnnealingOptimizer:
         rng: np.random.Generator,
         initial: FloatArray | None = None,
     ) -> ParetoResult:
-        """Anneal with ``budget`` single-row evaluations; return the best row seen.
+        """Anneal with ``budget`` single-row evaluations; return the feasible non-dominated set
+        of every row evaluated.
 
         With ``initial``, the annealing starts from its first row (clipped to the bounds).
         """
@@ -366,4 +380,4 @@ class CompiledAnnealingOptimizer:
             if run.chain(step, temperature):
                 break
             step, iteration = step + 1, iteration + 1
-        return cost.best.result(cost.n_calls, self.name)
+        return cost.result(self.name)
