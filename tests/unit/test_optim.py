@@ -1,4 +1,5 @@
-"""Tests for hcomc.optim: Eq. 19 selection, the non-dominated filter, NSGA-II, PSO and SA."""
+"""Tests for hcomc.optim: Eq. 19 selection, the non-dominated filter, NSGA-II, PSO and SA,
+and the set every optimiser returns (the feasible non-dominated subset of all its rows)."""
 
 from __future__ import annotations
 
@@ -14,13 +15,14 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from hcomc._typing import FloatArray
 from hcomc.optim.annealing import AnnealingOptimizer
-from hcomc.optim.base import ParetoResult
+from hcomc.optim.base import Archive, ParetoResult
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
 from hcomc.optim.pso import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, POPULATION_BASED, make_optimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer
 from hcomc.optim.selection import non_dominated, select_eq19
+from scalar_problems import RowRecording, assert_returns_expected_set, best_scalarised, recording
 
 PAPER_THRESHOLD = 4.0  # the paper's Eq. 19 gate on U_safe [m/s^2]
 eq19 = partial(select_eq19, safety_threshold=PAPER_THRESHOLD)
@@ -328,6 +330,7 @@ def test_warm_start_rows_open_the_first_population() -> None:
 def test_single_objective_reaches_known_optimum(name: str, budget: int, tol: float, seed: int):
     res = _run(name, PenalisedSphere(), budget, seed)
     assert res.feasible.all()
+    assert res.X.shape == (1, 4)  # one objective: the front is the lowest feasible row
     assert res.F[0, 0] == pytest.approx(PenalisedSphere.optimum, abs=tol)
     np.testing.assert_allclose(res.X[0, 1:], SPHERE_CENTRE[1:], atol=np.sqrt(tol))
 
@@ -428,23 +431,102 @@ def test_single_objective_deterministic_per_seed(name: str) -> None:
     assert not np.array_equal(a.X, c.X)
 
 
-@pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa", "sa-scipy"])
-def test_single_objective_returns_best_scalarised_row(name: str) -> None:
-    # the returned row is the best of every evaluated row: compare with a recording problem
-    class Recording(PenalisedSphere):
-        def __init__(self) -> None:
-            super().__init__()
-            self.rows: list[FloatArray] = []
+def test_archive_keeps_every_row_in_order_and_the_best_scalarised() -> None:
+    archive = Archive(2, 1, 1, 1)
+    archive.add(np.array([[0.0], [1.0], [2.0]]), np.array([[np.nan], [3.0], [3.0]]),
+                np.zeros((3, 1)), np.array([np.nan, 3.0, 3.0]))  # fmt: skip
+    assert (archive.size, archive.best) == (3, 1)  # grown; NaN ranks last, first of equals
+    k = archive.size
+    archive.X[k], archive.F[k], archive.G[k] = 3.0, 2.0, 1.0  # a row scored in place
+    archive.keep(k, 2.0)
+    archive.add(np.array([[4.0]]), np.array([[1.0]]), np.array([[0.0]]))  # no cost: not offered
+    assert (archive.size, archive.best) == (5, 3)
+    np.testing.assert_array_equal(archive.X[:5, 0], [0.0, 1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(archive.F[:5, 0], [np.nan, 3.0, 3.0, 2.0, 1.0])
+    res = archive.result(5, "test")  # the front: the NaN row (never dominated) and row 4
+    np.testing.assert_array_equal(res.X[:, 0], [0.0, 4.0])
+    assert res.feasible.all()
+    first = Archive(1, 1, 1, 1)
+    first.X[0], first.F[0], first.G[0] = 0.5, 0.0, 1.0  # infeasible
+    first.keep(0, np.inf)  # the first row is the best even at +inf
+    assert first.best == 0
+    res = first.result(1, "test")  # nothing feasible: the best-scalarised row
+    assert (res.X.tolist(), res.feasible.tolist()) == ([[0.5]], [False])
 
-        def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-            self.rows.append(X.copy())
-            return super().evaluate(X)
 
-    problem = Recording()
-    res = _run(name, problem, 120, seed=5)
-    X = np.concatenate(problem.rows)
-    best = problem.scalarise(*problem.evaluate(X)).min()
-    assert problem.scalarise(res.F, res.G)[0] == best
+class _RowDTLZ2(ConstrainedDTLZ2):
+    """The constrained DTLZ2 with the single-row path (``optim.base.RowProblem``)."""
+
+    def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
+        f, g = ConstrainedDTLZ2.evaluate(self, x[None, :])
+        F[:], G[:] = f[0], g[0]
+        return float(self.scalarise(f, g)[0])
+
+
+def _assert_front_of(res: ParetoResult, F: FloatArray, G: FloatArray) -> None:
+    """``res`` is a front of the rows ``F``, ``G`` by definition (numpy, pairwise): feasible,
+    mutually non-dominated, distinct objective vectors, and every feasible row is a member or
+    weakly dominated by one."""
+    assert res.feasible.all()
+    assert (res.G <= 0.0).all()
+    assert non_dominated(res.F).all()
+    assert np.unique(res.F, axis=0).shape[0] == res.F.shape[0]
+    feasible = F[(G <= 0.0).all(axis=1)]
+    covered = (res.F[None, :, :] <= feasible[:, None, :]).all(axis=2).any(axis=1)
+    assert covered.all()
+
+
+SCALARISED = ["pso", "pso-pymoo", "sa", "sa-scipy"]
+
+
+@pytest.mark.parametrize("make", [ConstrainedDTLZ2, UnconstrainedDTLZ2, _RowDTLZ2])
+@pytest.mark.parametrize("name", SCALARISED)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_scalarised_search_returns_the_front_of_every_evaluated_row(
+    name: str, make: type[ConstrainedDTLZ2], seed: int
+) -> None:
+    """PSO and SA search on the scalarised cost but return, as NSGA-II does, the feasible
+    non-dominated set of every row they evaluated (recorded by a wrapping problem, through
+    ``evaluate`` or SA's single-row path), which holds the best-scalarised feasible row."""
+    problem = recording(make())
+    assert isinstance(problem, RowRecording) == (make is _RowDTLZ2)
+    res = _run(name, problem, 240, seed)
+    assert_returns_expected_set(res, problem)
+    X, F, G = problem.scored()
+    _assert_front_of(res, F, G)
+    assert res.X.shape[0] > 1  # three objectives: a set, not one row
+    cost = problem.scalarise(F, G)
+    feasible = (G <= 0.0).all(axis=1)
+    best = best_scalarised(np.where(feasible, cost, np.inf))
+    assert (X[best] == res.X).all(axis=1).any()  # the row PSO or SA alone would return
+    assert problem.scalarise(res.F, res.G).min() == cost[best]
+
+
+@pytest.mark.parametrize("name", SCALARISED)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_scalarised_search_returns_best_scalarised_row_when_nothing_is_feasible(
+    name: str, seed: int
+) -> None:
+    problem = recording(InfeasibleDTLZ2())
+    res = _run(name, problem, 120, seed)
+    X, F, G = problem.scored()
+    best = best_scalarised(problem.scalarise(F, G))
+    np.testing.assert_array_equal(res.X, X[best : best + 1])
+    np.testing.assert_array_equal(res.F, F[best : best + 1])
+    np.testing.assert_array_equal(res.G, G[best : best + 1])
+    assert not res.any_feasible
+    assert_returns_expected_set(res, problem)
+
+
+@pytest.mark.parametrize(("compiled", "library"), [("pso", "pso-pymoo"), ("sa", "sa-scipy")])
+@pytest.mark.parametrize("make", [ConstrainedDTLZ2, InfeasibleDTLZ2, _RowDTLZ2])
+def test_compiled_and_library_return_the_same_set(
+    compiled: str, library: str, make: type[ConstrainedDTLZ2]
+) -> None:
+    a, b = (_run(name, make(), 240, seed=4) for name in (compiled, library))
+    for field in ("X", "F", "G", "feasible"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert a.n_eval == b.n_eval
 
 
 @pytest.mark.parametrize("name", ["pso", "pso-pymoo", "sa", "sa-scipy"])
