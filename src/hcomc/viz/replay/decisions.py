@@ -144,27 +144,29 @@ def _commanded(span: PlanSpan, log: SimulationLog) -> list[tuple[int, str, float
     return [c for c in out if c[3] > c[2]]
 
 
-def _roles(log: SimulationLog, spans: list[PlanSpan]) -> list[tuple[int, int, float, float]]:
-    """(vehicle, role index, from, to) of the key roles: each key group from the VR's entry
-    into the control zone, each plan's group from its decision, until the VR is planned
-    anew or leaves the road."""
+def _roles(log: SimulationLog, spans: list[PlanSpan]) -> list[tuple[int, int, float, float, int]]:
+    """(vehicle, role index, from, to, plan) of the key roles, in order of their start (a
+    later entry overrides an earlier one for the same vehicle): each key group from the VR's
+    entry into the control zone (plan -1), each plan's group from its decision (its index),
+    until the VR is planned anew or leaves the road."""
     t_last = float(log.t[log.n_recorded - 1]) if log.n_recorded else 0.0
     events = log.events
-    groups = [(float(g["t"]), {r: int(g.get(r, -1)) for r in KEY_ROLES})
+    groups = [(float(g["t"]), -1, {r: int(g.get(r, -1)) for r in KEY_ROLES})
               for g in log.meta.get("key_groups") or []]  # fmt: skip
-    groups += [(s.start, dict(s.record.group)) for s in spans]
+    groups += [(s.start, s.index, dict(s.record.group)) for s in spans]
+    groups.sort(key=lambda entry: entry[0])  # stable: a key group before a plan made with it
     out = []
-    for t0, group in groups:
+    for t0, plan, group in groups:
         vr = group.get("VR", -1)
         if vr < 0:
             continue
-        later = [t for t, g in groups if g.get("VR") == vr and t > t0]
+        later = [t for t, _, g in groups if g.get("VR") == vr and t > t0]
         end = min(min(later, default=math.inf), _first_after(events, EventKind.EXIT, vr, t0))
         end = end if math.isfinite(end) else t_last
         for role_index, role in enumerate(KEY_ROLES):
             k = group.get(role, -1)
             if k >= 0:
-                out.append((k, role_index, t0, end))
+                out.append((k, role_index, t0, end, plan))
     return out
 
 
@@ -176,7 +178,7 @@ def timeline_events(log: SimulationLog) -> dict[str, Any]:
     entries = log.meta.get("key_groups") or []
     return {
         "names": {int(k): k.name for k in EventKind},
-        "t": np.round(ev["t"], 4).tolist(),
+        "t": ev["t"].tolist(),
         "kind": ev["kind"].astype(int).tolist(),
         "vehicle": ev["vehicle"].astype(int).tolist(),
         "other": ev["other"].astype(int).tolist(),
@@ -214,7 +216,7 @@ def decisions_json(log: SimulationLog, lane_width: float) -> dict[str, Any]:
         "plans": plans,
         "roles": {"vehicle": [r[0] for r in roles], "role": [r[1] for r in roles],
                   "t0": [r[2] for r in roles], "t1": [r[3] for r in roles],
-                  "names": list(KEY_ROLES)},
+                  "plan": [r[4] for r in roles], "names": list(KEY_ROLES)},
         "commanded": {"vehicle": [c[0] for c in commanded], "role": [c[1] for c in commanded],
                       "t0": [c[2] for c in commanded], "t1": [c[3] for c in commanded],
                       "what": [c[4] for c in commanded]},

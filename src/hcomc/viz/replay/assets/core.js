@@ -60,6 +60,7 @@ HC.Run = class {
     this.dy = new Float64Array(this.cols);
     this.dh = new Float64Array(this.cols);
     this.roleOf = new Int8Array(this.n).fill(-1);
+    this.rolePlan = new Int32Array(this.n).fill(-1);  // the plan the role is from, -1: key group
     this.cmdOf = new Int32Array(this.n).fill(-1);
     this.live = [];  // indices of the plans live at the frame's time
   }
@@ -106,7 +107,10 @@ HC.Run = class {
     this.roleOf.fill(-1);
     this.cmdOf.fill(-1);
     for (let k = 0; k < R.vehicle.length; k++) {
-      if (R.t0[k] <= t && (t < R.t1[k] || R.t1[k] >= this.t1)) this.roleOf[R.vehicle[k]] = R.role[k];
+      if (R.t0[k] <= t && (t < R.t1[k] || R.t1[k] >= this.t1)) {
+        this.roleOf[R.vehicle[k]] = R.role[k];
+        this.rolePlan[R.vehicle[k]] = R.plan[k];
+      }
     }
     for (let k = 0; k < K.vehicle.length; k++) {
       if (K.t0[k] <= t && t < K.t1[k]) this.cmdOf[K.vehicle[k]] = k;

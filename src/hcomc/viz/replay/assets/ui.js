@@ -217,7 +217,9 @@ HC.App = class {
     const r = this.runs[run], idx = r.cell(id);
     const head = "vehicle " + id + " · " + (HC.KIND_NAMES[r.kind[id]] || "?") + " · " + r.title;
     if (idx < 0) return head + "\nnot on the road at t = " + this.t.toFixed(2) + " s";
-    const role = r.roleOf[id] >= 0 ? HC.ROLE_NAMES[r.roleOf[id]] : "–", k = r.cmdOf[id];
+    const k = r.cmdOf[id], plan = r.rolePlan[id];
+    const role = r.roleOf[id] < 0 ? "–" : HC.ROLE_NAMES[r.roleOf[id]] +
+      (plan >= 0 ? " of plan " + (plan + 1) : " at VR's control-zone entry");
     return [head,
       "t " + this.t.toFixed(2) + " s · x " + r.x[idx].toFixed(2) + " m · lane " + r.lane[idx],
       "speed " + (r.v[idx] * r.vStep).toFixed(2) + " m/s · acceleration " + (r.a[idx] * r.aStep).toFixed(2) + " m/s²",
