@@ -195,10 +195,14 @@ def test_report_content(report: Path, runs: pd.DataFrame, png: bytes) -> None:
     # Three header rows; Table II has C1-C3 x 3 optimisers, Table III C1-C5 x 3 controllers.
     assert text.count("<tr>") == 3 + 9 + 15
     assert f"data:image/png;base64,{base64.b64encode(png).decode('ascii')}" in text
-    # Claims coloured by share.
+    # Claims coloured by their CI verdict, with the Holm verdict and k of n beside it.
     frame = claims(runs)
-    assert text.count('<tr class="holds">') == int((frame["share"] > 0.5).sum())
-    assert text.count('<tr class="fails">') == int((frame["share"] <= 0.5).sum())
+    for verdict in ("holds", "reversed", "undecided"):
+        assert text.count(f'<tr class="{verdict}">') == int((frame["verdict"] == verdict).sum())
+    assert text.count('<tr class="') == len(frame)
+    assert "<th>Verdict (Holm)</th>" in text
+    assert f"Of {len(frame)} claims, {int((frame['verdict'] == 'holds').sum())} hold" in text
+    assert "The runs do not record merge success." in text  # no merged column
     # Escaped text, no markup injection.
     assert "<script" not in text.lower()
     assert "&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt; speed &amp; flow" in text
@@ -221,6 +225,20 @@ def test_report_takes_the_claims_already_computed(runs: pd.DataFrame, tmp_path: 
     given = write_report(tmp_path / "given", runs, claim_frame=claims(runs, uniform))
     created = re.compile(r"\d{4}-\d\d-\d\dT[\d:.]+(?:\+00:00|Z)?")
     assert created.sub("", given.read_text(encoding="utf-8")) == created.sub("", own)
+
+
+def test_report_shows_merge_success_and_links_replays(runs: pd.DataFrame, tmp_path: Path) -> None:
+    merged = runs.assign(merged=runs["seed"] != 3)  # the last of four seeds fails everywhere
+    links = {"C2, seed 0: HCOMC": "replay/C2-seed0.html"}
+    text = write_report(tmp_path, merged, replays=links).read_text(encoding="utf-8")
+    table = text[text.index('<table id="merge-success">') :]
+    table = table[: table.index("</table>")]
+    assert table.count("<td>3/4</td>") == 5 * len(_CONFIGURATIONS)  # condition x configuration
+    assert "<td>3/4</td>" in text[: text.index('<table id="merge-success">')]  # Tables II, III
+    assert '<li><a href="replay/C2-seed0.html">C2, seed 0: HCOMC</a></li>' in text
+    for bad in ("https://example.org/r.html", "//cdn/r.html", "/abs/r.html", "file:r.html"):
+        with pytest.raises(ValueError, match="relative path"):
+            write_report(tmp_path / "bad", runs, replays={"r": bad})
 
 
 def test_report_rejects_bad_input(runs: pd.DataFrame, tmp_path: Path) -> None:

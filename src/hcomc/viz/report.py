@@ -21,15 +21,15 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from hcomc.experiments.claims import claims
+from hcomc.experiments.claims import claims, verdict_counts
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.experiments.tables import paper_table
+from hcomc.experiments.tables import TABLE_CAPTION, merge_success, paper_table
 from hcomc.sim.manifest import atomic_paths, build_manifest
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["REQUIRED_COLUMNS", "contour_png", "figure_png", "write_report"]
+__all__ = ["REQUIRED_COLUMNS", "figure_png", "write_report"]
 
 #: Columns a results frame needs for the report's tables.
 REQUIRED_COLUMNS = ("condition", "configuration", "seed", "mode", *PAPER_METRICS)
@@ -60,9 +60,9 @@ th { background: #e8edf3; font-weight: 600; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 tbody tr:nth-child(even) td { background: #fafbfc; }
 tr.holds td { background: #e3f4e1 !important; }
-tr.fails td { background: #f9e0e0 !important; }
+tr.reversed td { background: #f9e0e0 !important; }
 .legend-holds { background: #e3f4e1; padding: 0 0.3em; }
-.legend-fails { background: #f9e0e0; padding: 0 0.3em; }
+.legend-reversed { background: #f9e0e0; padding: 0 0.3em; }
 figure { margin: 1.2rem 0; text-align: center; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e1e5ea; }
 figcaption { font-size: 0.88rem; color: #444; margin-top: 0.3rem; }
@@ -88,17 +88,6 @@ def figure_png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_FIGURE_DPI)
     return buffer.getvalue()
-
-
-def contour_png(scenario: str, seed: int, overrides: dict[str, Any] | None = None) -> bytes:
-    """The report's speed contour maps (paper Fig. 2) of one scenario and seed, simulated with
-    FIFO, Game and HCOMC as the runs were (with their config ``overrides``), as PNG bytes: a
-    self-contained task that ``hcomc reproduce`` hands to a worker process while the last
-    runs finish."""
-    from hcomc.viz.figures import contour_figure
-    from hcomc.viz.inputs import controller_logs
-
-    return figure_png(contour_figure(controller_logs(scenario, seed=seed, overrides=overrides)))
 
 
 def _e(value: Any) -> str:
@@ -143,27 +132,67 @@ def _claims_table(frame: pd.DataFrame) -> str:
         return '<p class="empty" id="claims">No claim can be evaluated from these runs.</p>'
     rows = []
     for rec in frame.to_dict("records"):
-        k, n, share = int(rec["holds"]), int(rec["n"]), float(rec["share"])
-        css = "holds" if math.isfinite(share) and share > 0.5 else "fails"
+        css = _e(rec["verdict"])
         median, low, high = (float(rec[c]) for c in ("median_diff", "ci_low", "ci_high"))
         effect = f"{median:.4g} [{low:.4g}, {high:.4g}]" if math.isfinite(median) else "—"
+        p_holm = float(rec["p_holm"])
         rows.append(
             f'<tr class="{css}"><td>{_e(rec["claim"])}</td><td>{_e(rec["condition"])}</td>'
-            f'<td class="num">{k} of {n}</td><td class="num">{_e(effect)}</td>'
+            f"<td>{_e(rec['verdict'])}</td><td>{_e(rec['verdict_holm'])}</td>"
+            f'<td class="num">{p_holm:.2g}</td>'
+            f'<td class="num">{int(rec["holds"])} of {int(rec["n"])}</td>'
+            f'<td class="num">{_e(effect)}</td>'
             f"<td>{_e(rec['ours'])}</td><td>{_e(rec['paper'])}</td></tr>"
         )
-    majority = int(((frame["share"] > 0.5) & frame["share"].notna()).sum())
     return (
-        f"<p>{majority} of {len(frame)} claims hold in a majority of seeds "
-        '(<span class="legend-holds">green</span>: more than half of the seeds; '
-        '<span class="legend-fails">red</span>: half or fewer).</p>\n'
+        f"<p>{_e(_verdict_counts(frame))} "
+        '(<span class="legend-holds">green</span>: holds by its 95 % CI; '
+        '<span class="legend-reversed">red</span>: reversed; white: undecided).</p>\n'
         '<table id="claims">\n<caption>Comparative claims of the paper\'s Section IV, '
         "evaluated on paired runs (same seed): median paired difference A - B with its 95 % "
-        "bootstrap CI.</caption>\n"
-        "<thead><tr><th>Claim</th><th>Condition</th><th>Holds (k of n seeds)</th>"
+        "bootstrap CI; verdict by that CI; verdict (Holm) by the sign test, Holm-corrected over "
+        "all claims; k of n: seeds in the paper's direction.</caption>\n"
+        "<thead><tr><th>Claim</th><th>Condition</th><th>Verdict (95 % CI)</th>"
+        "<th>Verdict (Holm)</th><th>p (Holm)</th><th>k of n seeds</th>"
         "<th>Median A - B [95 % CI]</th><th>Ours (mean A vs B)</th><th>Paper</th></tr>"
         "</thead>\n<tbody>\n" + "\n".join(rows) + "\n</tbody>\n</table>"
     )
+
+
+def _verdict_counts(frame: pd.DataFrame) -> str:
+    ci = verdict_counts(frame, "verdict").loc["all"]
+    holm = verdict_counts(frame, "verdict_holm").loc["all"]
+    return (
+        f"Of {len(frame)} claims, {ci['holds']} hold, {ci['reversed']} are reversed and "
+        f"{ci['undecided']} undecided by their 95 % CI; by the sign test with Holm's correction, "
+        f"{holm['holds']} hold, {holm['reversed']} are reversed and {holm['undecided']} undecided"
+    )
+
+
+def _merge_section(runs: pd.DataFrame) -> str:
+    wide = merge_success(runs)
+    if wide.empty:
+        return '<p class="empty" id="merge-success">The runs do not record merge success.</p>'
+    return _html_table(
+        wide,
+        "Runs in which VR merged, k of n, per condition and configuration.",
+        table_id="merge-success",
+    )
+
+
+def _replay_section(replays: Mapping[str, str]) -> str:
+    """Links to interactive replays (pages beside the report; relative paths only, so the
+    report stays self-contained and loads nothing)."""
+    for caption, target in replays.items():
+        if re.match(r"^\s*([a-z][a-z0-9+.-]*:|/)", target, re.I):
+            raise ValueError(
+                f"replay {caption!r} links to {target!r}; allowed: a relative path beside "
+                "the report (e.g. replay/C2-seed0.html)"
+            )
+    items = "\n".join(
+        f'<li><a href="{_e(target)}">{_e(caption)}</a></li>' for caption, target in replays.items()
+    )
+    return f'<section id="replays">\n<h2>Replays</h2>\n<ul>\n{items}\n</ul>\n</section>\n'
 
 
 def _figure_block(index: int, name: str, png: bytes) -> str:
@@ -195,17 +224,21 @@ def write_report(
     figures: Mapping[str, bytes] | None = None,
     title: str = "hcomc reproduction",
     claim_frame: pd.DataFrame | None = None,
+    replays: Mapping[str, str] | None = None,
 ) -> Path:
     """Write ``out_dir/report.html``, a self-contained report of a results table.
 
     The page has a header (title, package version, git revision, date), a short "how to
     read this" note, Table II (optimisers) and Table III (controllers) as built by
-    :func:`hcomc.experiments.tables.paper_table` ("ours ± 95 % CI (paper)"), the claims
-    table of :func:`hcomc.experiments.tables.claims` (rows green when the claim holds in
-    more than half of the seeds, red otherwise), every figure of *figures* with a caption,
-    and a footer. It references no external resource: styles are inline, there is no
-    script, and images are embedded as ``data:image/png;base64`` URIs. All text coming
-    from the data is HTML-escaped.
+    :func:`hcomc.experiments.tables.paper_table` ("ours ± 95 % CI (paper)" over the seeds
+    common to a condition's rows, with merge success), merge success per condition and
+    configuration (when the runs record ``merged``), the claims of
+    :func:`hcomc.experiments.claims.claims` with both verdict columns and "k of n seeds"
+    (rows green when the CI verdict is "holds", red when "reversed"), every figure of
+    *figures* with a caption, the links of *replays*, and a footer. It references no
+    external resource: styles are inline, there is no script, images are embedded as
+    ``data:image/png;base64`` URIs and the only links are relative ones to replay pages.
+    All text coming from the data is HTML-escaped.
 
     Parameters
     ----------
@@ -221,6 +254,10 @@ def write_report(
     claim_frame : pandas.DataFrame or None
         ``claims(runs)`` when the caller has computed it already (its bootstrap is the
         slowest part of the page); computed here if None.
+    replays : mapping of str to str or None
+        Caption -> relative path (from ``out_dir``) of an interactive replay page written
+        beside the report; listed in a "Replays" section. This is where the replay viewer
+        links in.
 
     Returns
     -------
@@ -230,7 +267,8 @@ def write_report(
     Raises
     ------
     ValueError
-        If *runs* lacks a required column or a figure is not PNG data.
+        If *runs* lacks a required column, a figure is not PNG data or a replay link is not
+        a relative path.
     """
     missing = [col for col in REQUIRED_COLUMNS if col not in runs.columns]
     if missing:
@@ -243,6 +281,7 @@ def write_report(
         if not isinstance(png, bytes | bytearray) or not bytes(png).startswith(_PNG_SIGNATURE):
             raise ValueError(f"figure {name!r} is not PNG data (use figure_png(fig))")
 
+    replay_html = _replay_section(replays) if replays else ""
     manifest = build_manifest(seed=0, config={})
     version = manifest["hcomc_version"]
     revision = manifest["git_revision"]
@@ -281,13 +320,17 @@ def write_report(
 <section id="how-to-read">
 <h2>How to read this</h2>
 <div class="note">
-<p>Each table cell reads <em>ours ± half-width of the 95&nbsp;% confidence interval over the
-seeds (paper value)</em>; <em>n</em> is the number of seeds with a defined value. Our metric
-definitions differ from the paper's, which does not give its own (see
-<code>docs/reproduction.md</code> in the source tree): the absolute numbers are not
-comparable, and the reproduction is judged on the paper's comparative claims (orderings and
-directions), each evaluated per seed on paired runs and reported as "holds in k of n
-seeds".</p>
+<p>Each table cell reads <em>ours ± half-width of the 95&nbsp;% confidence interval (paper
+value)</em>, over the seeds on which every row of the condition has a value (<em>n</em>, per
+metric when they differ), so the rows of a condition are comparable; <em>merged</em> counts
+the runs in which VR merged. Our metric definitions differ from the paper's, which does not
+give its own (see <code>docs/reproduction.md</code> in the source tree): the absolute numbers
+are not comparable, and the reproduction is judged on the paper's comparative claims
+(orderings and directions), each evaluated on paired runs. A claim <em>holds</em> when the
+95&nbsp;% CI of its median paired difference excludes 0 in the paper's direction, is
+<em>reversed</em> when it excludes 0 in the other direction and <em>undecided</em> otherwise;
+the Holm verdict asks the same of the sign test, corrected for testing all claims at once.
+"k of n seeds" describes the seeds; it is not a verdict.</p>
 <p>Better is larger for the critical distance and smaller for the average acceleration, the
 stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.</p>
 </div>
@@ -298,7 +341,7 @@ stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.
 {
         _html_table(
             table_ii,
-            "HCOMC with PSO, SA and NSGA-II, Conditions C1–C3: ours (paper).",
+            f"HCOMC with PSO, SA and NSGA-II, Conditions C1–C3 — {TABLE_CAPTION}.",
             table_id="table-ii",
         )
     }
@@ -308,13 +351,20 @@ stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.
 <h2>Table III — controllers</h2>
 {
         _html_table(
-            table_iii, "FIFO, Game and HCOMC, Conditions C1–C5: ours (paper).", table_id="table-iii"
+            table_iii,
+            f"FIFO, Game and HCOMC, Conditions C1–C5 — {TABLE_CAPTION}.",
+            table_id="table-iii",
         )
     }
 </section>
 
+<section id="merge-section">
+<h2>Merge success</h2>
+{_merge_section(runs)}
+</section>
+
 <section id="claims-section">
-<h2>Claims of Section IV, per seed</h2>
+<h2>Claims of Section IV, paired by seed</h2>
 {_claims_table(claim_frame)}
 </section>
 
@@ -322,7 +372,7 @@ stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.
 <h2>Figures</h2>
 {figure_html}
 </section>
-
+{replay_html}
 <footer>
 <p>Generated by hcomc {_e(version)} (git revision {_e(revision)}) on {_e(created)} UTC.
 Every number on this page is computed from the runs table; nothing is written by hand.
