@@ -223,3 +223,55 @@ def test_plan_cli_table_and_errors():
     none = runner.invoke(app, ["plan", "platoon"])
     assert none.exit_code == 2
     assert "no ramp vehicle entered the control zone" in none.stderr
+
+
+def _accel(p: np.ndarray, role: int, lead: int, x, v, a) -> float:
+    """Car following of ``role`` behind ``lead`` (-1: free road) with its parameter row."""
+    from hcomc.models.following import follow_accel
+
+    row = p[role]
+    s = np.inf if lead < 0 else x[lead] - p[lead, 7] - x[role]
+    vl, al = (v[role], 0.0) if lead < 0 else (v[lead], a[lead])
+    return float(follow_accel(s, v[role], vl, al, *row[:7], bool(row[9] > 0.5)))
+
+
+def _nearest_ahead(role: int, lanes: dict[int, int], x, present) -> int:
+    ahead = [j for j, ln in lanes.items() if j != role and present[j] and ln == lanes[role]
+             and x[j] > x[role]]  # fmt: skip
+    return min(ahead, key=lambda j: x[j]) if ahead else -1
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_efficiency_objective_is_eq17_at_the_lane_change_decision(seed):
+    """-F[:, efficiency] is Eq. 17 recomputed from the predicted state at the step VR begins
+    its change, with the model's car following: (a_VR,new - a_VR,free) + eta * sum over
+    VMC, VMR, VNR of (a_new - a_ori), lanes "new" (VR in lane 1, VMC in lane 2 if lateral)
+    against "ori" (VR on the ramp, VMC in lane 1)."""
+    problem = _problem(seed)
+    state, eta = problem.state, problem.config.lane_change.politeness
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(problem.xl, problem.xu, size=(40, 5))
+    X[:, 4] = 0.0  # the group as identified ("ahead"): its roles are the state's
+    problem.lateral_allowed = (True, False)
+    pred = problem.predict(X)
+    checked = 0
+    for c in range(X.shape[0]):
+        start = np.flatnonzero(pred.X[c, :, 0] >= X[c, 0])
+        if pred.k_merge[c] < 0 or start.size == 0:
+            continue
+        k = int(start[0])
+        x, v, a = pred.X[c, k], pred.V[c, k], pred.A[c, k]
+        lateral = X[c, 3] >= 0.5 and bool(state.coop[1])
+        base = {0: 0, 1: 1, 2: 1, 3: 1, 4: 2, 5: 2}
+        new, ori = {**base, 0: 1, 1: 2 if lateral else 1}, {**base, 0: -1}
+        p, present = state.params, state.present
+        want = _accel(p, 0, _nearest_ahead(0, new, x, present), x, v, a) - _accel(p, 0, -1, x, v, a)
+        for r in (1, 3, 5):
+            if present[r]:
+                want += eta * (
+                    _accel(p, r, _nearest_ahead(r, new, x, present), x, v, a)
+                    - _accel(p, r, _nearest_ahead(r, ori, x, present), x, v, a)
+                )
+        assert -pred.F[c, 2] == pytest.approx(want, rel=1e-9, abs=1e-12)
+        checked += 1
+    assert checked >= 10

@@ -69,11 +69,14 @@ def test_batches_keep_runs_of_one_undisturbed_run_together() -> None:
 
 def test_baselines_plan_once_as_published_and_replan_in_their_r_variants() -> None:
     assert set(CONFIGURATIONS) == {"FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA"}
-    assert set(ALL_CONFIGURATIONS) - set(CONFIGURATIONS) == {"FIFO-R", "Game-R"}
+    assert set(ALL_CONFIGURATIONS) - set(CONFIGURATIONS) == {"FIFO-R", "Game-R", "HCOMC+"}
     control = {
         label: RunSpec("C1", label, 0).config_overrides()["control"]
-        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC")
+        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC", "HCOMC+")
     }
+    assert "no_cooperation" not in control["HCOMC"]  # the paper's HCOMC: the config's value
+    assert control["HCOMC+"]["no_cooperation"] is True
+    assert control["HCOMC+"]["controller"] == "hcomc"
     assert control["FIFO-R"]["controller"] == "fifo"
     assert control["Game-R"]["controller"] == "game"
     assert control["FIFO"]["replan_period"] == 0.0

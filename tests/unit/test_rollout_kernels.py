@@ -19,13 +19,12 @@ from hcomc.control.hcomc.rollout import (
     N_ROLES,
     P_IIDM,
     VMC,
-    VMR,
     VR,
     counterfactual,
     resolve_starts,
 )
 from hcomc.control.hcomc.rollout_layout import R_ACC, R_FREE, R_V, R_X
-from hcomc.control.hcomc.rollout_score import created_pairs_safety, efficiency_gain
+from hcomc.control.hcomc.rollout_score import created_pairs_safety
 from hcomc.control.hcomc.rollout_step import follow_role, integrate, new_state
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind
@@ -152,15 +151,6 @@ def test_created_pair_safety_is_eq15_of_vr_behind_vmf():
                                            emergency_decel=c.safety_emergency_decel))
                for d, vr, vf in pairs)  # fmt: skip
     assert got == want
-
-
-def test_efficiency_gain_is_the_mean_of_eq17_terms():
-    rng = np.random.default_rng(0)
-    A, Ac = rng.normal(size=(9, N_ROLES)), rng.normal(size=(9, N_ROLES))
-    present = np.ones(N_ROLES, dtype=np.bool_)
-    d = A[1:] - Ac[1:]
-    want = (d[:, VR].sum() + 0.5 * d[:, [VMC, VMR, 5]].sum()) / 8
-    assert efficiency_gain(A, Ac, present, 0.5) == pytest.approx(want, rel=1e-12)
 
 
 def test_default_vv0_start_is_the_equilibrium_gap_ahead():

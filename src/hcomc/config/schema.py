@@ -298,6 +298,19 @@ class ControlParams(_Frozen):
         description="receding horizon: re-identify the key vehicles and replan every this many "
         "seconds until VR starts its lane change; 0 = plan once at control-zone entry [s]",
     )
+    commitment_margin: float = Field(
+        0.2,
+        ge=0,
+        le=2,
+        description="HCOMC replanning keeps the live plan's cooperating vehicle, mode and "
+        "sequence unless the best new plan's Eq. 19 cost (min-max normalised over the new "
+        "Pareto set, range 0-2) is lower by more than this; 0 = always take the best [-]",
+    )
+    no_cooperation: bool = Field(
+        False,
+        description="HCOMC+ (an extension, not in the paper): add 'none' (VMC keeps car "
+        "following, only VR's own merge is planned) to the cooperation modes HCOMC chooses from",
+    )
 
 
 class ScenarioConfig(_Frozen):

@@ -194,6 +194,12 @@ class MergePlan:
     details: PlanDetails = field(default_factory=PlanDetails)
     sequence: str = "ahead"
 
+    @property
+    def cooperating(self) -> int:
+        """The mainline vehicle the plan commands to cooperate (``group.vmc`` when the mode is
+        not NONE), -1 when it commands nobody on the mainline."""
+        return self.group.vmc if self.mode != Mode.NONE else -1
+
 
 def elapsed_ms(start: float) -> float:
     """Milliseconds since ``start`` (a :func:`time.perf_counter` value): a decision's time."""

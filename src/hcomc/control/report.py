@@ -8,6 +8,7 @@ import numpy as np
 
 from hcomc.control.base import MergePlan, Mode
 from hcomc.control.hcomc.controller import HCOMCDetails
+from hcomc.control.hcomc.problem import MODE_NONE
 from hcomc.road import Kind
 
 if TYPE_CHECKING:
@@ -19,7 +20,7 @@ def _solution(x: np.ndarray, f: np.ndarray) -> dict[str, Any]:
         "merge_x": float(x[0]),
         "vr_duration": float(x[1]),
         "horizon": float(x[2]),
-        "mode": "lateral" if x[3] >= 0.5 else "longitudinal",
+        "mode": "none" if x[3] >= MODE_NONE else "lateral" if x[3] >= 0.5 else "longitudinal",
         "sequence": "ahead" if x[3] >= 0.5 or x[4] < 0.5 else "behind",
         "safety": float(f[0]),
         "fuel": float(f[1]),
@@ -53,7 +54,7 @@ def plan_report(sim: Simulation, plan: MergePlan) -> dict[str, Any]:
         pareto = [
             _solution(x, f) for x, f, ok in zip(res.X, res.F, res.feasible, strict=True) if ok
         ]
-        if hcomc.chosen >= 0:
+        if 0 <= hcomc.chosen < len(res.X):
             k = hcomc.chosen
             chosen = {"index": k, **_solution(res.X[k], res.F[k])}
     return {

@@ -1,9 +1,9 @@
 """Run grids of conditions x configurations x seeds, locally in parallel, into one table.
 
 A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
-HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published) and two baseline
-variants that replan every second ("FIFO-R", "Game-R"). Every run is ``run_one(spec)``: a
-pure function of its spec (condition preset or TOML file, configuration, seed, overrides)
+HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published), two baseline variants
+that replan every second ("FIFO-R", "Game-R"), and the labelled extension "HCOMC+". Every
+run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file, configuration, seed, overrides)
 that returns one results row and the run's manifest. Seeds are shared across configurations
 within a condition (common random numbers: the same traffic for every controller), so
 comparisons are paired by seed.
@@ -51,30 +51,40 @@ REPLANNING_BASELINES: dict[str, tuple[str, str]] = {
     "FIFO-R": ("fifo", "nsga2"),
     "Game-R": ("game", "nsga2"),
 }
-"""FIFO and Game replanning every ``REPLAN_PERIOD[label]`` seconds (not in the paper)."""
+"""FIFO and Game replanning every second as HCOMC does (not in the paper)."""
 
-ALL_CONFIGURATIONS: dict[str, tuple[str, str]] = {**CONFIGURATIONS, **REPLANNING_BASELINES}
+EXTENSIONS: dict[str, tuple[str, str]] = {"HCOMC+": ("hcomc", "nsga2")}
+"""Labelled extensions of HCOMC, reported beside the faithful method (not in the paper):
+HCOMC+ may also choose to leave the mainline alone (``control.no_cooperation``)."""
+
+ALL_CONFIGURATIONS: dict[str, tuple[str, str]] = {
+    **CONFIGURATIONS,
+    **REPLANNING_BASELINES,
+    **EXTENSIONS,
+}
 """Every configuration label ``run_one`` accepts."""
 
-REPLAN_PERIOD: dict[str, float] = {"FIFO": 0.0, "Game": 0.0, "FIFO-R": 1.0, "Game-R": 1.0}
-"""``control.replan_period`` [s] per configuration (0 = plan once, as published); the HCOMC
-configurations use the config's value."""
-
-
-def _replan_override(label: str) -> dict[str, float]:
-    """The replanning override of a configuration (none: the config's value)."""
-    return {"replan_period": REPLAN_PERIOD[label]} if label in REPLAN_PERIOD else {}
+CONTROL_OVERRIDES: dict[str, dict[str, Any]] = {
+    "FIFO": {"replan_period": 0.0},
+    "Game": {"replan_period": 0.0},
+    "FIFO-R": {"replan_period": 1.0},
+    "Game-R": {"replan_period": 1.0},
+    "HCOMC+": {"no_cooperation": True},
+}
+"""``control`` values a configuration sets beyond its controller and optimiser: FIFO and Game
+plan once, as published (``replan_period = 0``), their -R variants replan every second; the
+HCOMC configurations use the config's values, HCOMC+ adds the mode "none"."""
 
 
 def configuration_overrides(configuration: str, overrides: dict[str, Any]) -> dict[str, Any]:
     """``overrides`` (nested, as :func:`hcomc.config.nest_overrides` gives them) with the
-    controller, optimiser and replanning period of a configuration label: what every run of
+    controller, optimiser and control values of a configuration label: what every run of
     that configuration is loaded with (:meth:`RunSpec.config_overrides`, the report's
     figures)."""
     controller, optimizer = ALL_CONFIGURATIONS[configuration]
     control = {
         **overrides.get("control", {}),
-        **_replan_override(configuration),
+        **CONTROL_OVERRIDES.get(configuration, {}),
         "controller": controller,
         "optimizer": optimizer,
     }
@@ -168,19 +178,49 @@ def undisturbed_log(spec: RunSpec) -> SimulationLog:
 
 
 def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
-    """Columns of VR's plans: the last plan's mode, fallback and Eq. 19 branch; the number of
-    replans (plans for VR minus one); the mean decision time."""
+    """Columns of VR's plans: the last plan's mode, fallback, Eq. 19 branch and lateral
+    admission (:func:`lateral_cause`); the Section III-B lane-change games played over the
+    plans and how many chose "change lane" at equilibrium; the number of replans (plans for
+    VR minus one) and of fallbacks; the mean decision time; and the plan switches
+    (:func:`plan_switches`: their number, and whether the last plan is one)."""
     plans = [p for p in sim.decisions if p.group.vr == vr]
     if not plans:
         return {}
     last = plans[-1]
+    switches = plan_switches(plans)
+    games = [g for g in (getattr(p.details, "game", None) for p in plans) if g is not None]
     return {
         "mode": last.mode.name.lower(),
         "fallback": bool(last.fallback),
+        "fallbacks": sum(bool(p.fallback) for p in plans),
         "eq19_branch": last.details.eq19_branch,
+        "lateral_cause": lateral_cause(last),
+        "games": len(games),
+        "games_change": sum(bool(g.change) for g in games),
         "replans": len(plans) - 1,
+        "plan_switches": len(switches),
+        "final_switch": bool(switches) and switches[-1] == len(plans) - 1,
         "decision_ms": float(np.mean([p.decision_ms for p in plans])),
     }
+
+
+def plan_switches(plans: Sequence[Any]) -> list[int]:
+    """Indices of the plans (of one VR, in decision order) whose cooperating vehicle
+    (:attr:`~hcomc.control.base.MergePlan.cooperating`, -1 for nobody) differs from the plan
+    before: a receding-horizon controller that switches commands another vehicle, or stops
+    or starts commanding one."""
+    return [i for i in range(1, len(plans)) if plans[i].cooperating != plans[i - 1].cooperating]
+
+
+def lateral_cause(plan: Any) -> str:
+    """Why a lateral plan was admissible: "equilibrium" when the Section III-B lane-change
+    game's equilibrium action of the cooperating vehicle is to change lane, "safety_rule"
+    when only the added admission (its change keeps Eq. 15 below the threshold against every
+    response of its follower) allowed it; "" for a plan that is not lateral."""
+    game = getattr(plan.details, "game", None)
+    if plan.mode.name != "LATERAL" or game is None:
+        return ""
+    return "equilibrium" if game.change else "safety_rule"
 
 
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -248,8 +288,14 @@ def _measure(
         "mode": "",
         "sequence": "",
         "eq19_branch": "",
+        "lateral_cause": "",
+        "games": 0,
+        "games_change": 0,
         "replans": 0,
+        "plan_switches": 0,
+        "final_switch": False,
         "fallback": False,
+        "fallbacks": 0,
         "decision_ms": np.nan,
         "vr": -1,
         "vr_kind": "",

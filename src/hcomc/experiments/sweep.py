@@ -47,7 +47,9 @@ GRID_KEYS = ("mean_headway_main_1", "mean_headway_main_2", "cav_penetration")
 RESOLVED = ("base", *GRID_KEYS, "ramp", "ramp_mean_headway", "duration")
 """Columns every result row starts with: the values the run actually used."""
 TIMING = ("wall_s", "decision_ms")
-Configuration = Literal["FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA"]
+Configuration = Literal[
+    "FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA", "FIFO-R", "Game-R", "HCOMC+"
+]
 
 
 class SweepGrid(BaseModel):

@@ -111,7 +111,8 @@ def select_eq19(
     n = F.shape[0]
     if n == 0:
         raise ValueError("cannot select from an empty set")
-    i_safe, i_fuel, i_eff = (_column(names, c) for c in (SAFETY, FUEL, EFFICIENCY))
+    i_safe, i_fuel = _column(names, SAFETY), _column(names, FUEL)
+    _column(names, EFFICIENCY)  # required, as the gate branch reads it
 
     candidates = np.arange(n)
     if feasible is not None:
@@ -128,11 +129,42 @@ def select_eq19(
         # lexsort: last key is primary; NaN sorts last
         order = np.lexsort((candidates, fuel, safety))
         return int(candidates[order[0]])
-
     subset = candidates[gate]
-    total = _minmax(F[subset, i_fuel]) + _minmax(F[subset, i_eff])
-    total[np.isnan(total)] = np.inf  # a non-finite cost never wins over a finite one
-    return int(subset[np.argmin(total)])
+    costs = eq19_costs(F, names, feasible=feasible, safety_threshold=safety_threshold)
+    return int(subset[np.argmin(costs[subset])])
+
+
+def eq19_costs(
+    F: FloatArray,
+    names: Sequence[str],
+    *,
+    feasible: BoolArray | None = None,
+    safety_threshold: float,
+) -> FloatArray:
+    """Eq. 19's cost of every row of ``F`` (the quantity :func:`select_eq19` minimises), so
+    that two candidates of one set can be compared by how much one is worse.
+
+    Rows are considered as in :func:`select_eq19`. If some considered row has ``safety <=
+    safety_threshold``, a row of that gate subset costs the sum of its min-max normalised
+    ``fuel`` and ``efficiency`` over the subset (range [0, 2]; NaN becomes +inf); otherwise a
+    considered row costs its ``safety`` min-max normalised over the considered rows (range
+    [0, 1]). Rows not considered cost +inf.
+    """
+    F = np.asarray(F, dtype=np.float64)
+    n = F.shape[0]
+    i_safe, i_fuel, i_eff = (_column(names, c) for c in (SAFETY, FUEL, EFFICIENCY))
+    considered = np.ones(n, dtype=bool)
+    if feasible is not None and np.any(feasible):
+        considered = np.asarray(feasible, dtype=np.bool_).copy()
+    costs = np.full(n, np.inf)
+    gate = considered & (F[:, i_safe] <= safety_threshold)
+    if gate.any():
+        total = _minmax(F[gate, i_fuel]) + _minmax(F[gate, i_eff])
+        costs[gate] = np.where(np.isnan(total), np.inf, total)
+    else:
+        normalised = _minmax(F[considered, i_safe])
+        costs[considered] = np.where(np.isnan(normalised), np.inf, normalised)
+    return costs
 
 
 def eq19_branch(

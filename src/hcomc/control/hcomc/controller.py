@@ -15,7 +15,12 @@
    the engine replans (receding horizon), the previous Pareto set of the same VR seeds the
    search and the live virtual vehicles are continued, so the commanded motion stays smooth.
 4. Eq. 19 picks one plan from the Pareto set; without any feasible candidate the safe fallback
-   applies: VR merges by gap acceptance and nobody is commanded.
+   applies: VR merges by gap acceptance and nobody is commanded. A replan keeps the live
+   plan's cooperating vehicle, mode and sequence unless a new plan is better by a stated
+   margin or the live one has become infeasible (:mod:`~hcomc.control.hcomc.commitment`).
+
+The labelled extension HCOMC+ (``control.no_cooperation``) also lets the optimiser choose to
+leave the mainline alone (mode "none"); the paper's HCOMC always commands a CAV VMC.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from hcomc.control.base import (
     elapsed_ms,
     virtual_states,
 )
+from hcomc.control.hcomc.commitment import choose, continuation, executed
 from hcomc.control.hcomc.problem import (
     AHEAD,
     OBJECTIVES,
@@ -79,9 +85,12 @@ class HCOMCDetails(PlanDetails):
         "behind", whose game is not played: a lateral candidate is always rolled out in the
         "ahead" group (the cooperating vehicle leaves lane 1 and VR takes its slot), so that
         game could not change the decision.
-    chosen : row of ``pareto`` that Eq. 19 picked (-1: no feasible row, the fallback applies).
+    chosen : row of ``pareto`` that Eq. 19 picked (-1: no feasible row, the fallback applies;
+        ``len(pareto.X)``: the live plan continued, kept by the commitment rule).
     prediction : the prediction of the chosen row (None without a pick).
     eq19_branch : the Eq. 19 case that picked it ("" without a pick).
+    commitment : what the commitment rule of a replan did: "kept" (the live plan's
+        cooperating vehicle, mode and sequence) or "switched"; "" for a first plan.
     """
 
     pareto: ParetoResult
@@ -89,6 +98,7 @@ class HCOMCDetails(PlanDetails):
     chosen: int = -1
     prediction: Prediction | None = None
     eq19_branch: str = ""
+    commitment: str = ""
 
     @property
     def game(self) -> LaneChangeDecision | None:
@@ -227,26 +237,19 @@ class HCOMCController:
                 details=HCOMCDetails(pareto=result, games=games),
             )
         self._pareto[group.vr] = result.X[result.feasible]
-        threshold = problem.safety.threshold
-        k = select_eq19(result.F, OBJECTIVES, feasible=result.feasible, safety_threshold=threshold)
-        x = result.X[k]
+        groups = sequence_groups(view, group)
+        x, f, k, commitment = self._pick(view, groups, problem, result)
         chosen = problem.predict(x[None, :])
-        seq = int(chosen.sequence[0])
-        exec_group = sequence_groups(view, group)[seq]
-        lateral = bool(x[3] >= 0.5)
-        mode = (
-            Mode.NONE
-            if not view.is_cav(exec_group.vmc)
-            else Mode.LATERAL
-            if lateral
-            else Mode.LONGITUDINAL
-        )
+        seq, exec_group, mode = executed(view, groups, problem, x)
         details = HCOMCDetails(
             pareto=result,
             games=games,
             chosen=k,
             prediction=chosen,
-            eq19_branch=eq19_branch(result.F, OBJECTIVES, result.feasible, threshold),
+            eq19_branch=eq19_branch(
+                result.F, OBJECTIVES, result.feasible, problem.safety.threshold
+            ),
+            commitment=commitment,
         )
         return MergePlan(
             exec_group,
@@ -260,12 +263,43 @@ class HCOMCController:
             vv2=chosen.vv2[0].copy()
             if mode == Mode.LATERAL and view.is_cav(exec_group.vnr)
             else None,
-            reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}",
-            objectives=dict(zip(OBJECTIVES, map(float, result.F[k]), strict=True)),
+            reason=f"{result.algorithm}: {result.X.shape[0]} Pareto solutions, Eq. 19 pick {k}"
+            + (f", {commitment}" if commitment else ""),
+            objectives=dict(zip(OBJECTIVES, map(float, f), strict=True)),
             decision_ms=elapsed_ms(start),
             details=details,
             sequence=SEQUENCES[seq],
         )
+
+    def _pick(
+        self,
+        view: TrafficView,
+        groups: tuple[MergeGroup, MergeGroup],
+        problem: MergeProblem,
+        result: ParetoResult,
+    ) -> tuple[np.ndarray, np.ndarray, int, str]:
+        """The plan to execute: Eq. 19's pick from the Pareto set for a first plan; for a
+        replan, the commitment rule (:mod:`~hcomc.control.hcomc.commitment`) over the Pareto
+        set and the live plan continued. Returns its decision vector, objectives, index (in
+        the Pareto set; ``len(result.X)`` for the continued live plan) and what the rule did
+        ("" for a first plan, "kept" or "switched")."""
+        threshold = problem.safety.threshold
+        live = view.live_plan(groups[0].vr)
+        if live is None or live.fallback:
+            k = select_eq19(
+                result.F, OBJECTIVES, feasible=result.feasible, safety_threshold=threshold
+            )
+            return result.X[k], result.F[k], k, ""
+        X, F, feasible = result.X, result.F, result.feasible
+        row = continuation(live, groups, problem, view.t)
+        if row is not None:
+            f, g = problem.evaluate(row[None, :])
+            X, F = np.vstack([X, row]), np.vstack([F, f])
+            feasible = np.append(feasible, bool(np.all(g <= 0.0)))
+        choice = choose(
+            view, groups, problem, (X, F, feasible), live, self.config.control.commitment_margin
+        )
+        return X[choice.row], F[choice.row], choice.row, "kept" if choice.kept else "switched"
 
 
 __all__ = [

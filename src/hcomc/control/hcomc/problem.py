@@ -12,6 +12,11 @@ col   variable                                                    bounds
 4     merge sequence (< 0.5 VR ahead of VMC, >= 0.5 VR behind VMC)  [0, 1]
 ====  ==========================================================  =====================
 
+The paper's cooperation modes are longitudinal (Section III-A-1) and lateral (III-A-2): a CAV
+VMC always cooperates. The labelled extension HCOMC+ (``control.no_cooperation``) adds the
+mode "none", VMC keeps car following and only VR's own merge is planned: the mode variable
+then spans [0, 1.5] and a value of at least 1 selects "none".
+
 The merge sequence (Section II-C) is a decision, not a rule: "ahead" puts VR between VMF and
 VMC, and VMC cooperates; "behind" puts VR between VMC and VMR, and VMR cooperates. Both are
 rolled out with the same kernel on their own key group: for "behind" the group is relabelled
@@ -30,8 +35,10 @@ Objectives, all minimised (columns named for :func:`hcomc.optim.selection.select
   over its own counterfactual distance [L] (a fixed time window would favour slow plans, and
   comparing a different cooperating vehicle's total fuel would favour one sequence by
   background);
-* ``efficiency`` — −U_eff, Eq. 17 accumulated over the window against the no-merge
-  counterfactual (VR: a free road, no lane end), politeness eta over VMC, VMR, VNR [m/s^2].
+* ``efficiency`` — −U_eff, Eq. 17 as the paper writes it: the incentive of VR's lane change
+  at its decision (the predicted state in which VR begins its change), each vehicle's own
+  car-following acceleration after the change minus before it (VR: before = its free-road
+  acceleration), politeness eta over VMC, VMR, VNR [m/s^2].
 
 Constraints (feasible when <= 0): predicted rectangle collisions among the key vehicles
 (count of colliding pair-steps), merge not completed in the window, an unavoidable crash in
@@ -43,7 +50,7 @@ game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to m
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -104,6 +111,10 @@ CONSTRAINTS = (
 )
 SEQUENCES = ("ahead", "behind")
 AHEAD, BEHIND = 0, 1
+MODE_NONE = 1.0
+"""With ``control.no_cooperation`` (HCOMC+) the mode variable spans [0, 1.5]: a value of at
+least this asks for no cooperation (VMC keeps car following); without it the variable spans
+[0, 1] and every row cooperates."""
 _G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
 _FUEL_COEFFICIENTS = np.array(FUEL_DEFAULT.coefficients(), dtype=np.float64)
 _FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64))
@@ -159,6 +170,14 @@ class Prediction:
     sequence: IntArray  # (C,) AHEAD or BEHIND
 
 
+def _without_cooperation(state: KeyState) -> KeyState:
+    """``state`` in which the cooperating vehicle (the VMC role) keeps car following: the
+    group of a row whose mode is "none"."""
+    coop = state.coop.copy()
+    coop[VMC] = False
+    return replace(state, coop=coop)
+
+
 def problem_constants(config: ScenarioConfig) -> FloatArray:
     """The rollout's constants vector, every value read from ``config``."""
     safety = SafetyIndex.from_config(config.control)
@@ -204,14 +223,18 @@ class MergeProblem:
         self.state: KeyState = states[0]  # the "ahead" group always exists
         self.config = config
         self.lateral_allowed = lateral_allowed
+        self.no_cooperation = bool(config.control.no_cooperation)
+        self._variants_of: tuple[KeyState | None, ...] = ()
+        self._variants_cache: tuple[KeyState | None, ...] = ()
         self.safety = SafetyIndex.from_config(config.control)
         road, control = config.road, config.control
         start, end = road.accel_lane_start, road.accel_lane_end
         s = self.state
         length = float(s.params[VR, P_LEN])
         self.xl = np.array([max(start, s.x[VR] + 1.0), 3.0, control.horizon_min, 0.0, 0.0])
+        mode_max = MODE_NONE + 0.5 if self.no_cooperation else 1.0
         self.xu = np.array(
-            [max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, control.horizon_max, 1.0, 1.0]
+            [max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, control.horizon_max, mode_max, 1.0]
         )
         self.consts = problem_constants(config)
         # window: VR reaches the lane end at its current speed, changes lane, then settles
@@ -241,22 +264,58 @@ class MergeProblem:
         # the per-sequence constants of the compiled scoring, prepared on first use
         self._row_cache: dict[int, tuple[object, ...]] = {}
 
+    @property
+    def _variants(self) -> tuple[KeyState | None, ...]:
+        """The groups a row is rolled out in, indexed by variant = sequence + 2 * (mode
+        "none"): the sequences' groups and, for HCOMC+, the same groups in which the
+        cooperating vehicle keeps car following. Derived from ``states`` (a copy of the
+        problem with other states, as the baselines make, gets its own)."""
+        if self._variants_of is not self.states:
+            none = (
+                None if st is None or not self.no_cooperation else _without_cooperation(st)
+                for st in self.states
+            )
+            self._variants_cache, self._variants_of = (*self.states, *none), self.states
+        return self._variants_cache
+
     # ------------------------------------------------------------------ evaluate
     def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
         """Merge sequence, lateral flag and "behind without a vehicle" flag of every row."""
-        seq = np.where(X[:, 4] >= 0.5, BEHIND, AHEAD)
-        lateral = X[:, 3] >= 0.5
-        seq[lateral] = AHEAD  # lateral: the cooperating vehicle leaves; VR takes its slot
-        no_behind = (seq == BEHIND) & (self.states[BEHIND] is None)
-        seq[no_behind] = AHEAD
+        seq, lateral, _, no_behind = self._rows(X)
         return seq, lateral, no_behind
+
+    def _rows(self, X: FloatArray) -> tuple[IntArray, BoolArray, IntArray, BoolArray]:
+        """Per row: merge sequence, lateral flag, variant (the group it is rolled out in:
+        sequence + 2 for mode "none") and the "behind without a vehicle" flag."""
+        seq: IntArray = np.where(X[:, 4] >= 0.5, BEHIND, AHEAD).astype(np.int64)
+        none: BoolArray = (X[:, 3] >= MODE_NONE) & self.no_cooperation
+        lateral: BoolArray = (X[:, 3] >= 0.5) & ~none
+        seq[lateral] = AHEAD  # lateral: the cooperating vehicle leaves; VR takes its slot
+        no_behind: BoolArray = (seq == BEHIND) & (self.states[BEHIND] is None)
+        seq[no_behind] = AHEAD
+        variant: IntArray = seq + 2 * none
+        return seq, lateral, variant, no_behind
+
+    def sequences(self, X: FloatArray) -> IntArray:
+        """The merge sequence (AHEAD or BEHIND) each row is rolled out in."""
+        return self._rows(np.atleast_2d(np.asarray(X, dtype=np.float64)))[0]
+
+    def modes(self, X: FloatArray) -> list[str]:
+        """The cooperation mode each row asks for: "longitudinal", "lateral" or "none"."""
+        X = np.atleast_2d(np.asarray(X, dtype=np.float64))
+        _, lateral, variant, _ = self._rows(X)
+        return [
+            "lateral" if lat else "none" if var >= 2 else "longitudinal"
+            for lat, var in zip(lateral.tolist(), variant.tolist(), strict=True)
+        ]
 
     def _score(
         self, which: int, rows: IntArray, X: FloatArray, lateral: BoolArray, G: FloatArray
     ) -> tuple[FloatArray, tuple[FloatArray, ...]] | None:
-        """Roll out ``rows`` of ``X`` in sequence ``which``: their objectives (writing their
+        """Roll out ``rows`` of ``X`` in variant ``which``: their objectives (writing their
         constraints into ``G``) and the kernel's outputs; None if there is nothing to roll."""
-        state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
+        seq = which % 2
+        state, cf, starts = self._variants[which], self._no_merge[seq], self._starts[seq]
         if rows.size == 0 or state is None or cf is None or starts is None:
             return None
         out = rollout(
@@ -266,15 +325,15 @@ class MergeProblem:
         )  # fmt: skip
         xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
         G[rows, : g.shape[1]] = g
-        allowed = self.lateral_allowed[which]
+        allowed = self.lateral_allowed[seq]
         G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
-        fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[which])
+        fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[seq])
         return objective_rows(u_safe, fuel, u_eff), out
 
     def predict(self, X: FloatArray) -> Prediction:
         """Roll out every candidate row of ``X`` and compute its objectives and constraints."""
         X = np.atleast_2d(np.asarray(X, dtype=np.float64))
-        seq, lateral, no_behind = self._sequences(X)
+        seq, lateral, variant, no_behind = self._rows(X)
         n, K = X.shape[0], self.n_steps
         shape = (n, K + 1, N_ROLES)
         Xt, Yt, Vt, At, Ht = (np.zeros(shape) for _ in range(5))
@@ -282,8 +341,8 @@ class MergeProblem:
         F = np.zeros((n, self.n_obj))
         G = np.zeros((n, self.n_constr))
         vv = [np.zeros((n, 4)) for _ in range(3)]
-        for which in (AHEAD, BEHIND):
-            rows = np.flatnonzero(seq == which)
+        for which in range(len(self._variants)):
+            rows = np.flatnonzero(variant == which)
             scored = self._score(which, rows, X, lateral, G)
             if scored is None:
                 continue
@@ -310,14 +369,14 @@ class MergeProblem:
         those of :meth:`predict` bit for bit (the tests hold both paths to it).
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
-        seq, lateral, no_behind = self._sequences(X)
+        _, lateral, variant, no_behind = self._rows(X)
         F = np.zeros((X.shape[0], self.n_obj))
         G = np.zeros((X.shape[0], self.n_constr))
-        for which in (AHEAD, BEHIND):
-            rows = np.flatnonzero(seq == which)
-            if rows.size == 0 or self.states[which] is None:
+        for which in range(len(self._variants)):
+            rows = np.flatnonzero(variant == which)
+            if rows.size == 0 or self._variants[which] is None:
                 continue  # "behind" rows without a vehicle to merge behind were moved ahead
-            allowed = bool(self.lateral_allowed[which])
+            allowed = bool(self.lateral_allowed[which % 2])
             batch = (X, rows, lateral, allowed, no_behind, self.safety.threshold, self._fuel_ref)
             args = (*self._row_constants(which), *batch, F, G)
             _score_rows(*args)
@@ -351,12 +410,14 @@ class MergeProblem:
         contiguous float64 arrays.
         """
         x = np.asarray(x, dtype=np.float64)
-        lateral = bool(x[3] >= 0.5)  # the rules of _sequences, for one row
+        none = self.no_cooperation and bool(x[3] >= MODE_NONE)  # the rules of _rows, one row
+        lateral = bool(x[3] >= 0.5) and not none
         which = BEHIND if x[4] >= 0.5 and not lateral else AHEAD
         no_behind = which == BEHIND and self.states[BEHIND] is None
         if no_behind:
             which = AHEAD
         lateral_violation = 1.0 if lateral and not self.lateral_allowed[which] else 0.0
+        which += 2 * none
         row = (x, lateral, lateral_violation, 1.0 if no_behind else 0.0)
         args = (*self._row_constants(which), *row, self.safety.threshold, self._fuel_ref, F, G)
         cost: float = _score_row(*args)
@@ -368,7 +429,8 @@ class MergeProblem:
         cached = self._row_cache.get(which)
         if cached is not None:
             return cached
-        state, cf, starts = self.states[which], self._no_merge[which], self._starts[which]
+        seq = which % 2
+        state, cf, starts = self._variants[which], self._no_merge[seq], self._starts[seq]
         # "behind" rows are scored only when that group exists
         assert state is not None
         assert cf is not None
@@ -380,7 +442,7 @@ class MergeProblem:
         constants = (
             state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
             starts, self.consts, self.n_steps, cf, tracks,
-            _FUEL_ROLES[int(bool(state.present[VMC]))], self._fuel_no_merge[which],
+            _FUEL_ROLES[int(bool(state.present[VMC]))], self._fuel_no_merge[seq],
             _FUEL_COEFFICIENTS, self.dt,
         )  # fmt: skip
         self._row_cache[which] = constants

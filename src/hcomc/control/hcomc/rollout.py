@@ -24,12 +24,12 @@ Three passes per candidate population:
 
 0. the **no-merge counterfactual** (candidate-independent): VR alone on a free road, the
    mainline key vehicles without VR and without cooperation; it is the reference of the
-   accumulated Eq. 17 gains and of the common distance of Eq. 16;
+   common distance of Eq. 16, VV0's target and VNR's motion in longitudinal mode;
 1. a **pre-pass** in which VR follows only VV0 and VMF, VMC only VMF and VNF, which fixes the
    end states of VV1 and VV2 at H exactly as the engine executes them (the cubics are fixed
    when the plan is made);
-2. the **joint pass** of every key vehicle, from which trajectories, constraints, Eq. 15 and
-   Eq. 17 are taken.
+2. the **joint pass** of every key vehicle, from which trajectories, constraints, Eq. 15 (at
+   VR's merge completion) and Eq. 17 (at VR's lane-change decision) are taken.
 
 The kernels are compiled with numba: a population is evaluated per optimiser generation, which
 a numpy time-stepping loop cannot do within the decision-time budget. Simulated annealing asks
@@ -227,9 +227,9 @@ def rollout(
     u_safe : (C,) Eq. 15 at k_merge, the largest over the follower-leader pairs the merge
         creates (VR behind its new leader, VR's new follower; lateral mode also VMC behind its
         lane-2 leader and VNR behind VMC).
-    u_eff : (C,) Eq. 17 gain accumulated over the window against the no-merge counterfactual:
-        mean over the K steps of (a_VR − a_VR,cf) + eta Σ_{VMC, VMR, VNR} (a_i − a_i,cf)
-        [m/s^2].
+    u_eff : (C,) Eq. 17, the incentive of VR's lane change in the predicted state in which it
+        begins (:func:`~hcomc.control.hcomc.rollout_score.lane_change_incentive`), 0 if it
+        never begins [m/s^2].
     g : (C, 5) constraint parts; column ``G_COLLISION`` counts the colliding (pair, step)
         combinations of the key vehicles (oriented rectangles, Eq. 7).
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).

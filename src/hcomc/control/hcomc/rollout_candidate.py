@@ -15,7 +15,6 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc.control.hcomc.rollout_layout import (
     C_DT,
-    C_POLITENESS,
     G_COLLISION,
     G_NOT_MERGED,
     G_OVERRUN,
@@ -30,11 +29,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VR,
 )
 from hcomc.control.hcomc.rollout_passes import joint_pass, pre_pass, vmc_pre_track, vv0_cubic
-from hcomc.control.hcomc.rollout_score import (
-    created_pairs_safety,
-    efficiency_gain,
-    virtual_violation,
-)
+from hcomc.control.hcomc.rollout_score import created_pairs_safety, virtual_violation
 
 
 @kernel
@@ -58,12 +53,11 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
     flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
     n_known = pre_pass(x0, v0, a0, present, params, starts, vvs, plan, flags[0], consts, track,
                        S, lc, vr_acc)  # fmt: skip
-    k_merge, g[G_OVERRUN], g[G_COLLISION] = joint_pass(
+    k_merge, g[G_OVERRUN], g[G_COLLISION], u_eff = joint_pass(
         x0, v0, a0, present, params, vvs, plan, lat, flags, consts,
         X, Y, V, A, HEAD, S, lc, box, vr_acc, n_known, cf,
     )  # fmt: skip
     g[G_VIRTUAL] = virtual_violation(vvs, horizon, flags, consts)
-    u_eff = efficiency_gain(A, cf[2], present, consts[C_POLITENESS])
     if k_merge < 0:
         g[G_NOT_MERGED] = 1.0
         return k_merge, np.inf, u_eff

@@ -22,6 +22,7 @@ from hcomc.control.hcomc.rollout_layout import (
     C_DT,
     C_EMERGENCY,
     C_GAMMA,
+    C_POLITENESS,
     C_VMC_DUR,
     C_WIDTH,
     L_LATERAL,
@@ -48,6 +49,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
+from hcomc.control.hcomc.rollout_score import lane_change_incentive
 from hcomc.control.hcomc.rollout_step import (
     behind,
     free_road,
@@ -209,12 +211,14 @@ def joint_pass(
     consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
     HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, box: np.ndarray, vr_acc: np.ndarray,
     n_known: int, cf: np.ndarray,
-) -> tuple[int, float, float]:  # fmt: skip
+) -> tuple[int, float, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
-    of its path lies beyond the acceleration lane [m] and the number of colliding
-    (pair, step) combinations of the key vehicles (Eq. 7). ``S`` (8, 6), ``lc`` (9,) and
+    of its path lies beyond the acceleration lane [m], the number of colliding
+    (pair, step) combinations of the key vehicles (Eq. 7) and U_eff, Eq. 17 in the state in
+    which VR begins its change (:func:`~hcomc.control.hcomc.rollout_score.
+    lane_change_incentive`; 0 if it never does). ``S`` (8, 6), ``lc`` (9,) and
     ``box`` (4, 6) are scratch space; VR's accelerations of the first ``n_known`` steps are
     those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
     counterfactual (:func:`step`).
@@ -226,7 +230,7 @@ def joint_pass(
     vr_acc, cf = borrow(vr_acc), borrow(cf)
     reset_state(S, x0, v0, a0, present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
-    k_merge, overrun, collisions = -1, plan[0] - consts[C_ACCEL_END], 0
+    k_merge, overrun, collisions, u_eff = -1, plan[0] - consts[C_ACCEL_END], 0, 0.0
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
         lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
@@ -237,11 +241,12 @@ def joint_pass(
         started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known, cf)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
+            u_eff = lane_change_incentive(S, params, lateral, consts[C_POLITENESS])
         if done:
             k_merge = k + 1
     if not lc[L_VR_STARTED]:
         overrun = plan[0] - consts[C_ACCEL_END]
-    return k_merge, overrun, float(collisions)
+    return k_merge, overrun, float(collisions), u_eff
 
 
 @kernel

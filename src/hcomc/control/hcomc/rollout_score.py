@@ -1,5 +1,5 @@
-"""Scoring of predicted candidates: Eq. 15 at merge completion, Eq. 17 accumulated over the
-window, the feasibility of the virtual vehicles, the objective vector and the penalised scalar
+"""Scoring of predicted candidates: Eq. 15 at merge completion, Eq. 17 at VR's lane-change
+decision, the feasibility of the virtual vehicles, the objective vector and the penalised scalar
 cost of single-objective optimisers (Eq. 16 over a common distance:
 :mod:`~hcomc.control.hcomc.rollout_fuel`).
 
@@ -28,11 +28,14 @@ from hcomc.control.hcomc.rollout_layout import (
     LANE0,
     N_ROLES,
     P_LEN,
+    R_PRESENT,
+    R_X,
     VMC,
     VMR,
     VNR,
     VR,
 )
+from hcomc.control.hcomc.rollout_step import behind, free_road
 from hcomc.control.virtual_vehicle import cubic_minima
 from hcomc.safety.critical import critical_accel
 
@@ -100,21 +103,45 @@ def created_pairs_safety(
     return worst
 
 
-@kernel
-def efficiency_gain(A: np.ndarray, Ac: np.ndarray, present: np.ndarray, politeness: float) -> float:
-    """Eq. 17 accumulated against the no-merge counterfactual [m/s^2].
+@kernel(inline="always")
+def _leader_in(S: np.ndarray, r: int, lanes: np.ndarray, lane: int) -> int:
+    """Nearest present role strictly ahead of role r among the roles whose entry in
+    ``lanes`` is ``lane``, -1 if none."""
+    best, best_x = -1, np.inf
+    for j in range(N_ROLES):
+        if j != r and S[R_PRESENT, j] and lanes[j] == lane and S[R_X, r] < S[R_X, j] < best_x:
+            best, best_x = j, S[R_X, j]
+    return best
 
-    Mean over the K steps of (a_VR - a_VR,cf) + eta sum over VMC, VMR, VNR of (a_i - a_i,cf),
-    with ``A`` and ``Ac`` (K + 1, 6) the candidate's and the counterfactual accelerations.
+
+@kernel
+def lane_change_incentive(
+    S: np.ndarray, params: np.ndarray, lateral: bool, politeness: float
+) -> float:
+    """Eq. 17, the MOBIL-style incentive of VR's lane change at its decision [m/s^2].
+
+    ``U_eff = (a_VR,new - a_VR,ori) + eta sum_{VMC, VMR, VNR} (a_i,new - a_i,ori)``, each
+    acceleration the vehicle's own car-following model (:func:`~hcomc.control.hcomc.
+    rollout_step.behind`) in the predicted state ``S`` (8, 6) of the step at which VR begins
+    its change: "new" with VR in lane 1 (and, in lateral mode, the cooperating VMC in lane 2),
+    "ori" as before the merge (VR on the acceleration lane, VMC in lane 1). Each vehicle
+    follows the nearest present key vehicle ahead in its lane of that arrangement. VR's "ori"
+    acceleration is its free-road acceleration: with the lane end as its leader the incentive
+    would grow the later VR decides. Roles whose leader the change does not alter contribute 0.
     """
-    K = A.shape[0] - 1
-    gain_vr, others = 0.0, 0.0
-    for k in range(1, K + 1):
-        gain_vr += A[k, VR] - Ac[k, VR]
-        for r in (VMC, VMR, VNR):
-            if present[r]:
-                others += A[k, r] - Ac[k, r]
-    return (gain_vr + politeness * others) / K
+    new, ori = LANE0.copy(), LANE0.copy()
+    new[VR] = 1
+    ori[VR] = 0
+    if lateral:
+        new[VMC] = 2
+    gain = behind(S, params, VR, _leader_in(S, VR, new, 1)) - free_road(S, params, VR)
+    others = 0.0
+    for r in (VMC, VMR, VNR):
+        if S[R_PRESENT, r]:
+            a_new = behind(S, params, r, _leader_in(S, r, new, new[r]))
+            a_ori = behind(S, params, r, _leader_in(S, r, ori, ori[r]))
+            others += a_new - a_ori
+    return gain + politeness * others
 
 
 @kernel
