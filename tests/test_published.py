@@ -27,6 +27,7 @@ from hcomc.experiments.publish import (
     PLACEHOLDER,
     README_END,
     README_START,
+    image_stamp,
     readme_block,
     render_readme_block,
     render_reproduction,
@@ -99,7 +100,7 @@ def test_committed_docs_match_their_summary() -> None:
 def test_committed_docs_are_stamped_with_this_version() -> None:
     prov = digest_mod.load(DOCS / "data").provenance
     assert prov.version == hcomc.__version__
-    stamp = f"hcomc {prov.version} · {prov.revision[:12]}"
+    stamp = image_stamp(prov.version, prov.revision)
     for name in GALLERY:
         assert read_stamp(DOCS / "img" / name) == stamp, name
 
@@ -264,6 +265,8 @@ def test_regenerated_docs_match_their_summary(
 def test_regenerated_images_are_stamped(published: tuple[Path, Path, Path, list[Path]]) -> None:
     _, docs, _, _ = published
     stamp = f"hcomc {hcomc.__version__} · {REVISION[:12]}"
+    assert image_stamp(hcomc.__version__, REVISION) == stamp
+    assert image_stamp("1.0", REVISION + "-dirty") == f"hcomc 1.0 · {REVISION[:12]}-dirty"
     for name in GALLERY:
         with Image.open(docs / "img" / name) as im:
             assert im.format == ("GIF" if name.endswith(".gif") else "PNG")

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from hcomc.experiments.claims import (
     COLUMNS,
     GROUPS,
+    MIN_PAIRS,
     Claim,
     ModeClaim,
     ci_verdict,
@@ -240,3 +241,15 @@ def test_verdict_counts() -> None:
     assert counts.loc[GROUPS["mode"], "holds"] == 1
     holm_counts = verdict_counts(table, "verdict_holm")
     assert holm_counts.loc["all"].sum() == len(table)
+
+
+def test_too_few_differing_seeds_are_undecided() -> None:
+    """Five unanimous seeds give a bootstrap CI clear of 0, but no paired test could call
+    them significant at 5 % (2 / 2^5 > 0.05): the CI verdict stays undecided."""
+    assert MIN_PAIRS == 6
+    assert sign_test(MIN_PAIRS, 0) < 0.05 < sign_test(MIN_PAIRS - 1, 0)
+    for seeds, verdict in ((MIN_PAIRS - 1, "undecided"), (MIN_PAIRS, "holds")):
+        row = claims(_strong_runs(seeds)).set_index("claim")
+        cd = row.loc["HCOMC critical distance higher than FIFO"]
+        assert cd["ci_low"] > 0
+        assert (cd["holds"], cd["verdict"]) == (seeds, verdict)

@@ -11,7 +11,8 @@ reports, and nothing here is written by hand:
   where d has the paper's sign, ``against`` seeds where it has the other sign, ``n`` seeds
   where both values are defined (ties are the rest);
 * ``verdict`` (the CI rule): "holds" when the CI excludes 0 in the paper's direction,
-  "reversed" when it excludes 0 in the other direction, "undecided" otherwise;
+  "reversed" when it excludes 0 in the other direction, "undecided" otherwise, and
+  "undecided" when fewer than :data:`MIN_PAIRS` seeds differ at all;
 * ``p_value``: the two-sided exact **sign test** of the non-zero differences (binomial
   test of ``holds`` against ``holds + against`` at 1/2); ``p_holm``: Holm's step-down
   adjustment over the family of every claim evaluated together; ``verdict_holm``:
@@ -48,6 +49,12 @@ from hcomc.experiments.tables import REPLANNING, TIE_TOLERANCE, median_ci
 
 ALPHA = 0.05
 """Significance level of the tests (and 1 - the CI's coverage)."""
+
+MIN_PAIRS = next(m for m in range(1, 64) if 2 * 0.5**m < ALPHA)
+"""Fewest seeds with a non-zero paired difference for which a claim can be decided (6 at
+ALPHA = 0.05): below it not even a unanimous sign reaches significance, and a bootstrap
+interval of so few values (one value: the value itself) says nothing, so the CI verdict is
+"undecided"."""
 
 VERDICTS = ("holds", "reversed", "undecided")
 """The three verdicts, in display order."""
@@ -231,11 +238,13 @@ def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, object] | None:
     median, low, high = median_ci(diff)
     nan = float("nan")
     p = sign_test(holds, against) if diff.size else nan
+    decidable = holds + against >= MIN_PAIRS
+    verdict = ci_verdict(low, high, claim.expect) if decidable else "undecided"
     return {
         "median_diff": median,
         "ci_low": low,
         "ci_high": high,
-        "verdict": ci_verdict(low, high, claim.expect),
+        "verdict": verdict,
         "p_value": p,
         "direction": int(np.sign(holds - against)),
         "holds": holds,

@@ -13,7 +13,7 @@ from collections.abc import Iterable
 import numpy as np
 import pandas as pd
 
-from hcomc.experiments.claims import ALPHA, GROUPS, VERDICTS, verdict_counts
+from hcomc.experiments.claims import ALPHA, GROUPS, MIN_PAIRS, VERDICTS, verdict_counts
 from hcomc.experiments.digest import Digest
 from hcomc.experiments.paper import PAPER_METRICS, TABLE_III
 from hcomc.experiments.tables import (
@@ -130,6 +130,7 @@ def run_facts(d: Digest) -> dict[str, str]:
         "resamples": str(BOOTSTRAP_RESAMPLES),
         "confidence": _num(100 * (1 - ALPHA)),
         "alpha": _num(ALPHA),
+        "min_pairs": str(MIN_PAIRS),
         "tie_tolerance": _sci(TIE_TOLERANCE, 0),
         "paper_lsrv_range": f"{min(lsrv):.0f}–{max(lsrv):.0f}",
         "paper_fuel": f"{np.mean(fuel):.0f}",
@@ -178,9 +179,11 @@ def decisions_table(d: Digest) -> str:
         gate, low = total("gate"), total("min_safety")
         branch = "—" if gate + low == 0 else f"{_num(gate)} / {_num(low)}"
         rec[f'Eq. 19: "U_safe ≤ {tau}" / "all > {tau}"'] = branch
-        if np.isfinite(total("lateral_equilibrium")) and total("lateral") > 0:
+        if d.decisions["lateral_equilibrium"].notna().any():
             rec["lateral by equilibrium / safety rule"] = (
                 f"{_num(total('lateral_equilibrium'))} / {_num(total('lateral_safety_rule'))}"
+                if total("lateral") > 0
+                else "—"
             )
         rec["decision time median [ms]"] = _g(float(part["decision_ms"].median()))
         rec["fallbacks"] = _num(total("fallback"))

@@ -136,6 +136,12 @@ def check_targets(targets: Targets, force: bool) -> None:
     readme_block(targets.readme.read_text(encoding="utf-8"))  # raises without one block
 
 
+def image_stamp(version: str, revision: str) -> str:
+    """The stamp of the gallery images: version and short revision ("-dirty" kept)."""
+    dirty = "-dirty" if revision.endswith("-dirty") else ""
+    return f"hcomc {version} · {revision[:12]}{dirty}"
+
+
 def default_readme(docs: Path) -> Path | None:
     """The README next to a documentation directory (``DIR/../README.md``), if it exists."""
     path = docs.resolve().parent / "README.md"
@@ -179,7 +185,7 @@ def write_docs(
         (stage / "reproduction.md").write_text(render_reproduction(saved), encoding="utf-8")
         from hcomc.viz.gallery import write_gallery
 
-        stamp = f"hcomc {saved.provenance.version} · {saved.provenance.revision[:12]}"
+        stamp = image_stamp(saved.provenance.version, saved.provenance.revision)
         images = write_gallery(results, stage / "img", stamp)
         written = _install(stage, targets, [p.name for p in images])
     if targets.readme is not None:  # read now: a shared file may have changed meanwhile

@@ -5,7 +5,7 @@ condition of the paper's Fig. 2 at the first seed, simulated with FIFO, Game and
 runs were (their logs), and the first merge decision of HCOMC with NSGA-II, PSO and SA (their
 plan reports). :func:`write_gallery` draws from that scene and the runs table the images the
 README shows, through the figure functions ``hcomc plot`` and ``hcomc animate`` use, each
-stamped in its bottom-right corner (and in its file metadata) with the hcomc version and git
+stamped in a bottom corner (and in its file metadata) with the hcomc version and git
 revision of the run. Nothing is simulated there.
 """
 
@@ -120,8 +120,9 @@ def _save_png(fig: Figure, path: Path, stamp: str) -> Path:
 
 
 def _stamp_gif(path: Path, stamp: str) -> None:
-    """Draw the stamp into every frame's bottom-right corner and store it as the GIF's
-    comment, keeping the frame durations and looping."""
+    """Draw the stamp into every frame's bottom-left corner (the bottom-right one holds the
+    scene's lateral-scale note) and store it as the GIF's comment, keeping the frame
+    durations and looping."""
     from PIL import Image, ImageDraw, ImageSequence
 
     with Image.open(path) as im:
@@ -130,11 +131,8 @@ def _stamp_gif(path: Path, stamp: str) -> None:
         for frame in ImageSequence.Iterator(im):
             rgb = frame.convert("RGB")
             draw = ImageDraw.Draw(rgb)
-            left, top, right, bottom = draw.textbbox((0, 0), stamp)
-            width, height = rgb.size
-            draw.text(
-                (width - (right - left) - 4, height - (bottom - top) - 4), stamp, fill=(90,) * 3
-            )
+            _, top, _, bottom = draw.textbbox((0, 0), stamp)
+            draw.text((4, rgb.size[1] - (bottom - top) - 4), stamp, fill=(90, 90, 90))
             frames.append(rgb.quantize(256, method=Image.Quantize.FASTOCTREE))
     with atomic_paths(path) as (tmp,):
         frames[0].save(
