@@ -18,18 +18,30 @@ from hcomc.control.base import (
     behind_group,
     find_key_vehicles,
 )
-from hcomc.control.fifo import FIFOController, FIFODetails, merge_position, with_cooperation
+from hcomc.control.fifo import (
+    HORIZON_STEP,
+    POSITION_STEP,
+    FIFOController,
+    FIFODetails,
+    last_merge_position,
+    merge_position,
+    nearest_feasible,
+    virtual_vehicle_feasible,
+    with_cooperation,
+)
 from hcomc.control.game import solve_cooperative
 from hcomc.control.hcomc.rollout import VMC, VR
 from hcomc.control.merge_game import (
     AHEAD,
     BEHIND,
+    INFEASIBLE_SAFETY,
     NOT_YIELD,
     YIELD,
     GameController,
     GameDetails,
     kita_mixed,
     pure_nash,
+    safety_term,
     solve_merge_game,
 )
 from hcomc.control.registry import make_controller
@@ -78,11 +90,22 @@ def _same_plan(a: MergePlan, b: MergePlan) -> None:
 
 
 # ------------------------------------------------------------------ registry, closed loop
-@pytest.mark.parametrize(("name", "cls"), [("fifo", FIFOController), ("game", GameController)])
-def test_registry_builds_the_baselines(name, cls):
+@pytest.mark.parametrize(
+    ("name", "cls", "safety"),
+    [("fifo", FIFOController, None), ("game", GameController, "linear"),
+     ("game-capped", GameController, "capped")],
+)  # fmt: skip
+def test_registry_builds_the_baselines(name, cls, safety):
     controller = make_controller(_config("C1", name))
     assert isinstance(controller, cls)
     assert controller.name == name
+    if safety is not None:
+        assert controller.safety == safety
+
+
+def test_game_rejects_an_unknown_safety_term():
+    with pytest.raises(ValueError, match="safety = 'soft'; allowed 'linear', 'capped'"):
+        GameController(_config("C1", "game"), safety="soft")
 
 
 @pytest.mark.parametrize("condition", CONDITIONS)
@@ -328,3 +351,191 @@ def test_game_cav_vmc_plays_the_cooperative_cell_and_yields():
                     # VR still follows its plan unless its VV0 is infeasible (fallback)
                     assert np.isfinite(plan.merge_x) != plan.fallback
     assert seen_yield, "some CAV VMC should yield in the cooperative cell"
+
+
+# ---------------------------------- Game as published: a safety term that does not saturate
+def _game_state() -> tuple[TrafficView, MergeGroup]:
+    """All CAVs; VMC 50 m behind VR's projection at 30 m/s: merging ahead of a VMC that does
+    not yield leaves VR a short gap (U_safe about 6 m/s^2), yielding opens it (about 4)."""
+    view = _view(vmc_x=350.0, vmc_v=30.0)
+    return view, find_key_vehicles(view, 0)
+
+
+@cache
+def _game_plans() -> tuple[MergePlan, MergePlan]:
+    view, group = _game_state()
+    return tuple(  # type: ignore[return-value]
+        GameController(view.config, safety=s).plan(view, group, np.random.default_rng(0))
+        for s in ("linear", "capped")
+    )
+
+
+def test_linear_safety_term_does_not_saturate_and_reads_a_merg_from_config():
+    view, group = _game_state()
+    plan = _game_plans()[0]
+    assert isinstance(plan.details, GameDetails)
+    pred = plan.details.predictions[AHEAD][YIELD]  # a feasible prediction
+    problem = GameController(view.config).problem(view, group)
+    assert view.config.control.safety_emergency_decel == 7.5
+    five, six = (safety_term(pred, problem, u) for u in (5.0, 6.0))
+    assert (five, six) == (5.0 / 7.5, 6.0 / 7.5)
+    assert six > five
+    capped = [safety_term(pred, problem, u, "capped") for u in (5.0, 6.0, 2.0)]
+    assert capped == [1.0, 1.0, 0.5]  # min(1, U_safe / 4): saturated above 4 m/s^2
+    # continuous and strictly increasing, uncapped, up to and beyond a_merg
+    u = np.linspace(0.0, 30.0, 301)
+    j_s = np.array([safety_term(pred, problem, x) for x in u])
+    np.testing.assert_allclose(j_s, u / 7.5, rtol=0, atol=1e-15)
+    assert (np.diff(j_s) > 0).all()
+    # infeasible: an unavoidable crash costs the infeasible cost under either term
+    assert safety_term(pred, problem, np.inf) == INFEASIBLE_SAFETY
+    assert safety_term(pred, problem, np.inf, "capped") == INFEASIBLE_SAFETY
+    # a_merg is the config's value, read through the problem
+    config = load_config("C1", control={"controller": "game", "safety_emergency_decel": 6.0})
+    other = GameController(config).problem(replace(view, config=config), group)
+    assert safety_term(pred, other, 5.0) == 5.0 / 6.0
+    with pytest.raises(ValueError, match="safety = 'soft'"):
+        safety_term(pred, problem, 5.0, "soft")
+
+
+def test_cav_lag_vehicle_yields_when_yielding_opens_a_safer_gap():
+    _, group = _game_state()
+    plan = _game_plans()[0]
+    d = plan.details
+    assert isinstance(d, GameDetails)
+    assert d.safety == "linear"
+    # yielding opens a safer gap: VR's merge ahead of VMC needs less critical deceleration
+    assert d.u_safe[AHEAD, YIELD] < 4.0 < d.u_safe[AHEAD, NOT_YIELD]
+    # the payoffs, rebuilt from the reported terms (oracle): J_s = U_safe / a_merg, shared
+    for i, row in enumerate(("ahead", "behind")):
+        for j, col in enumerate(("yield", "not_yield")):
+            t = d.terms[f"{row}/{col}"]
+            assert t["VR"]["J_s"] == t["lag"]["J_s"] == pytest.approx(d.u_safe[i, j] / 7.5)
+            vr = 0.5 * t["VR"]["J_s"] + 0.3 * t["VR"]["J_e"] + 0.2 * t["VR"]["J_c"]
+            lag = 0.4 * t["lag"]["J_s"] + 0.4 * t["lag"]["J_e"] + 0.2 * t["lag"]["J_c"]
+            assert (d.J_vr[i, j], d.J_lag[i, j]) == pytest.approx((vr, lag))
+    joint = d.J_vr + d.J_lag
+    assert np.unravel_index(np.argmin(joint), joint.shape) == (AHEAD, YIELD)
+    # ... so the CAV lag vehicle (VMC) yields: it is commanded to follow VV1
+    assert d.cell == ("ahead", "yield")
+    assert d.outcome.kind == "cooperative"
+    assert plan.mode == Mode.LONGITUDINAL
+    assert plan.group == group
+    assert plan.group.vmc == 2
+    assert not plan.fallback
+    np.testing.assert_array_equal(plan.vv1, d.predictions[AHEAD][YIELD].vv1[0])
+    assert d.candidates[AHEAD] == (plan.merge_x, plan.horizon)
+
+
+def test_capped_variant_keeps_the_saturating_equilibrium():
+    """The capped term scores both cells of the "ahead" row almost alike (min(1, 3.94 / 4)
+    against 1), so comfort decides and VMC does not yield: the equilibrium hcomc played before
+    the linear term, on the same predictions."""
+    linear, capped = _game_plans()
+    dl, dc = linear.details, capped.details
+    assert isinstance(dl, GameDetails)
+    assert isinstance(dc, GameDetails)
+    assert dc.safety == "capped"
+    np.testing.assert_array_equal(dc.u_safe, dl.u_safe)  # J_s is the only difference
+    assert dc.candidates == dl.candidates
+    assert dc.terms["ahead/not_yield"]["VR"]["J_s"] == 1.0
+    assert dc.terms["ahead/yield"]["VR"]["J_s"] == pytest.approx(dl.u_safe[AHEAD, YIELD] / 4.0)
+    assert dc.cell == ("ahead", "not_yield")
+    assert capped.mode == Mode.NONE
+    assert capped.vv1 is None
+    assert "game-capped" in capped.reason
+
+
+def test_game_is_deterministic_per_request():
+    view, group = _game_state()
+    for safety in ("linear", "capped"):
+        controller = GameController(view.config, safety=safety)
+        a, b = (controller.plan(view, group, np.random.default_rng(3)) for _ in "ab")
+        _same_plan(a, b)
+
+
+# ------------------------------------------------------ FIFO: the nearest feasible VV1
+def _far_leader_view(config: ScenarioConfig | None = None) -> TrafficView:
+    """VMF 200 m ahead of VR's projection: VV1, from VMF's state to VR's at VR's arrival
+    (11 s), would have to brake harder than b_max = 7.5 m/s^2."""
+    view = _view(vmc_x=330.0, vmc_v=30.0)
+    x = view.x.copy()
+    x[1] = 600.0
+    return replace(view, x=x, config=config or view.config)
+
+
+def _grid(view: TrafficView, merge_x: float, horizon: float) -> list[tuple[float, float]]:
+    """The search grid in its documented order (oracle, written out independently)."""
+    h_max = view.config.control.horizon_max
+    x_last = last_merge_position(view, 0)
+    positions = [
+        merge_x + i * POSITION_STEP for i in range(100) if merge_x + i * POSITION_STEP <= x_last
+    ]
+    positions += [x_last] if positions[-1] < x_last else []
+    horizons = [
+        horizon + k * HORIZON_STEP for k in range(100) if horizon + k * HORIZON_STEP <= h_max
+    ]
+    horizons += [h_max] if horizons[-1] < h_max else []
+    return [(x, h) for x in positions for h in horizons][1:]  # fmt: skip
+
+
+def _feasible(problem, cells: list[tuple[float, float]], duration: float) -> np.ndarray:
+    rows = np.array([[x, duration, h, 0.0, 0.0] for x, h in cells])
+    pred = problem.predict(rows)  # the population path, not evaluate's
+    return np.array([virtual_vehicle_feasible(pred, r) for r in range(len(cells))])
+
+
+def test_fifo_degrades_to_the_nearest_feasible_virtual_vehicle():
+    view = _far_leader_view()
+    group = find_key_vehicles(view, 0)
+    controller = FIFOController(view.config)
+    plan = controller.plan(view, group, np.random.default_rng(0))
+    d = plan.details
+    assert isinstance(d, FIFODetails)
+    assert plan.sequence == "ahead"
+    merge_x, horizon = d.nominal
+    assert merge_x == 710.0
+    duration = view.config.cav.lane_change_duration
+    problem = controller.problem(view, group)
+    assert not _feasible(problem, [d.nominal], duration)[0]  # the rule's own VV1 is infeasible
+    # the plan still commands VMC, with a feasible VV1 ...
+    assert not plan.fallback
+    assert plan.mode == Mode.LONGITUDINAL
+    assert plan.group.vmc == 2
+    assert "nearest feasible VV1" in plan.reason
+    tau = np.linspace(0.0, plan.horizon, 401)
+    _, v, a = cubic_state(plan.vv1, tau)
+    assert v.min() >= 0.0
+    assert a.min() >= -view.config.control.virtual_max_decel
+    # ... the first feasible candidate of the documented grid (merge position kept, H longer)
+    grid = _grid(view, merge_x, horizon)
+    ok = _feasible(problem, grid, duration)
+    first = int(np.flatnonzero(ok)[0])
+    assert (plan.merge_x, plan.horizon) == pytest.approx(grid[first])
+    assert plan.merge_x == merge_x
+    assert plan.horizon > horizon
+    assert nearest_feasible(problem, merge_x, duration, horizon, 20.0, last_merge_position(
+        view, 0)) == pytest.approx(grid[first])  # fmt: skip
+    # deterministic
+    _same_plan(plan, controller.plan(view, group, np.random.default_rng(9)))
+
+
+def test_fifo_falls_back_only_when_no_candidate_is_feasible():
+    strict = load_config("C1", control={"controller": "fifo", "virtual_max_decel": 0.05})
+    view = _far_leader_view(strict)
+    group = find_key_vehicles(view, 0)
+    controller = FIFOController(strict)
+    plan = controller.plan(view, group, np.random.default_rng(0))
+    d = plan.details
+    assert isinstance(d, FIFODetails)
+    merge_x, horizon = d.nominal
+    grid = _grid(view, merge_x, horizon)
+    problem = controller.problem(view, group)
+    duration = strict.cav.lane_change_duration
+    assert not _feasible(problem, [d.nominal, *grid], duration).any()
+    assert nearest_feasible(problem, merge_x, duration, horizon, 20.0, 900.0) is None
+    assert plan.fallback
+    assert plan.mode == Mode.NONE
+    assert plan.vv1 is None
+    assert np.isnan(plan.merge_x)
+    assert "gap acceptance" in plan.reason

@@ -239,11 +239,12 @@ class PlatoonParams(_Frozen):
 class ControlParams(_Frozen):
     """Merge controller and its optimiser (paper Section III)."""
 
-    controller: Literal["none", "hcomc", "fifo", "game"] = Field(
+    controller: Literal["none", "hcomc", "fifo", "game", "game-capped"] = Field(
         "none",
         description=(
             "merge controller; 'none' = gap acceptance only, 'hcomc' = the paper's controller, "
-            "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game)"
+            "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game); "
+            "'game-capped' = the merge game with a safety term capped at 1 (a variant)"
         ),
     )
     optimizer: Literal["nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy"] = Field(

@@ -1,6 +1,9 @@
 """FIFO merge-sequence baseline (Ntousakis, Nikolos & Papageorgiou 2016).
 
-The FIFO baseline of the paper's Table III orders the ramp vehicle VR and the mainline vehicles
+The paper (Section I) describes the baseline it follows: "Ntousakis et al. [11] established two
+merging sequence decision rules: first in first out (FIFO) and linear prediction of vehicle
+speed, which can ensure safety"; Section IV compares HCOMC with "the FIFO model [11]" (Table
+III). This FIFO baseline orders the ramp vehicle VR and the mainline vehicles
 around its projection first-in-first-out by their predicted arrival time at the merge point,
 and lets the mainline vehicle that must give way yield longitudinally through the virtual
 vehicle VV1 of Eq. 8-10. It never uses lateral cooperation (paper Table III: FIFO and Game are
@@ -45,9 +48,19 @@ Assumptions (documented; the paper gives no implementation details of its benchm
 * **Prediction.** VR, VMF and the yielding vehicle are predicted with
   :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
   candidate ``[merge_x, vr_duration, H, 0, sequence]`` (longitudinal); its ``vv0[0]`` and
-  ``vv1[0]`` are exactly the coefficients the engine executes. If a virtual vehicle is
-  infeasible (speed < 0 or deceleration beyond ``control.virtual_max_decel``), the plan falls
-  back to gap acceptance (``fallback=True``, mode NONE, ``merge_x`` NaN), like HCOMC's.
+  ``vv1[0]`` are exactly the coefficients the engine executes.
+* **Nearest feasible VV1.** Ntousakis et al. give every vehicle an arrival time and the
+  yielding vehicle an analytic trajectory to meet it, so the yielding vehicle yields whatever
+  the traffic. When a virtual vehicle of the rule's candidate is infeasible (speed < 0 or
+  deceleration beyond ``control.virtual_max_decel``), the candidate moves to the nearest
+  feasible one (:func:`nearest_feasible`): on a deterministic grid, the merge position kept if
+  possible and H lengthened in steps of :data:`HORIZON_STEP` up to ``control.horizon_max``;
+  otherwise the merge position moved downstream in steps of :data:`POSITION_STEP` (up to the
+  last position whose change still ends on the acceleration lane), each with the smallest such
+  H. The first candidate in that order whose virtual vehicles are feasible is executed (the
+  plan records the rule's own candidate in :attr:`FIFODetails.nominal`). Only when none is
+  feasible does the plan fall back to gap acceptance (``fallback=True``, mode NONE,
+  ``merge_x`` NaN), like HCOMC's.
 * **Only VMF, VMC and VR are sequenced.** If VR is predicted to arrive even before VMF, it still
   takes the VMF-VMC slot (VMF's own leader is outside the key group);
   :attr:`FIFODetails.order` shows the predicted order and the engine's MOBIL safety check
@@ -70,6 +83,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.base import (
     MergeGroup,
@@ -95,12 +109,17 @@ from hcomc.road import VMC, VR
 
 __all__ = [
     "FIFO_HEADWAY",
+    "HORIZON_STEP",
     "MERGE_OFFSET",
     "MIN_HORIZON",
+    "POSITION_STEP",
     "FIFOController",
     "FIFODetails",
     "arrival_times",
+    "feasible_candidate",
+    "last_merge_position",
     "merge_position",
+    "nearest_feasible",
     "predict_longitudinal",
     "reach_horizon",
     "virtual_vehicle_feasible",
@@ -113,6 +132,11 @@ MIN_HORIZON = 4.0
 """Lower bound of the virtual-vehicle horizon H [s] (roughly 4-10 s)."""
 FIFO_HEADWAY = 1.5
 """Ntousakis et al.'s minimum time headway between consecutive arrivals [s] (reported only)."""
+HORIZON_STEP = 0.5
+"""Step of the nearest-feasible search over the virtual-vehicle horizon H [s] (two prediction
+steps at the default ``control.prediction_dt``)."""
+POSITION_STEP = MERGE_OFFSET
+"""Step of the nearest-feasible search over the merge position [m]."""
 _MIN_SPEED = 0.1  # [m/s] floor in the arrival-time prediction
 _G_VIRTUAL = CONSTRAINTS.index("virtual_vehicle")
 
@@ -132,12 +156,19 @@ def merge_position(view: TrafficView, vr: int) -> tuple[float, float]:
         ``accel_lane_start`` [m].
     vr_duration : ``config.cav.lane_change_duration`` [s].
     """
+    road = view.config.road
+    merge_x = min(road.accel_lane_start + MERGE_OFFSET, last_merge_position(view, vr))
+    return max(merge_x, road.accel_lane_start), float(view.config.cav.lane_change_duration)
+
+
+def last_merge_position(view: TrafficView, vr: int) -> float:
+    """The last merge position whose change, predicted at VR's current speed with the CAV
+    default duration, ends on the acceleration lane: ``accel_lane_end - max(v T, 3 L)`` [m]
+    (the engine's rule, :meth:`hcomc.sim.engine.Simulation._start_lane_changes`)."""
     cfg = view.config
-    road = cfg.road
     duration = float(cfg.cav.lane_change_duration)
     span = max(float(view.v[vr]) * duration, 3.0 * float(view.fleet.length[vr]))
-    merge_x = min(road.accel_lane_start + MERGE_OFFSET, road.accel_lane_end - span)
-    return max(merge_x, road.accel_lane_start), duration
+    return float(cfg.road.accel_lane_end - span)
 
 
 def arrival_times(view: TrafficView, group: MergeGroup, merge_x: float) -> dict[str, float]:
@@ -215,8 +246,93 @@ def predict_longitudinal(
 
 
 def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
-    """Whether VV1 of the prediction's ``row`` is feasible (v >= 0, a >= -b_max)."""
+    """Whether the virtual vehicles (VV0 of a CAV VR, VV1 of a cooperating vehicle) of the
+    prediction's ``row`` are feasible (v >= 0, a >= -b_max)."""
     return bool(pred.G[row, _G_VIRTUAL] <= 0.0)
+
+
+def _steps(first: float, last: float, step: float) -> FloatArray:
+    """``first, first + step, ...`` up to ``last``, and ``last`` itself (one value if
+    ``last <= first``)."""
+    n = int(np.floor(max(last - first, 0.0) / step + 1e-9))
+    values = first + step * np.arange(n + 1, dtype=np.float64)
+    if values[-1] < last:
+        values = np.append(values, last)
+    out: FloatArray = values
+    return out
+
+
+def nearest_feasible(
+    problem: MergeProblem,
+    merge_x: float,
+    vr_duration: float,
+    horizon: float,
+    h_max: float,
+    x_last: float,
+    sequence: int = AHEAD,
+) -> tuple[float, float] | None:
+    """The candidate nearest to ``(merge_x, horizon)`` whose virtual vehicles are feasible.
+
+    The grid, in the order searched: the merge position ``merge_x`` with H = ``horizon`` +
+    k :data:`HORIZON_STEP` (k = 1, 2, ...) and ``h_max``; then each merge position ``merge_x`` +
+    i :data:`POSITION_STEP` (i = 1, 2, ...) up to ``x_last`` (and ``x_last`` itself), each with
+    H = ``horizon`` + k :data:`HORIZON_STEP` (k = 0, 1, ...) and ``h_max``. The candidates are
+    scored in one call of :meth:`MergeProblem.evaluate
+    <hcomc.control.hcomc.problem.MergeProblem.evaluate>` (longitudinal, ``sequence``); only
+    the virtual-vehicle constraint is asked of them, the criterion of the rule's own candidate.
+
+    Returns
+    -------
+    (merge_x, H) of the first feasible candidate [m, s], or None when none is feasible.
+    """
+    positions = _steps(merge_x, max(x_last, merge_x), POSITION_STEP)
+    horizons = _steps(horizon, max(h_max, horizon), HORIZON_STEP)
+    grid = np.array([(x, h) for x in positions for h in horizons])[1:]  # the rule's one tried
+    if grid.size == 0:
+        return None
+    rows = np.column_stack(
+        [grid[:, 0], np.full(len(grid), vr_duration), grid[:, 1],
+         np.zeros(len(grid)), np.full(len(grid), float(sequence))]
+    )  # fmt: skip
+    _, G = problem.evaluate(rows)
+    ok = np.flatnonzero(G[:, _G_VIRTUAL] <= 0.0)
+    if ok.size == 0:
+        return None
+    return float(grid[ok[0], 0]), float(grid[ok[0], 1])
+
+
+def feasible_candidate(
+    view: TrafficView,
+    vr: int,
+    problem: MergeProblem,
+    merge_x: float,
+    vr_duration: float,
+    sequence: int = AHEAD,
+) -> tuple[Prediction, float, float, tuple[float, float]]:
+    """The rule's candidate (:func:`predict_longitudinal` at the fixed merge position), moved
+    to the :func:`nearest_feasible` one when its virtual vehicles are infeasible.
+
+    Returns
+    -------
+    prediction : of the candidate executed (the rule's own if no candidate is feasible).
+    merge_x, horizon : of that candidate [m, s].
+    nominal : the rule's own (merge_x, H) [m, s].
+    """
+    h_max = float(view.config.control.horizon_max)
+    pred, horizon = predict_longitudinal(
+        problem, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max, sequence
+    )
+    nominal = (merge_x, horizon)
+    if virtual_vehicle_feasible(pred):
+        return pred, merge_x, horizon, nominal
+    found = nearest_feasible(
+        problem, merge_x, vr_duration, horizon, h_max, last_merge_position(view, vr), sequence
+    )
+    if found is None:
+        return pred, merge_x, horizon, nominal
+    x, h = found
+    row = np.array([[x, vr_duration, h, 0.0, float(sequence)]])
+    return problem.predict(row), x, h, nominal
 
 
 def _schedule(arrivals: dict[str, float], headway: float) -> dict[str, float]:
@@ -242,6 +358,9 @@ class FIFODetails(PlanDetails):
     yielding : vehicle index of the vehicle that yields (-1: none).
     prediction : the prediction of the executed candidate (None without a VMC).
     feasible : whether that prediction satisfies every constraint (False without one).
+    nominal : the rule's own candidate (merge position [m], H [s]) before the nearest-feasible
+        search (NaN without a VMC); the plan's ``merge_x`` and ``horizon`` differ from it when
+        its virtual vehicles were infeasible and a feasible one was found.
     """
 
     arrival: dict[str, float]
@@ -250,6 +369,7 @@ class FIFODetails(PlanDetails):
     yielding: int = -1
     prediction: Prediction | None = None
     feasible: bool = False
+    nominal: tuple[float, float] = (float("nan"), float("nan"))
 
 
 class PredictingBaseline:
@@ -304,10 +424,9 @@ class FIFOController(PredictingBaseline):
             )
         seq = AHEAD if arrivals["VR"] < arrivals["VMC"] else BEHIND
         exec_group = sequence_groups(view, group)[seq]
-        h_max = float(view.config.control.horizon_max)
         problem = self.problem(view, group)
-        pred, horizon = predict_longitudinal(
-            problem, merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max, seq
+        pred, merge_x, horizon, nominal = feasible_candidate(
+            view, vr, problem, merge_x, vr_duration, seq
         )
         details = FIFODetails(
             arrivals,
@@ -316,8 +435,11 @@ class FIFOController(PredictingBaseline):
             yielding=exec_group.vmc,
             prediction=pred,
             feasible=bool((pred.G[0] <= 0.0).all()),
+            nominal=nominal,
         )
         what = "VR before VMC: VMC yields" if seq == AHEAD else "VMC before VR: VR merges behind"
+        if (merge_x, horizon) != nominal:
+            what += f" (nearest feasible VV1: merge at {merge_x:.0f} m, H = {horizon:.2f} s)"
         return longitudinal_plan(
             view,
             exec_group,

@@ -1,7 +1,12 @@
 r"""Game-theoretic merge baseline (Liao et al. 2022; Kita 1999).
 
-The "Game" benchmark of the paper's Table III is Liao et al.'s two-player game between the ramp
-vehicle and the mainline lag vehicle, which may be an HDV. Only the abstracts are known, so it is
+The paper follows Liao et al. for this benchmark (Section I: "Liao et al. [17], [18] designed
+cooperative rules based on game theory, and verified the effectiveness of the proposed merging
+method through software simulation and digital twin experiments"; Section IV: "the game theory
+model [17]", Table III "Game") and states what it does (Section IV-A): "under Condition 2,
+where VMC implements longitudinal cooperation both in FIFO and game theory, while implementing
+lateral cooperation in our HCOMC". Liao et al.'s game is played between the ramp vehicle and
+the mainline lag vehicle, which may be an HDV. Only the abstracts are known, so it is
 implemented as the Kita-style 2x2 game of docs/models.md, executed longitudinally
 with the virtual vehicle VV1 (Eq. 8-10); no lateral cooperation, no NSGA-II (paper Table III).
 
@@ -13,8 +18,12 @@ Players and actions (row player first; index 0 / 1):
 
 Joint actions are scored from forward predictions of
 :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
-longitudinal candidate ``[merge_x, vr_duration, H, 0]`` of :mod:`hcomc.control.fifo` (fixed
-merge position and duration, H = VR's predicted arrival time at ``merge_x``):
+longitudinal candidate ``[merge_x, vr_duration, H, 0, row]`` of :mod:`hcomc.control.fifo`
+(fixed merge position and duration, H = VR's predicted arrival time at ``merge_x``). If the
+yield cell's virtual vehicles are infeasible in a row, that row's candidate moves to the
+nearest feasible one by FIFO's rule (:func:`hcomc.control.fifo.nearest_feasible`: H
+lengthened, then the merge position moved downstream), so that "yield" is a trajectory the lag
+vehicle can follow; both cells of the row use the row's candidate:
 
 ====================  ======================================  ==============================
 cell                  key group predicted                     follower of VR's slot
@@ -25,28 +34,37 @@ cell                  key group predicted                     follower of VR's s
 (behind, not yield)   relabelled group, old VMR car-follows   VMR
 ====================  ======================================  ==============================
 
-The relabelled group is :func:`hcomc.control.fifo.behind_group` (old VMC → ``vmf``, old VMR →
-``vmc``). "Yield" / "not yield" is obtained by overriding the ``cav`` flag of the ``vmc`` role
+The relabelled group is :func:`hcomc.control.base.behind_group` (old VMC → ``vmf``, old VMR →
+``vmc``). "Yield" / "not yield" is obtained by overriding the ``coop`` flag of the ``vmc`` role
 in a copy of the prediction's key state (:func:`hcomc.control.fifo.with_cooperation`): the
 rollout makes that role follow VV1 iff the flag is set. The simulation state is never touched.
 
 Payoffs: :math:`U = -J`, :math:`J = w_s J_s + w_e J_e + w_c J_c` per player,
 over the whole prediction window:
 
-* :math:`J_s = \min(1, U_{safe}/a_{th})`, :math:`a_{th}` = ``control.safety_threshold``
-  (4 m/s²), with :math:`U_{safe}` the worst Eq. 15 critical acceleration over consecutive
-  same-lane key pairs at merge completion — the rollout's ``F[:, 0]`` recomputed with the
-  vehicles' *true* kinds for the Eq. 15 delay (0.5 s CAV, 1.0 s HDV), so the cooperation
-  override does not change a vehicle's reaction time. :math:`J_s = 10` when the prediction is
+* :math:`J_s = U_{safe}/a_{merg}` (``safety="linear"``, the default), with :math:`U_{safe}`
+  the worst Eq. 15 critical acceleration over the follower-leader pairs the merge creates, at
+  merge completion (the rollout's ``F[:, 0]``; the Eq. 15 delays follow the vehicles' *true*
+  kinds, 0.5 s CAV and 1.0 s HDV, so the cooperation override does not change a vehicle's
+  reaction time) and :math:`a_{merg}` = ``control.safety_emergency_decel`` (7.5 m/s²), Eq. 15's
+  emergency deceleration: :math:`J_s` is the share of an emergency stop the merge demands of
+  the worst follower, 1 when it needs the full emergency deceleration. It is continuous,
+  strictly increasing and not capped. :math:`J_s = 10` when the prediction is
   infeasible: a predicted collision, an unavoidable crash (:math:`U_{safe} = \infty`), VR not
-  merged in the window, an infeasible VV1 (speed < 0 or deceleration beyond
-  ``control.virtual_max_decel``), or a key vehicle predicted to brake harder than Eq. 15's
-  emergency deceleration :math:`a_{merg}` = 7.5 m/s² (the same rule as
-  :mod:`hcomc.control.lane_change_game`'s :math:`a_{cr} > a_{merg}`: a cut-in that forces
-  emergency braking is a near-crash that U_safe at merge completion alone does not show).
-  :math:`J_s` is shared by both players (a property of the group). Note that at highway
-  speeds U_safe is often above 4 m/s², so :math:`J_s` saturates at 1 and the cells are then
-  separated by efficiency and comfort.
+  merged in the window, an infeasible virtual vehicle (speed < 0 or deceleration beyond
+  ``control.virtual_max_decel``), or a key vehicle predicted to brake harder than
+  :math:`a_{merg}` (the same rule as :mod:`hcomc.control.lane_change_game`'s
+  :math:`a_{cr} > a_{merg}`: a cut-in that forces emergency braking is a near-crash that
+  U_safe at merge completion alone does not show). :math:`J_s` is shared by both players (a
+  property of the group).
+
+  Why linear: Kita's merge game has payoffs linear in the safety measure (there the time to
+  collision), and Section IV-A says the lag vehicle cooperates. The lane-change game's capped
+  term :math:`\min(1, U_{safe}/a_{th})` (:math:`a_{th}` = ``control.safety_threshold``,
+  4 m/s²) saturates at highway speed — a CAV at its equilibrium gap at 30 m/s already has
+  :math:`U_{safe} \approx 4.6` m/s² — so every cell of most games scores 1 and comfort alone
+  decides against yielding, whatever gap the yield opens. That term is kept as the variant
+  ``safety="capped"`` (controller ``"game-capped"``), which differs in :math:`J_s` only.
 * :math:`J_e = \operatorname{mean}_k |v_k - v_0| / v_0` of the player.
 * :math:`J_c = \operatorname{mean}_k a_k^2 / a_{max}^2` of the player, :math:`a_{max}` its
   maximum acceleration parameter (1.4 m/s² CAV, 1.0 m/s² HDV).
@@ -84,8 +102,9 @@ prediction are reused):
   says; a non-CAV lag vehicle is never commanded, whatever the cell.
 * An HDV's "yield" is predicted as tracking VV1 (an idealised yield), its "not yield" as its
   IDM car following without delays or noise (the rollout's HDV model).
-* A chosen yield cell whose VV1 is infeasible falls back to gap acceptance (``fallback=True``,
-  mode NONE, ``merge_x`` NaN); its :math:`J_s = 10` makes this rare.
+* A chosen cell whose virtual vehicles are infeasible even after the nearest-feasible search
+  falls back to gap acceptance (``fallback=True``, mode NONE, ``merge_x`` NaN); its
+  :math:`J_s = 10` makes this rare.
 
 References
 ----------
@@ -109,6 +128,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
+from hcomc.config import ScenarioConfig
 from hcomc.control.base import (
     MergeGroup,
     MergePlan,
@@ -119,8 +139,10 @@ from hcomc.control.base import (
 )
 from hcomc.control.fifo import (
     PredictingBaseline,
+    last_merge_position,
     longitudinal_plan,
     merge_position,
+    nearest_feasible,
     predict_longitudinal,
     reach_horizon,
     virtual_vehicle_feasible,
@@ -139,6 +161,7 @@ __all__ = [
     "INFEASIBLE_SAFETY",
     "NORMAL_WEIGHTS",
     "NOT_YIELD",
+    "SAFETY_TERMS",
     "YIELD",
     "GameController",
     "GameDetails",
@@ -160,6 +183,9 @@ CAV_WEIGHTS = (0.5, 0.3, 0.2)
 """(w_s, w_e, w_c) of a CAV ramp vehicle."""
 NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
 """(w_s, w_e, w_c) of the "normal" driving type (Hang et al. 2021)."""
+SAFETY_TERMS = ("linear", "capped")
+"""The shared safety term J_s: ``"linear"`` U_safe / a_merg (the published game),
+``"capped"`` min(1, U_safe / threshold) (the variant "game-capped")."""
 INFEASIBLE_SAFETY = INFEASIBLE_SAFETY_COST
 """J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]; the
 same cost the lane-change game gives an infeasible action."""
@@ -205,6 +231,8 @@ class GameDetails(PlanDetails):
     groups : the usual and the relabelled key group ("ahead", "behind").
     predictions : the prediction of each cell, ``predictions[row][col]``.
     feasible : whether the played cell's prediction satisfies every constraint.
+    candidates : each row's candidate (merge position [m], H [s]), ``candidates[row]``.
+    safety : the safety term played (:data:`SAFETY_TERMS`).
     """
 
     J_vr: FloatArray
@@ -216,6 +244,8 @@ class GameDetails(PlanDetails):
     groups: tuple[MergeGroup, MergeGroup]
     predictions: tuple[PredictionPair, PredictionPair]
     feasible: bool
+    candidates: tuple[tuple[float, float], tuple[float, float]]
+    safety: str
 
 
 def _matrix(name: str, value: ArrayLike) -> FloatArray:
@@ -336,25 +366,38 @@ def player_cost(
 
 
 def safety_term(
-    pred: Prediction, problem: MergeProblem, u_safe: float, threshold: float, row: int = 0
+    pred: Prediction,
+    problem: MergeProblem,
+    u_safe: float,
+    safety: str = "linear",
+    row: int = 0,
 ) -> float:
     """Shared safety term ``J_s`` of one predicted joint action (module docstring).
 
-    ``min(1, u_safe / threshold)``, or :data:`INFEASIBLE_SAFETY` when the prediction has a
-    collision, VR not merged, an unavoidable crash (``u_safe`` infinite), an infeasible VV1, or
-    a present key vehicle braking harder than Eq. 15's emergency deceleration ``a_merg``.
+    ``u_safe / a_merg`` (``safety="linear"``; ``a_merg`` = ``control.safety_emergency_decel``)
+    or ``min(1, u_safe / threshold)`` (``"capped"``; ``control.safety_threshold``), or
+    :data:`INFEASIBLE_SAFETY` when the prediction has a collision, VR not merged, an
+    unavoidable crash (``u_safe`` infinite), an infeasible virtual vehicle, or a present key
+    vehicle braking harder than Eq. 15's emergency deceleration ``a_merg``.
     """
+    if safety not in SAFETY_TERMS:
+        raise ValueError(f"safety = {safety!r}: allowed {', '.join(map(repr, SAFETY_TERMS))}")
     g = pred.G[row]
     present = (problem.states[int(pred.sequence[row])] or problem.state).present
     a_min = float(pred.A[row][:, present].min())
+    a_merg = problem.safety.emergency_decel
     infeasible = (
         g[_G["collision"]] > 0.0
         or g[_G["not_merged"]] > 0.0
         or not np.isfinite(u_safe)
         or not virtual_vehicle_feasible(pred, row)
-        or a_min < -problem.safety.emergency_decel
+        or a_min < -a_merg
     )
-    return INFEASIBLE_SAFETY if infeasible else float(min(1.0, u_safe / threshold))
+    if infeasible:
+        return INFEASIBLE_SAFETY
+    if safety == "capped":
+        return float(min(1.0, u_safe / problem.safety.threshold))
+    return float(u_safe / a_merg)
 
 
 class GameController(PredictingBaseline):
@@ -363,6 +406,8 @@ class GameController(PredictingBaseline):
     Parameters
     ----------
     config : scenario (reads ``road``, ``cav`` and ``control``).
+    safety : the shared safety term, one of :data:`SAFETY_TERMS`: ``"linear"`` (the published
+        game, controller ``"game"``) or ``"capped"`` (the variant ``"game-capped"``).
 
     Notes
     -----
@@ -371,7 +416,39 @@ class GameController(PredictingBaseline):
     carries none.
     """
 
-    name = "game"
+    def __init__(self, config: ScenarioConfig, safety: str = "linear") -> None:
+        if safety not in SAFETY_TERMS:
+            allowed = ", ".join(map(repr, SAFETY_TERMS))
+            raise ValueError(f"GameController: safety = {safety!r}; allowed {allowed}")
+        super().__init__(config)
+        self.safety = safety
+        self.name = "game" if safety == "linear" else f"game-{safety}"
+
+    def candidates(
+        self, view: TrafficView, vr: int, yielding: MergeProblem, merge_x: float, duration: float
+    ) -> tuple[tuple[float, float], tuple[float, float], Prediction]:
+        """Each row's candidate (merge position [m], H [s]) and the (ahead, yield) prediction.
+
+        H is VR's predicted arrival at the fixed merge position (:func:`predict_longitudinal`
+        in the "ahead" row's yield cell), shared by both rows; a row whose yield cell has an
+        infeasible virtual vehicle takes FIFO's nearest feasible candidate instead
+        (:func:`hcomc.control.fifo.nearest_feasible`), or keeps its own when none is.
+        """
+        h_max = float(view.config.control.horizon_max)
+        first, horizon = predict_longitudinal(
+            yielding, merge_x, duration, reach_horizon(view, vr, merge_x), h_max
+        )
+        x_last = last_merge_position(view, vr)
+        nominal = (merge_x, horizon)
+        rows = [nominal, nominal]
+        for i in (AHEAD, BEHIND):
+            pred = first if i == AHEAD else yielding.predict(_row(*nominal, duration, i))
+            if not virtual_vehicle_feasible(pred):
+                found = nearest_feasible(yielding, merge_x, duration, horizon, h_max, x_last, i)
+                rows[i] = found or nominal
+        if rows[AHEAD] != nominal:
+            first = yielding.predict(_row(*rows[AHEAD], duration, AHEAD))
+        return rows[AHEAD], rows[BEHIND], first
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
         """Solve the 2x2 game between VR and the lag vehicle and execute its outcome."""
@@ -388,14 +465,10 @@ class GameController(PredictingBaseline):
                 reason="game: no lane-1 vehicle behind VR, no game to play",
                 decision_ms=elapsed_ms(start),
             )
-        h_max = float(view.config.control.horizon_max)
-        threshold = float(view.config.control.safety_threshold)
         groups = sequence_groups(view, group)
         problem = self.problem(view, group)
         variants = (with_cooperation(problem, True), with_cooperation(problem, False))
-        first, horizon = predict_longitudinal(
-            variants[YIELD], merge_x, vr_duration, reach_horizon(view, vr, merge_x), h_max
-        )
+        *rows, first = self.candidates(view, vr, variants[YIELD], merge_x, vr_duration)
         preds: list[list[Prediction]] = [[first, first], [first, first]]
         J_vr, J_lag, u_safe = np.zeros((2, 2)), np.zeros((2, 2)), np.zeros((2, 2))
         terms: dict[str, dict[str, dict[str, float]]] = {}
@@ -403,11 +476,10 @@ class GameController(PredictingBaseline):
         for i in (AHEAD, BEHIND):
             for j in (YIELD, NOT_YIELD):
                 if not (i == AHEAD and j == YIELD):
-                    row_x = np.array([[merge_x, vr_duration, horizon, 0.0, float(i)]])
-                    preds[i][j] = variants[j].predict(row_x)
+                    preds[i][j] = variants[j].predict(_row(*rows[i], vr_duration, i))
                 pred = preds[i][j]
                 u_safe[i, j] = float(pred.F[0, 0]) if pred.k_merge[0] >= 0 else np.inf
-                j_s = safety_term(pred, problem, u_safe[i, j], threshold)
+                j_s = safety_term(pred, problem, u_safe[i, j], self.safety)
                 J_vr[i, j], t_vr = player_cost(pred, problem, VR, w_vr, j_s)
                 J_lag[i, j], t_lag = player_cost(pred, problem, VMC, NORMAL_WEIGHTS, j_s)
                 terms[f"{ROW_NAMES[i]}/{COL_NAMES[j]}"] = {"VR": t_vr, "lag": t_lag}
@@ -426,18 +498,26 @@ class GameController(PredictingBaseline):
             groups=groups,
             predictions=((preds[0][0], preds[0][1]), (preds[1][0], preds[1][1])),
             feasible=bool((pred.G[0] <= 0.0).all()),
+            candidates=(rows[0], rows[1]),
+            safety=self.safety,
         )
-        what = f"game ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
+        what = f"{self.name} ({outcome.kind}): VR {cell[0]} of VMC, lag vehicle {cell[1]}"
+        x_played, h_played = rows[outcome.row]
         return longitudinal_plan(
             view,
             exec_group,
             pred,
-            merge_x=merge_x,
+            merge_x=x_played,
             vr_duration=vr_duration,
-            horizon=horizon,
+            horizon=h_played,
             reason=what,
             start=start,
             details=details,
             sequence=outcome.row,
             commands=outcome.col == YIELD and view.is_cav(exec_group.vmc),
         )
+
+
+def _row(merge_x: float, horizon: float, duration: float, sequence: int) -> FloatArray:
+    """The longitudinal candidate row ``[merge_x, duration, H, 0, sequence]`` (1, 5)."""
+    return np.array([[merge_x, duration, horizon, 0.0, float(sequence)]])

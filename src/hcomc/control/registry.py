@@ -26,10 +26,17 @@ def _game(config: ScenarioConfig) -> MergeController:
     return GameController(config)
 
 
+def _game_capped(config: ScenarioConfig) -> MergeController:
+    from hcomc.control.merge_game import GameController
+
+    return GameController(config, safety="capped")
+
+
 CONTROLLERS: dict[str, Callable[[ScenarioConfig], MergeController]] = {
     "hcomc": _hcomc,
     "fifo": _fifo,
     "game": _game,
+    "game-capped": _game_capped,
 }
 
 
