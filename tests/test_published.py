@@ -22,7 +22,8 @@ from hcomc.experiments import digest as digest_mod
 from hcomc.experiments.claims import verdict_counts
 from hcomc.experiments.narrative import values
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.experiments.publish import (
+from hcomc.viz.gallery import GALLERY, read_stamp, record_scene
+from hcomc.viz.publish import (
     GENERATED,
     PLACEHOLDER,
     README_END,
@@ -34,7 +35,6 @@ from hcomc.experiments.publish import (
     template,
     write_docs,
 )
-from hcomc.viz.gallery import GALLERY, read_stamp, record_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

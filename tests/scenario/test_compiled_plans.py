@@ -27,6 +27,7 @@ CASES: dict[str, tuple[str, dict[str, Any], int]] = {
     "C2 Game-R": ("C2", {"controller": "game", "replan_period": 1.0}, 1),
     "C3 FIFO": ("C3", {"controller": "fifo", "replan_period": 0.0}, 2),
     "C5 Game": ("C5", {"controller": "game", "replan_period": 0.0}, 0),
+    "C3 HCOMC": ("C3", {"controller": "hcomc"}, 0),
 }
 
 

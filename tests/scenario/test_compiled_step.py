@@ -1,9 +1,9 @@
 """The compiled step reproduces the numpy step it replaced, and ensembles reproduce runs alone.
 
 The references in ``tests/data/numpy_step`` were recorded with the numpy implementation of
-the step (``make_reference.py`` there): C1-C5 with no controller, FIFO and HCOMC, C4 with a
-ramp flow and the platoon scenario, seed 0 — controllers' decisions included, so the
-Python/compiled hand-over at decision events is covered too.
+the step (``make_reference.py`` there): C1-C5 with no controller and with FIFO, C4 with a ramp
+flow and the platoon scenario, seed 0 — FIFO's decisions included, so the Python/compiled
+hand-over at decision events is covered too.
 
 Observed: the logs (float32) and the event kinds and vehicles are identical; float64 positions
 differ by at most one unit in the last place (2.3e-13 m at x = 1.5 km). The numpy step called

@@ -35,6 +35,7 @@ def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: Any) -> P
     :func:`hcomc.viz.gallery.record_scene` for the first seed, or the exception it raised in
     its worker, raised here once the tables are saved) and the metric plots."""
     from hcomc.viz.figures import metrics_figure
+    from hcomc.viz.gallery import REPLAY_FILE, SCENE_DIR
     from hcomc.viz.report import figure_png, write_report
 
     if isinstance(contour, BaseException):
@@ -49,7 +50,11 @@ def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: Any) -> P
         "bar marked n=k rests on the k seeds that give a value)":
             figure_png(metrics_figure(runs)),
     }  # fmt: skip
-    return write_report(out_dir, runs, figures=figures, claim_frame=claim_frame)
+    replays = {
+        f"Condition 2, seed {seed}: FIFO, Game and HCOMC side by side (interactive replay)":
+            f"{SCENE_DIR}/{REPLAY_FILE}",
+    }  # fmt: skip
+    return write_report(out_dir, runs, figures=figures, claim_frame=claim_frame, replays=replays)
 
 
 PAPER_SCENARIO: dict[str, dict[str, Any]] = {
@@ -143,7 +148,7 @@ def _print_results(runs: Any, paper_runs: Any, claim_rows: Any) -> None:
 
 def _publish(out_dir: Path, docs: Path | None, readme: Path | None, force: bool) -> None:
     """Regenerate the documentation of a results directory and name every file written."""
-    from hcomc.experiments.publish import write_docs
+    from hcomc.viz.publish import write_docs
 
     if docs is None:
         return
@@ -157,7 +162,7 @@ def _publish(out_dir: Path, docs: Path | None, readme: Path | None, force: bool)
 def _docs_targets(docs: Path | None, readme: Path | None, force: bool) -> Path | None:
     """Check a documentation directory before anything runs; return the README to update
     (the given one, else the README.md next to ``docs`` if there is one)."""
-    from hcomc.experiments.publish import Targets, check_targets, default_readme
+    from hcomc.viz.publish import Targets, check_targets, default_readme
 
     if docs is None:
         if readme is not None:
@@ -202,9 +207,9 @@ def reproduce(
     readme: ReadmeOption = None,
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA,
-    and the replanning baselines FIFO-R, Game-R), seeded runs plus the deterministic paper
-    scenario. --set changes a config value for every run (e.g. a sensitivity check); --docs
-    regenerates the published documentation from the run."""
+    the replanning baselines FIFO-R, Game-R and the labelled extension HCOMC+), seeded runs
+    plus the deterministic paper scenario. --set changes a config value for every run (e.g. a
+    sensitivity check); --docs regenerates the published documentation from the run."""
     from hcomc.config import nest_overrides
     from hcomc.experiments.claims import claims
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, grid

@@ -2,7 +2,7 @@
 number, made from a :class:`~hcomc.experiments.digest.Digest` alone.
 
 :func:`values` returns them as the named values the templates of
-:mod:`hcomc.experiments.publish` put in place of their ``{{ name }}`` placeholders. Text
+:mod:`hcomc.viz.publish` put in place of their ``{{ name }}`` placeholders. Text
 without numbers is the templates'; nothing with a number is written by hand.
 """
 

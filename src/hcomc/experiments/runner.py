@@ -3,10 +3,10 @@
 A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
 HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published), two baseline variants
 that replan every second ("FIFO-R", "Game-R"), and the labelled extension "HCOMC+". Every
-run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file, configuration, seed, overrides)
-that returns one results row and the run's manifest. Seeds are shared across configurations
-within a condition (common random numbers: the same traffic for every controller), so
-comparisons are paired by seed.
+run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file,
+configuration, seed, overrides) that returns one results row and the run's manifest. Seeds
+are shared across configurations within a condition (common random numbers: the same traffic
+for every controller), so comparisons are paired by seed.
 
 Every run is measured against its undisturbed counterpart: the same condition, overrides and
 seed simulated without releasing the ramp vehicle (:mod:`hcomc.metrics`). That run does not

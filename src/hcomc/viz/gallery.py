@@ -34,6 +34,8 @@ __all__ = [
 
 SCENE_DIR = "scene"
 """Subdirectory of a results directory holding the recorded scene."""
+REPLAY_FILE = "replay.html"
+"""The scene's interactive replay, beside its logs."""
 
 SCENE_CONFIGURATIONS = ("FIFO", "Game", "HCOMC")
 """Configurations simulated for the scene (one log each, ``<label>.npz``)."""
@@ -83,13 +85,16 @@ def record_scene(
     Writes ``out_dir/scene/``: ``FIFO.npz``, ``Game.npz`` and ``HCOMC.npz`` (the logs of
     :func:`hcomc.viz.inputs.controller_logs` with the runs' config ``overrides``),
     ``plans.json`` (optimiser -> plan report of the first decision, the input of ``hcomc
-    plot plans.json --kind pareto``) and ``scene.json`` (condition and seed). A
+    plot plans.json --kind pareto``), ``replay.html`` (the three runs side by side in the
+    interactive replay, :func:`hcomc.viz.replay.write_replay`) and ``scene.json`` (condition
+    and seed). A
     self-contained task that ``hcomc reproduce`` hands to a worker process; the PNG is the
     report's Fig. 2.
     """
     from hcomc.experiments.runner import configuration_overrides
     from hcomc.viz.figures import contour_figure
     from hcomc.viz.inputs import controller_logs
+    from hcomc.viz.replay import write_replay
     from hcomc.viz.report import figure_png
 
     settings = dict(overrides or {})
@@ -98,6 +103,7 @@ def record_scene(
     scene.mkdir(parents=True, exist_ok=True)
     for label, log in logs.items():
         log.save(scene / f"{label}.npz")
+    write_replay(scene / REPLAY_FILE, list(logs.values()), list(logs))
     reports = {
         opt: _first_decision(condition, seed, configuration_overrides(label, settings))
         for opt, label in PARETO_CONFIGURATIONS.items()

@@ -14,9 +14,10 @@ unless
   ``control.commitment_margin``.
 
 The candidates are the optimiser's Pareto set plus the live plan continued (its merge
-position, duration and remaining horizon, re-predicted from now), and Eq. 19's cost is taken
-over that pool (:func:`hcomc.optim.selection.eq19_costs`: min-max normalised, so the margin
-is a share of the pool's range: 0.2 of the [0, 2] range of the two normalised costs).
+position, duration and remaining horizon, re-predicted from now) and the same cooperation on
+a small grid of merge positions and horizons, and Eq. 19's cost is taken over that pool
+(:func:`hcomc.optim.selection.eq19_costs`: min-max normalised, so the margin is a share of
+the pool's range: 0.2 of the [0, 2] range of the two normalised costs).
 """
 
 from __future__ import annotations
@@ -66,13 +67,17 @@ def commitment_of(plan: MergePlan) -> Commitment:
     return plan.group.vmc, plan.mode
 
 
-def continuation(
+def continuations(
     live: MergePlan, groups: tuple[MergeGroup, MergeGroup], problem: MergeProblem, t: float
 ) -> FloatArray | None:
-    """The live plan as a candidate row of ``problem`` (its merge position and duration, the
-    rest of its horizon, its mode and the sequence whose group has the same cooperating
-    vehicle), clipped to the bounds; None when that vehicle is no longer next to VR's slot
-    or the plan has no merge position (a fallback)."""
+    """Candidate rows of ``problem`` that keep the live plan's commitment: the live plan
+    continued (its merge position and duration, the rest of its horizon), then the same
+    cooperation on a small grid of merge positions (:data:`GRID_POSITIONS` evenly over the
+    bounds) and horizons (the continued one and :data:`GRID_HORIZONS` evenly over the
+    bounds), all with its mode and the sequence whose group has the same cooperating vehicle,
+    clipped to the bounds. None when that vehicle is no longer next to VR's slot or the plan
+    has no merge position (a fallback). The grid lets a cooperation that is still possible in
+    another form be kept even when the optimiser did not search near it."""
     seqs = [s for s, g in enumerate(groups) if g.vmc == live.group.vmc]
     if live.mode == Mode.LATERAL:
         seqs = [s for s in seqs if s == AHEAD]  # a lateral row is rolled out "ahead"
@@ -81,9 +86,20 @@ def continuation(
     mode = {Mode.LONGITUDINAL: 0.25, Mode.LATERAL: 0.75, Mode.NONE: 0.25}[live.mode]
     if live.mode == Mode.NONE and problem.no_cooperation and live.group.vmc >= 0:
         mode = MODE_NONE + 0.25
-    row = np.array([live.merge_x, live.vr_duration, live.horizon - (t - live.t0), mode, seqs[0]])
-    out: FloatArray = np.clip(row, problem.xl, problem.xu)
+    xl, xu = problem.xl, problem.xu
+    horizon = live.horizon - (t - live.t0)
+    positions = [live.merge_x, *np.linspace(xl[0], xu[0], GRID_POSITIONS)]
+    horizons = [horizon, *np.linspace(xl[2], xu[2], GRID_HORIZONS)]
+    rows = [[live.merge_x, live.vr_duration, horizon, mode, seqs[0]]]
+    rows += [[x, live.vr_duration, h, mode, seqs[0]] for x in positions[1:] for h in horizons]
+    out: FloatArray = np.clip(np.array(rows), xl, xu)
     return out
+
+
+GRID_POSITIONS = 5
+"""Merge positions of the committed grid of :func:`continuations`."""
+GRID_HORIZONS = 3
+"""Horizons of the committed grid of :func:`continuations`, besides the continued one."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -95,12 +111,14 @@ class Choice:
     row : index of the chosen row in the pool.
     kept : the chosen row keeps the live plan's commitment.
     margin : Eq. 19 cost of the best committed row minus that of the best row (inf: no
-        committed row is feasible; nan: nothing was live).
+        committed row is feasible, or none passes Eq. 19's safety gate while another does).
+    why : what the rule did, in words: "kept", or "switched: " and the reason.
     """
 
     row: int
     kept: bool
     margin: float
+    why: str
 
 
 def choose(
@@ -122,9 +140,12 @@ def choose(
          for ok, seq, mode in zip(feasible, seqs, modes, strict=True)]
     )  # fmt: skip
     if not committed.any():
-        return Choice(best, False, np.inf)
+        return Choice(best, False, np.inf, "switched: no feasible candidate keeps the cooperation")
     keep = int(np.flatnonzero(committed)[np.argmin(costs[committed])])
     excess = float(costs[keep] - costs[best])
     if excess <= margin:
-        return Choice(keep, True, excess)
-    return Choice(best, False, excess)
+        return Choice(keep, True, excess, "kept")
+    if np.isinf(excess):
+        gate = f"U_safe > {problem.safety.threshold:g} m/s² (Eq. 19's gate)"
+        return Choice(best, False, excess, f"switched: every candidate keeping it has {gate}")
+    return Choice(best, False, excess, f"switched: Eq. 19 cost lower by {excess:.3g}")

@@ -41,7 +41,7 @@ from hcomc.control.base import (
     elapsed_ms,
     virtual_states,
 )
-from hcomc.control.hcomc.commitment import choose, continuation, executed
+from hcomc.control.hcomc.commitment import choose, continuations, executed
 from hcomc.control.hcomc.problem import (
     AHEAD,
     OBJECTIVES,
@@ -86,11 +86,14 @@ class HCOMCDetails(PlanDetails):
         "ahead" group (the cooperating vehicle leaves lane 1 and VR takes its slot), so that
         game could not change the decision.
     chosen : row of ``pareto`` that Eq. 19 picked (-1: no feasible row, the fallback applies;
-        ``len(pareto.X)``: the live plan continued, kept by the commitment rule).
+        ``len(pareto.X)`` or more: a row keeping the live plan's cooperation, added by the
+        commitment rule, :func:`~hcomc.control.hcomc.commitment.continuations`).
     prediction : the prediction of the chosen row (None without a pick).
     eq19_branch : the Eq. 19 case that picked it ("" without a pick).
     commitment : what the commitment rule of a replan did: "kept" (the live plan's
-        cooperating vehicle, mode and sequence) or "switched"; "" for a first plan.
+        cooperating vehicle, mode and sequence) or "switched: ..." with the reason (no
+        feasible candidate keeps the live cooperation, every one keeping it fails Eq. 19's
+        safety gate, or the Eq. 19 cost it gains); "" for a first plan.
     """
 
     pareto: ParetoResult
@@ -280,9 +283,10 @@ class HCOMCController:
     ) -> tuple[np.ndarray, np.ndarray, int, str]:
         """The plan to execute: Eq. 19's pick from the Pareto set for a first plan; for a
         replan, the commitment rule (:mod:`~hcomc.control.hcomc.commitment`) over the Pareto
-        set and the live plan continued. Returns its decision vector, objectives, index (in
-        the Pareto set; ``len(result.X)`` for the continued live plan) and what the rule did
-        ("" for a first plan, "kept" or "switched")."""
+        set and the rows keeping the live plan's cooperation. Returns its decision vector,
+        objectives, index (in the Pareto set; ``len(result.X)`` or more for an added row) and
+        what the rule did
+        ("" for a first plan, "kept", or "switched: ..." with the reason)."""
         threshold = problem.safety.threshold
         live = view.live_plan(groups[0].vr)
         if live is None or live.fallback:
@@ -291,15 +295,15 @@ class HCOMCController:
             )
             return result.X[k], result.F[k], k, ""
         X, F, feasible = result.X, result.F, result.feasible
-        row = continuation(live, groups, problem, view.t)
-        if row is not None:
-            f, g = problem.evaluate(row[None, :])
-            X, F = np.vstack([X, row]), np.vstack([F, f])
-            feasible = np.append(feasible, bool(np.all(g <= 0.0)))
+        rows = continuations(live, groups, problem, view.t)
+        if rows is not None:
+            f, g = problem.evaluate(rows)
+            X, F = np.vstack([X, rows]), np.vstack([F, f])
+            feasible = np.append(feasible, np.all(g <= 0.0, axis=1))
         choice = choose(
             view, groups, problem, (X, F, feasible), live, self.config.control.commitment_margin
         )
-        return X[choice.row], F[choice.row], choice.row, "kept" if choice.kept else "switched"
+        return X[choice.row], F[choice.row], choice.row, choice.why
 
 
 __all__ = [
