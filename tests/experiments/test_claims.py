@@ -253,3 +253,21 @@ def test_too_few_differing_seeds_are_undecided() -> None:
         cd = row.loc["HCOMC critical distance higher than FIFO"]
         assert cd["ci_low"] > 0
         assert (cd["holds"], cd["verdict"]) == (seeds, verdict)
+
+
+def test_the_extension_is_a_holm_family_of_its_own() -> None:
+    """HCOMC+'s runs add its Table III claims in their own group; the paper's claims keep
+    every p_holm and verdict they had without them, and the extension's p_holm is Holm over
+    its own claims only."""
+    runs = _strong_runs()
+    plus = runs[runs["configuration"] == "HCOMC"].assign(configuration="HCOMC+")
+    plus["critical_distance"] = [99.0 + (s % 2) * 3.0 for s in range(30)]  # 15 of 30 above
+    alone, both = claims(runs), claims(pd.concat([runs, plus], ignore_index=True))
+    ext = both[both["group"] == GROUPS["extension"]]
+    paper = both[both["group"] != GROUPS["extension"]].reset_index(drop=True)
+    pd.testing.assert_frame_equal(paper, alone)
+    assert len(ext) == len(alone[alone["group"] == GROUPS["table3"]])
+    row = ext.set_index("claim").loc["HCOMC+ critical distance higher than FIFO"]
+    assert (row["holds"], row["against"], row["verdict"]) == (15, 15, "undecided")
+    assert (row["condition"], row["paper"]) == ("C1", "114.21 vs 104.67")
+    np.testing.assert_allclose(ext["p_holm"], holm(ext["p_value"]))

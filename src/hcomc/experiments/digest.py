@@ -157,7 +157,8 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
     ``behind`` / ``ahead`` (VR's realised sequence relative to VMC), ``lateral`` /
     ``longitudinal`` / ``none`` / ``no_plan`` (the last plan's cooperation mode), ``gate`` /
     ``min_safety`` (Eq. 19's branch), ``fallback`` (the last plan a fallback), ``vmc_hdv``
-    (VMC an HDV), ``final_switch``, ``lateral_equilibrium`` / ``lateral_safety_rule`` (why
+    (VMC an HDV), ``switched`` (at least one plan switch), ``final_switch`` (the last plan
+    switched), ``lateral_equilibrium`` / ``lateral_safety_rule`` (why
     a lateral plan was admissible); and ``plans_per_merge`` (mean plans over runs with a
     plan), ``plan_switches`` (mean), ``decision_ms`` (median). A count whose column the
     runs lack is NaN.
@@ -179,6 +180,9 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
             ("lateral_safety_rule", "lateral_cause", "safety_rule"),
         ):  # fmt: skip
             rec[name] = _count(part, column, value)
+        rec["switched"] = (
+            float(part["plan_switches"].gt(0).sum()) if "plan_switches" in part else np.nan
+        )
         rec["plans_per_merge"] = (
             float((planned["replans"] + 1).mean()) if "replans" in part and len(planned) else np.nan
         )

@@ -8,102 +8,40 @@ without numbers is the templates'; nothing with a number is written by hand.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-
 import numpy as np
 import pandas as pd
 
+from hcomc.experiments.checks import checks_table
 from hcomc.experiments.claims import ALPHA, GROUPS, MIN_PAIRS, VERDICTS, verdict_counts
 from hcomc.experiments.digest import Digest
 from hcomc.experiments.paper import PAPER_METRICS, TABLE_III
+from hcomc.experiments.prose import (
+    METRIC_NAMES,
+    cell,
+    g,
+    join,
+    md,
+    num,
+    p_text,
+    pct,
+    sci,
+    total,
+    total_collisions,
+    weighted,
+)
 from hcomc.experiments.tables import (
-    BETTER,
     BOOTSTRAP_RESAMPLES,
     LABELS,
     TABLE_CAPTION,
     TIE_TOLERANCE,
     format_table,
-    to_markdown,
 )
-
-CHECKS = {"behind": 0.20, "lateral_c2": 0.30, "not_worse": 4, "cd_larger": 3}
-"""Thresholds of the checks of a faithful HCOMC: VR behind VMC in at least this share of
-HCOMC's runs; lateral cooperation in at least this share of its C2 runs; average
-acceleration and LSRV not worse than each baseline in at least this many conditions;
-critical distance larger than FIFO's (paired median) in at least this many conditions."""
-
-_METRIC_NAMES = {m: m.replace("_", " ") for m in PAPER_METRICS}
-
-
-def _g(x: float) -> str:
-    """Four significant digits, "—" for NaN."""
-    return "—" if not np.isfinite(x) else f"{x:.4g}"
-
-
-def _sci(x: float, digits: int = 1) -> str:
-    """Scientific notation without a padded exponent: 3.7e-4."""
-    mantissa, exponent = f"{x:.{digits}e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
-
-
-def _p(x: float) -> str:
-    """A p-value: three decimals, or two significant digits below 0.001."""
-    if not np.isfinite(x):
-        return "—"
-    return _sci(x) if x < 1e-3 else f"{x:.3f}"
-
-
-def _pct(k: float, n: float) -> str:
-    return "—" if not n or not np.isfinite(k) else f"{round(100 * k / n)} %"
-
-
-def _num(x: float) -> str:
-    """A count or a value: an integer without decimals, else four significant digits."""
-    if not np.isfinite(x):
-        return "—"
-    return str(int(x)) if float(x).is_integer() else f"{x:.4g}"
-
-
-def _join(items: Iterable[str]) -> str:
-    """The items as prose: "a", "a and b", "a, b and c"."""
-    items = list(items)
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
-def _weighted(values: pd.Series, weights: pd.Series) -> float:
-    """Mean of per-cell means weighted by their runs (NaN without weight or values)."""
-    ok = values.notna() & (weights > 0)
-    if not ok.any():
-        return float("nan")
-    return float(np.average(values[ok], weights=weights[ok]))
-
-
-def _md(frame: pd.DataFrame) -> str:
-    return to_markdown(frame).rstrip("\n")
-
-
-# --------------------------------------------------------------------------- run and decisions
-def _total(d: Digest, column: str, configuration: str | None = None) -> tuple[float, int]:
-    """Sum of a decisions column and of its runs (over one configuration, or all)."""
-    dec = d.decisions
-    part = dec if configuration is None else dec[dec["configuration"] == configuration]
-    return float(part[column].sum(min_count=1)), int(part["runs"].sum())
-
-
-def _cell(d: Digest, condition: str, configuration: str, column: str) -> tuple[float, int]:
-    dec = d.decisions
-    row = dec[(dec["condition"] == condition) & (dec["configuration"] == configuration)]
-    if row.empty:
-        return float("nan"), 0
-    return float(row[column].iloc[0]), int(row["runs"].iloc[0])
 
 
 def run_facts(d: Digest) -> dict[str, str]:
     """Scope and provenance of the run, and the quoted config values."""
     prov, settings = d.provenance, d.provenance.settings
-    collisions = float(d.decisions["collisions"].sum(min_count=1))
-    if "collisions" in d.scenario:
-        collisions += float(d.scenario["collisions"].sum())
+    collisions = total_collisions(d)
     n_runs = prov.seeded_runs + prov.scenario_runs
     lsrv = [v[3] for v in TABLE_III.values()]
     fuel = [v[4] for v in TABLE_III.values()]
@@ -120,18 +58,18 @@ def run_facts(d: Digest) -> dict[str, str]:
         "n_conditions": str(len(prov.conditions)),
         "n_configurations": str(len(prov.configurations)),
         "configurations": ", ".join(prov.configurations),
-        "collisions": _num(collisions),
-        "a_merg": _num(settings["a_merg"]),
-        "virtual_max_decel": _num(settings["virtual_max_decel"]),
-        "safety_threshold": _num(settings["safety_threshold"]),
-        "cav_time_headway": _num(settings["cav_time_headway"]),
-        "duration": _num(settings["duration"]),
-        "road_length": _num(settings["road_length"] / 1000.0),
+        "collisions": num(collisions),
+        "a_merg": num(settings["a_merg"]),
+        "virtual_max_decel": num(settings["virtual_max_decel"]),
+        "safety_threshold": num(settings["safety_threshold"]),
+        "cav_time_headway": num(settings["cav_time_headway"]),
+        "duration": num(settings["duration"]),
+        "road_length": num(settings["road_length"] / 1000.0),
         "resamples": str(BOOTSTRAP_RESAMPLES),
-        "confidence": _num(100 * (1 - ALPHA)),
-        "alpha": _num(ALPHA),
+        "confidence": num(100 * (1 - ALPHA)),
+        "alpha": num(ALPHA),
         "min_pairs": str(MIN_PAIRS),
-        "tie_tolerance": _sci(TIE_TOLERANCE, 0),
+        "tie_tolerance": sci(TIE_TOLERANCE, 0),
         "paper_lsrv_range": f"{min(lsrv):.0f}–{max(lsrv):.0f}",
         "paper_fuel": f"{np.mean(fuel):.0f}",
     }
@@ -139,17 +77,17 @@ def run_facts(d: Digest) -> dict[str, str]:
 
 def hcomc_facts(d: Digest) -> str:
     """One sentence: what HCOMC decided over the run."""
-    behind, runs = _total(d, "behind", "HCOMC")
-    lateral, all_runs = _total(d, "lateral", "HCOMC")
-    lat_c2, runs_c2 = _cell(d, "C2", "HCOMC", "lateral")
+    behind, runs = total(d, "behind", "HCOMC")
+    lateral, all_runs = total(d, "lateral", "HCOMC")
+    lat_c2, runs_c2 = cell(d, "C2", "HCOMC", "lateral")
     own = d.decisions[d.decisions["configuration"] == "HCOMC"]
-    mean_plans = _weighted(own["plans_per_merge"], own["runs"] - own["no_plan"])
-    merged, _ = _total(d, "merged", "HCOMC")
-    merge = f"VR merged in {_num(merged)} of {runs} runs, " if np.isfinite(merged) else ""
+    mean_plans = weighted(own["plans_per_merge"], own["runs"] - own["no_plan"])
+    merged, _ = total(d, "merged", "HCOMC")
+    merge = f"VR merged in {num(merged)} of {runs} runs, " if np.isfinite(merged) else ""
     return (
-        f"{merge}behind VMC in {_num(behind)} ({_pct(behind, runs)}); lateral cooperation in "
-        f"{_num(lat_c2)} of {runs_c2} C2 runs ({_pct(lat_c2, runs_c2)}) and {_num(lateral)} of "
-        f"{all_runs} runs overall; {_g(mean_plans)} plans per merge on average"
+        f"{merge}behind VMC in {num(behind)} ({pct(behind, runs)}); lateral cooperation in "
+        f"{num(lat_c2)} of {runs_c2} C2 runs ({pct(lat_c2, runs_c2)}) and {num(lateral)} of "
+        f"{all_runs} runs overall; {g(mean_plans)} plans per merge on average"
     )
 
 
@@ -162,33 +100,33 @@ def decisions_table(d: Digest) -> str:
     for conf, part in d.decisions.groupby("configuration", sort=False):
         runs = int(part["runs"].sum())
 
-        def total(col: str, part: pd.DataFrame = part) -> float:
+        def count(col: str, part: pd.DataFrame = part) -> float:
             return float(part[col].sum(min_count=1))
 
         planned = part["runs"] - part["no_plan"]
         rec: dict[str, str] = {"configuration": str(conf), "runs": str(runs)}
-        if np.isfinite(total("merged")):
-            rec["merged"] = _num(total("merged"))
-        rec["VR behind VMC"] = f"{_num(total('behind'))} ({_pct(total('behind'), runs)})"
+        if np.isfinite(count("merged")):
+            rec["merged"] = num(count("merged"))
+        rec["VR behind VMC"] = f"{num(count('behind'))} ({pct(count('behind'), runs)})"
         rec["lateral / longitudinal / none"] = " / ".join(
-            _num(total(m)) for m in ("lateral", "longitudinal", "none")
+            num(count(m)) for m in ("lateral", "longitudinal", "none")
         )
-        rec["plans per merge (mean)"] = _g(_weighted(part["plans_per_merge"], planned))
+        rec["plans per merge (mean)"] = g(weighted(part["plans_per_merge"], planned))
         if part["plan_switches"].notna().any():
-            rec["plan switches (mean)"] = _g(_weighted(part["plan_switches"], planned))
-        gate, low = total("gate"), total("min_safety")
-        branch = "—" if gate + low == 0 else f"{_num(gate)} / {_num(low)}"
+            rec["plan switches (mean)"] = g(weighted(part["plan_switches"], planned))
+        gate, low = count("gate"), count("min_safety")
+        branch = "—" if gate + low == 0 else f"{num(gate)} / {num(low)}"
         rec[f'Eq. 19: "U_safe ≤ {tau}" / "all > {tau}"'] = branch
         if d.decisions["lateral_equilibrium"].notna().any():
             rec["lateral by equilibrium / safety rule"] = (
-                f"{_num(total('lateral_equilibrium'))} / {_num(total('lateral_safety_rule'))}"
-                if total("lateral") > 0
+                f"{num(count('lateral_equilibrium'))} / {num(count('lateral_safety_rule'))}"
+                if count("lateral") > 0
                 else "—"
             )
-        rec["decision time median [ms]"] = _g(float(part["decision_ms"].median()))
-        rec["fallbacks"] = _num(total("fallback"))
+        rec["decision time median [ms]"] = g(float(part["decision_ms"].median()))
+        rec["fallbacks"] = num(count("fallback"))
         rows.append(rec)
-    return _md(pd.DataFrame(rows))
+    return md(pd.DataFrame(rows))
 
 
 def decisions_by_condition(d: Digest) -> str:
@@ -196,20 +134,20 @@ def decisions_by_condition(d: Digest) -> str:
     conditions = list(d.provenance.conditions)
 
     def series(col: str) -> str:
-        return _join([_num(_cell(d, c, "HCOMC", col)[0]) for c in conditions])
+        return join([num(cell(d, c, "HCOMC", col)[0]) for c in conditions])
 
-    runs = _join([str(_cell(d, c, "HCOMC", "runs")[1]) for c in conditions])
+    runs = join([str(cell(d, c, "HCOMC", "runs")[1]) for c in conditions])
     where = f"{conditions[0]}–{conditions[-1]}" if len(conditions) > 1 else conditions[0]
-    hdv, n5 = _cell(d, conditions[-1], "HCOMC", "vmc_hdv")
-    none, _ = _cell(d, conditions[-1], "HCOMC", "none")
+    hdv, n5 = cell(d, conditions[-1], "HCOMC", "vmc_hdv")
+    none, _ = cell(d, conditions[-1], "HCOMC", "none")
     cav = d.provenance.settings["cav_penetration"].get(conditions[-1], float("nan"))
     return (
         f"HCOMC by condition ({where}, of {runs} runs): VR behind VMC in {series('behind')}; "
         f"lateral cooperation in {series('lateral')}; longitudinal in {series('longitudinal')}; "
         f'Eq. 19\'s "all U_safe > {run_facts(d)["safety_threshold"]}" branch in '
-        f"{series('min_safety')}. In {conditions[-1]} ({_num(100 * cav)} % CAVs) VMC is an HDV "
-        f'in {_num(hdv)} of {n5} runs and HCOMC plans only VR\'s own merge (mode "none") in '
-        f"{_num(none)}."
+        f"{series('min_safety')}. In {conditions[-1]} ({num(100 * cav)} % CAVs) VMC is an HDV "
+        f'in {num(hdv)} of {n5} runs and HCOMC plans only VR\'s own merge (mode "none") in '
+        f"{num(none)}."
     )
 
 
@@ -220,46 +158,65 @@ def paper_tables(d: Digest) -> dict[str, str]:
     out = {"table_caption": TABLE_CAPTION}
     for which, key in (("II", "table2"), ("III", "table3")):
         part = d.tables[d.tables["table"] == which].reset_index(drop=True)
-        out[key] = _md(format_table(part)) if len(part) else "(no runs)"
+        out[key] = md(format_table(part)) if len(part) else "(no runs)"
     cd = d.tables["critical_distance"].dropna()
     out["cd_range"] = f"{cd.min():.0f}–{cd.max():.0f}" if len(cd) else "—"
     return out
 
 
 # --------------------------------------------------------------------------- claims
+def paper_claims(d: Digest) -> pd.DataFrame:
+    """The claims of the paper: every group but the labelled extension's."""
+    return d.claims[d.claims["group"] != GROUPS["extension"]]
+
+
+def extension_claims(d: Digest) -> pd.DataFrame:
+    """The claims of the labelled extension HCOMC+."""
+    return d.claims[d.claims["group"] == GROUPS["extension"]]
+
+
 def verdict_table(d: Digest) -> str:
-    """Claims per group and verdict, by the CI rule and by the Holm-corrected test."""
-    ci = verdict_counts(d.claims, "verdict")
-    holm = verdict_counts(d.claims, "verdict_holm")
+    """Claims per group and verdict, by the CI rule and by the Holm-corrected test; the
+    total counts the paper's claims, the extension's row follows it."""
     rows = []
-    for group in ci.index:
-        rec = {"group": str(group), "claims": str(int(ci.loc[group].sum()))}
-        for v in VERDICTS:
-            rec[f"{v} (CI)"] = str(int(ci.loc[group, v]))
-        for v in VERDICTS:
-            rec[f"{v} (Holm)"] = str(int(holm.loc[group, v]))
-        rows.append(rec)
-    return _md(pd.DataFrame(rows))
+    for part, label in ((paper_claims(d), "all of the paper's"), (extension_claims(d), "")):
+        if part.empty:
+            continue
+        ci, holm = verdict_counts(part, "verdict"), verdict_counts(part, "verdict_holm")
+        for group in ci.index if label else ci.index[:-1]:
+            name = label if group == "all" else str(group)
+            rec = {"group": name, "claims": str(int(ci.loc[group].sum()))}
+            for v in VERDICTS:
+                rec[f"{v} (CI)"] = str(int(ci.loc[group, v]))
+            for v in VERDICTS:
+                rec[f"{v} (Holm)"] = str(int(holm.loc[group, v]))
+            rows.append(rec)
+    return md(pd.DataFrame(rows))
 
 
-def verdict_summary(d: Digest, column: str) -> str:
-    """The counts of one verdict column as prose: "a hold, b are reversed and c
-    undecided"."""
-    counts = verdict_counts(d.claims, column).loc["all"]
+def verdict_summary(claims: pd.DataFrame, column: str) -> str:
+    """The counts of one verdict column of ``claims`` as prose: "a hold, b are reversed and
+    c undecided"."""
+    if claims.empty:
+        return "none evaluated"
+    counts = verdict_counts(claims, column).loc["all"]
     return (
         f"{counts['holds']} hold, {counts['reversed']} are reversed and "
         f"{counts['undecided']} undecided"
     )
 
 
-def table3_matrix(d: Digest) -> str:
-    """Table III's claims by metric (rows) and condition (columns): the CI verdict against
-    FIFO / against Game, with the Holm verdict where it differs."""
-    part = d.claims[d.claims["group"] == GROUPS["table3"]]
+def table3_matrix(d: Digest, group: str = "table3") -> str:
+    """Table III's claims (of HCOMC, or of HCOMC+ for ``group="extension"``) by metric
+    (rows) and condition (columns): the CI verdict against FIFO / against Game, with the
+    Holm verdict where it differs."""
+    part = d.claims[d.claims["group"] == GROUPS[group]]
+    if part.empty:
+        return "(no runs for these claims)"
     conditions = list(dict.fromkeys(part["condition"]))
     rows = []
     for metric in dict.fromkeys(part["metric"]):
-        rec = {"metric": _METRIC_NAMES.get(metric, metric)}
+        rec = {"metric": METRIC_NAMES.get(metric, metric)}
         for cond in conditions:
             cells = []
             for base in ("FIFO", "Game"):
@@ -275,7 +232,7 @@ def table3_matrix(d: Digest) -> str:
                 cells.append(ci if ci == holm else f"{ci} (Holm: {holm})")
             rec[cond] = " / ".join(cells)
         rows.append(rec)
-    return _md(pd.DataFrame(rows))
+    return md(pd.DataFrame(rows))
 
 
 def claims_table(d: Digest, group: str) -> str:
@@ -289,22 +246,24 @@ def claims_table(d: Digest, group: str) -> str:
         if r["metric"] == "mode":
             rec["ours"] = r["ours"]
         else:
-            effect = f"{_g(r['median_diff'])} [{_g(r['ci_low'])}, {_g(r['ci_high'])}]"
+            effect = f"{g(r['median_diff'])} [{g(r['ci_low'])}, {g(r['ci_high'])}]"
             rec["median A − B [CI]"] = effect
         rec["verdict"] = r["verdict"]
-        rec["p (Holm)"] = _p(r["p_holm"])
+        rec["p (Holm)"] = p_text(r["p_holm"])
         rec["verdict (Holm)"] = r["verdict_holm"]
         rec["k of n"] = f"{int(r['holds'])} of {int(r['n'])}"
         if "uniform" in part:
             rec["uniform"] = r["uniform"] or "—"
         rows.append(rec)
-    return _md(pd.DataFrame(rows))
+    return md(pd.DataFrame(rows))
 
 
 def verdict_lists(d: Digest, column: str = "verdict") -> dict[str, str]:
-    """The claims that hold and those reversed (replanning comparisons left out), claim by
-    claim with their conditions: "HCOMC fuel lower than FIFO (C1, C3)"."""
-    part = d.claims[d.claims["group"] != GROUPS["replanning"]]
+    """The paper's claims that hold and those reversed (replanning comparisons and the
+    extension left out), claim by claim with their conditions: "HCOMC fuel lower than FIFO
+    (C1, C3)"."""
+    part = paper_claims(d)
+    part = part[part["group"] != GROUPS["replanning"]]
     out = {}
     for verdict in ("holds", "reversed"):
         hits = part[part[column] == verdict]
@@ -323,81 +282,26 @@ def mode_sentence(d: Digest) -> str:
     return "HCOMC's last plan's cooperation mode — " + "; ".join(items) + "."
 
 
-# --------------------------------------------------------------------------- checks
-def _worse(row: pd.Series) -> bool:
-    """Whether HCOMC is worse than the baseline on the claim's metric (CI clear of 0)."""
-    if BETTER[row["metric"]] == "larger":
-        return bool(row["ci_high"] < 0)
-    return bool(row["ci_low"] > 0)
-
-
-def _against(d: Digest, metric: str, base: str) -> pd.DataFrame:
-    part = d.claims[(d.claims["group"] == GROUPS["table3"]) & (d.claims["metric"] == metric)]
-    return part[part["claim"].str.endswith(f"than {base}")]
-
-
-def _not_worse(d: Digest, metric: str, base: str, unit: str) -> tuple[str, bool]:
-    rows = _against(d, metric, base)
-    worse = rows[[_worse(r) for _, r in rows.iterrows()]]
-    ok = len(rows) - len(worse)
-    text = f"{ok} of {len(rows)}"
-    if len(worse):
-        effects = "; ".join(
-            f"{r['condition']}: {r['median_diff']:+.3g} [{r['ci_low']:+.3g}, {r['ci_high']:+.3g}]"
-            for _, r in worse.iterrows()
-        )
-        text += f" (worse in {effects} {unit})"
-    return text, ok >= CHECKS["not_worse"]
-
-
-def checks_table(d: Digest) -> str:
-    """The checks of a faithful HCOMC (:data:`CHECKS`), each with its value and "met" or
-    "**not met**"."""
-    behind, runs = _total(d, "behind", "HCOMC")
-    lat, runs_c2 = _cell(d, "C2", "HCOMC", "lateral")
-    n_runs = d.provenance.seeded_runs + d.provenance.scenario_runs
-    collisions = run_facts(d)["collisions"]
-    rows = [
-        (
-            f"HCOMC merges VR behind VMC in ≥ {_num(100 * CHECKS['behind'])} % of runs",
-            f"{_pct(behind, runs)} ({_num(behind)} of {runs})",
-            runs > 0 and behind / runs >= CHECKS["behind"],
-        ),
-        (
-            f"lateral cooperation in ≥ {_num(100 * CHECKS['lateral_c2'])} % of C2 runs",
-            f"{_pct(lat, runs_c2)} ({_num(lat)} of {runs_c2})",
-            runs_c2 > 0 and lat / runs_c2 >= CHECKS["lateral_c2"],
-        ),
-    ]
-    n_cond = len(d.provenance.conditions)
-    for metric, unit in (("average_acceleration", "m/s²"), ("lsrv", "m²")):
-        for base in ("FIFO", "Game"):
-            text, ok = _not_worse(d, metric, base, unit)
-            rows.append(
-                (
-                    f"{_METRIC_NAMES[metric]} not worse than {base} (CI of the paired median "
-                    f"reaching 0 or better) in ≥ {CHECKS['not_worse']} of {n_cond} conditions",
-                    text,
-                    ok,
-                )
-            )
-    cd = _against(d, "critical_distance", "FIFO")
-    larger = list(cd.loc[cd["median_diff"] > 0, "condition"])
-    clear = list(cd.loc[cd["ci_low"] > 0, "condition"])
-    rows.append(
-        (
-            f"critical distance larger than FIFO's (paired median) in ≥ {CHECKS['cd_larger']} "
-            f"of {n_cond} conditions",
-            f"{len(larger)} of {len(cd)}: {', '.join(larger) or 'none'} (CI above 0: "
-            f"{', '.join(clear) or 'none'})",
-            len(larger) >= CHECKS["cd_larger"],
-        )
-    )
-    rows.append(("no collision", f"{collisions} in {n_runs} runs", collisions == "0"))
-    frame = pd.DataFrame(
-        [{"check": c, "result": r, "": "met" if ok else "**not met**"} for c, r, ok in rows]
-    )
-    return _md(frame)
+def decision_facts(d: Digest) -> dict[str, str]:
+    """Counts quoted in the prose: "k of n (p %)" per configuration (over all conditions)
+    of the last plan switching (``final_switch_*``), of at least one switch
+    (``switched_*``), of merges (``merged_*``) and of fallbacks (``fallbacks_*``), and
+    Game's and FIFO's longitudinal cooperation in C2 (``longitudinal_c2_*``); a
+    configuration the run lacks gives "—"."""
+    out = {}
+    for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "FIFO-R", "Game-R"):
+        key = conf.lower().replace("+", "_plus").replace("-", "_")
+        for column, name in (
+            ("final_switch", "final_switch"),
+            ("switched", "switched"),
+            ("merged", "merged"),
+            ("fallback", "fallbacks"),
+        ):
+            k, n = total(d, column, conf) if column in d.decisions else (float("nan"), 0)
+            out[f"{name}_{key}"] = f"{num(k)} of {n} ({pct(k, n)})" if n else "—"
+        k, n = cell(d, "C2", conf, "longitudinal")
+        out[f"longitudinal_c2_{key}"] = f"{num(k)} of {n} ({pct(k, n)})" if n else "—"
+    return out
 
 
 # --------------------------------------------------------------------------- paper scenario
@@ -408,9 +312,9 @@ def scenario_table(d: Digest) -> str:
     part = d.scenario[~d.scenario["configuration"].isin(variants)].copy()
     for m in PAPER_METRICS:
         if m in part:
-            part[m] = [_g(v) for v in part[m]]
+            part[m] = [g(v) for v in part[m]]
     part = part.drop(columns=[c for c in ("collisions", "merged") if c in part])
-    return _md(part.rename(columns=LABELS))
+    return md(part.rename(columns=LABELS))
 
 
 def values(d: Digest) -> dict[str, str]:
@@ -422,9 +326,14 @@ def values(d: Digest) -> dict[str, str]:
         "hcomc_facts": hcomc_facts(d),
         "decisions_table": decisions_table(d),
         "decisions_by_condition": decisions_by_condition(d),
-        "n_claims": str(len(d.claims)),
-        "verdicts_ci": verdict_summary(d, "verdict"),
-        "verdicts_holm": verdict_summary(d, "verdict_holm"),
+        **decision_facts(d),
+        "n_claims": str(len(paper_claims(d))),
+        "verdicts_ci": verdict_summary(paper_claims(d), "verdict"),
+        "verdicts_holm": verdict_summary(paper_claims(d), "verdict_holm"),
+        "n_claims_extension": str(len(extension_claims(d))),
+        "verdicts_extension": verdict_summary(extension_claims(d), "verdict"),
+        "verdicts_extension_holm": verdict_summary(extension_claims(d), "verdict_holm"),
+        "table3_matrix_extension": table3_matrix(d, "extension"),
         "verdict_table": verdict_table(d),
         "table3_matrix": table3_matrix(d),
         "holds_list": lists["holds"],
@@ -432,7 +341,7 @@ def values(d: Digest) -> dict[str, str]:
         "mode_sentence": mode_sentence(d),
         "checks_table": checks_table(d),
         "scenario_table": scenario_table(d),
-        "holm_first_step": _p(ALPHA / max(len(d.claims), 1)),
+        "holm_first_step": p_text(ALPHA / max(len(paper_claims(d)), 1)),
     }
     for group in GROUPS:
         out[f"claims_{group}"] = claims_table(d, group)
