@@ -83,16 +83,24 @@ def _claims_view(frame: Any) -> Any:
 
 
 def _verdict_line(frame: Any) -> str:
-    """How many claims hold, are reversed and undecided, by both verdict columns."""
-    from hcomc.experiments.claims import verdict_counts
+    """How many of the paper's claims hold, are reversed and undecided, by both verdict
+    columns, and the labelled extension's apart."""
+    from hcomc.experiments.claims import GROUPS, verdict_counts
 
-    ci = verdict_counts(frame, "verdict").loc["all"]
-    holm = verdict_counts(frame, "verdict_holm").loc["all"]
-    return (
-        f"{len(frame)} claims: {ci['holds']} hold, {ci['reversed']} reversed, "
-        f"{ci['undecided']} undecided (95 % CI); {holm['holds']} hold, {holm['reversed']} "
-        f"reversed, {holm['undecided']} undecided (sign test, Holm)"
-    )
+    def counts(part: Any, what: str) -> str:
+        ci = verdict_counts(part, "verdict").loc["all"]
+        holm = verdict_counts(part, "verdict_holm").loc["all"]
+        return (
+            f"{len(part)} {what}: {ci['holds']} hold, {ci['reversed']} reversed, "
+            f"{ci['undecided']} undecided (95 % CI); {holm['holds']} hold, {holm['reversed']} "
+            f"reversed, {holm['undecided']} undecided (sign test, Holm)"
+        )
+
+    extension = frame["group"] == GROUPS["extension"]
+    line = counts(frame[~extension], "claims of the paper")
+    if extension.any():
+        line += " · " + counts(frame[extension], "claims of HCOMC+ (extension)")
+    return line
 
 
 REPRODUCE_FILES = ("runs.csv", "claims.csv", "table2.md", "table3.md")

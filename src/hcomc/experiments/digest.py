@@ -158,9 +158,12 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
     ``longitudinal`` / ``none`` / ``no_plan`` (the last plan's cooperation mode), ``gate`` /
     ``min_safety`` (Eq. 19's branch), ``fallback`` (the last plan a fallback), ``vmc_hdv``
     (VMC an HDV), ``switched`` (at least one plan switch), ``final_switch`` (the last plan
-    switched), ``lateral_equilibrium`` / ``lateral_safety_rule`` (why
+    switched), ``unmerged_fallback`` (VR never merged after its last plan fell back),
+    ``lateral_equilibrium`` / ``lateral_safety_rule`` (why
     a lateral plan was admissible); and ``plans_per_merge`` (mean plans over runs with a
-    plan), ``plan_switches`` (mean), ``decision_ms`` (median). A count whose column the
+    plan), ``plan_switches`` (mean), ``decision_ms`` (median), and per last-plan mode
+    (``longitudinal``, ``lateral``, ``none``) ``cd_<mode>`` and ``cd_n_<mode>``: the mean
+    critical distance of those runs and the runs it is defined in. A count whose column the
     runs lack is NaN.
     """
     records = []
@@ -183,6 +186,12 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
         rec["switched"] = (
             float(part["plan_switches"].gt(0).sum()) if "plan_switches" in part else np.nan
         )
+        rec["unmerged_fallback"] = (
+            float((part["fallback"].astype(bool) & ~part["merged"].astype(bool)).sum())
+            if {"fallback", "merged"} <= set(part)
+            else np.nan
+        )
+        rec.update(_critical_distance_by_mode(part))
         rec["plans_per_merge"] = (
             float((planned["replans"] + 1).mean()) if "replans" in part and len(planned) else np.nan
         )
@@ -196,6 +205,20 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
         )
         records.append(rec)
     return pd.DataFrame(records)
+
+
+def _critical_distance_by_mode(part: pd.DataFrame) -> dict[str, float]:
+    """``cd_<mode>`` (mean critical distance of the runs whose last plan had that mode) and
+    ``cd_n_<mode>`` (how many of them define it)."""
+    out = {}
+    for mode in ("longitudinal", "lateral", "none"):
+        if {"mode", "critical_distance"} <= set(part):
+            cd = part.loc[part["mode"].eq(mode), "critical_distance"].dropna()
+        else:
+            cd = pd.Series(dtype=np.float64)
+        out[f"cd_{mode}"] = float(cd.mean()) if len(cd) else np.nan
+        out[f"cd_n_{mode}"] = float(len(cd))
+    return out
 
 
 def _scenario(paper_runs: pd.DataFrame) -> pd.DataFrame:

@@ -287,7 +287,9 @@ def decision_facts(d: Digest) -> dict[str, str]:
     of the last plan switching (``final_switch_*``), of at least one switch
     (``switched_*``), of merges (``merged_*``) and of fallbacks (``fallbacks_*``), and
     Game's and FIFO's longitudinal cooperation in C2 (``longitudinal_c2_*``); a
-    configuration the run lacks gives "—"."""
+    configuration the run lacks gives "—"; ``cd_by_mode_*``: the mean critical distance by the
+    last plan's mode; ``unmerged_fallback_*``: "k of its m" runs without a merge whose last
+    plan fell back."""
     out = {}
     for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "FIFO-R", "Game-R"):
         key = conf.lower().replace("+", "_plus").replace("-", "_")
@@ -299,9 +301,31 @@ def decision_facts(d: Digest) -> dict[str, str]:
         ):
             k, n = total(d, column, conf) if column in d.decisions else (float("nan"), 0)
             out[f"{name}_{key}"] = f"{num(k)} of {n} ({pct(k, n)})" if n else "—"
+        out[f"cd_by_mode_{key}"] = _cd_by_mode(d, conf)
+        merged, runs = total(d, "merged", conf) if "merged" in d.decisions else (np.nan, 0)
+        fell, _ = total(d, "unmerged_fallback", conf) if runs else (np.nan, 0)
+        out[f"unmerged_fallback_{key}"] = (
+            f"{num(fell)} of its {num(runs - merged)}"
+            if "unmerged_fallback" in d.decisions
+            else "—"
+        )
         k, n = cell(d, "C2", conf, "longitudinal")
         out[f"longitudinal_c2_{key}"] = f"{num(k)} of {n} ({pct(k, n)})" if n else "—"
     return out
+
+
+def _cd_by_mode(d: Digest, configuration: str) -> str:
+    """Mean critical distance by the last plan's mode over all conditions: "longitudinal
+    53.1 m (n = 73), ..." (modes without runs left out; "—" without any)."""
+    part = d.decisions[d.decisions["configuration"] == configuration]
+    items = []
+    for mode in ("longitudinal", "lateral", "none"):
+        if f"cd_{mode}" not in part:
+            continue
+        n = part[f"cd_n_{mode}"]
+        if n.sum() > 0:
+            items.append(f"{mode} {g(weighted(part[f'cd_{mode}'], n))} m (n = {num(n.sum())})")
+    return ", ".join(items) if items else "—"
 
 
 # --------------------------------------------------------------------------- paper scenario
