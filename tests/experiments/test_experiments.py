@@ -119,7 +119,8 @@ def test_run_command_json():
         (["reproduce", "--workers", "0"], "'--workers' = 0"),
     ],
 )
-def test_bad_experiment_input(args, fragment):
+def test_bad_experiment_input(args, fragment, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # default output paths must not meet a run left in the cwd
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 2
     assert fragment in result.stderr

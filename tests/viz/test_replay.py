@@ -233,6 +233,21 @@ def test_size_of_a_90_s_c1_run(tmp_path: Path) -> None:
     assert out.stat().st_size <= 3_000_000
 
 
+def test_the_paper_scenario_replays(tmp_path: Path) -> None:
+    """The deterministic paper scenario of ``hcomc reproduce`` (uniform headways, no HDV
+    estimation errors) replays like a seeded run: one panel, every logged time."""
+    paper = ("--set", 'demand.pattern="uniform"', "--set", "hdv.estimation_errors=false")
+    run = simulate(tmp_path / "paper", "C1", "--duration", "40", "--controller", "hcomc", *paper)
+    out = tmp_path / "paper.html"
+    result = runner.invoke(app, ["replay", str(run), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    log = SimulationLog.load(run / "log.npz")
+    assert log.meta["config"]["demand"]["pattern"] == "uniform"
+    (data,) = page_data(out)["runs"]
+    np.testing.assert_array_equal(decode(data["arrays"]["t"]), log.t[: log.n_recorded])
+    assert data["plans"], "HCOMC planned VR's merge"
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

@@ -85,21 +85,17 @@ def _claims_view(frame: Any) -> Any:
 def _verdict_line(frame: Any) -> str:
     """How many of the paper's claims hold, are reversed and undecided, by both verdict
     columns, and the labelled extension's apart."""
-    from hcomc.experiments.claims import GROUPS, verdict_counts
+    from hcomc.experiments.narrative import extension_share, paper_share, verdict_summary
 
     def counts(part: Any, what: str) -> str:
-        ci = verdict_counts(part, "verdict").loc["all"]
-        holm = verdict_counts(part, "verdict_holm").loc["all"]
         return (
-            f"{len(part)} {what}: {ci['holds']} hold, {ci['reversed']} reversed, "
-            f"{ci['undecided']} undecided (95 % CI); {holm['holds']} hold, {holm['reversed']} "
-            f"reversed, {holm['undecided']} undecided (sign test, Holm)"
+            f"{len(part)} {what}: {verdict_summary(part, 'verdict')} (95 % CI); "
+            f"{verdict_summary(part, 'verdict_holm')} (sign test, Holm)"
         )
 
-    extension = frame["group"] == GROUPS["extension"]
-    line = counts(frame[~extension], "claims of the paper")
-    if extension.any():
-        line += " · " + counts(frame[extension], "claims of HCOMC+ (extension)")
+    line = counts(paper_share(frame), "claims of the paper")
+    if len(extension_share(frame)):
+        line += " · " + counts(extension_share(frame), "claims of HCOMC+ (extension)")
     return line
 
 

@@ -165,14 +165,24 @@ def paper_tables(d: Digest) -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------- claims
+def paper_share(claims: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a claims table that are the paper's: every group but the extension's."""
+    return claims[claims["group"] != GROUPS["extension"]]
+
+
+def extension_share(claims: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a claims table that are the labelled extension HCOMC+'s."""
+    return claims[claims["group"] == GROUPS["extension"]]
+
+
 def paper_claims(d: Digest) -> pd.DataFrame:
-    """The claims of the paper: every group but the labelled extension's."""
-    return d.claims[d.claims["group"] != GROUPS["extension"]]
+    """The claims of the paper in a digest."""
+    return paper_share(d.claims)
 
 
 def extension_claims(d: Digest) -> pd.DataFrame:
-    """The claims of the labelled extension HCOMC+."""
-    return d.claims[d.claims["group"] == GROUPS["extension"]]
+    """The claims of the labelled extension HCOMC+ in a digest."""
+    return extension_share(d.claims)
 
 
 def verdict_table(d: Digest) -> str:

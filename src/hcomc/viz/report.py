@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from hcomc.experiments.claims import claims, verdict_counts
+from hcomc.experiments.claims import claims
+from hcomc.experiments.narrative import extension_share, paper_share, verdict_summary
 from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.experiments.tables import TABLE_CAPTION, merge_success, paper_table
 from hcomc.sim.manifest import atomic_paths, build_manifest
@@ -160,13 +161,19 @@ def _claims_table(frame: pd.DataFrame) -> str:
 
 
 def _verdict_counts(frame: pd.DataFrame) -> str:
-    ci = verdict_counts(frame, "verdict").loc["all"]
-    holm = verdict_counts(frame, "verdict_holm").loc["all"]
-    return (
-        f"Of {len(frame)} claims, {ci['holds']} hold, {ci['reversed']} are reversed and "
-        f"{ci['undecided']} undecided by their 95 % CI; by the sign test with Holm's correction, "
-        f"{holm['holds']} hold, {holm['reversed']} are reversed and {holm['undecided']} undecided"
+    """The verdict counts of the paper's claims, and of the labelled extension's apart."""
+    paper, extension = paper_share(frame), extension_share(frame)
+    text = (
+        f"Of {len(paper)} claims of the paper, {verdict_summary(paper, 'verdict')} by their "
+        f"95 % CI; by the sign test with Holm's correction, "
+        f"{verdict_summary(paper, 'verdict_holm')}"
     )
+    if len(extension):
+        text += (
+            f". Of the {len(extension)} claims of HCOMC+ (a labelled extension, a Holm family "
+            f"of its own), {verdict_summary(extension, 'verdict')} by their 95 % CI"
+        )
+    return text
 
 
 def _merge_section(runs: pd.DataFrame) -> str:
