@@ -67,6 +67,12 @@ def commitment_of(plan: MergePlan) -> Commitment:
     return plan.group.vmc, plan.mode
 
 
+GRID_POSITIONS = 5
+"""Merge positions of the committed grid of :func:`continuations`."""
+GRID_HORIZONS = 3
+"""Horizons of the committed grid of :func:`continuations`, besides the continued one."""
+
+
 def continuations(
     live: MergePlan, groups: tuple[MergeGroup, MergeGroup], problem: MergeProblem, t: float
 ) -> FloatArray | None:
@@ -94,12 +100,6 @@ def continuations(
     rows += [[x, live.vr_duration, h, mode, seqs[0]] for x in positions[1:] for h in horizons]
     out: FloatArray = np.clip(np.array(rows), xl, xu)
     return out
-
-
-GRID_POSITIONS = 5
-"""Merge positions of the committed grid of :func:`continuations`."""
-GRID_HORIZONS = 3
-"""Horizons of the committed grid of :func:`continuations`, besides the continued one."""
 
 
 @dataclass(frozen=True, slots=True)

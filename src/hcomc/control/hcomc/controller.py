@@ -285,8 +285,7 @@ class HCOMCController:
         replan, the commitment rule (:mod:`~hcomc.control.hcomc.commitment`) over the Pareto
         set and the rows keeping the live plan's cooperation. Returns its decision vector,
         objectives, index (in the Pareto set; ``len(result.X)`` or more for an added row) and
-        what the rule did
-        ("" for a first plan, "kept", or "switched: ..." with the reason)."""
+        what the rule did ("" for a first plan, "kept", or "switched: ..." with the reason)."""
         threshold = problem.safety.threshold
         live = view.live_plan(groups[0].vr)
         if live is None or live.fallback:
