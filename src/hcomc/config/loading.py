@@ -10,7 +10,7 @@ import tomllib
 from difflib import get_close_matches
 from importlib.resources import files
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any, get_args, get_origin
 
 import tomli_w
 from pydantic import (
@@ -204,7 +204,7 @@ def nest_overrides(overrides: dict[str, Any]) -> dict[str, Any]:
     for key, value in overrides.items():
         if value is None:
             continue
-        if "." in key and key not in paths:
+        if "." in key and key not in paths and not _in_table(key, paths):
             raise ConfigError(
                 f"unknown override '{key}' = {value!r}{suggest(key) or '; not a config key'}"
             )
@@ -229,6 +229,15 @@ def nest_overrides(overrides: dict[str, Any]) -> dict[str, Any]:
     return nested
 
 
+def _in_table(key: str, paths: dict[str, FieldInfo]) -> bool:
+    """Whether dotted ``key`` names an entry of a free-form table such as ``control.options``
+    (a leaf whose value is a mapping: its entries are the user's, not the schema's)."""
+    return any(
+        key.startswith(f"{path}.") and get_origin(info.annotation) is dict
+        for path, info in paths.items()
+    )
+
+
 def _flat(data: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in data.items():
@@ -247,7 +256,9 @@ def _note_changes(config: ScenarioConfig, reference: ScenarioConfig) -> Scenario
     """
     new, old = _flat(config.model_dump(mode="json")), _flat(reference.model_dump(mode="json"))
     changed = [
-        f"{k} {old[k]!r} -> {v!r}" for k, v in new.items() if k not in _UNTRACKED and old[k] != v
+        f"{k} {old.get(k)!r} -> {v!r}"
+        for k, v in new.items()
+        if k not in _UNTRACKED and old.get(k) != v
     ]
     if not changed or config.description != reference.description:
         return config
@@ -313,7 +324,10 @@ def _annotated(lines: list[str], model: type[BaseModel], data: dict[str, Any], p
             tables.append((name, sub))
             continue
         value = tomli_w.dumps({name: data[name]}).strip()
-        if isinstance(data[name], list):  # tomli_w spreads nested arrays over lines
+        if isinstance(data[name], dict):  # a free-form table, written inline
+            entries = (tomli_w.dumps({k: v}).strip() for k, v in data[name].items())
+            value = f"{name} = {{{', '.join(entries)}}}"
+        elif isinstance(data[name], list):  # tomli_w spreads nested arrays over lines
             value = " ".join(value.split()).replace("[ ", "[").replace(", ]", "]")
         lines.append(f"{value}  # {info.description}" if info.description else value)
     for name, sub in tables:

@@ -3,6 +3,7 @@ defaults in each field's description; unknown keys are rejected (``extra="forbid
 
 from __future__ import annotations
 
+import re
 from itertools import pairwise
 from typing import Any, Literal
 
@@ -26,6 +27,10 @@ __all__ = [
     "RoadParams",
     "ScenarioConfig",
 ]
+
+
+CONTROLLER_SPEC = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]*|[^:\s][^:]*:[A-Za-z_][A-Za-z0-9_]*")
+"""A controller name: a registered name, or ``module:Class`` / ``path/to/file.py:Class``."""
 
 
 class _Frozen(BaseModel):
@@ -239,13 +244,26 @@ class PlatoonParams(_Frozen):
 class ControlParams(_Frozen):
     """Merge controller and its optimiser (paper Section III)."""
 
-    controller: Literal["none", "hcomc", "fifo", "game", "game-capped"] = Field(
+    controller: str = Field(
         "none",
         description=(
             "merge controller; 'none' = gap acceptance only, 'hcomc' = the paper's controller, "
-            "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game); "
-            "'game-capped' = the merge game with a safety term capped at 1 (a variant)"
+            "'fifo' / 'game' = the Table III baselines (FIFO sequencing, 2x2 merge game), "
+            "'game-capped' = the merge game with a safety term capped at 1 (a variant), a name "
+            "an installed package registers (entry-point group 'hcomc.controllers'), or a class "
+            "of your own: 'package.module:Class' or 'path/to/file.py:Class'"
         ),
+    )
+    options: dict[str, Any] = Field(
+        default_factory=dict,
+        description="keyword arguments of the controller's constructor ([control.options] "
+        "table), checked against its signature and type hints",
+    )
+    on_invalid_plan: Literal["error", "fallback"] = Field(
+        "error",
+        description="a plan that fails the checks of hcomc.control.validation: 'error' stops "
+        "the run naming the field, the value and what is allowed; 'fallback' lets VR merge by "
+        "gap acceptance and records the plan as a fallback",
     )
     optimizer: Literal["nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy"] = Field(
         "nsga2",
@@ -312,6 +330,17 @@ class ControlParams(_Frozen):
         description="HCOMC+ (an extension, not in the paper): add 'none' (VMC keeps car "
         "following, only VR's own merge is planned) to the cooperation modes HCOMC chooses from",
     )
+
+    @field_validator("controller")
+    @classmethod
+    def _controller_name(cls, value: str) -> str:
+        if not CONTROLLER_SPEC.fullmatch(value):
+            raise ValueError(
+                f"'{value}' is not a controller name; allowed: a registered name (none, hcomc, "
+                "fifo, game, game-capped, or one an installed package registers), "
+                "'package.module:Class' or 'path/to/file.py:Class'"
+            )
+        return value
 
 
 class ScenarioConfig(_Frozen):
