@@ -49,7 +49,6 @@ app.add_typer(config_app, name="config")
 out = Console(width=None if sys.stdout.isatty() else 200)
 err = Console(stderr=True, width=None if sys.stderr.isatty() else 200)
 
-CONTROLLERS = ("none", "fifo", "game", "hcomc")
 OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy")
 
 ConfigArg = Annotated[
@@ -169,10 +168,23 @@ def _check_seed(seed: int | None) -> None:
         raise _fail(f"option '--seed' = {seed}: must be >= 0")
 
 
+def _controller(value: str | None) -> str | None:
+    """``--controller``: a registered name (case-insensitive), ``package.module:Class`` or
+    ``path/to/file.py:Class``, checked (imported) before anything runs."""
+    from hcomc.control.registry import canonical_name
+
+    if value is None:
+        return None
+    try:
+        return canonical_name(value)
+    except ConfigError as exc:
+        raise _fail(f"option '--controller' ({exc})") from None
+
+
 def _control(base: ScenarioConfig, controller: str | None, optimizer: str | None) -> dict:
     """The ``[control]`` table with the command's controller/optimiser; an optimiser only
     applies to HCOMC, so passing one to another controller is an error, not ignored."""
-    controller = _choice("--controller", controller, CONTROLLERS)
+    controller = _controller(controller)
     optimizer = _choice("--optimizer", optimizer, OPTIMIZERS)
     control = base.control.model_dump()
     control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})

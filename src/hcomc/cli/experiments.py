@@ -14,12 +14,10 @@ from rich.markup import escape
 from rich.table import Table
 
 from hcomc.cli._app import (
-    CONTROLLERS,
     ConfigArg,
     Engine,
     Optimizer,
     SetOption,
-    _choice,
     _control,
     _engine,
     _fail,
@@ -69,7 +67,14 @@ def _frame_table(frame: Any, title: str) -> Table:
 @app.command()
 def run(
     config: ConfigArg,
-    controller: Annotated[str, typer.Option(help="Merge controller: fifo, game or hcomc.")],
+    controller: Annotated[
+        str | None,
+        typer.Option(
+            help="Merge controller: fifo, game, hcomc (the paper's configurations), another "
+            "registered name, package.module:Class or path/to/file.py:Class (default: the "
+            "config's control.controller)."
+        ),
+    ] = None,
     optimizer: Optimizer = None,
     seeds: Annotated[int, typer.Option(help="Number of seeds (0 .. N-1).")] = 1,
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
@@ -82,9 +87,6 @@ def run(
     from hcomc.experiments.runner import CONFIGURATIONS, grid
     from hcomc.experiments.tables import LABELS, mean_ci
 
-    chosen = _choice("--controller", controller, CONTROLLERS[1:])
-    assert chosen is not None  # a required option
-    controller = chosen
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     overrides = _settings(settings)
@@ -92,8 +94,14 @@ def run(
     _require_merge(base, config, "run")
     engine = _engine(engine, base)
     control = _control(base, controller, optimizer)
+    if control["controller"] == "none":
+        raise _fail(
+            f"no merge controller: '{config}' has control.controller = 'none'; allowed: "
+            "--controller NAME, or a config that names one"
+        )
     labels = {pair: label for label, pair in CONFIGURATIONS.items()}
-    label = labels[(controller, control["optimizer"] if controller == "hcomc" else "nsga2")]
+    name = control["controller"]
+    label = labels.get((name, control["optimizer"] if name == "hcomc" else "nsga2"), name)
     specs = [
         replace(s, engine=engine)
         for s in grid([config], [label], range(seeds), nest_overrides(overrides))
@@ -103,8 +111,14 @@ def run(
         sys.stdout.write(frame.to_json(orient="records") + "\n")
         return
     frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
-    cols = ["seed", "mode", "decision_ms", *LABELS]
+    cols = ["seed", "merged", "mode", "decision_ms", *LABELS]
     out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {label}"))
+    merged = frame["merged"].fillna(False).astype(bool)
+    out.print(
+        f"VR merged in {int(merged.sum())} of {len(frame)} runs; a run in which it did not is "
+        "an outcome, not a run without disturbance: its metrics of the merge are empty",
+        highlight=False,
+    )
     unplanned = frame.loc[frame["mode"] == "", "seed"].tolist()
     if unplanned:
         out.print(

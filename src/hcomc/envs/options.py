@@ -9,14 +9,16 @@ from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
 from hcomc.config import ConfigError, ScenarioConfig, load_config
+from hcomc.control.registry import canonical_name
 
 AGENTS = ("vr", "vmc")
 """Who the agent of ``hcomc/Merge-v0`` drives: the ramp CAV VR (default) or the mainline
 vehicle VMC that VR merges in front of (the cooperating vehicle of Section II-A)."""
 
 CONTROLLERS = ("fifo", "game", "hcomc")
-"""Merge controllers that can drive VR in an environment instead of the agent
-(:mod:`hcomc.envs.policies`)."""
+"""hcomc's merge controllers that can drive VR in an environment instead of the agent
+(:mod:`hcomc.envs.policies`); any other controller name works too (``package.module:Class``,
+``path/to/file.py:Class`` or a registered name: :mod:`hcomc.control.registry`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,8 +65,9 @@ class EnvOptions:
     overrides : config values changed for this environment (``{"cav_penetration": 0.5}``),
         as :func:`hcomc.config.load_config` takes them.
     agent : ``"vr"`` or ``"vmc"`` (:data:`AGENTS`).
-    controller : ``None`` (the agent drives) or a controller of :data:`CONTROLLERS` that
-        drives VR through the engine, exactly as ``hcomc run`` executes it.
+    controller : ``None`` (the agent drives) or a controller name (:data:`CONTROLLERS`, or any
+        name :mod:`hcomc.control.registry` accepts) that drives VR through the engine, exactly
+        as ``hcomc run`` executes it.
     action_period : simulated time per environment step [s], a multiple of ``dt``.
     max_episode_time : the episode is truncated (a timeout) after this long [s].
     reward : the :class:`RewardWeights`.
@@ -81,10 +84,8 @@ class EnvOptions:
     def __post_init__(self) -> None:
         if self.agent not in AGENTS:
             raise ConfigError(f"key 'agent' = {self.agent!r}: allowed: {', '.join(AGENTS)}")
-        if self.controller is not None and self.controller.lower() not in CONTROLLERS:
-            raise ConfigError(
-                f"key 'controller' = {self.controller!r}: allowed: None, {', '.join(CONTROLLERS)}"
-            )
+        if self.controller is not None:
+            object.__setattr__(self, "controller", canonical_name(self.controller))
         if self.controller is not None and self.agent != "vr":
             raise ConfigError(
                 f"key 'controller' = {self.controller!r} drives VR: allowed only with agent 'vr'"
@@ -109,7 +110,7 @@ class EnvOptions:
 
     def config(self) -> ScenarioConfig:
         """The scenario as the environment runs it (its controller set by ``controller``)."""
-        control = {"controller": (self.controller or "none").lower()}
+        control = {"controller": self.controller or "none"}
         control = {**dict(self.overrides.get("control", {})), **control}
         config = load_config(self.scenario, **{**self.overrides, "control": control})
         steps = self.action_period / config.dt

@@ -18,8 +18,9 @@ from typing import Any, Protocol
 import numpy as np
 import pandas as pd
 
+from hcomc.config import ConfigError
+from hcomc.control.registry import canonical_name
 from hcomc.envs.merge_env import MergeEnv
-from hcomc.envs.options import CONTROLLERS
 from hcomc.metrics import METRICS, compute_metrics
 
 
@@ -33,18 +34,23 @@ class Predictor(Protocol):
 
 @dataclass(frozen=True, slots=True)
 class ControllerPolicy:
-    """A merge controller (``"fifo"``, ``"game"`` or ``"hcomc"``) as a policy."""
+    """A merge controller as a policy: ``"fifo"``, ``"game"``, ``"hcomc"`` or any name
+    :mod:`hcomc.control.registry` accepts (``"my_pkg.ctg:CTG"``, ``"ctg.py:CTG"``)."""
 
     controller: str
 
     def __post_init__(self) -> None:
-        if self.controller.lower() not in CONTROLLERS:
-            raise ValueError(f"controller {self.controller!r}; allowed: {', '.join(CONTROLLERS)}")
+        try:
+            object.__setattr__(self, "controller", canonical_name(self.controller))
+        except ConfigError as exc:
+            raise ValueError(str(exc)) from None
 
     @property
     def name(self) -> str:
         """The controller's name as the tables print it."""
-        return {"fifo": "FIFO", "game": "Game", "hcomc": "HCOMC"}[self.controller.lower()]
+        return {"fifo": "FIFO", "game": "Game", "hcomc": "HCOMC"}.get(
+            self.controller, self.controller
+        )
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
         """The (unused) action: the controller drives VR through the engine."""

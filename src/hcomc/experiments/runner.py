@@ -2,7 +2,8 @@
 
 A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
 HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published), two baseline variants
-that replan every second ("FIFO-R", "Game-R"), and the labelled extension "HCOMC+". Every
+that replan every second ("FIFO-R", "Game-R"), the labelled extension "HCOMC+", or any
+controller named as :mod:`hcomc.control.registry` accepts (a researcher's own). Every
 run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file,
 configuration, seed, overrides) that returns one results row and the run's manifest. Seeds
 are shared across configurations within a condition (common random numbers: the same traffic
@@ -31,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from hcomc.config import load_config
+from hcomc.control.registry import canonical_name, controller_source
 from hcomc.metrics.outcome import realised_sequence
 from hcomc.sim.log import SimulationLog
 
@@ -76,17 +78,40 @@ plan once, as published (``replan_period = 0``), their -R variants replan every 
 HCOMC configurations use the config's values, HCOMC+ adds the mode "none"."""
 
 
+def configuration_label(name: str) -> str:
+    """The configuration ``name`` stands for: a label of :data:`ALL_CONFIGURATIONS`
+    (case-insensitive: ``fifo`` is FIFO, planning once as published), else a controller name
+    (:mod:`hcomc.control.registry`: registered, ``package.module:Class`` or
+    ``path/to/file.py:Class``) that is a configuration of its own: that controller with the
+    config's control values. ConfigError if it is neither."""
+    for label in ALL_CONFIGURATIONS:
+        if label.lower() == name.lower():
+            return label
+    return canonical_name(name)
+
+
+def configuration_controller(configuration: str) -> tuple[str, str]:
+    """(controller, optimiser) of a configuration label; the optimiser is "" unless the
+    controller is HCOMC's."""
+    controller, optimizer = ALL_CONFIGURATIONS.get(configuration, (configuration, ""))
+    return controller, optimizer if controller == "hcomc" else ""
+
+
 def configuration_overrides(configuration: str, overrides: dict[str, Any]) -> dict[str, Any]:
     """``overrides`` (nested, as :func:`hcomc.config.nest_overrides` gives them) with the
     controller, optimiser and control values of a configuration label: what every run of
     that configuration is loaded with (:meth:`RunSpec.config_overrides`, the report's
-    figures)."""
-    controller, optimizer = ALL_CONFIGURATIONS[configuration]
+    figures). A controller name of its own (:func:`configuration_label`) sets the controller
+    alone."""
+    if configuration in ALL_CONFIGURATIONS:
+        controller, optimizer = ALL_CONFIGURATIONS[configuration]
+        own = {"controller": controller, "optimizer": optimizer}
+    else:
+        own = {"controller": configuration}
     control = {
         **overrides.get("control", {}),
         **CONTROL_OVERRIDES.get(configuration, {}),
-        "controller": controller,
-        "optimizer": optimizer,
+        **own,
     }
     return {**overrides, "control": control}
 
@@ -278,12 +303,12 @@ def _measure(
 
     log = sim.log
     start = time.perf_counter()
-    controller, optimizer = ALL_CONFIGURATIONS[spec.configuration]
+    controller, optimizer = configuration_controller(spec.configuration)
     row: dict[str, Any] = {
         "condition": config.name,
         "configuration": spec.configuration,
         "controller": controller,
-        "optimizer": optimizer if controller == "hcomc" else "",
+        "optimizer": optimizer,
         "seed": spec.seed,
         "mode": "",
         "sequence": "",
@@ -328,6 +353,7 @@ def _measure(
             "overrides": spec.overrides,
             "engine": spec.engine,
         },
+        "controller": controller_source(config.control.controller),
     }
     return row, manifest
 

@@ -33,11 +33,13 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 import hcomc
 from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
+from hcomc.control.registry import BUILTIN, controller_source
 from hcomc.experiments.runner import (
     _SPAWN,
     CONFIGURATIONS,
     RunSpec,
     batches_by_reference,
+    configuration_label,
     run_batch,
 )
 from hcomc.experiments.tables import mean_ci
@@ -47,9 +49,6 @@ GRID_KEYS = ("mean_headway_main_1", "mean_headway_main_2", "cav_penetration")
 RESOLVED = ("base", *GRID_KEYS, "ramp", "ramp_mean_headway", "duration")
 """Columns every result row starts with: the values the run actually used."""
 TIMING = ("wall_s", "decision_ms")
-Configuration = Literal[
-    "FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA", "FIFO-R", "Game-R", "HCOMC+"
-]
 
 
 class SweepGrid(BaseModel):
@@ -83,7 +82,13 @@ class SweepSpec(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
     name: str = Field("sweep", description="sweep name")
     base: str = Field("C1", description="preset or TOML file for everything not swept")
-    configurations: list[Configuration] = Field(["FIFO", "Game", "HCOMC"], min_length=1)
+    configurations: list[str] = Field(
+        ["FIFO", "Game", "HCOMC"],
+        min_length=1,
+        description="configuration labels (FIFO, Game, HCOMC, HCOMC-PSO, HCOMC-SA, FIFO-R, "
+        "Game-R, HCOMC+) or controller names (a registered name, package.module:Class, "
+        "path/to/file.py:Class)",
+    )
     seeds: int = Field(3, ge=1, le=10_000, description="seeds 0 .. seeds-1 per cell")
     ramp: Literal["single", "flow"] | None = Field(None, description="one key merge or a flow")
     ramp_mean_headway: float | None = Field(None, gt=0, description="'flow': ramp headway [s]")
@@ -92,6 +97,11 @@ class SweepSpec(BaseModel):
         "hcomc", description="simulation engine: hcomc, or sumo (co-simulation, hcomc[sumo])"
     )
     grid: SweepGrid = Field(default_factory=SweepGrid)
+
+    @field_validator("configurations")
+    @classmethod
+    def _configurations(cls, names: list[str]) -> list[str]:
+        return [configuration_label(name) for name in names]
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
@@ -157,16 +167,27 @@ def _identity(run: RunSpec) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
+def outside_source(controller: str) -> str:
+    """SHA-256 of the file that defines a controller from outside hcomc ("" for hcomc's own,
+    which the package version covers)."""
+    if controller == "none" or controller in BUILTIN:
+        return ""
+    return controller_source(controller)["sha256"]
+
+
 def run_key(run: RunSpec) -> str:
     """Stable key of a run's result: its identity, resolved config and hcomc version.
 
-    A changed preset or base file, or another package version, gives new keys, so a resumed
-    sweep recomputes those runs instead of mixing stale results into the table.
+    A changed preset or base file, another package version, or a changed source file of a
+    controller from outside hcomc gives new keys, so a resumed sweep recomputes those runs
+    instead of mixing stale results into the table.
     """
+    config = resolved_config(run)
     text = json.dumps(
-        [_identity(run), resolved_config(run).model_dump(mode="json"), hcomc.__version__],
+        [_identity(run), config.model_dump(mode="json"), hcomc.__version__,
+         outside_source(config.control.controller)],
         sort_keys=True,
-    )
+    )  # fmt: skip
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
