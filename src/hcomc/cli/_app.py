@@ -178,7 +178,8 @@ def _controller(value: str | None) -> str | None:
     try:
         return canonical_name(value)
     except ConfigError as exc:
-        raise _fail(f"option '--controller' ({exc})") from None
+        message = str(exc).replace("key 'control.controller'", "option '--controller'", 1)
+        raise _fail(message) from None
 
 
 def _control(base: ScenarioConfig, controller: str | None, optimizer: str | None) -> dict:

@@ -24,6 +24,7 @@ from hcomc.cli._app import (
     out,
 )
 from hcomc.cli.experiments import CONDITIONS, _frame_table, _progress_grid, _workers
+from hcomc.config import ConfigError
 
 CONTOUR_CONDITION = "C2"
 """The condition of the recorded scene: the report's and the README's speed contour maps (the
@@ -102,7 +103,9 @@ def _verdict_line(frame: Any) -> str:
 REPRODUCE_FILES = ("runs.csv", "claims.csv", "table2.md", "table3.md")
 
 
-def _command(seeds: int, out_dir: Path, settings: list[str] | None, engine: str) -> str:
+def _command(
+    seeds: int, out_dir: Path, settings: list[str] | None, engine: str, extra: list[str]
+) -> str:
     """The command line of a reproduction (what its results depend on; not --workers)."""
     import shlex
 
@@ -111,6 +114,8 @@ def _command(seeds: int, out_dir: Path, settings: list[str] | None, engine: str)
         parts += ["--set", pair]
     if engine != "hcomc":
         parts += ["--engine", engine]
+    if extra:
+        parts += ["--controllers", ",".join(extra)]
     return shlex.join(parts)
 
 
@@ -197,6 +202,29 @@ ReadmeOption = Annotated[
 ]
 
 
+def _own_controllers(names: str | None) -> list[str]:
+    """``--controllers``: controller names of the user's, each checked (imported) now."""
+    from hcomc.experiments.runner import ALL_CONFIGURATIONS, configuration_label
+
+    if names is None:
+        return []
+    labels = []
+    for name in (n.strip() for n in names.split(",")):
+        try:
+            label = configuration_label(name) if name else ""
+        except ConfigError as exc:
+            message = str(exc).replace("key 'control.controller'", "option '--controllers'", 1)
+            raise _fail(message) from None
+        if not label or label in ALL_CONFIGURATIONS:
+            raise _fail(
+                f"option '--controllers' = '{names}': '{name}' is "
+                + ("empty" if not name else "one of the paper's configurations, run anyway")
+                + "; allowed: controllers of your own, comma-separated"
+            )
+        labels.append(label)
+    return labels
+
+
 @app.command()
 def reproduce(
     seeds: Annotated[int, typer.Option(help="Seeds per condition and configuration.")] = 30,
@@ -209,11 +237,21 @@ def reproduce(
     engine: Engine = "hcomc",
     docs: DocsOption = None,
     readme: ReadmeOption = None,
+    controllers: Annotated[
+        str | None,
+        typer.Option(
+            help="Controllers of your own run beside the paper's configurations, comma-"
+            "separated (a registered name, package.module:Class or path/to/file.py:Class); "
+            "their rows join runs.csv, the report and a paired comparison with FIFO, Game "
+            "and HCOMC."
+        ),
+    ] = None,
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA,
     the replanning baselines FIFO-R, Game-R and the labelled extension HCOMC+), seeded runs
     plus the deterministic paper scenario. --set changes a config value for every run (e.g. a
-    sensitivity check); --docs regenerates the published documentation from the run."""
+    sensitivity check); --controllers adds controllers of your own; --docs regenerates the
+    published documentation from the run."""
     from hcomc.config import nest_overrides
     from hcomc.experiments.claims import claims
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, grid
@@ -223,6 +261,12 @@ def reproduce(
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     _refuse_overwrite(out_dir, REPRODUCE_FILES, force)
+    extra = _own_controllers(controllers)
+    if extra and docs is not None:
+        raise _fail(
+            f"option '--docs' = '{docs}' publishes the paper's configurations only; allowed: "
+            "--docs or --controllers, not both"
+        )
     readme = _docs_targets(docs, readme, force=False)
     overrides = nest_overrides(_settings(settings))
     for condition in CONDITIONS:  # validate before anything runs
@@ -231,12 +275,15 @@ def reproduce(
     start = time.perf_counter()
     seeded = [
         replace(s, engine=engine)
-        for s in grid(CONDITIONS, ALL_CONFIGURATIONS, range(seeds), overrides)
+        for s in grid(CONDITIONS, [*ALL_CONFIGURATIONS, *extra], range(seeds), overrides)
     ]
     paper = {**overrides}
     for table, values in PAPER_SCENARIO.items():
         paper[table] = {**cast(dict[str, Any], overrides.get(table, {})), **values}
-    uniform = [replace(s, engine=engine) for s in grid(CONDITIONS, ALL_CONFIGURATIONS, [0], paper)]
+    uniform = [
+        replace(s, engine=engine)
+        for s in grid(CONDITIONS, [*ALL_CONFIGURATIONS, *extra], [0], paper)
+    ]
     (out_dir / "manifests").mkdir(parents=True, exist_ok=True)
 
     def save_manifest(i: int, row: dict[str, Any], manifest: dict[str, Any]) -> None:
@@ -258,7 +305,7 @@ def reproduce(
     claim_rows = claims(runs, paper_runs)
     wall = time.perf_counter() - start
     record = {
-        "command": _command(seeds, out_dir, settings, engine),
+        "command": _command(seeds, out_dir, settings, engine, extra),
         "seeds": seeds,
         "overrides": overrides,
         "engine": engine,

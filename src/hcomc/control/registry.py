@@ -36,9 +36,9 @@ ENTRY_POINT_GROUP = "hcomc.controllers"
 """Entry-point group through which installed packages register controller names."""
 
 BUILTIN: dict[str, str] = {
-    "hcomc": "hcomc.control.hcomc.controller:HCOMCController",
     "fifo": "hcomc.control.fifo:FIFOController",
     "game": "hcomc.control.merge_game:GameController",
+    "hcomc": "hcomc.control.hcomc.controller:HCOMCController",
     "game-capped": "hcomc.control.merge_game:GameController",
 }
 """hcomc's own controllers: name -> ``module:Class``."""
