@@ -112,8 +112,16 @@ def plan(
     optimizer: Optimizer = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the decision as JSON.")] = False,
     settings: SetOption = None,
+    controller: Annotated[
+        str,
+        typer.Option(
+            help="Merge controller: hcomc, fifo, game, another registered name, "
+            "package.module:Class or path/to/file.py:Class."
+        ),
+    ] = "hcomc",
 ) -> None:
-    """Run until the first ramp vehicle enters the control zone and show HCOMC's decision."""
+    """Run until the first ramp vehicle enters the control zone and show the controller's
+    decision (HCOMC: with its lane-change game and Pareto set)."""
     from hcomc.control.report import plan_report
     from hcomc.sim.engine import Simulation
 
@@ -121,7 +129,9 @@ def plan(
     overrides = _settings(settings)
     base = _load(config, **overrides)
     _require_merge(base, config, "plan")
-    control = _control(base, "hcomc", optimizer)
+    control = _control(base, controller, optimizer)
+    if control["controller"] == "none":
+        raise _fail("option '--controller' = 'none': allowed: a merge controller")
     cfg = _load(config, **_with(overrides, seed=seed, control=control))
     sim = Simulation(cfg)
     decision = sim.run_until_plan()
@@ -138,22 +148,15 @@ def plan(
 
 
 def _print_plan(report: dict[str, Any]) -> None:
+    if not report["n_eval"]:  # a controller without HCOMC's optimisation
+        _print_other_plan(report)
+        return
     out.print(
         f"[bold]{report['scenario']}[/] seed {report['seed']} · t = {report['t']:.1f} s · "
         f"optimiser {report['optimizer']} · {report['n_eval']} evaluations · "
         f"decision {report['decision_ms']:.1f} ms"
     )
-    keys = Table(title="key vehicles (Section II-A)")
-    for col in ("role", "id", "kind", "lane", "x [m]", "v [m/s]"):
-        keys.add_column(col, justify="right")
-    for role, k in report["key_vehicles"].items():
-        if k is None:
-            keys.add_row(role, "—", "—", "—", "—", "—")
-        else:
-            keys.add_row(
-                role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}", f"{k['v']:.2f}"
-            )
-    out.print(keys)
+    out.print(_key_table(report))
     game = report["game"]
     if game:
         verdict = "admitted" if game["lateral_allowed"] else "not admitted"
@@ -230,3 +233,35 @@ def _print_summary(summary: dict[str, Any]) -> None:
     for row in rows:
         table.add_row(*(escape(cell) for cell in row))
     out.print(table)
+
+
+def _key_table(report: dict[str, Any]) -> Table:
+    keys = Table(title="key vehicles (Section II-A)")
+    for col in ("role", "id", "kind", "lane", "x [m]", "v [m/s]"):
+        keys.add_column(col, justify="right")
+    for role, k in report["key_vehicles"].items():
+        if k is None:
+            keys.add_row(role, "—", "—", "—", "—", "—")
+        else:
+            keys.add_row(
+                role, str(k["id"]), k["kind"], str(k["lane"]), f"{k['x']:.1f}", f"{k['v']:.2f}"
+            )
+    return keys
+
+
+def _print_other_plan(report: dict[str, Any]) -> None:
+    """The decision of a controller other than HCOMC: key vehicles and the plan's fields."""
+    out.print(
+        f"[bold]{escape(report['scenario'])}[/] seed {report['seed']} · t = {report['t']:.1f} s "
+        f"· controller {escape(report['controller'])} · decision {report['decision_ms']:.1f} ms"
+    )
+    out.print(_key_table(report))
+    what = "fallback" if report["fallback"] else "plan"
+    out.print(
+        escape(
+            f"{what}: mode {report['mode']} · VR {report['sequence']} of VMC · merge at "
+            f"{report['merge_x']:.1f} m, T_lc {report['vr_duration']:.2f} s, H "
+            f"{report['horizon']:.2f} s · {report['reason']}"
+        ),
+        highlight=False,
+    )
