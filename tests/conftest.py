@@ -9,6 +9,13 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 
 
+@pytest.fixture(autouse=True)
+def _empty_working_directory(tmp_path_factory: pytest.TempPathFactory, monkeypatch: Any) -> None:
+    """Every test runs in an empty directory of its own, so no test reads or trips over what
+    a command left in the checkout (``results/`` of ``hcomc reproduce``, ``sweeps/``, …)."""
+    monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))
+
+
 @pytest.fixture
 def platoon_config() -> Any:
     """Factory for a one-lane scripted-leader platoon config."""
