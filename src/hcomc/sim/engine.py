@@ -44,6 +44,7 @@ from hcomc.control.base import (
     TrafficView,
     find_key_vehicles,
 )
+from hcomc.control.validation import checked, name_of
 from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane
 from hcomc.sim import core
@@ -388,8 +389,11 @@ class Simulation:
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Ask the controller for a plan when a ramp vehicle enters the control zone, and again
         every ``control.replan_period`` seconds while its plan may still change (receding
-        horizon, key vehicles re-identified: :func:`hcomc.sim.core_plans.due_plans`). A new
-        plan replaces its VR's live plan in the plan table."""
+        horizon, key vehicles re-identified: :func:`hcomc.sim.core_plans.due_plans`). Each plan
+        is checked first (:func:`hcomc.control.validation.checked`: an invalid one raises
+        :class:`~hcomc.control.validation.InvalidPlan` or, with ``control.on_invalid_plan =
+        "fallback"``, becomes the safe default). A new plan replaces its VR's live plan in the
+        plan table."""
         assert self.controller is not None
         new = ids[
             (self.lane[ids] == Lane.RAMP)
@@ -404,6 +408,7 @@ class Simulation:
             view = self._view(t)
             group = find_key_vehicles(view, vr)
             plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+            plan = checked(plan, view, group, name_of(self.controller))
             self.requests.append((view, group))
             self.decisions.append(plan)
             self.log.meta.setdefault("plans", []).append(plan_record(plan))

@@ -45,6 +45,7 @@ from hcomc.control.base import (
     TrafficView,
     find_key_vehicles,
 )
+from hcomc.control.validation import checked, name_of
 from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.sim.demand import generate_demand
@@ -287,6 +288,7 @@ class SumoSimulation:
         view = self._view(t)
         group = find_key_vehicles(view, vr)
         plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+        plan = checked(plan, view, group, name_of(self.controller))  # as the engine does
         self.decisions.append(plan)
         self.log.meta.setdefault("plans", []).append(plan_record(plan))
         self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
