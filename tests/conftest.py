@@ -9,6 +9,17 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _kernels_compiled() -> None:
+    """The kernels compiled once, first, as a command would (hcomc.cli._compile): the
+    commands the tests run then print no compilation lines into the output they check."""
+    from rich.console import Console
+
+    from hcomc.cli._compile import ensure_compiled
+
+    ensure_compiled(Console(stderr=True))
+
+
 @pytest.fixture(autouse=True)
 def _empty_working_directory(tmp_path_factory: pytest.TempPathFactory, monkeypatch: Any) -> None:
     """Every test runs in an empty directory of its own, so no test reads or trips over what

@@ -18,17 +18,22 @@ from hcomc.config import ConfigError, ScenarioConfig, load_config
 
 
 class _Commands(TyperGroup):
-    """The command group: a config that cannot be realised is a one-line error, exit 2.
+    """The command group: a config that cannot be realised, or a controller's plan that
+    fails its checks, is a one-line error, exit 2.
 
     Loading checks most of a config; what only shows when a run is set up (a log larger
     than ``log_memory_limit``, for one) raises :class:`~hcomc.config.ConfigError` later, in
-    any command, and is reported here the same way instead of as a traceback.
+    any command, and is reported here the same way instead of as a traceback; so is an
+    :class:`~hcomc.control.validation.InvalidPlan` (with ``control.on_invalid_plan =
+    "error"``), also when a worker process raised it.
     """
 
     def invoke(self, ctx: Any) -> Any:  # ctx: typer's click Context
+        from hcomc.control.validation import InvalidPlan
+
         try:
             return super().invoke(ctx)
-        except ConfigError as exc:
+        except (ConfigError, InvalidPlan) as exc:
             raise _fail(str(exc)) from None
 
 
@@ -112,6 +117,15 @@ def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | N
     ) as bar:
         task = bar.add_task(label, total=total)
         yield lambda done, _total: bar.update(task, completed=done)
+
+
+def _compiled() -> None:
+    """Compile the kernels now, with a line per stage on stderr, if this environment has not
+    (:func:`hcomc.cli._compile.ensure_compiled`); called once a command's input is checked,
+    before it simulates."""
+    from hcomc.cli._compile import ensure_compiled
+
+    ensure_compiled(err)
 
 
 def _fail(message: str) -> typer.Exit:

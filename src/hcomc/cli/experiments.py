@@ -18,6 +18,7 @@ from hcomc.cli._app import (
     Engine,
     Optimizer,
     SetOption,
+    _compiled,
     _control,
     _engine,
     _fail,
@@ -48,6 +49,7 @@ def _progress_grid(
 ) -> Any:
     from hcomc.experiments.runner import run_grid
 
+    _compiled()
     with _progress("runs", len(specs)) as update:
         return run_grid(
             specs, workers=workers, on_result=on_result, progress=update, after=after,
@@ -168,6 +170,8 @@ def sweep(
     if target.exists() and not target.is_dir():
         raise _fail(f"option '--out' = '{target}': exists and is not a directory")
     status = sweep_status(plan, target)
+    if scheduler is None:
+        _compiled()
     start = time.perf_counter()
     with _progress("sweep", status.total) as update:
         table = run_sweep(plan, target, workers=n_workers, scheduler=scheduler, progress=update)

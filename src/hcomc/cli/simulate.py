@@ -19,6 +19,7 @@ from hcomc.cli._app import (
     SeedOption,
     SetOption,
     _check_seed,
+    _compiled,
     _control,
     _engine,
     _fail,
@@ -79,7 +80,9 @@ def simulate(
     control = _control(_load(config, **overrides), controller, optimizer)
     cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
-    sim = make_simulation(cfg, None, _engine(engine, cfg))
+    engine = _engine(engine, cfg)
+    _compiled()
+    sim = make_simulation(cfg, None, engine)
     start = time.perf_counter()
     with _progress(f"{cfg.name} seed {sim.seed}", sim.n_warmup + sim.n_steps) as update:
         log = sim.run(None if as_json else update)
@@ -133,6 +136,7 @@ def plan(
     if control["controller"] == "none":
         raise _fail("option '--controller' = 'none': allowed: a merge controller")
     cfg = _load(config, **_with(overrides, seed=seed, control=control))
+    _compiled()
     sim = Simulation(cfg)
     decision = sim.run_until_plan()
     if decision is None:

@@ -5,7 +5,8 @@
 * :class:`~hcomc.envs.vector.MergeVectorEnv`: many such environments advanced together on
   the ensemble engine (a native ``gymnasium.vector.VectorEnv``);
 * :class:`~hcomc.envs.multi_agent.MergeParallelEnv`: every CAV in the control zone is an
-  agent (PettingZoo ``ParallelEnv``);
+  agent (PettingZoo ``ParallelEnv``), also made by :func:`parallel_env`, PettingZoo's
+  factory convention;
 * :mod:`hcomc.envs.policies`: the FIFO, Game and HCOMC controllers on the same
   environment, and :func:`~hcomc.envs.policies.evaluate`.
 
@@ -14,10 +15,15 @@ Importing this package registers ``hcomc/Merge-v0`` with gymnasium.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import gymnasium as gym
 
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.envs.options import EnvOptions, RewardWeights
+
+if TYPE_CHECKING:
+    from hcomc.envs.multi_agent import MergeParallelEnv
 
 ENV_ID = "hcomc/Merge-v0"
 
@@ -28,4 +34,26 @@ if ENV_ID not in gym.registry:
         vector_entry_point="hcomc.envs.vector:MergeVectorEnv",
     )
 
-__all__ = ["ENV_ID", "EnvOptions", "MergeEnv", "RewardWeights"]
+
+def parallel_env(
+    scenario: str = "C1",
+    *,
+    overrides: dict[str, Any] | None = None,
+    action_period: float = 0.5,
+    max_episode_time: float = 60.0,
+    reward: RewardWeights | dict[str, float] | None = None,
+    render_mode: str | None = None,
+) -> MergeParallelEnv:
+    """The multi-agent environment (:class:`~hcomc.envs.multi_agent.MergeParallelEnv`, a
+    PettingZoo ``ParallelEnv``) with the class's arguments: PettingZoo's module-level factory
+    (``parallel_env(**kwargs)``). PettingZoo is imported only here, so that the Gymnasium
+    environments need only Gymnasium."""
+    from hcomc.envs.multi_agent import MergeParallelEnv
+
+    return MergeParallelEnv(
+        scenario, overrides=overrides, action_period=action_period,
+        max_episode_time=max_episode_time, reward=reward, render_mode=render_mode,
+    )  # fmt: skip
+
+
+__all__ = ["ENV_ID", "EnvOptions", "MergeEnv", "RewardWeights", "parallel_env"]
