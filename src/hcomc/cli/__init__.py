@@ -9,6 +9,7 @@ the key, the value and what is allowed, and exits with status 2 (no traceback).
 from hcomc.cli import simulate  # noqa: F401
 from hcomc.cli import experiments  # noqa: F401
 from hcomc.cli import reproduce  # noqa: F401
+from hcomc.cli import compare  # noqa: F401
 from hcomc.cli import figures  # noqa: F401
 from hcomc.cli import replay  # noqa: F401
 

@@ -11,7 +11,8 @@ nothing, and a rerun after the base or the code changed recomputes instead of mi
 Runs execute on local processes (a pool that dies is rebuilt and its unfinished runs
 resubmitted) or, with a scheduler address, on a Dask cluster (whose workers' tasks are retried
 by Dask when a worker dies). The final table is assembled from the parts in grid order, so it
-is identical for any backend and worker count; run timings live in the manifests.
+is identical for any backend and worker count; run timings live in the manifests. The
+store (:class:`RunStore`) takes any list of runs: benchmark comparisons keep theirs in one.
 """
 
 from __future__ import annotations
@@ -193,28 +194,103 @@ def run_key(run: RunSpec) -> str:
 
 @dataclass(frozen=True)
 class SweepStatus:
-    """What a (re)run of a sweep into a store will do."""
+    """What a (re)run of a list of runs into a store will do."""
 
     total: int
     done: int  # stored with the current config and version: skipped
     new: int  # never run
     changed: int  # stored under an older config or version: recomputed
-    stale: int  # stored parts that no run of this spec uses (kept, ignored)
+    stale: int  # stored parts that no run of this list uses (kept, ignored)
+
+
+@dataclass(frozen=True)
+class RunStore:
+    """A folder of finished runs, one per key (:func:`run_key`): ``parts/<key>.parquet``
+    (the run's results row) and ``manifests/<key>.json`` (its manifest, timing and grid
+    identity). A part is written last and atomically, so it exists only for a complete run;
+    rerunning a list of runs into the store runs only those without a part."""
+
+    root: Path
+
+    @property
+    def parts(self) -> Path:
+        """The folder of results rows."""
+        return self.root / "parts"
+
+    @property
+    def manifests(self) -> Path:
+        """The folder of manifests."""
+        return self.root / "manifests"
+
+    def part(self, run: RunSpec) -> Path:
+        """Where ``run``'s results row is (or will be) stored."""
+        return self.parts / f"{run_key(run)}.parquet"
+
+    def status(self, runs: list[RunSpec]) -> SweepStatus:
+        """Count the runs of ``runs`` already done here, new, and to recompute."""
+        keys = {run_key(r) for r in runs}
+        stored = {p.stem for p in self.parts.glob("*.parquet")}
+        done = sum(run_key(r) in stored for r in runs)
+        old = set()
+        for key in stored - keys:
+            manifest = self.manifests / f"{key}.json"
+            if manifest.is_file():
+                old.add(json.loads(manifest.read_text(encoding="utf-8")).get("sweep_identity"))
+        changed = sum(run_key(r) not in stored and _identity(r) in old for r in runs)
+        return SweepStatus(len(runs), done, len(runs) - done - changed, changed,
+                           len(stored - keys))  # fmt: skip
+
+    def run(
+        self,
+        runs: list[RunSpec],
+        frame: Callable[[int, dict[str, Any]], pd.DataFrame],
+        *,
+        workers: int = 1,
+        scheduler: str | None = None,
+        progress: Callable[[int, int], None] | None = None,
+        max_pool_restarts: int = 3,
+    ) -> None:
+        """Run every run of ``runs`` that has no part yet and store it; ``frame(i, row)``
+        turns run ``i``'s results row (timings removed, they go to the manifest) into the
+        one-row table stored as its part."""
+        self.parts.mkdir(parents=True, exist_ok=True)
+        self.manifests.mkdir(parents=True, exist_ok=True)
+        for stale in [*self.parts.glob(".*.tmp"), *self.manifests.glob(".*.tmp")]:
+            stale.unlink(missing_ok=True)  # a temporary file of a killed run, never a result
+        keys = [run_key(r) for r in runs]
+        todo = [i for i, k in enumerate(keys) if not (self.parts / f"{k}.parquet").exists()]
+        done = len(runs) - len(todo)
+        if progress is not None:
+            progress(done, len(runs))
+
+        def store(i: int, result: tuple[dict[str, Any], dict[str, Any]]) -> None:
+            nonlocal done
+            row, manifest = result
+            timing = {k: row.get(k) for k in TIMING}
+            manifest = {**manifest, "timing": timing, "sweep_identity": _identity(runs[i])}
+            write_json_atomic(self.manifests / f"{keys[i]}.json", manifest)
+            clean = {k: v for k, v in row.items() if k not in TIMING}
+            with atomic_paths(self.parts / f"{keys[i]}.parquet") as (tmp,):  # commits the run
+                frame(i, clean).to_parquet(tmp, index=False)
+            done += 1
+            if progress is not None:
+                progress(done, len(runs))
+
+        if scheduler is not None:
+            _run_dask(scheduler, runs, todo, store)
+        else:
+            _run_local(runs, todo, store, workers, max_pool_restarts)
+
+    def read(self, runs: list[RunSpec]) -> pd.DataFrame:
+        """The stored rows of ``runs``, in their order (runs not stored are left out)."""
+        paths = [self.part(r) for r in runs]
+        frames = [pd.read_parquet(p) for p in paths if p.exists()]
+        return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
 
 def sweep_status(spec: SweepSpec, out: Path) -> SweepStatus:
     """Count the runs of ``spec`` already done in ``out``, new, and to recompute."""
-    runs = expand(spec)
-    keys = {run_key(r) for r in runs}
-    stored = {p.stem for p in (out / "parts").glob("*.parquet")}
-    done = sum(run_key(r) in stored for r in runs)
-    old = set()
-    for key in stored - keys:
-        manifest = out / "manifests" / f"{key}.json"
-        if manifest.is_file():
-            old.add(json.loads(manifest.read_text(encoding="utf-8")).get("sweep_identity"))
-    changed = sum(run_key(r) not in stored and _identity(r) in old for r in runs)
-    return SweepStatus(len(runs), done, len(runs) - done - changed, changed, len(stored - keys))
+    return RunStore(out).status(expand(spec))
 
 
 def _row(run: RunSpec, row: dict[str, Any]) -> pd.DataFrame:
@@ -242,33 +318,10 @@ def run_sweep(
 ) -> pd.DataFrame:
     """Run every unfinished run of ``spec`` into ``out`` and return the assembled table."""
     runs = expand(spec)
-    parts, manifests = out / "parts", out / "manifests"
-    parts.mkdir(parents=True, exist_ok=True)
-    manifests.mkdir(parents=True, exist_ok=True)
-    for stale in [*parts.glob(".*.tmp"), *manifests.glob(".*.tmp")]:
-        stale.unlink(missing_ok=True)  # a temporary file of a killed run, never a result
-    keys = [run_key(r) for r in runs]
-    todo = [i for i, k in enumerate(keys) if not (parts / f"{k}.parquet").exists()]
-    done = len(runs) - len(todo)
-    if progress is not None:
-        progress(done, len(runs))
-
-    def store(i: int, result: tuple[dict[str, Any], dict[str, Any]]) -> None:
-        nonlocal done
-        row, manifest = result
-        timing = {k: row.get(k) for k in TIMING}
-        manifest = {**manifest, "timing": timing, "sweep_identity": _identity(runs[i])}
-        write_json_atomic(manifests / f"{keys[i]}.json", manifest)
-        with atomic_paths(parts / f"{keys[i]}.parquet") as (tmp,):  # the part commits the run
-            _row(runs[i], row).to_parquet(tmp, index=False)
-        done += 1
-        if progress is not None:
-            progress(done, len(runs))
-
-    if scheduler is not None:
-        _run_dask(scheduler, runs, todo, store)
-    else:
-        _run_local(runs, todo, store, workers, max_pool_restarts)
+    RunStore(out).run(
+        runs, lambda i, row: _row(runs[i], row), workers=workers, scheduler=scheduler,
+        progress=progress, max_pool_restarts=max_pool_restarts,
+    )  # fmt: skip
     return assemble(spec, out)
 
 
@@ -348,10 +401,7 @@ def _run_dask(scheduler: str, runs, todo, store) -> None:
 
 def assemble(spec: SweepSpec, out: Path) -> pd.DataFrame:
     """The results table from the stored parts, in grid order; writes sweep.* and summary."""
-    runs = expand(spec)
-    frames = [pd.read_parquet(out / "parts" / f"{run_key(r)}.parquet") for r in runs
-              if (out / "parts" / f"{run_key(r)}.parquet").exists()]  # fmt: skip
-    table = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+    table = RunStore(out).read(expand(spec))
     summ = summarise(table) if len(table) else pd.DataFrame()
     with atomic_paths(out / "sweep.csv", out / "sweep.parquet", out / "summary.csv") as tmp:
         table.to_csv(tmp[0], index=False)
@@ -377,6 +427,7 @@ def summarise(table: pd.DataFrame) -> pd.DataFrame:
 
 __all__ = [
     "CONFIGURATIONS",
+    "RunStore",
     "SweepSpec",
     "SweepStatus",
     "assemble",

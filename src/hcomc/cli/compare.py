@@ -1,0 +1,335 @@
+"""``hcomc compare``: merge controllers side by side on a benchmark suite, paired by seed.
+
+Two forms: ``hcomc compare --controllers fifo,game,mine ...`` runs what its folder lacks of
+suite cells x controllers x seeds (resumable) and compares them; ``hcomc compare A/ B/``
+compares the configurations two existing results folders share. Both print merge success,
+its paired comparison and the paired effects, and write the tables and an HTML report.
+"""
+
+from __future__ import annotations
+
+import shlex
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from hcomc.cli._app import (
+    SetOption,
+    _engine,
+    _fail,
+    _progress,
+    _settings,
+    app,
+    out,
+)
+from hcomc.cli.experiments import _workers
+from hcomc.config import ConfigError
+
+NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "excluded", "p (Holm)", "both merged",
+           "only A", "only B", "neither")  # fmt: skip
+"""Columns right-aligned on the terminal (the others, names and words, left-aligned)."""
+
+OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
+           "report.html")  # fmt: skip
+"""What a comparison writes into its folder (besides its record and run store)."""
+
+
+def _labels(names: str | None) -> list[str]:
+    """``--controllers``: configuration labels or controller names, each checked now."""
+    from hcomc.experiments.runner import configuration_label
+
+    if names is None:
+        raise _fail("option '--controllers' is missing; allowed: two or more, e.g. fifo,game,hcomc")
+    labels: list[str] = []
+    for name in (n.strip() for n in names.split(",")):
+        if not name:
+            raise _fail(f"option '--controllers' = '{names}': an empty name")
+        try:
+            label = configuration_label(name)
+        except ConfigError as exc:
+            raise _fail(f"option '--controllers' ({exc})") from None
+        if label in labels:
+            raise _fail(f"option '--controllers' = '{names}': '{name}' is given twice")
+        labels.append(label)
+    if len(labels) < 2:
+        raise _fail(f"option '--controllers' = '{names}': allowed: two or more to compare")
+    return labels
+
+
+def _baseline(value: str | None, labels: list[str]) -> str | None:
+    from hcomc.experiments.runner import configuration_label
+
+    if value is None:
+        return None
+    try:
+        label = configuration_label(value)
+    except ConfigError as exc:
+        raise _fail(f"option '--baseline' ({exc})") from None
+    if label not in labels:
+        raise _fail(
+            f"option '--baseline' = '{value}' is not among --controllers; allowed: "
+            + ", ".join(labels)
+        )
+    return label
+
+
+def _command(args: dict[str, Any]) -> str:
+    """The command line of a comparison (what its results depend on; not --workers)."""
+    parts = ["hcomc", "compare"]
+    for key, value in args.items():
+        for item in value if isinstance(value, list) else [value]:
+            if item is not None:
+                parts += [f"--{key}", str(item)]
+    return shlex.join(parts)
+
+
+def _table(frame: Any, title: str, numeric: tuple[str, ...] = NUMERIC) -> Any:
+    """A rich table of a text frame: the ``numeric`` columns right-aligned, names and
+    verdicts left-aligned."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(title=escape(title))
+    for col in frame.columns:
+        table.add_column(escape(str(col)), justify="right" if col in numeric else "left")
+    for row in frame.itertuples(index=False):
+        table.add_row(*(escape(str(v)) for v in row))
+    return table
+
+
+def _write_tables(target: Path, runs: Any, effects: Any, success: Any, pairs: Any) -> None:
+    from hcomc.sim.manifest import atomic_paths
+
+    with atomic_paths(*(target / n for n in OUTPUTS[:5])) as tmp:
+        runs.to_parquet(tmp[0], index=False)
+        runs.to_csv(tmp[1], index=False)
+        effects.to_csv(tmp[2], index=False)
+        success.to_csv(tmp[3], index=False)
+        pairs.to_csv(tmp[4], index=False)
+
+
+def _analyse(
+    target: Path,
+    runs: Any,
+    comparisons: list[tuple[str, str]],
+    configurations: list[str],
+    record: dict[str, Any],
+    notes: tuple[str, ...] = (),
+) -> None:
+    """Compute, print and write the comparison of ``runs``."""
+    from hcomc.experiments.compare import (
+        effects,
+        effects_view,
+        merge_success,
+        success_pairs,
+        success_pairs_view,
+        success_view,
+    )
+    from hcomc.viz.compare_report import write_compare_report
+
+    effect_rows = effects(runs, configurations, comparisons=comparisons)
+    success = merge_success(runs, configurations)
+    pairs = success_pairs(runs, comparisons)
+    _write_tables(target, runs, effect_rows, success, pairs)
+    report = write_compare_report(target, runs, effect_rows, success, pairs, record, notes=notes)
+    for note in notes:
+        out.print(f"note: {note}", highlight=False)
+    rates = success_view(success)
+    out.print(_table(rates, "Merge success — runs in which VR merged", tuple(rates.columns[1:])))
+    discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
+    if len(discordant):
+        title = (
+            "Merge success paired by seed (exact McNemar test, Holm-adjusted) — comparisons "
+            "in which only one of the two merged in some seed"
+        )
+        out.print(_table(success_pairs_view(discordant), title))
+    else:
+        out.print("merge success paired by seed: in no seed did only one of two compared "
+                  "configurations merge", highlight=False)  # fmt: skip
+    out.print(
+        _table(
+            effects_view(effect_rows),
+            "Paired effects — median A-B over seeds [95 % bootstrap CI]; verdict by the CI; "
+            "favours by the metric's better direction (↑ larger, ↓ smaller); A<B: k of n "
+            "pairs (both merged); excluded: seeds without a pair; p: sign test, Holm-adjusted "
+            "over the table",
+        )
+    )
+    out.print(f"report: {report}", highlight=False)
+
+
+@app.command()
+def compare(
+    folders: Annotated[
+        list[Path] | None,
+        typer.Argument(
+            metavar="A/ B/",
+            help="Two results folders (of hcomc compare or hcomc reproduce) to compare instead "
+            "of running: the configurations they share, paired by cell and seed.",
+        ),
+    ] = None,
+    controllers: Annotated[
+        str | None,
+        typer.Option(
+            help="Configurations to compare, comma-separated: fifo, game, hcomc (and the "
+            "other labels of hcomc reproduce), a registered name, package.module:Class or "
+            "path/to/file.py:Class."
+        ),
+    ] = None,
+    conditions: Annotated[
+        str | None,
+        typer.Option(
+            help="Cells of the suite: ids and ranges, e.g. C1,C2 or C1..C5 (default: all)."
+        ),
+    ] = None,
+    seeds: Annotated[
+        int | None, typer.Option(help="Seeds 0..N-1 per cell (default: the suite's, 30).")
+    ] = None,
+    suite: Annotated[str | None, typer.Option(help="Benchmark suite (default: merge-v1).")] = None,
+    baseline: Annotated[
+        str | None,
+        typer.Option(help="Compare every configuration with this one only (default: every pair)."),
+    ] = None,
+    engine: Annotated[
+        str | None,
+        typer.Option(help="Simulation engine: hcomc, or sumo (SUMO co-simulation, hcomc[sumo])."),
+    ] = None,
+    workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
+    out_dir: Annotated[
+        Path | None,
+        typer.Option("--out", help="Results folder (default: compare/SUITE, or compare/A-vs-B)."),
+    ] = None,
+    settings: SetOption = None,
+) -> None:
+    """Compare merge controllers on a benchmark suite, paired by seed; rerun to resume.
+
+    Prints merge success and the paired effects on the paper's five metrics (median
+    difference, 95 % CI, verdict, sign test with Holm's correction) and writes runs.parquet,
+    runs.csv, effects.csv, success.csv, success_pairs.csv, compare.json and report.html."""
+    if folders:
+        given = {"--controllers": controllers, "--conditions": conditions, "--seeds": seeds,
+                 "--suite": suite, "--baseline": baseline, "--engine": engine,
+                 "--workers": workers, "--set": settings}  # fmt: skip
+        extra = [k for k, v in given.items() if v]
+        if extra:
+            raise _fail(
+                f"option '{extra[0]}' does not apply when comparing folders; allowed: "
+                "hcomc compare A/ B/ [--out DIR]"
+            )
+        _compare_folders(folders, out_dir)
+        return
+    _compare_controllers(
+        controllers, conditions, seeds, suite, baseline, engine, workers, out_dir, settings
+    )
+
+
+def _compare_controllers(
+    controllers: str | None,
+    conditions: str | None,
+    seeds: int | None,
+    suite_name: str | None,
+    baseline: str | None,
+    engine: str | None,
+    workers: int | None,
+    out_dir: Path | None,
+    settings: list[str] | None,
+) -> None:
+    from hcomc.config import nest_overrides
+    from hcomc.experiments.benchmark import (
+        Comparison,
+        check_folder,
+        record,
+        run_comparison,
+        status,
+        write_record,
+    )
+    from hcomc.experiments.compare import pairs
+    from hcomc.experiments.suite import LATEST, suite_named
+
+    labels = _labels(controllers)
+    chosen = _baseline(baseline, labels)
+    if seeds is not None and seeds < 1:
+        raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
+    n_workers = _workers(workers)
+    try:
+        bench = suite_named(suite_name or LATEST)
+        cells = bench.select(conditions)
+        comparison = Comparison(
+            bench, cells, tuple(labels), seeds or bench.seeds,
+            nest_overrides(_settings(settings)), _engine(engine or "hcomc"),
+        )  # fmt: skip
+        comparison.check()
+        if comparison.engine != "hcomc":
+            _engine(comparison.engine, cells[0].config(**comparison.overrides))
+        target = out_dir or Path("compare") / bench.name
+        check_folder(target, bench)
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
+    command = _command({
+        "controllers": ",".join(labels), "conditions": ",".join(c.id for c in cells),
+        "seeds": comparison.seeds, "suite": bench.name, "baseline": chosen,
+        "engine": None if comparison.engine == "hcomc" else comparison.engine,
+        "out": str(target), "set": list(settings or []),
+    })  # fmt: skip
+    before = status(comparison, target)
+    write_record(target, record(comparison, command, None))  # claims the folder for this suite
+    start = time.perf_counter()
+    with _progress("runs", before.total) as update:
+        runs = run_comparison(comparison, target, workers=n_workers, progress=update)
+    wall = time.perf_counter() - start
+    content = record(comparison, command, before)
+    write_record(target, content)
+    out.print(
+        f"suite {bench.name} · cells {', '.join(c.id for c in cells)} · {comparison.seeds} "
+        f"seeds · {', '.join(labels)} · engine {comparison.engine}",
+        highlight=False,
+    )
+    _analyse(target, runs, pairs(labels, chosen), labels, content)
+    notes = [f"{before.new} new", f"{before.done} already done"]
+    if before.changed:
+        notes.append(f"{before.changed} recomputed because the config, hcomc version or "
+                     "controller file changed")  # fmt: skip
+    out.print(
+        f"{len(runs)} runs ({', '.join(notes)}) on {n_workers} processes in {wall:.1f} s · "
+        f"written to {target}/ ({', '.join(OUTPUTS)}, compare.json)",
+        highlight=False,
+    )
+
+
+def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
+    from hcomc.experiments.benchmark import folder_runs, stored_record
+    from hcomc.sim.manifest import build_manifest
+
+    try:
+        both = folder_runs(folders)
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
+    name = "-vs-".join(label.strip("/").replace("/", "_") for label in both.labels)
+    target = out_dir or Path("compare") / name
+    if target.exists() and not target.is_dir():
+        raise _fail(f"option '--out' = '{target}': exists and is not a directory")
+    if target.resolve() in {f.resolve() for f in folders}:
+        raise _fail(f"option '--out' = '{target}' is a compared folder; allowed: another folder")
+    if (target / "parts").exists() or stored_record(target) is not None:
+        raise _fail(
+            f"option '--out' = '{target}' holds runs of a comparison; allowed: another folder"
+        )
+    manifest = build_manifest(seed=0, config={})
+    content = {
+        "command": shlex.join(["hcomc", "compare", *map(str, folders), "--out", str(target)]),
+        "folders": [str(f) for f in folders],
+        "hcomc_version": manifest["hcomc_version"],
+        "git_revision": manifest["git_revision"],
+        "created_utc": manifest["created_utc"],
+    }
+    target.mkdir(parents=True, exist_ok=True)
+    confs = [c for pair in both.comparisons for c in pair]
+    out.print(
+        f"comparing {both.labels[1]} (A) with {both.labels[0]} (B): "
+        + ", ".join(f"{a} vs {b}" for a, b in both.comparisons),
+        highlight=False,
+    )
+    _analyse(target, both.runs, list(both.comparisons), confs, content, both.notes)
+    out.print(f"written to {target}/ ({', '.join(OUTPUTS)})", highlight=False)
