@@ -5,8 +5,7 @@ from __future__ import annotations
 import inspect
 
 import numpy as np
-from pettingzoo.test import api_test, parallel_api_test
-from pettingzoo.utils import parallel_to_aec
+from pettingzoo.test import parallel_api_test
 
 import hcomc.envs
 from hcomc.envs import RewardWeights, parallel_env
@@ -56,10 +55,6 @@ def test_keyword_arguments_are_forwarded() -> None:
 
 def test_the_factory_made_env_passes_pettingzoos_parallel_api_test() -> None:
     parallel_api_test(parallel_env(scenario="C1"), num_cycles=300)
-
-
-def test_the_aec_view_the_docs_name_passes_pettingzoos_api_test() -> None:
-    api_test(parallel_to_aec(parallel_env(scenario="C1")), num_cycles=300)
 
 
 def test_the_factory_and_the_class_run_the_same_episode() -> None:
