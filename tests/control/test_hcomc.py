@@ -175,7 +175,8 @@ def test_plan_cli_json():
 
 REPORT_KEYS = {"scenario", "seed", "t", "optimizer", "safety_threshold", "n_eval",
                "key_vehicles", "game", "pareto", "chosen", "mode", "sequence", "eq19_branch",
-               "fallback", "reason", "decision_ms"}  # fmt: skip
+               "fallback", "reason", "decision_ms", "controller", "merge_x", "vr_duration",
+               "horizon"}  # fmt: skip
 
 
 def test_plan_report_is_read_from_the_typed_details():
@@ -208,6 +209,7 @@ def test_plan_report_of_a_plan_without_hcomc_details():
     assert (report["pareto"], report["chosen"], report["game"]) == ([], None, None)
     assert (report["n_eval"], report["eq19_branch"]) == (0, "")
     assert report["optimizer"] == sim.config.control.optimizer
+    assert report["controller"] == "fifo"
 
 
 def test_plan_cli_table_and_errors():
