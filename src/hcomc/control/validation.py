@@ -53,7 +53,8 @@ class InvalidPlan(ValueError):  # noqa: N818 (reads as what it reports: an inval
     ) -> None:
         self.field, self.value, self.allowed = field, value, allowed
         self.controller, self.vr, self.t = controller, vr, t
-        super().__init__(self.message)
+        super().__init__(f"controller '{controller}' returned an invalid plan for VR {vr} "
+                         f"at t = {t:.10g} s: {self.rule}")  # fmt: skip
 
     def __reduce__(self) -> tuple[type[InvalidPlan], tuple[object, ...]]:
         """Pickled with its attributes (a run in a worker process raises it)."""
@@ -64,12 +65,6 @@ class InvalidPlan(ValueError):  # noqa: N818 (reads as what it reports: an inval
     def rule(self) -> str:
         """``field = value; allowed: ...`` on one line."""
         return f"{self.field} = {_show(self.value)}; allowed: {self.allowed}"
-
-    @property
-    def message(self) -> str:
-        """The one-line message: controller, VR, time and :attr:`rule`."""
-        return (f"controller '{self.controller}' returned an invalid plan for VR {self.vr} "
-                f"at t = {self.t:.10g} s: {self.rule}")  # fmt: skip
 
 
 def _show(value: object) -> str:
@@ -140,11 +135,6 @@ def _nan(x: object) -> bool:
     return _number(x) and math.isnan(float(x))
 
 
-def _kind(view: TrafficView, i: int) -> str:
-    """What a vehicle that cannot be commanded is."""
-    return "missing" if i < 0 else "an HDV"
-
-
 def _commands_vr(plan: MergePlan, view: TrafficView) -> bool:
     """The engine commands VR (VV0, its change at ``merge_x``) if a CAV with a ``merge_x``."""
     return view.is_cav(plan.group.vr) and _number(plan.merge_x) and not _nan(plan.merge_x)
@@ -161,7 +151,7 @@ def _number_rule(
 
 
 def _structure(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
-    """A mode and a group for this VR, executed in a known sequence."""
+    """A mode and a group for this VR, a known sequence, ``t0`` the planning time."""
     if not isinstance(plan.mode, Mode):
         return "mode", plan.mode, "a hcomc.control.base.Mode (NONE, LONGITUDINAL, LATERAL)"
     if not isinstance(plan.group, MergeGroup):
@@ -170,6 +160,9 @@ def _structure(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem
         return "group.vr", plan.group.vr, f"{group.vr}, the ramp vehicle planned for"
     if plan.sequence not in SEQUENCES or (plan.sequence == "behind" and group.vmc < 0):
         return "sequence", plan.sequence, "'ahead' or 'behind' ('behind' only with a VMC)"
+    tol = time_tolerance(view)  # the cubics run in t - t0
+    if not (_number(plan.t0) and abs(float(plan.t0) - view.t) <= tol):
+        return "t0", plan.t0, f"the planning time view.t = {view.t:.10g} s (within {tol:g} s)"
     return None
 
 
@@ -183,14 +176,6 @@ def _roles(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
         if got != want:
             return f"group.{role.lower()}", int(got), f"{want}, {role} of {which}"
     return None
-
-
-def _t0(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
-    """The cubics run in ``t - t0``: ``t0`` is the planning time."""
-    tol = time_tolerance(view)
-    if _number(plan.t0) and abs(float(plan.t0) - view.t) <= tol:
-        return None
-    return "t0", plan.t0, f"the planning time view.t = {view.t:.10g} s (within {tol:g} s)"
 
 
 def _safe_default(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
@@ -230,18 +215,15 @@ def _cubic(value: object) -> bool:
     return array.shape == (4,) and bool(np.isfinite(array).all())
 
 
-def _cubics(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
-    """Each virtual vehicle is None or four finite cubic coefficients."""
-    for name in CUBICS:
-        value = getattr(plan, name)
-        if value is not None and not _cubic(value):
-            return name, value, "None or 4 finite cubic coefficients, shape (4,)"
-    return None
-
-
 def _virtual_vehicles(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
-    """Each virtual vehicle in the plan that executes it: VV1 in longitudinal mode (which needs
-    it), VV2 in lateral mode, VV0 for a commanded VR."""
+    """Each virtual vehicle None or four finite cubic coefficients, and in the plan that
+    executes it: VV1 in longitudinal mode (which needs it), VV2 in lateral mode, VV0 for a
+    commanded VR."""
+    bad = next(
+        (n for n in CUBICS if getattr(plan, n) is not None and not _cubic(getattr(plan, n))), None
+    )
+    if bad is not None:
+        return bad, getattr(plan, bad), "None or 4 finite cubic coefficients, shape (4,)"
     mode = plan.mode.name
     if plan.mode == Mode.LONGITUDINAL and plan.vv1 is None:
         return "vv1", None, "VV1's 4 cubic coefficients (longitudinal mode: VMC follows VV1)"
@@ -258,16 +240,17 @@ def _commanded_cavs(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Pr
     """Only CAVs are commanded: the cooperating vehicle (mode not NONE), VNR (with a VV2)."""
     vmc, vnr = plan.group.vmc, plan.group.vnr
     if plan.mode != Mode.NONE and not view.is_cav(vmc):
-        mode, kind = plan.mode.name, _kind(view, vmc)
-        return "group.vmc", vmc, f"a CAV in mode {mode} (VMC is {kind}), or Mode.NONE"
+        kind = "missing" if vmc < 0 else "an HDV"
+        return "group.vmc", vmc, f"a CAV in mode {plan.mode.name} (VMC is {kind}), or Mode.NONE"
     if plan.vv2 is not None and not view.is_cav(vnr):
-        return "vv2", plan.vv2, f"None: VV2 commands VNR, which is {_kind(view, vnr)}"
+        kind = "missing" if vnr < 0 else "an HDV"
+        return "vv2", plan.vv2, f"None: VV2 commands VNR, which is {kind}"
     return None
 
 
-STRUCTURE: tuple[Rule, ...] = (_structure, _roles, _t0)
+STRUCTURE: tuple[Rule, ...] = (_structure, _roles)
 """Rules of every plan, in the order checked."""
-CONTENT: tuple[Rule, ...] = (_numbers, _cubics, _virtual_vehicles, _commanded_cavs)
+CONTENT: tuple[Rule, ...] = (_numbers, _virtual_vehicles, _commanded_cavs)
 """Rules of a plan that is not a fallback, in the order checked."""
 
 
