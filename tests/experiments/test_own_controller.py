@@ -1,0 +1,138 @@
+"""A researcher's own controller, named by its file, in a TOML, ``hcomc run`` and a sweep;
+deliberately broken controllers stop with a one-line error or, on request, fall back; a run
+whose ramp vehicle never merged is an outcome with empty metrics, never "no disturbance"."""
+
+from __future__ import annotations
+
+import json
+import math
+import textwrap
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from hcomc.cli import app
+from hcomc.experiments.tables import LABELS
+
+CONTROLLERS = '''
+import dataclasses
+
+import numpy as np
+
+from hcomc.config import ScenarioConfig
+from hcomc.control.base import MergePlan, Mode
+from hcomc.control.fifo import FIFOController
+
+
+class GapAcceptance:
+    """Never cooperates; ``label`` ends up in the plan's reason."""
+
+    name = "gap-acceptance"
+
+    def __init__(self, config: ScenarioConfig, label: str = "own") -> None:
+        self.label = label
+
+    def plan(self, view, group, rng):
+        return MergePlan(group, Mode.NONE, view.t, reason=self.label)
+
+
+class Broken(FIFOController):
+    """FIFO with one field of every plan spoilt (``field`` = ``value``)."""
+
+    def __init__(self, config: ScenarioConfig, field: str = "merge_x", value: float = 5000.0):
+        super().__init__(config)
+        self.field, self.value = field, value
+
+    def plan(self, view, group, rng):
+        plan = super().plan(view, group, rng)
+        value = None if self.field == "vv1" else self.value
+        mode = Mode.LONGITUDINAL if self.field == "vv1" else plan.mode
+        return dataclasses.replace(plan, **{self.field: value}, mode=mode)
+'''
+
+runner = CliRunner()
+
+
+@pytest.fixture
+def own(tmp_path: Path) -> Path:
+    path = tmp_path / "own.py"
+    path.write_text(textwrap.dedent(CONTROLLERS), encoding="utf-8")
+    return path
+
+
+def _run(*args: str) -> object:
+    return runner.invoke(app, ["run", *args, "--seeds", "1", "--workers", "1", "--json"])
+
+
+def test_a_toml_names_the_controller_and_its_options(own: Path, tmp_path: Path) -> None:
+    config = tmp_path / "study.toml"
+    config.write_text(
+        f'base = "C2"\nduration = 40.0\n\n[control]\ncontroller = "{own}:GapAcceptance"\n\n'
+        '[control.options]\nlabel = "mine"\n',
+        encoding="utf-8",
+    )
+    result = _run(str(config))
+    assert result.exit_code == 0, result.output
+    (row,) = json.loads(result.stdout)
+    assert row["configuration"] == f"{own}:GapAcceptance"
+    assert row["controller"] == f"{own}:GapAcceptance"
+    assert row["mode"] == "none"
+    bad = _run(str(config), "--set", "control.options.colour=1")
+    assert bad.exit_code == 2
+    assert "control.options.colour" in bad.stderr
+    assert "allowed: label" in bad.stderr
+    assert bad.stderr.strip().count("\n") == 0
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "shown"),
+    [("merge_x", 5000.0, "merge_x = 5000"), ("vr_duration", -1.0, "vr_duration = -1"),
+     ("vv1", 0.0, "vv1")],
+)  # fmt: skip
+def test_a_broken_plan_is_a_one_line_error_or_a_recorded_fallback(
+    own: Path, field: str, value: float, shown: str
+) -> None:
+    spec = f"{own}:Broken"
+    options = ["--set", f"control.options.field={json.dumps(field)}",
+               "--set", f"control.options.value={value}", "--set", "duration=40"]  # fmt: skip
+    result = _run("C2", "--controller", spec, *options)
+    assert result.exit_code == 2, result.output
+    message = result.stderr.strip()
+    assert message.count("\n") == 0
+    assert "invalid plan" in message
+    assert shown in message
+    fallback = _run("C2", "--controller", spec, *options, "--set", "on_invalid_plan='fallback'")
+    assert fallback.exit_code == 0, fallback.output
+    (row,) = json.loads(fallback.stdout)
+    assert row["fallback"]
+    assert row["mode"] == "none"
+    assert row["fallbacks"] >= 1  # recorded, not hidden
+
+
+def test_an_unmerged_run_is_an_outcome_not_a_smooth_run(own: Path) -> None:
+    # C1 seed 0: without cooperation the ramp vehicle finds no gap within the run
+    result = _run("C1", "--controller", f"{own}:GapAcceptance")
+    assert result.exit_code == 0, result.output
+    (row,) = json.loads(result.stdout)
+    assert row["merged"] is False
+    assert row["ramp_wait"] > 10.0
+    for metric in LABELS:
+        assert row[metric] is None or math.isnan(row[metric]), metric
+
+
+@pytest.mark.slow
+def test_a_sweep_runs_the_controller_beside_the_papers(own: Path, tmp_path: Path) -> None:
+    spec = tmp_path / "sweep.toml"
+    spec.write_text(
+        f'name = "own"\nbase = "C2"\nconfigurations = ["fifo", "{own}:GapAcceptance"]\n'
+        "seeds = 1\nduration = 40.0\n",
+        encoding="utf-8",
+    )
+    result = runner.invoke(app, ["sweep", str(spec), "--workers", "1", "--out",
+                                 str(tmp_path / "out")])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    import pandas as pd
+
+    table = pd.read_parquet(tmp_path / "out" / "sweep.parquet")
+    assert sorted(table["configuration"]) == sorted(["FIFO", f"{own}:GapAcceptance"])
