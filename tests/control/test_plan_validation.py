@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import pickle
 from dataclasses import replace
@@ -17,7 +18,7 @@ from hcomc.control.fifo import FIFOController
 from hcomc.control.validation import InvalidPlan, check_plan, checked
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
-from hcomc.sim.log import EventKind
+from hcomc.sim.log import EventKind, SimulationLog
 
 NAME = "X"
 
@@ -281,36 +282,60 @@ def test_a_broken_controller_stops_the_run_by_default():
     assert not sim.decisions  # nothing invalid was executed
 
 
-def test_a_broken_controller_falls_back_when_configured():
+def _fallback_run(seed: int) -> tuple[Simulation, SimulationLog, int]:
+    """C2 with ``on_invalid_plan = "fallback"`` and a controller whose durations are -1."""
     config = load_config("C2", duration=60.0, **{"control.on_invalid_plan": "fallback"})
-    sim = Simulation(config, 0, controller=CorruptFIFO(config, vr_duration=-1.0))
+    sim = Simulation(config, seed, controller=CorruptFIFO(config, vr_duration=-1.0))
     log = sim.run()
-    vr = next(iter(sim.key_groups))
-    # FIFO's own fallbacks (an infeasible VV1) pass: a fallback's duration is not executed
-    invalid = [p for p in sim.decisions if p.reason.startswith("invalid plan from")]
-    assert invalid
-    assert invalid[0] is sim.decisions[0]
+    return sim, log, next(iter(sim.key_groups))
+
+
+def test_a_broken_controller_falls_back_when_configured():
+    sim, log, vr = _fallback_run(1)
+    assert sim.fleet.kind[vr] == Kind.HDV
+    assert sim.decisions
     for plan in sim.decisions:
-        assert plan.fallback
-        assert plan.mode == Mode.NONE
+        assert (plan.fallback, plan.mode, plan.vv0, plan.vv1) == (True, Mode.NONE, None, None)
         assert math.isnan(plan.merge_x)
-    for plan in invalid:
-        assert "'corrupt-fifo': vr_duration = -1.0; allowed:" in plan.reason
-        assert "a lane-change duration in (0.5, 15] s" in plan.reason
+        assert plan.reason.startswith("invalid plan from 'corrupt-fifo': vr_duration = -1.0; ")
+        assert "allowed: NaN (not commanded) or a lane-change duration in (0.5, 15] s" in (
+            plan.reason
+        )
     records = log.meta["plans"]
     assert [(r["fallback"], r["reason"]) for r in records] == [
         (True, p.reason) for p in sim.decisions
     ]
-    assert vr in log.events_of(EventKind.FALLBACK)["vehicle"].tolist()
+    fallbacks = log.events_of(EventKind.FALLBACK)["vehicle"].tolist()
+    assert fallbacks.count(vr) == len(sim.decisions)
     assert vr in log.events_of(EventKind.MERGE)["vehicle"].tolist()  # by gap acceptance
 
 
+def test_a_cav_vr_on_fallback_plans_is_never_commanded():
+    sim, log, vr = _fallback_run(0)
+    assert sim.fleet.kind[vr] == Kind.CAV
+    invalid = [p for p in sim.decisions if p.reason.startswith("invalid plan from")]
+    assert invalid
+    assert invalid[0] is sim.decisions[0]
+    # FIFO's own fallbacks (an infeasible VV1) pass unchanged: a fallback's duration is not used
+    assert all(p.fallback and math.isnan(p.merge_x) and p.vv0 is None for p in sim.decisions)
+    assert vr not in log.events_of(EventKind.LANE_CHANGE_START)["vehicle"].tolist()
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="a live plan holds every CAV key vehicle in its lane, VR included "
+    "(hcomc.sim.core_plans.holding_mask), so a CAV VR on a fallback plan waits at the lane end",
+)
+def test_a_cav_vr_on_fallback_plans_merges_by_gap_acceptance():
+    _, log, vr = _fallback_run(0)
+    assert vr in log.events_of(EventKind.MERGE)["vehicle"].tolist()
+
+
 # ------------------------------------------------------- the built-in controllers pass
-@pytest.mark.slow
 @pytest.mark.parametrize("controller", ["fifo", "game", "game-capped", "hcomc"])
 def test_built_in_plans_pass(controller):
-    for condition in ("C1", "C2", "C3", "C4", "C5"):
-        sim = Simulation(load_config(condition, duration=30.0, controller=controller), 0)
+    for condition, seed in itertools.product(("C1", "C2", "C3", "C4", "C5"), (0, 1)):
+        sim = Simulation(load_config(condition, duration=30.0, controller=controller), seed)
         sim.run()  # the engine checks every plan: an invalid one would raise here
         assert sim.decisions
         for plan, (view, group) in zip(sim.decisions, sim.requests, strict=True):
