@@ -38,6 +38,7 @@ def test_held_out_cells_are_what_their_names_say():
     assert dense.demand.mean_headway_main_2 < c2.demand.mean_headway_main_2
     assert lowpen.demand.cav_penetration == 0.2
     assert (flow.demand.ramp, flow.demand.ramp_mean_headway) == ("flow", 12.0)
+    assert flow.warmup == 0.0  # the first ramp vehicle's merge falls in the measured time
 
 
 def test_suite_names_carry_their_version():

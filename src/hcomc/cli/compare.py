@@ -85,6 +85,13 @@ def _command(args: dict[str, Any]) -> str:
     return shlex.join(parts)
 
 
+def _say(text: str) -> None:
+    """Print a line of plain text (names such as "HCOMC [results]" are not markup)."""
+    from rich.markup import escape
+
+    out.print(escape(text), highlight=False)
+
+
 def _table(frame: Any, title: str, numeric: tuple[str, ...] = NUMERIC) -> Any:
     """A rich table of a text frame: the ``numeric`` columns right-aligned, names and
     verdicts left-aligned."""
@@ -135,7 +142,7 @@ def _analyse(
     _write_tables(target, runs, effect_rows, success, pairs)
     report = write_compare_report(target, runs, effect_rows, success, pairs, record, notes=notes)
     for note in notes:
-        out.print(f"note: {note}", highlight=False)
+        _say(f"note: {note}")
     rates = success_view(success)
     out.print(_table(rates, "Merge success — runs in which VR merged", tuple(rates.columns[1:])))
     discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
@@ -157,7 +164,7 @@ def _analyse(
             "over the table",
         )
     )
-    out.print(f"report: {report}", highlight=False)
+    _say(f"report: {report}")
 
 
 @app.command()
@@ -281,20 +288,18 @@ def _compare_controllers(
     wall = time.perf_counter() - start
     content = record(comparison, command, before)
     write_record(target, content)
-    out.print(
+    _say(
         f"suite {bench.name} · cells {', '.join(c.id for c in cells)} · {comparison.seeds} "
         f"seeds · {', '.join(labels)} · engine {comparison.engine}",
-        highlight=False,
     )
     _analyse(target, runs, pairs(labels, chosen), labels, content)
     notes = [f"{before.new} new", f"{before.done} already done"]
     if before.changed:
         notes.append(f"{before.changed} recomputed because the config, hcomc version or "
                      "controller file changed")  # fmt: skip
-    out.print(
+    _say(
         f"{len(runs)} runs ({', '.join(notes)}) on {n_workers} processes in {wall:.1f} s · "
         f"written to {target}/ ({', '.join(OUTPUTS)}, compare.json)",
-        highlight=False,
     )
 
 
@@ -326,10 +331,9 @@ def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
     }
     target.mkdir(parents=True, exist_ok=True)
     confs = [c for pair in both.comparisons for c in pair]
-    out.print(
+    _say(
         f"comparing {both.labels[1]} (A) with {both.labels[0]} (B): "
         + ", ".join(f"{a} vs {b}" for a, b in both.comparisons),
-        highlight=False,
     )
     _analyse(target, both.runs, list(both.comparisons), confs, content, both.notes)
-    out.print(f"written to {target}/ ({', '.join(OUTPUTS)})", highlight=False)
+    _say(f"written to {target}/ ({', '.join(OUTPUTS)})")

@@ -158,10 +158,11 @@ MERGE_V1 = Suite(
         Cell(
             "H3-flow",
             "C1",
-            {"demand": {"ramp": "flow", "ramp_mean_headway": 12.0}},
+            {"warmup": 0.0, "demand": {"ramp": "flow", "ramp_mean_headway": 12.0}},
             "continuous ramp demand: C1 with a ramp vehicle every 12 s on average instead of "
-            "one key merge (metrics of the first ramp vehicle's merge, with the others "
-            "merging around it)",
+            "one key merge; the metrics are of the first ramp vehicle's merge, with the others "
+            "merging around it (no warm-up: a flow starts with it, and the first merge would "
+            "fall in the unmeasured warm-up)",
         ),
     ),
 )
