@@ -11,18 +11,19 @@ Every compiled function of hcomc is declared with :data:`kernel`, numba's ``njit
 Use it bare (``@kernel``) or with numba's other options (``@kernel(inline="always")``,
 ``@kernel(parallel=True)``).
 
-**The cache follows the whole package.** numba judges a cached function fresh when the file
-that defines it is unchanged, but a compiled function carries the code of the functions it
-calls: after an edit of :func:`hcomc.models.idm.idm_accel`, the simulation step (defined in
-other files) would go on running the old model. hcomc's kernels are therefore cached with a
-freshness stamp of every source file of the package (:class:`PackageCacheLocator`): any
-edit recompiles them all on first use.
+**The cache follows every file the kernels depend on.** numba judges a cached function
+fresh when the file that defines it is unchanged, but a compiled function carries the code of
+the functions it calls: after an edit of :func:`hcomc.models.idm.idm_accel`, the simulation
+step (defined in other files) would go on running the old model. hcomc's kernels are
+therefore cached with a freshness stamp of the files that compile and every file of the
+package they import (:class:`PackageCacheLocator`, :mod:`hcomc._stamp`): an edit of any of
+them recompiles all kernels on first use; an edit of the command line, the experiments,
+the figures or a controller's Python code does not.
 """
 
 from __future__ import annotations
 
 import functools
-import hashlib
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -32,19 +33,17 @@ from numba import carray, njit, types
 from numba.core import caching, cgutils
 from numba.extending import intrinsic
 
+from hcomc._stamp import fingerprint
+
 PACKAGE = Path(__file__).resolve().parent
 """The directory of the hcomc package, whose sources the kernels' cache stamps."""
 
 
 @functools.cache
 def source_stamp(package: Path = PACKAGE) -> str:
-    """SHA-256 of the paths and contents of every ``.py`` file under ``package`` (once per
-    process: about 3 ms)."""
-    digest = hashlib.sha256()
-    for path in sorted(package.rglob("*.py")):
-        digest.update(path.relative_to(package).as_posix().encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """Fingerprint of the package's files the kernels depend on
+    (:func:`hcomc._stamp.fingerprint`; once per process: a few ms)."""
+    return fingerprint(package)
 
 
 class PackageCacheLocator(caching._CacheLocator):

@@ -111,12 +111,15 @@ def test_a_broken_plan_is_a_one_line_error_or_a_recorded_fallback(
 
 
 def test_an_unmerged_run_is_an_outcome_not_a_smooth_run(own: Path) -> None:
-    # C1 seed 0: without cooperation the ramp vehicle finds no gap within the run
-    result = _run("C1", "--controller", f"{own}:GapAcceptance")
+    # C1 seed 0 ending at 14 s: VR has entered the control zone and been planned for, but
+    # the run ends before it merges (it merges at about 15 s in a longer run)
+    result = _run("C1", "--controller", f"{own}:GapAcceptance", "--set", "duration=14")
     assert result.exit_code == 0, result.output
     (row,) = json.loads(result.stdout)
+    assert row["vr"] >= 0
+    assert row["mode"] == "none"
     assert row["merged"] is False
-    assert row["ramp_wait"] > 10.0
+    assert row["merge_time"] is None
     for metric in LABELS:
         assert row[metric] is None or math.isnan(row[metric]), metric
 

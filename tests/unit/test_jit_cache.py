@@ -1,5 +1,6 @@
-"""hcomc's kernel cache follows every source file of the package (hcomc._jit): a cached
-kernel whose callee in another file changed is compiled anew, not loaded stale."""
+"""hcomc's kernel cache follows every source file the kernels depend on (hcomc._jit,
+hcomc._stamp): a cached kernel whose callee in another file changed is compiled anew, not
+loaded stale."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import textwrap
 from pathlib import Path
 
 from hcomc._jit import PACKAGE, PackageCacheLocator, source_stamp
+from hcomc._stamp import kernel_sources
 
 _RUN = """
 import sys
@@ -107,13 +109,33 @@ def test_a_kernel_that_cannot_be_cached_runs_with_numbas_warning(tmp_path):
     assert str(pkg / "caller.py") in out.stderr
 
 
-def test_the_stamp_covers_every_source_file_of_the_package(tmp_path):
-    (tmp_path / "sub").mkdir()
-    (tmp_path / "a.py").write_text("A = 1\n")
-    (tmp_path / "sub" / "b.py").write_text("B = 1\n")
-    before = source_stamp.__wrapped__(tmp_path)
-    assert source_stamp.__wrapped__(tmp_path) == before
-    (tmp_path / "sub" / "b.py").write_text("B = 2\n")
-    assert source_stamp.__wrapped__(tmp_path) != before
+def test_the_stamp_covers_the_files_kernels_import_and_no_other(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "params.py").write_text("SCALE = 2.0\n")  # read by a kernel, not compiled
+    (pkg / "model.py").write_text("from hcomc._jit import kernel\nfrom .sub import params\n")
+    (pkg / "cli.py").write_text("from pkg.model import X\n")  # imports a kernel file: outside
+    assert [p.relative_to(pkg).as_posix() for p in kernel_sources(pkg)] == [
+        "__init__.py",
+        "model.py",
+        "sub/__init__.py",
+        "sub/params.py",
+    ]
+    before = source_stamp.__wrapped__(pkg)
+    assert source_stamp.__wrapped__(pkg) == before
+    (pkg / "cli.py").write_text("from pkg.model import Y\n")
+    assert source_stamp.__wrapped__(pkg) == before  # the command line does not recompile
+    (pkg / "sub" / "params.py").write_text("SCALE = 3.0\n")
+    assert source_stamp.__wrapped__(pkg) != before
     assert PackageCacheLocator.package == PACKAGE
     assert (PACKAGE / "_jit.py").exists()
+
+
+def test_every_compiled_module_of_hcomc_is_stamped():
+    stamped = set(kernel_sources(PACKAGE))
+    for name in ("sim/core.py", "models/idm.py", "control/base.py", "config/schema.py"):
+        assert PACKAGE / name in stamped, name
+    for name in ("cli/_app.py", "experiments/claims.py", "viz/report.py"):
+        assert PACKAGE / name not in stamped, name

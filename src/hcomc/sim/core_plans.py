@@ -133,10 +133,12 @@ def commanded_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
 @kernel
 def holding_mask(pi: np.ndarray, n_plans: int, is_cav: np.ndarray) -> np.ndarray:
     """Vehicles that make no discretionary change for a plan: those it commands and every
-    connected (CAV) key vehicle of a live plan (:func:`hcomc.sim.execution.holding_lane`)."""
+    connected (CAV) key vehicle of a live plan but VR (:func:`hcomc.sim.execution.holding_lane`).
+
+    A VR the plan does not command merges by gap acceptance, as an HDV VR does."""
     mask = commanded_mask(pi, n_plans, is_cav.size)
     for k in range(n_plans):
-        for role in range(P_VR, P_VNR + 1):
+        for role in range(P_VMC, P_VNR + 1):
             j = pi[k, role]
             if j >= 0 and is_cav[j]:
                 mask[j] = True

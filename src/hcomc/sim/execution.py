@@ -119,8 +119,9 @@ def commanded(plans: list[ActivePlan], n: int) -> BoolArray:
 
 def holding_lane(plans: list[ActivePlan], is_cav: BoolArray) -> BoolArray:
     """Vehicles that make no discretionary (MOBIL) lane change now: those a live plan
-    commands, and every connected (CAV) key vehicle of a live plan, which keeps its lane so
-    that it does not cut into the gap the plan opens (an HDV key vehicle cannot be told)."""
+    commands, and every connected (CAV) key vehicle of a live plan other than VR, which keeps
+    its lane so that it does not cut into the gap the plan opens (an HDV key vehicle cannot be
+    told). A VR the plan does not command merges by gap acceptance."""
     pi, _ = plan_table(plans)
     return holding_mask(pi, len(plans), np.ascontiguousarray(is_cav, dtype=np.bool_))
 
