@@ -251,7 +251,12 @@ cav_penetration = [0.5]
         manifest = json.loads((out / "manifests" / f"{key}.json").read_text())
         assert manifest["config"]["hdv"]["max_accel"] == 1.3
 
-    monkeypatch.setattr(sweep_mod.hcomc, "__version__", "99.0")  # the code changes
+    ours = sweep_mod.code_stamp
+    monkeypatch.setattr(sweep_mod, "code_stamp", lambda: "another revision")  # the code changes
+    status = sweep_mod.sweep_status(load_sweep(spec_path), out)
+    assert (status.done, status.new, status.changed) == (0, 0, 2)
+    monkeypatch.setattr(sweep_mod, "code_stamp", ours)
+    monkeypatch.setattr(sweep_mod.hcomc, "__version__", "99.0")  # another release
     status = sweep_mod.sweep_status(load_sweep(spec_path), out)
     assert (status.done, status.new, status.changed) == (0, 0, 2)
 

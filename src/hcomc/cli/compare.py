@@ -295,8 +295,8 @@ def _compare_controllers(
     _analyse(target, runs, pairs(labels, chosen), labels, content)
     notes = [f"{before.new} new", f"{before.done} already done"]
     if before.changed:
-        notes.append(f"{before.changed} recomputed because the config, hcomc version or "
-                     "controller file changed")  # fmt: skip
+        notes.append(f"{before.changed} recomputed because the config, the hcomc code or "
+                     "the controller file changed")  # fmt: skip
     _say(
         f"{len(runs)} runs ({', '.join(notes)}) on {n_workers} processes in {wall:.1f} s · "
         f"written to {target}/ ({', '.join(OUTPUTS)}, compare.json)",

@@ -178,7 +178,7 @@ def sweep(
     backend = scheduler or f"{n_workers} local processes"
     notes = [f"{status.new} new", f"{status.done} already done"]
     if status.changed:
-        notes.append(f"{status.changed} recomputed because the config or hcomc version changed")
+        notes.append(f"{status.changed} recomputed because the config or the hcomc code changed")
     if status.stale:
         notes.append(f"{status.stale} stored parts of other configs ignored (kept)")
     out.print(

@@ -4,7 +4,7 @@ A :class:`Comparison` is what ``hcomc compare`` runs: cells of a suite
 (:mod:`hcomc.experiments.suite`) x configurations x seeds 0..n-1, with optional overrides
 for every cell and an engine. Its runs live in a resumable store
 (:class:`hcomc.experiments.sweep.RunStore`): a rerun into the same folder runs only what is
-missing, and a changed config, hcomc version or controller file gives new run keys, so such
+missing, and a changed config, hcomc version or code, or controller file gives new run keys, so such
 runs are recomputed instead of mixed in. The folder's record (:data:`RECORD`) names the
 suite and its version, the hcomc version and git revision; a folder holding runs of another
 suite or version is refused. Every row of the runs table has ``suite``, ``condition`` (the

@@ -4,10 +4,11 @@ A sweep spec (TOML, validated like scenario configs) names a base scenario, the 
 the per-lane mean headways and the CAV penetration, the configurations, the number of seeds
 and optionally a continuous ramp flow; every value the spec leaves out comes from the base,
 and each result row starts with the values the run actually used (:data:`RESOLVED`). Every
-run is identified by a key hashed from its place in the grid, its fully resolved config and
-the hcomc version; each finished run is written atomically as ``parts/<key>.parquet`` (one
-row) plus ``manifests/<key>.json``, so a killed sweep rerun skips finished runs and loses
-nothing, and a rerun after the base or the code changed recomputes instead of mixing.
+run is identified by a key hashed from its place in the grid, its fully resolved config,
+the hcomc version and the code that computes it; each finished run is written atomically as
+``parts/<key>.parquet`` (one row) plus ``manifests/<key>.json``, so a killed sweep rerun
+skips finished runs and loses nothing, and a rerun after the base or the code changed
+recomputes instead of mixing.
 Runs execute on local processes (a pool that dies is rebuilt and its unfinished runs
 resubmitted) or, with a scheduler address, on a Dask cluster (whose workers' tasks are retried
 by Dask when a worker dies). The final table is assembled from the parts in grid order, so it
@@ -35,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 import hcomc
 from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
 from hcomc.control.registry import BUILTIN, controller_source
+from hcomc.experiments.provenance import code_stamp
 from hcomc.experiments.runner import (
     _SPAWN,
     CONFIGURATIONS,
@@ -177,15 +179,16 @@ def outside_source(controller: str) -> str:
 
 
 def run_key(run: RunSpec) -> str:
-    """Stable key of a run's result: its identity, resolved config and hcomc version.
+    """Stable key of a run's result: its identity, resolved config, hcomc version and code.
 
-    A changed preset or base file, another package version, or a changed source file of a
+    A changed preset or base file, another package version, a changed source file of hcomc
+    that can change a run (:func:`hcomc.experiments.provenance.code_stamp`) or of a
     controller from outside hcomc gives new keys, so a resumed sweep recomputes those runs
     instead of mixing stale results into the table.
     """
     config = resolved_config(run)
     text = json.dumps(
-        [_identity(run), config.model_dump(mode="json"), hcomc.__version__,
+        [_identity(run), config.model_dump(mode="json"), hcomc.__version__, code_stamp(),
          outside_source(config.control.controller)],
         sort_keys=True,
     )  # fmt: skip
