@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.experiments.claims import MIN_PAIRS, holm
 from hcomc.experiments.compare import (
+    EFFECTS_VIEW_COLUMNS,
     PREFERS,
     effects,
     effects_view,
@@ -320,3 +321,31 @@ def test_the_report_holds_the_tables_and_a_figure_per_cell(tmp_path):
     assert "abc123" in html
     assert "engine differs" in html
     assert "http" not in html.replace("http-equiv", "")  # loads nothing
+
+
+def _documented_rows(text: str) -> list[list[str]]:
+    """The paired-effects rows of the example output in docs/benchmark.md."""
+    block = text.split("--seeds 3`, run a second time", 1)[1].split("```text", 1)[1]
+    block = block.split("```", 1)[0]
+    rows = []
+    for line in block.splitlines():
+        cells = [c.strip() for c in line.strip().strip("│").split("│")]
+        if len(cells) == len(EFFECTS_VIEW_COLUMNS) and cells[0].startswith("C"):
+            rows.append(cells)
+    return rows
+
+
+@pytest.mark.slow
+def test_the_documented_example_is_what_the_command_computes(tmp_path):
+    docs = Path(__file__).resolve().parents[2] / "docs" / "benchmark.md"
+    rows = _documented_rows(docs.read_text(encoding="utf-8"))
+    assert len(rows) >= 10
+    out = tmp_path / "example"
+    result = _invoke("--controllers", "fifo,game,hcomc", "--conditions", "C1,C2",
+                     "--seeds", "3", "--out", str(out))  # fmt: skip
+    assert result.exit_code == 0, result.output
+    frame = pd.read_csv(out / "effects.csv")
+    computed = effects_view(frame.assign(favours=frame["favours"].astype(object).fillna("")))
+    computed_rows = computed.astype(str).values.tolist()
+    for row in rows:
+        assert row in computed_rows, row
