@@ -42,7 +42,7 @@ PACKAGE = Path(__file__).resolve().parent
 @functools.cache
 def source_stamp(package: Path = PACKAGE) -> str:
     """Fingerprint of the package's files the kernels depend on
-    (:func:`hcomc._stamp.fingerprint`; once per process: a few ms)."""
+    (:func:`hcomc._stamp.fingerprint`; once per process)."""
     return fingerprint(package)
 
 

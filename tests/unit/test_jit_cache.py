@@ -115,7 +115,10 @@ def test_the_stamp_covers_the_files_kernels_import_and_no_other(tmp_path):
     (pkg / "__init__.py").write_text("")
     (pkg / "sub" / "__init__.py").write_text("")
     (pkg / "sub" / "params.py").write_text("SCALE = 2.0\n")  # read by a kernel, not compiled
-    (pkg / "model.py").write_text("from hcomc._jit import kernel\nfrom .sub import params\n")
+    (pkg / "model.py").write_text(
+        "from hcomc._jit import kernel\n\n\ndef f():\n    from .sub import (\n"
+        "        params,  # read by a kernel\n    )\n"
+    )
     (pkg / "cli.py").write_text("from pkg.model import X\n")  # imports a kernel file: outside
     assert [p.relative_to(pkg).as_posix() for p in kernel_sources(pkg)] == [
         "__init__.py",
