@@ -1,9 +1,9 @@
 """Imports only run downwards through the package's layers.
 
 cli/sumo -> viz -> experiments/envs -> metrics -> sim -> control -> safety/models/optim ->
-config/road (plus the small utilities ``rng``, ``_typing`` and ``_jit``). Imports under
-``if TYPE_CHECKING:`` are for annotations only and do not count; imports inside functions
-do, since they run.
+config/corridor/road (plus the small utilities ``rng``, ``_typing``, ``_jit`` and
+``_stamp``). Imports under ``if TYPE_CHECKING:`` are for annotations only and do not count;
+imports inside functions do, since they run.
 """
 
 from __future__ import annotations
@@ -29,10 +29,12 @@ LAYERS = {
     "models": 1,
     "optim": 1,
     "config": 0,
+    "corridor": 0,
     "road": 0,
     "rng": 0,
     "_typing": 0,
     "_jit": 0,
+    "_stamp": 0,
 }
 ROOT_NAMES = {"__version__"}  # names defined in hcomc/__init__.py itself (layer 0)
 

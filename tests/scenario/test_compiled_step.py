@@ -1,7 +1,7 @@
 """The compiled step reproduces the numpy step it replaced, and ensembles reproduce runs alone.
 
 The references in ``tests/data/numpy_step`` were recorded with the numpy implementation of
-the step (``make_reference.py`` there): C1-C5 with no controller and with FIFO, C4 with a ramp
+the step (``make_reference.py`` there): C1-C5 with no controller, C1-C4 with FIFO, C4 with a ramp
 flow and the platoon scenario, seed 0 — FIFO's decisions included, so the Python/compiled
 hand-over at decision events is covered too.
 
