@@ -5,8 +5,8 @@ The runs include the controllers' decisions, so a reference holds only while the
 decisions are those of that revision: HCOMC's cases were dropped when its planning changed
 (Eq. 17 at the decision, the commitment rule); the hand-over of its plans between Python and
 the compiled loop is checked by ``tests/scenario/test_compiled_plans.py``. C5 with FIFO was
-dropped when a plan stopped holding a CAV VR it does not command on the ramp: in that run a
-CAV VR on FIFO's fallback plans now merges by gap acceptance instead of waiting.
+dropped when a plan stopped holding a CAV VR it does not command on the ramp: in that run
+FIFO's plans command no vehicle, and its CAV VR now merges by gap acceptance at once.
 
 Per case: the float64 state (x, v, y, lane) at the end of the run, the logged x and v of
 every 10th row and the event table, which ``tests/scenario/test_compiled_step.py`` compares
