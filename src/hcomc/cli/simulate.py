@@ -45,7 +45,26 @@ def config_show(config: ConfigArg, settings: SetOption = None) -> None:
     sys.stdout.write(config_to_toml(_load(config, **_settings(settings)), annotate=True))
 
 
-SIMULATE_FILES = ("log.npz", "manifest.json", "summary.json")
+SIMULATE_FILES = ("log.npz", "manifest.json", "summary.json", "detectors.csv")
+
+
+def _positions(text: str | None, road_length: float) -> list[float]:
+    """``--detectors "400,1200"`` as positions [m] on the road, or a one-line error."""
+    if text is None:
+        return []
+    try:
+        positions = [float(p) for p in text.split(",") if p.strip()]
+    except ValueError:
+        raise _fail(
+            f"'--detectors' = {text!r}: allowed: positions in m separated by commas"
+        ) from None
+    wrong = [p for p in positions if not 0.0 < p < road_length]
+    if wrong or not positions:
+        raise _fail(
+            f"'--detectors' = {text!r}: allowed: positions in (0, {road_length:g}) m, "
+            "the road's length, separated by commas"
+        )
+    return positions
 
 
 @app.command()
@@ -69,9 +88,20 @@ def simulate(
     optimizer: Optimizer = None,
     settings: SetOption = None,
     engine: Engine = "hcomc",
+    detectors: Annotated[
+        str | None,
+        typer.Option(
+            help="Virtual induction loops at these positions [m], e.g. 400,1200: count, flow, "
+            "speeds and occupancy per lane and interval (as SUMO's E1 detectors)."
+        ),
+    ] = None,
+    detector_interval: Annotated[
+        float, typer.Option(help="Aggregation interval of --detectors [s].", min=0.1)
+    ] = 60.0,
 ) -> None:
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
     from hcomc.experiments.runner import make_simulation
+    from hcomc.metrics.detectors import detector_table
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
@@ -79,6 +109,7 @@ def simulate(
     overrides = _settings(settings)
     control = _control(_load(config, **overrides), controller, optimizer)
     cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
+    positions = _positions(detectors, cfg.road.length)
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
     engine = _engine(engine, cfg)
     _compiled()
@@ -96,16 +127,23 @@ def simulate(
     }
     summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
+    table = detector_table(log, positions, detector_interval) if positions else None
+    if table is not None:
+        summary["detectors"] = json.loads(table.to_json(orient="records"))
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
         log.save(out_dir / "log.npz")
         write_json_atomic(out_dir / "manifest.json", log.meta)
         write_json_atomic(out_dir / "summary.json", summary)
+        if table is not None:
+            table.to_csv(out_dir / "detectors.csv", index=False)
         summary["out"] = str(out_dir)
     if as_json:
         sys.stdout.write(json.dumps(summary) + "\n")
     else:
         _print_summary(summary)
+        if table is not None:
+            out.print(_detectors_view(table))
 
 
 @app.command()
@@ -237,6 +275,21 @@ def _print_summary(summary: dict[str, Any]) -> None:
     for row in rows:
         table.add_row(*(escape(cell) for cell in row))
     out.print(table)
+
+
+def _detectors_view(frame: Any) -> Table:
+    """The detector table for the terminal, a row per detector, lane and interval."""
+    view = Table(title="virtual induction loops (per lane and interval)")
+    heads = ("x [m]", "lane", "from [s]", "to [s]", "count", "flow [veh/h]", "speed [m/s]",
+             "harmonic [m/s]", "occupancy [%]")  # fmt: skip
+    for head in heads:
+        view.add_column(head, justify="right")
+    for r in frame.itertuples():
+        cells = (f"{r.x:g}", str(r.lane), f"{r.begin:g}", f"{r.end:g}", str(r.count),
+                 f"{r.flow:.0f}", f"{r.speed:.2f}", f"{r.harmonic_speed:.2f}",
+                 f"{r.occupancy:.1f}")  # fmt: skip
+        view.add_row(*(c.replace("nan", "—") for c in cells))
+    return view
 
 
 def _key_table(report: dict[str, Any]) -> Table:
