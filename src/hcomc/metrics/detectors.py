@@ -1,6 +1,9 @@
 """Virtual induction loops: what a detector at position x would have counted, per lane and
-interval, measured on a run's log as SUMO's E1 detectors measure (SUMO documentation,
-"Induction Loops Detectors (E1)").
+interval, measured on a run's log with the quantities of SUMO's E1 detectors (SUMO
+documentation, "Induction Loops Detectors (E1)": nVehContrib, flow, occupancy, speed,
+harmonicMeanSpeed, length). One difference: SUMO counts a vehicle in the interval in which its
+rear leaves the loop, this module in the interval in which its front reaches it; the two
+differ only for a vehicle on the loop at an interval's boundary.
 
 A vehicle is counted by a detector when its front crosses the detector's position x_d
 moving downstream; the time and speed of the crossing are interpolated linearly between the
