@@ -129,12 +129,13 @@ def detector_table(
     lanes: Iterable[int] | None = None,
 ) -> pd.DataFrame:
     """E1 measurements at every position [m] and lane, per interval [s] from the log's first
-    time to its last (a shorter last interval is dropped); ``lanes`` defaults, per position,
-    to every lane a vehicle was counted in there. Columns :data:`DETECTOR_COLUMNS`."""
+    time to one step past its last (a shorter last interval is dropped); ``lanes`` defaults,
+    per position, to every lane a vehicle was counted in there. Columns
+    :data:`DETECTOR_COLUMNS`."""
     if not interval > 0:
         raise ValueError(f"interval must be > 0 [s], got {interval}")
     times = log.t[np.isfinite(log.t)]
-    t0, t1 = float(times[0]), float(times[-1])
+    t0, t1 = float(times[0]), float(times[-1]) + log.dt  # the last row stands for [t, t + dt)
     edges = t0 + interval * np.arange(int(np.floor((t1 - t0) / interval + 1e-9)) + 1)
     found = {float(p): crossings(log, float(p)) for p in positions}
     out = []
