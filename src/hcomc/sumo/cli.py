@@ -51,21 +51,45 @@ def _fresh_target(path: Path, option: str, force: bool) -> None:
 @export_app.command("sumo")
 def export_sumo(
     condition: Annotated[
-        str, typer.Argument(metavar="CONDITION", help="Preset name (C1..C5) or TOML config.")
+        str,
+        typer.Argument(
+            metavar="SOURCE",
+            help="Condition preset (C1..C5) or TOML config; or a corridor: preset (corridor, "
+            "paper) or TOML file with a [corridor] table.",
+        ),
     ],
     out_dir: Annotated[Path, typer.Option("--out", help="Directory for the SUMO scenario.")],
     seed: Annotated[int | None, typer.Option(help="Demand seed (default: the config's).")] = None,
     duration: Annotated[
-        float | None, typer.Option(help="Measured duration [s] (default: the config's).")
+        float | None,
+        typer.Option(
+            help="Measured duration [s] of a condition, simulated duration of a corridor "
+            "(default: the file's)."
+        ),
     ] = None,
     force: Annotated[bool, typer.Option(help="Overwrite an existing non-empty --out.")] = False,
 ) -> None:
-    """Write the condition as a SUMO scenario (network, routes, .sumocfg): `sumo -c` runs it."""
+    """Write a condition or a corridor as a SUMO scenario (network, routes, .sumocfg): `sumo -c`
+    runs it."""
+    from hcomc.corridor import is_corridor_source
     from hcomc.sumo import SumoFormatError, SumoMissingError
     from hcomc.sumo.export import export_scenario
 
     if seed is not None and seed < 0:
         raise fail(f"option '--seed' = {seed}: must be >= 0")
+    if is_corridor_source(condition):
+        _export_corridor(condition, out_dir, seed, duration, force)
+        return
+    if not condition.endswith(".toml") and not Path(condition).exists():
+        from hcomc.config import preset_names
+        from hcomc.corridor import corridor_preset_names
+
+        if condition.lower() not in {n.lower() for n in preset_names()}:
+            raise fail(
+                f"SOURCE = '{condition}': no such preset; allowed: a condition "
+                f"({', '.join(preset_names())}), a corridor "
+                f"({', '.join(corridor_preset_names())}) or a .toml file"
+            )
     cfg = _config(condition, duration=duration, seed=seed)
     if out_dir.exists() and not out_dir.is_dir():
         raise fail(f"option '--out' = '{out_dir}': exists and is not a directory")
@@ -73,6 +97,28 @@ def export_sumo(
     try:
         scenario = export_scenario(cfg, cfg.seed, out_dir)
     except (SumoMissingError, SumoFormatError, ValueError) as exc:
+        raise fail(str(exc)) from None
+    _out.print(f"wrote {scenario.directory}/ · run it with: sumo -c {scenario.sumocfg}")
+
+
+def _export_corridor(
+    source: str, out_dir: Path, seed: int | None, duration: float | None, force: bool
+) -> None:
+    """`hcomc export sumo` of a corridor: validate everything, then write the directory."""
+    from hcomc.corridor import load_corridor
+    from hcomc.sumo import SumoFormatError, SumoMissingError
+    from hcomc.sumo.corridor import export_corridor
+
+    try:
+        corridor = load_corridor(source, {"corridor.seed": seed, "corridor.duration": duration})
+    except ConfigError as exc:
+        raise fail(str(exc)) from None
+    if out_dir.exists() and not out_dir.is_dir():
+        raise fail(f"option '--out' = '{out_dir}': exists and is not a directory")
+    _fresh_target(out_dir, "--out", force)
+    try:
+        scenario = export_corridor(corridor, out_dir)
+    except (SumoMissingError, SumoFormatError, OSError) as exc:
         raise fail(str(exc)) from None
     _out.print(f"wrote {scenario.directory}/ · run it with: sumo -c {scenario.sumocfg}")
 

@@ -1,0 +1,170 @@
+"""A whole corridor: run settings, road, demand, vehicle classes and detector layout.
+
+This is what a corridor file holds (tables ``[corridor]``, ``[road]``, ``[demand.<origin>]``,
+``[vehicles.<class>]``, ``[detectors]``) and what :func:`hcomc.corridor.loading.load_corridor`
+returns. The rules that tie the tables together live here: origins are ``main`` or on-ramp
+ids, destinations lie downstream of their origin, class names exist. Profile points after
+the duration are allowed (a shorter run, ``--duration``, simply ends before them).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from pydantic import Field, model_validator
+
+from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
+from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
+from hcomc.corridor.road import Road, sections
+
+__all__ = ["Corridor", "DetectorSettings", "RunSettings", "detector_positions"]
+
+_EPS = 1e-6
+_CLASS_NAME = r"[A-Za-z][A-Za-z0-9_-]*"  # part of SUMO vType ids
+
+
+class RunSettings(Frozen):
+    """The ``[corridor]`` table: name, duration and simulation settings."""
+
+    name: str = Field("corridor", pattern=r"^[\w.-]+$", description="corridor name")
+    description: str = Field("", description="free text")
+    duration: float = Field(3600.0, gt=0, le=86_400, description="simulated time [s]")
+    seed: int = Field(0, ge=0, description="random seed (vehicle classes, SUMO's randomness)")
+    step_length: float = Field(0.1, gt=0, le=1, description="simulation step [s]")
+    lane_change_duration: float = Field(
+        3.0, ge=0, le=15, description="duration of a lane change [s]; 0 = instantaneous"
+    )
+
+
+class DetectorSettings(Frozen):
+    """Induction loops across every mainline lane (counts, speeds, occupancy per period)."""
+
+    spacing: float = Field(
+        1000.0,
+        ge=0,
+        description="one cross-section every this many metres from x = 0; 0 = none [m]",
+    )
+    around_ramps: bool = Field(
+        True, description="also one cross-section just upstream and downstream of each ramp"
+    )
+    ramp_offset: float = Field(
+        50.0, gt=0, le=1000, description="distance of those from the ramp's lanes [m]"
+    )
+    positions: list[float] = Field(
+        default_factory=list, description="further cross-sections at these x [m]"
+    )
+    period: float = Field(60.0, gt=0, le=3600, description="aggregation period [s]")
+
+
+class Corridor(Frozen):
+    """A corridor: road and demand that a simulator (for now SUMO) runs."""
+
+    corridor: RunSettings = Field(default_factory=RunSettings)
+    road: Road = Field(default_factory=Road)
+    demand: dict[str, OriginDemand] = Field(description="demand per origin (main, on-ramp ids)")
+    vehicles: dict[str, VehicleClass] = Field(default_factory=dict)
+    detectors: DetectorSettings = Field(default_factory=DetectorSettings)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_classes(cls, data: Any) -> Any:
+        """The built-in classes under whatever the file sets (key by key)."""
+        if not isinstance(data, dict):
+            return data
+        given = data.get("vehicles", {})
+        if not isinstance(given, dict):
+            return data
+        merged = {name: _merged(base, given.get(name)) for name, base in DEFAULT_CLASSES.items()}
+        merged.update({k: v for k, v in given.items() if k not in DEFAULT_CLASSES})
+        return {**data, "vehicles": merged}
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Corridor:
+        for name in self.vehicles:
+            if not re.fullmatch(_CLASS_NAME, name):
+                raise RuleError(
+                    f"vehicles.{name}", NO_VALUE, "a letter, then letters, digits, '_' or '-'",
+                    "not a class name",
+                )  # fmt: skip
+        _check_demand(self)
+        first = sections(self.road)[0]
+        longest = max(self.vehicles.items(), key=lambda item: item[1].length)
+        if first.length < longest[1].length:
+            raise RuleError(
+                "road", NO_VALUE, f"ramps, lane drops and zones at x >= {longest[1].length:g} "
+                "or at 0 (mainline vehicles enter on the first section)",
+                f"the first section is {first.length:g} m long, shorter than class "
+                f"'{longest[0]}' ({longest[1].length:g} m)",
+            )  # fmt: skip
+        for k, x in enumerate(self.detectors.positions):
+            if not 0 < x < self.road.length:
+                raise RuleError(
+                    f"detectors.positions[{k}]", x, f"0 < x < road.length = {self.road.length:g}"
+                )
+        return self
+
+    @property
+    def name(self) -> str:
+        """The corridor's name."""
+        return self.corridor.name
+
+    def origin_x(self, origin: str) -> float:
+        """Where an origin's vehicles reach the mainline [m] (0 for ``main``)."""
+        return next((r.x for r in self.road.on_ramps if r.id == origin), 0.0)
+
+
+def _merged(base: dict[str, Any], update: Any) -> Any:
+    if not isinstance(update, dict):
+        return base if update is None else update
+    out = dict(base)
+    for key, value in update.items():
+        out[key] = _merged(out[key], value) if isinstance(out.get(key), dict) else value
+    return out
+
+
+def _check_demand(c: Corridor) -> None:
+    on_ids = [r.id for r in c.road.on_ramps]
+    if not c.demand:
+        raise RuleError("demand", {}, f"at least one origin: {', '.join(['main', *on_ids])}")
+    for origin, demand in c.demand.items():
+        key = f"demand.{origin}"
+        if origin != "main" and origin not in on_ids:
+            raise RuleError(
+                key, NO_VALUE, ", ".join(["main", *on_ids]), "no such origin (main or an on-ramp)"
+            )
+        for name in demand.classes:
+            if name not in c.vehicles:
+                raise RuleError(
+                    f"{key}.classes.{name}", NO_VALUE, ", ".join(c.vehicles), "no such class"
+                )
+        start = next((r.end for r in c.road.on_ramps if r.id == origin), 0.0)
+        downstream = [r.id for r in c.road.off_ramps if r.x >= start - _EPS]
+        allowed = ", ".join(["exit", *downstream])
+        for dest in demand.destinations:
+            if dest == "exit" or dest in downstream:
+                continue
+            upstream = next((r for r in c.road.off_ramps if r.id == dest), None)
+            problem = (
+                "no such destination"
+                if upstream is None
+                else f"off-ramp '{dest}' (at {upstream.x:g} m) is not downstream of the origin "
+                f"(on the mainline from {start:g} m)"
+            )
+            raise RuleError(f"{key}.destinations.{dest}", NO_VALUE, allowed, problem)
+
+
+def detector_positions(c: Corridor) -> list[float]:
+    """Cross-sections x [m] of the induction loops, sorted, inside (0, road.length)."""
+    d, road = c.detectors, c.road
+    xs = list(d.positions)
+    if d.spacing > 0:
+        xs += [k * d.spacing for k in range(1, int(road.length / d.spacing) + 1)]
+    if d.around_ramps:
+        for ramp in road.ramps:
+            xs += [ramp.x - d.ramp_offset, ramp.end + d.ramp_offset]
+    out: list[float] = []
+    for x in sorted(x for x in xs if 0 < x < road.length - _EPS):
+        if not out or x - out[-1] > 0.5:
+            out.append(round(x, 3))
+    return out
