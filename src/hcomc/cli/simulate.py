@@ -102,6 +102,7 @@ def simulate(
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
     from hcomc.experiments.runner import make_simulation
     from hcomc.metrics.detectors import detector_table
+    from hcomc.metrics.travel import travel_summary
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
@@ -124,6 +125,7 @@ def simulate(
         "controller": cfg.control.controller,
         "optimizer": cfg.control.optimizer if cfg.control.controller == "hcomc" else None,
         **summarise(log),
+        "travel_times": travel_summary(log),
     }
     summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
@@ -264,6 +266,12 @@ def _print_summary(summary: dict[str, Any]) -> None:
         rows.append(
             (f"mean speed {lane.replace('_', ' ')} [m/s]", "—" if speed is None else f"{speed:.2f}")
         )
+    for origin, trips in summary["travel_times"].items():
+        if trips["trips"]:
+            rows.append((
+                f"trips from {origin}: count, mean travel time [s], mean delay [s]",
+                f"{trips['trips']}, {trips['mean_s']:.1f}, {trips['mean_delay_s']:.1f}",
+            ))  # fmt: skip
     rows += [
         ("fuel, all vehicles [L]", f"{summary['fuel_l']:.3f}"),
         ("vehicle-steps [count]", f"{summary['vehicle_steps']:,}"),
