@@ -33,7 +33,7 @@ from hcomc.cli._app import (
     config_app,
     out,
 )
-from hcomc.config import config_to_toml
+from hcomc.config import ConfigError, ScenarioConfig, config_to_toml
 
 
 @config_app.command("show")
@@ -65,6 +65,20 @@ def _positions(text: str | None, road_length: float) -> list[float]:
             "the road's length, separated by commas"
         )
     return positions
+
+
+def _scenario(source: str, overrides: dict[str, Any]) -> ScenarioConfig:
+    """The scenario of a condition or config file, or of a corridor of the paper's layout
+    (:func:`hcomc.corridor.engine.scenario_of`); a one-line error otherwise."""
+    from hcomc.corridor import is_corridor_source, load_corridor
+    from hcomc.corridor.engine import scenario_of
+
+    if not is_corridor_source(source):
+        return _load(source, **overrides)
+    try:
+        return scenario_of(load_corridor(source, {}), **overrides)
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
 
 
 @app.command()
@@ -108,8 +122,8 @@ def simulate(
 
     _check_seed(seed)
     overrides = _settings(settings)
-    control = _control(_load(config, **overrides), controller, optimizer)
-    cfg = _load(config, **_with(overrides, duration=duration, seed=seed, control=control))
+    control = _control(_scenario(config, overrides), controller, optimizer)
+    cfg = _scenario(config, _with(overrides, duration=duration, seed=seed, control=control))
     positions = _positions(detectors, cfg.road.length)
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
     engine = _engine(engine, cfg)

@@ -1,7 +1,8 @@
 """Corridors: a general road (mainline, on- and off-ramps, lane drops, speed-limit zones) and
 its time-varying demand, validated from TOML presets and files.
 
-hcomc's own engine simulates the paper's road only; a corridor runs in SUMO
+hcomc's own engine simulates the paper's road (and corridors of its layout,
+:mod:`hcomc.corridor.engine`); any corridor runs in SUMO
 (:mod:`hcomc.sumo.corridor`, ``hcomc export sumo corridor --out DIR``). The sections of
 :func:`~hcomc.corridor.road.sections` are the layout both read. This package depends only
 on :mod:`hcomc.config` (its error type), so any layer may use it.
