@@ -116,6 +116,7 @@ def simulate(
     """Simulate a scenario (merge controller from the config or --controller) and summarise."""
     from hcomc.experiments.runner import make_simulation
     from hcomc.metrics.detectors import detector_table
+    from hcomc.metrics.ramp import ramp_summary
     from hcomc.metrics.travel import travel_summary
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
@@ -140,6 +141,7 @@ def simulate(
         "optimizer": cfg.control.optimizer if cfg.control.controller == "hcomc" else None,
         **summarise(log),
         "travel_times": travel_summary(log),
+        "ramp": ramp_summary(log),
     }
     summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
@@ -286,6 +288,13 @@ def _print_summary(summary: dict[str, Any]) -> None:
                 f"trips from {origin}: count, mean travel time [s], mean delay [s]",
                 f"{trips['trips']}, {trips['mean_s']:.1f}, {trips['mean_delay_s']:.1f}",
             ))  # fmt: skip
+    ramp = summary["ramp"]
+    if ramp["vehicles"]:
+        rows.append((
+            "ramp vehicles: entered, merged, longest queue, mean time standing [s]",
+            f"{ramp['vehicles']}, {ramp['merged']}, {ramp['max_queue']}, "
+            f"{ramp['mean_standing_s']:.1f}",
+        ))  # fmt: skip
     rows += [
         ("fuel, all vehicles [L]", f"{summary['fuel_l']:.3f}"),
         ("vehicle-steps [count]", f"{summary['vehicle_steps']:,}"),
