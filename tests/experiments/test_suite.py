@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from hcomc.config import ConfigError
-from hcomc.experiments.suite import LATEST, MERGE_V1, SUITES, Cell, merge_overrides, suite_named
+from hcomc.config import ConfigError, merge_tables
+from hcomc.experiments.suite import LATEST, MERGE_V1, SUITES, Cell, suite_named
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -79,7 +79,7 @@ def test_bad_cell_selections_name_what_is_allowed(text, fragment):
 
 def test_overrides_merge_table_by_table():
     base = {"demand": {"cav_penetration": 0.2, "ramp": "flow"}}
-    merged = merge_overrides(base, {"demand": {"cav_penetration": 0.5}, "duration": 40.0})
+    merged = merge_tables(base, {"demand": {"cav_penetration": 0.5}, "duration": 40.0})
     assert merged == {"demand": {"cav_penetration": 0.5, "ramp": "flow"}, "duration": 40.0}
     assert base == {"demand": {"cav_penetration": 0.2, "ramp": "flow"}}  # unchanged
     cell = MERGE_V1.cell("H2-lowpen")

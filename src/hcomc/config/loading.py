@@ -158,7 +158,7 @@ def _resolve_base(
     except ConfigError as exc:
         raise ConfigError(f"{origin}: key 'base' = '{base}': {exc}") from None
     data.setdefault("name", Path(source).stem)
-    return _merge(base_data, data), base_data, origin
+    return merge_tables(base_data, data), base_data, origin
 
 
 def describe_error(
@@ -225,7 +225,7 @@ def nest_overrides(overrides: dict[str, Any]) -> dict[str, Any]:
         leaf: Any = value
         for part in reversed(path[1:]):
             leaf = {part: leaf}
-        nested = _merge(nested, {path[0]: leaf})
+        nested = merge_tables(nested, {path[0]: leaf})
     return nested
 
 
@@ -279,7 +279,7 @@ def load_config(source: str | os.PathLike[str], **overrides: Any) -> ScenarioCon
     """
     data, base_data, origin = _resolve_base(source)
     update = nest_overrides(overrides)
-    config = validate_config(_merge(data, update), origin)
+    config = validate_config(merge_tables(data, update), origin)
     reference_data = base_data if base_data is not None else data
     if reference_data is data and not update:
         return config
@@ -290,12 +290,13 @@ def load_config(source: str | os.PathLike[str], **overrides: Any) -> ScenarioCon
     return _note_changes(config, reference)
 
 
-def _merge(base: dict[str, Any], update: dict[str, Any]) -> dict[str, Any]:
-    """``base`` with ``update`` applied; nested tables are merged key by key."""
+def merge_tables(base: dict[str, Any], update: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with ``update`` applied: nested tables merged key by key, any other value of
+    ``update`` replacing ``base``'s; neither argument is changed."""
     out = dict(base)
     for key, value in update.items():
         if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
+            out[key] = merge_tables(out[key], value)
         else:
             out[key] = value
     return out

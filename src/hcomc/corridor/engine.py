@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from hcomc.config import ConfigError, ScenarioConfig, load_config
+from hcomc.config import ConfigError, ScenarioConfig, load_config, merge_tables
 from hcomc.corridor.demand import OriginDemand, VehicleClass
 from hcomc.corridor.model import Corridor
 
@@ -110,15 +110,4 @@ def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
         "hdv": {**_idm(vehicle), **lane_change},
         "cav": {**cav, **lane_change},
     }  # fmt: skip
-    return load_config("C1", **_deep(settings, overrides))
-
-
-def _deep(base: dict[str, Any], update: dict[str, Any]) -> dict[str, Any]:
-    out = dict(base)
-    for key, value in update.items():
-        out[key] = (
-            _deep(out[key], value)
-            if isinstance(value, dict) and isinstance(out.get(key), dict)
-            else value
-        )
-    return out
+    return load_config("C1", **merge_tables(settings, overrides))

@@ -14,6 +14,7 @@ from typing import Any
 
 from pydantic import Field, model_validator
 
+from hcomc.config import merge_tables
 from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
 from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
@@ -115,12 +116,11 @@ class Corridor(Frozen):
 
 
 def _merged(base: dict[str, Any], update: Any) -> Any:
+    """A class's table ``update`` over the built-in ``base`` (None: the base; not a table:
+    left for validation to report)."""
     if not isinstance(update, dict):
         return base if update is None else update
-    out = dict(base)
-    for key, value in update.items():
-        out[key] = _merged(out[key], value) if isinstance(out.get(key), dict) else value
-    return out
+    return merge_tables(base, update)
 
 
 def _check_demand(c: Corridor) -> None:

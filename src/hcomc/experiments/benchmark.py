@@ -25,10 +25,10 @@ from typing import Any
 
 import pandas as pd
 
-from hcomc.config import ConfigError
+from hcomc.config import ConfigError, merge_tables
 from hcomc.control.registry import check_controller
 from hcomc.experiments.runner import RunSpec
-from hcomc.experiments.suite import Cell, Suite, merge_overrides
+from hcomc.experiments.suite import Cell, Suite
 from hcomc.experiments.sweep import RunStore, SweepStatus, resolved_config
 from hcomc.sim.manifest import build_manifest, write_json_atomic
 
@@ -54,7 +54,7 @@ class Comparison:
         """Every run with its cell, ordered cell, configuration, seed."""
         return [
             (cell, RunSpec(cell.condition, conf, seed,
-                           merge_overrides(cell.overrides, self.overrides), self.engine))
+                           merge_tables(cell.overrides, self.overrides), self.engine))
             for cell in self.cells
             for conf in self.configurations
             for seed in range(self.seeds)
@@ -66,7 +66,7 @@ class Comparison:
         for cell in self.cells:
             for conf in self.configurations:
                 spec = RunSpec(cell.condition, conf, 0,
-                               merge_overrides(cell.overrides, self.overrides))  # fmt: skip
+                               merge_tables(cell.overrides, self.overrides))  # fmt: skip
                 config = resolved_config(spec)
                 check_controller(config)  # its [control.options] fit its constructor
                 if config.scenario != "merge" or config.demand.ramp == "none":

@@ -18,7 +18,7 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from hcomc.config import ConfigError, ScenarioConfig, load_config
+from hcomc.config import ConfigError, ScenarioConfig, load_config, merge_tables
 
 
 @dataclass(frozen=True)
@@ -37,7 +37,7 @@ class Cell:
 
     def config(self, **extra: Any) -> ScenarioConfig:
         """The cell's scenario, with ``extra`` (nested) overrides on top of the cell's."""
-        return load_config(self.condition, **merge_overrides(self.overrides, extra))
+        return load_config(self.condition, **merge_tables(self.overrides, extra))
 
     def overrides_text(self) -> str:
         """The overrides as dotted ``key = value`` pairs ("—" for none), for tables."""
@@ -107,18 +107,6 @@ class Suite:
         return "\n".join(lines) + "\n"
 
 
-def merge_overrides(base: dict[str, Any], extra: dict[str, Any]) -> dict[str, Any]:
-    """Nested overrides ``extra`` on top of ``base`` (tables merged key by key, a value of
-    ``extra`` replacing one of ``base``); neither argument is changed."""
-    out = dict(base)
-    for key, value in extra.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = merge_overrides(out[key], value)
-        else:
-            out[key] = value
-    return out
-
-
 def _dotted(tree: dict[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
     """Leaf ``(dotted.key, value)`` pairs of nested overrides, in insertion order."""
     pairs: list[tuple[str, Any]] = []
@@ -183,4 +171,4 @@ def suite_named(name: str) -> Suite:
     raise ConfigError(f"option '--suite' = '{name}': no such suite; allowed: {', '.join(SUITES)}")
 
 
-__all__ = ["LATEST", "MERGE_V1", "SUITES", "Cell", "Suite", "merge_overrides", "suite_named"]
+__all__ = ["LATEST", "MERGE_V1", "SUITES", "Cell", "Suite", "suite_named"]
