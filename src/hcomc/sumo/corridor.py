@@ -45,6 +45,7 @@ from hcomc.sumo.corridor_network import (
     corridor_edges,
     route_edges,
 )
+from hcomc.sumo.export import SUMO_PROCESSING, sumocfg_xml
 
 __all__ = [
     "CFG_FILE",
@@ -201,39 +202,13 @@ def detectors_xml(c: Corridor) -> str:
 
 def _sumocfg(c: Corridor) -> str:
     run = c.corridor
-    processing = {
-        "step-method.ballistic": "true",
-        "collision.action": "warn",
-        "collision.mingap-factor": "0",
-        "collision.check-junctions": "true",
-    }
+    options = {"begin": "0", "end": f"{run.duration:.6g}",
+               "step-length": f"{run.step_length:.6g}", **SUMO_PROCESSING}  # fmt: skip
     if run.lane_change_duration > 0:
-        processing["lanechange.duration"] = f"{run.lane_change_duration:.6g}"
-    lines = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        "<configuration>",
-        "    <input>",
-        f'        <net-file value="{NET_FILE}"/>',
-        f'        <route-files value="{ROUTE_FILE}"/>',
-        f'        <additional-files value="{DETECTOR_FILE}"/>',
-        "    </input>",
-        "    <time>",
-        '        <begin value="0"/>',
-        f'        <end value="{run.duration:.6g}"/>',
-        f'        <step-length value="{run.step_length:.6g}"/>',
-        "    </time>",
-        "    <processing>",
-        *(f'        <{k} value="{v}"/>' for k, v in processing.items()),
-        "    </processing>",
-        "    <output>",
-        f'        <statistic-output value="{STATISTICS_FILE}"/>',
-        "    </output>",
-        "    <random_number>",
-        f'        <seed value="{run.seed}"/>',
-        "    </random_number>",
-        "</configuration>",
-    ]
-    return "\n".join(lines) + "\n"
+        options["lanechange.duration"] = f"{run.lane_change_duration:.6g}"
+    options["seed"] = str(run.seed)
+    inputs = {"net-file": NET_FILE, "route-files": ROUTE_FILE, "additional-files": DETECTOR_FILE}
+    return sumocfg_xml(inputs, options, {"statistic-output": STATISTICS_FILE})
 
 
 def export_corridor(c: Corridor, out_dir: Path) -> CorridorScenario:

@@ -19,7 +19,14 @@ from hcomc.sim.manifest import build_manifest, write_json_atomic
 from hcomc.sumo.network import NET_FILE, build_network
 from hcomc.sumo.routes import routes_xml
 
-__all__ = ["ROUTE_FILE", "SumoScenario", "export_scenario", "sumo_options"]
+__all__ = [
+    "ROUTE_FILE",
+    "SUMO_PROCESSING",
+    "SumoScenario",
+    "export_scenario",
+    "sumo_options",
+    "sumocfg_xml",
+]
 
 ROUTE_FILE = "vehicles.rou.xml"
 
@@ -34,42 +41,50 @@ class SumoScenario:
     routes: Path
 
 
+SUMO_PROCESSING = {
+    "step-method.ballistic": "true",
+    "collision.action": "warn",
+    "collision.mingap-factor": "0",
+    "collision.check-junctions": "true",
+}
+"""SUMO's processing options as our engine works: ballistic position updates, collisions
+warned about and counted while the run goes on (module docstring)."""
+
+_TIME = ("begin", "end", "step-length")
+
+
 def sumo_options(config: ScenarioConfig, seed: int) -> dict[str, str]:
     """SUMO options (name -> value) shared by the exported .sumocfg and the co-simulation."""
     return {
         "begin": "0",
         "end": f"{config.warmup + config.duration:.6g}",
         "step-length": f"{config.dt:.6g}",
-        "step-method.ballistic": "true",
+        **SUMO_PROCESSING,
         "lanechange.duration": f"{config.hdv.lane_change_duration:.6g}",
-        "collision.action": "warn",
-        "collision.mingap-factor": "0",
-        "collision.check-junctions": "true",
         "seed": str(seed),
     }
 
 
-def _sumocfg(options: dict[str, str]) -> str:
+def sumocfg_xml(
+    inputs: dict[str, str], options: dict[str, str], outputs: dict[str, str] | None = None
+) -> str:
+    """A .sumocfg: the ``inputs`` (option -> file), ``begin``, ``end`` and ``step-length`` of
+    ``options`` as its time, ``seed`` as its random number seed, every other option as
+    processing, and the ``outputs`` (option -> file)."""
+
+    def section(name: str, values: dict[str, str]) -> list[str]:
+        rows = [f'        <{k} value="{v}"/>' for k, v in values.items()]
+        return [f"    <{name}>", *rows, f"    </{name}>"] if rows else []
+
+    processing = {k: v for k, v in options.items() if k not in (*_TIME, "seed")}
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         "<configuration>",
-        "    <input>",
-        f'        <net-file value="{NET_FILE}"/>',
-        f'        <route-files value="{ROUTE_FILE}"/>',
-        "    </input>",
-        "    <time>",
-        *(f'        <{k} value="{options[k]}"/>' for k in ("begin", "end", "step-length")),
-        "    </time>",
-        "    <processing>",
-        *(
-            f'        <{k} value="{v}"/>'
-            for k, v in options.items()
-            if k not in ("begin", "end", "step-length", "seed")
-        ),
-        "    </processing>",
-        "    <random_number>",
-        f'        <seed value="{options["seed"]}"/>',
-        "    </random_number>",
+        *section("input", inputs),
+        *section("time", {k: options[k] for k in _TIME}),
+        *section("processing", processing),
+        *section("output", outputs or {}),
+        *section("random_number", {"seed": options["seed"]}),
         "</configuration>",
     ]
     return "\n".join(lines) + "\n"
@@ -82,7 +97,8 @@ def export_scenario(config: ScenarioConfig, seed: int, out_dir: Path) -> SumoSce
     route_path = out_dir / ROUTE_FILE
     route_path.write_text(routes, encoding="utf-8")
     cfg_path = out_dir / f"{config.name}.sumocfg"
-    cfg_path.write_text(_sumocfg(sumo_options(config, seed)), encoding="utf-8")
+    inputs = {"net-file": NET_FILE, "route-files": ROUTE_FILE}
+    cfg_path.write_text(sumocfg_xml(inputs, sumo_options(config, seed)), encoding="utf-8")
     (out_dir / "scenario.toml").write_text(config_to_toml(config), encoding="utf-8")
     write_json_atomic(
         out_dir / "manifest.json",
