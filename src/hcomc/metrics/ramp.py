@@ -49,10 +49,14 @@ def _standing(log: SimulationLog) -> tuple[pd.Series, np.ndarray]:
 def ramp_vehicles(log: SimulationLog) -> pd.DataFrame:
     """One row per ramp vehicle of ``log`` (module docstring), in the order they entered;
     columns :data:`RAMP_COLUMNS`."""
+    return _table(log, _standing(log)[0])
+
+
+def _table(log: SimulationLog, stood: pd.Series) -> pd.DataFrame:
+    """:func:`ramp_vehicles` with each vehicle's seconds standing already counted."""
     ids, t_in = _ramp_ids(log)
     merges = log.events_of(EventKind.MERGE)
     merged_at = dict(zip(merges["vehicle"].tolist(), merges["t"].tolist(), strict=True))
-    stood, _ = _standing(log)
     return pd.DataFrame(
         {
             "vehicle": ids,
@@ -69,8 +73,8 @@ def ramp_summary(log: SimulationLog) -> dict[str, float | int | None]:
     """``vehicles`` and ``merged`` (counts), ``merges_per_hour`` over the measured time,
     ``mean_standing_s`` and ``max_standing_s`` [s] of the ramp vehicles, ``max_queue`` and
     ``mean_queue`` (vehicles standing on the ramp, over the logged rows)."""
-    table = ramp_vehicles(log)
-    _, queue = _standing(log)
+    stood, queue = _standing(log)
+    table = _table(log, stood)
     recorded = queue[: log.n_recorded or queue.size]
     merged = table[table["merged"] & (table["t_merge"] >= 0)]
     duration = float(log.dt * recorded.size)
