@@ -16,21 +16,14 @@ while keeping both kinds on the IDM keeps SUMO's runs comparable with the IDM fa
 engine uses. Each origin draws its vehicles' types from a ``vTypeDistribution`` with the
 probabilities class share x (CAV share or 1 - CAV share).
 
-**Flows.** One ``<flow>`` per origin, destination and interval of
-:meth:`~hcomc.corridor.demand.OriginDemand.intervals` (a linear profile in steps of
-:data:`PROFILE_STEP`), with ``vehsPerHour`` = share x flow, ``departLane="best"``,
-``departSpeed="max"`` and SUMO's default ``departPos``. SUMO spaces a flow's vehicles evenly
-from its ``begin``; each flow's ``begin`` and ``end`` continue the arrivals of the previous
-interval of the same origin and destination: a vehicle whenever the cumulative demand passes
-k + phi, with phi = (j + 1/2) / n for the j-th of an origin's n destinations, so that they take
-turns rather than arrive together (bunched arrivals made SUMO's insertion fall behind). The
-vehicles up to any interval's end are thus the profile's integral rounded to a whole vehicle
-per destination, with no bias from short intervals.
+**Flows.** One ``<flow>`` per flow of the departure schedule
+(:func:`hcomc.corridor.schedule.flows`: per origin, destination and profile interval, evenly
+spaced departures), with ``departLane="best"``, ``departSpeed="max"`` and SUMO's default
+``departPos``; hcomc's corridor engine departs the same vehicles at the same times.
 """
 
 from __future__ import annotations
 
-import math
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -38,6 +31,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from hcomc.corridor import Corridor, corridor_to_toml, detector_positions
+from hcomc.corridor.schedule import flows
 from hcomc.sim.manifest import build_manifest, write_json_atomic
 from hcomc.sumo.corridor_network import (
     NET_FILE,
@@ -50,7 +44,6 @@ from hcomc.sumo.export import SUMO_PROCESSING, sumocfg_xml
 __all__ = [
     "CFG_FILE",
     "DETECTOR_OUTPUT",
-    "PROFILE_STEP",
     "CorridorScenario",
     "detectors_xml",
     "export_corridor",
@@ -63,8 +56,6 @@ ROUTE_FILE = "routes.rou.xml"
 DETECTOR_FILE = "detectors.add.xml"
 DETECTOR_OUTPUT = "detectors.out.xml"
 STATISTICS_FILE = "statistics.xml"
-PROFILE_STEP = 60.0
-"""Length [s] of the constant-flow steps that approximate a linear profile."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -137,33 +128,14 @@ def _mixes(c: Corridor) -> list[str]:
     return rows
 
 
-def _flows(c: Corridor) -> list[tuple[float, str]]:
-    """(begin, XML line) of every flow."""
-    out = []
-    for origin, demand in c.demand.items():
-        intervals = demand.intervals(c.corridor.duration, PROFILE_STEP)
-        for j, (dest, share) in enumerate(demand.destinations.items()):
-            phase = (j + 0.5) / len(demand.destinations)  # destinations take turns
-            cumulative = 0.0  # expected vehicles to this destination so far
-            for k, (a, b, q) in enumerate(intervals):
-                rate = share * q  # [veh/h]
-                before, cumulative = cumulative, cumulative + rate * (b - a) / 3600.0
-                first = math.ceil(before - phase - 1e-9)  # next k with k + phase >= before
-                count = math.floor(cumulative - phase - 1e-9) - first + 1
-                if rate <= 0 or count <= 0:
-                    continue
-                period = 3600.0 / rate
-                begin = a + (first + phase - before) * period
-                end = begin + (count - 0.5) * period  # exactly `count` departures before it
-                out.append(
-                    (
-                        begin,
-                        f'    <flow id="{flow_id(origin, dest, k)}" type="{origin}_mix" '
-                        f'route="{origin}_{dest}" begin="{begin:.3f}" end="{end:.3f}" '
-                        f'vehsPerHour="{rate:.6g}" departLane="best" departSpeed="max"/>',
-                    )
-                )
-    return sorted(out, key=lambda item: item[0])
+def _flows(c: Corridor) -> list[str]:
+    """The ``<flow>`` line of every flow of the departure schedule, by ``begin``."""
+    return [
+        f'    <flow id="{flow_id(f.origin, f.destination, f.interval)}" type="{f.origin}_mix" '
+        f'route="{f.origin}_{f.destination}" begin="{f.begin:.3f}" end="{f.end:.3f}" '
+        f'vehsPerHour="{f.rate:.6g}" departLane="best" departSpeed="max"/>'
+        for f in flows(c)
+    ]
 
 
 def routes_xml(c: Corridor) -> str:
@@ -173,7 +145,7 @@ def routes_xml(c: Corridor) -> str:
         for dest in demand.destinations:
             edges = " ".join(route_edges(c, origin, dest))
             lines.append(f'    <route id="{origin}_{dest}" edges="{edges}"/>')
-    lines += [line for _, line in _flows(c)]
+    lines += _flows(c)
     lines.append("</routes>")
     return "\n".join(lines) + "\n"
 
