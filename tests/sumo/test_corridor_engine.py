@@ -1,7 +1,7 @@
 """A corridor of the paper's layout runs in hcomc's engine (hcomc.corridor.engine) and, exported,
 in SUMO: without a merge controller the two agree on the mean travel time of each origin and
 on the cross-section flows within 10 %; other corridors are refused with the key that does
-not fit."""
+not fit (hcomc simulate runs them in the corridor engine, without merge controllers)."""
 
 from __future__ import annotations
 
@@ -42,8 +42,10 @@ def test_other_corridors_are_refused_naming_the_key(change, key, tmp_path: Path)
     path.write_text('base = "paper"\n' + tomli_w.dumps(change), encoding="utf-8")
     with pytest.raises(ConfigError, match=f"key '{key}'"):
         scenario_of(load_corridor(str(path), {}))
-    refused = CliRunner().invoke(app, ["simulate", str(path)])
+    # hcomc simulate runs it in the corridor engine, which takes no merge controller
+    refused = CliRunner().invoke(app, ["simulate", str(path), "--controller", "fifo"])
     assert refused.exit_code == 2
+    assert "option '--controller'" in refused.stderr
     assert f"key '{key}'" in refused.stderr
 
 

@@ -81,6 +81,25 @@ def _scenario(source: str, overrides: dict[str, Any]) -> ScenarioConfig:
         raise _fail(str(exc)) from None
 
 
+def _general_corridor(source: str, overrides: dict[str, Any]) -> tuple[Any, str] | None:
+    """The corridor named by ``source`` and why the scenario engine refuses it, if it is a
+    corridor that engine does not run; None otherwise."""
+    from hcomc.corridor import is_corridor_source, load_corridor
+    from hcomc.corridor.engine import scenario_of
+
+    if not is_corridor_source(source):
+        return None
+    try:
+        corridor = load_corridor(source, overrides)
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
+    try:
+        scenario_of(corridor)
+    except ConfigError as exc:
+        return corridor, str(exc).split(":")[0]
+    return None
+
+
 @app.command()
 def simulate(
     config: ConfigArg,
@@ -112,8 +131,34 @@ def simulate(
     detector_interval: Annotated[
         float, typer.Option(help="Aggregation interval of --detectors [s].", min=0.1)
     ] = 60.0,
+    trajectory_interval: Annotated[
+        float,
+        typer.Option(
+            help="Corridor engine: sample every vehicle this often [s] into "
+            "trajectories.csv (0: none; the step length: the full log).",
+            min=0.0,
+        ),
+    ] = 0.0,
 ) -> None:
-    """Simulate a scenario (merge controller from the config or --controller) and summarise."""
+    """Simulate a scenario (merge controller from the config or --controller) and summarise.
+
+    A corridor other than the paper's layout (e.g. the preset 'corridor') runs in the
+    corridor engine: detectors, travel times and merges from its own [detectors] table;
+    --set takes its dotted keys (corridor.duration=600).
+    """
+    from hcomc.cli.corridor import refuse_options, run_corridor
+
+    general = _general_corridor(config, _settings(settings))
+    if general is not None:
+        corridor, why = general
+        refuse_options(corridor, why, {
+            "--controller": (controller, "none"), "--optimizer": (optimizer, None),
+            "--engine": (engine, "hcomc"), "--detectors": (detectors, None),
+        })  # fmt: skip
+        _check_seed(seed)
+        run_corridor(corridor, seed=seed, duration=duration, out_dir=out_dir, force=force,
+                     as_json=as_json, trajectory_interval=trajectory_interval)  # fmt: skip
+        return
     from hcomc.experiments.runner import make_simulation
     from hcomc.metrics.detectors import detector_table
     from hcomc.metrics.ramp import ramp_summary

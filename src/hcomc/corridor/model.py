@@ -10,16 +10,23 @@ the duration are allowed (a shorter run, ``--duration``, simply ends before them
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import Field, model_validator
 
-from hcomc.config import merge_tables
+from hcomc.config import LaneChangeParams, merge_tables
 from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
 from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
 
-__all__ = ["Corridor", "DetectorSettings", "RunSettings", "detector_positions"]
+__all__ = [
+    "Corridor",
+    "DetectorSettings",
+    "LaneChanges",
+    "RouteRules",
+    "RunSettings",
+    "detector_positions",
+]
 
 _EPS = 1e-6
 _CLASS_NAME = r"[A-Za-z][A-Za-z0-9_-]*"  # part of SUMO vType ids
@@ -56,6 +63,44 @@ class DetectorSettings(Frozen):
         default_factory=list, description="further cross-sections at these x [m]"
     )
     period: float = Field(60.0, gt=0, le=3600, description="aggregation period [s]")
+    cell_length: float = Field(
+        100.0, ge=10, le=10_000,
+        description="length of the space-time grid's cells (Edie's measures) [m]; their "
+        "duration is the period",
+    )  # fmt: skip
+
+
+_MOBIL = LaneChangeParams.model_fields
+
+
+class LaneChanges(Frozen):
+    """The ``[lane_change]`` table: MOBIL's discretionary changes (Kesting, Treiber & Helbing
+    2007) and the gap acceptance of mandatory ones, with hcomc's defaults for them."""
+
+    politeness: Annotated[float, _MOBIL["politeness"]]
+    threshold: Annotated[float, _MOBIL["threshold"]]
+    keep_right_bias: Annotated[float, _MOBIL["keep_right_bias"]]
+    safe_decel: Annotated[float, _MOBIL["safe_decel"]]
+    min_gap: Annotated[float, _MOBIL["min_gap"]]
+    decision_interval: Annotated[float, _MOBIL["decision_interval"]]
+    emergency_decel: Annotated[float, _MOBIL["emergency_decel"]]
+
+
+class RouteRules(Frozen):
+    """The ``[routes]`` table: when a vehicle starts the changes its route needs."""
+
+    exit_lookahead: float = Field(
+        400.0, gt=0, le=5000,
+        description="a vehicle bound for an off-ramp, or in a lane that ends, starts moving "
+        "right when its exit (or the lane's end) is within this distance per lane change "
+        "still needed [m]",
+    )  # fmt: skip
+    urgent_distance: float = Field(
+        100.0, ge=0, le=2000,
+        description="within this distance of the last point of a needed change, the "
+        "deceleration it may impose on the new follower rises linearly from safe_decel to "
+        "emergency_decel [m]",
+    )  # fmt: skip
 
 
 class Corridor(Frozen):
@@ -66,6 +111,8 @@ class Corridor(Frozen):
     demand: dict[str, OriginDemand] = Field(description="demand per origin (main, on-ramp ids)")
     vehicles: dict[str, VehicleClass] = Field(default_factory=dict)
     detectors: DetectorSettings = Field(default_factory=DetectorSettings)
+    lane_change: LaneChanges = Field(default_factory=lambda: LaneChanges.model_validate({}))
+    routes: RouteRules = Field(default_factory=RouteRules)
 
     @model_validator(mode="before")
     @classmethod

@@ -1,0 +1,119 @@
+"""``hcomc simulate CORRIDOR`` for a corridor hcomc's scenario engine does not run: the
+corridor engine (:mod:`hcomc.sim.corridor`), without a merge controller."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from rich.table import Table
+
+from hcomc.cli._app import _fail, _progress, _refuse_overwrite, out
+from hcomc.corridor import Corridor, corridor_to_toml
+
+CORRIDOR_FILES = (
+    "summary.json", "manifest.json", "corridor.toml", "trips.csv", "detectors.csv", "grid.csv",
+    "backlog.csv", "collisions.csv", "trajectories.csv",
+)  # fmt: skip
+"""What ``--out`` receives from a corridor run."""
+
+
+def refuse_options(corridor: Corridor, why: str, options: dict[str, Any]) -> None:
+    """A one-line error (exit 2) if an option the corridor engine does not take is given."""
+    for name, (value, allowed) in options.items():
+        if value is not None and value != allowed:
+            raise _fail(
+                f"option '{name}' = {value!r}: allowed: {allowed!r} for corridor "
+                f"'{corridor.name}' ({why}; it runs in the corridor engine, which has no "
+                "merge controllers yet)"
+            )
+
+
+def run_corridor(
+    corridor: Corridor, *, seed: int | None, duration: float | None, out_dir: Path | None,
+    force: bool, as_json: bool, trajectory_interval: float,
+) -> None:  # fmt: skip
+    """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
+    from hcomc.sim.corridor import simulate_corridor
+    from hcomc.sim.manifest import build_manifest, write_json_atomic
+
+    _refuse_overwrite(out_dir, CORRIDOR_FILES, force)
+    total = duration if duration is not None else corridor.corridor.duration
+    steps = round(total / corridor.corridor.step_length)
+    with _progress(f"{corridor.name}", steps) as update:
+        tick = None if (as_json or update is None) else (
+            lambda t, d: update(round(t / corridor.corridor.step_length), steps)
+        )  # fmt: skip
+        try:
+            run = simulate_corridor(
+                corridor, seed=seed, duration=duration,
+                trajectory_interval=trajectory_interval, progress=tick,
+            )  # fmt: skip
+        except ValueError as exc:
+            raise _fail(str(exc)) from None
+    summary = run.summary()
+    summary["vehicle_steps_per_s"] = round(run.vehicle_steps / max(run.wall_seconds, 1e-9))
+    summary["detectors"] = _detector_summary(run.detectors)
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        manifest = build_manifest(
+            seed=run.seed, config=corridor.model_dump(mode="json"),
+            extra={"engine": "hcomc-corridor", "duration": run.duration},
+        )  # fmt: skip
+        write_json_atomic(out_dir / "manifest.json", manifest)
+        (out_dir / "corridor.toml").write_text(corridor_to_toml(corridor), encoding="utf-8")
+        tables = {"trips": run.trips, "detectors": run.detectors, "grid": run.grid,
+                  "backlog": run.backlog, "collisions": run.collisions}  # fmt: skip
+        if run.trajectories is not None:
+            tables["trajectories"] = run.trajectories
+        for name, table in tables.items():
+            table.to_csv(out_dir / f"{name}.csv", index=False)
+        summary["out"] = str(out_dir)
+        write_json_atomic(out_dir / "summary.json", summary)
+    if as_json:
+        sys.stdout.write(json.dumps(summary) + "\n")
+    else:
+        _print(summary)
+
+
+def _detector_summary(detectors: Any) -> list[dict[str, float]]:
+    """Per cross-section: vehicles counted, mean flow [veh/h] and flow-weighted mean speed."""
+    rows = []
+    for x, at in detectors.groupby("x"):
+        count = float(at["count"].sum())
+        span = float(at.end.max() - at.begin.min())
+        speed = (at.speed * at["count"]).sum() / count if count else float("nan")
+        rows.append({"x": float(x), "count": int(count), "flow": 3600.0 * count / span,
+                     "speed": float(speed)})  # fmt: skip
+    return rows
+
+
+def _print(summary: dict[str, Any]) -> None:
+    out.print(
+        f"[bold]{summary['corridor']}[/] seed {summary['seed']} · {summary['duration']:g} s · "
+        f"{summary['vehicles']} vehicles: {summary['arrived']} arrived, "
+        f"{summary['missed_exit']} missed their exit, {summary['on_road']} on the road, "
+        f"{summary['not_inserted']} waiting to enter · {summary['collisions']} collisions · "
+        f"{summary['vehicle_steps_per_s'] / 1e6:.1f} M vehicle-steps/s"
+    )
+    table = Table(title="per origin")
+    for col in ("origin", "vehicles", "arrived", "travel time [s]", "delay [s]", "max backlog"):
+        table.add_column(col, justify="right")
+    for origin, row in summary["origins"].items():
+        table.add_row(origin, str(row["vehicles"]), str(row["arrived"]),
+                      _num(row["mean_travel_time"]), _num(row["mean_delay"]),
+                      str(row["max_backlog"]))  # fmt: skip
+    out.print(table)
+    ramps = Table(title="per on-ramp")
+    for col in ("ramp", "entered", "merged", "merges/h", "merge position [m]"):
+        ramps.add_column(col, justify="right")
+    for ramp, row in summary["on_ramps"].items():
+        rate, where = f"{row['merges_per_hour']:.0f}", _num(row["mean_merge_position"])
+        ramps.add_row(ramp, str(row["entered"]), str(row["merged"]), rate, where)
+    out.print(ramps)
+
+
+def _num(value: float | None) -> str:
+    return "–" if value is None else f"{value:.1f}"

@@ -1,0 +1,155 @@
+"""State of a corridor run in the arrays the compiled step reads and writes.
+
+:class:`Vehicles` holds what does not change during a run (parameters, route), :class:`State`
+what does (kinematics, lanes, the sorted lane entries, counters) and what a run measures
+(detectors, the space-time grid, collisions, sampled trajectories). Scalars the step reads
+are in the float array ``params`` (index constants ``P_*``) and the int array ``counters``
+(``C_*``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from hcomc.corridor import Corridor, detector_positions
+from hcomc.sim.corridor.fleet import CorridorFleet
+from hcomc.sim.corridor.layout import Layout
+
+__all__ = ["State", "Vehicles", "allocate", "vehicles_of"]
+
+OFFSET = 4.0e6
+"""Key offset between lane codes [m]; larger than any position on a code."""
+
+# vehicle status
+WAITING, ON_ROAD, ARRIVED = 0, 1, 2
+# params (floats)
+(P_DT, P_LC_DURATION, P_POLITENESS, P_THRESHOLD, P_BIAS, P_SAFE_DECEL, P_MIN_GAP,
+ P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_CELL_TIME) = range(13)  # fmt: skip
+N_PARAMS = 13
+# counters (ints)
+(C_STEP, C_ENTRIES, C_VEHICLE_STEPS, C_LANE_CHANGES, C_COLLISIONS, C_ROWS, C_ON_ROAD,
+ C_DECIDE_EVERY, C_SAMPLE_EVERY, C_SORTED) = range(10)  # fmt: skip
+N_COUNTERS = 10
+# columns of the measurement arrays
+D_COUNT, D_SPEED, D_INVERSE_SPEED, D_OCCUPIED, D_LENGTH = range(5)  # detectors
+G_DISTANCE, G_TIME = range(2)  # space-time grid
+TRAJECTORY_COLUMNS = ("t", "id", "x", "lane", "code", "v", "a")
+COLLISION_COLUMNS = ("t", "follower", "leader", "x", "code")
+
+
+class Vehicles(NamedTuple):
+    """Per-vehicle constants: IDM parameters (``v0 … delta``), body, route."""
+
+    depart: np.ndarray
+    v0: np.ndarray  # desired speed, capped by the technical top speed [m/s]
+    T: np.ndarray
+    s0: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    delta: np.ndarray
+    length: np.ndarray
+    start_code: np.ndarray
+    queue_start: np.ndarray
+    queue: np.ndarray
+
+
+class State(NamedTuple):
+    """Everything the step changes (module docstring)."""
+
+    x: np.ndarray  # front position [m] along the mainline (ramp roads: continued)
+    v: np.ndarray
+    a: np.ndarray
+    code: np.ndarray  # lane code driven in (-1 off the road)
+    target: np.ndarray  # lane code changed into (= code when not changing)
+    lc_start: np.ndarray  # start of the current lane change [s]
+    status: np.ndarray  # WAITING, ON_ROAD, ARRIVED
+    insert_t: np.ndarray  # [s], nan until inserted
+    arrive_t: np.ndarray  # [s], nan until arrived
+    exit_code: np.ndarray  # destination off-ramp's code, -1 for the mainline exit
+    missed: np.ndarray  # passed its off-ramp (then bound for the mainline exit)
+    merge_t: np.ndarray  # when an on-ramp vehicle's change onto the mainline ended [s], nan
+    merge_x: np.ndarray  # where it ended [m], nan
+    busy: np.ndarray  # step in which the vehicle last took part in an accepted change
+    colliding: np.ndarray  # leader the vehicle overlaps, -1 if none
+    ids: np.ndarray  # the vehicles on the road at the step's sort (C_ON_ROAD of them)
+    v0e: np.ndarray  # the step's desired speed (speed limit applied) [m/s]
+    free: np.ndarray  # the step's free-road term of the IDM
+    acc: np.ndarray  # the step's acceleration [m/s^2]
+    e_veh: np.ndarray  # lane entries (vehicle, code), sorted by code, then x
+    e_code: np.ndarray
+    e_key: np.ndarray
+    code_first: np.ndarray  # the most upstream entry's vehicle per code, -1 if none
+    queue_pos: np.ndarray  # per origin: vehicles of its queue inserted so far
+    backlog: np.ndarray  # (origins, periods): most vehicles waiting to enter
+    params: np.ndarray
+    counters: np.ndarray
+    detectors: np.ndarray  # (positions, mainline lanes, periods, 5): D_* sums
+    det_x: np.ndarray  # detector positions [m]
+    grid: np.ndarray  # (x cells, t cells, 2): G_* sums over the mainline lanes
+    collisions: np.ndarray  # (capacity, 5): COLLISION_COLUMNS
+    trajectory: np.ndarray  # (capacity, 7): TRAJECTORY_COLUMNS
+
+
+def vehicles_of(fleet: CorridorFleet) -> Vehicles:
+    """The compiled step's view of ``fleet``."""
+    idm = fleet.idm
+    return Vehicles(
+        depart=fleet.depart,
+        v0=np.minimum(idm[:, 0], fleet.max_speed),
+        T=idm[:, 1].copy(),
+        s0=idm[:, 2].copy(),
+        a=idm[:, 3].copy(),
+        b=idm[:, 4].copy(),
+        delta=idm[:, 5].copy(),
+        length=fleet.length,
+        start_code=fleet.start_code,
+        queue_start=fleet.queue_start,
+        queue=fleet.queue,
+    )
+
+
+def allocate(
+    c: Corridor, layout: Layout, fleet: CorridorFleet, duration: float, sample_every: int
+) -> State:
+    """A fresh state for ``fleet`` on ``layout`` over ``duration`` [s]; trajectories sampled
+    every ``sample_every`` steps (0: none)."""
+    n = fleet.depart.size
+    lc, run, det = c.lane_change, c.corridor, c.detectors
+    params = np.zeros(N_PARAMS)
+    params[[P_DT, P_LC_DURATION, P_POLITENESS, P_THRESHOLD, P_BIAS, P_SAFE_DECEL, P_MIN_GAP,
+            P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_CELL_TIME]] = [
+        run.step_length, run.lane_change_duration, lc.politeness, lc.threshold,
+        lc.keep_right_bias, lc.safe_decel, lc.min_gap, lc.emergency_decel,
+        c.routes.exit_lookahead, c.routes.urgent_distance, det.period, det.cell_length,
+        det.period,
+    ]  # fmt: skip
+    counters = np.zeros(N_COUNTERS, dtype=np.int64)
+    counters[C_DECIDE_EVERY] = max(1, round(lc.decision_interval / run.step_length))
+    counters[C_SAMPLE_EVERY] = sample_every
+    periods = max(1, math.ceil(duration / det.period - 1e-9))
+    positions = np.array(detector_positions(c))
+    cells = max(1, math.ceil(layout.length / det.cell_length))
+    nan = np.full(n, np.nan)
+    return State(
+        x=np.zeros(n), v=np.zeros(n), a=np.zeros(n),
+        code=np.full(n, -1, dtype=np.int64), target=np.full(n, -1, dtype=np.int64),
+        lc_start=nan.copy(), status=np.zeros(n, dtype=np.int64),
+        insert_t=nan.copy(), arrive_t=nan.copy(), exit_code=fleet.exit_code.copy(),
+        missed=np.zeros(n, dtype=np.bool_), merge_t=nan.copy(), merge_x=nan.copy(),
+        busy=np.full(n, -1, dtype=np.int64),
+        colliding=np.full(n, -1, dtype=np.int64),
+        ids=np.zeros(n, dtype=np.int64), v0e=np.zeros(n), free=np.zeros(n), acc=np.zeros(n),
+        e_veh=np.zeros(2 * n + 1, dtype=np.int64), e_code=np.zeros(2 * n + 1, dtype=np.int64),
+        e_key=np.zeros(2 * n + 1),
+        code_first=np.full(layout.n_codes, -1, dtype=np.int64),
+        queue_pos=np.zeros(len(fleet.origins), dtype=np.int64),
+        backlog=np.zeros((len(fleet.origins), periods), dtype=np.int64),
+        params=params, counters=counters,
+        detectors=np.zeros((positions.size, layout.n_main, periods, 5)), det_x=positions,
+        grid=np.zeros((cells, periods, 2)),
+        collisions=np.zeros((1024, len(COLLISION_COLUMNS))),
+        trajectory=np.zeros((0, len(TRAJECTORY_COLUMNS))),
+    )  # fmt: skip
