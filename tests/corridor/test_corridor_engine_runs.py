@@ -185,8 +185,10 @@ def test_simulate_runs_a_corridor_and_refuses_a_controller(tmp_path):
     assert summary["corridor"] == "corridor"
     assert summary["duration"] == 60.0
     assert {"origins", "on_ramps", "detectors", "collisions"} <= set(summary)
-    for name in ("trips.csv", "detectors.csv", "grid.csv", "manifest.json", "corridor.toml"):
+    for name in ("trips.csv", "detectors.csv", "grid.csv", "manifest.json", "corridor.toml",
+                 "corridor.html", "speed_heatmap.png"):  # fmt: skip
         assert (tmp_path / "run" / name).is_file()
+    assert (tmp_path / "run" / "speed_heatmap.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     manifest = json.loads((tmp_path / "run" / "manifest.json").read_text())
     assert manifest["seed"] == 0
     assert manifest["config"]["road"]["lanes"] == 3

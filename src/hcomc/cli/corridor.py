@@ -15,7 +15,8 @@ from hcomc.corridor import Corridor, corridor_to_toml
 
 CORRIDOR_FILES = (
     "summary.json", "manifest.json", "corridor.toml", "trips.csv", "detectors.csv", "grid.csv",
-    "backlog.csv", "collisions.csv", "trajectories.csv",
+    "backlog.csv", "collisions.csv", "trajectories.csv", "corridor.html", "speed_heatmap.png",
+    "flow_density.png", "travel_times.png",
 )  # fmt: skip
 """What ``--out`` receives from a corridor run."""
 
@@ -38,6 +39,7 @@ def run_corridor(
     """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
     from hcomc.sim.corridor import simulate_corridor
     from hcomc.sim.manifest import build_manifest, write_json_atomic
+    from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 
     _refuse_overwrite(out_dir, CORRIDOR_FILES, force)
     total = duration if duration is not None else corridor.corridor.duration
@@ -70,6 +72,9 @@ def run_corridor(
             tables["trajectories"] = run.trajectories
         for name, table in tables.items():
             table.to_csv(out_dir / f"{name}.csv", index=False)
+        write_corridor_figures(run.grid, run.detectors, run.trips, out_dir)
+        title = f"{corridor.name}, seed {run.seed}, {run.duration:g} s"
+        corridor_report_html(run.grid, run.detectors, run.trips, out_dir, title=title)
         summary["out"] = str(out_dir)
         write_json_atomic(out_dir / "summary.json", summary)
     if as_json:
