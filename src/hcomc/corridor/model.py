@@ -87,10 +87,14 @@ class LaneChanges(Frozen):
 
 
 class RouteRules(Frozen):
-    """The ``[routes]`` table: when a vehicle starts the changes its route needs."""
+    """The ``[routes]`` table: when a vehicle starts the changes its route needs.
+
+    On the ``corridor`` preset's hour, with 400 m per change 103 of the vehicles bound for an
+    off-ramp missed it (the changes came too late in dense traffic), with 700 m 25, with
+    1000 m 5."""
 
     exit_lookahead: float = Field(
-        400.0, gt=0, le=5000,
+        1000.0, gt=0, le=5000,
         description="a vehicle bound for an off-ramp, or in a lane that ends, starts moving "
         "right when its exit (or the lane's end) is within this distance per lane change "
         "still needed [m]",
