@@ -195,6 +195,10 @@ def test_simulate_runs_a_corridor_and_refuses_a_controller(tmp_path):
     again = runner.invoke(app, ["simulate", "corridor", "--duration", "60",
                                 "--out", str(tmp_path / "run")])  # fmt: skip
     assert again.exit_code == 2
+    huge = runner.invoke(app, ["simulate", "corridor", "--duration", "1e12"])
+    assert huge.exit_code == 2
+    assert "allowed: 0 < duration <= 86400" in huge.stderr
+    assert "Traceback" not in huge.output
     refused = runner.invoke(app, ["simulate", "corridor", "--controller", "hcomc"])
     assert refused.exit_code == 2
     assert "option '--controller'" in refused.stderr

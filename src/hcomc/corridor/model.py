@@ -20,6 +20,7 @@ from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
 
 __all__ = [
+    "MAX_DURATION",
     "Corridor",
     "DetectorSettings",
     "LaneChanges",
@@ -32,12 +33,16 @@ _EPS = 1e-6
 _CLASS_NAME = r"[A-Za-z][A-Za-z0-9_-]*"  # part of SUMO vType ids
 
 
+MAX_DURATION = 86_400.0
+"""Longest corridor run [s]: a day."""
+
+
 class RunSettings(Frozen):
     """The ``[corridor]`` table: name, duration and simulation settings."""
 
     name: str = Field("corridor", pattern=r"^[\w.-]+$", description="corridor name")
     description: str = Field("", description="free text")
-    duration: float = Field(3600.0, gt=0, le=86_400, description="simulated time [s]")
+    duration: float = Field(3600.0, gt=0, le=MAX_DURATION, description="simulated time [s]")
     seed: int = Field(0, ge=0, description="random seed (vehicle classes, SUMO's randomness)")
     step_length: float = Field(0.1, gt=0, le=1, description="simulation step [s]")
     lane_change_duration: float = Field(

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from hcomc.corridor import Corridor
+from hcomc.corridor.model import MAX_DURATION
 from hcomc.sim.corridor.fleet import CorridorFleet, build_fleet
 from hcomc.sim.corridor.layout import Layout, build_layout
 from hcomc.sim.corridor.motion import advance
@@ -56,7 +57,8 @@ CHUNK = 60.0
 
 @dataclass(frozen=True)
 class CorridorRun:
-    """What a corridor run measured (module docstring); tables as pandas DataFrames."""
+    """What a corridor run measured (module docstring); tables as pandas DataFrames.
+    ``collisions`` holds the first 1024 collisions, ``collision_count`` counts them all."""
 
     corridor: Corridor
     seed: int
@@ -70,6 +72,7 @@ class CorridorRun:
     vehicle_steps: int
     lane_changes: int
     wall_seconds: float
+    collision_count: int
 
     def summary(self) -> dict[str, object]:
         """Run-level figures: vehicles per outcome, travel time and delay per origin,
@@ -106,7 +109,7 @@ class CorridorRun:
             "duration": self.duration,
             "vehicles": len(trips),
             **{k: int(counts.get(k, 0)) for k in OUTCOMES},
-            "collisions": len(self.collisions),
+            "collisions": self.collision_count,
             "lane_changes": self.lane_changes,
             "vehicle_steps": self.vehicle_steps,
             "wall_seconds": self.wall_seconds,
@@ -141,8 +144,8 @@ def simulate_corridor(
     seed = corridor.corridor.seed if seed is None else seed
     duration = corridor.corridor.duration if duration is None else duration
     dt = corridor.corridor.step_length
-    if not duration > 0 or not math.isfinite(duration):
-        raise ValueError(f"duration must be > 0 [s], got {duration}")
+    if not 0 < duration <= MAX_DURATION:  # checked before anything is allocated
+        raise ValueError(f"duration = {duration!r} s: allowed: 0 < duration <= {MAX_DURATION:g}")
     every = round(trajectory_interval / dt) if trajectory_interval > 0 else 0
     if trajectory_interval > 0 and (every < 1 or abs(every * dt - trajectory_interval) > 1e-9):
         raise ValueError(
@@ -204,6 +207,7 @@ def _result(c: Corridor, layout: Layout, fleet: CorridorFleet, s: State, seed: i
         vehicle_steps=int(s.counters[C_VEHICLE_STEPS]),
         lane_changes=int(s.counters[C_LANE_CHANGES]),
         wall_seconds=wall,
+        collision_count=int(s.counters[C_COLLISIONS]),
     )
 
 
