@@ -31,7 +31,7 @@ from hcomc.experiments.compare import (
 )
 from hcomc.sim.manifest import atomic_paths
 from hcomc.viz.common import new_figure
-from hcomc.viz.report import figure_png
+from hcomc.viz.report import figure_png, html_page
 
 __all__ = ["differences_figure", "success_figure", "write_compare_report"]
 
@@ -211,17 +211,9 @@ def write_compare_report(
         list(pairs["verdict_holm"] != "undecided") if len(pairs) else None,
     )
     effects_html = "\n".join(sections) or '<p class="empty">No paired effects.</p>'
-    body = f"""<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{_e(title)}</title>
-<style>{_CSS}</style>
-</head>
-<body>
-<main>
-<h1>{_e(title)}</h1>
+    body = html_page(
+        title,
+        f"""<h1>{_e(title)}</h1>
 {_provenance(record)}
 {note_html}
 <h2>How to read this</h2>
@@ -231,10 +223,9 @@ def write_compare_report(
 <h2>Merge success, paired</h2>
 {pairs_html}
 {effects_html}
-</main>
-</body>
-</html>
-"""
+""",
+        css=_CSS,
+    )
     out_dir.mkdir(parents=True, exist_ok=True)
     target = out_dir / "report.html"
     with atomic_paths(target) as (tmp,):

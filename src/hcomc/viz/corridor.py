@@ -21,7 +21,7 @@ from matplotlib.colors import Normalize
 
 from hcomc.sim.manifest import atomic_paths, build_manifest
 from hcomc.viz.common import new_figure, save_figure, speed_cmap
-from hcomc.viz.report import _CSS, _e, _figure_block, _html_table, figure_png
+from hcomc.viz.report import _e, _figure_block, _html_table, figure_png, html_page
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -312,17 +312,9 @@ def corridor_report_html(
     pairs = zip(_CAPTIONS, _figures(grid, detectors, trips), strict=True)
     figures = "\n".join(_figure_block(i, c, figure_png(f)) for i, (c, f) in enumerate(pairs, 1))
     run = build_manifest(seed=0, config={})
-    body = f"""<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<title>{_e(title)}</title>
-<style>{_CSS}</style>
-</head>
-<body>
-<main>
-<header>
+    body = html_page(
+        title,
+        f"""<header>
 <h1>{_e(title)}</h1>
 <p class="meta">hcomc <code>{_e(run["hcomc_version"])}</code> · git revision
 <code>{_e(run["git_revision"])}</code> · generated {_e(run["created_utc"])} (UTC)</p>
@@ -335,10 +327,8 @@ def corridor_report_html(
 <h2>Figures</h2>
 {figures}
 </section>
-</main>
-</body>
-</html>
-"""
+""",
+    )
     target = Path(out_dir) / "corridor.html"
     target.parent.mkdir(parents=True, exist_ok=True)
     with atomic_paths(target) as (tmp,):

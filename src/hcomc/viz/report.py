@@ -30,7 +30,7 @@ from hcomc.sim.manifest import atomic_paths, build_manifest
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["REQUIRED_COLUMNS", "figure_png", "write_report"]
+__all__ = ["REQUIRED_COLUMNS", "figure_png", "html_page", "write_report"]
 
 #: Columns a results frame needs for the report's tables.
 REQUIRED_COLUMNS = ("condition", "configuration", "seed", "mode", *PAPER_METRICS)
@@ -89,6 +89,26 @@ def figure_png(fig: Figure) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=_FIGURE_DPI)
     return buffer.getvalue()
+
+
+def html_page(title: str, main: str, *, css: str = _CSS, generator: str = "") -> str:
+    """A standalone HTML page: ``main`` (HTML) in the ``<main>`` element, with its title,
+    inline style ``css`` and an optional generator tag; loads nothing."""
+    meta = f'<meta name="generator" content="{_e(generator)}">\n' if generator else ""
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+{meta}<title>{_e(title)}</title>
+<style>{css}</style>
+</head>
+<body>
+<main>
+{main}</main>
+</body>
+</html>
+"""
 
 
 def _e(value: Any) -> str:
@@ -305,18 +325,9 @@ def write_report(
     if not figure_html:
         figure_html = '<p class="empty">No figures were included.</p>'
 
-    body = f"""<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<meta name="generator" content="hcomc {_e(version)}">
-<title>{_e(title)}</title>
-<style>{_CSS}</style>
-</head>
-<body>
-<main>
-<header>
+    body = html_page(
+        title,
+        f"""<header>
 <h1>{_e(title)}</h1>
 <p class="meta">hcomc <code>{_e(version)}</code> · git revision <code>{_e(revision)}</code>
 · generated {_e(created)} (UTC) · Python {_e(manifest["python"])}
@@ -346,23 +357,23 @@ stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.
 <section id="table-ii-section">
 <h2>Table II — optimisers</h2>
 {
-        _html_table(
-            table_ii,
-            f"HCOMC with PSO, SA and NSGA-II, Conditions C1–C3 — {TABLE_CAPTION}.",
-            table_id="table-ii",
-        )
-    }
+            _html_table(
+                table_ii,
+                f"HCOMC with PSO, SA and NSGA-II, Conditions C1–C3 — {TABLE_CAPTION}.",
+                table_id="table-ii",
+            )
+        }
 </section>
 
 <section id="table-iii-section">
 <h2>Table III — controllers</h2>
 {
-        _html_table(
-            table_iii,
-            f"FIFO, Game and HCOMC, Conditions C1–C5 — {TABLE_CAPTION}.",
-            table_id="table-iii",
-        )
-    }
+            _html_table(
+                table_iii,
+                f"FIFO, Game and HCOMC, Conditions C1–C5 — {TABLE_CAPTION}.",
+                table_id="table-iii",
+            )
+        }
 </section>
 
 <section id="merge-section">
@@ -385,10 +396,9 @@ stabilisation time, the low-speed region volume (LSRV) and the fuel consumption.
 Every number on this page is computed from the runs table; nothing is written by hand.
 This page is self-contained: it loads no external resources.</p>
 </footer>
-</main>
-</body>
-</html>
-"""
+""",
+        generator=f"hcomc {version}",
+    )
     target_dir = Path(out_dir)
     target_dir.mkdir(parents=True, exist_ok=True)
     target = target_dir / "report.html"
