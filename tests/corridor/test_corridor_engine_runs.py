@@ -199,6 +199,9 @@ def test_simulate_runs_a_corridor_and_refuses_a_controller(tmp_path):
     assert huge.exit_code == 2
     assert "allowed: 0 < duration <= 86400" in huge.stderr
     assert "Traceback" not in huge.output
+    scenario = runner.invoke(app, ["simulate", "C1", "--trajectory-interval", "1"])
+    assert scenario.exit_code == 2
+    assert "option '--trajectory-interval'" in scenario.stderr
     refused = runner.invoke(app, ["simulate", "corridor", "--controller", "hcomc"])
     assert refused.exit_code == 2
     assert "option '--controller'" in refused.stderr

@@ -159,6 +159,11 @@ def simulate(
         run_corridor(corridor, seed=seed, duration=duration, out_dir=out_dir, force=force,
                      as_json=as_json, trajectory_interval=trajectory_interval)  # fmt: skip
         return
+    if trajectory_interval:
+        raise _fail(
+            f"option '--trajectory-interval' = {trajectory_interval:g}: allowed: 0 for "
+            f"'{config}' (the corridor engine's option; the scenario engine logs every step)"
+        )
     from hcomc.experiments.runner import make_simulation
     from hcomc.metrics.detectors import detector_table
     from hcomc.metrics.ramp import ramp_summary
