@@ -203,9 +203,8 @@ def move(road: Layout, veh: Vehicles, s: State, t: float) -> None:
         if sample:
             r = counters[C_ROWS]
             out = lane if lane < n_main else -1 - (lane - n_main) % 2  # ramp lane j: -1 - j
-            s.trajectory[r, 0], s.trajectory[r, 1], s.trajectory[r, 2] = t, i, x0
-            s.trajectory[r, 3], s.trajectory[r, 4] = out, lane
-            s.trajectory[r, 5], s.trajectory[r, 6] = v0, acc
+            s.traj_t[r], s.traj_id[r], s.traj_x[r], s.traj_lane[r] = t, i, x0, out
+            s.traj_code[r], s.traj_v[r], s.traj_a[r] = lane, v0, acc
             counters[C_ROWS] = r + 1
     counters[C_VEHICLE_STEPS] += counters[C_ON_ROAD]
 

@@ -45,6 +45,7 @@ from hcomc.sim.corridor.state import (
     TRAJECTORY_COLUMNS,
     State,
     allocate,
+    trajectory_buffer,
     vehicles_of,
 )  # fmt: skip
 from hcomc.sim.corridor.trips import free_flow_times
@@ -53,6 +54,9 @@ __all__ = ["CorridorRun", "simulate_corridor"]
 
 CHUNK = 60.0
 """Simulated seconds per call of the compiled loop."""
+
+GROWTH = 1.25
+"""The trajectory buffer grows to this times what the next chunk may need."""
 
 
 @dataclass(frozen=True)
@@ -174,22 +178,23 @@ def _room_for_samples(state: State, fleet: CorridorFleet, steps: int, every: int
     """``state`` with a trajectory buffer that holds the next ``steps`` steps' samples."""
     t_end = (int(state.counters[C_STEP]) + steps) * dt
     could = int(np.count_nonzero((state.status != ARRIVED) & (fleet.depart <= t_end + 1e-9)))
-    need = int(state.counters[C_ROWS]) + (steps // every + 1) * could
-    if need <= state.trajectory.shape[0]:
+    rows = int(state.counters[C_ROWS])
+    need = rows + (steps // every + 1) * could
+    if need <= state.traj_t.size:
         return state
-    grown = np.zeros((max(need, 2 * state.trajectory.shape[0]), len(TRAJECTORY_COLUMNS)))
-    grown[: state.trajectory.shape[0]] = state.trajectory
-    return state._replace(trajectory=grown)
+    grown = trajectory_buffer(int(need * GROWTH))  # a quarter more: the copies stay few
+    for name, new in grown.items():
+        new[:rows] = getattr(state, name)[:rows]
+    return state._replace(**grown)
 
 
 def _result(c: Corridor, layout: Layout, fleet: CorridorFleet, s: State, seed: int,
             duration: float, wall: float) -> CorridorRun:  # fmt: skip
     rows = int(s.counters[C_ROWS])
     trajectories = None
-    if s.counters[C_SAMPLE_EVERY]:
-        trajectories = pd.DataFrame(s.trajectory[:rows], columns=list(TRAJECTORY_COLUMNS))
-        for col in ("id", "lane", "code"):
-            trajectories[col] = trajectories[col].astype(np.int64)
+    if s.counters[C_SAMPLE_EVERY]:  # the buffer's columns, not copied
+        columns = {name: getattr(s, f"traj_{name}")[:rows] for name in TRAJECTORY_COLUMNS}
+        trajectories = pd.DataFrame(columns, copy=False)
     n_coll = min(int(s.counters[C_COLLISIONS]), s.collisions.shape[0])
     collisions = pd.DataFrame(s.collisions[:n_coll], columns=list(COLLISION_COLUMNS))
     return CorridorRun(

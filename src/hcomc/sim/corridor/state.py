@@ -18,7 +18,7 @@ from hcomc.corridor import Corridor, detector_positions
 from hcomc.sim.corridor.fleet import CorridorFleet
 from hcomc.sim.corridor.layout import Layout
 
-__all__ = ["State", "Vehicles", "allocate", "vehicles_of"]
+__all__ = ["State", "Vehicles", "allocate", "trajectory_buffer", "vehicles_of"]
 
 OFFSET = 4.0e6
 """Key offset between lane codes [m]; larger than any position on a code."""
@@ -36,7 +36,9 @@ N_COUNTERS = 10
 # columns of the measurement arrays
 D_COUNT, D_SPEED, D_INVERSE_SPEED, D_OCCUPIED, D_LENGTH = range(5)  # detectors
 G_DISTANCE, G_TIME = range(2)  # space-time grid
-TRAJECTORY_COLUMNS = ("t", "id", "x", "lane", "code", "v", "a")
+TRAJECTORY_COLUMNS = {"t": np.float64, "id": np.int32, "x": np.float64, "lane": np.int8,
+                      "code": np.int16, "v": np.float64, "a": np.float64}  # fmt: skip
+"""Columns of the trajectory samples and their types (38 bytes a sample)."""
 COLLISION_COLUMNS = ("t", "follower", "leader", "x", "code")
 
 
@@ -90,7 +92,19 @@ class State(NamedTuple):
     det_x: np.ndarray  # detector positions [m]
     grid: np.ndarray  # (x cells, t cells, 2): G_* sums over the mainline lanes
     collisions: np.ndarray  # (capacity, 5): COLLISION_COLUMNS
-    trajectory: np.ndarray  # (capacity, 7): TRAJECTORY_COLUMNS
+    traj_t: np.ndarray  # trajectory samples (capacity,), TRAJECTORY_COLUMNS: time [s]
+    traj_id: np.ndarray  # vehicle
+    traj_x: np.ndarray  # front position [m]
+    traj_lane: np.ndarray  # lane: 0 = rightmost mainline lane, -1 - j ramp lane j
+    traj_code: np.ndarray  # lane code
+    traj_v: np.ndarray  # speed [m/s]
+    traj_a: np.ndarray  # acceleration [m/s^2]
+
+
+def trajectory_buffer(capacity: int) -> dict[str, np.ndarray]:
+    """Empty trajectory columns for ``capacity`` samples, by :class:`State` field."""
+    return {f"traj_{name}": np.zeros(capacity, dtype=dtype)
+            for name, dtype in TRAJECTORY_COLUMNS.items()}  # fmt: skip
 
 
 def vehicles_of(fleet: CorridorFleet) -> Vehicles:
@@ -151,5 +165,5 @@ def allocate(
         detectors=np.zeros((positions.size, layout.n_main, periods, 5)), det_x=positions,
         grid=np.zeros((cells, periods, 2)),
         collisions=np.zeros((1024, len(COLLISION_COLUMNS))),
-        trajectory=np.zeros((0, len(TRAJECTORY_COLUMNS))),
+        **trajectory_buffer(0),
     )  # fmt: skip
