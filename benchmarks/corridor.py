@@ -46,12 +46,20 @@ teleports.
 ``--trajectory-interval S`` passes ``trajectory_interval=S`` to every hcomc call, timed ones
 included (0, the default: no trajectory log); the size of the memory run's
 ``run.trajectories`` (``DataFrame.memory_usage(deep=True).sum()``) is then reported as
-``trajectories_bytes``. The controlled corridor (HCOMC at every ramp) is not measured yet.
+``trajectories_bytes``.
+
+**Controlled.** With ``--controllers hcomc …`` (default: ``hcomc``; none given: skipped)
+hcomc also runs the corridor once per controller with that merge controller at every
+on-ramp (the corridor's ``[control]`` table, controller replaced), after an untimed
+10-second call that loads the controller's kernels; reported per controller under
+``controlled``: the wall time of the whole call and ``real_time_factor`` (simulated seconds
+per wall second, one process, one thread), the decisions and their wall time, collisions,
+and per on-ramp the merged share and the 5th percentile of the events' least TTC.
 
     python benchmarks/corridor.py [--json] [--corridor corridor] [--duration 3600]
                                   [--repeats 3] [--trajectory-interval 0]
                                   [--engines hcomc sumo] [--no-memory]
-                                  [--no-cold-compile]
+                                  [--no-cold-compile] [--controllers hcomc fifo game]
 """
 
 from __future__ import annotations
@@ -166,6 +174,31 @@ def time_hcomc(c: Corridor, duration: float, trajectory_interval: float) -> Timi
     run = simulate(c, seed=c.corridor.seed, duration=duration, **options)
     wall = time.perf_counter() - start
     return Timing(int(run.vehicle_steps), _steps(c, duration), wall)
+
+
+def time_controlled(c: Corridor, duration: float, controller: str) -> dict[str, Any]:
+    """One timed run of ``c`` with ``controller`` at every on-ramp (module docstring)."""
+    control = c.control.model_copy(update={"controller": controller})
+    controlled = c.model_copy(update={"control": control})
+    simulate = _simulate_corridor()
+    simulate(controlled, seed=c.corridor.seed, duration=WARMUP_S)  # the controller's kernels
+    gc.collect()
+    start = time.perf_counter()
+    run = simulate(controlled, seed=c.corridor.seed, duration=duration)
+    wall = time.perf_counter() - start
+    summary = run.summary()
+    ramps = {
+        ramp: {k: row["merge_events"][k] for k in ("events", "merged_share", "min_ttc_p05",
+                                                    "fallbacks", "released", "conflicts")}
+        for ramp, row in summary["on_ramps"].items()
+    }  # fmt: skip
+    return {
+        "controller": controller, "wall_s": round(wall, 2),
+        "real_time_factor": round(duration / wall, 2), "decisions": run.decisions,
+        "decision_s": round(run.decision_seconds, 2),
+        "mean_decision_ms": round(1000 * run.decision_seconds / max(run.decisions, 1), 2),
+        "collisions": run.collision_count, "arrived": summary["arrived"], "on_ramps": ramps,
+    }  # fmt: skip
 
 
 def sumo_statistics(directory: Path) -> dict[str, int]:
@@ -392,6 +425,10 @@ def main() -> None:
     parser.add_argument(
         "--no-cold-compile", action="store_true", help="skip the compilation with an empty cache"
     )
+    parser.add_argument(
+        "--controllers", nargs="*", default=["hcomc"],
+        help="also time hcomc with each of these merge controllers at every on-ramp",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -424,6 +461,7 @@ def main() -> None:
                 row["compile_s"] = round(cold_compile(args.corridor, every), 2)
             if not args.no_memory:
                 row.update(memory(args.corridor, sumocfg, duration, every, hcomc=hcomc))
+            row["controlled"] = [time_controlled(c, duration, k) for k in args.controllers]
     except (ConfigError, SumoMissingError, RuntimeError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
@@ -472,6 +510,14 @@ def report(c: Corridor, row: dict[str, Any], *, as_json: bool) -> None:
     for key, label in (("sumo_statistics", "SUMO"), ("sumo_checked_statistics", "SUMO checked")):
         if row.get(key):
             print(f"{label} at the end: " + ", ".join(f"{k} {v}" for k, v in row[key].items()))
+    for run in row["controlled"]:
+        print(
+            f"hcomc with {run['controller']} at every on-ramp: {run['wall_s']} s, "
+            f"{run['real_time_factor']}x real time (target >= 10), {run['decisions']:,} "
+            f"decisions ({run['mean_decision_ms']} ms each), {run['collisions']} collisions"
+        )
+        for ramp, ev in run["on_ramps"].items():
+            print(f"  {ramp}: " + ", ".join(f"{k} {_cell(v)}" for k, v in ev.items()))
     if "sumo_most_waiting" in row:
         run = row["sumo_memory_run"]
         print(f"SUMO memory run: at most {row['sumo_most_waiting']} vehicles waiting to be "

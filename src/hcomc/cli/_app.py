@@ -14,7 +14,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from typer.core import TyperGroup
 
-from hcomc.config import ConfigError, ScenarioConfig, load_config
+from hcomc.config import ConfigError, ControlParams, ScenarioConfig, load_config
 
 
 class _Commands(TyperGroup):
@@ -196,12 +196,12 @@ def _controller(value: str | None) -> str | None:
         raise _fail(message) from None
 
 
-def _control(base: ScenarioConfig, controller: str | None, optimizer: str | None) -> dict:
-    """The ``[control]`` table with the command's controller/optimiser; an optimiser only
-    applies to HCOMC, so passing one to another controller is an error, not ignored."""
+def _control(base: ControlParams, controller: str | None, optimizer: str | None) -> dict:
+    """The ``[control]`` table ``base`` with the command's controller/optimiser; an optimiser
+    only applies to HCOMC, so passing one to another controller is an error, not ignored."""
     controller = _controller(controller)
     optimizer = _choice("--optimizer", optimizer, OPTIMIZERS)
-    control = base.control.model_dump()
+    control = base.model_dump()
     control.update({k: v for k, v in (("controller", controller), ("optimizer", optimizer)) if v})
     if optimizer is not None and control["controller"] != "hcomc":
         raise _fail(

@@ -1,5 +1,6 @@
 """``hcomc simulate CORRIDOR`` for a corridor hcomc's scenario engine does not run: the
-corridor engine (:mod:`hcomc.sim.corridor`), without a merge controller."""
+corridor engine (:mod:`hcomc.sim.corridor`), with the merge controller of the corridor's
+``[control]`` table (or ``--controller``) at every on-ramp."""
 
 from __future__ import annotations
 
@@ -10,13 +11,14 @@ from typing import Any
 
 from rich.table import Table
 
-from hcomc.cli._app import _fail, _progress, _refuse_overwrite, out
+from hcomc.cli._app import _control, _fail, _progress, _refuse_overwrite, out
+from hcomc.config import ControlParams
 from hcomc.corridor import Corridor, corridor_to_toml
 
 CORRIDOR_FILES = (
     "summary.json", "manifest.json", "corridor.toml", "trips.csv", "detectors.csv", "grid.csv",
-    "backlog.csv", "collisions.csv", "trajectories.csv", "corridor.html", "speed_heatmap.png",
-    "flow_density.png", "travel_times.png",
+    "backlog.csv", "collisions.csv", "merges.csv", "trajectories.csv", "corridor.html",
+    "speed_heatmap.png", "flow_density.png", "travel_times.png",
 )  # fmt: skip
 """What ``--out`` receives from a corridor run."""
 
@@ -27,9 +29,17 @@ def refuse_options(corridor: Corridor, why: str, options: dict[str, Any]) -> Non
         if value is not None and value != allowed:
             raise _fail(
                 f"option '{name}' = {value!r}: allowed: {allowed!r} for corridor "
-                f"'{corridor.name}' ({why}; it runs in the corridor engine, which has no "
-                "merge controllers yet)"
+                f"'{corridor.name}' ({why}; it runs in the corridor engine)"
             )
+
+
+def with_control(corridor: Corridor, controller: str | None, optimizer: str | None) -> Corridor:
+    """``corridor`` with the command's ``--controller`` / ``--optimizer`` in its ``[control]``
+    table (checked as for a scenario: a one-line error naming the option)."""
+    if controller is None and optimizer is None:
+        return corridor
+    control = ControlParams(**_control(corridor.control, controller, optimizer))
+    return corridor.model_copy(update={"control": control})
 
 
 def run_corridor(
@@ -62,19 +72,22 @@ def run_corridor(
         out_dir.mkdir(parents=True, exist_ok=True)
         manifest = build_manifest(
             seed=run.seed, config=corridor.model_dump(mode="json"),
-            extra={"engine": "hcomc-corridor", "duration": run.duration},
+            extra={"engine": "hcomc-corridor", "duration": run.duration,
+                   "controller": run.controller},
         )  # fmt: skip
         write_json_atomic(out_dir / "manifest.json", manifest)
         (out_dir / "corridor.toml").write_text(corridor_to_toml(corridor), encoding="utf-8")
         tables = {"trips": run.trips, "detectors": run.detectors, "grid": run.grid,
-                  "backlog": run.backlog, "collisions": run.collisions}  # fmt: skip
+                  "backlog": run.backlog, "collisions": run.collisions,
+                  "merges": run.merges}  # fmt: skip
         if run.trajectories is not None:
             tables["trajectories"] = run.trajectories
         for name, table in tables.items():
             table.to_csv(out_dir / f"{name}.csv", index=False)
         write_corridor_figures(run.grid, run.detectors, run.trips, out_dir)
         title = f"{corridor.name}, seed {run.seed}, {run.duration:g} s"
-        corridor_report_html(run.grid, run.detectors, run.trips, out_dir, title=title)
+        corridor_report_html(run.grid, run.detectors, run.trips, out_dir, title=title,
+                             merges=run.merges)  # fmt: skip
         summary["out"] = str(out_dir)
         write_json_atomic(out_dir / "summary.json", summary)
     if as_json:
@@ -101,7 +114,7 @@ def _print(summary: dict[str, Any]) -> None:
         f"{summary['vehicles']} vehicles: {summary['arrived']} arrived, "
         f"{summary['missed_exit']} missed their exit, {summary['on_road']} on the road, "
         f"{summary['not_inserted']} waiting to enter · {summary['collisions']} collisions · "
-        f"{summary['vehicle_steps_per_s'] / 1e6:.1f} M vehicle-steps/s"
+        f"{summary['vehicle_steps_per_s']:,} vehicle-steps/s"
     )
     table = Table(title="per origin")
     for col in ("origin", "vehicles", "arrived", "travel time [s]", "delay [s]", "max backlog"):
@@ -111,12 +124,17 @@ def _print(summary: dict[str, Any]) -> None:
                       _num(row["mean_travel_time"]), _num(row["mean_delay"]),
                       str(row["max_backlog"]))  # fmt: skip
     out.print(table)
-    ramps = Table(title="per on-ramp")
-    for col in ("ramp", "entered", "merged", "merges/h", "merge position [m]"):
+    ramps = Table(title=f"per on-ramp (controller: {summary['controller']})")
+    for col in ("ramp", "entered", "merged", "merges/h", "merge position [m]",
+                "zone to merge [s]", "least TTC, 5 % [s]", "plans", "fallbacks"):  # fmt: skip
         ramps.add_column(col, justify="right")
     for ramp, row in summary["on_ramps"].items():
-        rate, where = f"{row['merges_per_hour']:.0f}", _num(row["mean_merge_position"])
-        ramps.add_row(ramp, str(row["entered"]), str(row["merged"]), rate, where)
+        ev = row["merge_events"]
+        ramps.add_row(
+            ramp, str(row["entered"]), str(row["merged"]), f"{row['merges_per_hour']:.0f}",
+            _num(row["mean_merge_position"]), _num(ev["mean_time_to_merge"]),
+            _num(ev["min_ttc_p05"]), str(ev["plans"]), str(ev["fallbacks"]),
+        )  # fmt: skip
     out.print(ramps)
 
 

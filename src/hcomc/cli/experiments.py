@@ -95,7 +95,7 @@ def run(
     base = _load(config, **overrides)  # validate before anything runs
     _require_merge(base, config, "run")
     engine = _engine(engine, base)
-    control = _control(base, controller, optimizer)
+    control = _control(base.control, controller, optimizer)
     if control["controller"] == "none":
         raise _fail(
             f"no merge controller: '{config}' has control.controller = 'none'; allowed: "

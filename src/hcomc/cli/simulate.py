@@ -146,18 +146,18 @@ def simulate(
     corridor engine: detectors, travel times and merges from its own [detectors] table;
     --set takes its dotted keys (corridor.duration=600).
     """
-    from hcomc.cli.corridor import refuse_options, run_corridor
+    from hcomc.cli.corridor import refuse_options, run_corridor, with_control
 
     general = _general_corridor(config, _settings(settings))
     if general is not None:
         corridor, why = general
         refuse_options(corridor, why, {
-            "--controller": (controller, "none"), "--optimizer": (optimizer, None),
             "--engine": (engine, "hcomc"), "--detectors": (detectors, None),
         })  # fmt: skip
         _check_seed(seed)
-        run_corridor(corridor, seed=seed, duration=duration, out_dir=out_dir, force=force,
-                     as_json=as_json, trajectory_interval=trajectory_interval)  # fmt: skip
+        run_corridor(with_control(corridor, controller, optimizer), seed=seed,
+                     duration=duration, out_dir=out_dir, force=force, as_json=as_json,
+                     trajectory_interval=trajectory_interval)  # fmt: skip
         return
     if trajectory_interval:
         raise _fail(
@@ -173,7 +173,7 @@ def simulate(
 
     _check_seed(seed)
     overrides = _settings(settings)
-    control = _control(_scenario(config, overrides), controller, optimizer)
+    control = _control(_scenario(config, overrides).control, controller, optimizer)
     cfg = _scenario(config, _with(overrides, duration=duration, seed=seed, control=control))
     positions = _positions(detectors, cfg.road.length)
     _refuse_overwrite(out_dir, SIMULATE_FILES, force)
@@ -238,7 +238,7 @@ def plan(
     overrides = _settings(settings)
     base = _load(config, **overrides)
     _require_merge(base, config, "plan")
-    control = _control(base, controller, optimizer)
+    control = _control(base.control, controller, optimizer)
     if control["controller"] == "none":
         raise _fail("option '--controller' = 'none': allowed: a merge controller")
     cfg = _load(config, **_with(overrides, seed=seed, control=control))

@@ -43,6 +43,7 @@ if TYPE_CHECKING:
 
 
 _MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)
+_CAV = int(Kind.CAV)  # a plain int: an enum member's lookup costs more than the comparison
 
 
 class Mode(IntEnum):
@@ -128,7 +129,7 @@ class TrafficView:
 
     def is_cav(self, i: int) -> bool:
         """Whether vehicle ``i`` exists (``i >= 0``; -1 is a missing key vehicle) and is a CAV."""
-        return i >= 0 and bool(self.fleet.kind[i] == Kind.CAV)
+        return i >= 0 and bool(self.fleet.kind[i] == _CAV)
 
     def live_plan(self, vr: int) -> MergePlan | None:
         """The plan being executed for ramp vehicle ``vr``, if any."""

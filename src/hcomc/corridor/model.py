@@ -14,7 +14,7 @@ from typing import Annotated, Any
 
 from pydantic import Field, model_validator
 
-from hcomc.config import LaneChangeParams, merge_tables
+from hcomc.config import ControlParams, LaneChangeParams, merge_tables
 from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
 from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
@@ -24,6 +24,7 @@ __all__ = [
     "Corridor",
     "DetectorSettings",
     "LaneChanges",
+    "MergeEvents",
     "RouteRules",
     "RunSettings",
     "detector_positions",
@@ -112,6 +113,20 @@ class RouteRules(Frozen):
     )  # fmt: skip
 
 
+class MergeEvents(Frozen):
+    """The ``[merges]`` table: how a merge event is measured.
+
+    An event begins when a ramp vehicle (VR) enters its on-ramp's control zone, with the key
+    vehicles of paper Section II-A identified then (with or without a controller, so runs
+    compare the same vehicles), and its window ends ``window_after`` seconds after VR's merge
+    is complete (or when VR leaves the road, or the run ends)."""
+
+    window_after: float = Field(
+        10.0, ge=0, le=120,
+        description="a merge event's window ends this long after VR's merge is complete [s]",
+    )  # fmt: skip
+
+
 class Corridor(Frozen):
     """A corridor: road and demand that a simulator (for now SUMO) runs."""
 
@@ -122,6 +137,12 @@ class Corridor(Frozen):
     detectors: DetectorSettings = Field(default_factory=DetectorSettings)
     lane_change: LaneChanges = Field(default_factory=lambda: LaneChanges.model_validate({}))
     routes: RouteRules = Field(default_factory=RouteRules)
+    control: ControlParams = Field(
+        default_factory=lambda: ControlParams.model_validate({}),
+        description="the merge controller at every on-ramp and its settings (as a "
+        "scenario's [control] table)",
+    )
+    merges: MergeEvents = Field(default_factory=MergeEvents)
 
     @model_validator(mode="before")
     @classmethod

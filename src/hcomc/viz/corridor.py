@@ -233,6 +233,29 @@ def trip_table(trips: pd.DataFrame) -> pd.DataFrame:
     return table.reset_index()
 
 
+_MERGE_HEADERS = {
+    "events": "events", "merged_share": "merged share", "mean_time_to_merge":
+    "zone to merge [s]", "min_ttc_p05": "least TTC, 5th pct. [s]", "ttc_below_1_5s_share":
+    "share with TTC < 1.5 s", "max_drac": "max DRAC [m/s²]", "max_decel":
+    "hardest braking [m/s²]", "plans": "plans", "fallbacks": "fallbacks", "released":
+    "released merges", "conflicts": "one-plan conflicts",
+}  # fmt: skip
+"""Columns of :func:`merge_table` (keys of :func:`hcomc.sim.corridor.events.merge_summary`)
+and their headers in the report."""
+
+
+def merge_table(merges: pd.DataFrame) -> pd.DataFrame:
+    """Merge events per on-ramp (:func:`hcomc.sim.corridor.events.merge_summary` of each
+    ramp in ``merges``), one row per ramp, columns as :data:`_MERGE_HEADERS` says."""
+    from hcomc.sim.corridor.events import merge_summary
+
+    rows = []
+    for ramp in sorted(merges["ramp"].astype(str).unique()):
+        summary = merge_summary(merges, ramp)
+        rows.append({"ramp": ramp, **{k: summary[k] for k in _MERGE_HEADERS}})
+    return pd.DataFrame(rows, columns=["ramp", *_MERGE_HEADERS])
+
+
 def travel_time_distribution(trips: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """Empirical CDF of the travel time [s] of the arrived trips, one step line per origin.
 
@@ -295,8 +318,10 @@ def corridor_report_html(
     out_dir: str | os.PathLike[str],
     *,
     title: str = "hcomc corridor run",
+    merges: pd.DataFrame | None = None,
 ) -> Path:
-    """Write ``out_dir/corridor.html``, the trips table and the three figures, and return it.
+    """Write ``out_dir/corridor.html``, the trips table, the merge events per on-ramp (with
+    ``merges``, :func:`merge_table`) and the three figures, and return it.
 
     Like :func:`hcomc.viz.report.write_report` (whose table, figure and style helpers it
     uses) the page loads nothing (inline styles, no script, figures as base64 PNG), escapes
@@ -309,6 +334,14 @@ def corridor_report_html(
         if not table.empty
         else '<p class="empty" id="trips">No trips.</p>'
     )
+    merge_html = ""
+    if merges is not None:
+        per_ramp = merge_table(merges).rename(columns=_MERGE_HEADERS)
+        caption = "Merge events per on-ramp, from VR's entry into the control zone."
+        merge_html = (
+            '<section id="merges-section">\n<h2>Merges</h2>\n'
+            f"{_html_table(per_ramp, caption, table_id='merges')}\n</section>"
+        )
     pairs = zip(_CAPTIONS, _figures(grid, detectors, trips), strict=True)
     figures = "\n".join(_figure_block(i, c, figure_png(f)) for i, (c, f) in enumerate(pairs, 1))
     run = build_manifest(seed=0, config={})
@@ -323,6 +356,7 @@ def corridor_report_html(
 <h2>Trips</h2>
 {table_html}
 </section>
+{merge_html}
 <section id="figures">
 <h2>Figures</h2>
 {figures}

@@ -34,11 +34,24 @@ from hcomc._jit import borrow_all, kernel
 from hcomc.models.following import follow_accel_given, free_term
 from hcomc.sim.corridor.lanes import section_at, speed_limit
 from hcomc.sim.corridor.layout import KIND_MAIN, KIND_OFF, KIND_ON, Layout
+from hcomc.sim.corridor.plans import (
+    due_replans,
+    execute,
+    finish_plans,
+    identify,
+    mark_commanded,
+    track_events,
+    virtual_leaders,
+)  # fmt: skip
 from hcomc.sim.corridor.state import (
     ARRIVED,
     C_COLLISIONS,
+    C_CONTROLLED,
     C_ENTRIES,
     C_ON_ROAD,
+    C_OPEN,
+    C_PENDING,
+    C_PLANS,
     C_ROWS,
     C_SAMPLE_EVERY,
     C_SORTED,
@@ -54,11 +67,10 @@ from hcomc.sim.corridor.state import (
     OFFSET,
     ON_ROAD,
     P_CELL,
-    P_CELL_TIME,
     P_DT,
-    P_LC_DURATION,
     P_LOOKAHEAD,
     P_PERIOD,
+    P_REPLAN,
     State,
     Vehicles,
 )  # fmt: skip
@@ -176,10 +188,9 @@ def move(road: Layout, veh: Vehicles, s: State, t: float) -> None:
     """Integrate every vehicle over the step and measure the moves (module docstring)."""
     road, veh, s = borrow_all(road), borrow_all(veh), borrow_all(s)
     dt, counters = s.params[P_DT], s.counters
-    half = 0.5 * s.params[P_LC_DURATION]
     every = counters[C_SAMPLE_EVERY]
     sample = every > 0 and counters[C_STEP] % every == 0
-    cells, cell, cell_t = s.grid.shape[0], s.params[P_CELL], s.params[P_CELL_TIME]
+    cells, cell, cell_t = s.grid.shape[0], s.params[P_CELL], s.params[P_PERIOD]
     t_cell = min(int(t / cell_t), s.grid.shape[1] - 1)
     n_main = road.lane_end.shape[0]
     for k in range(counters[C_ON_ROAD]):
@@ -193,7 +204,7 @@ def move(road: Layout, veh: Vehicles, s: State, t: float) -> None:
             s.x[i] = x0 + v0 * dt + 0.5 * acc * dt * dt
             s.v[i], s.a[i] = v1, acc
         lane = s.code[i]
-        if s.target[i] != lane and t - s.lc_start[i] >= half:
+        if s.target[i] != lane and t - s.lc_start[i] >= 0.5 * s.lc_dur[i]:
             lane = s.target[i]
         if lane < n_main:
             _detect(s, lane, x0, s.x[i], v0, s.v[i], veh.length[i], t, dt)
@@ -216,7 +227,7 @@ def finish(road: Layout, veh: Vehicles, s: State, t_next: float) -> None:
     end = road.sec_x1[-1]
     for k in range(s.counters[C_ON_ROAD]):
         i = s.ids[k]
-        if s.target[i] != s.code[i] and t_next - s.lc_start[i] >= s.params[P_LC_DURATION] - 1e-9:
+        if s.target[i] != s.code[i] and t_next - s.lc_start[i] >= s.lc_dur[i] - 1e-9:
             if road.code_kind[s.code[i]] == KIND_ON and road.code_kind[s.target[i]] == KIND_MAIN:
                 s.merge_t[i], s.merge_x[i] = t_next, s.x[i]
             s.code[i] = s.target[i]
@@ -259,17 +270,32 @@ def _collisions(s: State, length: np.ndarray, t: float) -> None:
 
 @kernel
 def advance(road: Layout, veh: Vehicles, s: State, n_steps: int) -> None:
-    """Run ``n_steps`` steps from ``counters[C_STEP]`` (module docstrings of this module
-    and of :mod:`hcomc.sim.corridor.step`)."""
+    """Run up to ``n_steps`` steps from ``counters[C_STEP]`` (module docstrings of this
+    module, :mod:`hcomc.sim.corridor.step` and :mod:`hcomc.sim.corridor.plans`); return
+    early, between steps, when VRs await the controller (``counters[C_PENDING]``)."""
     road, veh, s = borrow_all(road), borrow_all(veh), borrow_all(s)
-    dt = s.params[P_DT]
+    dt, controlled = s.params[P_DT], s.counters[C_CONTROLLED] != 0
     for _ in range(n_steps):
         step = s.counters[C_STEP]
-        t = step * dt
+        t, t_next = step * dt, (step + 1) * dt
         release(road, veh, s, t)
         sort_entries(s)
+        if s.counters[C_OPEN]:
+            track_events(veh, s, t)
+        if controlled:
+            mark_commanded(veh, s)
         accelerations(road, veh, s)
+        if s.counters[C_PLANS]:
+            virtual_leaders(veh, s, t)
+            execute(road, veh, s, t, step)
         decide(road, veh, s, t, step)
         move(road, veh, s, t)
-        finish(road, veh, s, (step + 1) * dt)
+        finish(road, veh, s, t_next)
+        if s.counters[C_PLANS]:
+            finish_plans(road, s)
+        identify(s, t_next)
+        if controlled and s.params[P_REPLAN] > 0.0:
+            due_replans(s, t_next)
         s.counters[C_STEP] = step + 1
+        if s.counters[C_PENDING]:
+            return

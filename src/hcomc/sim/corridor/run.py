@@ -19,6 +19,8 @@ import pandas as pd
 
 from hcomc.corridor import Corridor
 from hcomc.corridor.model import MAX_DURATION
+from hcomc.sim.corridor.control import CorridorControl
+from hcomc.sim.corridor.events import merge_events, merge_summary
 from hcomc.sim.corridor.fleet import CorridorFleet, build_fleet
 from hcomc.sim.corridor.layout import Layout, build_layout
 from hcomc.sim.corridor.motion import advance
@@ -26,6 +28,7 @@ from hcomc.sim.corridor.state import (
     ARRIVED,
     C_COLLISIONS,
     C_LANE_CHANGES,
+    C_PENDING,
     C_ROWS,
     C_SAMPLE_EVERY,
     C_STEP,
@@ -40,7 +43,6 @@ from hcomc.sim.corridor.state import (
     G_TIME,
     ON_ROAD,
     P_CELL,
-    P_CELL_TIME,
     P_PERIOD,
     TRAJECTORY_COLUMNS,
     State,
@@ -77,12 +79,17 @@ class CorridorRun:
     lane_changes: int
     wall_seconds: float
     collision_count: int
+    merges: pd.DataFrame
+    controller: str = "none"
+    decisions: int = 0
+    decision_seconds: float = 0.0
 
     def summary(self) -> dict[str, object]:
         """Run-level figures: vehicles per outcome, travel time and delay per origin,
         collisions, lane changes, the largest backlog per origin, and per on-ramp the
         vehicles that entered and merged, where (metres past the start of the acceleration
-        lane) and how many per hour."""
+        lane), how many per hour, and its merge events (:func:`merge_summary`); with a
+        controller, its decisions and their wall time."""
         trips = self.trips
         per_origin = {}
         for origin, rows in trips.groupby("origin", sort=False):
@@ -106,6 +113,7 @@ class CorridorRun:
                 "merged_share": len(merged) / len(entered) if len(entered) else None,
                 "mean_merge_position": _mean(merged.merge_x - ramp.x),
                 "merges_per_hour": 3600.0 * len(merged) / self.duration,
+                "merge_events": merge_summary(self.merges, ramp.id),
             }
         return {
             "corridor": self.corridor.name,
@@ -113,6 +121,9 @@ class CorridorRun:
             "duration": self.duration,
             "vehicles": len(trips),
             **{k: int(counts.get(k, 0)) for k in OUTCOMES},
+            "controller": self.controller,
+            "decisions": self.decisions,
+            "decision_seconds": self.decision_seconds,
             "collisions": self.collision_count,
             "lane_changes": self.lane_changes,
             "vehicle_steps": self.vehicle_steps,
@@ -127,6 +138,11 @@ OUTCOMES = ("arrived", "missed_exit", "on_road", "not_inserted")
 missing its off-ramp; still on the road at the end; never inserted (backlog)."""
 
 
+DETECTOR_COLUMNS = ("x", "lane", "begin", "end", "count", "flow", "speed", "harmonic_speed",
+                    "occupancy", "mean_length")  # fmt: skip
+"""Columns of :attr:`CorridorRun.detectors` (one row per loop, mainline lane and period)."""
+
+
 def _mean(values: pd.Series) -> float | None:
     return float(values.mean()) if len(values) else None
 
@@ -139,7 +155,8 @@ def simulate_corridor(
     trajectory_interval: float = 0.0,
     progress: Callable[[float, float], None] | None = None,
 ) -> CorridorRun:
-    """Run ``corridor`` without a merge controller.
+    """Run ``corridor``, with the merge controller its ``[control]`` table names at every
+    on-ramp (:mod:`hcomc.sim.corridor.control`; "none": without).
 
     ``seed`` and ``duration`` [s] default to the corridor's; ``trajectory_interval`` [s]
     samples every vehicle's state that often (0: no trajectories; a multiple of the step);
@@ -159,18 +176,27 @@ def simulate_corridor(
     started = time.perf_counter()
     layout = build_layout(corridor)
     fleet = build_fleet(corridor, layout, seed, duration)
-    state = allocate(corridor, layout, fleet, duration, every)
     vehicles = vehicles_of(fleet)
+    control = None
+    if corridor.control.controller != "none":
+        control = CorridorControl.build(corridor, layout, fleet, vehicles, seed)
+    state = allocate(corridor, layout, fleet, duration, every, controlled=control is not None)
     n_steps = round(duration / dt)
     per_chunk = max(1, round(CHUNK / dt))
+    reported = 0.0
     while state.counters[C_STEP] < n_steps:
         steps = min(per_chunk, n_steps - int(state.counters[C_STEP]))
         if every:
             state = _room_for_samples(state, fleet, steps, every, dt)
-        advance(layout, vehicles, state, steps)
-        if progress is not None:
-            progress(float(state.counters[C_STEP] * dt), duration)
-    return _result(corridor, layout, fleet, state, seed, duration, time.perf_counter() - started)
+        advance(layout, vehicles, state, steps)  # returns early when VRs await a decision
+        t = float(state.counters[C_STEP] * dt)
+        if control is not None and state.counters[C_PENDING]:
+            control.decide(state, t)
+        if progress is not None and (t - reported >= CHUNK or t >= duration):
+            progress(t, duration)
+            reported = t
+    wall = time.perf_counter() - started
+    return _result(corridor, layout, fleet, state, seed, duration, wall, control)
 
 
 def _room_for_samples(state: State, fleet: CorridorFleet, steps: int, every: int,
@@ -189,7 +215,8 @@ def _room_for_samples(state: State, fleet: CorridorFleet, steps: int, every: int
 
 
 def _result(c: Corridor, layout: Layout, fleet: CorridorFleet, s: State, seed: int,
-            duration: float, wall: float) -> CorridorRun:  # fmt: skip
+            duration: float, wall: float,
+            control: CorridorControl | None) -> CorridorRun:  # fmt: skip
     rows = int(s.counters[C_ROWS])
     trajectories = None
     if s.counters[C_SAMPLE_EVERY]:  # the buffer's columns, not copied
@@ -213,6 +240,10 @@ def _result(c: Corridor, layout: Layout, fleet: CorridorFleet, s: State, seed: i
         lane_changes=int(s.counters[C_LANE_CHANGES]),
         wall_seconds=wall,
         collision_count=int(s.counters[C_COLLISIONS]),
+        merges=merge_events(c, fleet, s, control),
+        controller=c.control.controller,
+        decisions=len(control.decisions) if control else 0,
+        decision_seconds=control.decision_seconds if control else 0.0,
     )
 
 
@@ -262,11 +293,11 @@ def _detectors(s: State, layout: Layout) -> pd.DataFrame:
                     "occupancy": 100.0 * occupied / period,
                     "mean_length": length / count if count else math.nan,
                 })  # fmt: skip
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=list(DETECTOR_COLUMNS))
 
 
 def _grid(s: State, layout: Layout) -> pd.DataFrame:
-    cell, cell_t = float(s.params[P_CELL]), float(s.params[P_CELL_TIME])
+    cell, cell_t = float(s.params[P_CELL]), float(s.params[P_PERIOD])
     cells, periods = s.grid.shape[:2]
     ix, it = np.meshgrid(np.arange(cells), np.arange(periods), indexing="ij")
     return pd.DataFrame({

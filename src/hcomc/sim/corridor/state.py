@@ -15,6 +15,8 @@ from typing import NamedTuple
 import numpy as np
 
 from hcomc.corridor import Corridor, detector_positions
+from hcomc.road import N_ROLES
+from hcomc.sim.core_plans import N_FLOAT, N_INT
 from hcomc.sim.corridor.fleet import CorridorFleet
 from hcomc.sim.corridor.layout import Layout
 
@@ -27,12 +29,13 @@ OFFSET = 4.0e6
 WAITING, ON_ROAD, ARRIVED = 0, 1, 2
 # params (floats)
 (P_DT, P_LC_DURATION, P_POLITENESS, P_THRESHOLD, P_BIAS, P_SAFE_DECEL, P_MIN_GAP,
- P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_CELL_TIME) = range(13)  # fmt: skip
-N_PARAMS = 13
+ P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_REPLAN, P_WINDOW) = range(14)  # fmt: skip
+N_PARAMS = 14
 # counters (ints)
 (C_STEP, C_ENTRIES, C_VEHICLE_STEPS, C_LANE_CHANGES, C_COLLISIONS, C_ROWS, C_ON_ROAD,
- C_DECIDE_EVERY, C_SAMPLE_EVERY, C_SORTED) = range(10)  # fmt: skip
-N_COUNTERS = 10
+ C_DECIDE_EVERY, C_SAMPLE_EVERY, C_SORTED, C_CONTROLLED, C_PENDING, C_PLANS,
+ C_OPEN) = range(14)  # fmt: skip
+N_COUNTERS = 14
 # columns of the measurement arrays
 D_COUNT, D_SPEED, D_INVERSE_SPEED, D_OCCUPIED, D_LENGTH = range(5)  # detectors
 G_DISTANCE, G_TIME = range(2)  # space-time grid
@@ -53,6 +56,7 @@ class Vehicles(NamedTuple):
     b: np.ndarray
     delta: np.ndarray
     length: np.ndarray
+    cav: np.ndarray  # bool: connected and automated
     start_code: np.ndarray
     queue_start: np.ndarray
     queue: np.ndarray
@@ -67,6 +71,7 @@ class State(NamedTuple):
     code: np.ndarray  # lane code driven in (-1 off the road)
     target: np.ndarray  # lane code changed into (= code when not changing)
     lc_start: np.ndarray  # start of the current lane change [s]
+    lc_dur: np.ndarray  # duration of the current (or last) lane change [s]
     status: np.ndarray  # WAITING, ON_ROAD, ARRIVED
     insert_t: np.ndarray  # [s], nan until inserted
     arrive_t: np.ndarray  # [s], nan until arrived
@@ -99,6 +104,24 @@ class State(NamedTuple):
     traj_code: np.ndarray  # lane code
     traj_v: np.ndarray  # speed [m/s]
     traj_a: np.ndarray  # acceleration [m/s^2]
+    # merge control and merge events (hcomc.sim.corridor.plans)
+    zone: np.ndarray  # per code: where an on-ramp's control zone starts [m] (j = 0), nan
+    following: np.ndarray  # a VR on its ramp following its live plan (VV0; merge commanded)
+    holding: np.ndarray  # makes no discretionary change (commanded or CAV key vehicle)
+    plan_int: np.ndarray  # (capacity, N_INT): live plans, columns of hcomc.sim.core_plans
+    plan_f: np.ndarray  # (capacity, N_FLOAT)
+    pending: np.ndarray  # VRs awaiting the controller (C_PENDING of them)
+    view_lane: np.ndarray  # one ramp's local lanes (hcomc.road.Lane), filled on demand
+    view_active: np.ndarray  # on one of that ramp's three lanes
+    ev_t: np.ndarray  # when VR entered its control zone [s], nan
+    ev_group: np.ndarray  # (N, 6): its key vehicles then (MergeGroup order)
+    ev_min_ttc: np.ndarray  # over the event's window, VR, VMC, VMR and VNR [s]
+    ev_max_drac: np.ndarray  # [m/s^2]
+    ev_max_decel: np.ndarray  # hardest braking of those vehicles [m/s^2]
+    ev_vmc_v: np.ndarray  # VMC's speed at identification [m/s]
+    ev_vmc_min_v: np.ndarray  # VMC's lowest speed in the window [m/s]
+    ev_released: np.ndarray  # VR's plan gave up its commanded merge (gap acceptance)
+    ev_open: np.ndarray  # VRs whose window is open (C_OPEN of them)
 
 
 def trajectory_buffer(capacity: int) -> dict[str, np.ndarray]:
@@ -119,6 +142,7 @@ def vehicles_of(fleet: CorridorFleet) -> Vehicles:
         b=idm[:, 4].copy(),
         delta=idm[:, 5].copy(),
         length=fleet.length,
+        cav=fleet.cav,
         start_code=fleet.start_code,
         queue_start=fleet.queue_start,
         queue=fleet.queue,
@@ -126,23 +150,30 @@ def vehicles_of(fleet: CorridorFleet) -> Vehicles:
 
 
 def allocate(
-    c: Corridor, layout: Layout, fleet: CorridorFleet, duration: float, sample_every: int
-) -> State:
+    c: Corridor, layout: Layout, fleet: CorridorFleet, duration: float, sample_every: int,
+    controlled: bool = False,
+) -> State:  # fmt: skip
     """A fresh state for ``fleet`` on ``layout`` over ``duration`` [s]; trajectories sampled
-    every ``sample_every`` steps (0: none)."""
+    every ``sample_every`` steps (0: none); ``controlled``: a merge controller decides for
+    the vehicles entering the on-ramps' control zones."""
     n = fleet.depart.size
     lc, run, det = c.lane_change, c.corridor, c.detectors
     params = np.zeros(N_PARAMS)
     params[[P_DT, P_LC_DURATION, P_POLITENESS, P_THRESHOLD, P_BIAS, P_SAFE_DECEL, P_MIN_GAP,
-            P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_CELL_TIME]] = [
+            P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_REPLAN, P_WINDOW]] = [
         run.step_length, run.lane_change_duration, lc.politeness, lc.threshold,
         lc.keep_right_bias, lc.safe_decel, lc.min_gap, lc.emergency_decel,
         c.routes.exit_lookahead, c.routes.urgent_distance, det.period, det.cell_length,
-        det.period,
+        c.control.replan_period, c.merges.window_after,
     ]  # fmt: skip
     counters = np.zeros(N_COUNTERS, dtype=np.int64)
     counters[C_DECIDE_EVERY] = max(1, round(lc.decision_interval / run.step_length))
     counters[C_SAMPLE_EVERY] = sample_every
+    counters[C_CONTROLLED] = controlled
+    zone = np.full(layout.n_codes, np.nan)
+    for ramp in c.road.on_ramps:
+        zone[layout.ramp_code(ramp.id, c)] = ramp.x - ramp.control_zone_length
+    plans = max(1, int(np.count_nonzero(fleet.start_code >= 0)))
     periods = max(1, math.ceil(duration / det.period - 1e-9))
     positions = np.array(detector_positions(c))
     cells = max(1, math.ceil(layout.length / det.cell_length))
@@ -150,7 +181,8 @@ def allocate(
     return State(
         x=np.zeros(n), v=np.zeros(n), a=np.zeros(n),
         code=np.full(n, -1, dtype=np.int64), target=np.full(n, -1, dtype=np.int64),
-        lc_start=nan.copy(), status=np.zeros(n, dtype=np.int64),
+        lc_start=nan.copy(), lc_dur=np.full(n, run.lane_change_duration),
+        status=np.zeros(n, dtype=np.int64),
         insert_t=nan.copy(), arrive_t=nan.copy(), exit_code=fleet.exit_code.copy(),
         missed=np.zeros(n, dtype=np.bool_), merge_t=nan.copy(), merge_x=nan.copy(),
         busy=np.full(n, -1, dtype=np.int64),
@@ -166,4 +198,12 @@ def allocate(
         grid=np.zeros((cells, periods, 2)),
         collisions=np.zeros((1024, len(COLLISION_COLUMNS))),
         **trajectory_buffer(0),
+        zone=zone, following=np.zeros(n, dtype=np.bool_), holding=np.zeros(n, dtype=np.bool_),
+        plan_int=np.zeros((plans, N_INT), dtype=np.int64), plan_f=np.zeros((plans, N_FLOAT)),
+        pending=np.zeros(n, dtype=np.int64),
+        view_lane=np.full(n, -1, dtype=np.int64), view_active=np.zeros(n, dtype=np.bool_),
+        ev_t=nan.copy(), ev_group=np.full((n, N_ROLES), -1, dtype=np.int64),
+        ev_min_ttc=np.full(n, np.inf), ev_max_drac=np.zeros(n), ev_max_decel=np.zeros(n),
+        ev_vmc_v=nan.copy(), ev_vmc_min_v=nan.copy(), ev_released=np.zeros(n, dtype=np.bool_),
+        ev_open=np.zeros(n, dtype=np.int64),
     )  # fmt: skip

@@ -92,7 +92,7 @@ def sort_entries(s: State) -> None:
 
 
 @kernel(inline="always")
-def _follow(veh: Vehicles, s: State, i: int, j: int) -> float:
+def follow_behind(veh: Vehicles, s: State, i: int, j: int) -> float:
     """IDM acceleration of vehicle i behind vehicle j (free road for j = -1; 0 for i = -1)."""
     if i < 0:
         return 0.0
@@ -118,10 +118,10 @@ def accelerations(road: Layout, veh: Vehicles, s: State) -> None:
         i, lead = s.e_veh[p], -1
         if p + 1 < m and s.e_code[p + 1] == s.e_code[p]:
             lead = s.e_veh[p + 1]
-        s.acc[i] = min(s.acc[i], _follow(veh, s, i, lead))
+        s.acc[i] = min(s.acc[i], follow_behind(veh, s, i, lead))
     for k in range(n):
         i = s.ids[k]
-        if s.target[i] == s.code[i]:
+        if s.target[i] == s.code[i] and not s.following[i]:
             gap = stop_point(road, s.code[i], s.x[i], s.exit_code[i]) - s.x[i]
             v = s.v[i]
             if gap < veh.s0[i] + v * veh.T[i] + v * v / (2.0 * veh.b[i]):
@@ -134,7 +134,7 @@ def accelerations(road: Layout, veh: Vehicles, s: State) -> None:
 
 
 @kernel(inline="always")
-def _neighbours_in(s: State, code: int, x: float) -> tuple[int, int]:
+def neighbours_in(s: State, code: int, x: float) -> tuple[int, int]:
     """Leader and follower a vehicle at x would have in lane ``code`` (-1 if none)."""
     m, value = s.counters[C_SORTED], code * OFFSET + x
     lo, hi = 0, m
@@ -150,7 +150,7 @@ def _neighbours_in(s: State, code: int, x: float) -> tuple[int, int]:
 
 
 @kernel(inline="always")
-def _gaps_clear(veh: Vehicles, s: State, i: int, old_lead: int, lead: int, fol: int,
+def gaps_clear(veh: Vehicles, s: State, i: int, old_lead: int, lead: int, fol: int,
                 step: int) -> bool:  # fmt: skip
     """The gap criteria of a change of i between ``lead`` and ``fol`` (module docstring)."""
     if s.busy[i] == step or (lead >= 0 and s.busy[lead] == step):
@@ -168,15 +168,16 @@ def _gaps_clear(veh: Vehicles, s: State, i: int, old_lead: int, lead: int, fol: 
 
 
 @kernel(inline="always")
-def _accept(s: State, i: int, code: int, lead: int, fol: int, t: float, step: int) -> None:
-    """Start the change of i into ``code`` (a new entry there)."""
-    s.target[i], s.lc_start[i] = code, t
+def start_change(s: State, i: int, code: int, lead: int, fol: int, t: float, step: int,
+                 duration: float) -> None:  # fmt: skip
+    """Start the change of i into ``code``, lasting ``duration`` [s] (a new entry there)."""
+    s.target[i], s.lc_start[i], s.lc_dur[i] = code, t, duration
     s.busy[i] = step
     if lead >= 0:
         s.busy[lead] = step
     if fol >= 0:
         s.busy[fol] = step
-    if s.params[P_LC_DURATION] <= 0.0:  # instantaneous: ends in this step's bookkeeping
+    if duration <= 0.0:  # instantaneous: ends in this step's bookkeeping
         s.lc_start[i] = t - 1.0
     p = s.counters[C_ENTRIES]
     s.e_veh[p], s.e_code[p], s.e_key[p] = i, code, code * OFFSET + s.x[i]
@@ -200,17 +201,19 @@ def decide(road: Layout, veh: Vehicles, s: State, t: float, step: int) -> None:
             continue
         x = s.x[i]
         lead = s.e_veh[p + 1] if p + 1 < m and s.e_code[p + 1] == c else -1
+        if s.following[i]:
+            continue  # its merge is the plan's (hcomc.sim.corridor.plans)
         tgt, left = mandatory_target(road, c, x, s.exit_code[i], lookahead)
         if tgt >= 0:
-            ln, fn = _neighbours_in(s, tgt, x)
-            if not _gaps_clear(veh, s, i, lead, ln, fn, step):
+            ln, fn = neighbours_in(s, tgt, x)
+            if not gaps_clear(veh, s, i, lead, ln, fn, step):
                 continue
             urgency = max(0.0, 1.0 - left / urgent) if urgent > 0 else 0.0
             b_ok = b_safe + (b_max - b_safe) * urgency
-            if _follow(veh, s, i, ln) >= -b_ok and _follow(veh, s, fn, i) >= -b_ok:
-                _accept(s, i, tgt, ln, fn, t, step)
+            if follow_behind(veh, s, i, ln) >= -b_ok and follow_behind(veh, s, fn, i) >= -b_ok:
+                start_change(s, i, tgt, ln, fn, t, step, s.params[P_LC_DURATION])
             continue
-        if c >= road.lane_end.shape[0] or (step + i) % every != 0:
+        if c >= road.lane_end.shape[0] or (step + i) % every != 0 or s.holding[i]:
             continue
         _discretionary(road, veh, s, p, lead, t, step)
 
@@ -225,7 +228,7 @@ def _discretionary(road: Layout, veh: Vehicles, s: State, p: int, lead: int, t: 
     sec = section_at(road.sec_x0, x)
     lookahead, b_safe = s.params[P_LOOKAHEAD], s.params[P_SAFE_DECEL]
     exit_code = s.exit_code[i]
-    a_c = _follow(veh, s, i, lead)
+    a_c = follow_behind(veh, s, i, lead)
     best, best_gain, best_lead, best_fol = -1, 0.0, -1, -1
     for side in (-1, 1):
         tgt = c + side
@@ -233,16 +236,16 @@ def _discretionary(road: Layout, veh: Vehicles, s: State, p: int, lead: int, t: 
             continue
         if side > 0 and exit_code >= 0 and road.code_x1[exit_code] - x < (c + 2) * lookahead:
             continue  # its exit is near: no move away from it
-        ln, fn = _neighbours_in(s, tgt, x)
-        if not _gaps_clear(veh, s, i, lead, ln, fn, step):
+        ln, fn = neighbours_in(s, tgt, x)
+        if not gaps_clear(veh, s, i, lead, ln, fn, step):
             continue
-        acc1, acc3 = _follow(veh, s, i, ln), _follow(veh, s, fn, i)
+        acc1, acc3 = follow_behind(veh, s, i, ln), follow_behind(veh, s, fn, i)
         if acc1 < -b_safe or acc3 < -b_safe:
             continue
         acc2, acc4, acc5 = (
-            _follow(veh, s, fn, ln),
-            _follow(veh, s, fo, i),
-            _follow(veh, s, fo, lead),
+            follow_behind(veh, s, fn, ln),
+            follow_behind(veh, s, fo, i),
+            follow_behind(veh, s, fo, lead),
         )
         bias = s.params[P_BIAS] if side > 0 else -s.params[P_BIAS]
         gain = acc1 - a_c + s.params[P_POLITENESS] * ((acc3 - acc2) + (acc5 - acc4))
@@ -250,4 +253,4 @@ def _discretionary(road: Layout, veh: Vehicles, s: State, p: int, lead: int, t: 
         if gain > best_gain:
             best, best_gain, best_lead, best_fol = tgt, gain, ln, fn
     if best >= 0:
-        _accept(s, i, best, best_lead, best_fol, t, step)
+        start_change(s, i, best, best_lead, best_fol, t, step, s.params[P_LC_DURATION])
