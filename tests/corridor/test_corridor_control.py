@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.control.fifo import MERGE_OFFSET
 from hcomc.corridor import Corridor, corridor_to_toml
-from hcomc.metrics.surrogate import CLOSING_SPEED
+from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.corridor import simulate_corridor
 from hcomc.sim.corridor.control import CorridorControl
 

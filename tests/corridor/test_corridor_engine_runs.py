@@ -202,6 +202,6 @@ def test_simulate_runs_a_corridor_and_refuses_a_controller(tmp_path):
     scenario = runner.invoke(app, ["simulate", "C1", "--trajectory-interval", "1"])
     assert scenario.exit_code == 2
     assert "option '--trajectory-interval'" in scenario.stderr
-    refused = runner.invoke(app, ["simulate", "corridor", "--controller", "hcomc"])
+    refused = runner.invoke(app, ["simulate", "corridor", "--engine", "sumo"])
     assert refused.exit_code == 2
-    assert "option '--controller'" in refused.stderr
+    assert "option '--engine'" in refused.stderr

@@ -42,10 +42,10 @@ def test_other_corridors_are_refused_naming_the_key(change, key, tmp_path: Path)
     path.write_text('base = "paper"\n' + tomli_w.dumps(change), encoding="utf-8")
     with pytest.raises(ConfigError, match=f"key '{key}'"):
         scenario_of(load_corridor(str(path), {}))
-    # hcomc simulate runs it in the corridor engine, which takes no merge controller
-    refused = CliRunner().invoke(app, ["simulate", str(path), "--controller", "fifo"])
+    # hcomc simulate runs it in the corridor engine, whose loops come from [detectors]
+    refused = CliRunner().invoke(app, ["simulate", str(path), "--detectors", "500"])
     assert refused.exit_code == 2
-    assert "option '--controller'" in refused.stderr
+    assert "option '--detectors'" in refused.stderr
     assert f"key '{key}'" in refused.stderr
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from hcomc._typing import FloatArray
 from hcomc.metrics.window import EPS_T, MetricWindow, key_pairs, times, window_rows
+from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.log import EventKind, SimulationLog
 
 __all__ = [
@@ -23,9 +24,6 @@ __all__ = [
     "min_ttc",
     "pet_at_merge",
 ]
-
-CLOSING_SPEED = 0.1
-"""Minimum closing speed v_follower - v_leader for TTC and DRAC [m/s]."""
 
 
 def _first_crossing(t: FloatArray, pos: FloatArray, target: float) -> float:

@@ -10,11 +10,11 @@ in the view (:func:`fill_view`, then :func:`hcomc.control.base.key_vehicle_indic
 function the controllers use). This happens in every run, with or without a controller, so
 runs compare the same vehicles. The event's window runs from then until ``window_after``
 seconds after VR's merge is complete (or VR leaves the road); over it
-:func:`track_events` keeps the surrogate safety of VR, VMC, VMR and VNR (each against its
-leader in every lane it occupies, while it closes in at ``CLOSING_SPEED`` or more, as
-:mod:`hcomc.metrics.surrogate` on the paper's scene): the least time to collision, the
-largest deceleration rate to avoid a crash (DRAC), the hardest braking, and VMC's lowest
-speed.
+:func:`track_events` keeps the surrogate safety of VR, VMC, VMR and VNR, each against its
+leader in every lane it occupies while it closes in at
+:data:`~hcomc.safety.surrogate.CLOSING_SPEED` or more (as :mod:`hcomc.metrics.surrogate` on
+the paper's scene): the least time to collision, the largest deceleration rate to avoid a
+crash (DRAC), the hardest braking, and VMC's lowest speed.
 
 **Live plans** are rows of the plan table of :mod:`hcomc.sim.core_plans` (same columns), in
 ``plan_int`` / ``plan_f`` of the state; Python enters only to decide (a new event, or a plan
@@ -43,9 +43,9 @@ import math
 from hcomc._jit import borrow_all, kernel
 from hcomc.control.base import key_vehicle_indices
 from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.metrics.surrogate import CLOSING_SPEED
 from hcomc.models.following import follow_accel_given
 from hcomc.road import VMC, VMR, VNR, VR, Lane
+from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.core_plans import (
     F_HORIZON,
     F_MERGE_X,
