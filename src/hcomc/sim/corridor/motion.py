@@ -12,7 +12,8 @@ brake harder than ``b``. With less than ``s0`` free it waits, and its origin's l
 vehicles wait behind it: the backlog, recorded per origin and period, never dropped.
 
 **Motion** is ballistic (a vehicle that would reverse stops at v = 0); a lane change lasts
-``lane_change_duration`` and counts in its target lane from its middle on. A vehicle arrives
+``lane_change_duration`` (a merge plan may set its ramp vehicle's) and counts in its target
+lane from its middle on. A vehicle arrives
 when its front reaches the mainline's end or the end of its off-ramp's road; one bound for
 an off-ramp that passes the end of the ramp's deceleration lane in the mainline has missed
 its exit and drives on to the mainline's end (recorded).

@@ -2,9 +2,10 @@
 
 The compiled step (:mod:`hcomc.sim.corridor.step`, :mod:`hcomc.sim.corridor.motion`) runs in
 chunks of simulated time; between chunks Python only grows the trajectory buffer (when
-trajectories are sampled) and reports progress. A run returns its measurements as tables:
-one row per vehicle (trips), per detector, lane and period, per space-time cell, per
-collision, and the sampled trajectories.
+trajectories are sampled) and reports progress, and with a merge controller a chunk ends
+early whenever ramp vehicles await a decision (:mod:`hcomc.sim.corridor.control`). A run
+returns its measurements as tables: one row per vehicle (trips), per detector, lane and
+period, per space-time cell, per collision, per merge event, and the sampled trajectories.
 """
 
 from __future__ import annotations

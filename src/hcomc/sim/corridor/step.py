@@ -26,6 +26,11 @@ behind the other (a needed change within ``urgent_distance`` of its last point a
 ``emergency_decel``, linearly), and a clear path (no standing leader within 3 lengths plus
 ``min_gap``). Changes are taken downstream first; a vehicle that is part of a change accepted
 in this step (changer, new leader or new follower) takes part in no other.
+
+**Merge control.** A ramp vehicle following a live merge plan (``s.following``) neither
+brakes for the end of its acceleration lane nor takes its merge by the rule above: the plan
+commands it (:mod:`hcomc.sim.corridor.plans`, whose changes are started before these); the
+vehicles a plan holds in their lane (``s.holding``) make no discretionary change.
 """
 
 from __future__ import annotations
