@@ -22,8 +22,9 @@ from typing import Any
 from hcomc.config import ConfigError, ScenarioConfig, load_config, merge_tables
 from hcomc.corridor.demand import OriginDemand, VehicleClass
 from hcomc.corridor.model import Corridor
+from hcomc.corridor.road import OnRamp
 
-__all__ = ["scenario_of"]
+__all__ = ["ramp_road", "scenario_of"]
 
 _SUMO = "run it in SUMO: hcomc export sumo"
 
@@ -74,6 +75,19 @@ def _layout(c: Corridor) -> None:
         raise _refuse("road.on_ramps[0].lanes", road.on_ramps[0].lanes, "1")
 
 
+def ramp_road(c: Corridor, ramp: OnRamp, vehicle: VehicleClass) -> dict[str, float]:
+    """The scenario's ``[road]`` table for ``ramp`` of ``c``: the paper's road with the
+    ramp's geometry in corridor coordinates (the ramp road enters at ``x - ramp_length``),
+    bodies of ``vehicle``'s class."""
+    return {
+        "length": c.road.length, "lane_width": c.road.lane_width,
+        "accel_lane_start": ramp.x, "accel_lane_end": ramp.x + ramp.accel_length,
+        "ramp_start": ramp.x - ramp.ramp_length,
+        "control_zone_length": ramp.control_zone_length,
+        "vehicle_length": vehicle.length, "vehicle_width": vehicle.width,
+    }  # fmt: skip
+
+
 def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
     """The scenario config of corridor ``c`` for hcomc's engine (module docstring), with
     ``overrides`` as :func:`hcomc.config.load_config` takes them; a :class:`ConfigError`
@@ -95,13 +109,7 @@ def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
         "dt": c.corridor.step_length,
         "duration": c.corridor.duration,
         "warmup": 0.0,
-        "road": {
-            "length": c.road.length, "lane_width": c.road.lane_width,
-            "accel_lane_start": ramp.x, "accel_lane_end": ramp.x + ramp.accel_length,
-            "ramp_start": ramp.x - ramp.ramp_length,
-            "control_zone_length": ramp.control_zone_length,
-            "vehicle_length": vehicle.length, "vehicle_width": vehicle.width,
-        },
+        "road": ramp_road(c, ramp, vehicle),
         "demand": {
             "mean_headway_main_1": 2 * 3600.0 / main, "mean_headway_main_2": 2 * 3600.0 / main,
             "cav_penetration": c.demand["main"].cav_share, "ramp": "flow",

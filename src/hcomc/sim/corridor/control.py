@@ -29,6 +29,7 @@ from hcomc.control.base import MergeController, MergePlan, Mode, TrafficView, fi
 from hcomc.control.registry import make_controller
 from hcomc.control.validation import checked, name_of
 from hcomc.corridor import Corridor, OnRamp
+from hcomc.corridor.engine import ramp_road
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.core_plans import (
@@ -49,8 +50,6 @@ from hcomc.sim.fleet import Fleet
 
 __all__ = ["CorridorControl", "Decision", "ramp_config"]
 
-_IDM = ("desired_speed", "time_headway", "min_gap", "max_accel", "comfort_decel", "exponent")
-
 
 def mainline_class(c: Corridor) -> str:
     """The vehicle class with the largest share of the mainline demand (the first class
@@ -69,13 +68,7 @@ def ramp_config(c: Corridor, ramp: OnRamp) -> ScenarioConfig:
     settings = {
         "name": f"{c.name}.{ramp.id}", "seed": c.corridor.seed, "dt": c.corridor.step_length,
         "duration": c.corridor.duration, "warmup": 0.0,
-        "road": {
-            "length": c.road.length, "lane_width": c.road.lane_width,
-            "accel_lane_start": ramp.x, "accel_lane_end": ramp.end,
-            "ramp_start": ramp.x - ramp.ramp_length,
-            "control_zone_length": ramp.control_zone_length,
-            "vehicle_length": vehicle.length, "vehicle_width": vehicle.width,
-        },
+        "road": ramp_road(c, ramp, vehicle),
         "hdv": {**vehicle.idm(False), **duration},
         "cav": {**vehicle.idm(True), **duration, "coolness": 0.0},
         "lane_change": lc.model_dump(),
