@@ -19,7 +19,8 @@ from hcomc.corridor import (
 
 
 def test_presets_are_listed_and_shipped() -> None:
-    assert corridor_preset_names() == ["corridor", "paper"]
+    names = ["corridor", "paper", *(f"paper-C{k}" for k in range(1, 6))]
+    assert corridor_preset_names() == names
     c = load_corridor("corridor")
     assert (c.road.length, c.road.lanes, c.corridor.duration) == (10_000.0, 3, 3600.0)
     assert (len(c.road.on_ramps), len(c.road.off_ramps)) == (5, 4)

@@ -350,3 +350,14 @@ def test_any_scenario_toml_and_overrides(tmp_path) -> None:
     obs, info = env.reset(seed=1)
     assert info["ego"] == env.episode.vr
     assert obs.shape == (N_OBS,)
+
+
+def test_a_corridor_of_the_papers_layout_is_its_condition() -> None:
+    a, b = rollout(MergeEnv("paper-C3"), 4), rollout(MergeEnv("C3"), 4)
+    assert len(a) == len(b) > 5
+    for (oa, ra, *_), (ob, rb, *_) in zip(a, b, strict=True):
+        np.testing.assert_array_equal(oa, ob)
+        assert ra == rb
+    # a general corridor runs in the corridor engine, not in an environment: refused by name
+    with pytest.raises(ConfigError, match=r"key 'road\.lanes' = 3"):
+        MergeEnv("corridor")

@@ -203,9 +203,10 @@ def test_cli_writes_the_corridor_and_refuses_bad_input(tmp_path: Path) -> None:
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".corridor-")]
     unknown = CliRunner().invoke(app, ["export", "sumo", "corridr", "--out", str(target)])
     assert unknown.exit_code == 2
-    assert "allowed: a condition (C1, C2, C3, C4, C5, platoon), a corridor (corridor, paper)" in (
-        unknown.output.replace("\n", "")
-    )
+    assert (
+        "allowed: a condition (C1, C2, C3, C4, C5, platoon), a corridor (corridor, paper, "
+        "paper-C1, paper-C2, paper-C3, paper-C4, paper-C5)"
+    ) in unknown.output.replace("\n", "")
     assert not target.exists()
 
 

@@ -124,6 +124,32 @@ class OriginDemand(Frozen):
         default_factory=lambda: {"exit": 1.0},
         description="share per destination [-] ('exit' or a downstream off-ramp id), summing to 1",
     )
+    lane_flows: list[float] | None = Field(
+        None,
+        description="the mainline origin only: the flow of each mainline lane [veh/h], given "
+        "instead of 'flow' (paper Table I sets a mean headway per lane); hcomc's scenario "
+        "engine only",
+    )
+    release: float | None = Field(
+        None,
+        ge=0,
+        le=3600,
+        description="an on-ramp only: one vehicle enters at this time after the warm-up [s], "
+        "instead of a flow (the paper's single merging vehicle); hcomc's scenario engine only",
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _flow_of_alternatives(cls, data: Any) -> Any:
+        """Without ``flow``: the sum of ``lane_flows``, or 0 beside a ``release``."""
+        if not isinstance(data, dict) or "flow" in data:
+            return data
+        lanes = data.get("lane_flows")
+        if isinstance(lanes, list) and all(isinstance(q, int | float) for q in lanes):
+            return {**data, "flow": float(sum(lanes))}
+        if data.get("release") is not None:
+            return {**data, "flow": 0.0}
+        return data
 
     @field_validator("flow", mode="before")
     @classmethod
@@ -153,7 +179,28 @@ class OriginDemand(Frozen):
             total = sum(shares.values())
             if abs(total - 1) > _SUM_TOLERANCE:
                 raise RuleError(key, shares, f"shares summing to 1 (they sum to {total:.6g})")
+        self._check_alternatives()
         return self
+
+    def _check_alternatives(self) -> None:
+        """``lane_flows`` and ``release`` replace a constant ``flow``; they never contradict it."""
+        if self.lane_flows is not None:
+            for k, q in enumerate(self.lane_flows):
+                if not 0 < q <= 20_000:
+                    raise RuleError(f"lane_flows[{k}]", q, "a flow 0 < q <= 20000 veh/h")
+            total = sum(self.lane_flows)
+            if self.flow != [(0.0, total)]:
+                raise RuleError(
+                    "flow", [list(p) for p in self.flow],
+                    f"no 'flow' beside lane_flows (or their sum, {total:g}, as one constant)",
+                )  # fmt: skip
+        if self.release is not None:
+            if self.lane_flows is not None:
+                raise RuleError("release", self.release, "no release beside lane_flows")
+            if self.flow != [(0.0, 0.0)]:
+                raise RuleError(
+                    "flow", [list(p) for p in self.flow], "no 'flow' beside a release (or 0)"
+                )
 
     def rate(self, t: float) -> float:
         """Flow q(t) [veh/h] at time t >= 0 [s]."""

@@ -8,15 +8,20 @@ Any other corridor is refused with the key that does not fit; it runs in SUMO.
 
 The translation: road geometry one to one (the ramp enters at ``x - ramp_length``); the
 mainline flow split equally over the two lanes as mean headways (``2 · 3600 / flow`` s per
-lane) and the ramp flow as a continuous ramp demand (``3600 / flow`` s); one CAV share; the
-one vehicle class's length and IDM parameters for the HDVs, with its CAV values for the CAVs
-(the engine's HDVs keep their reaction delays and estimation errors, paper Eq. 2, which
-SUMO's IDM does not have); no warm-up, since SUMO's road starts empty too; no merge
-controller unless one is given.
+lane), or each lane's own flow (``lane_flows``: paper Table I's headway per lane); the ramp
+flow as a continuous ramp demand (``3600 / flow`` s), or one vehicle released at
+``release`` s (the paper's single merging vehicle); headways to the nanosecond; one CAV
+share; the one vehicle class's length and IDM parameters for the HDVs, with its CAV values
+for the CAVs (the engine's HDVs keep their reaction delays and estimation errors, paper
+Eq. 2, which SUMO's IDM does not have); the corridor's warm-up (0 by default, since SUMO's
+road starts empty too); no merge controller unless one is given. The presets ``paper-C1``
+... ``paper-C5`` are the conditions C1-C5 written this way: their scenario configs equal the
+conditions' except for name and description, so they run bit for bit the same.
 """
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 from hcomc.config import ConfigError, ScenarioConfig, load_config, merge_tables
@@ -24,7 +29,7 @@ from hcomc.corridor.demand import OriginDemand, VehicleClass
 from hcomc.corridor.model import Corridor
 from hcomc.corridor.road import OnRamp
 
-__all__ = ["ramp_road", "scenario_of"]
+__all__ = ["ramp_road", "scenario_config", "scenario_of", "scenario_only"]
 
 _SUMO = "run it in SUMO: hcomc export sumo"
 
@@ -34,6 +39,49 @@ def _refuse(key: str, value: Any, allowed: str) -> ConfigError:
                        f"allowed: {allowed} ({_SUMO})")  # fmt: skip
 
 
+def scenario_only(c: Corridor) -> tuple[str, Any] | None:
+    """The first key of ``c`` that only hcomc's scenario engine runs, with its value: a
+    warm-up, per-lane mainline flows, a single ramp release (the paper's conditions C1-C5,
+    presets ``paper-C1`` ... ``paper-C5``); None if there is none."""
+    if c.corridor.warmup > 0:
+        return "corridor.warmup", c.corridor.warmup
+    for origin, demand in c.demand.items():
+        if demand.lane_flows is not None:
+            return f"demand.{origin}.lane_flows", demand.lane_flows
+        if demand.release is not None:
+            return f"demand.{origin}.release", demand.release
+    return None
+
+
+def _headway(flow: float) -> float:
+    """Mean headway [s] of a flow [veh/h], to the nanosecond: a flow written with 16 digits
+    (3600 / 7 s = 514.2857142857143 veh/h) gives back the headway it came from."""
+    return round(3600.0 / flow, 9)
+
+
+def _lane_headways(main: OriginDemand) -> tuple[float, float]:
+    """Mean headways of mainline lanes 1 and 2 [s]: the lane flows', or the one flow split
+    equally."""
+    if main.lane_flows is not None:
+        first, second = main.lane_flows
+        return _headway(first), _headway(second)
+    flow = _constant("main", main)
+    return _headway(flow / 2), _headway(flow / 2)
+
+
+def _ramp_demand(key: str, demand: OriginDemand) -> dict[str, Any]:
+    """The scenario's ramp keys: one release (``ramp = "single"``) or a continuous flow."""
+    if demand.release is not None:
+        _destinations(key, demand)
+        return {"ramp": "single", "ramp_entry_time": demand.release}
+    return {"ramp": "flow", "ramp_mean_headway": _headway(_constant(key, demand))}
+
+
+def _destinations(key: str, demand: OriginDemand) -> None:
+    if set(demand.destinations) != {"exit"}:
+        raise _refuse(f"demand.{key}.destinations", demand.destinations, "{ exit = 1.0 }")
+
+
 def _constant(key: str, demand: OriginDemand) -> float:
     flows = {f for _, f in demand.flow}
     if len(flows) != 1:
@@ -41,8 +89,7 @@ def _constant(key: str, demand: OriginDemand) -> float:
     flow = flows.pop()
     if flow <= 0:
         raise _refuse(f"demand.{key}.flow", flow, "a flow > 0 veh/h")
-    if set(demand.destinations) != {"exit"}:
-        raise _refuse(f"demand.{key}.destinations", demand.destinations, "{ exit = 1.0 }")
+    _destinations(key, demand)
     return flow
 
 
@@ -96,7 +143,8 @@ def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
     ramp = c.road.on_ramps[0]
     if set(c.demand) != {"main", ramp.id}:
         raise _refuse("demand", sorted(c.demand), f"the origins main and {ramp.id}")
-    main, on_ramp = _constant("main", c.demand["main"]), _constant(ramp.id, c.demand[ramp.id])
+    lane_1, lane_2 = _lane_headways(c.demand["main"])
+    _destinations("main", c.demand["main"])
     if c.demand["main"].cav_share != c.demand[ramp.id].cav_share:
         shares = [c.demand["main"].cav_share, c.demand[ramp.id].cav_share]
         raise _refuse(f"demand.{ramp.id}.cav_share", shares[1], f"{shares[0]}, main's share")
@@ -105,17 +153,30 @@ def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
     lane_change = {"lane_change_duration": c.corridor.lane_change_duration}
     settings: dict[str, Any] = {
         "name": c.name,
+        "description": c.corridor.description or f"corridor {c.name}",
         "seed": c.corridor.seed,
         "dt": c.corridor.step_length,
         "duration": c.corridor.duration,
-        "warmup": 0.0,
+        "warmup": c.corridor.warmup,
         "road": ramp_road(c, ramp, vehicle),
         "demand": {
-            "mean_headway_main_1": 2 * 3600.0 / main, "mean_headway_main_2": 2 * 3600.0 / main,
-            "cav_penetration": c.demand["main"].cav_share, "ramp": "flow",
-            "ramp_mean_headway": 3600.0 / on_ramp,
+            "mean_headway_main_1": lane_1, "mean_headway_main_2": lane_2,
+            "cav_penetration": c.demand["main"].cav_share,
+            **_ramp_demand(ramp.id, c.demand[ramp.id]),
         },
         "hdv": {**_idm(vehicle), **lane_change},
         "cav": {**cav, **lane_change},
     }  # fmt: skip
     return load_config("C1", **merge_tables(settings, overrides))
+
+
+def scenario_config(source: str | os.PathLike[str], **overrides: Any) -> ScenarioConfig:
+    """The scenario config of ``source``: a condition preset or scenario file as
+    :func:`hcomc.config.load_config` reads it, or a corridor of the paper's layout (``paper``,
+    ``paper-C1`` ...) as :func:`scenario_of` translates it; ``overrides`` are the scenario's
+    keys either way. A :class:`ConfigError` names the key of a corridor that does not fit."""
+    from hcomc.corridor.loading import is_corridor_source, load_corridor
+
+    if is_corridor_source(source):
+        return scenario_of(load_corridor(source, {}), **overrides)
+    return load_config(source, **overrides)

@@ -40,7 +40,7 @@ _SHARE_TABLES = frozenset({"classes", "destinations"})
 
 
 def corridor_preset_names() -> list[str]:
-    """Names of the built-in corridors (``corridor``, ``paper``)."""
+    """Names of the built-in corridors (``corridor``, ``paper``, ``paper-C1`` ... ``paper-C5``)."""
     root = files("hcomc").joinpath(_PRESET_DIR)
     return sorted(p.name.removesuffix(".toml") for p in root.iterdir() if p.name.endswith(".toml"))
 

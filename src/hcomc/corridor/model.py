@@ -44,6 +44,11 @@ class RunSettings(Frozen):
     name: str = Field("corridor", pattern=r"^[\w.-]+$", description="corridor name")
     description: str = Field("", description="free text")
     duration: float = Field(3600.0, gt=0, le=MAX_DURATION, description="simulated time [s]")
+    warmup: float = Field(
+        0.0, ge=0, le=3600,
+        description="simulated before 'duration' and not measured (the paper's conditions "
+        "start from developed traffic) [s]; hcomc's scenario engine only",
+    )  # fmt: skip
     seed: int = Field(0, ge=0, description="random seed (vehicle classes, SUMO's randomness)")
     step_length: float = Field(0.1, gt=0, le=1, description="simulation step [s]")
     lane_change_duration: float = Field(
@@ -210,6 +215,7 @@ def _check_demand(c: Corridor) -> None:
             raise RuleError(
                 key, NO_VALUE, ", ".join(["main", *on_ids]), "no such origin (main or an on-ramp)"
             )
+        _check_origin_kind(c, origin, demand)
         for name in demand.classes:
             if name not in c.vehicles:
                 raise RuleError(
@@ -229,6 +235,18 @@ def _check_demand(c: Corridor) -> None:
                 f"(on the mainline from {start:g} m)"
             )
             raise RuleError(f"{key}.destinations.{dest}", NO_VALUE, allowed, problem)
+
+
+def _check_origin_kind(c: Corridor, origin: str, demand: OriginDemand) -> None:
+    """Lane flows belong to the mainline (one per lane), a single release to an on-ramp."""
+    key = f"demand.{origin}"
+    lanes = demand.lane_flows
+    if lanes is not None and origin != "main":
+        raise RuleError(f"{key}.lane_flows", lanes, "lane flows at the origin main only")
+    if lanes is not None and len(lanes) != c.road.lanes:
+        raise RuleError(f"{key}.lane_flows", lanes, f"one flow per lane: {c.road.lanes}")
+    if demand.release is not None and origin == "main":
+        raise RuleError(f"{key}.release", demand.release, "a release at an on-ramp only")
 
 
 def detector_positions(c: Corridor) -> list[float]:

@@ -8,8 +8,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
-from hcomc.config import ConfigError, ScenarioConfig, load_config
+from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.control.registry import canonical_name
+from hcomc.corridor.engine import scenario_config
 
 AGENTS = ("vr", "vmc")
 """Who the agent of ``hcomc/Merge-v0`` drives: the ramp CAV VR (default) or the mainline
@@ -61,7 +62,9 @@ class EnvOptions:
 
     Attributes
     ----------
-    scenario : a condition preset (``"C1"`` ... ``"C5"``) or a scenario TOML path.
+    scenario : a condition preset (``"C1"`` ... ``"C5"``), a scenario TOML path, or a
+        corridor of the paper's layout (``"paper"``, ``"paper-C3"``, a file based on them:
+        :func:`hcomc.corridor.engine.scenario_config`).
     overrides : config values changed for this environment (``{"cav_penetration": 0.5}``),
         as :func:`hcomc.config.load_config` takes them.
     agent : ``"vr"`` or ``"vmc"`` (:data:`AGENTS`).
@@ -112,7 +115,7 @@ class EnvOptions:
         """The scenario as the environment runs it (its controller set by ``controller``)."""
         control = {"controller": self.controller or "none"}
         control = {**dict(self.overrides.get("control", {})), **control}
-        config = load_config(self.scenario, **{**self.overrides, "control": control})
+        config = scenario_config(self.scenario, **{**self.overrides, "control": control})
         steps = self.action_period / config.dt
         if abs(steps - round(steps)) > 1e-9:
             raise ConfigError(

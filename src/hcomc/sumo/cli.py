@@ -106,21 +106,28 @@ def _export_corridor(
 ) -> None:
     """`hcomc export sumo` of a corridor: validate everything, then write the directory."""
     from hcomc.corridor import load_corridor
+    from hcomc.corridor.engine import scenario_of, scenario_only
     from hcomc.sumo import SumoFormatError, SumoMissingError
     from hcomc.sumo.corridor import export_corridor
+    from hcomc.sumo.export import export_scenario
 
     try:
         corridor = load_corridor(source, {"corridor.seed": seed, "corridor.duration": duration})
+        # a warm-up, lane flows or a single release: the scenario it stands for is exported
+        config = scenario_of(corridor) if scenario_only(corridor) else None
     except ConfigError as exc:
         raise fail(str(exc)) from None
     if out_dir.exists() and not out_dir.is_dir():
         raise fail(f"option '--out' = '{out_dir}': exists and is not a directory")
     _fresh_target(out_dir, "--out", force)
     try:
-        scenario = export_corridor(corridor, out_dir)
+        written = (
+            export_corridor(corridor, out_dir) if config is None
+            else export_scenario(config, config.seed, out_dir)
+        )  # fmt: skip
     except (SumoMissingError, SumoFormatError, OSError) as exc:
         raise fail(str(exc)) from None
-    _out.print(f"wrote {scenario.directory}/ · run it with: sumo -c {scenario.sumocfg}")
+    _out.print(f"wrote {written.directory}/ · run it with: sumo -c {written.sumocfg}")
 
 
 def _run_log(run_dir: Path) -> tuple[Any, ScenarioConfig]:

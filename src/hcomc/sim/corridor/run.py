@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from hcomc.corridor import Corridor
+from hcomc.corridor.engine import scenario_only
 from hcomc.corridor.model import MAX_DURATION
 from hcomc.sim.corridor.control import CorridorControl
 from hcomc.sim.corridor.events import merge_events, merge_summary
@@ -148,6 +149,18 @@ def _mean(values: pd.Series) -> float | None:
     return float(values.mean()) if len(values) else None
 
 
+def _refuse_scenario_keys(corridor: Corridor) -> None:
+    """A ValueError naming the first key only hcomc's scenario engine runs (a warm-up, lane
+    flows, a single release: :func:`hcomc.corridor.engine.scenario_only`)."""
+    found = scenario_only(corridor)
+    if found is not None:
+        key, value = found
+        raise ValueError(
+            f"key '{key}' = {value!r}: the corridor engine does not run it; allowed: it unset "
+            "(it runs in hcomc's scenario engine, for corridors of the paper's layout)"
+        )
+
+
 def simulate_corridor(
     corridor: Corridor,
     *,
@@ -174,6 +187,7 @@ def simulate_corridor(
             f"trajectory_interval = {trajectory_interval} s: allowed: 0 or a multiple of the "
             f"step, {dt} s"
         )
+    _refuse_scenario_keys(corridor)
     started = time.perf_counter()
     layout = build_layout(corridor)
     fleet = build_fleet(corridor, layout, seed, duration)
