@@ -23,24 +23,37 @@ def plot(
         typer.Argument(
             metavar="LOG_OR_RESULTS...",
             help="Logs (.npz/.parquet or a simulate --out directory), runs.parquet, plan JSON, "
-            "a sweep directory, or a preset name to simulate (see --kind).",
+            "a sweep directory, a corridor run (simulate CORRIDOR --out directory), or a "
+            "preset name or TOML file (scenario or corridor) to simulate (see --kind).",
         ),
     ],
     kind: Annotated[
         str,
-        typer.Option(help="contour, timespace, trajectories, pareto, metrics or heatmap."),
+        typer.Option(
+            help="Of scenario runs: contour, timespace, trajectories, pareto, metrics or "
+            "heatmap (a sweep). Of corridor runs or corridors: speed_heatmap, flow_density "
+            "or travel_times."
+        ),
     ],
     out_file: Annotated[
         Path | None, typer.Option("--out", help="Output file: .png, .svg or .pdf.")
     ] = None,
-    seed: Annotated[int | None, typer.Option(help="Seed when simulating a preset.")] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="Seed when simulating a preset or TOML file.")
+    ] = None,
     metric: Annotated[
         str | None, typer.Option(help="Metric of a sweep heatmap (default: lsrv).")
     ] = None,
     raw: Annotated[bool, typer.Option(help="contour: raw bins instead of smoothing.")] = False,
 ) -> None:
-    """Draw a figure of a run, a decision, a results table or a sweep."""
+    """Draw a figure of a run, a decision, a results table, a sweep or a corridor run.
+
+    A corridor of the paper's layout (e.g. 'paper') runs in the scenario engine, as 'hcomc
+    simulate' runs it: the scenario kinds draw it and the corridor kinds refuse it.
+    """
     from hcomc.viz.common import save_figure
+    from hcomc.viz.corridor import CORRIDOR_KINDS
+    from hcomc.viz.corridor_inputs import make_corridor_figure, refuse_corridor_input
     from hcomc.viz.inputs import FIGURE_KINDS, is_scenario, make_figure
 
     kind = kind.lower()
@@ -53,15 +66,18 @@ def plot(
         raise _fail(f"option '--raw' applies to --kind contour only, not '{kind}'")
     if seed is not None and not (len(sources) == 1 and is_scenario(sources[0])):
         raise _fail(
-            f"option '--seed' = {seed} applies only when a preset or TOML scenario is "
-            "simulated; saved logs and tables already have their seed"
+            f"option '--seed' = {seed} applies only when a preset or TOML file (scenario or "
+            "corridor) is simulated; saved logs, runs and tables already have their seed"
         )
     try:
-        if kind == "heatmap":
+        if kind in CORRIDOR_KINDS:
+            fig = make_corridor_figure(kind, sources, seed=seed)
+        elif kind == "heatmap":
             import pandas as pd
 
             from hcomc.viz.sweep import heatmap_figure
 
+            refuse_corridor_input(kind, sources)
             if len(sources) != 1:
                 raise ValueError(f"--kind heatmap takes one sweep directory, got {len(sources)}")
             path = Path(sources[0])
@@ -73,7 +89,7 @@ def plot(
             options = {"smooth": False} if raw and kind == "contour" else {}
             fig = make_figure(kind, sources, seed=seed, **options)
         else:
-            allowed = ", ".join([*FIGURE_KINDS, "heatmap"])
+            allowed = ", ".join([*FIGURE_KINDS, "heatmap", *CORRIDOR_KINDS])
             raise ValueError(f"option '--kind' = '{kind}': allowed: {allowed}")
         written = save_figure(fig, target)
     except (ValueError, ConfigError) as exc:

@@ -143,8 +143,10 @@ def success_figure(success: pd.DataFrame) -> Figure:
 
 def _provenance(record: Mapping[str, Any]) -> str:
     runs = record.get("runs") or {}
+    what = ("corridors", ", ".join(record["corridors"])) if "corridors" in record else (
+        "suite", record.get("suite", "—"))  # fmt: skip
     return (
-        f'<p class="meta">suite <code>{_e(record.get("suite", "—"))}</code> · hcomc '
+        f'<p class="meta">{what[0]} <code>{_e(what[1])}</code> · hcomc '
         f"<code>{_e(record.get('hcomc_version', '—'))}</code> · git revision "
         f"<code>{_e(record.get('git_revision', '—'))}</code> · engine "
         f"<code>{_e(record.get('engine', '—'))}</code> · generated "

@@ -29,7 +29,10 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = [
+    "CORRIDOR_KINDS",
     "FIGURE_FILES",
+    "KIND_TABLES",
+    "corridor_figure",
     "corridor_report_html",
     "detector_density",
     "edie_measures",
@@ -40,10 +43,21 @@ __all__ = [
     "write_corridor_figures",
 ]
 
-FIGURE_FILES = ("speed_heatmap.png", "flow_density.png", "travel_times.png")
+CORRIDOR_KINDS: dict[str, str] = {
+    "speed_heatmap": "space-mean speed of the mainline over position and time (grid.csv)",
+    "flow_density": "fundamental diagram: flow against density per detector interval "
+    "(detectors.csv)",
+    "travel_times": "empirical CDF of the arrived trips' travel times per origin (trips.csv)",
+}
+"""Figure kind -> one-line description: the corridor choices of ``hcomc plot --kind``."""
+
+KIND_TABLES = {"speed_heatmap": "grid", "flow_density": "detectors", "travel_times": "trips"}
+"""Figure kind -> the run table it is drawn from (``<table>.csv`` of a corridor run)."""
+
+FIGURE_FILES = tuple(f"{kind}.png" for kind in CORRIDOR_KINDS)
 """File names :func:`write_corridor_figures` writes, in order."""
 
-_SIZES = ((8.0, 4.8), (6.5, 4.5), (6.5, 4.5))  # [inch] of the figures, FIGURE_FILES order
+_SIZES = {"speed_heatmap": (8.0, 4.8), "flow_density": (6.5, 4.5), "travel_times": (6.5, 4.5)}
 _CAPTIONS = (
     "Space-mean speed of the mainline over position and time (Edie's definitions per cell).",
     "Fundamental diagram: mainline flow against density q/v per detector and interval.",
@@ -108,7 +122,7 @@ def speed_heatmap(grid: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
     Raises ValueError if the cells do not tile a lattice (one x step and one t step each).
     """
-    ax = _axes(ax, _SIZES[0])
+    ax = _axes(ax, _SIZES["speed_heatmap"])
     cells = edie_measures(grid)
     if cells.empty:
         _note(ax, "no grid cells")
@@ -182,7 +196,7 @@ def flow_density(detectors: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
     Returns the axes drawn on; its first collection holds the points (density, flow).
     """
-    ax = _axes(ax, _SIZES[1])
+    ax = _axes(ax, _SIZES["flow_density"])
     points = detector_density(detectors).dropna(subset=["density"])
     if points.empty:
         _note(ax, "no detector interval with vehicles")
@@ -265,7 +279,7 @@ def travel_time_distribution(trips: pd.DataFrame, ax: Axes | None = None) -> Axe
 
     Returns the axes drawn on; one line per origin with arrived trips, mainline first.
     """
-    ax = _axes(ax, _SIZES[2])
+    ax = _axes(ax, _SIZES["travel_times"])
     arrived = _arrived(trips)
     for origin in _origins(arrived):
         values = np.sort(arrived.loc[arrived["origin"] == origin, "travel_time"].to_numpy(float))
@@ -285,13 +299,26 @@ def travel_time_distribution(trips: pd.DataFrame, ax: Axes | None = None) -> Axe
 
 
 # --------------------------------------------------------------------------- output
+def corridor_figure(kind: str, table: pd.DataFrame) -> Figure:
+    """The figure of *kind* (:data:`CORRIDOR_KINDS`) drawn from its run *table*
+    (:data:`KIND_TABLES`) on a fresh figure of that kind's size: the one drawing that
+    :func:`write_corridor_figures`, the HTML page and ``hcomc plot`` share.
+
+    Raises ValueError on an unknown kind.
+    """
+    draws = (speed_heatmap, flow_density, travel_time_distribution)  # CORRIDOR_KINDS order
+    draw = dict(zip(CORRIDOR_KINDS, draws, strict=True)).get(kind)
+    if draw is None:
+        raise ValueError(f"unknown corridor figure '{kind}'; allowed: {', '.join(CORRIDOR_KINDS)}")
+    fig = new_figure(*_SIZES[kind])
+    draw(table, fig.add_subplot())
+    return fig
+
+
 def _figures(grid: pd.DataFrame, detectors: pd.DataFrame, trips: pd.DataFrame) -> list[Figure]:
     """The three figures, each on a fresh figure, in :data:`FIGURE_FILES` order."""
-    figures = [new_figure(*size) for size in _SIZES]
-    speed_heatmap(grid, figures[0].add_subplot())
-    flow_density(detectors, figures[1].add_subplot())
-    travel_time_distribution(trips, figures[2].add_subplot())
-    return figures
+    tables = {"grid": grid, "detectors": detectors, "trips": trips}
+    return [corridor_figure(kind, tables[KIND_TABLES[kind]]) for kind in CORRIDOR_KINDS]
 
 
 def write_corridor_figures(

@@ -6,8 +6,9 @@ kind            inputs (``sources``)
 ==============  ===============================================================================
 contour         simulation logs (``log.npz`` / ``.parquet`` or the ``--out`` directory of
                 ``hcomc simulate``), one column each; or one scenario (preset name or TOML
-                file), simulated with FIFO, Game and HCOMC (without a controller when the
-                scenario has no merge, e.g. ``platoon``)
+                file, or a corridor of the paper's layout such as ``paper``), simulated with
+                FIFO, Game and HCOMC (without a controller when the scenario has no merge,
+                e.g. ``platoon``)
 timespace       one simulation log, or one scenario (simulated with HCOMC)
 trajectories    one simulation log, or one scenario (simulated with HCOMC)
 pareto          plan reports (JSON of ``hcomc plan --json``; a file may also hold a mapping
@@ -15,6 +16,12 @@ pareto          plan reports (JSON of ``hcomc plan --json``; a file may also hol
 metrics         one runs table (``runs.parquet`` / ``runs.csv`` or a results directory
                 holding one)
 ==============  ===============================================================================
+
+A scenario may be a corridor of the paper's layout: it is simulated in the scenario engine,
+as ``hcomc simulate`` runs it (:func:`hcomc.corridor.engine.scenario_config`). Corridor runs
+and the corridors the corridor engine runs are drawn by the corridor kinds of
+:mod:`hcomc.viz.corridor_inputs` (``speed_heatmap``, ``flow_density``, ``travel_times``);
+these kinds refuse them.
 
 Bad input raises :class:`ValueError` with a one-line message naming the source and what is
 allowed (the CLI prints it and exits with status 2).
@@ -27,6 +34,8 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from hcomc.corridor.engine import scenario_config
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -183,7 +192,8 @@ def controller_logs(
     Parameters
     ----------
     scenario : str or os.PathLike
-        Preset name (``C1`` ... ``C5``) or TOML file.
+        Preset name (``C1`` ... ``C5``), TOML file or corridor of the paper's layout
+        (:func:`hcomc.corridor.engine.scenario_config`).
     seed : int or None
         Run seed; default the config's.
     configurations : sequence of str
@@ -206,7 +216,6 @@ def controller_logs(
     ValueError
         On an unknown configuration label.
     """
-    from hcomc.config import load_config
     from hcomc.experiments.runner import CONFIGURATIONS, configuration_overrides
     from hcomc.sim.engine import simulate
 
@@ -220,7 +229,7 @@ def controller_logs(
         settings["duration"] = duration
     logs: dict[str, SimulationLog] = {}
     for label in configurations:
-        config = load_config(scenario, **configuration_overrides(label, settings))
+        config = scenario_config(scenario, **configuration_overrides(label, settings))
         logs[label] = simulate(config, seed)
     return logs
 
@@ -240,13 +249,12 @@ def decision_reports(
     ValueError
         If no ramp vehicle reaches the control zone within the run.
     """
-    from hcomc.config import load_config
     from hcomc.control.report import plan_report
     from hcomc.sim.engine import Simulation
 
     reports: dict[str, dict[str, Any]] = {}
     for opt in optimizers:
-        config = load_config(scenario, control={"controller": "hcomc", "optimizer": opt})
+        config = scenario_config(scenario, control={"controller": "hcomc", "optimizer": opt})
         sim = Simulation(config, seed)
         plan = sim.run_until_plan()
         if plan is None:
@@ -259,22 +267,23 @@ def decision_reports(
 
 
 def is_scenario(source: Source) -> bool:
-    """A preset name or a TOML file (as opposed to a data file or directory)."""
+    """A preset name (scenario or corridor) or a TOML file: something to simulate, as
+    opposed to a data file or directory to read."""
     path = Path(source)
     if path.suffix.lower() == ".toml":
         return True
     if path.exists():
         return False
     from hcomc.config import preset_names
+    from hcomc.corridor import corridor_preset_names
 
-    return str(source).lower() in {name.lower() for name in preset_names()}
+    names = [*preset_names(), *corridor_preset_names()]
+    return str(source).lower() in {name.lower() for name in names}
 
 
 def _has_merge(scenario: Source) -> bool:
     """Whether a scenario has ramp vehicles that merge (so controllers can be compared)."""
-    from hcomc.config import load_config
-
-    config = load_config(scenario)
+    config = scenario_config(scenario)
     return config.scenario == "merge" and config.demand.ramp != "none"
 
 
@@ -306,7 +315,8 @@ def make_figure(
     kind : str
         One of :data:`FIGURE_KINDS`.
     sources : sequence of str or os.PathLike
-        Input files/directories, or one scenario (preset name or TOML file).
+        Input files/directories, or one scenario (preset name or TOML file, or a corridor
+        of the paper's layout).
     seed : int or None
         Seed when a scenario is simulated; default the config's. Ignored for files.
     **options
@@ -321,15 +331,19 @@ def make_figure(
     Raises
     ------
     ValueError
-        On an unknown kind, a wrong number of sources or unusable input.
+        On an unknown kind, a wrong number of sources or unusable input (among it a
+        corridor run or a corridor of the corridor engine:
+        :func:`hcomc.viz.corridor_inputs.refuse_corridor_input`).
     hcomc.config.ConfigError
         On a bad scenario.
     """
     from hcomc.viz import figures
+    from hcomc.viz.corridor_inputs import refuse_corridor_input
 
     if kind not in FIGURE_KINDS:
         raise ValueError(f"unknown figure kind '{kind}'; allowed: {', '.join(FIGURE_KINDS)}")
     sources = list(sources)
+    refuse_corridor_input(kind, sources)
     if not sources:
         raise ValueError(f"figure kind '{kind}' needs at least one input")
     scenario = len(sources) == 1 and is_scenario(sources[0])
@@ -338,10 +352,9 @@ def make_figure(
 
     if kind == "contour":
         if scenario and not _has_merge(sources[0]):  # no merge: nothing for controllers to do
-            from hcomc.config import load_config
             from hcomc.sim.engine import simulate
 
-            logs = {"no controller": simulate(load_config(sources[0]), seed)}
+            logs = {"no controller": simulate(scenario_config(sources[0]), seed)}
         elif scenario:
             logs = controller_logs(sources[0], seed=seed)
         else:
