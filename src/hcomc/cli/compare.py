@@ -4,6 +4,8 @@ Two forms: ``hcomc compare --controllers fifo,game,mine ...`` runs what its fold
 suite cells x controllers x seeds (resumable) and compares them; ``hcomc compare A/ B/``
 compares the configurations two existing results folders share. Both print merge success,
 its paired comparison and the paired effects, and write the tables and an HTML report.
+``--conditions`` may name corridors instead of suite cells
+(:mod:`hcomc.cli.corridor_conditions`).
 """
 
 from __future__ import annotations
@@ -117,6 +119,13 @@ def _write_tables(target: Path, runs: Any, effects: Any, success: Any, pairs: An
         pairs.to_csv(tmp[4], index=False)
 
 
+SUCCESS_TITLE = "Merge success — runs in which VR merged"
+"""Title of the merge-success table (for runs of the scenario engine)."""
+
+PAIRS_NOTE = "A<B: k of n pairs (both merged)"
+"""How the effects title explains n (for the paper's metrics)."""
+
+
 def _analyse(
     target: Path,
     runs: Any,
@@ -124,8 +133,13 @@ def _analyse(
     configurations: list[str],
     record: dict[str, Any],
     notes: tuple[str, ...] = (),
+    *,
+    metrics: tuple[str, ...] | None = None,
+    success_title: str = SUCCESS_TITLE,
+    pairs_note: str = PAIRS_NOTE,
 ) -> None:
-    """Compute, print and write the comparison of ``runs``."""
+    """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
+    paper's five)."""
     from hcomc.experiments.compare import (
         effects,
         effects_view,
@@ -134,9 +148,12 @@ def _analyse(
         success_pairs_view,
         success_view,
     )
+    from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 
-    effect_rows = effects(runs, configurations, comparisons=comparisons)
+    effect_rows = effects(
+        runs, configurations, comparisons=comparisons, metrics=metrics or PAPER_METRICS
+    )
     success = merge_success(runs, configurations)
     pairs = success_pairs(runs, comparisons)
     _write_tables(target, runs, effect_rows, success, pairs)
@@ -144,7 +161,7 @@ def _analyse(
     for note in notes:
         _say(f"note: {note}")
     rates = success_view(success)
-    out.print(_table(rates, "Merge success — runs in which VR merged", tuple(rates.columns[1:])))
+    out.print(_table(rates, success_title, tuple(rates.columns[1:])))
     discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
     if len(discordant):
         title = (
@@ -159,9 +176,8 @@ def _analyse(
         _table(
             effects_view(effect_rows),
             "Paired effects — median A-B over seeds [95 % bootstrap CI]; verdict by the CI; "
-            "favours by the metric's better direction (↑ larger, ↓ smaller); A<B: k of n "
-            "pairs (both merged); excluded: seeds without a pair; p: sign test, Holm-adjusted "
-            "over the table",
+            f"favours by the metric's better direction (↑ larger, ↓ smaller); {pairs_note}; "
+            "excluded: seeds without a pair; p: sign test, Holm-adjusted over the table",
         )
     )
     _say(f"report: {report}")
@@ -188,7 +204,9 @@ def compare(
     conditions: Annotated[
         str | None,
         typer.Option(
-            help="Cells of the suite: ids and ranges, e.g. C1,C2 or C1..C5 (default: all)."
+            help="Cells of the suite: ids and ranges, e.g. C1,C2 or C1..C5 (default: all); or "
+            "corridors: presets or corridor files, e.g. corridor or my_road.toml (--set then "
+            "takes dotted corridor keys, e.g. corridor.duration=600)."
         ),
     ] = None,
     seeds: Annotated[
@@ -243,6 +261,7 @@ def _compare_controllers(
     out_dir: Path | None,
     settings: list[str] | None,
 ) -> None:
+    from hcomc.cli.corridor_conditions import compare_corridors, corridor_conditions
     from hcomc.config import nest_overrides
     from hcomc.experiments.benchmark import (
         Comparison,
@@ -260,6 +279,12 @@ def _compare_controllers(
     if seeds is not None and seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
     n_workers = _workers(workers)
+    corridors = corridor_conditions(conditions, suite_name)
+    if corridors:
+        compare_corridors(
+            labels, chosen, corridors, seeds, engine, n_workers, out_dir, settings or []
+        )
+        return
     try:
         bench = suite_named(suite_name or LATEST)
         cells = bench.select(conditions)
@@ -304,6 +329,7 @@ def _compare_controllers(
 
 
 def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
+    from hcomc.cli.corridor_conditions import analysis_of
     from hcomc.experiments.benchmark import folder_runs, stored_record
     from hcomc.sim.manifest import build_manifest
 
@@ -335,5 +361,7 @@ def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
         f"comparing {both.labels[1]} (A) with {both.labels[0]} (B): "
         + ", ".join(f"{a} vs {b}" for a, b in both.comparisons),
     )
-    _analyse(target, both.runs, list(both.comparisons), confs, content, both.notes)
+    notes, options = analysis_of(both.runs)  # corridor runs: the corridor metrics
+    _analyse(target, both.runs, list(both.comparisons), confs, content, (*both.notes, *notes),
+             **options)  # fmt: skip
     _say(f"written to {target}/ ({', '.join(OUTPUTS)})")

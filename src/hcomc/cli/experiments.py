@@ -84,13 +84,24 @@ def run(
     settings: SetOption = None,
     engine: Engine = "hcomc",
 ) -> None:
-    """Run one scenario with one merge controller over seeds and print the paper's metrics."""
+    """Run one scenario with one merge controller over seeds and print the paper's metrics.
+
+    A corridor (preset or file) runs too: one of the paper's layout in the scenario engine
+    (the paper's metrics), any other in the corridor engine with the controller at every
+    on-ramp (the corridor metrics); --set takes its dotted keys (corridor.duration=600)."""
     from hcomc.config import nest_overrides
-    from hcomc.experiments.runner import CONFIGURATIONS, grid
-    from hcomc.experiments.tables import LABELS, mean_ci
+    from hcomc.corridor import is_corridor_source
+    from hcomc.experiments.runner import grid
 
     if seeds < 1:
         raise _fail(f"option '--seeds' = {seeds}: must be >= 1")
+    if is_corridor_source(config):
+        from hcomc.cli.corridor_conditions import run_corridor_condition
+
+        run_corridor_condition(
+            config, controller, optimizer, seeds, _workers(workers), as_json, settings, engine
+        )
+        return
     overrides = _settings(settings)
     base = _load(config, **overrides)  # validate before anything runs
     _require_merge(base, config, "run")
@@ -101,20 +112,39 @@ def run(
             f"no merge controller: '{config}' has control.controller = 'none'; allowed: "
             "--controller NAME, or a config that names one"
         )
-    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
-    name = control["controller"]
-    label = labels.get((name, control["optimizer"] if name == "hcomc" else "nsga2"), name)
+    if optimizer is not None:  # kept for a controller name that is not a paper label
+        overrides["control.optimizer"] = control["optimizer"]
+    label = configuration_of(control)
     specs = [
         replace(s, engine=engine)
         for s in grid([config], [label], range(seeds), nest_overrides(overrides))
     ]
     frame = _progress_grid(specs, _workers(workers))
     if as_json:
-        sys.stdout.write(frame.to_json(orient="records") + "\n")
+        sys.stdout.write(frame.to_json(orient="records", double_precision=15) + "\n")
         return
+    print_merge_runs(frame, f"{config} · {label}", base.duration)
+
+
+def configuration_of(control: dict[str, Any]) -> str:
+    """The configuration label a ``[control]`` table's controller and optimiser stand for
+    (``fifo`` is FIFO, planning once as published; HCOMC with PSO is HCOMC-PSO), else the
+    controller's name."""
+    from hcomc.experiments.runner import CONFIGURATIONS
+
+    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
+    name = control["controller"]
+    return labels.get((name, control["optimizer"] if name == "hcomc" else "nsga2"), name)
+
+
+def print_merge_runs(frame: Any, title: str, duration: float) -> None:
+    """Print runs of the scenario engine: per seed the paper's metrics, merge success, and
+    each metric's mean with its 95 % CI."""
+    from hcomc.experiments.tables import LABELS, mean_ci
+
     frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
     cols = ["seed", "merged", "mode", "decision_ms", *LABELS]
-    out.print(_frame_table(frame[cols].rename(columns=LABELS), f"{config} · {label}"))
+    out.print(_frame_table(frame[cols].rename(columns=LABELS), title))
     merged = frame["merged"].fillna(False).astype(bool)
     out.print(
         f"VR merged in {int(merged.sum())} of {len(frame)} runs; a run in which it did not is "
@@ -125,7 +155,7 @@ def run(
     if unplanned:
         out.print(
             f"no merge planned in seed(s) {unplanned}: no ramp vehicle entered the control "
-            f"zone within duration = {base.duration} s, so these seeds have no metrics"
+            f"zone within duration = {duration} s, so these seeds have no metrics"
         )
     for metric, name in LABELS.items():
         mean, half, n = mean_ci(frame[metric].dropna())
@@ -149,8 +179,10 @@ def sweep(
         typer.Option(help="Simulation engine: hcomc or sumo (default: the spec's, hcomc)."),
     ] = None,
 ) -> None:
-    """Run a density x penetration x configuration x seed grid; rerun to resume."""
-    from hcomc.experiments.sweep import connect, load_sweep, run_sweep, sweep_status
+    """Run a density x penetration x configuration x seed grid; rerun to resume.
+
+    A spec whose base is a corridor sweeps its [corridor_grid] of dotted corridor keys."""
+    from hcomc.experiments.sweep import connect, expand, load_sweep, run_sweep, sweep_status
 
     if scheduler is not None and workers is not None:
         raise _fail(
@@ -161,6 +193,7 @@ def sweep(
         plan = load_sweep(spec)
         if engine is not None:
             plan = plan.model_copy(update={"engine": _engine(engine)})
+            expand(plan)  # every run can run on that engine
         if scheduler is not None:
             connect(scheduler).close()  # reachable before anything runs
     except ConfigError as exc:

@@ -103,6 +103,12 @@ def check_folder(out: Path, suite: Suite) -> None:
                 "hcomc compare"
             )
         return
+    if "corridors" in record:  # hcomc.experiments.corridor_compare's record
+        raise ConfigError(
+            f"option '--out' = '{out}' holds a comparison on corridors "
+            f"({', '.join(record['corridors'])}); allowed: another folder (runs of a suite and "
+            "of corridors are never mixed)"
+        )
     stored = f"{record.get('suite_id')}-v{record.get('suite_version')}"
     if stored != suite.name:
         raise ConfigError(

@@ -20,6 +20,11 @@ that take no side, since a comparison of your own has no expected direction:
 * "k of n": ``a_lower`` seeds where A < B, ``a_higher`` where A > B, ``n`` pairs in which
   both runs merged with a defined value.
 
+The corridor metrics (:data:`~hcomc.experiments.corridor_metrics.CORRIDOR_METRICS`, of runs
+on a corridor) are run-level figures whose failures are inside them (an unmerged ramp
+vehicle lowers ``merged_share``), so their pairs are the seeds in which both runs have a
+defined value, whatever the runs' ``merged`` says (:data:`RUN_LEVEL`).
+
 A run whose ramp vehicle (VR) never merged has no metrics of the merge: it is an outcome, not
 a run without disturbance. It never vanishes: :func:`merge_success` counts it (k of n runs
 merged), ``excluded`` counts the seeds both configurations ran but that give no pair, and
@@ -39,12 +44,21 @@ import numpy as np
 import pandas as pd
 
 from hcomc.experiments.claims import ALPHA, MIN_PAIRS, ci_verdict, holm, p_verdict, sign_test
+from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS
 from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.experiments.tables import LABELS, TIE_TOLERANCE, median_ci
 from hcomc.metrics import METRICS
 
-PREFERS: dict[str, str] = {m: METRICS[m].better for m in PAPER_METRICS}
-"""Metric -> the direction that is better ("larger" or "smaller"), as the claims use it."""
+PREFERS: dict[str, str] = {
+    **{m: METRICS[m].better for m in PAPER_METRICS},
+    **{m: spec.better for m, spec in CORRIDOR_METRICS.items()},
+}
+"""Metric -> the direction that is better ("larger" or "smaller"): the metric registry's, as
+the claims use it, and the corridor metrics' registry's."""
+
+RUN_LEVEL = frozenset(CORRIDOR_METRICS)
+"""Metrics defined for every run, failed merges included: paired without regard to
+``merged``."""
 
 VERDICTS = ("lower", "higher", "undecided")
 """The verdicts of A against B, in display order."""
@@ -153,13 +167,15 @@ def _merged(part: pd.DataFrame) -> pd.Series:
 def _pair_values(
     side_a: pd.DataFrame, side_b: pd.DataFrame, metric: str
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """A's and B's values of ``metric`` on the seeds where both merged with a defined value,
-    and the number of seeds both ran."""
+    """A's and B's values of ``metric`` on the seeds where both merged with a defined value
+    (for a :data:`RUN_LEVEL` metric: with a defined value), and the number of seeds both
+    ran."""
     seeds = side_a.index.intersection(side_b.index)
     va = pd.to_numeric(side_a.loc[seeds, metric], errors="coerce").to_numpy(np.float64)
     vb = pd.to_numeric(side_b.loc[seeds, metric], errors="coerce").to_numpy(np.float64)
     both = np.isfinite(va) & np.isfinite(vb)
-    both &= (_merged(side_a.loc[seeds]) & _merged(side_b.loc[seeds])).to_numpy()
+    if metric not in RUN_LEVEL:
+        both &= (_merged(side_a.loc[seeds]) & _merged(side_b.loc[seeds])).to_numpy()
     return va[both], vb[both], len(seeds)
 
 
@@ -175,7 +191,8 @@ def paired_differences(
     runs: pd.DataFrame, condition: str, metric: str, a: str, b: str
 ) -> np.ndarray:
     """The paired differences A - B of ``metric`` in one cell, by seed (the pairs of
-    :class:`Effect`: both runs merged with a defined value; ties set to 0)."""
+    :class:`Effect`: both runs merged with a defined value, or for a :data:`RUN_LEVEL`
+    metric both defined; ties set to 0)."""
     va, vb, _ = _pair_values(_by_seed(runs, condition, a), _by_seed(runs, condition, b), metric)
     return _differences(va, vb)
 
@@ -311,7 +328,8 @@ EFFECTS_VIEW_COLUMNS = (
 def metric_label(metric: str) -> str:
     """A metric's name with its unit and preferred direction (↑ larger is better, ↓ smaller)."""
     arrow = {"larger": " ↑", "smaller": " ↓"}.get(PREFERS.get(metric, ""), "")
-    return LABELS.get(metric, metric) + arrow
+    corridor = CORRIDOR_METRICS.get(metric)
+    return LABELS.get(metric, corridor.label if corridor else metric) + arrow
 
 
 def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
@@ -383,6 +401,7 @@ __all__ = [
     "ALPHA",
     "EFFECT_COLUMNS",
     "PREFERS",
+    "RUN_LEVEL",
     "SUCCESS_COLUMNS",
     "SUCCESS_PAIR_COLUMNS",
     "VERDICTS",

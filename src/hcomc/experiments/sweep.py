@@ -14,6 +14,12 @@ resubmitted) or, with a scheduler address, on a Dask cluster (whose workers' tas
 by Dask when a worker dies). The final table is assembled from the parts in grid order, so it
 is identical for any backend and worker count; run timings live in the manifests. The
 store (:class:`RunStore`) takes any list of runs: benchmark comparisons keep theirs in one.
+
+A corridor (:mod:`hcomc.corridor`: a preset such as ``corridor`` or a corridor file) may be
+the base: its runs are :class:`~hcomc.experiments.corridor_runs.CorridorSpec` s, its grid is
+``[corridor_grid]`` (dotted corridor keys, each with its list of values) and its rows hold
+the corridor metrics (:mod:`hcomc.experiments.corridor_sweep`). A store holds runs of both
+kinds side by side; each kind is batched and keyed on its own.
 """
 
 from __future__ import annotations
@@ -23,7 +29,7 @@ import hashlib
 import itertools
 import json
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
@@ -36,11 +42,20 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 import hcomc
 from hcomc.config import ConfigError, ScenarioConfig, describe_error, load_config
 from hcomc.control.registry import BUILTIN, controller_source
+from hcomc.corridor import is_corridor_source
+from hcomc.experiments.corridor_runs import (
+    CorridorSpec,
+    forget,
+    key_material,
+    reference_group,
+    run_corridor_batch,
+)
 from hcomc.experiments.provenance import code_stamp
 from hcomc.experiments.runner import (
     _SPAWN,
     CONFIGURATIONS,
     RunSpec,
+    batches,
     batches_by_reference,
     configuration_label,
     run_batch,
@@ -52,6 +67,9 @@ GRID_KEYS = ("mean_headway_main_1", "mean_headway_main_2", "cav_penetration")
 RESOLVED = ("base", *GRID_KEYS, "ramp", "ramp_mean_headway", "duration")
 """Columns every result row starts with: the values the run actually used."""
 TIMING = ("wall_s", "decision_ms")
+
+AnySpec = RunSpec | CorridorSpec
+"""A run of a scenario condition (the runner's) or of a corridor."""
 
 
 class SweepGrid(BaseModel):
@@ -100,6 +118,11 @@ class SweepSpec(BaseModel):
         "hcomc", description="simulation engine: hcomc, or sumo (co-simulation, hcomc[sumo])"
     )
     grid: SweepGrid = Field(default_factory=SweepGrid)
+    corridor_grid: dict[str, Any] = Field(
+        default_factory=dict,
+        description="grid values of a corridor base: dotted corridor keys (or nested tables), "
+        'each with its list of values, e.g. "demand.main.cav_share" = [0.2, 0.8]',
+    )
 
     @field_validator("configurations")
     @classmethod
@@ -130,14 +153,30 @@ def load_sweep(path: str | Path) -> SweepSpec:
     return spec
 
 
-def expand(spec: SweepSpec) -> list[RunSpec]:
-    """Runs in grid order (cell, configuration, seed); validates every cell's scenario."""
+def is_corridor_sweep(spec: SweepSpec) -> bool:
+    """Whether the spec's base is a corridor (preset or corridor file)."""
+    return is_corridor_source(spec.base)
+
+
+def expand(spec: SweepSpec) -> list[AnySpec]:
+    """Runs in grid order (cell, configuration, seed); validates every cell's scenario (or
+    corridor: :func:`hcomc.experiments.corridor_sweep.expand_corridor`)."""
     _resolved.cache_clear()  # base files may have changed since the last expansion
+    forget()
+    if is_corridor_sweep(spec):
+        from hcomc.experiments.corridor_sweep import expand_corridor
+
+        return list(expand_corridor(spec))
+    if spec.corridor_grid:
+        raise ConfigError(
+            f"key 'corridor_grid' applies to a corridor base; base '{spec.base}' is a scenario "
+            "config; allowed: [grid] (mean_headway_main_1, mean_headway_main_2, cav_penetration)"
+        )
     demand_extra = {
         k: v for k, v in (("ramp", spec.ramp), ("ramp_mean_headway", spec.ramp_mean_headway))
         if v is not None
     }  # fmt: skip
-    runs: list[RunSpec] = []
+    runs: list[AnySpec] = []
     for cell in spec.grid.cells():
         overrides: dict[str, Any] = {"demand": {**cell, **demand_extra}}
         if spec.duration is not None:
@@ -162,10 +201,13 @@ def resolved_config(run: RunSpec) -> ScenarioConfig:
     return _resolved(run.condition, run.configuration, json.dumps(run.overrides, sort_keys=True))
 
 
-def _identity(run: RunSpec) -> str:
-    """What a run is in the grid (base, cell, configuration, seed), whatever its inputs say."""
+def _identity(run: AnySpec) -> str:
+    """What a run is in the grid (base, cell, configuration, seed), whatever its inputs say;
+    a corridor's run is marked as such."""
+    kind = ["corridor"] if isinstance(run, CorridorSpec) else []
     text = json.dumps(
-        [run.condition, run.configuration, run.seed, run.overrides, run.engine], sort_keys=True
+        [*kind, run.condition, run.configuration, run.seed, run.overrides, run.engine],
+        sort_keys=True,
     )
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
@@ -178,18 +220,24 @@ def outside_source(controller: str) -> str:
     return controller_source(controller)["sha256"]
 
 
-def run_key(run: RunSpec) -> str:
+def run_key(run: AnySpec) -> str:
     """Stable key of a run's result: its identity, resolved config, hcomc version and code.
 
     A changed preset or base file, another package version, a changed source file of hcomc
     that can change a run (:func:`hcomc.experiments.provenance.code_stamp`) or of a
     controller from outside hcomc gives new keys, so a resumed sweep recomputes those runs
-    instead of mixing stale results into the table.
+    instead of mixing stale results into the table. A corridor's run hashes the resolved
+    corridor, and the scenario it becomes when it runs in the scenario engine
+    (:func:`hcomc.experiments.corridor_runs.key_material`), in place of the config.
     """
-    config = resolved_config(run)
+    if isinstance(run, CorridorSpec):
+        *material, controller = key_material(run)
+    else:
+        config = resolved_config(run)
+        material, controller = [config.model_dump(mode="json")], config.control.controller
     text = json.dumps(
-        [_identity(run), config.model_dump(mode="json"), hcomc.__version__, code_stamp(),
-         outside_source(config.control.controller)],
+        [_identity(run), *material, hcomc.__version__, code_stamp(),
+         outside_source(controller)],
         sort_keys=True,
     )  # fmt: skip
     return hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -225,11 +273,11 @@ class RunStore:
         """The folder of manifests."""
         return self.root / "manifests"
 
-    def part(self, run: RunSpec) -> Path:
+    def part(self, run: AnySpec) -> Path:
         """Where ``run``'s results row is (or will be) stored."""
         return self.parts / f"{run_key(run)}.parquet"
 
-    def status(self, runs: list[RunSpec]) -> SweepStatus:
+    def status(self, runs: Sequence[AnySpec]) -> SweepStatus:
         """Count the runs of ``runs`` already done here, new, and to recompute."""
         keys = {run_key(r) for r in runs}
         stored = {p.stem for p in self.parts.glob("*.parquet")}
@@ -245,7 +293,7 @@ class RunStore:
 
     def run(
         self,
-        runs: list[RunSpec],
+        runs: Sequence[AnySpec],
         frame: Callable[[int, dict[str, Any]], pd.DataFrame],
         *,
         workers: int = 1,
@@ -284,7 +332,7 @@ class RunStore:
         else:
             _run_local(runs, todo, store, workers, max_pool_restarts)
 
-    def read(self, runs: list[RunSpec]) -> pd.DataFrame:
+    def read(self, runs: Sequence[AnySpec]) -> pd.DataFrame:
         """The stored rows of ``runs``, in their order (runs not stored are left out)."""
         paths = [self.part(r) for r in runs]
         frames = [pd.read_parquet(p) for p in paths if p.exists()]
@@ -310,6 +358,15 @@ def _row(run: RunSpec, row: dict[str, Any]) -> pd.DataFrame:
     return pd.DataFrame([{**used, **clean}])
 
 
+def _stored_row(spec: SweepSpec, run: AnySpec, row: dict[str, Any]) -> pd.DataFrame:
+    """The one-row table stored for ``run`` of ``spec``."""
+    if isinstance(run, CorridorSpec):
+        from hcomc.experiments.corridor_sweep import corridor_row
+
+        return corridor_row(spec, run, {k: v for k, v in row.items() if k not in TIMING})
+    return _row(run, row)
+
+
 def run_sweep(
     spec: SweepSpec,
     out: Path,
@@ -322,10 +379,32 @@ def run_sweep(
     """Run every unfinished run of ``spec`` into ``out`` and return the assembled table."""
     runs = expand(spec)
     RunStore(out).run(
-        runs, lambda i, row: _row(runs[i], row), workers=workers, scheduler=scheduler,
-        progress=progress, max_pool_restarts=max_pool_restarts,
+        runs, lambda i, row: _stored_row(spec, runs[i], row), workers=workers,
+        scheduler=scheduler, progress=progress, max_pool_restarts=max_pool_restarts,
     )  # fmt: skip
     return assemble(spec, out)
+
+
+def run_rows(
+    runs: Sequence[AnySpec],
+    *,
+    workers: int = 1,
+    progress: Callable[[int, int], None] | None = None,
+) -> pd.DataFrame:
+    """Run every run without a store (``hcomc run``) and return their rows in run order,
+    batched and spread over ``workers`` processes as a sweep's."""
+    rows: list[dict[str, Any] | None] = [None] * len(runs)
+    done = 0
+
+    def keep(i: int, result: tuple[dict[str, Any], dict[str, Any]]) -> None:
+        nonlocal done
+        rows[i] = result[0]
+        done += 1
+        if progress is not None:
+            progress(done, len(runs))
+
+    _run_local(runs, list(range(len(runs))), keep, workers, 0)
+    return pd.DataFrame(rows)
 
 
 BATCH_SIZE = 4
@@ -333,10 +412,33 @@ BATCH_SIZE = 4
 killed sweep loses at most the batches that were running; small batches keep that small."""
 
 
-def _chunks(runs, todo: list[int]) -> list[list[int]]:
-    """The runs still to do in batches, runs of one undisturbed run together."""
-    chunks = batches_by_reference([runs[i] for i in todo], BATCH_SIZE)
-    return [[todo[k] for k in chunk] for chunk in chunks]
+def _chunks(runs: Sequence[AnySpec], todo: list[int]) -> list[list[int]]:
+    """The runs still to do in batches of one kind, runs of one undisturbed run together; a
+    run in the corridor engine is a batch of its own (it shares nothing with others)."""
+    ours = {i: run for i in todo if isinstance(run := runs[i], RunSpec)}
+    chunks = batches_by_reference(list(ours.values()), BATCH_SIZE)
+    found = [[list(ours)[k] for k in chunk] for chunk in chunks]
+    corridor = {i: run for i in todo if isinstance(run := runs[i], CorridorSpec)}
+    order = sorted(corridor, key=lambda i: reference_group(corridor[i]))
+    paper = [i for i in order if reference_group(corridor[i])[0] == "scenario"]
+    found += [[paper[k] for k in chunk] for chunk in batches(len(paper), BATCH_SIZE)]
+    return found + [[i] for i in order if reference_group(corridor[i])[0] != "scenario"]
+
+
+def _batch_function(run: AnySpec) -> Callable[..., list[tuple[dict[str, Any], dict[str, Any]]]]:
+    """What simulates a batch of runs of ``run``'s kind (picklable, for worker processes)."""
+    return run_corridor_batch if isinstance(run, CorridorSpec) else run_batch
+
+
+def _submit(submit: Callable[..., Any], runs: Sequence[AnySpec], chunk: list[int],
+            **options: Any) -> Any:  # fmt: skip
+    """``submit(batch function, runs of the chunk, **options)``: one chunk's batch handed to
+    a pool's or a Dask client's ``submit``, or called here (``submit`` = :func:`_call`)."""
+    return submit(_batch_function(runs[chunk[0]]), [runs[i] for i in chunk], **options)
+
+
+def _call(function: Callable[..., Any], *args: Any, **options: Any) -> Any:
+    return function(*args, **options)
 
 
 def _store_batch(chunk, results, store) -> None:
@@ -347,7 +449,7 @@ def _store_batch(chunk, results, store) -> None:
 def _run_local(runs, todo, store, workers: int, restarts: int) -> None:
     if workers <= 1:
         for chunk in _chunks(runs, todo):
-            _store_batch(chunk, run_batch([runs[i] for i in chunk]), store)
+            _store_batch(chunk, _submit(_call, runs, chunk), store)
         return
     pending = _chunks(runs, todo)
     for _ in range(restarts + 1):
@@ -355,7 +457,7 @@ def _run_local(runs, todo, store, workers: int, restarts: int) -> None:
         try:
             with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
                 futures = {
-                    pool.submit(run_batch, [runs[i] for i in chunk], threads=1): k
+                    _submit(pool.submit, runs, chunk, threads=1): k
                     for k, chunk in enumerate(pending)
                 }
                 for future in as_completed(futures):
@@ -393,7 +495,7 @@ def _run_dask(scheduler: str, runs, todo, store) -> None:
     try:
         chunks = _chunks(runs, todo)
         futures = {
-            client.submit(run_batch, [runs[i] for i in chunk], pure=False, retries=2): k
+            _submit(client.submit, runs, chunk, pure=False, retries=2): k
             for k, chunk in enumerate(chunks)
         }
         for future in dask_completed(list(futures)):
@@ -405,7 +507,13 @@ def _run_dask(scheduler: str, runs, todo, store) -> None:
 def assemble(spec: SweepSpec, out: Path) -> pd.DataFrame:
     """The results table from the stored parts, in grid order; writes sweep.* and summary."""
     table = RunStore(out).read(expand(spec))
-    summ = summarise(table) if len(table) else pd.DataFrame()
+    summ = pd.DataFrame()
+    if len(table) and is_corridor_sweep(spec):
+        from hcomc.experiments.corridor_sweep import corridor_summary
+
+        summ = corridor_summary(spec, table)
+    elif len(table):
+        summ = summarise(table)
     with atomic_paths(out / "sweep.csv", out / "sweep.parquet", out / "summary.csv") as tmp:
         table.to_csv(tmp[0], index=False)
         table.to_parquet(tmp[1], index=False)
@@ -435,8 +543,10 @@ __all__ = [
     "SweepStatus",
     "assemble",
     "expand",
+    "is_corridor_sweep",
     "load_sweep",
     "resolved_config",
+    "run_rows",
     "run_sweep",
     "sweep_status",
 ]
