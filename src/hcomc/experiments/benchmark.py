@@ -119,16 +119,25 @@ def check_folder(out: Path, suite: Suite) -> None:
 
 def record(comparison: Comparison, command: str, status: SweepStatus | None) -> dict[str, Any]:
     """What a comparison folder records about its runs (written as :data:`RECORD`)."""
-    from hcomc.control.registry import controller_source
-    from hcomc.experiments.runner import configuration_controller
-
-    manifest = build_manifest(seed=0, config={})
     suite = comparison.suite
     return {
         "suite": suite.name,
         "suite_id": suite.id,
         "suite_version": suite.version,
         "cells": [c.id for c in comparison.cells],
+        **settings_record(comparison, command, status),
+    }
+
+
+def settings_record(comparison: Any, command: str, status: SweepStatus | None) -> dict[str, Any]:
+    """The part of a comparison folder's record every comparison has (of a suite or of
+    corridors): configurations with their controllers' sources, seeds, overrides, engine,
+    the command, version, git revision and the runs' status."""
+    from hcomc.control.registry import controller_source
+    from hcomc.experiments.runner import configuration_controller
+
+    manifest = build_manifest(seed=0, config={})
+    return {
         "configurations": list(comparison.configurations),
         "controllers": {
             conf: controller_source(configuration_controller(conf)[0])

@@ -28,7 +28,6 @@ import pandas as pd
 from hcomc.config import ConfigError
 from hcomc.experiments.corridor_runs import CorridorSpec, check, forget, resolve
 from hcomc.experiments.sweep import RunStore, SweepStatus
-from hcomc.sim.manifest import build_manifest
 
 RECORD = "compare.json"
 """The record of a comparison folder (as a suite comparison's)."""
@@ -111,11 +110,9 @@ def record(
     """What a comparison folder records about its runs (written as ``compare.json``): the
     corridors as given and resolved (with the overrides, without a controller), settings
     and provenance."""
-    from hcomc.control.registry import controller_source
     from hcomc.corridor import load_corridor
-    from hcomc.experiments.runner import configuration_controller
+    from hcomc.experiments.benchmark import settings_record
 
-    manifest = build_manifest(seed=0, config={})
     return {
         "suite": None,
         "corridors": {
@@ -124,19 +121,7 @@ def record(
         },
         "cells": list(comparison.conditions),
         "kind": resolve(comparison.runs()[0]).kind,
-        "configurations": list(comparison.configurations),
-        "controllers": {
-            conf: controller_source(configuration_controller(conf)[0])
-            for conf in comparison.configurations
-        },
-        "seeds": comparison.seeds,
-        "overrides": comparison.overrides,
-        "engine": comparison.engine,
-        "command": command,
-        "hcomc_version": manifest["hcomc_version"],
-        "git_revision": manifest["git_revision"],
-        "created_utc": manifest["created_utc"],
-        "runs": None if status is None else vars(status),
+        **settings_record(comparison, command, status),
     }
 
 
