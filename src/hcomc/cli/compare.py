@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import shlex
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -269,7 +271,6 @@ def _compare_controllers(
         record,
         run_comparison,
         status,
-        write_record,
     )
     from hcomc.experiments.compare import pairs
     from hcomc.experiments.suite import LATEST, suite_named
@@ -305,27 +306,62 @@ def _compare_controllers(
         "engine": None if comparison.engine == "hcomc" else comparison.engine,
         "out": str(target), "set": list(settings or []),
     })  # fmt: skip
-    before = status(comparison, target)
-    write_record(target, record(comparison, command, None))  # claims the folder for this suite
-    start = time.perf_counter()
-    with _progress("runs", before.total) as update:
-        runs = run_comparison(comparison, target, workers=n_workers, progress=update)
-    wall = time.perf_counter() - start
-    content = record(comparison, command, before)
-    write_record(target, content)
+    filled = fill_folder(target, comparison, command, n_workers,
+                         (status, record, run_comparison))  # fmt: skip
     _say(
         f"suite {bench.name} · cells {', '.join(c.id for c in cells)} · {comparison.seeds} "
         f"seeds · {', '.join(labels)} · engine {comparison.engine}",
     )
-    _analyse(target, runs, pairs(labels, chosen), labels, content)
-    notes = [f"{before.new} new", f"{before.done} already done"]
-    if before.changed:
-        notes.append(f"{before.changed} recomputed because the config, the hcomc code or "
-                     "the controller file changed")  # fmt: skip
-    _say(
-        f"{len(runs)} runs ({', '.join(notes)}) on {n_workers} processes in {wall:.1f} s · "
-        f"written to {target}/ ({', '.join(OUTPUTS)}, compare.json)",
-    )
+    _analyse(target, filled.runs, pairs(labels, chosen), labels, filled.record)
+    filled.say("the config")
+
+
+@dataclass(frozen=True)
+class FilledFolder:
+    """A comparison run into its folder: runs, record, status before, wall [s], processes."""
+
+    runs: Any
+    record: dict[str, Any]
+    before: Any
+    wall: float
+    workers: int
+    target: Path
+
+    def say(self, input_name: str) -> None:
+        """The closing line: runs new, done and recomputed (``input_name``, the code or a
+        controller file changed), processes, time, files."""
+        before = self.before
+        counts = [f"{before.new} new", f"{before.done} already done"]
+        if before.changed:
+            counts.append(f"{before.changed} recomputed because {input_name}, the hcomc code "
+                          "or the controller file changed")  # fmt: skip
+        _say(
+            f"{len(self.runs)} runs ({', '.join(counts)}) on {self.workers} processes in "
+            f"{self.wall:.1f} s · written to {self.target}/ ({', '.join(OUTPUTS)}, "
+            "compare.json)"
+        )
+
+
+def fill_folder(
+    target: Path, comparison: Any, command: str, workers: int,
+    folder: tuple[Callable[..., Any], Callable[..., dict[str, Any]], Callable[..., Any]],
+) -> FilledFolder:  # fmt: skip
+    """Run what ``target`` lacks of ``comparison`` with the ``(status, record,
+    run_comparison)`` functions of its kind (a suite's or corridors'): the folder is claimed
+    with its record before anything runs, and the record is rewritten with the runs' status
+    after."""
+    from hcomc.experiments.benchmark import write_record
+
+    status, record, run_comparison = folder
+    before = status(comparison, target)
+    write_record(target, record(comparison, command, None))  # claims the folder
+    start = time.perf_counter()
+    with _progress("runs", before.total) as update:
+        runs = run_comparison(comparison, target, workers=workers, progress=update)
+    wall = time.perf_counter() - start
+    content = record(comparison, command, before)
+    write_record(target, content)
+    return FilledFolder(runs, content, before, wall, workers, target)
 
 
 def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:

@@ -12,13 +12,12 @@ keys (``corridor.duration=600``, ``demand.main.cav_share=0.5``, ``control.replan
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 from rich.markup import escape
 
-from hcomc.cli._app import _compiled, _control, _engine, _fail, _progress, _settings, out
+from hcomc.cli._app import _compiled, _engine, _fail, _progress, _settings, out
 from hcomc.config import ConfigError
 
 CORRIDOR_SUCCESS = (
@@ -100,8 +99,7 @@ def compare_corridors(
 ) -> None:
     """``hcomc compare`` on corridors: run what the folder lacks, print and write the
     comparison (as for cells of a suite)."""
-    from hcomc.cli.compare import OUTPUTS, _analyse, _command, _say
-    from hcomc.experiments.benchmark import write_record
+    from hcomc.cli.compare import _analyse, _command, _say, fill_folder
     from hcomc.experiments.compare import pairs
     from hcomc.experiments.corridor_compare import (
         CorridorComparison,
@@ -132,25 +130,14 @@ def compare_corridors(
         "engine": None if comparison.engine == "hcomc" else comparison.engine,
         "out": str(target), "set": list(settings),
     })  # fmt: skip
-    before = status(comparison, target)
-    write_record(target, record(comparison, command, None))  # claims the folder
-    start = time.perf_counter()
-    with _progress("runs", before.total) as update:
-        runs = run_comparison(comparison, target, workers=workers, progress=update)
-    wall = time.perf_counter() - start
-    content = record(comparison, command, before)
-    write_record(target, content)
+    filled = fill_folder(target, comparison, command, workers, (status, record, run_comparison))
     engine_name = "corridor engine" if kind == "corridor" else f"engine {comparison.engine}"
     _say(f"corridors {', '.join(corridors)} · {comparison.seeds} seeds · {', '.join(labels)} "
          f"· {engine_name}")  # fmt: skip
-    notes, options = analysis_of(runs)
-    _analyse(target, runs, pairs(labels, baseline), labels, content, notes, **options)
-    counts = [f"{before.new} new", f"{before.done} already done"]
-    if before.changed:
-        counts.append(f"{before.changed} recomputed because the corridor, the hcomc code or "
-                      "the controller file changed")  # fmt: skip
-    _say(f"{len(runs)} runs ({', '.join(counts)}) on {workers} processes in {wall:.1f} s · "
-         f"written to {target}/ ({', '.join(OUTPUTS)}, compare.json)")  # fmt: skip
+    notes, options = analysis_of(filled.runs)
+    _analyse(target, filled.runs, pairs(labels, baseline), labels, filled.record, notes,
+             **options)  # fmt: skip
+    filled.say("the corridor")
 
 
 def run_corridor_condition(
@@ -165,7 +152,7 @@ def run_corridor_condition(
 ) -> None:
     """``hcomc run CORRIDOR``: one configuration over seeds 0..n-1; prints each run's metrics
     and their means with 95 % CIs (or the rows as JSON)."""
-    from hcomc.cli.experiments import configuration_of, print_merge_runs
+    from hcomc.cli.experiments import print_merge_runs, run_label
     from hcomc.corridor import load_corridor
     from hcomc.experiments.corridor_runs import CorridorSpec, check
     from hcomc.experiments.sweep import run_rows
@@ -176,15 +163,7 @@ def run_corridor_condition(
         corridor = load_corridor(source, overrides)
     except ConfigError as exc:
         raise _fail(str(exc)) from None
-    control = _control(corridor.control, controller, optimizer)
-    if control["controller"] == "none":
-        raise _fail(
-            f"no merge controller: '{source}' has control.controller = 'none'; allowed: "
-            "--controller NAME, or a corridor that names one"
-        )
-    if optimizer is not None:  # kept for a controller name that is not a paper label
-        overrides["control.optimizer"] = control["optimizer"]
-    label = configuration_of(control)
+    label = run_label(corridor.control, source, controller, optimizer, overrides, "corridor")
     specs = [CorridorSpec(source, label, seed, overrides, engine) for seed in range(seeds)]
     try:
         resolved = check(specs[0])

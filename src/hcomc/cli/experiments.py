@@ -66,6 +66,25 @@ def _frame_table(frame: Any, title: str) -> Table:
     return table
 
 
+def run_label(
+    table: Any, source: str, controller: str | None, optimizer: str | None,
+    overrides: dict[str, Any], what: str,
+) -> str:  # fmt: skip
+    """The configuration ``hcomc run`` runs on ``source`` (a ``what``, whose control table
+    is ``table``): ``--controller`` / ``--optimizer`` or the table's; a one-line error when
+    neither names a controller. A given optimiser is kept in ``overrides``
+    (``control.optimizer``) for a controller name that is not a paper label."""
+    control = _control(table, controller, optimizer)
+    if control["controller"] == "none":
+        raise _fail(
+            f"no merge controller: '{source}' has control.controller = 'none'; allowed: "
+            f"--controller NAME, or a {what} that names one"
+        )
+    if optimizer is not None:
+        overrides["control.optimizer"] = control["optimizer"]
+    return configuration_of(control)
+
+
 @app.command()
 def run(
     config: ConfigArg,
@@ -106,15 +125,7 @@ def run(
     base = _load(config, **overrides)  # validate before anything runs
     _require_merge(base, config, "run")
     engine = _engine(engine, base)
-    control = _control(base.control, controller, optimizer)
-    if control["controller"] == "none":
-        raise _fail(
-            f"no merge controller: '{config}' has control.controller = 'none'; allowed: "
-            "--controller NAME, or a config that names one"
-        )
-    if optimizer is not None:  # kept for a controller name that is not a paper label
-        overrides["control.optimizer"] = control["optimizer"]
-    label = configuration_of(control)
+    label = run_label(base.control, config, controller, optimizer, overrides, "config")
     specs = [
         replace(s, engine=engine)
         for s in grid([config], [label], range(seeds), nest_overrides(overrides))
