@@ -284,11 +284,11 @@ def run_on_corridor(spec: CorridorSpec) -> Result:
         "decision_ms": 1000.0 * run.decision_seconds / run.decisions if run.decisions else 0.0,
         "wall_s": time.perf_counter() - start,
     }
+    resolved = corridor.model_dump(mode="json")  # as "config" and, as for any run, "corridor"
     manifest = build_manifest(
-        seed=spec.seed, config=corridor.model_dump(mode="json"),
+        seed=spec.seed, config=resolved,
         extra={"engine": CORRIDOR_ENGINE, "duration": run.duration, "run": _run_record(spec),
-               "corridor": corridor.model_dump(mode="json"),
-               "controller": controller_source(corridor.control.controller)},
+               "corridor": resolved, "controller": controller_source(corridor.control.controller)},
     )  # fmt: skip
     return row, manifest
 
