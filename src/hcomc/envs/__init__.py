@@ -8,9 +8,13 @@
   agent (PettingZoo ``ParallelEnv``), also made by :func:`parallel_env`, PettingZoo's
   factory convention;
 * :mod:`hcomc.envs.policies`: the FIFO, Game and HCOMC controllers on the same
-  environment, and :func:`~hcomc.envs.policies.evaluate`.
+  environment, and :func:`~hcomc.envs.policies.evaluate`;
+* ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor_env.CorridorMergeEnv`): the agent
+  drives a ramp CAV through its merge at one on-ramp of any corridor (N lanes, several
+  ramps, continuous demand), on the corridor engine.
 
-Importing this package registers ``hcomc/Merge-v0`` with gymnasium.
+Importing this package registers ``hcomc/Merge-v0`` and ``hcomc/CorridorMerge-v0`` with
+gymnasium.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ if TYPE_CHECKING:
     from hcomc.envs.multi_agent import MergeParallelEnv
 
 ENV_ID = "hcomc/Merge-v0"
+CORRIDOR_ENV_ID = "hcomc/CorridorMerge-v0"
 
 if ENV_ID not in gym.registry:
     gym.register(
@@ -33,6 +38,8 @@ if ENV_ID not in gym.registry:
         entry_point="hcomc.envs.merge_env:MergeEnv",
         vector_entry_point="hcomc.envs.vector:MergeVectorEnv",
     )
+if CORRIDOR_ENV_ID not in gym.registry:
+    gym.register(id=CORRIDOR_ENV_ID, entry_point="hcomc.envs.corridor_env:CorridorMergeEnv")
 
 
 def parallel_env(
@@ -56,4 +63,4 @@ def parallel_env(
     )  # fmt: skip
 
 
-__all__ = ["ENV_ID", "EnvOptions", "MergeEnv", "RewardWeights", "parallel_env"]
+__all__ = ["CORRIDOR_ENV_ID", "ENV_ID", "EnvOptions", "MergeEnv", "RewardWeights", "parallel_env"]

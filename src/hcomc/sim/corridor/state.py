@@ -34,8 +34,8 @@ N_PARAMS = 14
 # counters (ints)
 (C_STEP, C_ENTRIES, C_VEHICLE_STEPS, C_LANE_CHANGES, C_COLLISIONS, C_ROWS, C_ON_ROAD,
  C_DECIDE_EVERY, C_SAMPLE_EVERY, C_SORTED, C_CONTROLLED, C_PENDING, C_PLANS,
- C_OPEN) = range(14)  # fmt: skip
-N_COUNTERS = 14
+ C_OPEN, C_AGENTS) = range(15)  # fmt: skip
+N_COUNTERS = 15
 # columns of the measurement arrays
 D_COUNT, D_SPEED, D_INVERSE_SPEED, D_OCCUPIED, D_LENGTH = range(5)  # detectors
 G_DISTANCE, G_TIME = range(2)  # space-time grid
@@ -122,6 +122,9 @@ class State(NamedTuple):
     ev_vmc_min_v: np.ndarray  # VMC's lowest speed in the window [m/s]
     ev_released: np.ndarray  # VR's plan gave up its commanded merge (gap acceptance)
     ev_open: np.ndarray  # VRs whose window is open (C_OPEN of them)
+    # agents' vehicles (learning environments; C_AGENTS of them, 0: the arrays are not read)
+    agent_acc: np.ndarray  # acceleration it is driven at [m/s^2]; nan: its own model
+    agent_lane: np.ndarray  # lane code it is to change into at the next step, -1: none
 
 
 def trajectory_buffer(capacity: int) -> dict[str, np.ndarray]:
@@ -206,4 +209,5 @@ def allocate(
         ev_min_ttc=np.full(n, np.inf), ev_max_drac=np.zeros(n), ev_max_decel=np.zeros(n),
         ev_vmc_v=nan.copy(), ev_vmc_min_v=nan.copy(), ev_released=np.zeros(n, dtype=np.bool_),
         ev_open=np.zeros(n, dtype=np.int64),
+        agent_acc=nan.copy(), agent_lane=np.full(n, -1, dtype=np.int64),
     )  # fmt: skip

@@ -31,6 +31,12 @@ in this step (changer, new leader or new follower) takes part in no other.
 brakes for the end of its acceleration lane nor takes its merge by the rule above: the plan
 commands it (:mod:`hcomc.sim.corridor.plans`, whose changes are started before these); the
 vehicles a plan holds in their lane (``s.holding``) make no discretionary change.
+
+**Agents' vehicles** (a learning environment's; ``counters[C_AGENTS]`` > 0) drive at the
+acceleration they are given (``s.agent_acc``, bounded below by ``-emergency_decel``; NaN: the
+vehicle's own model) and change lane only when told (``s.agent_lane``, the target code,
+taken at once without any safety check: the agent answers for it); they neither brake for
+the end of their lane nor change lane on their own.
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ from hcomc.models.following import follow_accel_given, free_term
 from hcomc.sim.corridor.lanes import mandatory_target, section_at, speed_limit, stop_point
 from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.state import (
+    C_AGENTS,
     C_DECIDE_EVERY,
     C_ENTRIES,
     C_LANE_CHANGES,
@@ -136,6 +143,11 @@ def accelerations(road: Layout, veh: Vehicles, s: State) -> None:
                 )  # fmt: skip
                 s.acc[i] = min(s.acc[i], a_stop)
         s.acc[i] = max(s.acc[i], -s.params[P_EMERGENCY])
+    if s.counters[C_AGENTS]:
+        for k in range(n):
+            i = s.ids[k]
+            if not math.isnan(s.agent_acc[i]):
+                s.acc[i] = max(s.agent_acc[i], -s.params[P_EMERGENCY])
 
 
 @kernel(inline="always")
@@ -200,9 +212,12 @@ def decide(road: Layout, veh: Vehicles, s: State, t: float, step: int) -> None:
     m, every = s.counters[C_SORTED], s.counters[C_DECIDE_EVERY]
     b_safe, b_max = s.params[P_SAFE_DECEL], s.params[P_EMERGENCY]
     urgent, lookahead = s.params[P_URGENT], s.params[P_LOOKAHEAD]
+    agents = s.counters[C_AGENTS] != 0
+    if agents:
+        _agent_changes(s, t, step)
     for p in range(m - 1, -1, -1):  # downstream first
         i, c = s.e_veh[p], s.e_code[p]
-        if c != s.code[i] or s.target[i] != c:
+        if c != s.code[i] or s.target[i] != c or (agents and not math.isnan(s.agent_acc[i])):
             continue
         x = s.x[i]
         lead = s.e_veh[p + 1] if p + 1 < m and s.e_code[p + 1] == c else -1
@@ -221,6 +236,21 @@ def decide(road: Layout, veh: Vehicles, s: State, t: float, step: int) -> None:
         if c >= road.lane_end.shape[0] or (step + i) % every != 0 or s.holding[i]:
             continue
         _discretionary(road, veh, s, p, lead, t, step)
+
+
+@kernel(inline="always")
+def _agent_changes(s: State, t: float, step: int) -> None:
+    """Start the lane changes agents' vehicles were told to take (module docstring)."""
+    for k in range(s.counters[C_ON_ROAD]):
+        i = s.ids[k]
+        code = s.agent_lane[i]
+        if code < 0:
+            continue
+        s.agent_lane[i] = -1
+        if s.status[i] != ON_ROAD or s.target[i] != s.code[i]:
+            continue
+        lead, fol = neighbours_in(s, code, s.x[i])
+        start_change(s, i, code, lead, fol, t, step, s.params[P_LC_DURATION])
 
 
 @kernel(inline="always")
