@@ -15,8 +15,10 @@ import pytest
 from typer.testing import CliRunner
 
 from hcomc.cli import app
+from hcomc.experiments import run_store, workers
 from hcomc.experiments import sweep as sweep_mod
-from hcomc.experiments.sweep import expand, load_sweep, run_key, run_sweep
+from hcomc.experiments.run_store import run_key
+from hcomc.experiments.sweep import expand, load_sweep, run_sweep
 
 SPEC = """
 name = "tiny"
@@ -60,7 +62,7 @@ def test_local_pool_and_dask_cluster_give_identical_tables(spec_file, tmp_path):
     assert (tmp_path / "dask" / "summary.csv").stat().st_size > 0
 
 
-_RUN_BATCH = sweep_mod.run_batch
+_RUN_BATCH = workers.run_batch
 
 
 def _dying_run_batch(runs, threads=None):
@@ -74,7 +76,7 @@ def _dying_run_batch(runs, threads=None):
 
 def test_a_dying_worker_has_its_runs_retried(spec_file, tmp_path, monkeypatch):
     monkeypatch.setenv("HCOMC_TEST_MARKER", str(tmp_path / "marker"))
-    monkeypatch.setattr(sweep_mod, "run_batch", _dying_run_batch)
+    monkeypatch.setattr(workers, "run_batch", _dying_run_batch)
     table = run_sweep(load_sweep(spec_file), tmp_path / "out", workers=2)
     assert (tmp_path / "marker").exists()
     assert len(table) == 8
@@ -209,7 +211,7 @@ mean_headway_main_2 = [6.0]
     spec = load_sweep(_spec(tmp_path, text))
     runs = expand(spec)
     assert len(runs) == 1
-    config = sweep_mod.resolved_config(runs[0])
+    config = run_store.resolved_config(runs[0])
     assert (config.demand.ramp, config.demand.ramp_mean_headway) == ("flow", 9.0)
     assert (config.duration, config.demand.cav_penetration) == (25.0, 0.6)
     assert config.demand.mean_headway_main_2 == 6.0
@@ -246,17 +248,17 @@ cav_penetration = [0.5]
     assert "2 stored parts of other configs ignored" in changed.stdout
     assert len(list((out / "parts").glob("*.parquet"))) == 4  # old results kept, not mixed
     assert len(pd.read_parquet(out / "sweep.parquet")) == 2
-    keys = [sweep_mod.run_key(r) for r in expand(load_sweep(spec_path))]
+    keys = [run_key(r) for r in expand(load_sweep(spec_path))]
     for key in keys:
         manifest = json.loads((out / "manifests" / f"{key}.json").read_text())
         assert manifest["config"]["hdv"]["max_accel"] == 1.3
 
-    ours = sweep_mod.code_stamp
-    monkeypatch.setattr(sweep_mod, "code_stamp", lambda: "another revision")  # the code changes
+    ours = run_store.code_stamp
+    monkeypatch.setattr(run_store, "code_stamp", lambda: "another revision")  # the code changes
     status = sweep_mod.sweep_status(load_sweep(spec_path), out)
     assert (status.done, status.new, status.changed) == (0, 0, 2)
-    monkeypatch.setattr(sweep_mod, "code_stamp", ours)
-    monkeypatch.setattr(sweep_mod.hcomc, "__version__", "99.0")  # another release
+    monkeypatch.setattr(run_store, "code_stamp", ours)
+    monkeypatch.setattr(run_store.hcomc, "__version__", "99.0")  # another release
     status = sweep_mod.sweep_status(load_sweep(spec_path), out)
     assert (status.done, status.new, status.changed) == (0, 0, 2)
 

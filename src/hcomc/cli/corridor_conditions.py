@@ -155,7 +155,7 @@ def run_corridor_condition(
     from hcomc.cli.experiments import print_merge_runs, run_label
     from hcomc.corridor import load_corridor
     from hcomc.experiments.corridor_runs import CorridorSpec, check
-    from hcomc.experiments.sweep import run_rows
+    from hcomc.experiments.workers import run_rows
 
     _known_engine(engine)
     overrides = _settings(settings)

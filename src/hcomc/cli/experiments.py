@@ -193,7 +193,8 @@ def sweep(
     """Run a density x penetration x configuration x seed grid; rerun to resume.
 
     A spec whose base is a corridor sweeps its [corridor_grid] of dotted corridor keys."""
-    from hcomc.experiments.sweep import connect, expand, load_sweep, run_sweep, sweep_status
+    from hcomc.experiments.sweep import expand, load_sweep, run_sweep, sweep_status
+    from hcomc.experiments.workers import connect
 
     if scheduler is not None and workers is not None:
         raise _fail(

@@ -3,7 +3,7 @@
 A :class:`Comparison` is what ``hcomc compare`` runs: cells of a suite
 (:mod:`hcomc.experiments.suite`) x configurations x seeds 0..n-1, with optional overrides
 for every cell and an engine. Its runs live in a resumable store
-(:class:`hcomc.experiments.sweep.RunStore`): a rerun into the same folder runs only what is
+(:class:`hcomc.experiments.run_store.RunStore`): a rerun into the same folder runs only what is
 missing, and a changed config, hcomc version or code, or controller file gives new run keys, so such
 runs are recomputed instead of mixed in. The folder's record (:data:`RECORD`) names the
 suite and its version, the hcomc version and git revision; a folder holding runs of another
@@ -27,9 +27,9 @@ import pandas as pd
 
 from hcomc.config import ConfigError, merge_tables
 from hcomc.control.registry import check_controller
+from hcomc.experiments.run_store import RunStore, SweepStatus, resolved_config
 from hcomc.experiments.runner import RunSpec
 from hcomc.experiments.suite import Cell, Suite
-from hcomc.experiments.sweep import RunStore, SweepStatus, resolved_config
 from hcomc.sim.manifest import build_manifest, write_json_atomic
 
 RECORD = "compare.json"

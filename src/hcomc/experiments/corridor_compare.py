@@ -3,7 +3,7 @@
 A :class:`CorridorComparison` is corridors (presets or files, as given) x configurations x
 seeds 0..n-1 with dotted corridor overrides for every corridor and an engine, the corridor
 counterpart of :class:`hcomc.experiments.benchmark.Comparison`. Its runs live in the same
-resumable store (:class:`hcomc.experiments.sweep.RunStore`), keyed by the resolved corridor,
+resumable store (:class:`hcomc.experiments.run_store.RunStore`), keyed by the resolved corridor,
 version and code, so a changed corridor file or code revision is recomputed, never mixed in.
 Every row of its runs table starts with ``condition`` (the corridor as given: the cell of
 the comparison), ``corridor`` (its name), ``kind`` and ``engine``.
@@ -27,7 +27,7 @@ import pandas as pd
 
 from hcomc.config import ConfigError
 from hcomc.experiments.corridor_runs import CorridorSpec, check, forget, resolve
-from hcomc.experiments.sweep import RunStore, SweepStatus
+from hcomc.experiments.run_store import RunStore, SweepStatus
 
 RECORD = "compare.json"
 """The record of a comparison folder (as a suite comparison's)."""
