@@ -29,6 +29,12 @@ __all__ = [
 ]
 
 
+MIN_STEP = 1e-3
+"""Shortest simulation step [s] of the scenario and corridor engines."""
+
+MIN_HEADWAY = 0.1
+"""Shortest headway between two vehicles entering one lane [s]."""
+
 CONTROLLER_SPEC = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]*|[^:\s][^:]*:[A-Za-z_][A-Za-z0-9_]*")
 """A controller name: a registered name, or ``module:Class`` / ``path/to/file.py:Class``."""
 
@@ -168,7 +174,9 @@ class DemandParams(_Frozen):
 
     mean_headway_main_1: float = Field(5.0, gt=0, le=3600, description="lane 1 mean headway [s]")
     mean_headway_main_2: float = Field(5.0, gt=0, le=3600, description="lane 2 mean headway [s]")
-    min_headway: float = Field(1.0, gt=0, le=60, description="minimum (shift) headway [s]")
+    min_headway: float = Field(
+        1.0, ge=MIN_HEADWAY, le=60, description="minimum (shift) headway [s]"
+    )
     cav_penetration: float = Field(0.9, ge=0, le=1, description="share of CAVs [-]")
     main_speed: float | Literal["equilibrium"] = Field(
         "equilibrium",
@@ -228,6 +236,7 @@ class PlatoonParams(_Frozen):
             (40.0, 15.0),
             (50.0, 25.0),
         ],
+        max_length=10_000,
         description="leader speed profile points (t [s], v [m/s]), linear in between",
     )
 
@@ -350,7 +359,7 @@ class ScenarioConfig(_Frozen):
     description: str = Field("", description="free text")
     scenario: Literal["merge", "platoon"] = Field("merge", description="scenario type")
     seed: int = Field(0, ge=0, description="default random seed (the CLI --seed overrides it)")
-    dt: float = Field(0.1, gt=0, le=1, description="simulation step [s]")
+    dt: float = Field(0.1, ge=MIN_STEP, le=1, description="simulation step [s]")
     duration: float = Field(90.0, gt=0, le=86_400, description="measured duration [s]")
     warmup: float = Field(30.0, ge=0, le=3600, description="unlogged warm-up before t = 0 [s]")
     log_interval: float = Field(0.1, gt=0, le=60, description="logging interval [s]")
@@ -359,8 +368,9 @@ class ScenarioConfig(_Frozen):
         gt=0,
         le=1024,
         description=(
-            "a run whose log would need more memory than this is refused, or stopped when its "
-            "log must grow beyond it [GiB]"
+            "a run whose log or perception history would need more memory than this is "
+            "refused before anything is allocated, or stopped when its log must grow beyond "
+            "it [GiB]"
         ),
     )
     road: RoadParams = Field(default_factory=RoadParams)
@@ -374,11 +384,43 @@ class ScenarioConfig(_Frozen):
     @model_validator(mode="after")
     def _steps(self) -> ScenarioConfig:
         ratio = self.log_interval / self.dt
-        if abs(ratio - round(ratio)) > 1e-9:
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ValueError(
-                f"log_interval = {self.log_interval} must be a multiple of dt = {self.dt}"
+                f"log_interval = {self.log_interval} must be a positive multiple of dt = {self.dt}"
             )
         return self
+
+    @model_validator(mode="after")
+    def _memory(self) -> ScenarioConfig:
+        need = self.history_gib()
+        if need > self.log_memory_limit:
+            raise ValueError(
+                f"the HDV perception history of this run would need {need:.3g} GiB "
+                f"(dt = {self.dt} s, {self.expected_vehicles():.3g} vehicles expected), more "
+                f"than log_memory_limit = {self.log_memory_limit} GiB; allowed: a larger dt, "
+                "a shorter duration or sparser demand"
+            )
+        return self
+
+    def expected_vehicles(self) -> float:
+        """Vehicles a run is expected to release: its followers (platoon) or every lane's
+        demand over warm-up and duration at its mean headway."""
+        if self.scenario == "platoon":
+            return self.platoon.followers + 1.0
+        total = self.warmup + self.duration
+        d = self.demand
+        rate = 1.0 / d.mean_headway_main_1 + 1.0 / d.mean_headway_main_2
+        rate += 1.0 / d.ramp_mean_headway if d.ramp == "flow" else 0.0
+        return total * rate + 1.0
+
+    def history_gib(self) -> float:
+        """Memory of the perception ring buffer (x and v of every vehicle over the longest
+        reaction delay, :class:`hcomc.sim.perception.Perception`) [GiB], estimated from
+        :meth:`expected_vehicles` before anything is allocated."""
+        h = self.hdv
+        rows = max(h.reaction_time_gap, h.reaction_time_speed, h.reaction_time_approach)
+        rows = rows / self.dt + 2.0
+        return 2 * 8 * rows * self.expected_vehicles() / 2**30
 
 
 class ConfigError(ValueError):
