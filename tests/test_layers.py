@@ -1,9 +1,9 @@
 """Imports only run downwards through the package's layers.
 
-cli/sumo -> viz -> experiments/envs -> metrics -> sim -> control -> safety/models/optim ->
-config/corridor/road (plus the small utilities ``rng``, ``_typing``, ``_jit`` and
-``_stamp``). Imports under ``if TYPE_CHECKING:`` are for annotations only and do not count;
-imports inside functions do, since they run.
+cli/sumo -> viz -> experiments/envs/robustness -> metrics -> sim -> control ->
+safety/models/optim -> config/corridor/road (plus the small utilities ``rng``, ``_typing``,
+``_jit`` and ``_stamp``). Imports under ``if TYPE_CHECKING:`` are for annotations only and do
+not count; imports inside functions do, since they run.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ LAYERS = {
     "sumo": 7,
     "viz": 6,
     "experiments": 5,
+    "robustness": 5,
     "envs": 5,
     "metrics": 4,
     "sim": 3,

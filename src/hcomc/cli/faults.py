@@ -1,0 +1,83 @@
+"""``hcomc faults``: the robustness campaign (V2X channel x injected faults x shield)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from hcomc.cli._app import _compiled, _fail, _progress, app, out
+
+_MAX_SEEDS = 100_000
+
+
+def _names(option: str, value: str | None, allowed: list[str]) -> tuple[str, ...] | None:
+    """A comma-separated list of ``allowed`` names, or None (all)."""
+    if value is None:
+        return None
+    names = tuple(v.strip() for v in value.split(",") if v.strip())
+    bad = [n for n in names if n not in allowed]
+    if bad or not names:
+        raise _fail(f"option '{option}' = '{value}'; allowed: a comma-separated list of "
+                    f"{', '.join(allowed)}")  # fmt: skip
+    return names
+
+
+@app.command()
+def faults(
+    seeds: Annotated[int, typer.Option(help="Seeds 0 .. N-1 of every cell.")] = 10,
+    conditions: Annotated[str | None, typer.Option(help="Conditions (default: C1,...,C5).")] = None,
+    configurations: Annotated[
+        str | None, typer.Option(help="Configurations (default: FIFO,Game,HCOMC).")
+    ] = None,
+    fault: Annotated[str | None, typer.Option("--faults", help="Faults (default: all).")] = None,
+    channel: Annotated[
+        str | None, typer.Option("--channels", help="Channel settings (default: all).")
+    ] = None,
+    out_dir: Annotated[Path, typer.Option("--out", help="Campaign directory.")] = Path(
+        "results/faults"
+    ),
+    workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
+    force: Annotated[bool, typer.Option(help="Start the campaign in --out afresh.")] = False,
+    docs: Annotated[
+        Path | None, typer.Option(help="Also write DOCS/robustness.md and its data.")
+    ] = None,
+) -> None:
+    """Run the robustness campaign: conditions x configurations x faults x V2X channels x
+    shield off/on x seeds; rerun to resume. Writes runs.csv and summary.csv (one row per
+    cell) under --out."""
+    from hcomc.config import preset_names
+    from hcomc.experiments.runner import ALL_CONFIGURATIONS
+    from hcomc.robustness.campaign import CampaignSpec, run_campaign
+    from hcomc.robustness.settings import CHANNELS, FAULTS
+
+    if not 1 <= seeds <= _MAX_SEEDS:
+        raise _fail(f"option '--seeds' = {seeds}: allowed 1 .. {_MAX_SEEDS}")
+    if workers is not None and not 1 <= workers <= 256:
+        raise _fail(f"option '--workers' = {workers}: allowed 1 .. 256")
+    scenario_presets = [p for p in preset_names() if p != "platoon"]
+    axes: dict[str, Any] = {
+        k: v for k, v in {
+            "conditions": _names("--conditions", conditions, scenario_presets),
+            "configurations": _names("--configurations", configurations,
+                                     list(ALL_CONFIGURATIONS)),
+            "faults": _names("--faults", fault, list(FAULTS)),
+            "channels": _names("--channels", channel, list(CHANNELS)),
+        }.items() if v is not None
+    }  # fmt: skip
+    spec = CampaignSpec(**axes, seeds=tuple(range(seeds)))
+    _compiled()
+    n_workers = workers or os.cpu_count() or 1
+    with _progress("cells", len(spec.cells())) as update:
+        runs = run_campaign(spec, out_dir, workers=n_workers, force=force, progress=update)
+    from hcomc.robustness.tables import OVERVIEW, summarise
+
+    out.print(summarise(runs, OVERVIEW).to_string(index=False))
+    out.print(f"{len(runs)} runs; tables in {out_dir}")
+    if docs is not None:
+        from hcomc.robustness.publish import publish
+
+        page = publish(out_dir, docs, seeds=seeds)
+        out.print(f"wrote {page}")

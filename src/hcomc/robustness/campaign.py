@@ -1,0 +1,204 @@
+"""The robustness campaign: conditions x faults x channels x configurations x shield x seeds.
+
+Every run is :func:`run_faulted`: a pure function of its :class:`FaultRun` that returns one
+row. Seeds are shared across every other axis (the same traffic and the same fault timing),
+so each cell is paired with the nominal run of the same seeds (fault ``none``, ideal channel,
+no shield). A campaign directory holds ``campaign.json`` (the spec, package version and git
+revision: a rerun with another spec or version is refused, so results never mix), one
+``parts/<cell>.csv`` per finished cell (written atomically; a killed campaign rerun skips
+them) and, when all cells are done, ``runs.csv`` and ``summary.csv``
+(:func:`hcomc.robustness.tables.summarise`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import multiprocessing
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+import hcomc
+from hcomc.config import ConfigError, load_config
+from hcomc.robustness.settings import CHANNELS, FAULTS, ChannelParams, FaultParams, ShieldParams
+from hcomc.sim.log import EventKind
+from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
+
+__all__ = ["CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
+
+_SPAWN = multiprocessing.get_context("spawn")
+
+
+@dataclass(frozen=True)
+class FaultRun:
+    """One run: condition, configuration (a label of :mod:`hcomc.experiments.runner`), the
+    fault and channel (names and settings), shield on or off, and the seed."""
+
+    condition: str
+    configuration: str
+    fault: str
+    channel: str
+    shield: bool
+    seed: int
+    fault_params: FaultParams = FAULTS["none"]
+    channel_params: ChannelParams = CHANNELS["ideal"]
+    shield_params: ShieldParams = field(default_factory=ShieldParams)
+
+
+def run_faulted(run: FaultRun) -> dict[str, Any]:
+    """Simulate one run and measure it: merge outcome, collisions (all, and those with a
+    vehicle a live plan commanded in that step), the key vehicles' min TTC and max DRAC,
+    shield overrides, plans (lost, fallbacks) and the fault's timing."""
+    from hcomc.experiments.runner import configuration_overrides
+    from hcomc.metrics import key_window
+    from hcomc.metrics.outcome import merge_outcome
+    from hcomc.metrics.surrogate import closing_metrics, max_drac, min_ttc
+    from hcomc.robustness.engine import FaultedSimulation
+
+    start = time.perf_counter()
+    config = load_config(run.condition, **configuration_overrides(run.configuration, {}))
+    shield = run.shield_params.model_copy(update={"enabled": run.shield})
+    sim = FaultedSimulation(config, run.seed, channel=run.channel_params,
+                            fault=run.fault_params, shield=shield)  # fmt: skip
+    log = sim.run()
+    window = key_window(log)
+    closing = closing_metrics(log, window)
+    outcome = merge_outcome(log, window)
+    collisions = log.events_of(EventKind.COLLISION)
+    overrides = sim.shield.counts()
+    return {
+        "condition": run.condition, "configuration": run.configuration, "fault": run.fault,
+        "channel": run.channel, "shield": run.shield, "seed": run.seed,
+        "merged": bool(outcome.merged), "merge_time": outcome.merge_time,
+        "collisions": int(collisions.size),
+        "collisions_commanded": sim.collisions_commanded(),
+        "min_ttc": closing[min_ttc], "max_drac": closing[max_drac],
+        "shield_brakes": overrides["brake"], "shield_holds": overrides["hold_change"],
+        "shield_releases": overrides["release"],
+        "plans": len(sim.decisions), "plans_lost": sim.plans_lost,
+        "fallbacks": sum(bool(p.fallback) for p in sim.decisions),
+        "fault_vehicle": sim.fault.vehicle,
+        "fault_start": sim.fault.start - window.t_start if math.isfinite(window.t_start)
+        else math.nan,
+        "degraded_steps": sim.degraded_steps,
+        "collision_pair": _pair_roles(collisions, window.group),
+        "fault_involved": bool(sim.fault.vehicle >= 0 and sim.fault.vehicle in
+                               set(collisions["vehicle"]) | set(collisions["other"])),
+        "wall_s": time.perf_counter() - start,
+    }  # fmt: skip
+
+
+def _pair_roles(collisions: Any, group: dict[str, int]) -> str:
+    """The key-vehicle roles of the first collision's pair ("VR-VMF"; "other" for a vehicle
+    that is not a key vehicle); "" without a collision."""
+    if not len(collisions):
+        return ""
+    roles = {int(i): role for role, i in group.items() if i >= 0}
+    first = collisions[0]
+    return "-".join(roles.get(int(first[k]), "other") for k in ("vehicle", "other"))
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """The grid: every combination of the axes, each over ``seeds``."""
+
+    conditions: tuple[str, ...] = ("C1", "C2", "C3", "C4", "C5")
+    configurations: tuple[str, ...] = ("FIFO", "Game", "HCOMC")
+    faults: tuple[str, ...] = tuple(FAULTS)
+    channels: tuple[str, ...] = tuple(CHANNELS)
+    shields: tuple[bool, ...] = (False, True)
+    seeds: tuple[int, ...] = tuple(range(10))
+
+    def __post_init__(self) -> None:
+        for key, names, known in (("fault", self.faults, FAULTS),
+                                  ("channel", self.channels, CHANNELS)):  # fmt: skip
+            for name in names:
+                if name not in known:
+                    raise ConfigError(f"{key} '{name}'; allowed: {', '.join(known)}")
+        if not self.seeds:
+            raise ConfigError("seeds: at least one seed is needed")
+
+    def cells(self) -> list[tuple[str, str, str, str, bool]]:
+        """(condition, configuration, fault, channel, shield) of every cell, in order."""
+        return [(c, k, f, ch, s) for c in self.conditions for k in self.configurations
+                for f in self.faults for ch in self.channels for s in self.shields]  # fmt: skip
+
+    def runs(self, cell: tuple[str, str, str, str, bool]) -> list[FaultRun]:
+        """The runs of one cell, one per seed."""
+        cond, conf, fault, channel, shield = cell
+        return [FaultRun(cond, conf, fault, channel, shield, seed, FAULTS[fault],
+                         CHANNELS[channel]) for seed in self.seeds]  # fmt: skip
+
+    def identity(self) -> dict[str, Any]:
+        """What a campaign directory's results depend on."""
+        return {"spec": asdict(self), "version": hcomc.__version__,
+                "faults": {f: FAULTS[f].model_dump() for f in self.faults},
+                "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
+                "shield": ShieldParams().model_dump()}  # fmt: skip
+
+
+def _cell_name(cell: tuple[str, str, str, str, bool]) -> str:
+    text = json.dumps(cell)
+    readable = "_".join(str(p) for p in cell).replace("/", "-")
+    return f"{readable}-{hashlib.sha256(text.encode()).hexdigest()[:8]}"
+
+
+def _run_cell(runs: Sequence[FaultRun]) -> list[dict[str, Any]]:
+    return [run_faulted(r) for r in runs]
+
+
+def run_campaign(
+    spec: CampaignSpec, out: Path, *, workers: int = 1, force: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> pd.DataFrame:  # fmt: skip
+    """Run every unfinished cell of ``spec`` into ``out`` and return all runs' rows."""
+    from hcomc.robustness.tables import summarise
+
+    parts = out / "parts"
+    parts.mkdir(parents=True, exist_ok=True)
+    identity = spec.identity()
+    stamp = out / "campaign.json"
+    if stamp.exists() and not force:
+        recorded = json.loads(stamp.read_text())
+        if {k: recorded.get(k) for k in identity} != json.loads(json.dumps(identity)):
+            raise ConfigError(f"{out} holds a campaign of another spec or hcomc version; "
+                              "allowed: the same spec, another --out, or --force")  # fmt: skip
+    elif force:
+        for old in parts.glob("*.csv"):
+            old.unlink()
+    write_json_atomic(stamp, {**identity, "revision": git_revision()})
+    cells = spec.cells()
+    todo = [c for c in cells if not (parts / f"{_cell_name(c)}.csv").exists()]
+    done = len(cells) - len(todo)
+    if progress:
+        progress(done, len(cells))
+
+    def store(cell: tuple[str, str, str, str, bool], rows: list[dict[str, Any]]) -> None:
+        nonlocal done
+        with atomic_paths(parts / f"{_cell_name(cell)}.csv") as (tmp,):
+            pd.DataFrame(rows).to_csv(tmp, index=False)
+        done += 1
+        if progress:
+            progress(done, len(cells))
+
+    if workers <= 1:
+        for cell in todo:
+            store(cell, _run_cell(spec.runs(cell)))
+    else:
+        with ProcessPoolExecutor(workers, mp_context=_SPAWN) as pool:
+            futures = {pool.submit(_run_cell, spec.runs(c)): c for c in todo}
+            for future in as_completed(futures):
+                store(futures[future], future.result())
+    table = pd.concat([pd.read_csv(parts / f"{_cell_name(c)}.csv") for c in cells],
+                      ignore_index=True)  # fmt: skip
+    with atomic_paths(out / "runs.csv", out / "summary.csv") as (runs_tmp, summary_tmp):
+        table.to_csv(runs_tmp, index=False)
+        summarise(table).to_csv(summary_tmp, index=False)
+    return table

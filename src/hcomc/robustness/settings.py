@@ -1,0 +1,148 @@
+"""Settings of a run under faults: the V2X channel, the injected fault and the safety shield.
+
+Three frozen pydantic tables (unknown keys rejected, like the scenario config), each with its
+units and allowed range in the field descriptions. Their defaults are the nominal run: an
+ideal channel, no fault, no shield; a run with all three defaults is bit for bit the run of
+the scenario alone. Named presets (:data:`CHANNELS`, :data:`FAULTS`) are the settings the
+robustness campaign uses; a campaign spec may add its own.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+__all__ = ["CHANNELS", "FAULTS", "ChannelParams", "FaultParams", "ShieldParams"]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class ChannelParams(_Frozen):
+    """The V2X channel between the vehicles and the merge controller (a roadside unit).
+
+    Every vehicle's state (x, v, a, lane) is broadcast ``update_rate`` times a second and
+    arrives ``latency + U(0, jitter)`` seconds later, unless lost: independently with
+    probability ``loss``, or (``loss_model = "gilbert_elliott"``) in bursts of a two-state
+    Gilbert-Elliott chain per sender with the same stationary loss rate and a mean burst of
+    ``mean_burst`` messages. Messages of vehicles farther than ``range`` from the roadside
+    unit (at the acceleration-lane start) never arrive. A plan reaches its vehicles the same
+    way: after one latency draw, or never.
+    """
+
+    update_rate: float = Field(10.0, gt=0, le=100, description="broadcasts per second [Hz]")
+    latency: float = Field(0.0, ge=0, le=5, description="fixed delay of every message [s]")
+    jitter: float = Field(0.0, ge=0, le=5, description="extra delay, uniform in [0, jitter] [s]")
+    loss: float = Field(0.0, ge=0, lt=1, description="stationary share of lost messages [-]")
+    loss_model: Literal["independent", "gilbert_elliott"] = Field(
+        "independent", description="'independent' losses, or bursts of a Gilbert-Elliott chain"
+    )
+    mean_burst: float = Field(
+        5.0, ge=1, le=1000, description="Gilbert-Elliott: mean length of a loss burst [messages]"
+    )
+    range: float = Field(
+        math.inf, gt=0, description="communication range around the roadside unit [m]"
+    )
+    max_age: float = Field(
+        2.0, gt=0, le=60, description="the controller forgets a state older than this [s]"
+    )
+    stale_after: float = Field(
+        0.5,
+        gt=0,
+        le=60,
+        description="a CAV whose CAV leader's newest message is older than this drives on its "
+        "own sensors with the degraded time headway [s]",
+    )
+    degraded_time_headway: float = Field(
+        1.5, gt=0, le=10, description="time headway T of a CAV without its leader's messages [s]"
+    )
+
+    @property
+    def ideal(self) -> bool:
+        """Whether every message arrives at once (the nominal run)."""
+        return self.latency == 0 and self.jitter == 0 and self.loss == 0 and math.isinf(self.range)
+
+    @property
+    def period(self) -> float:
+        """Time between two broadcasts of one vehicle [s]."""
+        return 1.0 / self.update_rate
+
+
+class FaultParams(_Frozen):
+    """One injected fault, with its seeded timing (drawn from the run's seed, never from the
+    traffic's random stream, so the traffic before the fault is the nominal one).
+
+    * ``none``: the nominal run.
+    * ``emergency_brake``: the key vehicle ``role`` brakes at ``decel`` (default: the Eq. 15
+      emergency deceleration a_merg of the scenario's control table) from ``U(delay_min,
+      delay_max)`` seconds after the ramp vehicle entered the control zone, for ``U(duration_min,
+      duration_max)`` seconds (or until it stands), then drives on by its model.
+    * ``aggressive_hdv``: every human-driven key vehicle drives with ``time_headway``,
+      ``min_gap`` and ``max_accel`` (short headways; unknown to the controller, which predicts
+      with the nominal HDV model).
+    * ``ignore_command``: a CAV that a plan commands (VR or the cooperating vehicle) keeps
+      driving by its own model and does not start a commanded lane change.
+    """
+
+    kind: Literal["none", "emergency_brake", "aggressive_hdv", "ignore_command"] = "none"
+    role: Literal["vmf", "vmc", "vmr", "vnf", "vnr"] = Field(
+        "vmf", description="emergency_brake: the key vehicle that brakes"
+    )
+    decel: float | None = Field(
+        None, gt=0, le=15, description="emergency_brake: deceleration [m/s^2]; None = a_merg"
+    )
+    delay_min: float = Field(0.0, ge=0, le=600, description="earliest start after VR's entry [s]")
+    delay_max: float = Field(6.0, ge=0, le=600, description="latest start after VR's entry [s]")
+    duration_min: float = Field(1.0, gt=0, le=600, description="shortest braking [s]")
+    duration_max: float = Field(4.0, gt=0, le=600, description="longest braking [s]")
+    time_headway: float = Field(0.6, gt=0, le=10, description="aggressive_hdv: T [s]")
+    min_gap: float = Field(0.5, ge=0, le=20, description="aggressive_hdv: s0 [m]")
+    max_accel: float = Field(2.5, gt=0, le=10, description="aggressive_hdv: a [m/s^2]")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> FaultParams:
+        if self.delay_min > self.delay_max or self.duration_min > self.duration_max:
+            raise ValueError(
+                f"need delay_min <= delay_max and duration_min <= duration_max, got "
+                f"{self.delay_min}, {self.delay_max}, {self.duration_min}, {self.duration_max}"
+            )
+        return self
+
+
+class ShieldParams(_Frozen):
+    """The safety shield: an RSS safe-distance rule (Shalev-Shwartz, Shammah & Shashua 2017,
+    Definition 1) checked on the true state before a commanded vehicle's acceleration or a
+    commanded lane change acts (:mod:`hcomc.robustness.shield`)."""
+
+    enabled: bool = Field(False, description="check every commanded vehicle every step")
+    response_time: float = Field(0.3, ge=0, le=3, description="rho, response time [s]")
+    accel_max: float = Field(
+        1.4, ge=0, le=10, description="a_max,accel, worst acceleration during rho [m/s^2]"
+    )
+    brake_min: float = Field(
+        4.0, gt=0, le=15, description="b_min,brake, the braking the shield commands [m/s^2]"
+    )
+    brake_max: float = Field(
+        7.5, gt=0, le=15, description="b_max,brake, the leader's worst braking (a_merg) [m/s^2]"
+    )
+
+
+CHANNELS: dict[str, ChannelParams] = {
+    "ideal": ChannelParams(),
+    "lat100-loss10": ChannelParams(latency=0.1, loss=0.1),
+    "lat300-loss30-bursty": ChannelParams(latency=0.3, loss=0.3, loss_model="gilbert_elliott"),
+}
+"""The campaign's channel settings: ideal, 100 ms + 10 % independent loss, 300 ms + 30 %
+bursty loss (mean burst 5 messages = 0.5 s)."""
+
+FAULTS: dict[str, FaultParams] = {
+    "none": FaultParams(),
+    "brake-vmf": FaultParams(kind="emergency_brake", role="vmf"),
+    "brake-vnf": FaultParams(kind="emergency_brake", role="vnf"),
+    "aggressive-hdv": FaultParams(kind="aggressive_hdv"),
+    "ignore-command": FaultParams(kind="ignore_command"),
+}
+"""The campaign's fault catalogue."""

@@ -1,0 +1,195 @@
+"""The safety shield: an RSS safe-distance rule checked before a command acts.
+
+Responsibility-Sensitive Safety (Shalev-Shwartz, Shammah & Shashua 2017, "On a Formal
+Model of Safe and Scalable Self-driving Cars", Definition 1): a rear vehicle at speed
+``v_r`` is at a safe distance behind a front vehicle at ``v_f`` if, when the front vehicle
+brakes at up to ``b_max`` and the rear one accelerates at up to ``a_max`` during its response
+time ``rho`` and then brakes at least ``b_min``, they do not touch.
+
+The shield runs between two steps of a run on the true state. For every vehicle a live plan
+commands (:func:`commanded_vehicles`) and every lane its body occupies, it checks the distance
+to the nearest vehicle ahead; closer than :func:`rss_safe_distance`, the vehicle brakes for
+the next step at ``min(its car-following acceleration behind that vehicle, -b_min)`` (RSS's
+proper response), which replaces the plan's command. A commanded lane change of VR is
+gated the same way, before it starts: against the target lane's leader (VR behind) and
+follower (VR ahead); unsafe, the change waits a step, and if VR could no longer stop before
+the lane end it is released to gap acceptance (the engine's own fallback). Every override is
+recorded.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from hcomc._typing import FloatArray, IntArray
+from hcomc.config import ScenarioConfig
+from hcomc.road import Lane
+from hcomc.robustness.settings import ShieldParams
+from hcomc.sim import core_plans as plans
+from hcomc.sim.core_state import N_PLANS
+
+if TYPE_CHECKING:
+    from hcomc.robustness.engine import FaultedSimulation
+
+__all__ = ["Override", "Shield", "commanded_vehicles", "rss_safe_distance"]
+
+
+def rss_safe_distance(
+    v_rear: FloatArray | float, v_front: FloatArray | float, response_time: float,
+    accel_max: float, brake_min: float, brake_max: float,
+) -> FloatArray:  # fmt: skip
+    """Minimal safe longitudinal distance [m] (RSS Definition 1):
+
+    ``[v_r rho + a_max rho^2 / 2 + (v_r + rho a_max)^2 / (2 b_min) - v_f^2 / (2 b_max)]_+``
+
+    Parameters: speeds [m/s] (arrays broadcast), ``response_time`` rho [s], ``accel_max``
+    [m/s^2] (the rear vehicle's worst acceleration during rho), ``brake_min`` [m/s^2] (the
+    braking the rear vehicle applies at least), ``brake_max`` [m/s^2] (the front vehicle's
+    worst braking).
+    """
+    v_r, v_f = np.asarray(v_rear, dtype=float), np.asarray(v_front, dtype=float)
+    reach = v_r + response_time * accel_max
+    d = (v_r * response_time + 0.5 * accel_max * response_time**2
+         + reach**2 / (2.0 * brake_min) - v_f**2 / (2.0 * brake_max))  # fmt: skip
+    return np.maximum(d, 0.0)
+
+
+def safe_behind(params: ShieldParams, gap: float, v_rear: float, v_front: float) -> bool:
+    """Whether a bumper gap [m] is at least the RSS safe distance of ``params``."""
+    d = rss_safe_distance(v_rear, v_front, params.response_time, params.accel_max,
+                          params.brake_min, params.brake_max)  # fmt: skip
+    return gap >= float(d)
+
+
+@dataclass(frozen=True, slots=True)
+class Override:
+    """One shield intervention: time [s], vehicle, the vehicle it was unsafe to, and what
+    the shield did ("brake", "hold_change" or "release")."""
+
+    t: float
+    vehicle: int
+    other: int
+    action: str
+
+
+def commanded_vehicles(c: Any) -> IntArray:
+    """Vehicles a live plan commands now: VR until its plan releases it (on the ramp and in
+    its commanded change), a commanded cooperating vehicle (VMC) and a commanded VNR."""
+    pi = c.plan_int[: int(c.counters[N_PLANS])]
+    vr = pi[(pi[:, plans.P_VR_CMD] != 0) & (pi[:, plans.P_RELEASED] == 0), plans.P_VR]
+    vmc = pi[pi[:, plans.P_VMC_CMD] != 0, plans.P_VMC]
+    vnr = pi[pi[:, plans.P_VNR_CMD] != 0, plans.P_VNR]
+    ids = np.concatenate([vr, vmc, vnr])
+    return np.unique(ids[ids >= 0])
+
+
+def lane_leaders(c: Any, i: int) -> list[int]:
+    """The nearest active vehicle ahead of ``i`` in each lane its body occupies (its lane,
+    and during a change its origin and target lanes)."""
+    active = np.flatnonzero(c.active)
+    out = []
+    for lane in {int(c.lane[i]), int(c.origin[i]), int(c.target[i])}:
+        occupies = (
+            (c.origin[active] == lane) | (c.target[active] == lane) | (c.lane[active] == lane)
+        )
+        ahead = active[occupies & (c.x[active] > c.x[i]) & (active != i)]
+        if ahead.size:
+            out.append(int(ahead[np.argmin(c.x[ahead])]))
+    return out
+
+
+def lane_neighbours(c: Any, i: int, lane: int) -> tuple[int, int]:
+    """``(leader, follower)`` of position ``x[i]`` in ``lane`` (-1: none), ``i`` excluded."""
+    active = np.flatnonzero(c.active)
+    occupies = (c.origin[active] == lane) | (c.target[active] == lane) | (c.lane[active] == lane)
+    there = active[occupies & (active != i)]
+    ahead, behind = there[c.x[there] > c.x[i]], there[c.x[there] <= c.x[i]]
+    leader = int(ahead[np.argmin(c.x[ahead])]) if ahead.size else -1
+    follower = int(behind[np.argmax(c.x[behind])]) if behind.size else -1
+    return leader, follower
+
+
+class Shield:
+    """The shield of one run (:class:`~hcomc.robustness.settings.ShieldParams`); with
+    ``enabled`` false it only tells which vehicles are commanded."""
+
+    def __init__(self, params: ShieldParams, config: ScenarioConfig) -> None:
+        self.params, self.config = params, config
+        self.overrides: list[Override] = []
+        self._braking: set[int] = set()  # vehicles the shield drives this step
+
+    def commanded(self, sim: FaultedSimulation) -> IntArray:
+        """The vehicles live plans command now (:func:`commanded_vehicles`)."""
+        return commanded_vehicles(sim.arrays)
+
+    def leaders_in_lane(self, sim: FaultedSimulation, ids: IntArray) -> IntArray:
+        """The nearest active vehicle ahead of each of ``ids`` in its own lane (-1: none)."""
+        active = np.flatnonzero(sim.active)
+        order = active[np.lexsort((sim.x[active], sim.lane[active]))]  # by lane, then x
+        rank = np.empty(sim.x.size, dtype=np.int64)
+        rank[order] = np.arange(order.size)
+        nxt = np.minimum(rank[ids] + 1, order.size - 1)
+        ahead = order[nxt]
+        found = (rank[ids] + 1 < order.size) & (sim.lane[ahead] == sim.lane[ids])
+        return np.where(found, ahead, -1)
+
+    def act(self, sim: FaultedSimulation, t: float) -> None:
+        """Check every commanded vehicle before the next step (see the module docstring)."""
+        if not self.params.enabled:
+            return
+        self._gate_changes(sim, t)
+        commanded = self.commanded(sim)
+        braking: dict[int, float] = {}
+        for i in commanded.tolist():
+            if sim.fault.drives(i):
+                continue
+            unsafe = [j for j in lane_leaders(sim.arrays, i) if not self._safe(sim, i, j)]
+            if unsafe:
+                follow = sim._follow(np.full(len(unsafe), i), np.array(unsafe))
+                braking[i] = min(float(follow.min()), -self.params.brake_min)
+                self.overrides.append(Override(t, i, unsafe[0], "brake"))
+        for i in self._braking - braking.keys():
+            sim.command(i, math.nan)
+        for i, acc in braking.items():
+            sim.command(i, acc)
+        self._braking = set(braking)
+
+    def _safe(self, sim: FaultedSimulation, rear: int, front: int) -> bool:
+        gap = float(sim.x[front] - sim.fleet.length[front] - sim.x[rear])
+        return safe_behind(self.params, gap, float(sim.v[rear]), float(sim.v[front]))
+
+    def _gate_changes(self, sim: FaultedSimulation, t: float) -> None:
+        """Hold a commanded merge about to start next to an unsafe gap; release VR to gap
+        acceptance once it could no longer stop before the lane end."""
+        c = sim.arrays
+        n = int(c.counters[N_PLANS])
+        pi, pf = c.plan_int, c.plan_f
+        for k in range(n):
+            vr = int(pi[k, plans.P_VR])
+            waiting = (pi[k, plans.P_VR_CMD] and not pi[k, plans.P_VR_STARTED]
+                       and not pi[k, plans.P_RELEASED] and sim.origin[vr] == sim.target[vr]
+                       and sim.lane[vr] == Lane.RAMP)  # fmt: skip
+            if not waiting or sim.x[vr] < pf[k, plans.F_MERGE_X]:
+                continue
+            leader, follower = lane_neighbours(c, vr, int(Lane.MAIN_1))
+            bad = [j for j, ok in ((leader, leader < 0 or self._safe(sim, vr, leader)),
+                                   (follower, follower < 0 or self._safe(sim, follower, vr)))
+                   if not ok]  # fmt: skip
+            if not bad:
+                continue
+            stop = sim.v[vr] ** 2 / (2 * self.config.lane_change.safe_decel) + sim.fleet.s0[vr]
+            if sim.x[vr] >= self.config.road.accel_lane_end - stop:
+                pi[k, plans.P_RELEASED] = 1
+                self.overrides.append(Override(t, vr, bad[0], "release"))
+            else:
+                pf[k, plans.F_MERGE_X] = sim.x[vr] + sim.v[vr] * sim.dt + 1e-6
+                self.overrides.append(Override(t, vr, bad[0], "hold_change"))
+
+    def counts(self) -> dict[str, int]:
+        """Overrides by action."""
+        actions = [o.action for o in self.overrides]
+        return {a: actions.count(a) for a in ("brake", "hold_change", "release")}

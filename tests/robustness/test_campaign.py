@@ -1,0 +1,88 @@
+"""``hcomc faults``: the campaign end to end through the CLI, resumable and never mixed,
+and docs/robustness.md against the data it was generated from."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+from typer.testing import CliRunner
+
+from hcomc.cli import app
+from hcomc.robustness.campaign import FaultRun, run_faulted
+from hcomc.robustness.publish import BEGIN, END, generated_part
+from hcomc.robustness.settings import CHANNELS, FAULTS
+from hcomc.robustness.tables import CELL, summarise
+
+runner = CliRunner()
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+SMALL = ["faults", "--seeds", "2", "--conditions", "C2", "--configurations", "FIFO,HCOMC",
+         "--faults", "none,brake-vmf", "--channels", "ideal,lat300-loss30-bursty",
+         "--workers", "1"]  # fmt: skip
+
+
+def test_campaign_runs_resumes_and_refuses_to_mix(tmp_path):
+    out = tmp_path / "faults"
+    first = runner.invoke(app, [*SMALL, "--out", str(out)])
+    assert first.exit_code == 0, first.output
+    runs = pd.read_csv(out / "runs.csv")
+    assert (
+        len(runs) == 1 * 2 * 2 * 2 * 2 * 2
+    )  # conditions x configs x faults x channels x shield x seeds
+    assert set(runs["fault"]) == {"none", "brake-vmf"}
+    # one row per cell, equal to a pandas aggregation written out here
+    summary = pd.read_csv(out / "summary.csv")
+    assert len(summary) == 16
+    for _, cell in summary.iterrows():
+        mine = runs[(runs[CELL] == cell[CELL]).all(axis=1)]
+        assert cell["runs"] == len(mine) == 2
+        assert cell["collisions_commanded"] == mine["collisions_commanded"].sum()
+        assert cell["merged"] == mine["merged"].sum()
+    # every run is its pure function: one row recomputed alone equals the table's
+    row = runs[(runs["configuration"] == "HCOMC") & (runs["fault"] == "brake-vmf")
+               & (runs["channel"] == "lat300-loss30-bursty") & runs["shield"]].iloc[1]  # fmt: skip
+    again = run_faulted(FaultRun("C2", "HCOMC", "brake-vmf", "lat300-loss30-bursty", True,
+                                 int(row["seed"]), FAULTS["brake-vmf"],
+                                 CHANNELS["lat300-loss30-bursty"]))  # fmt: skip
+    for key in ("collisions", "plans", "plans_lost", "shield_brakes", "min_ttc", "merged"):
+        assert again[key] == row[key] or (again[key] != again[key] and row[key] != row[key])
+    # rerun: every cell is found done, nothing is recomputed
+    parts = {p: p.stat().st_mtime_ns for p in (out / "parts").iterdir()}
+    second = runner.invoke(app, [*SMALL, "--out", str(out)])
+    assert second.exit_code == 0, second.output
+    assert {p: p.stat().st_mtime_ns for p in (out / "parts").iterdir()} == parts
+    # another spec in the same directory is refused, one line, exit 2
+    other = runner.invoke(app, [*SMALL[:2], "3", *SMALL[3:], "--out", str(out)])
+    assert other.exit_code == 2
+    assert "another spec" in other.stderr
+    assert other.stderr.strip().count("\n") == 0
+
+
+def test_bad_campaign_options_are_one_line_errors(tmp_path):
+    for args, fragment in (
+        (["--faults", "fire"], "--faults"),
+        (["--channels", "carrier-pigeon"], "--channels"),
+        (["--conditions", "C9"], "--conditions"),
+        (["--seeds", "0"], "--seeds"),
+        (["--configurations", "Nobody"], "--configurations"),
+    ):
+        result = runner.invoke(app, ["faults", *args, "--out", str(tmp_path / "x")])
+        assert result.exit_code == 2, (args, result.output)
+        assert fragment in result.stderr
+        assert result.stderr.strip().count("\n") == 0
+
+
+def test_docs_page_is_generated_from_its_data():
+    data = DOCS / "data" / "robustness"
+    runs = pd.read_csv(data / "runs.csv")
+    meta = json.loads((data / "campaign.json").read_text())
+    stamp = f"hcomc {meta['version']}, revision {meta['revision']}"
+    text = (DOCS / "robustness.md").read_text()
+    part = text[text.index(BEGIN) : text.index(END) + len(END)]
+    assert part == generated_part(runs, stamp, seeds=len(meta["spec"]["seeds"]))
+    summary = pd.read_csv(data / "summary.csv")
+    pd.testing.assert_frame_equal(summary, summarise(runs), check_dtype=False)
+    assert set(runs["fault"]) == set(FAULTS)
+    assert set(runs["channel"]) == set(CHANNELS)
