@@ -7,10 +7,11 @@ import json
 from pathlib import Path
 
 import pandas as pd
+import pytest
 from typer.testing import CliRunner
 
 from hcomc.cli import app
-from hcomc.robustness.campaign import FaultRun, run_faulted
+from hcomc.robustness.campaign import CampaignSpec, FaultRun, run_campaign, run_faulted
 from hcomc.robustness.publish import BEGIN, END, generated_part
 from hcomc.robustness.settings import CHANNELS, FAULTS
 from hcomc.robustness.tables import CELL, summarise
@@ -86,3 +87,17 @@ def test_docs_page_is_generated_from_its_data():
     pd.testing.assert_frame_equal(summary, summarise(runs), check_dtype=False)
     assert set(runs["fault"]) == set(FAULTS)
     assert set(runs["channel"]) == set(CHANNELS)
+
+
+@pytest.mark.slow
+def test_local_processes_and_a_dask_cluster_give_the_same_runs(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    spec = CampaignSpec(conditions=("C4",), configurations=("HCOMC",), faults=("brake-vmf",),
+                        channels=("lat100-loss10",), seeds=(0, 1))  # fmt: skip
+    local = run_campaign(spec, tmp_path / "local", workers=2)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:  # fmt: skip
+        remote = run_campaign(spec, tmp_path / "dask", scheduler=cluster.scheduler_address)
+    columns = [c for c in local.columns if c != "wall_s"]
+    pd.testing.assert_frame_equal(local[columns], remote[columns])
+    assert len(local) == 4

@@ -40,6 +40,9 @@ def faults(
         "results/faults"
     ),
     workers: Annotated[int | None, typer.Option(help="Processes (default: all cores).")] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler address (default: local processes).")
+    ] = None,
     force: Annotated[bool, typer.Option(help="Start the campaign in --out afresh.")] = False,
     docs: Annotated[
         Path | None, typer.Option(help="Also write DOCS/robustness.md and its data.")
@@ -57,6 +60,9 @@ def faults(
         raise _fail(f"option '--seeds' = {seeds}: allowed 1 .. {_MAX_SEEDS}")
     if workers is not None and not 1 <= workers <= 256:
         raise _fail(f"option '--workers' = {workers}: allowed 1 .. 256")
+    if workers is not None and scheduler is not None:
+        raise _fail(f"option '--workers' = {workers} does not apply with '--scheduler': the "
+                    "Dask cluster's workers run the campaign")  # fmt: skip
     scenario_presets = [p for p in preset_names() if p != "platoon"]
     axes: dict[str, Any] = {
         k: v for k, v in {
@@ -71,7 +77,8 @@ def faults(
     _compiled()
     n_workers = workers or os.cpu_count() or 1
     with _progress("cells", len(spec.cells())) as update:
-        runs = run_campaign(spec, out_dir, workers=n_workers, force=force, progress=update)
+        runs = run_campaign(spec, out_dir, workers=n_workers, scheduler=scheduler, force=force,
+                            progress=update)  # fmt: skip
     from hcomc.robustness.tables import OVERVIEW, summarise
 
     out.print(summarise(runs, OVERVIEW).to_string(index=False))

@@ -154,11 +154,32 @@ def _run_cell(runs: Sequence[FaultRun]) -> list[dict[str, Any]]:
     return [run_faulted(r) for r in runs]
 
 
+def _run_on_dask(
+    scheduler: str,
+    spec: CampaignSpec,
+    todo: list[tuple[str, str, str, str, bool]],
+    store: Callable[[tuple[str, str, str, str, bool], list[dict[str, Any]]], None],
+) -> None:
+    """The cells ``todo`` as Dask tasks (a lost worker's cell is retried twice)."""
+    from distributed import as_completed as dask_completed
+
+    from hcomc.experiments.workers import connect
+
+    client = connect(scheduler)
+    try:
+        futures = {client.submit(_run_cell, spec.runs(c), pure=False, retries=2): c for c in todo}
+        for future in dask_completed(list(futures)):
+            store(futures[future], future.result())
+    finally:
+        client.close()
+
+
 def run_campaign(
-    spec: CampaignSpec, out: Path, *, workers: int = 1, force: bool = False,
-    progress: Callable[[int, int], None] | None = None,
+    spec: CampaignSpec, out: Path, *, workers: int = 1, scheduler: str | None = None,
+    force: bool = False, progress: Callable[[int, int], None] | None = None,
 ) -> pd.DataFrame:  # fmt: skip
-    """Run every unfinished cell of ``spec`` into ``out`` and return all runs' rows."""
+    """Run every unfinished cell of ``spec`` into ``out`` (on ``workers`` local processes, or
+    on the Dask cluster at ``scheduler``) and return all runs' rows."""
     from hcomc.robustness.tables import summarise
 
     parts = out / "parts"
@@ -188,7 +209,9 @@ def run_campaign(
         if progress:
             progress(done, len(cells))
 
-    if workers <= 1:
+    if scheduler is not None:
+        _run_on_dask(scheduler, spec, todo, store)
+    elif workers <= 1:
         for cell in todo:
             store(cell, _run_cell(spec.runs(cell)))
     else:
