@@ -153,3 +153,22 @@ def test_shield_keeps_commanded_vehicles_at_rss_distance_or_braking():
     d = rss_safe_distance(25.0, 25.0, params.response_time, params.accel_max,
                           params.brake_min, params.brake_max)  # fmt: skip
     assert float(d) == pytest.approx(7.5 + 0.063 + 25.42**2 / 8 - 625 / 15, abs=1e-9)
+
+
+def test_sensor_dropout_holds_the_acceleration_of_its_start():
+    fault = FaultParams(kind="sensor_dropout", role="vmc", delay_min=1, delay_max=1,
+                        duration_min=2, duration_max=2)  # fmt: skip
+    for seed in range(6):
+        sim = FaultedSimulation(_config(), seed, fault=fault)
+        log = sim.run()
+        if sim.fault.vehicle >= 0:
+            break
+    else:
+        pytest.skip("no CAV VMC in seeds 0-5")
+    vmc = sim.fault.vehicle
+    assert vmc == sim.key_group.vmc
+    t = log.t
+    during = (t > sim.fault.start + 0.05) & (t < sim.fault.end - 0.05) & (log.v[:, vmc] > 0)
+    assert during.sum() >= 15
+    held = log.a[during, vmc]
+    np.testing.assert_allclose(held, held[0], atol=1e-5)

@@ -52,8 +52,11 @@ class Fault:
         """The first ramp vehicle entered the control zone with key vehicles ``group``."""
         if self.vehicle >= 0 or self.kind == "none":
             return
-        if self.kind == "emergency_brake":
-            self.vehicle = int(getattr(group, self.params.role))
+        if self.kind in ("emergency_brake", "sensor_dropout"):
+            who = int(getattr(group, self.params.role))
+            if self.kind == "sensor_dropout" and (who < 0 or sim.fleet.kind[who] != Kind.CAV):
+                return  # no CAV in that role: nothing to fail
+            self.vehicle = who
             self.start, self.end = t + self.delay, t + self.delay + self.duration
         elif self.kind == "aggressive_hdv":
             keys = [int(i) for i in group.as_array() if i >= 0]
@@ -65,12 +68,13 @@ class Fault:
             self.vehicle, self.start = (hdvs[0] if hdvs else -1), t
 
     def act(self, sim: FaultedSimulation, t: float) -> None:
-        """Start or end the emergency braking before the step at ``t``."""
-        if self.kind != "emergency_brake" or self.vehicle < 0:
+        """Start or end the emergency braking or the sensor dropout before the step at ``t``."""
+        if self.kind not in ("emergency_brake", "sensor_dropout") or self.vehicle < 0:
             return
         on = self.start <= t + 1e-9 < self.end and bool(sim.active[self.vehicle])
         if on and not self._braking:
-            sim.command(self.vehicle, -self.decel)
+            held = -self.decel if self.kind == "emergency_brake" else float(sim.a[self.vehicle])
+            sim.command(self.vehicle, held)
         elif self._braking and not on:
             sim.command(self.vehicle, math.nan)
         self._braking = on

@@ -85,11 +85,16 @@ class FaultParams(_Frozen):
       with the nominal HDV model).
     * ``ignore_command``: a CAV that a plan commands (VR or the cooperating vehicle) keeps
       driving by its own model and does not start a commanded lane change.
+    * ``sensor_dropout``: the key vehicle ``role``, if a CAV, loses its sensors for the same
+      seeded window as ``emergency_brake``: it holds the acceleration it had when they failed
+      (it no longer reacts to the traffic or to its plan), then drives on by its model.
     """
 
-    kind: Literal["none", "emergency_brake", "aggressive_hdv", "ignore_command"] = "none"
+    kind: Literal[
+        "none", "emergency_brake", "aggressive_hdv", "ignore_command", "sensor_dropout"
+    ] = "none"
     role: Literal["vmf", "vmc", "vmr", "vnf", "vnr"] = Field(
-        "vmf", description="emergency_brake: the key vehicle that brakes"
+        "vmf", description="emergency_brake, sensor_dropout: the key vehicle it happens to"
     )
     decel: float | None = Field(
         None, gt=0, le=15, description="emergency_brake: deceleration [m/s^2]; None = a_merg"
@@ -144,5 +149,6 @@ FAULTS: dict[str, FaultParams] = {
     "brake-vnf": FaultParams(kind="emergency_brake", role="vnf"),
     "aggressive-hdv": FaultParams(kind="aggressive_hdv"),
     "ignore-command": FaultParams(kind="ignore_command"),
+    "dropout-vmc": FaultParams(kind="sensor_dropout", role="vmc"),
 }
 """The campaign's fault catalogue."""
