@@ -9,6 +9,7 @@ from typing import Annotated, Any
 import typer
 
 from hcomc.cli._app import _compiled, _fail, _progress, app, out
+from hcomc.robustness.settings import CHANNELS, FAULTS
 
 _MAX_SEEDS = 100_000
 
@@ -32,9 +33,12 @@ def faults(
     configurations: Annotated[
         str | None, typer.Option(help="Configurations (default: FIFO,Game,HCOMC).")
     ] = None,
-    fault: Annotated[str | None, typer.Option("--faults", help="Faults (default: all).")] = None,
+    fault: Annotated[
+        str | None, typer.Option("--faults", help=f"Faults: {', '.join(FAULTS)} (default: all).")
+    ] = None,
     channel: Annotated[
-        str | None, typer.Option("--channels", help="Channel settings (default: all).")
+        str | None,
+        typer.Option("--channels", help=f"Channel settings: {', '.join(CHANNELS)} (default: all)."),
     ] = None,
     out_dir: Annotated[Path, typer.Option("--out", help="Campaign directory.")] = Path(
         "results/faults"
@@ -54,7 +58,6 @@ def faults(
     from hcomc.config import preset_names
     from hcomc.experiments.runner import ALL_CONFIGURATIONS
     from hcomc.robustness.campaign import CampaignSpec, run_campaign
-    from hcomc.robustness.settings import CHANNELS, FAULTS
 
     if not 1 <= seeds <= _MAX_SEEDS:
         raise _fail(f"option '--seeds' = {seeds}: allowed 1 .. {_MAX_SEEDS}")
