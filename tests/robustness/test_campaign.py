@@ -24,7 +24,7 @@ SMALL = ["faults", "--seeds", "2", "--conditions", "C2", "--configurations", "FI
          "--workers", "1"]  # fmt: skip
 
 
-def test_campaign_runs_resumes_and_refuses_to_mix(tmp_path):
+def test_campaign_runs_resumes_and_refuses_to_mix(tmp_path, monkeypatch):
     out = tmp_path / "faults"
     first = runner.invoke(app, [*SMALL, "--out", str(out)])
     assert first.exit_code == 0, first.output
@@ -59,6 +59,13 @@ def test_campaign_runs_resumes_and_refuses_to_mix(tmp_path):
     assert other.exit_code == 2
     assert "another spec" in other.stderr
     assert other.stderr.strip().count("\n") == 0
+    # so is the same spec with other code; the campaign's stamp keeps its first revision
+    stamp = (out / "campaign.json").read_text()
+    monkeypatch.setattr("hcomc.experiments.provenance.code_stamp", lambda: "edited")
+    edited = runner.invoke(app, [*SMALL, "--out", str(out)])
+    assert edited.exit_code == 2
+    assert "code" in edited.stderr
+    assert (out / "campaign.json").read_text() == stamp
 
 
 def test_bad_campaign_options_are_one_line_errors(tmp_path):

@@ -5,8 +5,8 @@ row. Seeds are shared across every other axis (the same traffic and the same fau
 so each cell is paired with the nominal run of the same seeds (fault ``none``, ideal channel,
 no shield). A campaign directory holds ``campaign.json`` (the spec, package version and git
 revision: a rerun with another spec or version is refused, so results never mix), one
-``parts/<cell>.csv`` per finished cell (written atomically; a killed campaign rerun skips
-them) and, when all cells are done, ``runs.csv`` and ``summary.csv``
+``parts/<cell>.csv`` per finished cell (written atomically; a killed campaign rerun with the
+same spec and code skips them) and, when all cells are done, ``runs.csv`` and ``summary.csv``
 (:func:`hcomc.robustness.tables.summarise`).
 """
 
@@ -137,8 +137,11 @@ class CampaignSpec:
                          CHANNELS[channel]) for seed in self.seeds]  # fmt: skip
 
     def identity(self) -> dict[str, Any]:
-        """What a campaign directory's results depend on."""
-        return {"spec": asdict(self), "version": hcomc.__version__,
+        """What a campaign directory's results depend on: the spec, the settings it names,
+        hcomc's version and the hash of its result-bearing code."""
+        from hcomc.experiments.provenance import code_stamp
+
+        return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
                 "shield": ShieldParams().model_dump()}  # fmt: skip
@@ -189,12 +192,14 @@ def run_campaign(
     if stamp.exists() and not force:
         recorded = json.loads(stamp.read_text())
         if {k: recorded.get(k) for k in identity} != json.loads(json.dumps(identity)):
-            raise ConfigError(f"{out} holds a campaign of another spec or hcomc version; "
-                              "allowed: the same spec, another --out, or --force")  # fmt: skip
-    elif force:
+            raise ConfigError(
+                f"{out} holds a campaign of another spec, hcomc version or code; allowed: "
+                "the same spec and code, another --out, or --force"
+            )
+    else:  # a new campaign (the revision it started at stays with its runs)
         for old in parts.glob("*.csv"):
             old.unlink()
-    write_json_atomic(stamp, {**identity, "revision": git_revision()})
+        write_json_atomic(stamp, {**identity, "revision": git_revision()})
     cells = spec.cells()
     todo = [c for c in cells if not (parts / f"{_cell_name(c)}.csv").exists()]
     done = len(cells) - len(todo)

@@ -89,7 +89,8 @@ def page(runs: pd.DataFrame, stamp: str, command: str) -> str:
         f"{len(runs)} runs: {runs['condition'].nunique()} conditions × "
         f"{runs['configuration'].nunique()} configurations × {runs['fault'].nunique()} faults × "
         f"{runs['channel'].nunique()} channels × shield off/on × {seeds} seeds "
-        f"({stamp}).",
+        f"({stamp}); simulated and measured in {runs['wall_s'].sum() / 60:.1f} CPU-minutes "
+        f"({runs['wall_s'].mean():.2f} s per run).",
         "",
         _markdown(overview[cols]),
         "",
