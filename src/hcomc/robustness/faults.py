@@ -84,8 +84,8 @@ class Fault:
         return self._braking and i == self.vehicle
 
     def ignores(self, plan: MergePlan) -> set[int]:
-        """Vehicles that ignore ``plan``: with ``ignore_command``, its cooperating vehicle
-        (VR when it commands none) if that is a CAV, for the whole run."""
+        """Vehicles that ignore ``plan``: with ``ignore_command``, the first plan's
+        cooperating vehicle (VR when it commands none), for the whole run."""
         if self.kind != "ignore_command":
             return set()
         if not self._ignoring:

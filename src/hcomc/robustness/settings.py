@@ -83,8 +83,8 @@ class FaultParams(_Frozen):
     * ``aggressive_hdv``: every human-driven key vehicle drives with ``time_headway``,
       ``min_gap`` and ``max_accel`` (short headways; unknown to the controller, which predicts
       with the nominal HDV model).
-    * ``ignore_command``: a CAV that a plan commands (VR or the cooperating vehicle) keeps
-      driving by its own model and does not start a commanded lane change.
+    * ``ignore_command``: the vehicle the first plan commands to cooperate (VR when it
+      commands none) keeps driving by its own model and starts no commanded lane change.
     * ``sensor_dropout``: the key vehicle ``role``, if a CAV, loses its sensors for the same
       seeded window as ``emergency_brake``: it holds the acceleration it had when they failed
       (it no longer reacts to the traffic or to its plan), then drives on by its model.
