@@ -200,15 +200,19 @@ def run_campaign(
         for old in parts.glob("*.csv"):
             old.unlink()
         write_json_atomic(stamp, {**identity, "revision": git_revision()})
+
+    def part(cell: tuple[str, str, str, str, bool]) -> Path:
+        return parts / f"{_cell_name(cell)}.csv"
+
     cells = spec.cells()
-    todo = [c for c in cells if not (parts / f"{_cell_name(c)}.csv").exists()]
+    todo = [c for c in cells if not part(c).exists()]
     done = len(cells) - len(todo)
     if progress:
         progress(done, len(cells))
 
     def store(cell: tuple[str, str, str, str, bool], rows: list[dict[str, Any]]) -> None:
         nonlocal done
-        with atomic_paths(parts / f"{_cell_name(cell)}.csv") as (tmp,):
+        with atomic_paths(part(cell)) as (tmp,):
             pd.DataFrame(rows).to_csv(tmp, index=False)
         done += 1
         if progress:
@@ -224,8 +228,7 @@ def run_campaign(
             futures = {pool.submit(_run_cell, spec.runs(c)): c for c in todo}
             for future in as_completed(futures):
                 store(futures[future], future.result())
-    table = pd.concat([pd.read_csv(parts / f"{_cell_name(c)}.csv") for c in cells],
-                      ignore_index=True)  # fmt: skip
+    table = pd.concat([pd.read_csv(part(c)) for c in cells], ignore_index=True)
     with atomic_paths(out / "runs.csv", out / "summary.csv") as (runs_tmp, summary_tmp):
         table.to_csv(runs_tmp, index=False)
         summarise(table).to_csv(summary_tmp, index=False)

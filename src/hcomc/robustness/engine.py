@@ -34,7 +34,7 @@ from hcomc.road import Kind, Lane
 from hcomc.robustness.channel import Channel
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
-from hcomc.robustness.shield import Shield
+from hcomc.robustness.shield import Shield, commanded_vehicles
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_plans import add_plan, encode_plan
@@ -43,8 +43,6 @@ from hcomc.sim.execution import plan_record
 from hcomc.sim.log import EventKind, SimulationLog
 
 __all__ = ["FaultedSimulation"]
-
-_T_ROW = 1  # row of the time headway T in the fleet's parameter matrix
 
 
 class FaultedSimulation(Simulation):
@@ -66,10 +64,10 @@ class FaultedSimulation(Simulation):
         self.channel = Channel(self.channel_params, n, config.road.accel_lane_start, self.seed)
         self.fault = Fault(fault or FaultParams(), config, self.seed)
         self.shield = Shield(shield or ShieldParams(), config)
-        # the engine's parameters may change (faults, degraded headway); controllers predict
-        # with the nominal ones
+        # the engine's parameters may change (faults, degraded headway): ``driving`` reads and
+        # writes the ones it drives with; controllers predict with the nominal ones
+        self.driving = dataclasses.replace(self.fleet, matrix=self.arrays.matrix)
         self.nominal_fleet = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
-        self._nominal_T = self.arrays.matrix[_T_ROW].copy()
         self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
         self._next_plan: dict[int, float] = {}  # VR -> earliest next decision after a loss
         self._broadcast_every = max(1, round(self.channel_params.period / self.dt))
@@ -101,8 +99,8 @@ class FaultedSimulation(Simulation):
             self._deliver_plans(t)
             self._degrade(t)
         self.fault.act(self, t)
-        self.shield.act(self, t)
-        commanded = self.shield.commanded(self)
+        commanded = commanded_vehicles(self.arrays)
+        self.shield.act(self, t, commanded)
         if commanded.size:
             self.commanded_at[self.step_index] = frozenset(commanded.tolist())
 
@@ -206,9 +204,9 @@ class FaultedSimulation(Simulation):
     # ------------------------------------------------------------ degraded CAVs
     def _degrade(self, t: float) -> None:
         """CAVs behind a CAV whose newest message is stale drive with the degraded headway."""
-        T = self.arrays.matrix[_T_ROW]
+        T = self.driving.T
         ids = np.flatnonzero(self.active & (self.fleet.kind == Kind.CAV))
-        T[ids] = self._nominal_T[ids]
+        T[ids] = self.nominal_fleet.T[ids]
         if ids.size == 0:
             return
         leaders = self.shield.leaders_in_lane(self, ids)

@@ -26,8 +26,6 @@ __all__ = ["FAULT_STREAM", "Fault"]
 FAULT_STREAM = 0xFA17
 """Spawn key of a fault's generator: ``SeedSequence([seed, FAULT_STREAM])``."""
 
-_T, _S0, _A = 1, 2, 3  # rows of T, s0 and a in the fleet's parameter matrix
-
 
 class Fault:
     """The fault of one run: what it does, to whom, and when."""
@@ -61,10 +59,10 @@ class Fault:
         elif self.kind == "aggressive_hdv":
             keys = [int(i) for i in group.as_array() if i >= 0]
             hdvs = [i for i in keys if sim.fleet.kind[i] == Kind.HDV]
-            m = sim.arrays.matrix
-            m[_T, hdvs], m[_S0, hdvs], m[_A, hdvs] = (
-                self.params.time_headway, self.params.min_gap, self.params.max_accel
-            )  # fmt: skip
+            driving = sim.driving
+            driving.T[hdvs] = self.params.time_headway
+            driving.s0[hdvs] = self.params.min_gap
+            driving.a[hdvs] = self.params.max_accel
             self.vehicle, self.start = (hdvs[0] if hdvs else -1), t
 
     def act(self, sim: FaultedSimulation, t: float) -> None:

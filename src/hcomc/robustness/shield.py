@@ -90,16 +90,8 @@ def commanded_vehicles(c: Any) -> IntArray:
 def lane_leaders(c: Any, i: int) -> list[int]:
     """The nearest active vehicle ahead of ``i`` in each lane its body occupies (its lane,
     and during a change its origin and target lanes)."""
-    active = np.flatnonzero(c.active)
-    out = []
-    for lane in {int(c.lane[i]), int(c.origin[i]), int(c.target[i])}:
-        occupies = (
-            (c.origin[active] == lane) | (c.target[active] == lane) | (c.lane[active] == lane)
-        )
-        ahead = active[occupies & (c.x[active] > c.x[i]) & (active != i)]
-        if ahead.size:
-            out.append(int(ahead[np.argmin(c.x[ahead])]))
-    return out
+    lanes = {int(c.lane[i]), int(c.origin[i]), int(c.target[i])}
+    return [j for j in (lane_neighbours(c, i, lane)[0] for lane in lanes) if j >= 0]
 
 
 def lane_neighbours(c: Any, i: int, lane: int) -> tuple[int, int]:
@@ -122,10 +114,6 @@ class Shield:
         self.overrides: list[Override] = []
         self._braking: set[int] = set()  # vehicles the shield drives this step
 
-    def commanded(self, sim: FaultedSimulation) -> IntArray:
-        """The vehicles live plans command now (:func:`commanded_vehicles`)."""
-        return commanded_vehicles(sim.arrays)
-
     def leaders_in_lane(self, sim: FaultedSimulation, ids: IntArray) -> IntArray:
         """The nearest active vehicle ahead of each of ``ids`` in its own lane (-1: none)."""
         active = np.flatnonzero(sim.active)
@@ -137,12 +125,12 @@ class Shield:
         found = (rank[ids] + 1 < order.size) & (sim.lane[ahead] == sim.lane[ids])
         return np.where(found, ahead, -1)
 
-    def act(self, sim: FaultedSimulation, t: float) -> None:
-        """Check every commanded vehicle before the next step (see the module docstring)."""
+    def act(self, sim: FaultedSimulation, t: float, commanded: IntArray) -> None:
+        """Check the ``commanded`` vehicles (:func:`commanded_vehicles`) before the next step
+        (see the module docstring)."""
         if not self.params.enabled:
             return
         self._gate_changes(sim, t)
-        commanded = self.commanded(sim)
         braking: dict[int, float] = {}
         for i in commanded.tolist():
             if sim.fault.drives(i):
