@@ -89,8 +89,8 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
         else math.nan,
         "degraded_steps": sim.degraded_steps,
         "collision_pair": _pair_roles(collisions, window.group),
-        "fault_involved": bool(sim.fault.vehicle >= 0 and sim.fault.vehicle in
-                               set(collisions["vehicle"]) | set(collisions["other"])),
+        "fault_involved": bool(set(sim.fault.vehicles)
+                               & (set(collisions["vehicle"]) | set(collisions["other"]))),
         "wall_s": time.perf_counter() - start,
     }  # fmt: skip
 

@@ -88,13 +88,24 @@ class FaultParams(_Frozen):
     * ``sensor_dropout``: the key vehicle ``role``, if a CAV, loses its sensors for the same
       seeded window as ``emergency_brake``: it holds the acceleration it had when they failed
       (it no longer reacts to the traffic or to its plan), then drives on by its model.
+    * ``sensor_noise``: the key vehicle ``role``, if a CAV, measures its leader with a faulty
+      sensor during the same seeded window: it drives by its car-following model (Eq. 3) on a
+      gap and a leader speed with Gaussian errors of ``gap_noise`` and ``speed_noise``, drawn
+      anew every step (no plan, no lane change of its own in the window).
+    * ``distracted_hdv``: every human-driven key vehicle is distracted during the same seeded
+      window: its car following (Eq. 1) acts on the traffic as it was ``distracted_delay``
+      seconds ago — the leader too, so a vehicle that merged in front of it within that time
+      is not yet seen — with a relative gap error ``distracted_gap_error`` (Eq. 2's
+      ``s exp(V_s w)``, ``w`` an Ornstein-Uhlenbeck process of the scenario's correlation
+      time); it makes no lane change of its own in the window.
     """
 
     kind: Literal[
-        "none", "emergency_brake", "aggressive_hdv", "ignore_command", "sensor_dropout"
-    ] = "none"
+        "none", "emergency_brake", "aggressive_hdv", "ignore_command", "sensor_dropout",
+        "sensor_noise", "distracted_hdv",
+    ] = "none"  # fmt: skip
     role: Literal["vmf", "vmc", "vmr", "vnf", "vnr"] = Field(
-        "vmf", description="emergency_brake, sensor_dropout: the key vehicle it happens to"
+        "vmf", description="emergency_brake, sensor_dropout, sensor_noise: the key vehicle"
     )
     decel: float | None = Field(
         None, gt=0, le=15, description="emergency_brake: deceleration [m/s^2]; None = a_merg"
@@ -106,6 +117,18 @@ class FaultParams(_Frozen):
     time_headway: float = Field(0.6, gt=0, le=10, description="aggressive_hdv: T [s]")
     min_gap: float = Field(0.5, ge=0, le=20, description="aggressive_hdv: s0 [m]")
     max_accel: float = Field(2.5, gt=0, le=10, description="aggressive_hdv: a [m/s^2]")
+    gap_noise: float = Field(
+        2.0, ge=0, le=50, description="sensor_noise: standard deviation of the measured gap [m]"
+    )
+    speed_noise: float = Field(
+        1.0, ge=0, le=20, description="sensor_noise: standard deviation of the leader's speed [m/s]"
+    )
+    distracted_delay: float = Field(
+        2.0, ge=0, le=10, description="distracted_hdv: age of what the driver acts on [s]"
+    )
+    distracted_gap_error: float = Field(
+        0.2, ge=0, le=1, description="distracted_hdv: V_s, relative gap-estimation error [-]"
+    )
 
     @model_validator(mode="after")
     def _ordered(self) -> FaultParams:
@@ -150,5 +173,7 @@ FAULTS: dict[str, FaultParams] = {
     "aggressive-hdv": FaultParams(kind="aggressive_hdv"),
     "ignore-command": FaultParams(kind="ignore_command"),
     "dropout-vmc": FaultParams(kind="sensor_dropout", role="vmc"),
+    "noise-vmc": FaultParams(kind="sensor_noise", role="vmc"),
+    "distracted-hdv": FaultParams(kind="distracted_hdv"),
 }
 """The campaign's fault catalogue."""
