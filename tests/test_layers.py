@@ -44,6 +44,8 @@ ALLOWED = {
     # The experiment runner can run a spec on the SUMO engine; the import happens only when
     # engine="sumo" is asked for, so SUMO stays an optional extra.
     ("hcomc.experiments.runner", "hcomc.sumo.cosim"),
+    # Likewise the robustness campaign, with --engine sumo.
+    ("hcomc.robustness.campaign", "hcomc.sumo.faulted"),
 }
 
 

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.robustness.campaign import CampaignSpec, FaultRun, run_campaign, run_faulted
-from hcomc.robustness.publish import BEGIN, END, generated_part
+from hcomc.robustness.publish import data_dir, generated_part, markers
 from hcomc.robustness.settings import CHANNELS, FAULTS
 from hcomc.robustness.tables import CELL, summarise
 
@@ -82,18 +82,27 @@ def test_bad_campaign_options_are_one_line_errors(tmp_path):
         assert result.stderr.strip().count("\n") == 0
 
 
-def test_docs_page_is_generated_from_its_data():
-    data = DOCS / "data" / "robustness"
+@pytest.mark.parametrize("engine", ["hcomc", "sumo"])
+def test_docs_page_is_generated_from_its_data(engine):
+    data = data_dir(DOCS, engine)
     runs = pd.read_csv(data / "runs.csv")
     meta = json.loads((data / "campaign.json").read_text())
-    stamp = f"hcomc {meta['version']}, revision {meta['revision']}"
     text = (DOCS / "robustness.md").read_text()
-    part = text[text.index(BEGIN) : text.index(END) + len(END)]
-    assert part == generated_part(runs, stamp, seeds=len(meta["spec"]["seeds"]))
+    begin, end = markers(engine)
+    part = text[text.index(begin) : text.index(end) + len(end)]
+    assert part == generated_part(runs, meta)
     summary = pd.read_csv(data / "summary.csv")
     pd.testing.assert_frame_equal(summary, summarise(runs), check_dtype=False)
-    assert set(runs["fault"]) == set(FAULTS)
-    assert set(runs["channel"]) == set(CHANNELS)
+    spec = meta["spec"]
+    assert set(runs["fault"]) == set(spec["faults"])
+    assert set(runs["channel"]) == set(spec["channels"])
+    assert len(runs) == len(runs.drop_duplicates([*CELL, "seed"]))
+    if engine == "hcomc":  # the whole catalogue, every channel
+        assert set(spec["faults"]) == set(FAULTS)
+        assert set(spec["channels"]) == set(CHANNELS)
+    else:
+        assert spec["engine"] == "sumo"
+        assert len(spec["seeds"]) >= 100
 
 
 @pytest.mark.slow

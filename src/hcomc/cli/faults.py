@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import typer
 
-from hcomc.cli._app import _compiled, _fail, _progress, app, out
+from hcomc.cli._app import Engine, _compiled, _engine, _fail, _progress, app, out
 from hcomc.robustness.settings import CHANNELS, FAULTS
 
 _MAX_SEEDS = 100_000
@@ -51,10 +51,11 @@ def faults(
     docs: Annotated[
         Path | None, typer.Option(help="Also write DOCS/robustness.md and its data.")
     ] = None,
+    engine: Engine = "hcomc",
 ) -> None:
     """Run the robustness campaign: conditions x configurations x faults x V2X channels x
-    shield off/on x seeds; rerun to resume. Writes runs.csv and summary.csv (one row per
-    cell) under --out."""
+    shield off/on x seeds, in our engine or in SUMO; rerun to resume. Writes runs.csv and
+    summary.csv (one row per cell) under --out."""
     from hcomc.config import preset_names
     from hcomc.experiments.runner import ALL_CONFIGURATIONS
     from hcomc.robustness.campaign import CampaignSpec, run_campaign
@@ -76,7 +77,7 @@ def faults(
             "channels": _names("--channels", channel, list(CHANNELS)),
         }.items() if v is not None
     }  # fmt: skip
-    spec = CampaignSpec(**axes, seeds=tuple(range(seeds)))
+    spec = CampaignSpec(**axes, seeds=tuple(range(seeds)), engine=_engine(engine))
     _compiled()
     n_workers = workers or os.cpu_count() or 1
     with _progress("cells", len(spec.cells())) as update:
@@ -89,5 +90,5 @@ def faults(
     if docs is not None:
         from hcomc.robustness.publish import publish
 
-        page = publish(out_dir, docs, seeds=seeds)
+        page = publish(out_dir, docs)
         out.print(f"wrote {page}")

@@ -21,7 +21,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
@@ -33,13 +33,17 @@ from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 
 __all__ = ["CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
 
+if TYPE_CHECKING:
+    from hcomc.sumo.faulted import FaultedSumoSimulation
+
 _SPAWN = multiprocessing.get_context("spawn")
 
 
 @dataclass(frozen=True)
 class FaultRun:
     """One run: condition, configuration (a label of :mod:`hcomc.experiments.runner`), the
-    fault and channel (names and settings), shield on or off, and the seed."""
+    fault and channel (names and settings), shield on or off, the seed, and the engine that
+    moves the vehicles (``hcomc``, or ``sumo`` for the co-simulation)."""
 
     condition: str
     configuration: str
@@ -50,6 +54,7 @@ class FaultRun:
     fault_params: FaultParams = FAULTS["none"]
     channel_params: ChannelParams = CHANNELS["ideal"]
     shield_params: ShieldParams = field(default_factory=ShieldParams)
+    engine: str = "hcomc"
 
 
 def run_faulted(run: FaultRun) -> dict[str, Any]:
@@ -65,8 +70,13 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
     start = time.perf_counter()
     config = load_config(run.condition, **configuration_overrides(run.configuration, {}))
     shield = run.shield_params.model_copy(update={"enabled": run.shield})
-    sim = FaultedSimulation(config, run.seed, channel=run.channel_params,
-                            fault=run.fault_params, shield=shield)  # fmt: skip
+    engine: type[FaultedSimulation] | type[FaultedSumoSimulation] = FaultedSimulation
+    if run.engine == "sumo":
+        from hcomc.sumo.faulted import FaultedSumoSimulation
+
+        engine = FaultedSumoSimulation
+    sim = engine(config, run.seed, channel=run.channel_params, fault=run.fault_params,
+                 shield=shield)  # fmt: skip
     log = sim.run()
     window = key_window(log)
     closing = closing_metrics(log, window)
@@ -115,8 +125,13 @@ class CampaignSpec:
     channels: tuple[str, ...] = tuple(CHANNELS)
     shields: tuple[bool, ...] = (False, True)
     seeds: tuple[int, ...] = tuple(range(10))
+    engine: str = "hcomc"
 
     def __post_init__(self) -> None:
+        from hcomc.experiments.runner import ENGINES
+
+        if self.engine not in ENGINES:
+            raise ConfigError(f"engine '{self.engine}'; allowed: {', '.join(ENGINES)}")
         for key, names, known in (("fault", self.faults, FAULTS),
                                   ("channel", self.channels, CHANNELS)):  # fmt: skip
             for name in names:
@@ -134,17 +149,43 @@ class CampaignSpec:
         """The runs of one cell, one per seed."""
         cond, conf, fault, channel, shield = cell
         return [FaultRun(cond, conf, fault, channel, shield, seed, FAULTS[fault],
-                         CHANNELS[channel]) for seed in self.seeds]  # fmt: skip
+                         CHANNELS[channel], engine=self.engine)
+                for seed in self.seeds]  # fmt: skip
 
     def identity(self) -> dict[str, Any]:
         """What a campaign directory's results depend on: the spec, the settings it names,
-        hcomc's version and the hash of its result-bearing code."""
+        hcomc's version, the hash of its result-bearing code (and SUMO's version)."""
         from hcomc.experiments.provenance import code_stamp
 
+        sumo = {"sumo_version": _sumo_version()} if self.engine == "sumo" else {}
         return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
-                "shield": ShieldParams().model_dump()}  # fmt: skip
+                "shield": ShieldParams().model_dump(), **sumo}  # fmt: skip
+
+    def command(self) -> str:
+        """The ``hcomc faults`` command line that runs this spec and publishes it."""
+        default = CampaignSpec()
+        words = ["hcomc faults"]
+        if self.engine != default.engine:
+            words.append(f"--engine {self.engine}")
+        words.append(f"--seeds {len(self.seeds)}")
+        for axis, option in (("conditions", "--conditions"),
+                             ("configurations", "--configurations"),
+                             ("faults", "--faults"), ("channels", "--channels")):  # fmt: skip
+            if getattr(self, axis) != getattr(default, axis):
+                words.append(f"{option} {','.join(getattr(self, axis))}")
+        out = "results/faults" if self.engine == "hcomc" else f"results/faults-{self.engine}"
+        return " ".join([*words, f"--out {out} --docs docs"])
+
+
+def _sumo_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("eclipse-sumo")
+    except PackageNotFoundError:  # pragma: no cover - SUMO from elsewhere
+        return "unknown"
 
 
 def _cell_name(cell: tuple[str, str, str, str, bool]) -> str:

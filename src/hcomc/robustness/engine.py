@@ -28,13 +28,12 @@ from typing import Any
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergeGroup, MergePlan, Mode, find_key_vehicles
+from hcomc.control.base import MergeController, MergePlan, Mode, find_key_vehicles
 from hcomc.control.validation import checked, name_of
 from hcomc.road import Kind, Lane
-from hcomc.robustness.channel import Channel
-from hcomc.robustness.faults import Fault
+from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
-from hcomc.robustness.shield import Shield, commanded_vehicles
+from hcomc.robustness.shield import commanded_vehicles
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_plans import add_plan, encode_plan
@@ -45,7 +44,7 @@ from hcomc.sim.log import EventKind, SimulationLog
 __all__ = ["FaultedSimulation"]
 
 
-class FaultedSimulation(Simulation):
+class FaultedSimulation(Impairments, Simulation):
     """One run of ``config`` with ``seed`` under ``channel``, ``fault`` and ``shield``."""
 
     def __init__(
@@ -59,21 +58,8 @@ class FaultedSimulation(Simulation):
         shield: ShieldParams | None = None,
     ) -> None:
         super().__init__(config, seed, controller)
-        self.channel_params = channel or ChannelParams()
-        n = self.x.size
-        self.channel = Channel(self.channel_params, n, config.road.accel_lane_start, self.seed)
-        self.fault = Fault(fault or FaultParams(), config, self.seed)
-        self.shield = Shield(shield or ShieldParams(), config)
-        # the engine's parameters may change (faults, degraded headway): ``driving`` reads and
-        # writes the ones it drives with; controllers predict with the nominal ones
-        self.driving = dataclasses.replace(self.fleet, matrix=self.arrays.matrix)
-        self.nominal_fleet = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
+        self._impair(channel, fault, shield, self.arrays.matrix)
         self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
-        self._next_plan: dict[int, float] = {}  # VR -> earliest next decision after a loss
-        self._broadcast_every = max(1, round(self.channel_params.period / self.dt))
-        self.plans_lost = 0
-        self.degraded_steps = 0
-        self.commanded_at: dict[int, frozenset[int]] = {}  # step -> commanded vehicles
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Any = None) -> SimulationLog:
@@ -153,15 +139,6 @@ class FaultedSimulation(Simulation):
             else:
                 self._pending.append((t + delay, len(self.decisions) - 1, plan))
 
-    def _decide(self, view: Any, group: MergeGroup) -> MergePlan:
-        """The controller's plan, or the safe default when a key vehicle was never heard."""
-        assert self.controller is not None
-        missing = [int(i) for i in group.as_array() if i >= 0 and not view.active[i]]
-        if missing:
-            return MergePlan(group, Mode.NONE, view.t, fallback=True,
-                             reason=f"no V2X message from vehicles {missing}")  # fmt: skip
-        return self.controller.plan(view, group, self.rng.spawn(1)[0])
-
     def _lost_due(self, t: float) -> list[int]:
         """Ramp vehicles whose last plan was lost and that are due for a new one."""
         return [vr for vr, when in self._next_plan.items() if when <= t + 1e-9
@@ -200,32 +177,3 @@ class FaultedSimulation(Simulation):
         c = self.arrays
         n = int(c.counters[layout.N_PLANS])
         c.counters[layout.N_PLANS] = add_plan(c.plan_int, c.plan_f, n, *row)
-
-    # ------------------------------------------------------------ degraded CAVs
-    def _degrade(self, t: float) -> None:
-        """CAVs behind a CAV whose newest message is stale drive with the degraded headway."""
-        T = self.driving.T
-        ids = np.flatnonzero(self.active & (self.fleet.kind == Kind.CAV))
-        T[ids] = self.nominal_fleet.T[ids]
-        if ids.size == 0:
-            return
-        leaders = self.shield.leaders_in_lane(self, ids)
-        has = leaders >= 0
-        stale = np.zeros(ids.size, dtype=bool)
-        stale[has] = (self.fleet.kind[leaders[has]] == Kind.CAV) & (
-            t - self.channel.heard[leaders[has]] > self.channel_params.stale_after
-        )
-        T[ids[stale]] = self.channel_params.degraded_time_headway
-        self.degraded_steps += int(stale.sum())
-
-    def collisions_commanded(self) -> int:
-        """COLLISION events with a vehicle that a live plan commanded in that step."""
-        ev = self.log.events_of(EventKind.COLLISION)
-        count = 0
-        for e in ev:
-            step = round((float(e["t"]) + self.config.warmup) / self.dt)
-            commanded = self.commanded_at.get(step, frozenset()) | self.commanded_at.get(
-                step - 1, frozenset()
-            )
-            count += int(int(e["vehicle"]) in commanded or int(e["other"]) in commanded)
-        return count

@@ -1,9 +1,10 @@
 """docs/robustness.md and its data, from a finished campaign directory.
 
 The page keeps its written text (what the campaign does, how to rerun it) and replaces the
-part between :data:`BEGIN` and :data:`END` with :func:`hcomc.robustness.tables.page` of the
-campaign's runs; the runs and the per-cell summary go to ``DOCS/data/robustness/``, so a test
-can check the page against the data it came from.
+part between the campaign engine's :func:`markers` with :func:`hcomc.robustness.tables.page`
+of the campaign's runs, headed by the command that made them; the runs, the per-cell summary
+and the campaign's stamp go to :func:`data_dir`, so a test can check the page against the
+data it came from.
 """
 
 from __future__ import annotations
@@ -11,47 +12,67 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from hcomc.config import ConfigError
+from hcomc.robustness.campaign import CampaignSpec
 from hcomc.robustness.tables import page
 from hcomc.sim.manifest import atomic_paths
 
-__all__ = ["BEGIN", "END", "generated_part", "publish"]
-
-BEGIN = "<!-- robustness tables: begin -->"
-END = "<!-- robustness tables: end -->"
+__all__ = ["data_dir", "generated_part", "markers", "publish"]
 
 
-def _stamp(campaign: Path) -> str:
-    meta = json.loads((campaign / "campaign.json").read_text())
-    return f"hcomc {meta['version']}, revision {meta['revision']}"
+def markers(engine: str) -> tuple[str, str]:
+    """The comments around the generated part of a campaign in ``engine``."""
+    where = "" if engine == "hcomc" else f" in {engine.upper()}"
+    return f"<!-- robustness tables{where}: begin -->", f"<!-- robustness tables{where}: end -->"
 
 
-def generated_part(runs: pd.DataFrame, stamp: str, seeds: int) -> str:
-    """The page's generated part for ``runs``."""
-    command = f"hcomc faults --seeds {seeds} --out results/faults --docs docs"
-    return f"{BEGIN}\n{page(runs, stamp, command)}\n{END}"
+def data_dir(docs: Path, engine: str) -> Path:
+    """Where a campaign's runs, summary and stamp are kept under ``docs``."""
+    base = docs / "data" / "robustness"
+    return base if engine == "hcomc" else base / engine
 
 
-def publish(campaign: Path, docs: Path, *, seeds: int) -> Path:
-    """Write ``docs/robustness.md``'s tables and ``docs/data/robustness/{runs,summary}.csv``
-    from ``campaign``; returns the page's path."""
+def _spec(meta: dict[str, Any]) -> CampaignSpec:
+    fields: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v
+                              for k, v in meta["spec"].items()}  # fmt: skip
+    return CampaignSpec(**fields)
+
+
+def _stamp(meta: dict[str, Any]) -> str:
+    sumo = f", SUMO {meta['sumo_version']}" if "sumo_version" in meta else ""
+    return f"hcomc {meta['version']}, revision {meta['revision']}{sumo}"
+
+
+def generated_part(runs: pd.DataFrame, meta: dict[str, Any]) -> str:
+    """The page's generated part for ``runs`` of the campaign stamped ``meta``."""
+    spec = _spec(meta)
+    begin, end = markers(spec.engine)
+    return f"{begin}\n{page(runs, _stamp(meta), spec.command())}\n{end}"
+
+
+def publish(campaign: Path, docs: Path) -> Path:
+    """Write ``docs/robustness.md``'s tables of ``campaign`` and its runs, summary and stamp
+    (under :func:`data_dir`); returns the page's path."""
     target = docs / "robustness.md"
     if not target.exists():
         raise ConfigError(f"option '--docs' = '{docs}': no robustness.md there to update")
+    meta = json.loads((campaign / "campaign.json").read_text())
+    engine = _spec(meta).engine
+    begin, end = markers(engine)
     text = target.read_text()
-    if BEGIN not in text or END not in text:
-        raise ConfigError(f"{target} has no '{BEGIN}' ... '{END}' section to replace")
+    if begin not in text or end not in text:
+        raise ConfigError(f"{target} has no '{begin}' ... '{end}' section to replace")
     runs = pd.read_csv(campaign / "runs.csv")
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    data = docs / "data" / "robustness"
+    head, rest = text.split(begin, 1)
+    tail = rest.split(end, 1)[1]
+    data = data_dir(docs, engine)
     data.mkdir(parents=True, exist_ok=True)
-    for name in ("runs.csv", "summary.csv"):
+    for name in ("runs.csv", "summary.csv", "campaign.json"):
         shutil.copyfile(campaign / name, data / name)
-    shutil.copyfile(campaign / "campaign.json", data / "campaign.json")
     with atomic_paths(target) as (tmp,):
-        tmp.write_text(head + generated_part(runs, _stamp(campaign), seeds) + tail)
+        tmp.write_text(head + generated_part(runs, meta) + tail)
     return target

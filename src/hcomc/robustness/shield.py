@@ -34,6 +34,7 @@ from hcomc.sim.core_state import N_PLANS
 
 if TYPE_CHECKING:
     from hcomc.robustness.engine import FaultedSimulation
+    from hcomc.robustness.impairments import Impairments
 
 __all__ = ["Override", "Shield", "commanded_vehicles", "rss_safe_distance"]
 
@@ -114,7 +115,7 @@ class Shield:
         self.overrides: list[Override] = []
         self._braking: set[int] = set()  # vehicles the shield drives this step
 
-    def leaders_in_lane(self, sim: FaultedSimulation, ids: IntArray) -> IntArray:
+    def leaders_in_lane(self, sim: Impairments, ids: IntArray) -> IntArray:
         """The nearest active vehicle ahead of each of ``ids`` in its own lane (-1: none)."""
         active = np.flatnonzero(sim.active)
         order = active[np.lexsort((sim.x[active], sim.lane[active]))]  # by lane, then x
@@ -131,6 +132,11 @@ class Shield:
         if not self.params.enabled:
             return
         self._gate_changes(sim, t)
+        self.brake(sim, t, commanded)
+
+    def brake(self, sim: Impairments, t: float, commanded: IntArray) -> None:
+        """Brake each of the ``commanded`` vehicles closer than the RSS distance to the
+        nearest vehicle ahead in a lane it occupies; hand back those that no longer are."""
         braking: dict[int, float] = {}
         for i in commanded.tolist():
             if sim.fault.drives(i):
@@ -146,7 +152,20 @@ class Shield:
             sim.command(i, acc)
         self._braking = set(braking)
 
-    def _safe(self, sim: FaultedSimulation, rear: int, front: int) -> bool:
+    def unsafe_merge(self, sim: Impairments, vr: int) -> list[int]:
+        """The vehicles of lane 1 next to which VR's merge would start closer than the RSS
+        distance: its leader there (VR behind it) and its follower there (VR ahead)."""
+        leader, follower = lane_neighbours(sim.arrays, vr, int(Lane.MAIN_1))
+        pairs = ((leader, leader < 0 or self._safe(sim, vr, leader)),
+                 (follower, follower < 0 or self._safe(sim, follower, vr)))  # fmt: skip
+        return [j for j, ok in pairs if not ok]
+
+    def cannot_stop(self, sim: Impairments, vr: int) -> bool:
+        """Whether VR could no longer stop before the lane end at the safe deceleration."""
+        stop = sim.v[vr] ** 2 / (2 * self.config.lane_change.safe_decel) + sim.fleet.s0[vr]
+        return bool(sim.x[vr] >= self.config.road.accel_lane_end - stop)
+
+    def _safe(self, sim: Impairments, rear: int, front: int) -> bool:
         gap = float(sim.x[front] - sim.fleet.length[front] - sim.x[rear])
         return safe_behind(self.params, gap, float(sim.v[rear]), float(sim.v[front]))
 
@@ -163,14 +182,10 @@ class Shield:
                        and sim.lane[vr] == Lane.RAMP)  # fmt: skip
             if not waiting or sim.x[vr] < pf[k, plans.F_MERGE_X]:
                 continue
-            leader, follower = lane_neighbours(c, vr, int(Lane.MAIN_1))
-            bad = [j for j, ok in ((leader, leader < 0 or self._safe(sim, vr, leader)),
-                                   (follower, follower < 0 or self._safe(sim, follower, vr)))
-                   if not ok]  # fmt: skip
+            bad = self.unsafe_merge(sim, vr)
             if not bad:
                 continue
-            stop = sim.v[vr] ** 2 / (2 * self.config.lane_change.safe_decel) + sim.fleet.s0[vr]
-            if sim.x[vr] >= self.config.road.accel_lane_end - stop:
+            if self.cannot_stop(sim, vr):
                 pi[k, plans.P_RELEASED] = 1
                 self.overrides.append(Override(t, vr, bad[0], "release"))
             else:

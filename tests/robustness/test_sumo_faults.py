@@ -1,0 +1,106 @@
+"""The channel, faults and shield in the SUMO co-simulation: nominal settings give the
+co-simulation's run, the faults act as they say, and a campaign runs with --engine sumo."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from hcomc.cli import app
+from hcomc.config import ScenarioConfig, load_config
+from hcomc.experiments.runner import configuration_overrides
+from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
+
+pytest.importorskip("libsumo")
+
+runner = CliRunner()
+WINDOW = {"delay_min": 1.0, "delay_max": 1.0, "duration_min": 2.0, "duration_max": 2.0}
+
+
+def _config(condition: str = "C1") -> ScenarioConfig:
+    return load_config(condition, **configuration_overrides("HCOMC", {}), duration=50.0)
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    return bool(np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+
+
+def test_nominal_settings_give_the_cosimulation_bit_for_bit():
+    from hcomc.sumo.cosim import SumoSimulation
+    from hcomc.sumo.faulted import FaultedSumoSimulation
+
+    config = _config()
+    nominal = SumoSimulation(config, 0).run()
+    faulted = FaultedSumoSimulation(config, 0).run()
+    for name in ("x", "v", "a", "lane", "active"):
+        assert _same(getattr(faulted, name), getattr(nominal, name)), name
+    assert len(faulted.meta["plans"]) == len(nominal.meta["plans"]) > 0
+
+
+def test_emergency_braking_in_sumo_at_a_merg_then_sumo_drives_again():
+    from hcomc.sumo.faulted import FaultedSumoSimulation
+
+    fault = FaultParams(kind="emergency_brake", role="vmf", **WINDOW)
+    sim = FaultedSumoSimulation(_config(), 0, fault=fault)
+    log = sim.run()
+    (vmf,) = sim.fault.vehicles
+    assert vmf == sim.key_group.vmf
+    t = log.t
+    # SUMO reports the acceleration of the step that ended at t: from the first step after
+    # the start to the window's end
+    during = (t > sim.fault.start + 0.15) & (t < sim.fault.end - 0.05) & (log.v[:, vmf] > 0)
+    assert during.sum() >= 15
+    a_merg = sim.config.control.safety_emergency_decel
+    np.testing.assert_allclose(log.a[during, vmf], -a_merg, atol=1e-6)
+    after = (t > sim.fault.end + 0.5) & log.active[:, vmf]
+    assert after.any()
+    assert np.all(log.a[after, vmf] > -a_merg + 1e-3)
+
+
+def test_a_lossy_channel_and_the_shield_act_in_sumo():
+    from hcomc.sumo.faulted import FaultedSumoSimulation
+
+    lossy = ChannelParams(latency=0.3, loss=0.7, loss_model="gilbert_elliott")
+    sim = FaultedSumoSimulation(_config(), 1, channel=lossy, shield=ShieldParams(enabled=True))
+    log = sim.run()
+    assert sim.plans_lost > 0
+    assert len(sim.decisions) > sim.plans_lost  # a lost plan is made again
+    assert sim.channel.received < sim.channel.broadcasts
+    assert sim.shield.overrides
+    for o in sim.shield.overrides:
+        step = round((o.t + sim.config.warmup) / sim.dt)
+        if o.action == "hold_change":  # a ramp vehicle's commanded merge waits
+            assert o.vehicle in sim.key_groups
+        else:  # a commanded vehicle brakes at least b_min in the next step
+            assert o.action == "brake"
+            assert o.vehicle in sim.commanded_at[step]
+            row = int(np.argmin(np.abs(log.t - (o.t + sim.dt))))
+            assert log.a[row, o.vehicle] <= -sim.shield.params.brake_min + 1e-6
+
+
+def test_campaign_in_sumo_through_the_cli(tmp_path):
+    out = tmp_path / "sumo"
+    args = ["faults", "--engine", "sumo", "--seeds", "2", "--conditions", "C3",
+            "--configurations", "HCOMC", "--faults", "none,brake-vmf", "--channels", "ideal",
+            "--workers", "1", "--out", str(out)]  # fmt: skip
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    runs = pd.read_csv(out / "runs.csv")
+    assert len(runs) == 2 * 2 * 2  # faults x shield x seeds
+    meta = json.loads((out / "campaign.json").read_text())
+    assert meta["spec"]["engine"] == "sumo"
+    assert meta["sumo_version"]
+    # its runs are the co-simulation's: the nominal row's merge time is SUMO's
+    from hcomc.metrics import key_window
+    from hcomc.metrics.outcome import merge_outcome
+    from hcomc.sumo.cosim import SumoSimulation
+
+    config = load_config("C3", **configuration_overrides("HCOMC", {}))
+    log = SumoSimulation(config, 0).run()
+    nominal = runs[(runs["fault"] == "none") & ~runs["shield"] & (runs["seed"] == 0)].iloc[0]
+    outcome = merge_outcome(log, key_window(log))
+    assert nominal["merge_time"] == pytest.approx(outcome.merge_time)
