@@ -33,6 +33,10 @@ FAULT_STREAM = 0xFA17
 """Spawn key of a fault's generator: ``SeedSequence([seed, FAULT_STREAM])``."""
 
 
+MIN_SEEN_GAP = 0.1
+"""[m] A perceived gap is kept at least this long: a sensor or a driver never sees an overlap
+with its leader (a true overlap is a collision, logged by the engine)."""
+
 WINDOWED = ("emergency_brake", "sensor_dropout", "sensor_noise", "distracted_hdv")
 """Faults that act during a seeded window after the ramp vehicle's entry."""
 
@@ -77,15 +81,15 @@ def noisy_acceleration(
 ) -> float:
     """Vehicle ``i``'s acceleration on its faulty sensors: its car following behind the true
     leader in its lane, with the gap and the leader's speed measured with Gaussian errors of
-    standard deviations ``gap_noise`` [m] and ``speed_noise`` [m/s] (the measured gap kept
-    above 0.1 m; the leader's acceleration exact, as broadcast)."""
+    standard deviations ``gap_noise`` [m] and ``speed_noise`` [m/s] (the measured gap at least
+    :data:`MIN_SEEN_GAP`; the leader's acceleration exact, as broadcast)."""
     j = _leader_in(sim._state(), i, int(sim.lane[i]))
     e_gap, e_speed = rng.standard_normal(2)
     if j < 0:
         return _follow(sim, i, math.inf, float(sim.v[i]), float(sim.v[i]), 0.0)
     gap = float(sim.x[j] - sim.fleet.length[j] - sim.x[i]) + gap_noise * e_gap
     vl = max(0.0, float(sim.v[j]) + speed_noise * e_speed)
-    return _follow(sim, i, max(gap, 0.1), float(sim.v[i]), vl, float(sim.a[j]))
+    return _follow(sim, i, max(gap, MIN_SEEN_GAP), float(sim.v[i]), vl, float(sim.a[j]))
 
 
 def distracted_acceleration(
@@ -99,7 +103,7 @@ def distracted_acceleration(
     if j < 0:
         return _follow(sim, i, math.inf, v, v, 0.0)
     gap = float(seen["x"][j] - sim.fleet.length[j] - seen["x"][i]) * math.exp(gap_error)
-    return _follow(sim, i, max(gap, 0.1), v, float(seen["v"][j]), float(seen["a"][j]))
+    return _follow(sim, i, max(gap, MIN_SEEN_GAP), v, float(seen["v"][j]), float(seen["a"][j]))
 
 
 class Fault:
