@@ -22,14 +22,12 @@ scenario's nominal run, bit for bit.
 from __future__ import annotations
 
 import dataclasses
-import math
 from typing import Any
 
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergePlan, Mode, find_key_vehicles
-from hcomc.control.validation import checked, name_of
+from hcomc.control.base import MergeController, MergePlan, Mode
 from hcomc.road import Kind, Lane
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
@@ -38,8 +36,7 @@ from hcomc.sim import core
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_plans import add_plan, encode_plan
 from hcomc.sim.engine import Simulation
-from hcomc.sim.execution import plan_record
-from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.log import SimulationLog
 
 __all__ = ["FaultedSimulation"]
 
@@ -59,7 +56,6 @@ class FaultedSimulation(Impairments, Simulation):
     ) -> None:
         super().__init__(config, seed, controller)
         self._impair(channel, fault, shield, self.arrays.matrix)
-        self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Any = None) -> SimulationLog:
@@ -78,12 +74,7 @@ class FaultedSimulation(Impairments, Simulation):
 
     def _between_steps(self) -> None:
         t = self.t
-        if not self.channel_params.ideal:
-            if (self.step_index - self.n_warmup) % self._broadcast_every == 0:
-                self.channel.broadcast(t, self._state())
-            self.channel.deliver(t)
-            self._deliver_plans(t)
-            self._degrade(t)
+        self._channel_step(t)
         self.fault.act(self, t)
         commanded = commanded_vehicles(self.arrays)
         self.shield.act(self, t, commanded)
@@ -113,53 +104,20 @@ class FaultedSimulation(Impairments, Simulation):
         assert self.controller is not None
         new = ids[(self.lane[ids] == Lane.RAMP) & ~changing & ~self.planned[ids]
                   & (self.x[ids] >= self.config.road.control_zone_start)]  # fmt: skip
-        waiting = {p.group.vr for _, _, p in self._pending}
+        waiting = self._waiting()
         due = [vr for vr in self._due(t) if vr not in waiting]
         for vr in [*new.tolist(), *due]:
-            self.planned[vr] = True
-            self._next_plan.pop(vr, None)
-            true_view = self._view(t)
-            group = find_key_vehicles(true_view, vr)
-            seen = true_view if self.channel_params.ideal else self.channel.view(true_view)
-            plan = self._decide(seen, group)
-            plan = checked(plan, seen, group, name_of(self.controller))
+            seen, group, _ = self._decision(vr, t)
             self.requests.append((seen, group))
-            self.decisions.append(plan)
-            self.log.meta.setdefault("plans", []).append(plan_record(plan))
-            self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
-                               value=int(plan.mode))  # fmt: skip
-            if plan.fallback:
-                self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
-            delay = 0.0 if self.channel_params.ideal else self.channel.plan_delay()
-            if math.isinf(delay):
-                self.plans_lost += 1
-                self._next_plan[vr] = t + self.config.control.replan_period
-            elif delay == 0.0:
-                self._execute(plan, len(self.decisions) - 1)
-            else:
-                self._pending.append((t + delay, len(self.decisions) - 1, plan))
 
-    def _lost_due(self, t: float) -> list[int]:
-        """Ramp vehicles whose last plan was lost and that are due for a new one."""
-        return [vr for vr, when in self._next_plan.items() if when <= t + 1e-9
-                and self.active[vr] and self.lane[vr] == Lane.RAMP
-                and self.origin[vr] == self.target[vr]]  # fmt: skip
+    def _may_execute(self, vr: int) -> bool:
+        """Whether ramp vehicle ``vr`` is on the road, on the ramp and not changing lanes."""
+        return bool(self.active[vr] and self.lane[vr] == Lane.RAMP
+                    and self.origin[vr] == self.target[vr])  # fmt: skip
 
     def _due(self, t: float) -> list[int]:
         due = core.due_plans(self.core, t).tolist()
         return [*due, *(vr for vr in self._lost_due(t) if vr not in due)]
-
-    def _deliver_plans(self, t: float) -> None:
-        arrived = [(d, p) for when, d, p in self._pending if when <= t + 1e-9]
-        self._pending = [item for item in self._pending if item[0] > t + 1e-9]
-        for ident, plan in arrived:
-            vr = plan.group.vr
-            if (
-                self.active[vr]
-                and self.lane[vr] == Lane.RAMP
-                and self.origin[vr] == self.target[vr]
-            ):
-                self._execute(plan, ident)
 
     def _execute(self, plan: MergePlan, ident: int) -> None:
         """Put ``plan`` into the engine's plan table (replacing its VR's live plan)."""

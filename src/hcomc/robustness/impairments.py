@@ -10,6 +10,7 @@ with a commanded vehicle.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -17,12 +18,21 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergeGroup, MergePlan, Mode
+from hcomc.control.base import (
+    MergeController,
+    MergeGroup,
+    MergePlan,
+    Mode,
+    TrafficView,
+    find_key_vehicles,
+)
+from hcomc.control.validation import checked, name_of
 from hcomc.road import Kind
 from hcomc.robustness.channel import Channel
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Shield
+from hcomc.sim.execution import plan_record
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -42,11 +52,18 @@ class Impairments:
     lane: IntArray
     origin: IntArray
     active: BoolArray
+    planned: BoolArray
     fleet: Fleet
     arrays: Any  # lane occupancy (x, lane, origin, target, active), and our engine's plans
+    step_index: int
+    n_warmup: int
+    decisions: list[MergePlan]
     command: Callable[[int, float], None]  # drive a vehicle from outside (NaN: stop)
     _follow: Callable[[IntArray, IntArray], FloatArray]  # car following behind leaders
     _state: Callable[[], dict[str, np.ndarray]]  # the state a broadcast carries
+    _view: Callable[[float], TrafficView]  # the true state, as a controller reads it
+    _execute: Callable[[MergePlan, int], None]  # put decision k's plan into force
+    _may_execute: Callable[[int], bool]  # whether VR is still on the ramp, not changing
     controller: MergeController | None
     rng: np.random.Generator
     log: SimulationLog
@@ -71,10 +88,71 @@ class Impairments:
         self.nominal_fleet = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
         self.driving = dataclasses.replace(self.fleet, matrix=driving_matrix)
         self._next_plan: dict[int, float] = {}  # VR -> earliest next decision after a loss
+        self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
         self._broadcast_every = max(1, round(self.channel_params.period / self.dt))
         self.plans_lost = 0
         self.degraded_steps = 0
         self.commanded_at: dict[int, frozenset[int]] = {}  # step -> commanded vehicles
+
+    def _channel_step(self, t: float) -> None:
+        """Broadcast (every update period), deliver the messages and plans due at ``t``,
+        and degrade the CAVs whose leader went silent; nothing on the ideal channel."""
+        if self.channel_params.ideal:
+            return
+        if (self.step_index - self.n_warmup) % self._broadcast_every == 0:
+            self.channel.broadcast(t, self._state())
+        self.channel.deliver(t)
+        self._deliver_plans(t)
+        self._degrade(t)
+
+    def _waiting(self) -> set[int]:
+        """Ramp vehicles whose plan is on its way."""
+        return {p.group.vr for _, _, p in self._pending}
+
+    def _decision(self, vr: int, t: float) -> tuple[TrafficView, MergeGroup, MergePlan]:
+        """Decide for ramp vehicle ``vr`` at ``t`` on the channel's view, record the decision
+        (as the engines do: plan record, PLAN and FALLBACK events) and send the plan; returns
+        the view the controller saw, the key vehicles and the plan."""
+        assert self.controller is not None
+        self.planned[vr] = True
+        self._next_plan.pop(vr, None)
+        view = self._view(t)
+        group = find_key_vehicles(view, vr)
+        seen = view if self.channel_params.ideal else self.channel.view(view)
+        plan = checked(self._decide(seen, group), seen, group, name_of(self.controller))
+        self.decisions.append(plan)
+        self.log.meta.setdefault("plans", []).append(plan_record(plan))
+        x = self.x[vr]
+        self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=x, value=int(plan.mode))
+        if plan.fallback:
+            self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=x)
+        self._send(plan, len(self.decisions) - 1, t)
+        return seen, group, plan
+
+    def _send(self, plan: MergePlan, ident: int, t: float) -> None:
+        """Execute decision ``ident`` now (ideal channel), when it arrives, or never (lost:
+        its VR is planned again a replan period later)."""
+        delay = 0.0 if self.channel_params.ideal else self.channel.plan_delay()
+        if math.isinf(delay):
+            self.plans_lost += 1
+            self._next_plan[plan.group.vr] = t + self.config.control.replan_period
+        elif delay == 0.0:
+            self._execute(plan, ident)
+        else:
+            self._pending.append((t + delay, ident, plan))
+
+    def _deliver_plans(self, t: float) -> None:
+        """Execute the plans that arrived by ``t`` whose VR can still act on them."""
+        arrived = [(ident, p) for when, ident, p in self._pending if when <= t + 1e-9]
+        self._pending = [item for item in self._pending if item[0] > t + 1e-9]
+        for ident, plan in arrived:
+            if self._may_execute(plan.group.vr):
+                self._execute(plan, ident)
+
+    def _lost_due(self, t: float) -> list[int]:
+        """Ramp vehicles whose last plan was lost and that are due for a new one."""
+        due = [vr for vr, when in self._next_plan.items() if when <= t + 1e-9]
+        return [vr for vr in due if self._may_execute(vr)]
 
     def _decide(self, view: Any, group: MergeGroup) -> MergePlan:
         """The controller's plan, or the safe default when a key vehicle was never heard."""

@@ -28,15 +28,13 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergePlan, Mode, find_key_vehicles
-from hcomc.control.validation import checked, name_of
+from hcomc.control.base import MergeController, MergePlan, Mode
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Override
-from hcomc.sim.execution import ActivePlan, commanded, plan_record
+from hcomc.sim.execution import ActivePlan, commanded
 from hcomc.sim.fleet import follow
-from hcomc.sim.log import EventKind
 from hcomc.sumo.cosim import _COMMANDED_LC_MODE, _DEFAULT_LC_MODE, SumoSimulation
 from hcomc.sumo.routes import vehicle_id
 
@@ -66,7 +64,6 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
         self._outside: dict[int, float] = {}  # vehicle -> acceleration a fault or shield sets
         self._driven: set[int] = set()  # vehicles under an outside command in SUMO now
         self._tau = self.fleet.T.copy()  # the tau each SUMO vehicle has
-        self._pending: list[tuple[float, MergePlan]] = []  # (arrival, plan)
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
@@ -79,12 +76,7 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
 
     def _between_steps(self) -> None:
         t = self.t
-        if not self.channel_params.ideal:
-            if (self.step_index - self.n_warmup) % self._broadcast_every == 0:
-                self.channel.broadcast(t, self._state())
-            self.channel.deliver(t)
-            self._deliver_plans(t)
-            self._degrade(t)
+        self._channel_step(t)
         self.fault.act(self, t)
         self._sync_parameters()
         ids = np.flatnonzero(commanded(self.plans, self.x.size))
@@ -163,42 +155,21 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
         super()._key_vehicles(ids, t)
         if len(self.key_groups) > before:
             self.fault.on_entry(self, next(reversed(self.key_groups.values())), t)
-        for vr in [v for v, when in self._next_plan.items() if when <= t + 1e-9]:
-            if self.active[vr] and self.lane[vr] == Lane.RAMP and not self.changing()[vr]:
-                self._plan(vr, t)
-            else:  # merged or gone: nothing left to plan
-                del self._next_plan[vr]
+        for vr in self._lost_due(t):
+            self._plan(vr, t)
 
     def _plan(self, vr: int, t: float) -> None:
-        """A decision on the channel's view; the plan is executed when it arrives."""
-        assert self.controller is not None
-        if any(p.group.vr == vr for _, p in self._pending):
-            return
-        self.planned[vr] = True
-        self._next_plan.pop(vr, None)
-        view = self._view(t)
-        group = find_key_vehicles(view, vr)
-        seen = view if self.channel_params.ideal else self.channel.view(view)
-        plan = self._decide(seen, group)
-        plan = checked(plan, seen, group, name_of(self.controller))
-        self.decisions.append(plan)
-        self.log.meta.setdefault("plans", []).append(plan_record(plan))
-        self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
-                           value=int(plan.mode))  # fmt: skip
-        if plan.fallback:
-            self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
-        delay = 0.0 if self.channel_params.ideal else self.channel.plan_delay()
-        if math.isinf(delay):
-            self.plans_lost += 1
-            self._next_plan[vr] = t + self.config.control.replan_period
-        elif delay == 0.0:
-            self._install(plan)
-        else:
-            self._pending.append((t + delay, plan))
+        """A decision on the channel's view (none while VR's last plan is on its way)."""
+        if vr not in self._waiting():
+            self._decision(vr, t)
 
-    def _install(self, plan: MergePlan) -> None:
+    def _may_execute(self, vr: int) -> bool:
+        """Whether ramp vehicle ``vr`` is in SUMO, on the ramp and not changing lanes."""
+        return bool(self.active[vr] and self.lane[vr] == Lane.RAMP and not self.changing()[vr])
+
+    def _execute(self, plan: MergePlan, ident: int) -> None:
         """Execute ``plan`` (replacing its VR's live plan), as the co-simulation does, less
-        the commands of a vehicle that ignores them."""
+        the commands of a vehicle that ignores them (``ident``: its decision's index)."""
         vr = plan.group.vr
         ignores = self.fault.ignores(plan)
         cav = self.fleet.kind == Kind.CAV
@@ -216,14 +187,6 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
             self._release(i)
         for i in np.flatnonzero(commanded([active], self.x.size)).tolist():
             self.sumo.vehicle.setLaneChangeMode(vehicle_id(i), _COMMANDED_LC_MODE)
-
-    def _deliver_plans(self, t: float) -> None:
-        arrived = [p for when, p in self._pending if when <= t + 1e-9]
-        self._pending = [item for item in self._pending if item[0] > t + 1e-9]
-        for plan in arrived:
-            vr = plan.group.vr
-            if self.active[vr] and self.lane[vr] == Lane.RAMP and not self.changing()[vr]:
-                self._install(plan)
 
     def _safe_change(self, i: int, target: int, ids: np.ndarray) -> bool:
         """The co-simulation's check of a commanded change, and for VR's merge the shield's."""
