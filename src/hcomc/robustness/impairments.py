@@ -2,9 +2,11 @@
 
 :class:`Impairments` is mixed into our engine (:class:`hcomc.robustness.engine.FaultedSimulation`)
 and into the SUMO co-simulation (:class:`hcomc.sumo.faulted.FaultedSumoSimulation`):
-the channel, the fault and the shield of one run, the controller's decision on the channel's
-view, the degraded headway of CAVs whose leader went silent, and the count of collisions
-with a commanded vehicle.
+the channel, the fault and the shield of one run; the controller's decision on the channel's
+view, its record, and its plan sent to the vehicles (at once, late or never, then made
+again); the degraded headway of CAVs whose leader went silent; and the count of collisions
+with a commanded vehicle. Each engine says how a plan is put into force (``_execute``) and
+whether its ramp vehicle can still act on one (``_may_execute``).
 """
 
 from __future__ import annotations
