@@ -16,6 +16,7 @@ pytest.importorskip("stable_baselines3")  # the rl extra (installed by the test 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "train_ppo.py"
 
 
+@pytest.mark.slow
 def test_ppo_example_trains_and_compares(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     scratch = tmp_path / "temp"
     scratch.mkdir()
