@@ -21,6 +21,7 @@ from hcomc.config.loading import (
     validate_config,
 )
 from hcomc.config.schema import (
+    MIN_STEP,
     CAVParams,
     ConfigError,
     ControlParams,
@@ -34,6 +35,7 @@ from hcomc.config.schema import (
 )
 
 __all__ = [
+    "MIN_STEP",
     "CAVParams",
     "ConfigError",
     "ControlParams",

@@ -14,7 +14,7 @@ from typing import Annotated, Any
 
 from pydantic import Field, model_validator
 
-from hcomc.config import ControlParams, LaneChangeParams, merge_tables
+from hcomc.config import MIN_STEP, ControlParams, LaneChangeParams, merge_tables
 from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
 from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
@@ -50,7 +50,7 @@ class RunSettings(Frozen):
         "start from developed traffic) [s]; hcomc's scenario engine only",
     )  # fmt: skip
     seed: int = Field(0, ge=0, description="random seed (vehicle classes, SUMO's randomness)")
-    step_length: float = Field(0.1, ge=1e-3, le=1, description="simulation step [s]")
+    step_length: float = Field(0.1, ge=MIN_STEP, le=1, description="simulation step [s]")
     lane_change_duration: float = Field(
         3.0, ge=0, le=15, description="duration of a lane change [s]; 0 = instantaneous"
     )
