@@ -157,7 +157,11 @@ class CampaignSpec:
         hcomc's version, the hash of its result-bearing code (and SUMO's version)."""
         from hcomc.experiments.provenance import code_stamp
 
-        sumo = {"sumo_version": _sumo_version()} if self.engine == "sumo" else {}
+        sumo = {}
+        if self.engine == "sumo":  # the co-simulation's SUMO, as its run logs record it
+            from hcomc.sumo.faulted import FaultedSumoSimulation
+
+            sumo = {"sumo_version": FaultedSumoSimulation._sumo_version()}
         return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
@@ -177,15 +181,6 @@ class CampaignSpec:
                 words.append(f"{option} {','.join(getattr(self, axis))}")
         out = "results/faults" if self.engine == "hcomc" else f"results/faults-{self.engine}"
         return " ".join([*words, f"--out {out} --docs docs"])
-
-
-def _sumo_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("eclipse-sumo")
-    except PackageNotFoundError:  # pragma: no cover - SUMO from elsewhere
-        return "unknown"
 
 
 def _cell_name(cell: tuple[str, str, str, str, bool]) -> str:

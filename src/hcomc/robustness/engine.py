@@ -93,8 +93,7 @@ class FaultedSimulation(Impairments, Simulation):
     def _identify_key_vehicles(self, ids: Any, changing: Any, t: float) -> None:
         before = len(self.key_groups)
         super()._identify_key_vehicles(ids, changing, t)
-        if len(self.key_groups) > before:
-            self.fault.on_entry(self, next(reversed(self.key_groups.values())), t)
+        self._tell_fault_of_entry(before, t)
 
     # ---------------------------------------------------------------- plans
     def _plan_new(self, ids: Any, changing: Any, t: float) -> None:

@@ -37,6 +37,7 @@ from hcomc.robustness.shield import Shield
 from hcomc.sim.execution import plan_record
 from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.neighbours import build_lane_index
 
 __all__ = ["Impairments"]
 
@@ -60,6 +61,7 @@ class Impairments:
     step_index: int
     n_warmup: int
     decisions: list[MergePlan]
+    key_groups: dict[int, MergeGroup]
     command: Callable[[int, float], None]  # drive a vehicle from outside (NaN: stop)
     _follow: Callable[[IntArray, IntArray], FloatArray]  # car following behind leaders
     _state: Callable[[], dict[str, np.ndarray]]  # the state a broadcast carries
@@ -106,6 +108,12 @@ class Impairments:
         self.channel.deliver(t)
         self._deliver_plans(t)
         self._degrade(t)
+
+    def _tell_fault_of_entry(self, groups_before: int, t: float) -> None:
+        """Start the fault's clock if a ramp vehicle entered the control zone (its key
+        vehicles were found) since there were ``groups_before`` key groups."""
+        if len(self.key_groups) > groups_before:
+            self.fault.on_entry(self, next(reversed(self.key_groups.values())), t)
 
     def _waiting(self) -> set[int]:
         """Ramp vehicles whose plan is on its way."""
@@ -172,7 +180,9 @@ class Impairments:
         T[ids] = self.nominal_fleet.T[ids]
         if ids.size == 0:
             return
-        leaders = self.shield.leaders_in_lane(self, ids)
+        on_road = np.flatnonzero(self.active)
+        index = build_lane_index(on_road, self.lane[on_road], self.x[on_road])
+        leaders = index.leader_of(np.searchsorted(on_road, ids))
         has = leaders >= 0
         stale = np.zeros(ids.size, dtype=bool)
         stale[has] = (self.fleet.kind[leaders[has]] == Kind.CAV) & (

@@ -108,23 +108,12 @@ def lane_neighbours(c: Any, i: int, lane: int) -> tuple[int, int]:
 
 class Shield:
     """The shield of one run (:class:`~hcomc.robustness.settings.ShieldParams`); with
-    ``enabled`` false it only tells which vehicles are commanded."""
+    ``enabled`` false the engines do not call it."""
 
     def __init__(self, params: ShieldParams, config: ScenarioConfig) -> None:
         self.params, self.config = params, config
         self.overrides: list[Override] = []
         self._braking: set[int] = set()  # vehicles the shield drives this step
-
-    def leaders_in_lane(self, sim: Impairments, ids: IntArray) -> IntArray:
-        """The nearest active vehicle ahead of each of ``ids`` in its own lane (-1: none)."""
-        active = np.flatnonzero(sim.active)
-        order = active[np.lexsort((sim.x[active], sim.lane[active]))]  # by lane, then x
-        rank = np.empty(sim.x.size, dtype=np.int64)
-        rank[order] = np.arange(order.size)
-        nxt = np.minimum(rank[ids] + 1, order.size - 1)
-        ahead = order[nxt]
-        found = (rank[ids] + 1 < order.size) & (sim.lane[ahead] == sim.lane[ids])
-        return np.where(found, ahead, -1)
 
     def act(self, sim: FaultedSimulation, t: float, commanded: IntArray) -> None:
         """Check the ``commanded`` vehicles (:func:`commanded_vehicles`) before the next step
@@ -138,10 +127,11 @@ class Shield:
         """Brake each of the ``commanded`` vehicles closer than the RSS distance to the
         nearest vehicle ahead in a lane it occupies; hand back those that no longer are."""
         braking: dict[int, float] = {}
+        occupancy = sim.arrays
         for i in commanded.tolist():
             if sim.fault.drives(i):
                 continue
-            unsafe = [j for j in lane_leaders(sim.arrays, i) if not self._safe(sim, i, j)]
+            unsafe = [j for j in lane_leaders(occupancy, i) if not self._safe(sim, i, j)]
             if unsafe:
                 follow = sim._follow(np.full(len(unsafe), i), np.array(unsafe))
                 braking[i] = min(float(follow.min()), -self.params.brake_min)

@@ -63,7 +63,7 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
         self._impair(channel, fault, shield, self.fleet.matrix.copy())
         self._outside: dict[int, float] = {}  # vehicle -> acceleration a fault or shield sets
         self._driven: set[int] = set()  # vehicles under an outside command in SUMO now
-        self._tau = self.fleet.T.copy()  # the tau each SUMO vehicle has
+        self._in_sumo = self.fleet.matrix.copy()  # the parameters each SUMO vehicle has
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
@@ -94,14 +94,15 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
         """Impose the faults' and the shield's accelerations; hand back the vehicles whose
         outside command ended."""
         veh = self.sumo.vehicle
-        for i in self._driven - self._outside.keys():
-            if self.active[i]:
-                name = vehicle_id(i)
-                veh.setSpeedMode(name, _DEFAULT_SPEED_MODE)
-                planned = i in self._speed_set or commanded(self.plans, self.x.size)[i]
-                veh.setLaneChangeMode(name, _COMMANDED_LC_MODE if planned else _DEFAULT_LC_MODE)
-                if i not in self._speed_set:
-                    veh.setSpeed(name, -1.0)
+        ended = [i for i in self._driven - self._outside.keys() if self.active[i]]
+        by_plan = commanded(self.plans, self.x.size) if ended else np.zeros(0, dtype=bool)
+        for i in ended:
+            name = vehicle_id(i)
+            veh.setSpeedMode(name, _DEFAULT_SPEED_MODE)
+            planned = i in self._speed_set or by_plan[i]
+            veh.setLaneChangeMode(name, _COMMANDED_LC_MODE if planned else _DEFAULT_LC_MODE)
+            if i not in self._speed_set:
+                veh.setSpeed(name, -1.0)
         for i, accel in self._outside.items():
             if self.active[i]:
                 name = vehicle_id(i)
@@ -120,13 +121,13 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
 
     def _sync_parameters(self) -> None:
         """Give SUMO the time headway, jam gap and acceleration the vehicles drive with."""
-        changed = np.flatnonzero(self.active & (self._tau != self.driving.T))
-        for i in changed.tolist():
+        changed = self.active & (self._in_sumo != self.driving.matrix).any(axis=0)
+        for i in np.flatnonzero(changed).tolist():
             name = vehicle_id(i)
             self.sumo.vehicle.setTau(name, float(self.driving.T[i]))
             self.sumo.vehicle.setMinGap(name, float(self.driving.s0[i]))
             self.sumo.vehicle.setAccel(name, float(self.driving.a[i]))
-            self._tau[i] = self.driving.T[i]
+            self._in_sumo[:, i] = self.driving.matrix[:, i]
 
     # ---------------------------------------------------------------- state
     def _state(self) -> dict[str, np.ndarray]:
@@ -153,8 +154,7 @@ class FaultedSumoSimulation(Impairments, SumoSimulation):
     def _key_vehicles(self, ids: np.ndarray, t: float) -> None:
         before = len(self.key_groups)
         super()._key_vehicles(ids, t)
-        if len(self.key_groups) > before:
-            self.fault.on_entry(self, next(reversed(self.key_groups.values())), t)
+        self._tell_fault_of_entry(before, t)
         for vr in self._lost_due(t):
             self._plan(vr, t)
 
