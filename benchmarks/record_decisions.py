@@ -46,12 +46,15 @@ from pymoo.indicators.hv import HV  # noqa: E402
 from throughput import machine  # noqa: E402
 
 from hcomc.config import ScenarioConfig, load_config, validate_config  # noqa: E402
-from hcomc.control.base import MergeGroup, TrafficView  # noqa: E402
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails  # noqa: E402
+from hcomc.interface import (  # noqa: E402
+    Fleet,
+    MergeGroup,
+    TrafficView,
+)
 from hcomc.optim.base import Optimizer  # noqa: E402
 from hcomc.optim.registry import OPTIMIZERS, optimizer_from_config  # noqa: E402
 from hcomc.sim.engine import Simulation  # noqa: E402
-from hcomc.sim.fleet import Fleet  # noqa: E402
 
 DATA = Path(__file__).with_name("data")
 PROBLEMS_FILE = DATA / "decisions.pkl"

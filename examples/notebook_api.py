@@ -56,7 +56,7 @@ print(f"HCOMC: mode {plan.mode.name}, merge at {plan.merge_x:.1f} m, {plan.decis
 # %% 6. A custom merge controller
 import numpy as np
 
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 
 
 class GapAcceptance:

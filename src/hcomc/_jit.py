@@ -5,8 +5,8 @@ Every compiled function of hcomc is declared with :data:`kernel`, numba's ``njit
 * ``cache=True``: compiled once per machine and loaded from ``__pycache__`` afterwards;
 * ``error_model="numpy"``: a floating-point division by zero gives inf or NaN, as it does in
   numpy, instead of raising ``ZeroDivisionError``. Every other result is the same under both
-  models; numpy's spares the test for zero before each division, which makes the merge
-  prediction's kernels about a sixth faster.
+  models; numpy's spares the test for zero before each division in the kernels' inner
+  loops.
 
 Use it bare (``@kernel``) or with numba's other options (``@kernel(inline="always")``,
 ``@kernel(parallel=True)``).

@@ -42,8 +42,8 @@ def _names(text: str) -> list[str]:
 
 def _imported_names(path: Path, package: Path) -> set[str]:
     """Every dotted name ``path`` imports anywhere in it (``from a import b`` gives ``a`` and
-    ``a.b``), with relative imports made absolute. A plain scan of the text, about ten times
-    faster than parsing it (which every process that loads a kernel would pay); a line in a
+    ``a.b``), with relative imports made absolute. A plain scan of the text, cheaper than
+    parsing it (which every process that loads a kernel pays); a line in a
     docstring that looks like an import only adds a file to the stamp."""
     text = path.read_text(encoding="utf-8")
     here = [package.name, *path.relative_to(package).parent.parts]

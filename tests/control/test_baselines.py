@@ -10,45 +10,35 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import (
-    MergeGroup,
-    MergePlan,
-    Mode,
-    TrafficView,
-    behind_group,
-    find_key_vehicles,
-)
-from hcomc.control.fifo import (
+from hcomc.control.fifo import FIFOController, FIFODetails
+from hcomc.control.game import solve_cooperative
+from hcomc.control.hcomc.rollout import VMC, VR
+from hcomc.control.key_vehicles import behind_group, find_key_vehicles
+from hcomc.control.longitudinal_candidate import (
     HORIZON_STEP,
     POSITION_STEP,
-    FIFOController,
-    FIFODetails,
     last_merge_position,
     merge_position,
     nearest_feasible,
     virtual_vehicle_feasible,
     with_cooperation,
 )
-from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.rollout import VMC, VR
-from hcomc.control.merge_game import (
+from hcomc.control.merge_game import GameController, GameDetails
+from hcomc.control.merge_game_equilibrium import (
     AHEAD,
     BEHIND,
-    INFEASIBLE_SAFETY,
     NOT_YIELD,
     YIELD,
-    GameController,
-    GameDetails,
     kita_mixed,
     pure_nash,
-    safety_term,
     solve_merge_game,
 )
+from hcomc.control.merge_game_payoffs import INFEASIBLE_SAFETY, safety_term
 from hcomc.control.registry import make_controller
 from hcomc.control.virtual_vehicle import cubic_state
+from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
-from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import EventKind, SimulationLog
 
 CONTROLLERS = ("fifo", "game")

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import MergeGroup, MergePlan, Mode
 from hcomc.control.hcomc.commitment import (
     GRID_HORIZONS,
     GRID_POSITIONS,
@@ -19,8 +18,10 @@ from hcomc.control.hcomc.commitment import (
     executed,
 )
 from hcomc.control.hcomc.controller import HCOMCController, merge_problem, sequence_groups
-from hcomc.control.hcomc.problem import MODE_NONE, MergeProblem
-from hcomc.experiments.runner import plan_switches
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import MODE_NONE
+from hcomc.experiments.results_row import plan_switches
+from hcomc.interface import MergeGroup, MergePlan, Mode
 from hcomc.optim.selection import eq19_costs, select_eq19
 from hcomc.road import VMC
 from hcomc.sim.engine import Simulation

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import behind_group
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails, merge_problem
-from hcomc.control.hcomc.problem import AHEAD, BEHIND, MergeProblem, problem_constants
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND, problem_constants
 from hcomc.control.hcomc.rollout import (
     C_A_MERG,
     C_D,
@@ -25,6 +25,7 @@ from hcomc.control.hcomc.rollout import (
     VMR,
     VR,
 )
+from hcomc.control.key_vehicles import behind_group
 from hcomc.control.lane_change_game import game_params
 from hcomc.models.fuel import fuel_rate
 from hcomc.road import Kind

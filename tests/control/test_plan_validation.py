@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, behind_group
 from hcomc.control.fifo import FIFOController
+from hcomc.control.key_vehicles import behind_group
 from hcomc.control.validation import InvalidPlan, check_plan, checked
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog

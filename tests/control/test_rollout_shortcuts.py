@@ -14,7 +14,8 @@ import numpy as np
 
 from hcomc.config import load_config
 from hcomc.control.hcomc.controller import merge_problem
-from hcomc.control.hcomc.problem import AHEAD, MergeProblem
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import AHEAD
 from hcomc.control.hcomc.rollout import (
     C_DT,
     G_COLLISION,

@@ -29,7 +29,9 @@ from hypothesis import strategies as st
 
 from hcomc._typing import FloatArray
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
-from hcomc.control.hcomc.problem import AHEAD, BEHIND, VMC, MergeProblem
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND
+from hcomc.control.hcomc.rollout import VMC
 from hcomc.control.hcomc.rollout_score import objective_rows
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import RowProblem

@@ -14,7 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 from hcomc.cli import app
-from hcomc.control.fifo import MERGE_OFFSET
+from hcomc.control.longitudinal_candidate import MERGE_OFFSET
 from hcomc.corridor import Corridor, corridor_to_toml
 from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.corridor import simulate_corridor

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
-from hcomc.control.base import key_vehicle_indices
+from hcomc.control.key_vehicles import key_vehicle_indices
 from hcomc.road import Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.ensemble import advance_ensemble

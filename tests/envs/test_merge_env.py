@@ -14,7 +14,7 @@ from pettingzoo.test import parallel_api_test
 
 import hcomc.envs  # noqa: F401 (registers hcomc/Merge-v0)
 from hcomc.config import ConfigError, load_config
-from hcomc.control.base import find_key_vehicles
+from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.envs import MergeEnv
 from hcomc.envs import episode as episode_module
 from hcomc.envs import vector as vector_module

@@ -12,16 +12,9 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.experiments.claims import MIN_PAIRS, holm
-from hcomc.experiments.compare import (
-    EFFECTS_VIEW_COLUMNS,
-    PREFERS,
-    effects,
-    effects_view,
-    merge_success,
-    pairs,
-    success_pairs,
-    success_view,
-)
+from hcomc.experiments.compare import PREFERS, effects, pairs
+from hcomc.experiments.compare_success import merge_success, success_pairs
+from hcomc.experiments.compare_view import EFFECTS_VIEW_COLUMNS, effects_view, success_view
 from hcomc.experiments.paper import PAPER_METRICS
 
 SEEDS = 10
@@ -155,7 +148,7 @@ def test_a_comparison_missing_from_a_cell_is_left_out():
 
 GAP_ACCEPTANCE = '''
 import numpy as np
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 
 
 class GapAcceptance:

@@ -24,7 +24,8 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.config import ControlParams
 from hcomc.corridor import load_corridor
-from hcomc.experiments.compare import PREFERS, RUN_LEVEL, effects, merge_success
+from hcomc.experiments.compare import PREFERS, RUN_LEVEL, effects
+from hcomc.experiments.compare_success import merge_success
 from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS, corridor_metrics
 from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.sim.corridor import simulate_corridor
@@ -457,7 +458,7 @@ def test_configuration_labels_set_the_corridors_control_table(label, expected):
 
 
 GAP_ACCEPTANCE = """
-from hcomc.control.base import MergePlan, Mode
+from hcomc.interface import MergePlan, Mode
 
 
 class GapAcceptance:

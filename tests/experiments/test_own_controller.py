@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergePlan, Mode
+from hcomc.interface import MergePlan, Mode
 from hcomc.control.fifo import FIFOController
 
 

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
-from hcomc.control.base import Mode, virtual_states
+from hcomc.control.virtual_vehicle import virtual_states
+from hcomc.interface import Mode
 from hcomc.sim import core_state as layout
 from hcomc.sim.engine import Simulation
 from hcomc.sim.execution import ActivePlan, virtual_leaders

@@ -39,7 +39,7 @@ def _loops(config: ScenarioConfig, out: Path) -> Path:
 @pytest.mark.slow
 def test_our_loops_count_what_sumos_loops_count(c1: ScenarioConfig, c1_scenario: Path):
     from hcomc.sumo import sumo_binary
-    from hcomc.sumo.trajectories import read_fcd
+    from hcomc.sumo.fcd import read_fcd
 
     folder = c1_scenario.parent
     fcd, e1 = folder / "loops-fcd.xml", folder / "e1.xml"

@@ -16,7 +16,8 @@ from hcomc.metrics import compute_metrics, merge_window
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sumo.external import aligned_reference, derive_events, score_merges
-from hcomc.sumo.trajectories import read_fcd, read_highd, write_fcd, write_highd
+from hcomc.sumo.fcd import read_fcd, write_fcd
+from hcomc.sumo.highd import read_highd, write_highd
 
 sumolib = pytest.importorskip("sumolib")
 

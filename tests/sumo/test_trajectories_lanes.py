@@ -10,7 +10,7 @@ import pytest
 
 from hcomc.config import load_config
 from hcomc.road import Lane
-from hcomc.sumo.trajectories import read_fcd, write_fcd
+from hcomc.sumo.fcd import read_fcd, write_fcd
 
 CONFIG = load_config("C1")  # lane width 3.75 m: the lane lines at y = -1.875 and 1.875 m
 W = CONFIG.road.lane_width

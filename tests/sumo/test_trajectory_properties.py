@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from hcomc.config import load_config
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.log import SimulationLog
-from hcomc.sumo.trajectories import read_fcd, read_highd, write_fcd, write_highd
+from hcomc.sumo.fcd import read_fcd, write_fcd
+from hcomc.sumo.highd import read_highd, write_highd
 
 CONFIG = load_config("C1")
 

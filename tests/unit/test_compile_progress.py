@@ -116,3 +116,29 @@ def test_the_real_kernels_leave_the_marker_and_a_second_call_is_silent() -> None
     console, text = _console()
     ensure_compiled(console)
     assert text.getvalue() == ""
+
+
+def test_a_process_that_finds_another_compiling_waits_and_then_loads(fake: dict) -> None:
+    """While another process holds the lock (here: this test, through its own open file, which
+    flock treats as another holder), ``ensure_compiled`` says it waits; when the other one
+    writes the marker and lets go, it compiles nothing."""
+    import fcntl
+    import threading
+
+    lock = fake["marker"].parent / "hcomc-kernels.lock"
+    held = lock.open("a")
+    fcntl.flock(held, fcntl.LOCK_EX)
+    done = threading.Event()
+    waiter = threading.Thread(target=lambda: (ensure_compiled(fake["console"]), done.set()))
+    waiter.start()
+    while "waiting" not in fake["text"].getvalue():
+        assert waiter.is_alive()
+        threading.Event().wait(0.01)
+    assert not done.is_set()
+    fake["marker"].write_text(json.dumps({"machine": _compile._machine(), "seconds": 1.0}))
+    fcntl.flock(held, fcntl.LOCK_UN)
+    held.close()
+    waiter.join(timeout=60)
+    assert done.is_set()
+    assert fake["runs"] == []  # the other process's kernels are loaded, not compiled again
+    assert fake["text"].getvalue() == "waiting for another process compiling hcomc's kernels …\n"

@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hcomc.models.idm import desired_gap, equilibrium_gap, idm_acceleration, iidm_acceleration
+from hcomc.models.idm import desired_gap, equilibrium_gap, idm_acceleration
+from hcomc.models.iidm import iidm_acceleration
 
 # Textbook example: v0 = 33.3 m/s, T = 1.5 s, s0 = 2 m (a, b do not enter s_e).
 HDV = {"v0": 33.3, "T": 1.5, "a": 1.0, "b": 2.0, "s0": 2.0, "delta": 4.0}

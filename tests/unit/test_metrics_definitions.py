@@ -255,7 +255,7 @@ def test_ramp_wait_runs_from_the_stop_to_the_lane_change(start: float | None, wa
 
 
 def test_runner_reads_the_sequence_from_the_metrics() -> None:
-    from hcomc.experiments import runner
+    from hcomc.experiments import results_row
     from hcomc.metrics.outcome import realised_sequence
 
-    assert runner.realised_sequence is realised_sequence
+    assert results_row.realised_sequence is realised_sequence

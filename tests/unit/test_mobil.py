@@ -3,7 +3,7 @@
 Situations are built by hand on a small Fleet of the C1 parameters; the index, leaders and
 followers are formed as ``Simulation._advance`` / ``_lane_changes`` form them (no vehicle
 is changing lane, so every vehicle has exactly one entry). Every acceleration a decision
-relies on is recomputed with :func:`hcomc.sim.fleet.follow`.
+relies on is recomputed with :func:`hcomc.interface.follow`.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from hcomc.config import LaneChangeParams, load_config
+from hcomc.interface import Fleet, follow
 from hcomc.road import Kind, Lane
-from hcomc.sim.fleet import Fleet, follow
 from hcomc.sim.mobil import Snapshot, _resolve, decide
 from hcomc.sim.neighbours import LaneIndex, build_lane_index
 

@@ -1,10 +1,15 @@
-"""The compiled NSGA-II against pymoo, its reference: same rows evaluated, same Pareto sets.
+"""The compiled NSGA-II against pymoo, its reference: same rows evaluated, same Pareto sets
+where numpy's power is the C library's, the same quality everywhere.
 
 pymoo (``nsga2-pymoo``) is the oracle throughout: the kernels are compared with pymoo's
 non-dominated sorting, crowding distance and domination relation on random sets, and whole runs
 with pymoo's NSGA-II on the same problems, budgets and generators (ZDT1, ZDT2, a constrained and
 an infeasible problem, odd population sizes, warm starts, other operator parameters, and the
-HCOMC merge problem itself).
+HCOMC merge problem itself). The variation operators take powers with the C library's ``pow``,
+pymoo with numpy's: the whole runs equal pymoo's bit for bit only where numpy's power is the C
+library's, and are skipped elsewhere (:data:`scalar_problems.needs_libm_numpy`); on any CPU the
+compiled NSGA-II's hypervolume and best Eq. 19 cost on recorded merge problems are held within
+a stated tolerance of pymoo's (:func:`test_merge_problem_quality_matches_pymoo`).
 """
 
 from __future__ import annotations
@@ -38,6 +43,8 @@ from hcomc.optim.pymoo_backend import NSGA2Optimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.optim.selection import non_dominated
 from hcomc.sim.engine import Simulation
+from recorded_decisions import assert_quality_matches
+from scalar_problems import needs_libm_numpy
 
 
 class _Recorder:
@@ -127,6 +134,7 @@ def _assert_same(ref: ParetoResult, new: ParetoResult, p_ref: _Recorder, p_new: 
 # --------------------------------------------------------------------------------------------
 
 
+@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("concave", [False, True], ids=["ZDT1", "ZDT2"])
 def test_zdt_runs_equal_pymoo_and_converge(concave: bool, seed: int) -> None:
@@ -141,6 +149,7 @@ def test_zdt_runs_equal_pymoo_and_converge(concave: bool, seed: int) -> None:
     assert hv(F[non_dominated(F)]) < hv(new.F) <= 1.21 - (2.0 / 3.0 if concave else 1.0 / 3.0)
 
 
+@needs_libm_numpy
 @pytest.mark.parametrize(
     ("pop_size", "budget", "seed"), [(24, 240, 0), (40, 360, 1), (7, 100, 2), (3, 5, 3)]
 )
@@ -151,6 +160,7 @@ def test_constrained_runs_equal_pymoo(pop_size: int, budget: int, seed: int) -> 
     assert (new.G <= 0).all()
 
 
+@needs_libm_numpy
 def test_infeasible_problem_returns_pymoos_least_violating_row() -> None:
     ref, new, p_ref, p_new = _both(lambda: ConstrainedBNH(shift=30.0), 200, 4, pop_size=20)
     _assert_same(ref, new, p_ref, p_new)
@@ -161,6 +171,7 @@ def test_infeasible_problem_returns_pymoos_least_violating_row() -> None:
     assert violation(new.G)[0] == cv.min()  # elitist: the least violation ever seen survives
 
 
+@needs_libm_numpy
 def test_operator_parameters_and_warm_start_equal_pymoo() -> None:
     options = {"pop_size": 12, "crossover_eta": 5.0, "crossover_prob": 0.6, "mutation_eta": 8.0}
     _assert_same(*_both(lambda: ZDT(n_var=4), 120, 5, **options))
@@ -192,6 +203,7 @@ def _merge_problem(seed: int) -> MergeProblem:
     return HCOMCController(config).problem(view, group)[0]
 
 
+@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 3])
 def test_merge_problem_runs_equal_pymoo(seed: int) -> None:
     """On the HCOMC problem at the default budget (pop 40, 360 rows) the sets are identical."""
@@ -267,3 +279,19 @@ def test_survival_takes_feasible_fronts_then_least_violating() -> None:
     np.testing.assert_array_equal(rows[idx], [0, 1, 2, 5, 4])
     np.testing.assert_array_equal(rank[idx][:4], [0, 0, 1, 2])
     assert np.isinf(crowding[idx][:4]).all()  # fronts of <= 2 rows are all boundary
+
+
+def test_merge_problem_quality_matches_pymoo() -> None:
+    """On any CPU, the compiled NSGA-II's solution quality is pymoo's, paired over seeds on the
+    recorded merge problems (:func:`recorded_decisions.assert_quality_matches`: instants 0-4,
+    the first of C1-C5, seeds 0-7, the config's budget and population).
+
+    Tolerance: mean hypervolume ratio >= 0.95, and mean best Eq. 19 cost at most 10 % of the
+    library's spread above pymoo's. Measured: here (numpy's power is the C library's) the
+    runs are pymoo's bit for bit: ratio 1, gap 0; with pymoo's powers put one unit in the last
+    place off on 30 % of results (as a SIMD power may be), every pymoo run changes, by at most
+    4e-13 in a variable, ratio 1 within 2e-15, gap below 1e-14; with the runs unpaired (pymoo seeded
+    1000-1007: runs that share no draws, the worst a divergence could do) ratio 0.996 and gap
+    +0.016 against a spread of 0.62 (2.6 %, one standard error 2.8 %).
+    """
+    assert_quality_matches("nsga2", "nsga2-pymoo")

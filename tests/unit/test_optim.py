@@ -22,7 +22,13 @@ from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, POPULATION_BASED, make_optimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer
 from hcomc.optim.selection import non_dominated, select_eq19
-from scalar_problems import RowRecording, assert_returns_expected_set, best_scalarised, recording
+from scalar_problems import (
+    RowRecording,
+    assert_returns_expected_set,
+    best_scalarised,
+    needs_libm_numpy,
+    recording,
+)
 
 PAPER_THRESHOLD = 4.0  # the paper's Eq. 19 gate on U_safe [m/s^2]
 eq19 = partial(select_eq19, safety_threshold=PAPER_THRESHOLD)
@@ -518,6 +524,7 @@ def test_scalarised_search_returns_best_scalarised_row_when_nothing_is_feasible(
     assert_returns_expected_set(res, problem)
 
 
+@needs_libm_numpy
 @pytest.mark.parametrize(("compiled", "library"), [("pso", "pso-pymoo"), ("sa", "sa-scipy")])
 @pytest.mark.parametrize("make", [ConstrainedDTLZ2, InfeasibleDTLZ2, _RowDTLZ2])
 def test_compiled_and_library_return_the_same_set(

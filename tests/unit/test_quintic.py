@@ -9,15 +9,13 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial as poly
 
-from hcomc.models.quintic import (
-    lateral_offset,
+from hcomc.models.lane_change_peaks import (
     min_duration,
     peak_lateral_accel,
     peak_lateral_jerk,
     peak_lateral_speed,
-    quintic_coefficients,
-    quintic_shape,
 )
+from hcomc.models.quintic import lateral_offset, quintic_coefficients, quintic_shape
 
 W = 3.75  # lane width [m]
 

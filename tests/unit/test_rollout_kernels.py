@@ -26,10 +26,10 @@ from hcomc.control.hcomc.rollout import (
 from hcomc.control.hcomc.rollout_layout import R_ACC, R_FREE, R_V, R_X
 from hcomc.control.hcomc.rollout_score import created_pairs_safety
 from hcomc.control.hcomc.rollout_step import follow_role, integrate, new_state
+from hcomc.interface import Fleet, follow
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind
 from hcomc.safety.critical import critical_accel, critical_acceleration
-from hcomc.sim.fleet import Fleet, follow
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "hcomc" / "control" / "hcomc"
 
@@ -134,7 +134,7 @@ def test_critical_scalar_is_the_array_function(d, v_r, v_f, delay):
 
 def test_created_pair_safety_is_eq15_of_vr_behind_vmf():
     """Longitudinal mode at merge completion: the pairs VR-VMF and VMC-VR, worst of both."""
-    from hcomc.control.hcomc.problem import problem_constants
+    from hcomc.control.hcomc.problem_terms import problem_constants
 
     config = load_config("C1")
     consts = problem_constants(config)

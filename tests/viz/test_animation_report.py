@@ -22,7 +22,8 @@ from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import SimulationLog
 from hcomc.viz.animation import animate
-from hcomc.viz.report import figure_png, write_report
+from hcomc.viz.page import figure_png
+from hcomc.viz.report import write_report
 from hcomc.viz.scene import RoadScene
 
 # ----------------------------------------------------------------------------- animation

@@ -13,7 +13,8 @@ from matplotlib.collections import LineCollection
 from hcomc.config import load_config
 from hcomc.sim.engine import simulate
 from hcomc.viz.figures import metrics_figure, timespace_figure, trajectories_figure
-from hcomc.viz.report import figure_png, write_report
+from hcomc.viz.page import figure_png
+from hcomc.viz.report import write_report
 from hcomc.viz.sweep import heatmap_figure
 
 

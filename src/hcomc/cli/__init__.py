@@ -7,6 +7,7 @@ the key, the value and what is allowed, and exits with status 2 (no traceback).
 # Importing the command modules registers their commands on ``app``, in help order.
 # isort: off
 from hcomc.cli import simulate  # noqa: F401
+from hcomc.cli import plan  # noqa: F401
 from hcomc.cli import experiments  # noqa: F401
 from hcomc.cli import reproduce  # noqa: F401
 from hcomc.cli import compare  # noqa: F401

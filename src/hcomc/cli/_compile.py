@@ -14,6 +14,10 @@ version, Python, target CPU: an upgrade or another machine sharing the cache rec
 the compilation's seconds (the next estimate). Deciding takes milliseconds once numba is
 imported, as the command does anyway. With the JIT disabled there is nothing to compile; when
 the marker cannot be written, every process compiles for itself, so one line says so.
+
+**Several processes at once** (two commands, two test sessions): one compiles, holding an
+exclusive lock on ``hcomc-kernels.lock`` beside the marker; the others say that they wait for
+it, then find the marker and load the cache, instead of each compiling the same kernels.
 """
 
 from __future__ import annotations
@@ -24,13 +28,13 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
 ESTIMATE = "10-15 min: numba compiles on one core"
-"""The first estimate: the stages took 11 min of one core of a 2-core machine (22 min of wall
-time while other processes shared it); later ones say the last compilation's time."""
+"""The estimate before the first compilation in a cache; later ones say the last
+compilation's time."""
 
 
 def _tiny(*controls: tuple[str, str]) -> Callable[[], None]:
@@ -127,6 +131,28 @@ def _estimate(marker: Path, machine: str) -> str:
     return f"about {ESTIMATE}"
 
 
+@contextmanager
+def _exclusive(path: Path, on_wait: Callable[[], None]) -> Iterator[None]:
+    """Hold an exclusive lock on ``path`` (created if missing), calling ``on_wait`` once if
+    another process holds it; no lock where the OS has no ``fcntl``."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield
+        return
+    with path.open("a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            on_wait()
+            fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            with suppress(OSError):
+                fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def ensure_compiled(console: Any) -> None:
     """Compile hcomc's kernels unless this environment's cache holds them for the current
     sources, with a line per stage on ``console`` (a rich Console); silent when it does."""
@@ -147,6 +173,17 @@ def ensure_compiled(console: Any) -> None:
     except OSError as exc:
         say(f"hcomc's kernels cannot be cached ({exc}): every process compiles them")
         return
+
+    def waiting() -> None:
+        say("waiting for another process compiling hcomc's kernels …")
+
+    with _exclusive(marker.parent / "hcomc-kernels.lock", waiting):
+        if _read(marker).get("machine") != machine:  # not compiled while this one waited
+            _compile(marker, machine, say)
+
+
+def _compile(marker: Path, machine: str, say: Callable[..., None]) -> None:
+    """Run the stages, then write ``marker``."""
     say(
         "compiling hcomc's kernels, once per environment and after every change of its "
         f"sources ({_estimate(marker, machine)}) …"

@@ -66,7 +66,7 @@ def corridor_conditions(text: str | None, suite: str | None) -> list[str]:
 
 
 def analysis_of(runs: Any) -> tuple[tuple[str, ...], dict[str, Any]]:
-    """The notes and :func:`hcomc.cli.compare._analyse` options for a runs table: for runs
+    """The notes and :func:`hcomc.cli.compare_output._analyse` options for a runs table: for runs
     of the corridor engine (``kind`` "corridor" in every row) the corridor metrics with their
     wording; none otherwise (the paper's metrics)."""
     from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS
@@ -99,7 +99,8 @@ def compare_corridors(
 ) -> None:
     """``hcomc compare`` on corridors: run what the folder lacks, print and write the
     comparison (as for cells of a suite)."""
-    from hcomc.cli.compare import _analyse, _command, _say, fill_folder
+    from hcomc.cli.compare import _command, fill_folder
+    from hcomc.cli.compare_output import _analyse, _say
     from hcomc.experiments.compare import pairs
     from hcomc.experiments.corridor_compare import (
         CorridorComparison,

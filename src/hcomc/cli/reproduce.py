@@ -37,7 +37,8 @@ def _write_report(out_dir: Path, runs: Any, claim_frame: Any, contour: Any) -> P
     its worker, raised here once the tables are saved) and the metric plots."""
     from hcomc.viz.figures import metrics_figure
     from hcomc.viz.gallery import REPLAY_FILE, SCENE_DIR
-    from hcomc.viz.report import figure_png, write_report
+    from hcomc.viz.page import figure_png
+    from hcomc.viz.report import write_report
 
     if isinstance(contour, BaseException):
         raise contour

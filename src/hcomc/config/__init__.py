@@ -9,6 +9,7 @@ A config is named either by a path to a TOML file or by a built-in preset name
 platoon), see :func:`load_config`.
 """
 
+from hcomc.config.control_table import ControlParams
 from hcomc.config.loading import (
     config_to_toml,
     describe_error,
@@ -20,19 +21,9 @@ from hcomc.config.loading import (
     suggest,
     validate_config,
 )
-from hcomc.config.schema import (
-    MIN_STEP,
-    CAVParams,
-    ConfigError,
-    ControlParams,
-    DemandParams,
-    HDVParams,
-    IDMParams,
-    LaneChangeParams,
-    PlatoonParams,
-    RoadParams,
-    ScenarioConfig,
-)
+from hcomc.config.schema import MIN_STEP, ConfigError, ScenarioConfig
+from hcomc.config.traffic_tables import DemandParams, PlatoonParams, RoadParams
+from hcomc.config.vehicle_tables import CAVParams, HDVParams, IDMParams, LaneChangeParams
 
 __all__ = [
     "MIN_STEP",

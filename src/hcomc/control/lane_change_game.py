@@ -81,28 +81,30 @@ from hcomc._typing import FloatArray
 from hcomc.config import IDMParams
 from hcomc.control.game import GameSolution, solve_cooperative, solve_stackelberg_harsanyi
 from hcomc.control.lane_change_cost import (
+    INFEASIBLE_SAFETY_COST,
+    GameVehicle,
+    comfort_cost,
+    efficiency_cost,
+    fv_kinematics,
+    game_vehicle,
+    lateral_accel,
+    leader_track,
+    safety_cost,
+    simulate_sv,
+)
+from hcomc.control.lane_change_params import (
     FV_AC,
     FV_ACTIONS,
     FV_CS,
     FV_DC,
     FV_LC,
     GAME_DEFAULT,
-    INFEASIBLE_SAFETY_COST,
     SV_ACTIONS,
     SV_K,
     SV_LC,
     DriverType,
     GameParams,
-    GameVehicle,
-    comfort_cost,
-    efficiency_cost,
-    fv_kinematics,
     game_params,
-    game_vehicle,
-    lateral_accel,
-    leader_track,
-    safety_cost,
-    simulate_sv,
 )
 
 __all__ = [

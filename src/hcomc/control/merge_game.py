@@ -18,12 +18,14 @@ Players and actions (row player first; index 0 / 1):
 
 Joint actions are scored from forward predictions of
 :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
-longitudinal candidate ``[merge_x, vr_duration, H, 0, row]`` of :mod:`hcomc.control.fifo`
+longitudinal candidate ``[merge_x, vr_duration, H, 0, row]`` of
+:mod:`hcomc.control.longitudinal_candidate`
 (fixed merge position and duration, H = VR's predicted arrival time at ``merge_x``). If the
 yield cell's virtual vehicles are infeasible in a row, that row's candidate moves to the
-nearest feasible one by FIFO's rule (:func:`hcomc.control.fifo.nearest_feasible`: H
-lengthened, then the merge position moved downstream), so that "yield" is a trajectory the lag
-vehicle can follow; both cells of the row use the row's candidate:
+nearest feasible one by FIFO's rule
+(:func:`hcomc.control.longitudinal_candidate.nearest_feasible`: H lengthened, then the merge
+position moved downstream), so that "yield" is a trajectory the lag vehicle can follow; both
+cells of the row use the row's candidate:
 
 ====================  ======================================  ==============================
 cell                  key group predicted                     follower of VR's slot
@@ -34,10 +36,11 @@ cell                  key group predicted                     follower of VR's s
 (behind, not yield)   relabelled group, old VMR car-follows   VMR
 ====================  ======================================  ==============================
 
-The relabelled group is :func:`hcomc.control.base.behind_group` (old VMC → ``vmf``, old VMR →
-``vmc``). "Yield" / "not yield" is obtained by overriding the ``coop`` flag of the ``vmc`` role
-in a copy of the prediction's key state (:func:`hcomc.control.fifo.with_cooperation`): the
-rollout makes that role follow VV1 iff the flag is set. The simulation state is never touched.
+The relabelled group is :func:`hcomc.control.key_vehicles.behind_group` (old VMC → ``vmf``, old
+VMR → ``vmc``). "Yield" / "not yield" is obtained by overriding the ``coop`` flag of the ``vmc``
+role in a copy of the prediction's key state
+(:func:`hcomc.control.longitudinal_candidate.with_cooperation`): the rollout makes that role
+follow VV1 iff the flag is set. The simulation state is never touched.
 
 Payoffs: :math:`U = -J`, :math:`J = w_s J_s + w_e J_e + w_c J_c` per player,
 over the whole prediction window:
@@ -75,9 +78,11 @@ Solution:
 
 * VMC a CAV: the cooperative (joint-optimal) cell,
   :func:`hcomc.control.game.solve_cooperative` with SV = VR and FV = the lag vehicle.
-* VMC an HDV: a pure Nash equilibrium by enumeration (:func:`pure_nash`); among several, the
+* VMC an HDV: a pure Nash equilibrium by enumeration
+  (:func:`~hcomc.control.merge_game_equilibrium.pure_nash`); among several, the
   one with the largest payoff sum, ties to the first in row-major order. Without a pure
-  equilibrium, Kita's closed-form mixed equilibrium (:func:`kita_mixed`)
+  equilibrium, Kita's closed-form mixed equilibrium
+  (:func:`~hcomc.control.merge_game_equilibrium.kita_mixed`)
   :math:`q^* = (a_{22} - a_{12})/(a_{11} - a_{12} - a_{21} + a_{22})`,
   :math:`p^* = (b_{22} - b_{21})/(b_{11} - b_{12} - b_{21} + b_{22})`, and both actions are
   sampled from it with the ``rng`` passed to :meth:`GameController.plan` (VR first).
@@ -125,22 +130,14 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeGroup,
-    MergePlan,
-    Mode,
-    PlanDetails,
-    TrafficView,
-    elapsed_ms,
-)
-from hcomc.control.fifo import (
-    PredictingBaseline,
+from hcomc.control.hcomc.controller import sequence_groups
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import Prediction
+from hcomc.control.longitudinal_candidate import (
     last_merge_position,
-    longitudinal_plan,
     merge_position,
     nearest_feasible,
     predict_longitudinal,
@@ -148,70 +145,29 @@ from hcomc.control.fifo import (
     virtual_vehicle_feasible,
     with_cooperation,
 )
-from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.controller import sequence_groups
-from hcomc.control.hcomc.problem import CONSTRAINTS, MergeProblem, Prediction
-from hcomc.control.lane_change_game import INFEASIBLE_SAFETY_COST
+from hcomc.control.merge_game_equilibrium import (
+    AHEAD,
+    BEHIND,
+    NOT_YIELD,
+    YIELD,
+    GameOutcome,
+    solve_merge_game,
+)
+from hcomc.control.merge_game_payoffs import (
+    CAV_WEIGHTS,
+    NORMAL_WEIGHTS,
+    SAFETY_TERMS,
+    player_cost,
+    safety_term,
+)
+from hcomc.control.predicting_baseline import PredictingBaseline, longitudinal_plan
+from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms
 from hcomc.road import VMC, VR
 
-__all__ = [
-    "AHEAD",
-    "BEHIND",
-    "CAV_WEIGHTS",
-    "INFEASIBLE_SAFETY",
-    "NORMAL_WEIGHTS",
-    "NOT_YIELD",
-    "SAFETY_TERMS",
-    "YIELD",
-    "GameController",
-    "GameDetails",
-    "GameOutcome",
-    "kita_mixed",
-    "player_cost",
-    "pure_nash",
-    "safety_term",
-    "solve_merge_game",
-]
+__all__ = ["GameController", "GameDetails"]
 
-AHEAD, BEHIND = 0, 1
-"""VR's actions (rows): merge ahead of / behind VMC."""
-YIELD, NOT_YIELD = 0, 1
-"""The lag vehicle's actions (columns)."""
 ROW_NAMES = ("ahead", "behind")
 COL_NAMES = ("yield", "not_yield")
-CAV_WEIGHTS = (0.5, 0.3, 0.2)
-"""(w_s, w_e, w_c) of a CAV ramp vehicle."""
-NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
-"""(w_s, w_e, w_c) of the "normal" driving type (Hang et al. 2021)."""
-SAFETY_TERMS = ("linear", "capped")
-"""The shared safety term J_s: ``"linear"`` U_safe / a_merg (the published game),
-``"capped"`` min(1, U_safe / threshold) (the variant "game-capped")."""
-INFEASIBLE_SAFETY = INFEASIBLE_SAFETY_COST
-"""J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]; the
-same cost the lane-change game gives an infeasible action."""
-_G = {name: i for i, name in enumerate(CONSTRAINTS)}
-
-
-# ----------------------------------------------------------------- equilibrium logic
-@dataclass(frozen=True)
-class GameOutcome:
-    """Solution of the 2x2 merge game.
-
-    Attributes
-    ----------
-    row, col : the played actions (VR: AHEAD/BEHIND; lag vehicle: YIELD/NOT_YIELD).
-    kind : "cooperative", "pure" or "mixed".
-    pure : all pure Nash equilibria (row, col) (empty for the cooperative solution).
-    p, q : Kita's mixed equilibrium, P(row AHEAD) and P(col YIELD) (NaN unless "mixed").
-    """
-
-    row: int
-    col: int
-    kind: str
-    pure: tuple[tuple[int, int], ...] = ()
-    p: float = float("nan")
-    q: float = float("nan")
-
 
 PredictionPair = tuple[Prediction, Prediction]
 
@@ -232,7 +188,8 @@ class GameDetails(PlanDetails):
     predictions : the prediction of each cell, ``predictions[row][col]``.
     feasible : whether the played cell's prediction satisfies every constraint.
     candidates : each row's candidate (merge position [m], H [s]), ``candidates[row]``.
-    safety : the safety term played (:data:`SAFETY_TERMS`).
+    safety : the safety term played
+        (:data:`~hcomc.control.merge_game_payoffs.SAFETY_TERMS`).
     """
 
     J_vr: FloatArray
@@ -248,165 +205,14 @@ class GameDetails(PlanDetails):
     safety: str
 
 
-def _matrix(name: str, value: ArrayLike) -> FloatArray:
-    arr = np.array(value, dtype=np.float64)
-    if arr.shape != (2, 2) or np.isnan(arr).any():
-        raise ValueError(f"{name} must be a 2x2 array without NaN, got {arr!r}")
-    return arr
-
-
-def pure_nash(A: ArrayLike, B: ArrayLike) -> list[tuple[int, int]]:
-    """Pure Nash equilibria of the bimatrix game (A row payoffs, B column payoffs; maximised).
-
-    A cell (i, j) is an equilibrium when neither player gains by deviating alone:
-    ``A[i, j] >= A[1 - i, j]`` and ``B[i, j] >= B[i, 1 - j]`` (weak inequalities). Returned in
-    row-major order.
-
-    Examples
-    --------
-    >>> pure_nash([[3, 0], [5, 1]], [[3, 5], [0, 1]])  # prisoner's dilemma
-    [(1, 1)]
-    """
-    a, b = _matrix("A", A), _matrix("B", B)
-    return [
-        (i, j)
-        for i in range(2)
-        for j in range(2)
-        if a[i, j] >= a[1 - i, j] and b[i, j] >= b[i, 1 - j]
-    ]
-
-
-def kita_mixed(A: ArrayLike, B: ArrayLike) -> tuple[float, float]:
-    r"""Kita's closed-form mixed equilibrium of a 2x2 game.
-
-    .. math::
-       q^* = \frac{a_{22} - a_{12}}{a_{11} - a_{12} - a_{21} + a_{22}},\qquad
-       p^* = \frac{b_{22} - b_{21}}{b_{11} - b_{12} - b_{21} + b_{22}}
-
-    :math:`q^*` is the column player's probability of its first action that makes the row
-    player indifferent, :math:`p^*` the row player's probability of its first action that makes
-    the column player indifferent (indices 1-based as in Kita 1999). The values are clipped to
-    [0, 1]; a zero denominator (a player indifferent whatever the other does) gives 0.5.
-
-    Returns
-    -------
-    p, q : P(row 0), P(column 0).
-
-    Examples
-    --------
-    >>> kita_mixed([[1, -1], [-1, 1]], [[-1, 1], [1, -1]])  # matching pennies
-    (0.5, 0.5)
-    """
-    a, b = _matrix("A", A), _matrix("B", B)
-    den_q = a[0, 0] - a[0, 1] - a[1, 0] + a[1, 1]
-    den_p = b[0, 0] - b[0, 1] - b[1, 0] + b[1, 1]
-    q = (a[1, 1] - a[0, 1]) / den_q if den_q != 0.0 else 0.5
-    p = (b[1, 1] - b[1, 0]) / den_p if den_p != 0.0 else 0.5
-    return float(np.clip(p, 0.0, 1.0)), float(np.clip(q, 0.0, 1.0))
-
-
-def solve_merge_game(
-    J_row: ArrayLike, J_col: ArrayLike, *, cooperative: bool, rng: np.random.Generator
-) -> GameOutcome:
-    """Play the 2x2 merge game on costs (payoffs are their negatives).
-
-    Parameters
-    ----------
-    J_row, J_col : (2, 2) costs of VR and of the lag vehicle, rows = VR's action.
-    cooperative : True for a CAV VMC — the joint-optimal cell
-        (:func:`hcomc.control.game.solve_cooperative`); False — a pure Nash equilibrium (largest
-        payoff sum, ties to row-major order) or, if none exists, a draw from Kita's mixed
-        equilibrium (row action first, then column action, two ``rng.random()`` calls).
-    rng : used only for the mixed equilibrium.
-    """
-    jr, jc = _matrix("J_row", J_row), _matrix("J_col", J_col)
-    if cooperative:
-        sol = solve_cooperative(jr, jc)
-        return GameOutcome(sol.sv_action, int(sol.fv_response[sol.sv_action, 0]), "cooperative")
-    A, B = -jr, -jc
-    pure = pure_nash(A, B)
-    if pure:
-        welfare = [A[i, j] + B[i, j] for i, j in pure]
-        row, col = pure[int(np.argmax(welfare))]
-        return GameOutcome(row, col, "pure", tuple(pure))
-    p, q = kita_mixed(A, B)
-    row = AHEAD if rng.random() < p else BEHIND
-    col = YIELD if rng.random() < q else NOT_YIELD
-    return GameOutcome(row, col, "mixed", (), p, q)
-
-
-# ------------------------------------------------------------------------ payoffs
-def player_cost(
-    pred: Prediction,
-    problem: MergeProblem,
-    role: int,
-    weights: tuple[float, float, float],
-    j_s: float,
-    row: int = 0,
-) -> tuple[float, dict[str, float]]:
-    """Cost ``w_s J_s + w_e J_e + w_c J_c`` of the key vehicle in ``role``.
-
-    ``J_e = mean |v - v0| / v0`` and ``J_c = mean a^2 / a_max^2`` over the prediction window,
-    with the vehicle's desired speed and maximum-acceleration parameters; ``j_s`` is the shared
-    safety term. An absent vehicle costs 0.
-
-    Returns
-    -------
-    cost : J [-].
-    terms : {"J_s", "J_e", "J_c"}.
-    """
-    s = problem.states[int(pred.sequence[row])] or problem.state
-    if not s.present[role]:
-        return 0.0, {"J_s": 0.0, "J_e": 0.0, "J_c": 0.0}
-    v0, a_max = s.desired_speed(role), s.max_accel(role)
-    j_e = float(np.mean(np.abs(pred.V[row, :, role] - v0)) / v0)
-    j_c = float(np.mean(pred.A[row, :, role] ** 2) / a_max**2)
-    w_s, w_e, w_c = weights
-    return w_s * j_s + w_e * j_e + w_c * j_c, {"J_s": j_s, "J_e": j_e, "J_c": j_c}
-
-
-def safety_term(
-    pred: Prediction,
-    problem: MergeProblem,
-    u_safe: float,
-    safety: str = "linear",
-    row: int = 0,
-) -> float:
-    """Shared safety term ``J_s`` of one predicted joint action (module docstring).
-
-    ``u_safe / a_merg`` (``safety="linear"``; ``a_merg`` = ``control.safety_emergency_decel``)
-    or ``min(1, u_safe / threshold)`` (``"capped"``; ``control.safety_threshold``), or
-    :data:`INFEASIBLE_SAFETY` when the prediction has a collision, VR not merged, an
-    unavoidable crash (``u_safe`` infinite), an infeasible virtual vehicle, or a present key
-    vehicle braking harder than Eq. 15's emergency deceleration ``a_merg``.
-    """
-    if safety not in SAFETY_TERMS:
-        raise ValueError(f"safety = {safety!r}: allowed {', '.join(map(repr, SAFETY_TERMS))}")
-    g = pred.G[row]
-    present = (problem.states[int(pred.sequence[row])] or problem.state).present
-    a_min = float(pred.A[row][:, present].min())
-    a_merg = problem.safety.emergency_decel
-    infeasible = (
-        g[_G["collision"]] > 0.0
-        or g[_G["not_merged"]] > 0.0
-        or not np.isfinite(u_safe)
-        or not virtual_vehicle_feasible(pred, row)
-        or a_min < -a_merg
-    )
-    if infeasible:
-        return INFEASIBLE_SAFETY
-    if safety == "capped":
-        return float(min(1.0, u_safe / problem.safety.threshold))
-    return float(u_safe / a_merg)
-
-
 class GameController(PredictingBaseline):
     """Kita-style 2x2 ramp-merging game (Liao et al. 2022), longitudinal execution.
 
     Parameters
     ----------
     config : scenario (reads ``road``, ``cav`` and ``control``).
-    safety : the shared safety term, one of :data:`SAFETY_TERMS`: ``"linear"`` (the published
+    safety : the shared safety term, one of
+        :data:`~hcomc.control.merge_game_payoffs.SAFETY_TERMS`: ``"linear"`` (the published
         game, controller ``"game"``) or ``"capped"`` (the variant ``"game-capped"``).
 
     Notes
@@ -429,10 +235,12 @@ class GameController(PredictingBaseline):
     ) -> tuple[tuple[float, float], tuple[float, float], Prediction]:
         """Each row's candidate (merge position [m], H [s]) and the (ahead, yield) prediction.
 
-        H is VR's predicted arrival at the fixed merge position (:func:`predict_longitudinal`
+        H is VR's predicted arrival at the fixed merge position
+        (:func:`~hcomc.control.longitudinal_candidate.predict_longitudinal`
         in the "ahead" row's yield cell), shared by both rows; a row whose yield cell has an
         infeasible virtual vehicle takes FIFO's nearest feasible candidate instead
-        (:func:`hcomc.control.fifo.nearest_feasible`), or keeps its own when none is.
+        (:func:`hcomc.control.longitudinal_candidate.nearest_feasible`), or keeps its own when
+        none is.
         """
         h_max = float(view.config.control.horizon_max)
         first, horizon = predict_longitudinal(

@@ -30,7 +30,7 @@ from typing import Any
 from pydantic import TypeAdapter, ValidationError
 
 from hcomc.config import ConfigError, ScenarioConfig
-from hcomc.control.base import MergeController
+from hcomc.interface import MergeController
 
 ENTRY_POINT_GROUP = "hcomc.controllers"
 """Entry-point group through which installed packages register controller names."""

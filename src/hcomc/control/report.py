@@ -2,17 +2,14 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from hcomc.control.base import MergePlan, Mode
 from hcomc.control.hcomc.controller import HCOMCDetails
-from hcomc.control.hcomc.problem import MODE_NONE
+from hcomc.control.hcomc.problem_terms import MODE_NONE
+from hcomc.interface import Engine, MergePlan, Mode
 from hcomc.road import Kind
-
-if TYPE_CHECKING:
-    from hcomc.sim.engine import Simulation
 
 
 def _solution(x: np.ndarray, f: np.ndarray) -> dict[str, Any]:
@@ -28,7 +25,7 @@ def _solution(x: np.ndarray, f: np.ndarray) -> dict[str, Any]:
     }
 
 
-def plan_report(sim: Simulation, plan: MergePlan) -> dict[str, Any]:
+def plan_report(sim: Engine[object], plan: MergePlan) -> dict[str, Any]:
     """Key vehicles, game outcome, Pareto set and chosen plan as JSON-ready data."""
     view, group = sim.requests[0]
     keys: dict[str, Any] = {}

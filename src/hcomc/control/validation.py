@@ -31,8 +31,9 @@ from typing import TypeGuard
 
 import numpy as np
 
-from hcomc.config.schema import IDMParams
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView, behind_group
+from hcomc.config.vehicle_tables import IDMParams
+from hcomc.control.key_vehicles import behind_group
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import KEY_ROLES
 
 __all__ = ["InvalidPlan", "check_plan", "checked", "name_of"]
@@ -153,9 +154,9 @@ def _number_rule(
 def _structure(plan: MergePlan, view: TrafficView, group: MergeGroup) -> Problem:
     """A mode and a group for this VR, a known sequence, ``t0`` the planning time."""
     if not isinstance(plan.mode, Mode):
-        return "mode", plan.mode, "a hcomc.control.base.Mode (NONE, LONGITUDINAL, LATERAL)"
+        return "mode", plan.mode, "a hcomc.interface.Mode (NONE, LONGITUDINAL, LATERAL)"
     if not isinstance(plan.group, MergeGroup):
-        return "group", plan.group, "a hcomc.control.base.MergeGroup"
+        return "group", plan.group, "a hcomc.interface.MergeGroup"
     if plan.group.vr != group.vr:
         return "group.vr", plan.group.vr, f"{group.vr}, the ramp vehicle planned for"
     if plan.sequence not in SEQUENCES or (plan.sequence == "behind" and group.vmc < 0):
@@ -258,7 +259,7 @@ def check_plan(plan: object, view: TrafficView, group: MergeGroup, controller_na
     """Raise :class:`InvalidPlan` for the first rule (module doc) ``plan`` breaks; ``group``
     is the key group the controller was asked to plan for."""
     if not isinstance(plan, MergePlan):
-        found: Problem = ("plan", type(plan).__name__, "a hcomc.control.base.MergePlan")
+        found: Problem = ("plan", type(plan).__name__, "a hcomc.interface.MergePlan")
     else:
         rules = (*STRUCTURE, _safe_default) if plan.fallback else (*STRUCTURE, *CONTENT)
         found = next((p for p in (rule(plan, view, group) for rule in rules) if p), None)

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
+from hcomc.interface import MergePlan
 from hcomc.models._broadcast import broadcast_apply
 
 
@@ -23,7 +24,8 @@ def cubic_coefficients(
 ) -> FloatArray:
     r"""Coefficients (..., 4) of the cubic through (x0, v0) at τ = 0 and (xf, vf) at τ = H.
 
-    Eq. 10 with ``t0' = 0``: the 4x4 system has the closed-form solution
+    Eq. 10 (VV1, between the boundary states of Eq. 8) and Eq. 13 (VV2, between those of
+    Eq. 11) with ``t0' = 0``: the 4x4 system has the closed-form solution
 
     .. math::
        b_1 = x_0,\quad b_2 = v_0,\quad
@@ -58,7 +60,8 @@ def _coefficients_array(h, x0, v0, xf, vf):
 
 
 def cubic_state(b: FloatArray, tau: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Position [m], speed [m/s] and acceleration [m/s^2] of the cubic at ``tau`` (Eq. 9)."""
+    """Position [m], speed [m/s] and acceleration [m/s^2] of the cubic at ``tau`` (Eq. 9 for
+    VV1, Eq. 12 for VV2)."""
     b = np.asarray(b, dtype=np.float64)
     out = broadcast_apply(_state_array, b[..., 0], b[..., 1], b[..., 2], b[..., 3], tau)
     return out[..., 0], out[..., 1], out[..., 2]
@@ -114,4 +117,28 @@ def _extremes_array(b1, b2, b3, b4, h):
     for i in range(h.size):
         b[0], b[1], b[2], b[3] = b1[i], b2[i], b3[i], b4[i]
         out[i, 0], out[i, 1] = cubic_minima(b, h[i])
+    return out
+
+
+def virtual_states(
+    plan: MergePlan, t: float, x: FloatArray, v: FloatArray, a: FloatArray
+) -> dict[str, tuple[float, float, float]]:
+    """State (x, v, a) at time t of each virtual vehicle ``plan`` has ("vv0", "vv1", "vv2").
+
+    Within the horizon a virtual vehicle is its cubic; after it, VV0 is the projection of VR's
+    future leader (``group.vmf``, if any) and VV1 that of VR; VV2 ends at the horizon. The
+    engine executes exactly these, and a replanning controller continues them.
+    """
+    g, tau = plan.group, t - plan.t0
+    out: dict[str, tuple[float, float, float]] = {}
+    after = {"vv0": g.vmf, "vv1": g.vr, "vv2": -1}
+    for name, coeffs in (("vv0", plan.vv0), ("vv1", plan.vv1), ("vv2", plan.vv2)):
+        if coeffs is None:
+            continue
+        if tau <= plan.horizon:
+            xv, vv, av = cubic_state(coeffs, tau)
+            out[name] = (float(xv), float(vv), float(av))
+        elif after[name] >= 0:
+            j = after[name]
+            out[name] = (float(x[j]), float(v[j]), float(a[j]))
     return out

@@ -1,4 +1,5 @@
-"""Paired comparison of merge controllers: effects, verdicts and merge success per cell.
+"""Paired comparison of merge controllers: the effects of one configuration against another
+per cell and metric, with their verdicts.
 
 Runs of a comparison share their seeds across configurations (common random numbers: the
 same traffic for every controller), so configurations A and B are compared **paired**: in a
@@ -26,17 +27,15 @@ vehicle lowers ``merged_share``), so their pairs are the seeds in which both run
 defined value, whatever the runs' ``merged`` says (:data:`RUN_LEVEL`).
 
 A run whose ramp vehicle (VR) never merged has no metrics of the merge: it is an outcome, not
-a run without disturbance. It never vanishes: :func:`merge_success` counts it (k of n runs
-merged), ``excluded`` counts the seeds both configurations ran but that give no pair, and
-:func:`success_pairs` compares merge success itself, paired by seed: the exact McNemar test
-(the sign test of the seeds where exactly one of the two merged), Holm-adjusted over its own
-family.
+a run without disturbance. It never vanishes: ``excluded`` counts the seeds both
+configurations ran but that give no pair, and :mod:`hcomc.experiments.compare_success`
+counts and compares merge success itself. :mod:`hcomc.experiments.compare_view` turns the
+tables into text.
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
 
@@ -46,7 +45,7 @@ import pandas as pd
 from hcomc.experiments.claims import ALPHA, MIN_PAIRS, ci_verdict, holm, p_verdict, sign_test
 from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.experiments.tables import LABELS, TIE_TOLERANCE, median_ci
+from hcomc.experiments.tables import TIE_TOLERANCE, median_ci
 from hcomc.metrics import METRICS
 
 PREFERS: dict[str, str] = {
@@ -96,37 +95,7 @@ class Effect:
     mean_b: float
 
 
-@dataclass(frozen=True)
-class Success:
-    """Merge success of one configuration in one cell: k of n runs in which VR merged."""
-
-    condition: str
-    configuration: str
-    merged: int
-    runs: int
-    rate: float
-
-
-@dataclass(frozen=True)
-class SuccessPair:
-    """Merge success of A against B in one cell, paired by seed (exact McNemar test)."""
-
-    condition: str
-    a: str
-    b: str
-    both: int  # seeds in which both merged
-    only_a: int
-    only_b: int
-    neither: int
-    p_value: float  # exact sign test of only_a against only_a + only_b
-    p_holm: float  # Holm-adjusted over every success pair of the comparison
-    verdict: str  # "higher" (A merges more often), "lower" or "undecided", at p < ALPHA
-    verdict_holm: str
-
-
 EFFECT_COLUMNS = tuple(f.name for f in fields(Effect))
-SUCCESS_COLUMNS = tuple(f.name for f in fields(Success))
-SUCCESS_PAIR_COLUMNS = tuple(f.name for f in fields(SuccessPair))
 
 
 def check_runs(runs: pd.DataFrame) -> None:
@@ -265,157 +234,15 @@ def effects(
     return frame
 
 
-def merge_success(runs: pd.DataFrame, configurations: Sequence[str] | None = None) -> pd.DataFrame:
-    """Merge success (:class:`Success`) per cell and configuration: every run counts."""
-    check_runs(runs)
-    records = []
-    for condition in pd.unique(runs["condition"]):
-        for conf in configurations or configurations_of(runs):
-            part = _by_seed(runs, condition, conf)
-            if part.empty:
-                continue
-            k, n = int(_merged(part).sum()), len(part)
-            records.append(Success(str(condition), conf, k, n, k / n))
-    return pd.DataFrame([asdict(r) for r in records], columns=list(SUCCESS_COLUMNS))
-
-
-def success_pairs(
-    runs: pd.DataFrame,
-    comparisons: Sequence[tuple[str, str]],
-) -> pd.DataFrame:
-    """Merge success of A against B per cell, paired by seed (:class:`SuccessPair`): the
-    exact McNemar test on the seeds where exactly one merged, Holm-adjusted over all rows."""
-    check_runs(runs)
-    records = []
-    for condition in pd.unique(runs["condition"]):
-        for a, b in comparisons:
-            side_a, side_b = _by_seed(runs, condition, a), _by_seed(runs, condition, b)
-            seeds = side_a.index.intersection(side_b.index)
-            if seeds.empty:
-                continue
-            ma = _merged(side_a.loc[seeds]).to_numpy()
-            mb = _merged(side_b.loc[seeds]).to_numpy()
-            only_a, only_b = int((ma & ~mb).sum()), int((~ma & mb).sum())
-            p = sign_test(only_a, only_b)
-            records.append(SuccessPair(
-                condition=str(condition), a=a, b=b, both=int((ma & mb).sum()), only_a=only_a,
-                only_b=only_b, neither=int((~ma & ~mb).sum()), p_value=p, p_holm=math.nan,
-                verdict=_success_word(p, only_a - only_b), verdict_holm="undecided",
-            ))  # fmt: skip
-    frame = pd.DataFrame([asdict(r) for r in records], columns=list(SUCCESS_PAIR_COLUMNS))
-    if len(frame):
-        frame["p_holm"] = holm(frame["p_value"].to_numpy(np.float64))
-        frame["verdict_holm"] = [
-            _success_word(p, int(d))
-            for p, d in zip(frame["p_holm"], frame["only_a"] - frame["only_b"], strict=True)
-        ]
-    return frame
-
-
-def _success_word(p: float, direction: int) -> str:
-    """The success verdict: "higher" when A merges significantly more often, "lower" when
-    less, else "undecided"."""
-    return {"holds": "higher", "reversed": "lower"}.get(p_verdict(p, direction), "undecided")
-
-
-EFFECTS_VIEW_COLUMNS = (
-    "cell", "metric", "A", "B", "median A-B [95 % CI]", "verdict", "favours", "A<B", "A>B",
-    "excluded", "p (Holm)", "verdict (Holm)",
-)  # fmt: skip
-"""The columns of :func:`effects_view`."""
-
-
-def metric_label(metric: str) -> str:
-    """A metric's name with its unit and preferred direction (↑ larger is better, ↓ smaller)."""
-    arrow = {"larger": " ↑", "smaller": " ↓"}.get(PREFERS.get(metric, ""), "")
-    corridor = CORRIDOR_METRICS.get(metric)
-    return LABELS.get(metric, corridor.label if corridor else metric) + arrow
-
-
-def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
-    """The effects as text for a terminal or a page: cell, metric, A, B, median A - B with
-    its 95 % CI, verdict, the favoured configuration, "k of n" seeds with A < B, seeds with
-    A > B, excluded seeds, the Holm-adjusted p and its verdict."""
-
-    def interval(m: float, lo: float, hi: float) -> str:
-        return "—" if not math.isfinite(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]"
-
-    rows = frame.to_dict("records")
-    return pd.DataFrame(
-        {
-            "cell": [r["condition"] for r in rows],
-            "metric": [metric_label(r["metric"]) for r in rows],
-            "A": [r["a"] for r in rows],
-            "B": [r["b"] for r in rows],
-            "median A-B [95 % CI]": [
-                interval(r["median_diff"], r["ci_low"], r["ci_high"]) for r in rows
-            ],
-            "verdict": [r["verdict"] for r in rows],
-            "favours": [r["favours"] or "—" for r in rows],
-            "A<B": [f"{r['a_lower']} of {r['n']}" for r in rows],
-            "A>B": [str(r["a_higher"]) for r in rows],
-            "excluded": [str(r["excluded"]) for r in rows],
-            "p (Holm)": [_p(r["p_holm"]) for r in rows],
-            "verdict (Holm)": [r["verdict_holm"] for r in rows],
-        },
-        columns=EFFECTS_VIEW_COLUMNS,
-    )
-
-
-def _p(p: float) -> str:
-    return "—" if not math.isfinite(p) else f"{p:.2g}"
-
-
-def success_view(frame: pd.DataFrame) -> pd.DataFrame:
-    """Merge success as text: one row per cell, one column per configuration, "k/n (rate)"."""
-    if frame.empty:
-        return pd.DataFrame()
-    text = [f"{k}/{n} ({100 * r:.0f} %)" for k, n, r in
-            zip(frame["merged"], frame["runs"], frame["rate"], strict=True)]  # fmt: skip
-    wide = frame.assign(text=text).pivot(index="condition", columns="configuration", values="text")
-    wide = wide.reindex(index=pd.unique(frame["condition"]),
-                        columns=pd.unique(frame["configuration"]))  # fmt: skip
-    return wide.fillna("—").rename_axis(index="cell", columns=None).reset_index()
-
-
-def success_pairs_view(frame: pd.DataFrame) -> pd.DataFrame:
-    """Paired merge success as text: cell, A, B, seeds where both / only A / only B /
-    neither merged, the Holm-adjusted p of the exact McNemar test and its verdict."""
-    rows = frame.to_dict("records")
-    return pd.DataFrame(
-        {
-            "cell": [r["condition"] for r in rows],
-            "A": [r["a"] for r in rows],
-            "B": [r["b"] for r in rows],
-            "both merged": [str(r["both"]) for r in rows],
-            "only A": [str(r["only_a"]) for r in rows],
-            "only B": [str(r["only_b"]) for r in rows],
-            "neither": [str(r["neither"]) for r in rows],
-            "p (Holm)": [_p(r["p_holm"]) for r in rows],
-            "verdict (Holm)": [r["verdict_holm"] for r in rows],
-        }
-    )
-
-
 __all__ = [
     "ALPHA",
     "EFFECT_COLUMNS",
     "PREFERS",
     "RUN_LEVEL",
-    "SUCCESS_COLUMNS",
-    "SUCCESS_PAIR_COLUMNS",
     "VERDICTS",
     "Effect",
-    "Success",
-    "SuccessPair",
     "effects",
-    "effects_view",
     "favoured",
-    "merge_success",
-    "metric_label",
     "paired_differences",
     "pairs",
-    "success_pairs",
-    "success_pairs_view",
-    "success_view",
 ]

@@ -23,7 +23,7 @@ RESULT_FREE = ("cli", "viz")
 @functools.cache
 def code_stamp(package: Path = PACKAGE) -> str:
     """SHA-256 of the paths and contents of the package's ``.py`` files outside
-    :data:`RESULT_FREE` (once per process: a few ms)."""
+    :data:`RESULT_FREE` (computed once per process)."""
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*.py")):
         relative = path.relative_to(package)

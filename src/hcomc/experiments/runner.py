@@ -28,12 +28,12 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
-from hcomc.config import load_config
+from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.registry import canonical_name, controller_source
-from hcomc.metrics.outcome import realised_sequence
+from hcomc.experiments.results_row import run_columns
+from hcomc.interface import Engine
 from hcomc.sim.log import SimulationLog
 
 _SPAWN = multiprocessing.get_context("spawn")
@@ -157,8 +157,12 @@ def grid(
 
 
 def make_simulation(
-    config: Any, seed: int | None = None, engine: str = "hcomc", *, counterfactual: bool = False
-) -> Any:
+    config: ScenarioConfig,
+    seed: int | None = None,
+    engine: str = "hcomc",
+    *,
+    counterfactual: bool = False,
+) -> Engine[SimulationLog]:
     """A run of ``config`` on the named engine (SUMO is imported only when asked for);
     ``counterfactual``: the undisturbed run, the ramp vehicle never released."""
     if engine == "sumo":
@@ -187,7 +191,7 @@ def _remember(key: tuple[str, int, str, str], log: SimulationLog) -> None:
         del _REFERENCES[next(iter(_REFERENCES))]
 
 
-def _reference_simulation(spec: RunSpec) -> Any:
+def _reference_simulation(spec: RunSpec) -> Engine[SimulationLog]:
     condition, seed, overrides_json, engine = _reference_key(spec)
     config = load_config(condition, **json.loads(overrides_json))
     return make_simulation(config, seed, engine, counterfactual=True)
@@ -200,52 +204,6 @@ def undisturbed_log(spec: RunSpec) -> SimulationLog:
     if key not in _REFERENCES:
         _remember(key, _reference_simulation(spec).run())
     return _REFERENCES[key]
-
-
-def _plan_columns(sim: Any, vr: int) -> dict[str, Any]:
-    """Columns of VR's plans: the last plan's mode, fallback, Eq. 19 branch and lateral
-    admission (:func:`lateral_cause`); the Section III-B lane-change games played over the
-    plans and how many chose "change lane" at equilibrium; the number of replans (plans for
-    VR minus one) and of fallbacks; the mean decision time; and the plan switches
-    (:func:`plan_switches`: their number, and whether the last plan is one)."""
-    plans = [p for p in sim.decisions if p.group.vr == vr]
-    if not plans:
-        return {}
-    last = plans[-1]
-    switches = plan_switches(plans)
-    games = [g for g in (getattr(p.details, "game", None) for p in plans) if g is not None]
-    return {
-        "mode": last.mode.name.lower(),
-        "fallback": bool(last.fallback),
-        "fallbacks": sum(bool(p.fallback) for p in plans),
-        "eq19_branch": last.details.eq19_branch,
-        "lateral_cause": lateral_cause(last),
-        "games": len(games),
-        "games_change": sum(bool(g.change) for g in games),
-        "replans": len(plans) - 1,
-        "plan_switches": len(switches),
-        "final_switch": bool(switches) and switches[-1] == len(plans) - 1,
-        "decision_ms": float(np.mean([p.decision_ms for p in plans])),
-    }
-
-
-def plan_switches(plans: Sequence[Any]) -> list[int]:
-    """Indices of the plans (of one VR, in decision order) whose cooperating vehicle
-    (:attr:`~hcomc.control.base.MergePlan.cooperating`, -1 for nobody) differs from the plan
-    before: a receding-horizon controller that switches commands another vehicle, or stops
-    or starts commanding one."""
-    return [i for i in range(1, len(plans)) if plans[i].cooperating != plans[i - 1].cooperating]
-
-
-def lateral_cause(plan: Any) -> str:
-    """Why a lateral plan was admissible: "equilibrium" when the Section III-B lane-change
-    game's equilibrium action of the cooperating vehicle is to change lane, "safety_rule"
-    when only the added admission (its change keeps Eq. 15 below the threshold against every
-    response of its follower) allowed it; "" for a plan that is not lateral."""
-    game = getattr(plan.details, "game", None)
-    if plan.mode.name != "LATERAL" or game is None:
-        return ""
-    return "equilibrium" if game.change else "safety_rule"
 
 
 def run_one(spec: RunSpec) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -263,21 +221,21 @@ def run_batch(
     on ``threads`` cores); each run's result is bit-identical to running it alone. SUMO runs
     are simulated one after the other. ``wall_s`` is each run's share of the batch's time.
     """
+    from hcomc.sim.engine import Simulation
     from hcomc.sim.ensemble import run_ensemble
 
     start = time.perf_counter()
     configs = [load_config(spec.condition, **spec.config_overrides()) for spec in specs]
     sims = [make_simulation(c, s.seed, s.engine) for c, s in zip(configs, specs, strict=True)]
-    missing: dict[tuple[str, int, str, str], Any] = {}
+    missing: dict[tuple[str, int, str, str], Engine[SimulationLog]] = {}
     for spec in specs:
         key = _reference_key(spec)
         if key not in _REFERENCES and key not in missing:
             missing[key] = _reference_simulation(spec)
     batch = [*sims, *missing.values()]
-    ours = [sim for sim in batch if _engine_of(sim) == "hcomc"]
-    run_ensemble(ours, threads=threads)
+    run_ensemble([sim for sim in batch if isinstance(sim, Simulation)], threads=threads)
     for sim in batch:
-        if _engine_of(sim) != "hcomc":
+        if not isinstance(sim, Simulation):
             sim.run()
     for key, sim in missing.items():
         _remember(key, sim.log)
@@ -288,54 +246,20 @@ def run_batch(
     ]
 
 
-def _engine_of(sim: Any) -> str:
-    """The engine a simulation object runs on."""
-    from hcomc.sim.engine import Simulation
-
-    return "hcomc" if isinstance(sim, Simulation) else "sumo"
-
-
 def _measure(
-    spec: RunSpec, config: Any, sim: Any, wall: float
+    spec: RunSpec, config: ScenarioConfig, sim: Engine[SimulationLog], wall: float
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The results row and manifest of a finished run."""
+    """The results row (:func:`~hcomc.experiments.results_row.run_columns`, the metrics against
+    the undisturbed run, the time taken) and manifest of a finished run."""
     from hcomc.metrics import compute_metrics, key_window
 
     log = sim.log
     start = time.perf_counter()
     controller, optimizer = configuration_controller(spec.configuration)
-    row: dict[str, Any] = {
-        "condition": config.name,
-        "configuration": spec.configuration,
-        "controller": controller,
-        "optimizer": optimizer,
-        "seed": spec.seed,
-        "mode": "",
-        "sequence": "",
-        "eq19_branch": "",
-        "lateral_cause": "",
-        "games": 0,
-        "games_change": 0,
-        "replans": 0,
-        "plan_switches": 0,
-        "final_switch": False,
-        "fallback": False,
-        "fallbacks": 0,
-        "decision_ms": np.nan,
-        "vr": -1,
-        "vr_kind": "",
-        "vmc_kind": "",
-    }
-    group = sim.key_group
-    if group is not None:
-        kinds = sim.fleet.kind
-        row.update(
-            vr=group.vr,
-            vr_kind="CAV" if kinds[group.vr] else "HDV",
-            vmc_kind="" if group.vmc < 0 else "CAV" if kinds[group.vmc] else "HDV",
-        )
-        row.update(_plan_columns(sim, group.vr))
-        row["sequence"] = realised_sequence(log, group.vr, group.vmc)
+    row = run_columns(
+        sim, condition=config.name, configuration=spec.configuration, controller=controller,
+        optimizer=optimizer, seed=spec.seed,
+    )  # fmt: skip
     window = key_window(log)
     row["key_vehicles"] = " ".join(str(i) for i in window.key_vehicles.tolist())
     row.update(compute_metrics(log, window, reference=undisturbed_log(spec)))

@@ -17,12 +17,8 @@ from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.models._broadcast import broadcast_apply
 from hcomc.models.cav import acc_accel, cah_accel
-from hcomc.models.idm import (
-    idm_accel_given,
-    idm_free_power,
-    iidm_accel_given,
-    iidm_free_accel,
-)
+from hcomc.models.idm import idm_accel_given, idm_free_power
+from hcomc.models.iidm import iidm_accel_given, iidm_free_accel
 
 __all__ = ["follow_accel", "follow_accel_given", "follow_acceleration", "free_term"]
 

@@ -1,11 +1,12 @@
-r"""Intelligent Driver Model (IDM) and Improved IDM (IIDM) kernels.
+r"""Intelligent Driver Model (IDM) kernels.
 
 Pure, vectorised implementations of the car-following law of the HCOMC paper, Eq. (1)
-(Treiber, Hennecke & Helbing 2000), the IIDM variant used by MovSim's ACC model and SUMO's EIDM
-(Treiber & Kesting 2013), and the IDM equilibrium gap. All functions take scalars or arrays (for
+(Treiber, Hennecke & Helbing 2000), and the IDM equilibrium gap; the IIDM variant (Treiber &
+Kesting 2013), which shares the desired gap and the powers here, is
+:mod:`hcomc.models.iidm`. All functions take scalars or arrays (for
 example one entry per vehicle, with per-vehicle parameter arrays), broadcast them with the usual
 numpy rules and return ``float64`` arrays. Each equation has one home: a scalar
-numba-compiled kernel (:func:`idm_accel`, :func:`iidm_accel`) that the simulation step, the
+numba-compiled kernel (:func:`idm_accel`) that the simulation step, the
 HCOMC prediction and the tests all call; the array functions apply it elementwise.
 
 Sign conventions: ``s`` is the bumper-to-bumper gap to the leader [m]
@@ -39,18 +40,11 @@ __all__ = [
     "idm_accel_given",
     "idm_acceleration",
     "idm_free_power",
-    "iidm_accel",
-    "iidm_accel_given",
-    "iidm_acceleration",
-    "iidm_free_accel",
     "power",
 ]
 
 S_MIN: float = 1e-3
 """Lower guard on the gap [m] used in the interaction term (avoids division by zero)."""
-
-_A_FREE_FLOOR: float = 1e-300
-"""Floor on the IIDM free-road acceleration [m/s^2] inside its exponent ``2a/a_free``."""
 
 
 def desired_gap(
@@ -174,7 +168,7 @@ def idm_acceleration(
 
     See Also
     --------
-    iidm_acceleration : improved IDM with the same parameters.
+    hcomc.models.iidm.iidm_acceleration : improved IDM with the same parameters.
     equilibrium_gap : steady-state gap at which this acceleration is zero.
 
     References
@@ -212,7 +206,7 @@ def power(base: float, exponent: float) -> float:
     n = 4), at a fraction of the cost of the C library's ``pow``, which takes the others.
 
     The car-following powers are taken for every vehicle at every step of the simulation and
-    of the HCOMC prediction, where ``pow`` was the largest single cost.
+    of the HCOMC prediction, so their cost counts.
     """
     if 1.0 <= exponent <= 16.0 and exponent == math.floor(exponent):
         n = int(exponent)
@@ -242,130 +236,6 @@ def _idm_array(s, v, dv, v0, T, a, b, s0, delta):
     out = np.empty(s.size)
     for i in range(s.size):
         out[i] = idm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])
-    return out
-
-
-def iidm_acceleration(
-    s: FloatArray | float,
-    v: FloatArray | float,
-    dv: FloatArray | float,
-    *,
-    v0: FloatArray | float,
-    T: FloatArray | float,
-    a: FloatArray | float,
-    b: FloatArray | float,
-    s0: FloatArray | float,
-    delta: FloatArray | float,
-) -> FloatArray:
-    r"""Improved IDM (IIDM) acceleration (Treiber & Kesting 2013).
-
-    With :math:`z = s^*(v, \Delta v)/s` and :math:`a_\mathrm{free}` the free-road term,
-
-    .. math::
-       :label: eq-iidm
-
-       \dot v = \begin{cases}
-         a_\mathrm{free}\,\left(1 - z^{2a/a_\mathrm{free}}\right) & v \le v_0,\ z < 1 \\
-         a\,(1 - z^2) & v \le v_0,\ z \ge 1 \\
-         a_\mathrm{free} & v > v_0,\ z < 1 \\
-         a_\mathrm{free} + a\,(1 - z^2) & v > v_0,\ z \ge 1
-       \end{cases}
-       \qquad
-       a_\mathrm{free} = \begin{cases}
-         a\left[1 - (v/v_0)^{\delta}\right] & v \le v_0 \\
-         -b\left[1 - (v_0/v)^{a\delta/b}\right] & v > v_0
-       \end{cases}
-
-    Unlike the IDM, the IIDM equilibrium gap is exactly :math:`s_0 + vT` for all
-    :math:`v < v_0`. It is the base of Kesting's ACC/CAH model, so it is offered
-    as a switch next to the paper's plain IDM of Eq. (1).
-
-    Parameters
-    ----------
-    s : float or array_like
-        Bumper-to-bumper gap [m]. ``np.inf`` gives ``z = 0`` (free road); gaps ``<= 0`` are
-        guarded by ``max(s, 1e-3)`` as in :func:`idm_acceleration`.
-    v : float or array_like
-        Own speed [m/s].
-    dv : float or array_like
-        Approach rate ``v - v_leader`` [m/s].
-    v0 : float or array_like
-        Desired speed [m/s] (must be > 0).
-    T : float or array_like
-        Desired time gap [s].
-    a : float or array_like
-        Maximum acceleration [m/s^2].
-    b : float or array_like
-        Comfortable deceleration (positive) [m/s^2].
-    s0 : float or array_like
-        Minimum (jam) gap [m].
-    delta : float or array_like
-        Acceleration exponent [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        Acceleration [m/s^2], ``float64``, broadcast shape of the inputs.
-
-    Notes
-    -----
-    At :math:`v = v_0` the exponent :math:`2a/a_\mathrm{free}` is infinite; the free-road term is
-    floored at 1e-300 inside the exponent and ``z`` is clipped to 1 there, so the limit
-    (:math:`z^{\infty} = 0` for :math:`z < 1`) is reproduced without warnings.
-
-    References
-    ----------
-    .. [1] M. Treiber and A. Kesting, "Traffic Flow Dynamics", Springer (2013), Sec. 11.3.
-    .. [2] MovSim ``ACC.java`` (IIDM branch); SUMO ``MSCFModel_EIDM.cpp``.
-
-    Examples
-    --------
-    >>> float(iidm_acceleration(32.0, 20.0, 0.0, v0=33.3, T=1.5, a=1.0, b=2.0, s0=2.0, delta=4))
-    0.0
-    """
-    return broadcast_apply(_iidm_array, s, v, dv, v0, T, a, b, s0, delta)
-
-
-@kernel
-def iidm_accel(
-    s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float, delta: float
-) -> float:
-    """IIDM acceleration of one vehicle [m/s^2]: the one implementation of
-    :func:`iidm_acceleration` (same arguments, positional)."""
-    return iidm_accel_given(s, v, dv, v0, T, a, b, s0, iidm_free_accel(v, v0, a, b, delta))
-
-
-@kernel(inline="always")
-def iidm_free_accel(v: float, v0: float, a: float, b: float, delta: float) -> float:
-    """The IIDM's free-road acceleration [m/s^2], which depends on the own speed alone."""
-    if v <= v0:
-        return a * (1.0 - power(min(v, v0) / v0, delta))
-    return -b * (1.0 - power(v0 / max(v, v0), a / b * delta))
-
-
-@kernel
-def iidm_accel_given(
-    s: float, v: float, dv: float, v0: float, T: float, a: float, b: float, s0: float,
-    a_free: float,
-) -> float:  # fmt: skip
-    """:func:`iidm_accel` with its free-road acceleration ``a_free`` =
-    :func:`iidm_free_accel` given."""
-    z = desired_gap_scalar(v, dv, T, a, b, s0) / max(s, S_MIN)
-    if v <= v0:
-        if z < 1.0:
-            # a_free >= 0 is floored inside the exponent, so z^inf -> 0 at v = v0
-            return a_free * (1.0 - min(z, 1.0) ** (a * 2.0 / max(a_free, _A_FREE_FLOOR)))
-        return a * (1.0 - z * z)
-    if z < 1.0:
-        return a_free
-    return a_free + a * (1.0 - z * z)
-
-
-@kernel
-def _iidm_array(s, v, dv, v0, T, a, b, s0, delta):
-    out = np.empty(s.size)
-    for i in range(s.size):
-        out[i] = iidm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])
     return out
 
 

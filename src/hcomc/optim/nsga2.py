@@ -106,7 +106,7 @@ def survive_and_mate(
 
 @dataclass(frozen=True, slots=True)
 class CompiledNSGA2Optimizer:
-    """NSGA-II on arrays with numba kernels; the same decisions as the pymoo optimiser.
+    """NSGA-II on arrays with numba kernels; the pymoo optimiser's decisions (see the module).
 
     Parameters
     ----------

@@ -3,22 +3,20 @@
 numpy adds a contiguous run of float64 values by pairwise summation: runs of fewer than 8
 terms from 0 in order, runs of up to 128 in 8 interleaved partial sums combined pairwise and
 then the rest in order, longer runs split in two at a multiple of 8. Kernels that must round
-exactly as whole-array numpy code does sum with :func:`pairwise_sum`: the merge prediction's
-U_fuel (:mod:`hcomc.control.hcomc.rollout_fuel`, equal to the array form it replaced) and PSO's
-adaptation (:mod:`hcomc.optim.pso`, as pymoo's numpy, where :func:`numpy_sums_are_pairwise` has
-found numpy's sums to be exactly these).
+as whole-array numpy code does sum with :func:`pairwise_sum`: the merge prediction's U_fuel
+(:mod:`hcomc.control.hcomc.rollout_fuel`, equal bit for bit to ``ndarray.sum`` over the same
+samples) and PSO's adaptation (:mod:`hcomc.optim.pso_adaptation`, rounding as pymoo's numpy
+does wherever numpy's float64 summation is this pairwise one; the tests check it is here).
 """
 
 from __future__ import annotations
-
-import functools
 
 import numpy as np
 
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 
-__all__ = ["numpy_sums_are_pairwise", "pairwise_sum"]
+__all__ = ["pairwise_sum"]
 
 
 @kernel
@@ -75,23 +73,3 @@ def pairwise_sum(a: FloatArray, start: int, n: int) -> float:
             task_start[tasks + 2], task_n[tasks + 2] = s, half  # popped first
             tasks += 3
     return sums[0]
-
-
-@functools.cache  # once per process
-def numpy_sums_are_pairwise() -> bool:
-    """Whether numpy sums float64 runs as :func:`pairwise_sum` does, bit for bit, here.
-
-    numpy's summation order is an implementation detail; a probe of 1-D sums of every length
-    up to 600 and of row sums of (n, m) arrays, with terms of mixed magnitudes, must agree
-    everywhere, or the swarm's spread is left to numpy.
-    """
-    probe = np.random.default_rng(0)
-    a = probe.standard_normal(600) * 10.0 ** probe.integers(-8, 9, 600)
-    if any(pairwise_sum(a, 0, n) != a[:n].sum() for n in range(1, 601)):
-        return False
-    for shape in ((576, 5), (24, 24), (40, 13), (3, 200)):
-        A = probe.standard_normal(shape) * 10.0 ** probe.integers(-8, 9, shape)
-        sums = A.sum(axis=1)
-        if any(pairwise_sum(A[i].copy(), 0, shape[1]) != sums[i] for i in range(shape[0])):
-            return False
-    return True

@@ -124,8 +124,8 @@ class NSGA2Optimizer:
     mutation_eta : polynomial-mutation distribution index (pymoo default; per-variable
         probability min(0.5, 1/n_var)).
     eliminate_duplicates : pymoo's duplicate elimination. Off by default: with continuous
-        variables exact duplicates are vanishingly rare, and the pairwise check costs about
-        1 ms per generation of the 50 ms decision budget.
+        variables exact duplicates are vanishingly rare, and the pairwise check would run in
+        every generation of a decision.
 
     Notes
     -----

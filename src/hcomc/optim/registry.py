@@ -15,11 +15,11 @@ from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer
 
 OPTIMIZERS: dict[str, Callable[..., Optimizer]] = {
-    "nsga2": CompiledNSGA2Optimizer,  # makes the same decisions as "nsga2-pymoo", faster
+    "nsga2": CompiledNSGA2Optimizer,  # "nsga2-pymoo"'s decisions, faster
     "nsga2-pymoo": NSGA2Optimizer,
-    "pso": CompiledPSOOptimizer,  # makes the same decisions as "pso-pymoo", faster
+    "pso": CompiledPSOOptimizer,  # "pso-pymoo"'s decisions, faster
     "pso-pymoo": PSOOptimizer,
-    "sa": CompiledAnnealingOptimizer,  # makes the same decisions as "sa-scipy", faster
+    "sa": CompiledAnnealingOptimizer,  # "sa-scipy"'s decisions, faster
     "sa-scipy": AnnealingOptimizer,
 }
 

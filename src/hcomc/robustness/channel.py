@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.control.base import TrafficView
+from hcomc.interface import TrafficView
 from hcomc.robustness.settings import ChannelParams
 
 __all__ = ["Channel", "ChannelView", "GilbertElliott"]
@@ -33,7 +33,7 @@ CHANNEL_STREAM = 0x5632_5800
 
 @dataclass(frozen=True, slots=True)
 class ChannelView(TrafficView):
-    """A :class:`~hcomc.control.base.TrafficView` of received states: ``x, v, a, lane,
+    """A :class:`~hcomc.interface.TrafficView` of received states: ``x, v, a, lane,
     changing`` are each vehicle's newest received values, ``active`` whether any arrived,
     and ``age`` [s] how old they are (``inf``: not heard within ``max_age``)."""
 

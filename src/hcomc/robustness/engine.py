@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergePlan, Mode
+from hcomc.interface import MergeController, MergePlan, Mode
 from hcomc.road import Kind, Lane
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
@@ -106,8 +106,7 @@ class FaultedSimulation(Impairments, Simulation):
         waiting = self._waiting()
         due = [vr for vr in self._due(t) if vr not in waiting]
         for vr in [*new.tolist(), *due]:
-            seen, group, _ = self._decision(vr, t)
-            self.requests.append((seen, group))
+            self._decision(vr, t)
 
     def _may_execute(self, vr: int) -> bool:
         """Whether ramp vehicle ``vr`` is on the road, on the ramp and not changing lanes."""

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeGroup, MergePlan
+from hcomc.interface import MergeGroup, MergePlan
 from hcomc.models.following import follow_accel
 from hcomc.road import Kind
 from hcomc.robustness.settings import FaultParams

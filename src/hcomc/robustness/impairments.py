@@ -20,22 +20,15 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeController,
-    MergeGroup,
-    MergePlan,
-    Mode,
-    TrafficView,
-    find_key_vehicles,
-)
+from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.validation import checked, name_of
+from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind
 from hcomc.robustness.channel import Channel
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Shield
-from hcomc.sim.execution import plan_record
-from hcomc.sim.fleet import Fleet
+from hcomc.sim.execution import record_decision
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
 
@@ -61,6 +54,7 @@ class Impairments:
     step_index: int
     n_warmup: int
     decisions: list[MergePlan]
+    requests: list[tuple[TrafficView, MergeGroup]]
     key_groups: dict[int, MergeGroup]
     command: Callable[[int, float], None]  # drive a vehicle from outside (NaN: stop)
     _follow: Callable[[IntArray, IntArray], FloatArray]  # car following behind leaders
@@ -121,7 +115,7 @@ class Impairments:
 
     def _decision(self, vr: int, t: float) -> tuple[TrafficView, MergeGroup, MergePlan]:
         """Decide for ramp vehicle ``vr`` at ``t`` on the channel's view, record the decision
-        (as the engines do: plan record, PLAN and FALLBACK events) and send the plan; returns
+        (as the engines do: :func:`hcomc.sim.execution.record_decision`) and send the plan; returns
         the view the controller saw, the key vehicles and the plan."""
         assert self.controller is not None
         self.planned[vr] = True
@@ -130,12 +124,7 @@ class Impairments:
         group = find_key_vehicles(view, vr)
         seen = view if self.channel_params.ideal else self.channel.view(view)
         plan = checked(self._decide(seen, group), seen, group, name_of(self.controller))
-        self.decisions.append(plan)
-        self.log.meta.setdefault("plans", []).append(plan_record(plan))
-        x = self.x[vr]
-        self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=x, value=int(plan.mode))
-        if plan.fallback:
-            self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=x)
+        record_decision(self, seen, group, plan, t)
         self._send(plan, len(self.decisions) - 1, t)
         return seen, group, plan
 

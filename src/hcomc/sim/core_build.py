@@ -7,13 +7,13 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc.config import ConfigError, ScenarioConfig
+from hcomc.interface import Fleet
 from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
 from hcomc.sim import core_state as layout
 from hcomc.sim.core_plans import N_FLOAT, N_INT
 from hcomc.sim.core_state import Core, CoreArrays
 from hcomc.sim.demand import Demand
-from hcomc.sim.fleet import Fleet
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.mobil import lane_change_params

@@ -12,7 +12,7 @@ from hcomc._jit import kernel
 from hcomc.models.following import follow_accel
 from hcomc.models.quintic import lateral_state
 from hcomc.models.transition import blend, transition_psi
-from hcomc.safety.collision import vehicle_pair_collides
+from hcomc.safety.collision_kernels import vehicle_pair_collides
 from hcomc.sim.core_state import (
     ACCEL_END,
     COLLISIONS,

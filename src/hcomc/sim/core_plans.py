@@ -10,7 +10,7 @@ kernels are their one implementation, used by the compiled loop, by the engine's
 after a decision, and (on a table built from a list of plans) by the SUMO co-simulation.
 
 Columns: ``plan_int`` holds the key vehicles (role order of
-:meth:`hcomc.control.base.MergeGroup.as_array`), the mode, which virtual vehicles the plan
+:meth:`hcomc.interface.MergeGroup.as_array`), the mode, which virtual vehicles the plan
 has, the progress flags of :class:`hcomc.sim.execution.ActivePlan` and the index of the plan
 in the run's decisions; ``plan_f`` holds t0, the horizon, the merge position, VR's duration
 and the cubic coefficients of VV0, VV1 and VV2.
@@ -39,7 +39,7 @@ from hcomc.sim.core_state import (
 )
 
 if TYPE_CHECKING:
-    from hcomc.control.base import MergePlan
+    from hcomc.interface import MergePlan
 
 # plan_int columns
 P_VR, P_VMC, P_VMF, P_VMR, P_VNF, P_VNR = range(6)  # MergeGroup.as_array order
@@ -52,7 +52,7 @@ F_T0, F_HORIZON, F_MERGE_X, F_VR_DURATION = range(4)
 F_VV0, F_VV1, F_VV2 = 4, 8, 12  # four cubic coefficients each
 N_FLOAT = 16
 
-LONGITUDINAL, LATERAL = 1, 2  # hcomc.control.base.Mode, as plain ints
+LONGITUDINAL, LATERAL = 1, 2  # hcomc.interface.Mode, as plain ints
 _MOBIL_SAFE_DECEL = 1  # index of the safe deceleration in lc_params
 
 
@@ -164,7 +164,7 @@ def virtual_rows(
     a: np.ndarray, length: np.ndarray,
 ):  # fmt: skip
     """``(followers, x_vv, v_vv, a_vv, length_vv)`` of every virtual vehicle in force at t,
-    plan by plan VV0, VV1, VV2 (the states of :func:`hcomc.control.base.virtual_states`).
+    plan by plan VV0, VV1, VV2 (the states of :func:`hcomc.control.virtual_vehicle.virtual_states`).
 
     VV0 leads a CAV VR that follows its plan on the ramp (when VR has a future leader VMF),
     VV1 a cooperating VMC in longitudinal mode, VV2 a CAV VNR in lateral mode (within the

@@ -144,14 +144,14 @@ class Core(structref.StructRefProxy):
     """The compiled kernels' handle on one run's :class:`CoreArrays` (the same buffers).
 
     Its fields are views that do not own their memory: an owning array's reference count
-    is changed atomically each time a kernel reads it from the record or passes it on, and
-    in the step's loops that was about a quarter of the time. The handle keeps the arrays
+    is changed atomically each time a kernel reads it from the record or passes it on, which
+    the step's loops would pay hundreds of times a step. The handle keeps the arrays
     it borrows alive itself (:meth:`adopt`)."""
 
     _arrays: CoreArrays
 
     def __new__(cls, arrays: CoreArrays) -> Core:
-        # numba's own constructor path compiles anew in every process (about 2.5 s); this
+        # numba's own constructor path compiles anew in every process; this
         # one is compiled once and then loaded from numba's cache
         core: Core = _new_core(*arrays)
         core._arrays = arrays

@@ -2,7 +2,8 @@
 
 State is struct-of-arrays over every vehicle of the run (``active`` marks those on the road).
 All vehicles decide from the same snapshot, then all integrate, so update order cannot bias
-results. Only this module writes state.
+results. Only this module writes state; its set-up (demand, fleet, compiled state arrays,
+log) is :class:`hcomc.sim.engine_setup.EngineSetup`.
 
 Lane changes follow the quintic path of Eq. 4-6 parametrised in x: the end point is predicted
 as ``x_f = x_0 + max(v T_lc, 3 L)`` when the change starts and the true x(t) is mapped through
@@ -30,39 +31,28 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeController,
-    MergeGroup,
-    MergePlan,
-    Mode,
-    TrafficView,
-    find_key_vehicles,
-)
+from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.validation import checked, name_of
-from hcomc.rng import make_rng
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim import core
 from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import adopt_log_columns, allocate_log, build_arrays, widen_log
+from hcomc.sim.core_build import adopt_log_columns, widen_log
 from hcomc.sim.core_plans import add_plan, encode_plan
-from hcomc.sim.core_state import Core
-from hcomc.sim.demand import Demand, generate_demand
-from hcomc.sim.execution import ActivePlan, game_confirms, plan_record, plan_views
-from hcomc.sim.fleet import Fleet
-from hcomc.sim.log import EventKind, SimulationLog
+from hcomc.sim.engine_setup import EngineSetup
+from hcomc.sim.execution import ActivePlan, game_confirms, plan_views, record_decision
+from hcomc.sim.log import SimulationLog
 from hcomc.sim.neighbours import LaneIndex
-from hcomc.sim.perception import Perception
 
 _NO_FLOAT = np.empty(0)
 
 
-class Simulation:
+class Simulation(EngineSetup):
     """One run of a scenario with one seed.
 
     Parameters
@@ -74,94 +64,6 @@ class Simulation:
     counterfactual : the undisturbed run: the same demand and random streams, but ramp
         vehicles are never released (nothing merges).
     """
-
-    def __init__(
-        self,
-        config: ScenarioConfig,
-        seed: int | None = None,
-        controller: MergeController | None = None,
-        *,
-        counterfactual: bool = False,
-    ) -> None:
-        seed = config.seed if seed is None else seed
-        rng = make_rng(seed)
-        demand = generate_demand(config, rng)
-        if controller is None:
-            from hcomc.control.registry import make_controller
-
-            controller = make_controller(config)
-        fleet = Fleet.build(config, demand.kind, demand.scripted)
-        self._build(config, seed, rng, demand, fleet, controller, counterfactual)
-
-    @classmethod
-    def _sibling(cls, sim: Simulation, *, counterfactual: bool) -> Simulation:
-        """The run of ``sim``'s scenario and seed at step 0, built on the demand, fleet and
-        controller ``sim`` drew (shared, read-only) instead of drawing them again: its
-        generator resumes where ``sim``'s stood after the demand draw."""
-        rng = make_rng(sim.seed)
-        rng.bit_generator.state = sim._after_demand
-        new = cls.__new__(cls)
-        new._build(sim.config, sim.seed, rng, sim.demand, sim.fleet, sim.controller,
-                   counterfactual)  # fmt: skip
-        return new
-
-    def _build(
-        self, config: ScenarioConfig, seed: int, rng: np.random.Generator, demand: Demand,
-        fleet: Fleet, controller: MergeController | None, counterfactual: bool,
-    ) -> None:  # fmt: skip
-        self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
-        self._after_demand = rng.bit_generator.state  # for _sibling
-        self.counterfactual = counterfactual
-        self.demand, self.fleet, self.controller = demand, fleet, controller
-        self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
-        self.python_steps = 0  # steps taken in Python (decision events)
-        self.decisions: list[MergePlan] = []
-        self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
-        self.is_hdv = demand.kind == Kind.HDV
-        self.perception = Perception(config.hdv, self.is_hdv, self.dt, rng)
-        self.n_warmup = round(config.warmup / self.dt)
-        self.n_steps = round(config.duration / self.dt)
-        self._log_every = round(config.log_interval / self.dt)
-        self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
-        self.log = allocate_log(config, seed, demand, fleet, self.n_steps // self._log_every + 1)
-        self.arrays = build_arrays(
-            config, demand, fleet, self.perception, self.log,
-            counterfactual=counterfactual, controlled=controller is not None,
-            n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
-        )  # fmt: skip
-        # the kernels see the same arrays through one compiled reference, typed as its fields
-        self.core: Any = Core(self.arrays)
-        c = self.arrays  # the state arrays, by name
-        self.x, self.y, self.v, self.a, self.heading = c.x, c.y, c.v, c.a, c.heading
-        self.lane, self.origin, self.target = c.lane, c.origin, c.target
-        self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
-        self.active, self.waited, self.planned = c.active, c.waited, c.planned
-        self._stage = 0
-
-    @property
-    def t(self) -> float:
-        """Current simulation time [s]; logging starts at t = 0 after the warm-up."""
-        return -self.config.warmup + self.step_index * self.dt
-
-    @property
-    def step_index(self) -> int:
-        """Steps simulated so far (warm-up included)."""
-        return int(self.arrays.counters[layout.STEP])
-
-    @property
-    def collisions(self) -> int:
-        """Collisions (pairs coming into contact) so far; each is a COLLISION event."""
-        return int(self.arrays.counters[layout.COLLISIONS])
-
-    @property
-    def rows_recorded(self) -> int:
-        """Log rows written so far (rows ``[0, rows_recorded)`` of :attr:`log` are final)."""
-        return int(self.arrays.counters[layout.ROWS])
-
-    @property
-    def vehicle_steps(self) -> int:
-        """Sum over the steps simulated so far of the vehicles on the road."""
-        return int(self.arrays.counters[layout.VEHICLE_STEPS])
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
@@ -409,13 +311,7 @@ class Simulation:
             group = find_key_vehicles(view, vr)
             plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
             plan = checked(plan, view, group, name_of(self.controller))
-            self.requests.append((view, group))
-            self.decisions.append(plan)
-            self.log.meta.setdefault("plans", []).append(plan_record(plan))
-            self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
-                               value=int(plan.mode))  # fmt: skip
-            if plan.fallback:
-                self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
+            record_decision(self, view, group, plan, t)
             cav_vr = bool(self.fleet.kind[vr] == Kind.CAV)
             row = encode_plan(
                 plan,

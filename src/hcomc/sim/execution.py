@@ -27,20 +27,22 @@ kernels to a list of :class:`ActivePlan` (the SUMO co-simulation keeps its plans
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.control.base import MergePlan
+from hcomc.interface import MergeGroup, MergePlan, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim import core_plans as table
 from hcomc.sim.core_plans import commanded_mask, encode_plan, holding_mask, replan_due
+from hcomc.sim.log_events import EventKind
 from hcomc.sim.plans import PlanRecord
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
-    from hcomc.sim.fleet import Fleet
+    from hcomc.interface import Fleet
+    from hcomc.sim.log import SimulationLog
     from hcomc.sim.neighbours import LaneIndex
 
 
@@ -138,7 +140,7 @@ def virtual_leaders(
 
     VV0 leads a CAV VR that follows its plan on the ramp, VV1 a cooperating VMC in
     longitudinal mode (until VR's merge is complete), VV2 a CAV VNR in lateral mode (within
-    the horizon); their states are those of :func:`hcomc.control.base.virtual_states`
+    the horizon); their states are those of :func:`hcomc.control.virtual_vehicle.virtual_states`
     (:func:`hcomc.sim.core_plans.virtual_rows`).
     """
     pi, pf = plan_table(plans)
@@ -182,3 +184,32 @@ def plan_record(plan: MergePlan) -> dict[str, Any]:
     """JSON-ready summary of a plan, stored in ``SimulationLog.meta["plans"]`` for plots
     (:class:`hcomc.sim.plans.PlanRecord` is its typed form)."""
     return PlanRecord.from_plan(plan).to_json()
+
+
+class DecisionRecorder(Protocol):
+    """What :func:`record_decision` writes to: an :class:`~hcomc.interface.Engine`'s decision
+    lists and log (an engine, or a mix-in that records for one)."""
+
+    @property
+    def x(self) -> FloatArray: ...
+    @property
+    def requests(self) -> list[tuple[TrafficView, MergeGroup]]: ...
+    @property
+    def decisions(self) -> list[MergePlan]: ...
+    @property
+    def log(self) -> SimulationLog: ...
+
+
+def record_decision(
+    engine: DecisionRecorder, view: TrafficView, group: MergeGroup, plan: MergePlan, t: float
+) -> None:
+    """Record a decision as every engine does: what was asked (``engine.requests``), the plan
+    (``engine.decisions``, its :func:`plan_record` in the log's meta) and the PLAN event, with a
+    FALLBACK event when the controller found no feasible plan."""
+    vr, x = group.vr, engine.x[group.vr]
+    engine.requests.append((view, group))
+    engine.decisions.append(plan)
+    engine.log.meta.setdefault("plans", []).append(plan_record(plan))
+    engine.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=x, value=int(plan.mode))
+    if plan.fallback:
+        engine.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=x)

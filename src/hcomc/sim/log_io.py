@@ -8,6 +8,10 @@ files share a random token so a log and an events file that do not belong togeth
 detected. Both formats are read back exactly, with the dtypes of
 :mod:`hcomc.sim.log_layout`; files whose arrays have other dtypes (e.g. float64 states) are
 read and converted to that layout.
+
+The functions write and read the log's data (:class:`~hcomc.sim.log_data.LogData`, of which
+``SimulationLog`` is the subclass that calls them): a log is read into the class
+:meth:`SimulationLog.load` is called on, and this module does not import the log class.
 """
 
 from __future__ import annotations
@@ -17,11 +21,11 @@ import json
 import os
 import uuid
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
-from hcomc.sim.log import SimulationLog
+from hcomc.sim.log_data import LogData
 from hcomc.sim.log_events import EVENT_DTYPE
 from hcomc.sim.log_layout import ARRAY_FIELDS, CELL_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
 from hcomc.sim.log_slots import identity_slots
@@ -35,6 +39,9 @@ _TABLES = ("slot", "span", "owner")
 _PARQUET_META_KEY = b"hcomc.simulation_log"
 _PARQUET_EVENTS_META_KEY = b"hcomc.simulation_log.events"
 
+LogT = TypeVar("LogT", bound=LogData)
+"""The class a log is read into (``SimulationLog``, or a subclass of it)."""
+
 
 def _b64(arr: np.ndarray, dtype: str) -> str:
     return base64.b64encode(np.ascontiguousarray(arr, dtype=dtype).tobytes()).decode("ascii")
@@ -44,7 +51,7 @@ def _unb64(text: str, dtype: str) -> np.ndarray:
     return np.frombuffer(base64.b64decode(text), dtype=dtype).copy()
 
 
-def _header(log: SimulationLog) -> dict[str, Any]:
+def _header(log: LogData) -> dict[str, Any]:
     return {
         "format_version": _FORMAT_VERSION,
         "n_steps": log.n_steps,
@@ -56,7 +63,7 @@ def _header(log: SimulationLog) -> dict[str, Any]:
     }
 
 
-def long_columns(log: SimulationLog) -> dict[str, np.ndarray]:
+def long_columns(log: LogData) -> dict[str, np.ndarray]:
     """One array per column of :meth:`SimulationLog.to_frame`: a row per active (step,
     vehicle) cell, ordered by step then vehicle."""
     cells = log.cells
@@ -85,7 +92,7 @@ def events_path(path: str | os.PathLike[str]) -> Path:
     return path.with_name(f"{path.stem}.events.parquet")
 
 
-def write_log(log: SimulationLog, path: str | os.PathLike[str]) -> Path:
+def write_log(log: LogData, path: str | os.PathLike[str]) -> Path:
     """Write ``log`` to ``.npz`` or ``.parquet``, atomically (see :meth:`SimulationLog.save`)."""
     path = Path(path)
     suffix = path.suffix.lower()
@@ -98,7 +105,7 @@ def write_log(log: SimulationLog, path: str | os.PathLike[str]) -> Path:
     return path
 
 
-def _write_npz(log: SimulationLog, path: Path) -> None:
+def _write_npz(log: LogData, path: Path) -> None:
     header = json.dumps(_header(log), default=json_default)
     tables = {"slot": log.slot, "span": log.span, "owner": log.owner}
     per_vehicle = {"kind": log.kind, "length": log.length, "width": log.width}
@@ -108,7 +115,7 @@ def _write_npz(log: SimulationLog, path: Path) -> None:
         np.savez_compressed(fh, header=np.array(header), events=log.events, **arrays)
 
 
-def _write_parquet(log: SimulationLog, path: Path) -> None:
+def _write_parquet(log: LogData, path: Path) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -125,7 +132,7 @@ def _write_parquet(log: SimulationLog, path: Path) -> None:
     header["span"] = _b64(log.span, "<i8")
     header["owner"] = _b64(log.owner, "<i8")
     header_json = json.dumps(header, default=json_default).encode("utf-8")
-    table = pa.table(log.long_columns())
+    table = pa.table(long_columns(log))
     table = table.replace_schema_metadata({_PARQUET_META_KEY: header_json})
 
     ev = log.events
@@ -139,14 +146,14 @@ def _write_parquet(log: SimulationLog, path: Path) -> None:
         pq.write_table(table, tmp_main)
 
 
-def read_log(path: str | os.PathLike[str]) -> SimulationLog:
-    """Read a log written by :func:`write_log` (see :meth:`SimulationLog.load`)."""
+def read_log(path: str | os.PathLike[str], cls: type[LogT]) -> LogT:
+    """Read a log written by :func:`write_log` into a ``cls`` (see :meth:`SimulationLog.load`)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
-        return _read_npz(path)
+        return _read_npz(path, cls)
     if suffix == ".parquet":
-        return _read_parquet(path)
+        return _read_parquet(path, cls)
     raise ValueError(f"unsupported log file suffix {path.suffix!r}: use .npz or .parquet")
 
 
@@ -156,7 +163,7 @@ def _check_version(header: dict[str, Any], path: Path) -> None:
         raise ValueError(f"{path}: unsupported simulation log format version {version!r}")
 
 
-def _read_npz(path: Path) -> SimulationLog:
+def _read_npz(path: Path, cls: type[LogT]) -> LogT:
     with np.load(path, allow_pickle=False) as data:
         header = json.loads(str(data["header"]))
         _check_version(header, path)
@@ -166,12 +173,12 @@ def _read_npz(path: Path) -> SimulationLog:
     common = {"dt": header["dt"], "meta": header["meta"], "n_recorded": header["n_recorded"],
               "events": events}  # fmt: skip
     if tables is None:  # format 1: one column per vehicle
-        return SimulationLog(**common, **arrays)
+        return cls(**common, **arrays)
     cells = {name: arrays.pop(name) for name in CELL_FIELDS}
-    return SimulationLog.from_slots(**common, **arrays, cells=cells, **tables)
+    return cls.from_slots(**common, **arrays, cells=cells, **tables)
 
 
-def _read_parquet(path: Path) -> SimulationLog:
+def _read_parquet(path: Path, cls: type[LogT]) -> LogT:
     import pyarrow.parquet as pq
 
     table = pq.read_table(path)
@@ -211,7 +218,7 @@ def _read_parquet(path: Path) -> SimulationLog:
         if column.dtype.kind != DTYPES[name].kind:
             raise ValueError(f"{path}: column {name!r} has dtype {column.dtype}")
         arrays[name][steps, columns] = column  # float64 columns are rounded to float32
-    return SimulationLog.from_slots(
+    return cls.from_slots(
         dt=header["dt"],
         meta=header["meta"],
         n_recorded=header["n_recorded"],

@@ -29,9 +29,9 @@ import numpy as np
 from hcomc._jit import borrow, kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
+from hcomc.interface import Fleet
 from hcomc.models.following import follow_accel_given, free_term
 from hcomc.road import Lane
-from hcomc.sim.fleet import Fleet
 from hcomc.sim.neighbours import LaneIndex, lookup_one
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)

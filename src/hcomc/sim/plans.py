@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
-from hcomc.control.base import MergePlan, Mode
+from hcomc.interface import MergePlan, Mode
 from hcomc.road import KEY_ROLES
 
 if TYPE_CHECKING:
@@ -39,7 +39,7 @@ def _cubic(values: FloatArray | list[float] | None, name: str) -> Cubic | None:
 class PlanRecord:
     """One merge plan as the run recorded it (all times absolute simulation time [s]).
 
-    Attributes mirror :class:`hcomc.control.base.MergePlan`: ``group`` (role -> vehicle
+    Attributes mirror :class:`hcomc.interface.MergePlan`: ``group`` (role -> vehicle
     index, -1 = missing), ``mode`` ("none", "longitudinal" or "lateral"), ``t0``,
     ``merge_x`` [m], ``vr_duration``, ``horizon``, the cubic coefficients ``vv0``, ``vv1``,
     ``vv2`` of the virtual vehicles (None when not planned), ``sequence`` ("ahead" or

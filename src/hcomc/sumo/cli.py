@@ -155,7 +155,9 @@ def export_trajectories(
     force: Annotated[bool, typer.Option(help="Overwrite existing output.")] = False,
 ) -> None:
     """Write a run's trajectories as highD-style tracks, SUMO FCD XML or long CSV."""
-    from hcomc.sumo.trajectories import FORMATS, write_csv, write_fcd, write_highd
+    from hcomc.sumo.fcd import write_fcd
+    from hcomc.sumo.highd import write_highd
+    from hcomc.sumo.trajectories import FORMATS, write_csv
 
     if fmt not in FORMATS:
         raise fail(f"option '--format' = '{fmt}': allowed: {', '.join(FORMATS)}")
@@ -244,7 +246,8 @@ def metrics(
     """Our merge metrics from an external FCD or highD-style trajectory file."""
     from hcomc.sumo import SumoFormatError
     from hcomc.sumo.external import derive_events, score_merges
-    from hcomc.sumo.trajectories import read_fcd, read_highd
+    from hcomc.sumo.fcd import read_fcd
+    from hcomc.sumo.highd import read_highd
 
     cfg = _file_config(file, config) if file.exists() else None
     if cfg is None:

@@ -9,13 +9,14 @@ options), run in process through libsumo. Every step:
 
 1. SUMO advances one ``dt``; HDVs and uncommanded CAVs drive SUMO's IDM and LC2013.
 2. The state is read back in our frame (the network's x, y are ours; the lane is the one the
-   vehicle's centre is in, so it switches mid-manoeuvre as in our engine).
+   vehicle's centre is in, so it switches mid-manoeuvre as in our engine): the run's state
+   and its reading are :class:`hcomc.sumo.cosim_state.CosimState`.
 3. As in our engine, a ramp vehicle entering the control zone gets its key vehicles
-   (:func:`hcomc.control.base.find_key_vehicles`) and the controller is asked for a plan on a
-   read-only :class:`~hcomc.control.base.TrafficView`.
+   (:func:`hcomc.control.key_vehicles.find_key_vehicles`) and the controller is asked for a
+   plan on a read-only :class:`~hcomc.interface.TrafficView`.
 4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.execution`): a commanded CAV
    whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
-   (:func:`hcomc.sim.fleet.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
+   (:func:`hcomc.interface.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
    pass our MOBIL safety criterion (b_safe, as in our engine) and are executed by
    ``changeLane`` with the plan's duration (lateral speed = lane width / duration); SUMO only
    rules out immediate collisions (lane-change mode 256), since its own check, built on the
@@ -36,26 +37,15 @@ from pathlib import Path
 
 import numpy as np
 
-from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeController,
-    MergeGroup,
-    MergePlan,
-    Mode,
-    TrafficView,
-    find_key_vehicles,
-)
+from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.validation import checked, name_of
-from hcomc.rng import make_rng
-from hcomc.road import Kind, Lane, lane_centre
-from hcomc.sim.demand import generate_demand
-from hcomc.sim.execution import ActivePlan, commanded, plan_record, virtual_leaders
-from hcomc.sim.fleet import Fleet, follow
+from hcomc.interface import Mode, TrafficView, follow
+from hcomc.road import Kind, Lane
+from hcomc.sim.execution import ActivePlan, commanded, record_decision, virtual_leaders
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.manifest import build_manifest
 from hcomc.sim.mobil import Snapshot, decide
 from hcomc.sim.neighbours import build_lane_index
-from hcomc.sumo import import_libsumo
+from hcomc.sumo.cosim_state import CosimState
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
 from hcomc.sumo.network import edge_at, sumo_lane_of
@@ -67,84 +57,10 @@ _DEFAULT_LC_MODE = 1621  # SUMO's default lane-change mode
 # no own lane changes; a commanded change (already passed by our MOBIL safety criterion, as in
 # our engine) only has to avoid immediate collisions, not SUMO's stricter comfort-gap check
 _COMMANDED_LC_MODE = 256
-_SETTLED = 1e-3  # lateral offset [lane widths] below which a vehicle keeps its lane
 
 
-class SumoSimulation:
+class SumoSimulation(CosimState):
     """One run of a merge scenario in SUMO (libsumo), controlled by our merge controller."""
-
-    def __init__(
-        self,
-        config: ScenarioConfig,
-        seed: int | None = None,
-        controller: MergeController | None = None,
-        *,
-        counterfactual: bool = False,
-    ) -> None:
-        self.counterfactual = counterfactual  # the undisturbed run: ramp vehicles removed
-        if config.scenario != "merge":
-            raise ValueError(f"scenario = '{config.scenario}': the SUMO engine runs 'merge' only")
-        self.sumo = import_libsumo()
-        self.config = config
-        self.seed = config.seed if seed is None else seed
-        self.rng = make_rng(self.seed)
-        self.dt = config.dt
-        self.demand = generate_demand(config, self.rng)  # same draws as our engine
-        n = self.demand.n
-        self.fleet = Fleet.build(config, self.demand.kind, self.demand.scripted)
-        if controller is None:
-            from hcomc.control.registry import make_controller
-
-            controller = make_controller(config)
-        self.controller = controller
-        self.x, self.y, self.v = np.zeros(n), np.zeros(n), np.zeros(n)
-        self.a, self.heading = np.zeros(n), np.zeros(n)
-        self.lane = self.demand.lane.copy()
-        self.origin = self.demand.lane.copy()  # lane a manoeuvre started from
-        self.active = np.zeros(n, dtype=bool)
-        self.planned = np.zeros(n, dtype=bool)
-        self.key_groups: dict[int, MergeGroup] = {}
-        self.plans: list[ActivePlan] = []
-        self.decisions: list[MergePlan] = []
-        self.n_warmup = round(config.warmup / self.dt)
-        self.n_steps = round(config.duration / self.dt)
-        self._log_every = round(config.log_interval / self.dt)
-        self.step_index = 0
-        self.vehicle_steps = 0
-        self.sumo_collisions = 0
-        self.sumo_teleports = 0
-        self._speed_set: set[int] = set()  # vehicles whose speed we impose this step
-        self._lc_start: dict[int, float] = {}  # vehicle -> start of its running lane change
-        meta = build_manifest(
-            seed=self.seed,
-            config=config.model_dump(mode="json"),
-            extra={"dt": self.dt, "log_interval": config.log_interval, "engine": "sumo",
-                   "sumo_version": self._sumo_version()},
-        )  # fmt: skip
-        self.log = SimulationLog.allocate(
-            self.n_steps // self._log_every + 1, n, dt=config.log_interval,
-            kind=self.demand.kind, length=self.fleet.length, width=self.fleet.width, meta=meta,
-        )  # fmt: skip
-        self._rows = 0
-
-    @staticmethod
-    def _sumo_version() -> str:
-        from importlib.metadata import PackageNotFoundError, version
-
-        try:
-            return version("eclipse-sumo")
-        except PackageNotFoundError:  # pragma: no cover - SUMO from elsewhere
-            return "unknown"
-
-    @property
-    def t(self) -> float:
-        """Current time [s]; t = 0 after the warm-up (SUMO time = t + warmup)."""
-        return -self.config.warmup + self.step_index * self.dt
-
-    @property
-    def key_group(self) -> MergeGroup | None:
-        """Key vehicles of the first ramp vehicle that entered the control zone (or None)."""
-        return next(iter(self.key_groups.values()), None)
 
     # ------------------------------------------------------------------ run
     def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
@@ -177,11 +93,6 @@ class SumoSimulation:
             progress(total, total)
         return self.log
 
-    def _record(self) -> None:
-        self.log.record(self._rows, self.t, self.x, self.y, self.v, self.a, self.heading,
-                        self.lane, self.active)  # fmt: skip
-        self._rows += 1
-
     # ----------------------------------------------------------------- step
     def step(self) -> None:
         """Command the key CAVs, advance SUMO by ``dt`` and read the new state back."""
@@ -198,56 +109,6 @@ class SumoSimulation:
         if self.plans:
             self._execute_plans(ids, t)
             self._finish_plans()
-
-    def _read_state(self, t: float) -> None:
-        sim, veh = self.sumo.simulation, self.sumo.vehicle
-        width = self.config.road.lane_width
-        ramp = self.demand.lane == Lane.RAMP
-        for name in sim.getDepartedIDList():
-            i = int(name[1:])
-            if self.counterfactual and ramp[i]:
-                veh.remove(name)  # the undisturbed run: nothing merges
-                continue
-            self.log.add_event(t, EventKind.INSERTION, i, x=float(self.demand.x[i]),
-                               value=t - float(self.demand.t[i]))  # fmt: skip
-        for name in sim.getArrivedIDList():
-            if self.counterfactual and ramp[int(name[1:])]:
-                continue
-            self.log.add_event(t, EventKind.EXIT, int(name[1:]), x=float(self.x[int(name[1:])]))
-        self.sumo_teleports += sim.getStartingTeleportNumber()
-        # on the road = in SUMO's network now (a vehicle being teleported is not)
-        self.active[:] = False
-        self.active[[int(name[1:]) for name in veh.getIDList()]] = True
-        for i in np.flatnonzero(self.active).tolist():
-            name = vehicle_id(i)
-            self.x[i], self.y[i] = veh.getPosition(name)
-            self.v[i] = veh.getSpeed(name)
-            self.a[i] = veh.getAcceleration(name)
-            self.heading[i] = np.radians(90.0 - veh.getAngle(name))
-        ids = np.flatnonzero(self.active)
-        lane = np.clip(np.rint(self.y[ids] / width).astype(np.int64) + 1, Lane.RAMP, Lane.MAIN_2)
-        self.lane[ids] = lane
-        settled = np.abs(self.y[ids] - lane_centre(lane, width)) < _SETTLED * width
-        for i, s in zip(ids.tolist(), settled.tolist(), strict=True):
-            if self.origin[i] == self.lane[i] and not s and i not in self._lc_start:
-                self._lc_start[i] = t
-                target = self.lane[i] + int(np.sign(self.y[i] - lane_centre(self.lane[i], width)))
-                self.log.add_event(t, EventKind.LANE_CHANGE_START, i, x=self.x[i], value=target)
-            elif s and self.origin[i] != self.lane[i]:
-                self.log.add_event(t, EventKind.LANE_CHANGE_END, i, x=self.x[i],
-                                   value=int(self.lane[i]))  # fmt: skip
-                if self.origin[i] == Lane.RAMP:
-                    self.log.add_event(t, EventKind.MERGE, i, x=self.x[i])
-                self.origin[i] = self.lane[i]
-                self._lc_start.pop(i, None)
-            elif s:
-                self._lc_start.pop(i, None)
-
-    def changing(self) -> np.ndarray:
-        """Vehicles in a lane-change manoeuvre (off their lane centre)."""
-        mask = self.active & (self.origin != self.lane)
-        mask[list(self._lc_start)] = True
-        return mask
 
     # ---------------------------------------------------------------- plans
     def _view(self, t: float) -> TrafficView:
@@ -289,12 +150,7 @@ class SumoSimulation:
         group = find_key_vehicles(view, vr)
         plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
         plan = checked(plan, view, group, name_of(self.controller))  # as the engine does
-        self.decisions.append(plan)
-        self.log.meta.setdefault("plans", []).append(plan_record(plan))
-        self.log.add_event(t, EventKind.PLAN, vr, other=group.vmc, x=self.x[vr],
-                           value=int(plan.mode))  # fmt: skip
-        if plan.fallback:
-            self.log.add_event(t, EventKind.FALLBACK, vr, other=group.vmc, x=self.x[vr])
+        record_decision(self, view, group, plan, t)
         cav = self.fleet.kind == Kind.CAV
         active = ActivePlan(
             plan,

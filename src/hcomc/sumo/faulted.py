@@ -28,13 +28,12 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import MergeController, MergePlan, Mode
+from hcomc.interface import MergeController, MergePlan, Mode, follow
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Override
 from hcomc.sim.execution import ActivePlan, commanded
-from hcomc.sim.fleet import follow
 from hcomc.sumo.cosim import _COMMANDED_LC_MODE, _DEFAULT_LC_MODE, SumoSimulation
 from hcomc.sumo.routes import vehicle_id
 

@@ -21,7 +21,8 @@ from matplotlib import animation as mpl_animation
 
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import atomic_paths
-from hcomc.viz.scene import DPI, RoadScene, SceneRoad
+from hcomc.viz.scene import DPI, RoadScene
+from hcomc.viz.scene_road import SceneRoad
 
 __all__ = ["ALLOWED_SUFFIXES", "animate"]
 
@@ -33,8 +34,8 @@ class _QuantizingPillowWriter(mpl_animation.PillowWriter):
     """:class:`~matplotlib.animation.PillowWriter` that keeps frames in palette mode.
 
     A GIF stores palette images anyway; quantising each frame as it is grabbed (fast octree,
-    about 3 ms a frame instead of Pillow's 16 ms median cut at save time) keeps a third of the
-    memory and halves the render time.
+    instead of Pillow's median cut at save time) keeps palette frames in memory instead of
+    full-colour ones and spares the slower quantiser.
     """
 
     def grab_frame(self, **savefig_kwargs: Any) -> None:

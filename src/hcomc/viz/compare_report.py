@@ -22,16 +22,16 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from hcomc.experiments.claims import MIN_PAIRS
-from hcomc.experiments.compare import (
+from hcomc.experiments.compare import paired_differences
+from hcomc.experiments.compare_view import (
     effects_view,
     metric_label,
-    paired_differences,
     success_pairs_view,
     success_view,
 )
 from hcomc.sim.manifest import atomic_paths
 from hcomc.viz.common import new_figure
-from hcomc.viz.report import figure_png, html_page
+from hcomc.viz.page import figure_png, html_page
 
 __all__ = ["differences_figure", "success_figure", "write_compare_report"]
 
@@ -187,8 +187,9 @@ def write_compare_report(
     """Write ``out_dir/report.html`` (atomically) and return its path.
 
     ``runs`` is the runs table, ``effects``, ``success`` and ``pairs`` the frames of
-    :func:`hcomc.experiments.compare.effects`, :func:`~hcomc.experiments.compare.merge_success`
-    and :func:`~hcomc.experiments.compare.success_pairs`, ``record`` the folder's record
+    :func:`hcomc.experiments.compare.effects`,
+    :func:`~hcomc.experiments.compare_success.merge_success` and
+    :func:`~hcomc.experiments.compare_success.success_pairs`, ``record`` the folder's record
     (suite, versions, command) and ``notes`` lines shown under the header (e.g. settings in
     which two compared folders differ).
     """

@@ -21,7 +21,7 @@ from matplotlib.colors import Normalize
 
 from hcomc.sim.manifest import atomic_paths, build_manifest
 from hcomc.viz.common import new_figure, save_figure, speed_cmap
-from hcomc.viz.report import _e, _figure_block, _html_table, figure_png, html_page
+from hcomc.viz.page import _e, _figure_block, _html_table, figure_png, html_page
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -350,10 +350,10 @@ def corridor_report_html(
     """Write ``out_dir/corridor.html``, the trips table, the merge events per on-ramp (with
     ``merges``, :func:`merge_table`) and the three figures, and return it.
 
-    Like :func:`hcomc.viz.report.write_report` (whose table, figure and style helpers it
-    uses) the page loads nothing (inline styles, no script, figures as base64 PNG), escapes
-    all text, is stamped with the hcomc version and git revision, and is written atomically,
-    replacing an existing page; *out_dir* is created if missing.
+    Like :func:`hcomc.viz.report.write_report` (both build on :mod:`hcomc.viz.page`) the
+    page loads nothing (inline styles, no script, figures as base64 PNG), escapes all text,
+    is stamped with the hcomc version and git revision, and is written atomically, replacing
+    an existing page; *out_dir* is created if missing.
     """
     table = trip_table(trips).rename(columns=_HEADERS)
     table_html = (

@@ -94,8 +94,8 @@ def record_scene(
     from hcomc.experiments.runner import configuration_overrides
     from hcomc.viz.figures import contour_figure
     from hcomc.viz.inputs import controller_logs
+    from hcomc.viz.page import figure_png
     from hcomc.viz.replay import write_replay
-    from hcomc.viz.report import figure_png
 
     settings = dict(overrides or {})
     logs = controller_logs(condition, seed=seed, overrides=settings)

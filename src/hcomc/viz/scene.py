@@ -4,141 +4,31 @@ every plan (ghosts) and a status line."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Patch, Rectangle
+from matplotlib.patches import Patch
 
-from hcomc.metrics import road_of
 from hcomc.road import KEY_ROLES
 from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.log import SimulationLog
+from hcomc.viz.scene_ghosts import plan_ghosts
+from hcomc.viz.scene_road import ROAD_COLOURS, Y_MARGIN, SceneRoad, draw_road
 
-__all__ = [
-    "DPI",
-    "Ghost",
-    "RoadScene",
-    "SceneRoad",
-    "hex_rgba",
-    "plan_ghosts",
-]
+__all__ = ["DPI", "RoadScene", "hex_rgba"]
 
 _FIG_SIZE = (12.0, 2.8)  # [in]; with DPI an even pixel size, as H.264 needs
 DPI = 100
 _AX_RECT = (0.035, 0.2, 0.955, 0.6)  # left, bottom, width, height (figure fraction)
-_Y_MARGIN = 0.85  # [lane widths] beyond the outer road edges
-
-# Coefficients (c0, c1, c2, c3) of a virtual vehicle's cubic x(τ) (Section III-A, Eqs. 8-9).
-Cubic = tuple[float, float, float, float]
 
 _COLOURS = {
     "hdv": "#d95f02",
     "cav": "#1b9e77",
     "ghost": "#7570b3",
-    "asphalt": "#d9d9d9",
-    "ramp": "#cfcfcf",
-    "zone": "#fff3b0",
-    "marking": "white",
-    "edge": "#4d4d4d",
 }
-
-
-@dataclass(frozen=True)
-class SceneRoad:
-    """Road geometry needed for drawing [m]."""
-
-    length: float
-    lane_width: float
-    accel_lane_start: float
-    accel_lane_end: float
-    ramp_start: float
-    control_zone_start: float
-    vehicle_length: float
-    vehicle_width: float
-
-    @classmethod
-    def of(cls, log: SimulationLog) -> SceneRoad:
-        """Geometry of the run (:func:`hcomc.metrics.road_of`; raises without one)."""
-        road = road_of(log)
-        return cls(
-            length=road.length,
-            lane_width=road.lane_width,
-            accel_lane_start=road.accel_lane_start,
-            accel_lane_end=road.accel_lane_end,
-            ramp_start=road.ramp_start,
-            control_zone_start=road.control_zone_start,
-            vehicle_length=road.vehicle_length,
-            vehicle_width=road.vehicle_width,
-        )
-
-
-@dataclass(frozen=True)
-class Ghost:
-    """One virtual vehicle of a plan: cubic x(τ) in a fixed lane while the plan is in force
-    (from its t0 until its horizon ends or a replan of the same VR replaces it)."""
-
-    label: str
-    coefficients: Cubic
-    t0: float
-    horizon: float
-    until: float
-    y: float
-    length: float
-    width: float
-
-    def x_at(self, t: float) -> float | None:
-        """Position [m] at time *t* [s], or None outside ``[t0, min(t0 + horizon, until))``."""
-        tau = t - self.t0
-        if not (0.0 <= tau <= self.horizon and t < self.until):
-            return None
-        b1, b2, b3, b4 = self.coefficients
-        return b1 + tau * (b2 + tau * (b3 + tau * b4))
-
-
-def plan_ghosts(
-    meta: Mapping[str, Any], lengths: np.ndarray, widths: np.ndarray, road: SceneRoad
-) -> list[Ghost]:
-    """Virtual vehicles of every plan in ``meta["plans"]``, each until the next plan of its VR."""
-    ghosts: list[Ghost] = []
-    plans = list(meta.get("plans") or [])
-    for i, plan in enumerate(plans):
-        group = plan.get("group") or {}
-        later = [
-            float(p["t0"])
-            for p in plans[i + 1 :]
-            if (p.get("group") or {}).get("VR") == group.get("VR") and p.get("t0") is not None
-        ]
-        until = min(later, default=math.inf)
-        for label, key, lane_y, owner in (
-            ("VV0", "vv0", -road.lane_width, "VMF"),
-            ("VV1", "vv1", 0.0, "VR"),
-            ("VV2", "vv2", road.lane_width, "VMC"),
-        ):
-            coefficients = plan.get(key)
-            if coefficients is None or plan.get("horizon") is None or plan.get("t0") is None:
-                continue
-            owner_k = group.get(owner)
-            k = -1 if owner_k is None else int(owner_k)
-            valid = 0 <= k < lengths.size
-            ghosts.append(
-                Ghost(
-                    label=label,
-                    coefficients=cast(Cubic, tuple(float(c) for c in coefficients)),
-                    t0=float(plan["t0"]),
-                    horizon=float(plan["horizon"]),
-                    until=until,
-                    y=lane_y,
-                    length=float(lengths[k]) if valid else road.vehicle_length,
-                    width=float(widths[k]) if valid else road.vehicle_width,
-                )
-            )
-    return ghosts
 
 
 class RoadScene:
@@ -150,7 +40,7 @@ class RoadScene:
         self.x_min, self.x_max = window
         self.fig = Figure(figsize=_FIG_SIZE, dpi=DPI)
         self.ax = self.fig.add_axes(_AX_RECT)
-        self._draw_road()
+        draw_road(self.ax, self.road, window, self.y_exaggeration())
         self.lengths = log.length.astype(np.float64)
         self.widths = log.width.astype(np.float64)
         colours = np.array(
@@ -216,85 +106,11 @@ class RoadScene:
         self._freeze_background()
 
     # ------------------------------------------------------------------ static parts
-    def _draw_road(self) -> None:
-        r, ax, W = self.road, self.ax, self.road.lane_width
-        half = 0.5 * W
-        ax.set_facecolor("#eef3e8")  # verge
-        ax.add_patch(
-            Rectangle((0.0, -half), r.length, 2 * W, fc=_COLOURS["asphalt"], ec="none", zorder=0)
-        )
-        ax.add_patch(
-            Rectangle(
-                (r.ramp_start, -1.5 * W),
-                r.accel_lane_end - r.ramp_start,
-                W,
-                fc=_COLOURS["ramp"],
-                ec="none",
-                zorder=0,
-            )
-        )
-        zone = Rectangle(
-            (r.control_zone_start, -1.5 * W),
-            r.accel_lane_start - r.control_zone_start,
-            3 * W,
-            fc=_COLOURS["zone"],
-            ec="none",
-            alpha=0.55,
-            zorder=1,
-        )
-        ax.add_patch(zone)
-        solid: dict[str, Any] = {
-            "color": _COLOURS["marking"],
-            "lw": 1.6,
-            "zorder": 2,
-            "solid_capstyle": "butt",
-        }
-        dashed: dict[str, Any] = {**solid, "lw": 1.2, "dashes": (6, 6)}
-        ax.plot([0.0, r.length], [1.5 * W, 1.5 * W], **solid)  # outer edge of lane 2
-        ax.plot([0.0, r.length], [half, half], **dashed)  # lane 2 | lane 1
-        ax.plot([0.0, r.ramp_start], [-half, -half], **solid)  # lane 1 edge upstream
-        ax.plot([r.ramp_start, r.accel_lane_start], [-half, -half], **{**solid, "lw": 2.4})
-        ax.plot([r.accel_lane_start, r.accel_lane_end], [-half, -half], **dashed)
-        ax.plot([r.accel_lane_end, r.length], [-half, -half], **solid)
-        ax.plot([r.ramp_start, r.accel_lane_end], [-1.5 * W, -1.5 * W], **solid)
-        ax.plot([r.accel_lane_end, r.accel_lane_end], [-1.5 * W, -half], **solid)
-        y_text = -1.5 * W - 0.15 * W
-        text: dict[str, Any] = {
-            "fontsize": 7,
-            "va": "top",
-            "color": "#555555",
-            "zorder": 3,
-            "clip_on": True,
-        }
-        cz_mid = 0.5 * (max(r.control_zone_start, self.x_min) + min(r.accel_lane_start, self.x_max))
-        ax.text(cz_mid, 1.5 * W + 0.55 * W, "control zone", ha="center", **{**text, "va": "bottom"})
-        ramp_mid = 0.5 * (max(r.ramp_start, self.x_min) + min(r.accel_lane_start, self.x_max))
-        ax.text(ramp_mid, y_text, "ramp", ha="center", **text)
-        acc_mid = 0.5 * (max(r.accel_lane_start, self.x_min) + min(r.accel_lane_end, self.x_max))
-        ax.text(acc_mid, y_text, "acceleration lane", ha="center", **text)
-        ax.set_xlim(self.x_min, self.x_max)
-        ax.set_ylim(-(1.5 + _Y_MARGIN) * W, (1.5 + _Y_MARGIN) * W)
-        ax.set_yticks([-W, 0.0, W], ["ramp", "lane 1", "lane 2"], fontsize=7)
-        ax.tick_params(axis="x", labelsize=7)
-        ax.set_xlabel("x [m]", fontsize=8, labelpad=1)
-        for spine in ax.spines.values():
-            spine.set_visible(False)
-        ax.text(
-            1.0,
-            -0.22,
-            f"lateral scale × {self.y_exaggeration():.0f}",
-            transform=ax.transAxes,
-            ha="right",
-            va="top",
-            fontsize=7,
-            color="#555555",
-        )
-
     def y_exaggeration(self) -> float:
         """How much the y axis is stretched relative to x on screen [-]."""
         width_in = _FIG_SIZE[0] * _AX_RECT[2]
         height_in = _FIG_SIZE[1] * _AX_RECT[3]
-        y_span = 2 * (1.5 + _Y_MARGIN) * self.road.lane_width
+        y_span = 2 * (1.5 + Y_MARGIN) * self.road.lane_width
         return ((self.x_max - self.x_min) / width_in) / (y_span / height_in)
 
     def _legend(self) -> None:
@@ -307,7 +123,7 @@ class RoadScene:
                 ls="--",
                 label="virtual vehicle (VV1, VV2)",
             ),
-            Patch(fc=_COLOURS["zone"], ec="none", label="control zone"),
+            Patch(fc=ROAD_COLOURS["zone"], ec="none", label="control zone"),
             Line2D([], [], color="black", marker="v", ls="none", ms=5, label="planned merge x"),
         ]
         self.fig.legend(

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc._typing import FloatArray
-from hcomc.control.base import MergeGroup, MergePlan, Mode, TrafficView
-from hcomc.control.hcomc.problem import AHEAD, MODE_NONE, OBJECTIVES, MergeProblem
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import AHEAD, MODE_NONE, OBJECTIVES
+from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.optim.selection import eq19_costs
 
 Commitment = tuple[int, Mode]

@@ -1,7 +1,8 @@
 """HCOMC merge controller (paper Section III): game -> multi-objective optimisation -> Eq. 19.
 
-1. The six key vehicles are taken from the view (:func:`hcomc.control.base.find_key_vehicles`);
-   the "behind" sequence uses the relabelled group of :func:`hcomc.control.base.behind_group`.
+1. The six key vehicles are taken from the view
+   (:func:`hcomc.control.key_vehicles.find_key_vehicles`); the "behind" sequence uses the
+   relabelled group of :func:`hcomc.control.key_vehicles.behind_group`.
 2. For each sequence whose cooperating vehicle is a CAV, the Stackelberg/Harsanyi lane-change
    game (Section III-B) between that vehicle (SV) and its lane-2 follower (FV) decides whether
    lateral cooperation is admissible: when SV's equilibrium action is to change lane, or when
@@ -31,26 +32,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.base import (
-    MergeGroup,
-    MergePlan,
-    Mode,
-    PlanDetails,
-    TrafficView,
-    behind_group,
-    elapsed_ms,
-    virtual_states,
-)
 from hcomc.control.hcomc.commitment import choose, continuations, executed
-from hcomc.control.hcomc.problem import (
+from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hcomc.problem_terms import (
     AHEAD,
     OBJECTIVES,
     SEQUENCES,
     KeyState,
-    MergeProblem,
     Prediction,
     default_starts,
-    load_prediction_kernels,
 )
 from hcomc.control.hcomc.rollout import (
     S_VV0_V,
@@ -62,8 +52,12 @@ from hcomc.control.hcomc.rollout import (
     VNF,
     VR,
 )
+from hcomc.control.hcomc.row_scoring import load_prediction_kernels
+from hcomc.control.key_vehicles import behind_group
 from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
 from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
+from hcomc.control.virtual_vehicle import virtual_states
+from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms
 from hcomc.optim.base import Optimizer, ParetoResult
 from hcomc.optim.registry import optimizer_from_config
 from hcomc.optim.selection import eq19_branch, select_eq19

@@ -21,7 +21,7 @@ The merge sequence (Section II-C) is a decision, not a rule: "ahead" puts VR bet
 VMC, and VMC cooperates; "behind" puts VR between VMC and VMR, and VMR cooperates. Both are
 rolled out with the same kernel on their own key group: for "behind" the group is relabelled
 so that the vehicle ahead of VR's slot (VMC) plays the VMF role and the one behind it (VMR)
-the VMC role (:func:`hcomc.control.base.behind_group`). In lateral mode the cooperating
+the VMC role (:func:`hcomc.control.key_vehicles.behind_group`). In lateral mode the cooperating
 vehicle moves to lane 2 and VR takes its place in front of the next lane-1 vehicle.
 
 Objectives, all minimised (columns named for :func:`hcomc.optim.selection.select_eq19`):
@@ -49,152 +49,42 @@ game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to m
 
 from __future__ import annotations
 
-import functools
-from dataclasses import dataclass, replace
-
 import numpy as np
 
-from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import IDMParams, ScenarioConfig
+from hcomc.config import ScenarioConfig
+from hcomc.control.hcomc.problem_terms import (
+    AHEAD,
+    BEHIND,
+    CONSTRAINTS,
+    G_LATERAL,
+    G_SEQUENCE,
+    MODE_NONE,
+    OBJECTIVES,
+    KeyState,
+    Prediction,
+    problem_constants,
+)
 from hcomc.control.hcomc.rollout import (
-    C_A_MERG,
-    C_ACCEL_END,
-    C_D,
-    C_DELAY_CAV,
-    C_DELAY_HDV,
-    C_DT,
-    C_EMERGENCY,
-    C_GAMMA,
-    C_POLITENESS,
-    C_VMC_DUR,
-    C_VV_DECEL,
-    C_WIDTH,
-    N_CONSTS,
     N_ROLES,
-    N_STARTS,
-    P_A,
     P_LEN,
-    P_V0,
     VMC,
     VR,
     counterfactual,
     resolve_starts,
     rollout,
-    rollout_into,
-    rollout_work,
-    vmc_tracks,
-    warm_up,
-    warm_up_instant,
 )
 from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, common_distance_fuel
-from hcomc.control.hcomc.rollout_layout import N_G
-from hcomc.control.hcomc.rollout_score import (
-    objective_rows,
-    objectives_into,
-    penalised_cost,
-    penalised_costs,
+from hcomc.control.hcomc.rollout_score import objective_rows, penalised_costs
+from hcomc.control.hcomc.row_scoring import (
+    FUEL_COEFFICIENTS,
+    FUEL_ROLES,
+    row_constants,
+    score_row,
+    score_rows,
 )
-from hcomc.control.lane_change_cost import GAME_DEFAULT, GameVehicle, simulate_sv
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.safety.critical import SafetyIndex
-
-OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
-CONSTRAINTS = (
-    "collision",
-    "not_merged",
-    "unsafe",
-    "virtual_vehicle",
-    "overrun",
-    "lateral",
-    "sequence",
-)
-SEQUENCES = ("ahead", "behind")
-AHEAD, BEHIND = 0, 1
-MODE_NONE = 1.0
-"""With ``control.no_cooperation`` (HCOMC+) the mode variable spans [0, 1.5]: a value of at
-least this asks for no cooperation (VMC keeps car following); without it the variable spans
-[0, 1] and every row cooperates."""
-_G_LATERAL, _G_SEQUENCE = CONSTRAINTS.index("lateral"), CONSTRAINTS.index("sequence")
-_FUEL_COEFFICIENTS = np.array(FUEL_DEFAULT.coefficients(), dtype=np.float64)
-_FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64))
-"""U_fuel's roles: VR alone, or VR and the cooperating vehicle (indexed by its presence)."""
-
-
-@dataclass(frozen=True, slots=True)
-class KeyState:
-    """State and parameters of the six key vehicles at planning time (roles VR … VNR).
-
-    Missing VMF/VNF are replaced by a phantom far ahead at VMC's speed (free road); missing
-    VMR/VNR are absent (``present`` False). ``coop`` says which roles cooperate when their
-    mode asks it (normally the CAVs); ``starts`` are the start states of VV0 and VV1 (NaN:
-    the paper's Eq. 8 start; a replanning controller continues the live virtual vehicles).
-    """
-
-    t0: float
-    x: FloatArray
-    v: FloatArray
-    a: FloatArray
-    present: BoolArray
-    cav: BoolArray
-    coop: BoolArray
-    params: FloatArray  # (6, 10): v0, T, s0, a, b, delta, coolness, length, width, iidm
-    ids: IntArray  # (6,) vehicle indices in the simulation, -1 for absent or phantom
-    starts: FloatArray  # (4,) VV0 x, v and VV1 x, v (NaN = default)
-
-    def desired_speed(self, role: int) -> float:
-        """Desired speed v0 of a role [m/s] (Eq. 1)."""
-        return float(self.params[role, P_V0])
-
-    def max_accel(self, role: int) -> float:
-        """Maximum acceleration a of a role [m/s^2] (Eq. 1)."""
-        return float(self.params[role, P_A])
-
-
-@dataclass(frozen=True, slots=True)
-class Prediction:
-    """Predicted trajectories (C, K + 1, 6) and objective parts of candidate plans."""
-
-    t: FloatArray
-    X: FloatArray
-    Y: FloatArray
-    V: FloatArray
-    A: FloatArray
-    heading: FloatArray
-    k_merge: IntArray
-    F: FloatArray
-    G: FloatArray
-    vv0: FloatArray
-    vv1: FloatArray
-    vv2: FloatArray
-    sequence: IntArray  # (C,) AHEAD or BEHIND
-
-
-def _without_cooperation(state: KeyState) -> KeyState:
-    """``state`` in which the cooperating vehicle (the VMC role) keeps car following: the
-    group of a row whose mode is "none"."""
-    coop = state.coop.copy()
-    coop[VMC] = False
-    return replace(state, coop=coop)
-
-
-def problem_constants(config: ScenarioConfig) -> FloatArray:
-    """The rollout's constants vector, every value read from ``config``."""
-    safety = SafetyIndex.from_config(config.control)
-    consts = np.zeros(N_CONSTS)
-    consts[C_DT] = config.control.prediction_dt
-    consts[C_ACCEL_END] = config.road.accel_lane_end
-    consts[C_WIDTH] = config.road.lane_width
-    consts[C_VMC_DUR] = config.cav.lane_change_duration
-    consts[C_GAMMA] = np.arctanh(1.0 - 2.0 * config.lane_change.transition_tolerance)
-    consts[C_EMERGENCY] = config.lane_change.emergency_decel
-    consts[C_VV_DECEL] = config.control.virtual_max_decel
-    consts[C_POLITENESS] = config.lane_change.politeness
-    consts[C_D] = safety.min_distance
-    consts[C_A_MERG] = safety.emergency_decel
-    consts[C_DELAY_CAV] = safety.delay_cav
-    consts[C_DELAY_HDV] = safety.delay_hdv
-    return consts
 
 
 class MergeProblem:
@@ -272,7 +162,7 @@ class MergeProblem:
         problem with other states, as the baselines make, gets its own)."""
         if self._variants_of is not self.states:
             none = (
-                None if st is None or not self.no_cooperation else _without_cooperation(st)
+                None if st is None or not self.no_cooperation else st.with_vmc_cooperation(False)
                 for st in self.states
             )
             self._variants_cache, self._variants_of = (*self.states, *none), self.states
@@ -326,7 +216,7 @@ class MergeProblem:
         xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
         G[rows, : g.shape[1]] = g
         allowed = self.lateral_allowed[seq]
-        G[rows, _G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
+        G[rows, G_LATERAL] = np.where(lateral[rows] & ~allowed, 1.0, 0.0)
         fuel = self._fuel(xs, vs, as_, cf, state, self._fuel_no_merge[seq])
         return objective_rows(u_safe, fuel, u_eff), out
 
@@ -352,21 +242,23 @@ class MergeProblem:
             k_merge[rows] = km
             for dst, src in zip(vv, (v0_, v1_, v2_), strict=True):
                 dst[rows] = src
-        G[no_behind, _G_SEQUENCE] = 1.0
+        G[no_behind, G_SEQUENCE] = 1.0
         t: FloatArray = np.arange(K + 1, dtype=np.float64) * self.dt
         return Prediction(
             t, Xt, Yt, Vt, At, Ht, k_merge, F, G, vv0=vv[0], vv1=vv[1], vv2=vv[2], sequence=seq
         )
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5): those of
-        :meth:`predict`, without assembling the trajectories.
+        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5): F(x) and the
+        constraints of Ω in Eq. 18, those of :meth:`predict`, without assembling the
+        trajectories.
 
         An optimiser needs the scores only, so each sequence's rows are scored in one compiled
-        call (:func:`_score_rows`) by the single-row body of :meth:`evaluate_row`, on the
-        per-sequence constants prepared once per problem: no population of trajectories is
-        allocated and VMC's pre-pass tracks are not rolled out again per call. The values are
-        those of :meth:`predict` bit for bit (the tests hold both paths to it).
+        call (:func:`~hcomc.control.hcomc.row_scoring.score_rows`) by the single-row body of
+        :meth:`evaluate_row`, on the per-sequence constants prepared once per problem: no
+        population of trajectories is allocated and VMC's pre-pass tracks are not rolled out
+        again per call. The values are those of :meth:`predict` bit for bit (the tests hold
+        both paths to it).
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
         _, lateral, variant, no_behind = self._rows(X)
@@ -379,7 +271,7 @@ class MergeProblem:
             allowed = bool(self.lateral_allowed[which % 2])
             batch = (X, rows, lateral, allowed, no_behind, self.safety.threshold, self._fuel_ref)
             args = (*self._row_constants(which), *batch, F, G)
-            _score_rows(*args)
+            score_rows(*args)
         return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
@@ -405,9 +297,9 @@ class MergeProblem:
 
         Simulated annealing asks for one row at a time, where the machinery of a population
         call (masks, index arrays) costs more than the rollout itself; here one compiled call
-        (:func:`_score_row`, the body :meth:`evaluate` runs per row too) rolls out and scores
-        the row, on per-sequence constants prepared once per problem. ``F`` and ``G`` must be
-        contiguous float64 arrays.
+        (:func:`~hcomc.control.hcomc.row_scoring.score_row`, the body :meth:`evaluate` runs per
+        row too) rolls out and scores the row, on per-sequence constants prepared once per
+        problem. ``F`` and ``G`` must be contiguous float64 arrays.
         """
         x = np.asarray(x, dtype=np.float64)
         none = self.no_cooperation and bool(x[3] >= MODE_NONE)  # the rules of _rows, one row
@@ -420,12 +312,13 @@ class MergeProblem:
         which += 2 * none
         row = (x, lateral, lateral_violation, 1.0 if no_behind else 0.0)
         args = (*self._row_constants(which), *row, self.safety.threshold, self._fuel_ref, F, G)
-        cost: float = _score_row(*args)
+        cost: float = score_row(*args)
         return cost
 
     def _row_constants(self, which: int) -> tuple[object, ...]:
-        """The arguments of :func:`_score_row` that depend on the planning instant and the
-        sequence alone, prepared on first use."""
+        """The arguments of :func:`~hcomc.control.hcomc.row_scoring.score_row` that depend on
+        the planning instant and the sequence alone
+        (:func:`~hcomc.control.hcomc.row_scoring.row_constants`), prepared on first use."""
         cached = self._row_cache.get(which)
         if cached is not None:
             return cached
@@ -435,16 +328,9 @@ class MergeProblem:
         assert state is not None
         assert cf is not None
         assert starts is not None
-        tracks = vmc_tracks(
-            state.x, state.v, state.a, state.present, state.coop, state.params, self.consts,
-            self.n_steps,
-        )  # fmt: skip
-        constants = (
-            state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-            starts, self.consts, self.n_steps, cf, tracks,
-            _FUEL_ROLES[int(bool(state.present[VMC]))], self._fuel_no_merge[seq],
-            _FUEL_COEFFICIENTS, self.dt,
-        )  # fmt: skip
+        constants = row_constants(
+            state, starts, cf, self.consts, self.n_steps, self._fuel_no_merge[seq], self.dt
+        )
         self._row_cache[which] = constants
         return constants
 
@@ -465,8 +351,8 @@ class MergeProblem:
         if with_vmc and cf_fuel is None:
             cf_fuel = self._counterfactual_fuel(cf)
         fuel: FloatArray = common_distance_fuel(
-            cf, _FUEL_ROLES[int(with_vmc)], X, V, A, self.dt,
-            0.0 if cf_fuel is None else cf_fuel, _FUEL_COEFFICIENTS,
+            cf, FUEL_ROLES[int(with_vmc)], X, V, A, self.dt,
+            0.0 if cf_fuel is None else cf_fuel, FUEL_COEFFICIENTS,
         )  # fmt: skip
         return fuel
 
@@ -483,91 +369,9 @@ class MergeProblem:
         Each vehicle's fuel over the window is completed to that distance at its end speed's
         cruise rate (a negative completion when it went further):
         ``fuel(D) = sum fe dt + fe_cruise(max(v_K, 1)) (D - dx) / max(v_K, 1)``, with the
-        rates of :func:`~hcomc.models.fuel.fuel_rate_scalar` (:func:`_fuel_to_distance_kernel`).
+        rates of :func:`~hcomc.models.fuel.fuel_rate_scalar`
+        (:func:`~hcomc.control.hcomc.rollout_fuel._fuel_to_distance_kernel`).
         """
         return _fuel_to_distance_kernel(
             cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, *FUEL_DEFAULT.coefficients()
         )
-
-
-@kernel
-def _score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
-               roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
-               sequence_violation, threshold, fuel_ref, F, G):  # fmt: skip
-    """:meth:`MergeProblem.evaluate_row` compiled: the row's rollout (:func:`rollout_into`),
-    U_fuel, the objectives into ``F`` and the constraints into ``G`` as :meth:`MergeProblem.
-    evaluate` writes them (kernel parts, then the lateral and sequence flags), and the cost."""
-    return _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks,
-                       roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
-                       sequence_violation, threshold, fuel_ref, F, G,
-                       rollout_work(n_steps))  # fmt: skip
-
-
-@kernel
-def _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks, roles,
-                cf_fuel, coefficients, dt, x, lateral, lateral_violation, sequence_violation,
-                threshold, fuel_ref, F, G, work):  # fmt: skip
-    """The body of :func:`_score_row`, rolling out into the arrays ``work`` of
-    :func:`rollout_work` (which a population reuses from row to row)."""
-    plan = np.empty(3)
-    plan[0], plan[1], plan[2] = x[0], x[1], x[2]
-    _, u_safe, u_eff = rollout_into(
-        x0, v0, a0, present, cav, coop, params, starts, plan, lateral, consts, cf, tracks, work
-    )
-    X, V, A, g = work[0], work[1], work[3], work[5]
-    fuel = common_distance_fuel(cf, roles, X, V, A, dt, cf_fuel, coefficients)
-    objectives_into(u_safe, fuel[0], u_eff, F)
-    G[:] = 0.0
-    G[:N_G] = g
-    G[_G_LATERAL] = lateral_violation
-    G[_G_SEQUENCE] = sequence_violation
-    return penalised_cost(F, G, threshold, fuel_ref)
-
-
-@kernel
-def _score_rows(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, cf, tracks,
-                roles, cf_fuel, coefficients, dt, X, rows, lateral, allowed, no_behind,
-                threshold, fuel_ref, F, G):  # fmt: skip
-    """Rows ``rows`` of ``X`` (all of one sequence, whose constants come first as for
-    :func:`_score_row`) scored into the same rows of ``F`` and ``G``, each by
-    :func:`_score_row`'s body (``allowed``: whether the sequence admits lateral cooperation;
-    ``no_behind``: per row of ``X``, a "behind" row moved ahead for want of a vehicle); the
-    rollout's arrays are allocated once for all rows."""
-    work = rollout_work(n_steps)
-    for q in range(rows.size):
-        r = rows[q]
-        lat = lateral[r]
-        _score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks, roles,
-                    cf_fuel, coefficients, dt, X[r], lat, 1.0 if lat and not allowed else 0.0,
-                    1.0 if no_behind[r] else 0.0, threshold, fuel_ref, F[r], G[r],
-                    work)  # fmt: skip
-
-
-def default_starts() -> FloatArray:
-    """Start states of VV0 and VV1 for a first plan: the Eq. 8 defaults (all NaN)."""
-    return np.full(N_STARTS, np.nan)
-
-
-@functools.cache  # once per process
-def load_prediction_kernels() -> None:
-    """Load (or compile) the kernels of a decision once per process, so that no timed
-    decision pays for it: the rollout (population and single row), U_fuel's and the
-    lane-change game's SV simulation."""
-    warm_up()
-    x, v, a, flags, params, consts, n_steps, cf = warm_up_instant()  # evaluate_row's kernel
-    starts = resolve_starts(x, v, params, np.full(N_STARTS, np.nan))
-    tracks = vmc_tracks(x, v, a, flags, flags, params, consts, n_steps)
-    row, F, G = np.array([800.0, 4.0, 6.0, 0.0, 0.0]), np.empty(3), np.empty(len(CONSTRAINTS))
-    _score_row(x, v, a, flags, flags, flags, params, starts, consts, n_steps, cf, tracks,
-               _FUEL_ROLES[1], 0.0, _FUEL_COEFFICIENTS, 0.5, row, False, 0.0, 0.0, 1.0, 1.0,
-               F, G)  # fmt: skip
-    rows, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)  # evaluate's
-    _score_rows(x, v, a, flags, flags, flags, params, starts, consts, n_steps, cf, tracks,
-                _FUEL_ROLES[1], 0.0, _FUEL_COEFFICIENTS, 0.5, row[None], rows, lateral, True,
-                lateral, 1.0, 1.0, F[None], G[None])  # fmt: skip
-    trajectory = np.zeros((1, 2, N_ROLES))
-    roles = np.zeros(1, dtype=np.int64)
-    coefficients = FUEL_DEFAULT.coefficients()
-    _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, *coefficients)
-    sv = GameVehicle(x=0.0, v=10.0, length=5.0, desired_speed=30.0, is_cav=True)
-    simulate_sv(sv, None, None, IDMParams(), GAME_DEFAULT)

@@ -3,9 +3,9 @@
 Each vehicle's fuel over the prediction window is completed to the distance it covers in the
 no-merge counterfactual at its end speed's cruise rate; the rates are
 :func:`hcomc.models.fuel.fuel_rate_scalar`, their one home, summed in numpy's pairwise order
-(:func:`hcomc.optim.numpy_sum.pairwise_sum`) so that the values equal the array forms they
-replaced bit for bit. Used for whole populations
-(:meth:`hcomc.control.hcomc.problem.MergeProblem.evaluate`) and for the single rows of
+(:func:`hcomc.optim.numpy_sum.pairwise_sum`) so that the values equal those of
+:func:`~hcomc.models.fuel.fuel_rate` summed with ``ndarray.sum``, bit for bit. Used for whole
+populations (:meth:`hcomc.control.hcomc.problem.MergeProblem.evaluate`) and for the single rows of
 simulated annealing alike.
 """
 

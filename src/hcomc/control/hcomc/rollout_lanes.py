@@ -39,7 +39,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VR,
 )
 from hcomc.models.quintic import lateral_state
-from hcomc.safety.collision import vehicle_pair_collides
+from hcomc.safety.collision_kernels import vehicle_pair_collides
 
 
 @kernel

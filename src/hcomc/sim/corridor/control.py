@@ -7,9 +7,9 @@ HDVs and CAVs (CAVs without the constant-acceleration heuristic, coolness 0, as 
 corridor engine drives them), the corridor's lane-change settings. The controller sees the
 ramp's local view (ramp lane, mainline lanes 0 and 1 as ``RAMP``, ``MAIN_1``, ``MAIN_2``:
 :func:`hcomc.sim.corridor.plans.fill_view`) through the same :class:`TrafficView` and
-:class:`MergeGroup` as in the paper's scene, and its plans are executed by the compiled
-step (:mod:`hcomc.sim.corridor.plans`). Plans of different ramps, and of several VRs of one
-ramp, are live at the same time.
+:class:`~hcomc.interface.MergeGroup` as in the paper's scene, and its plans are executed by
+the compiled step (:mod:`hcomc.sim.corridor.plans`). Plans of different ramps, and of several
+VRs of one ramp, are live at the same time.
 
 **One live plan per vehicle.** A plan may command a vehicle (its VMC, or VNR in lateral
 mode) only if no live plan of another VR commands it; otherwise the new plan keeps its
@@ -25,11 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.base import MergeController, MergePlan, Mode, TrafficView, find_key_vehicles
+from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.registry import make_controller
 from hcomc.control.validation import checked, name_of
 from hcomc.corridor import Corridor, OnRamp
 from hcomc.corridor.engine import ramp_road
+from hcomc.interface import Fleet, MergeController, MergePlan, Mode, TrafficView
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.core_plans import (
@@ -46,7 +47,6 @@ from hcomc.sim.corridor.fleet import CorridorFleet
 from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.plans import fill_view
 from hcomc.sim.corridor.state import C_PENDING, C_PLANS, State, Vehicles
-from hcomc.sim.fleet import Fleet
 
 __all__ = ["CorridorControl", "Decision", "ramp_config"]
 

@@ -6,7 +6,7 @@ identified as in paper Section II-A on the ramp's *local view*: the ramp lane is
 :attr:`~hcomc.road.Lane.RAMP`, mainline lane 0 (the one the ramp joins) ``MAIN_1`` and
 mainline lane 1 ``MAIN_2``; a vehicle counts in the lane it drives in up to the lateral
 midpoint of a change and in its target lane after it, and vehicles on other lanes are not
-in the view (:func:`fill_view`, then :func:`hcomc.control.base.key_vehicle_indices`, the
+in the view (:func:`fill_view`, then :func:`hcomc.control.key_vehicles.key_vehicle_indices`, the
 function the controllers use). This happens in every run, with or without a controller, so
 runs compare the same vehicles. The event's window runs from then until ``window_after``
 seconds after VR's merge is complete (or VR leaves the road); over it
@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 
 from hcomc._jit import borrow_all, kernel
-from hcomc.control.base import key_vehicle_indices
+from hcomc.control.key_vehicles import key_vehicle_indices
 from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.models.following import follow_accel_given
 from hcomc.road import VMC, VMR, VNR, VR, Lane

@@ -1,0 +1,109 @@
+"""What ``hcomc compare`` prints and writes once its runs are in: merge success, its paired
+comparison and the paired effects as terminal tables, the tables as files and the HTML
+report (:mod:`hcomc.viz.compare_report`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from hcomc.cli._app import out
+
+NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "excluded", "p (Holm)", "both merged",
+           "only A", "only B", "neither")  # fmt: skip
+"""Columns right-aligned on the terminal (the others, names and words, left-aligned)."""
+
+OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
+           "report.html")  # fmt: skip
+"""What a comparison writes into its folder (besides its record and run store)."""
+
+
+def _say(text: str) -> None:
+    """Print a line of plain text (names such as "HCOMC [results]" are not markup)."""
+    from rich.markup import escape
+
+    out.print(escape(text), highlight=False)
+
+
+def _table(frame: Any, title: str, numeric: tuple[str, ...] = NUMERIC) -> Any:
+    """A rich table of a text frame: the ``numeric`` columns right-aligned, names and
+    verdicts left-aligned."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(title=escape(title))
+    for col in frame.columns:
+        table.add_column(escape(str(col)), justify="right" if col in numeric else "left")
+    for row in frame.itertuples(index=False):
+        table.add_row(*(escape(str(v)) for v in row))
+    return table
+
+
+def _write_tables(target: Path, runs: Any, effects: Any, success: Any, pairs: Any) -> None:
+    from hcomc.sim.manifest import atomic_paths
+
+    with atomic_paths(*(target / n for n in OUTPUTS[:5])) as tmp:
+        runs.to_parquet(tmp[0], index=False)
+        runs.to_csv(tmp[1], index=False)
+        effects.to_csv(tmp[2], index=False)
+        success.to_csv(tmp[3], index=False)
+        pairs.to_csv(tmp[4], index=False)
+
+
+SUCCESS_TITLE = "Merge success — runs in which VR merged"
+"""Title of the merge-success table (for runs of the scenario engine)."""
+
+PAIRS_NOTE = "A<B: k of n pairs (both merged)"
+"""How the effects title explains n (for the paper's metrics)."""
+
+
+def _analyse(
+    target: Path,
+    runs: Any,
+    comparisons: list[tuple[str, str]],
+    configurations: list[str],
+    record: dict[str, Any],
+    notes: tuple[str, ...] = (),
+    *,
+    metrics: tuple[str, ...] | None = None,
+    success_title: str = SUCCESS_TITLE,
+    pairs_note: str = PAIRS_NOTE,
+) -> None:
+    """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
+    paper's five)."""
+    from hcomc.experiments.compare import effects
+    from hcomc.experiments.compare_success import merge_success, success_pairs
+    from hcomc.experiments.compare_view import effects_view, success_pairs_view, success_view
+    from hcomc.experiments.paper import PAPER_METRICS
+    from hcomc.viz.compare_report import write_compare_report
+
+    effect_rows = effects(
+        runs, configurations, comparisons=comparisons, metrics=metrics or PAPER_METRICS
+    )
+    success = merge_success(runs, configurations)
+    pairs = success_pairs(runs, comparisons)
+    _write_tables(target, runs, effect_rows, success, pairs)
+    report = write_compare_report(target, runs, effect_rows, success, pairs, record, notes=notes)
+    for note in notes:
+        _say(f"note: {note}")
+    rates = success_view(success)
+    out.print(_table(rates, success_title, tuple(rates.columns[1:])))
+    discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
+    if len(discordant):
+        title = (
+            "Merge success paired by seed (exact McNemar test, Holm-adjusted) — comparisons "
+            "in which only one of the two merged in some seed"
+        )
+        out.print(_table(success_pairs_view(discordant), title))
+    else:
+        out.print("merge success paired by seed: in no seed did only one of two compared "
+                  "configurations merge", highlight=False)  # fmt: skip
+    out.print(
+        _table(
+            effects_view(effect_rows),
+            "Paired effects — median A-B over seeds [95 % bootstrap CI]; verdict by the CI; "
+            f"favours by the metric's better direction (↑ larger, ↓ smaller); {pairs_note}; "
+            "excluded: seeds without a pair; p: sign test, Holm-adjusted over the table",
+        )
+    )
+    _say(f"report: {report}")

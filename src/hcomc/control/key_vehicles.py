@@ -1,0 +1,100 @@
+"""Identification of the six key vehicles around a ramp vehicle (Section II-A).
+
+When a ramp vehicle (VR) enters the cooperative control zone, the engine identifies its key
+vehicles here and calls ``controller.plan(view, group, rng)`` (:mod:`hcomc.interface`); it
+replans in a receding horizon — key vehicles re-identified, ``plan`` called again — every
+``control.replan_period`` seconds until VR starts its lane change (or a lateral cooperation
+has begun), and falls back to gap acceptance if the plan cannot be executed safely.
+
+Key vehicles, with VR's position projected onto lane 1 (virtual-vehicle mapping at the same
+x, Uno et al. 1999):
+
+* VMF, VMC — the lane-1 vehicles directly ahead of and behind the projection: VR is to merge
+  between them, so VMC is the vehicle that must cooperate;
+* VMR — the lane-1 vehicle behind VMC;
+* VNF, VNR — the lane-2 vehicles directly ahead of and behind VMC.
+
+A vehicle belongs to the lane its ``view.lane`` entry gives; a vehicle in a lane change
+switches lane at the lateral midpoint of its change, so it is a key vehicle of one lane at a
+time (``view.changing`` is not used here). A missing vehicle is -1. Without VMC there is no one
+to cooperate (VR merges by gap acceptance); without VMF or VNF the road ahead is free (planners
+use a phantom far ahead).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc._jit import kernel
+from hcomc.interface import MergeGroup, TrafficView
+from hcomc.road import N_ROLES, VMC, VMF, VMR, VNF, VNR, VR, Lane
+
+_MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)
+
+
+@kernel
+def nearest_in_lane(
+    x: np.ndarray, lane: np.ndarray, active: np.ndarray, in_lane: int, x0: float, exclude: int
+) -> tuple[int, int]:
+    """Nearest vehicle ahead (x' > x0) and behind (x' <= x0) in lane ``in_lane``, -1 if none
+    (ties: the lowest index); vehicle ``exclude`` is skipped.
+
+    "In the lane" is ``lane == in_lane``: a changing vehicle counts in its origin lane up to
+    the lateral midpoint of its change and in its target lane after it, never in both.
+    """
+    lead, follow = -1, -1
+    x_lead, x_follow = np.inf, -np.inf
+    for i in range(x.size):
+        if i == exclude or not active[i] or lane[i] != in_lane:
+            continue
+        if x[i] > x0:
+            if x[i] < x_lead:
+                lead, x_lead = i, x[i]
+        elif x[i] > x_follow:
+            follow, x_follow = i, x[i]
+    return lead, follow
+
+
+@kernel
+def key_vehicle_indices(x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int) -> np.ndarray:
+    """The six key vehicles of Section II-A around ramp vehicle ``vr``, in role order VR, VMC,
+    VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc)."""
+    out = np.full(N_ROLES, -1, dtype=np.int64)
+    out[VR] = vr
+    vmf, vmc = nearest_in_lane(x, lane, active, _MAIN_1, x[vr], vr)
+    out[VMF] = vmf
+    if vmc < 0:
+        return out
+    out[VMC] = vmc
+    out[VMR] = nearest_in_lane(x, lane, active, _MAIN_1, x[vmc] - 1e-9, vmc)[1]
+    out[VNF], out[VNR] = nearest_in_lane(x, lane, active, _MAIN_2, x[vmc], vmc)
+    return out
+
+
+def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
+    """:func:`nearest_in_lane` on a view."""
+    lead, follow = nearest_in_lane(view.x, view.lane, view.active, int(lane), float(x), exclude)
+    return int(lead), int(follow)
+
+
+def find_key_vehicles(view: TrafficView, vr: int) -> MergeGroup:
+    """The six key vehicles of Section II-A around ramp vehicle ``vr`` (rules in module doc)."""
+    return MergeGroup(*key_vehicle_indices(view.x, view.lane, view.active, vr).tolist())
+
+
+def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
+    """Relabelled key group for "VR merges behind VMC" (the old VMR cooperates).
+
+    The vehicle ahead of VR's slot (old VMC) becomes ``vmf``, the vehicle behind it (old VMR)
+    becomes ``vmc``, the lane-1 vehicle behind the old VMR becomes ``vmr`` and VNF/VNR are the
+    lane-2 neighbours of the old VMR (the rules of :func:`find_key_vehicles`). Without an old
+    VMR only ``vr`` and ``vmf`` are set (nobody to cooperate). Requires ``group.vmc >= 0``.
+    """
+    if group.vmc < 0:
+        raise ValueError("behind_group needs a VMC (the vehicle VR merges behind)")
+    new_vmc = group.vmr
+    if new_vmc < 0:
+        return MergeGroup(vr=group.vr, vmf=group.vmc)
+    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
+    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
+    return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)

@@ -1,0 +1,119 @@
+"""A run of the engine as it is set up: scenario, seed, random streams, demand, fleet,
+controller, the compiled state arrays, the log, and the counters read from them.
+
+:class:`EngineSetup` draws the demand and builds everything a run of
+:class:`hcomc.sim.engine.Simulation` starts from (:mod:`hcomc.sim.core_build`), or builds it on
+another run's demand, fleet and controller (:meth:`EngineSetup._sibling`: the undisturbed twin
+of :mod:`hcomc.sim.twin`). Advancing the run is :class:`~hcomc.sim.engine.Simulation`'s.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Self
+
+import numpy as np
+
+from hcomc.config import ScenarioConfig
+from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, TrafficView
+from hcomc.rng import make_rng
+from hcomc.road import Kind
+from hcomc.sim import core_state as layout
+from hcomc.sim.core_build import allocate_log, build_arrays
+from hcomc.sim.core_state import Core
+from hcomc.sim.demand import Demand, generate_demand
+from hcomc.sim.perception import Perception
+
+__all__ = ["EngineSetup"]
+
+
+class EngineSetup:
+    """One run of a scenario with one seed, set up (its parameters are those of
+    :class:`hcomc.sim.engine.Simulation`, the class to use)."""
+
+    def __init__(
+        self,
+        config: ScenarioConfig,
+        seed: int | None = None,
+        controller: MergeController | None = None,
+        *,
+        counterfactual: bool = False,
+    ) -> None:
+        seed = config.seed if seed is None else seed
+        rng = make_rng(seed)
+        demand = generate_demand(config, rng)
+        if controller is None:
+            from hcomc.control.registry import make_controller
+
+            controller = make_controller(config)
+        fleet = Fleet.build(config, demand.kind, demand.scripted)
+        self._build(config, seed, rng, demand, fleet, controller, counterfactual)
+
+    @classmethod
+    def _sibling(cls, sim: Self, *, counterfactual: bool) -> Self:
+        """The run of ``sim``'s scenario and seed at step 0, built on the demand, fleet and
+        controller ``sim`` drew (shared, read-only) instead of drawing them again: its
+        generator resumes where ``sim``'s stood after the demand draw."""
+        rng = make_rng(sim.seed)
+        rng.bit_generator.state = sim._after_demand
+        new = cls.__new__(cls)
+        new._build(sim.config, sim.seed, rng, sim.demand, sim.fleet, sim.controller,
+                   counterfactual)  # fmt: skip
+        return new
+
+    def _build(
+        self, config: ScenarioConfig, seed: int, rng: np.random.Generator, demand: Demand,
+        fleet: Fleet, controller: MergeController | None, counterfactual: bool,
+    ) -> None:  # fmt: skip
+        self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
+        self._after_demand = rng.bit_generator.state  # for _sibling
+        self.counterfactual = counterfactual
+        self.demand, self.fleet, self.controller = demand, fleet, controller
+        self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
+        self.python_steps = 0  # steps taken in Python (decision events)
+        self.decisions: list[MergePlan] = []
+        self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
+        self.is_hdv = demand.kind == Kind.HDV
+        self.perception = Perception(config.hdv, self.is_hdv, self.dt, rng)
+        self.n_warmup = round(config.warmup / self.dt)
+        self.n_steps = round(config.duration / self.dt)
+        self._log_every = round(config.log_interval / self.dt)
+        self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
+        self.log = allocate_log(config, seed, demand, fleet, self.n_steps // self._log_every + 1)
+        self.arrays = build_arrays(
+            config, demand, fleet, self.perception, self.log,
+            counterfactual=counterfactual, controlled=controller is not None,
+            n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
+        )  # fmt: skip
+        # the kernels see the same arrays through one compiled reference, typed as its fields
+        self.core: Any = Core(self.arrays)
+        c = self.arrays  # the state arrays, by name
+        self.x, self.y, self.v, self.a, self.heading = c.x, c.y, c.v, c.a, c.heading
+        self.lane, self.origin, self.target = c.lane, c.origin, c.target
+        self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
+        self.active, self.waited, self.planned = c.active, c.waited, c.planned
+        self._stage = 0
+
+    @property
+    def t(self) -> float:
+        """Current simulation time [s]; logging starts at t = 0 after the warm-up."""
+        return -self.config.warmup + self.step_index * self.dt
+
+    @property
+    def step_index(self) -> int:
+        """Steps simulated so far (warm-up included)."""
+        return int(self.arrays.counters[layout.STEP])
+
+    @property
+    def collisions(self) -> int:
+        """Collisions (pairs coming into contact) so far; each is a COLLISION event."""
+        return int(self.arrays.counters[layout.COLLISIONS])
+
+    @property
+    def rows_recorded(self) -> int:
+        """Log rows written so far (rows ``[0, rows_recorded)`` of :attr:`log` are final)."""
+        return int(self.arrays.counters[layout.ROWS])
+
+    @property
+    def vehicle_steps(self) -> int:
+        """Sum over the steps simulated so far of the vehicles on the road."""
+        return int(self.arrays.counters[layout.VEHICLE_STEPS])
