@@ -167,9 +167,9 @@ def ensure_compiled(console: Any) -> None:
         console.print(text, end=end, markup=False, highlight=False, soft_wrap=True)
         console.file.flush()
 
-    try:  # fail now, not after minutes
-        marker.write_text("", encoding="utf-8")
-        marker.unlink()
+    lock = marker.parent / "hcomc-kernels.lock"
+    try:  # fail now, not after minutes; the lock, never the marker another process may write
+        lock.touch()
     except OSError as exc:
         say(f"hcomc's kernels cannot be cached ({exc}): every process compiles them")
         return
@@ -177,7 +177,7 @@ def ensure_compiled(console: Any) -> None:
     def waiting() -> None:
         say("waiting for another process compiling hcomc's kernels …")
 
-    with _exclusive(marker.parent / "hcomc-kernels.lock", waiting):
+    with _exclusive(lock, waiting):
         if _read(marker).get("machine") != machine:  # not compiled while this one waited
             _compile(marker, machine, say)
 
