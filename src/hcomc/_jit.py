@@ -46,6 +46,27 @@ def source_stamp(package: Path = PACKAGE) -> str:
     return fingerprint(package)
 
 
+def stamp_tag(package: Path = PACKAGE) -> str:
+    """The part of :func:`source_stamp` in the names of the kernels' cache files."""
+    return source_stamp(package)[:16]
+
+
+def remove_stale_caches(package: Path = PACKAGE) -> int:
+    """Delete the cache files of ``package``'s kernels in its ``__pycache__`` directories that
+    were written for other sources (their names lack :func:`stamp_tag`); returns how many.
+    They are never read again, and a full cache takes tens of megabytes."""
+    tag = f"-{stamp_tag(package)}."
+    stale = [
+        path
+        for pattern in ("__pycache__/*.nbi", "__pycache__/*.nbc")
+        for path in package.rglob(pattern)
+        if tag not in path.name
+    ]
+    for path in stale:
+        path.unlink(missing_ok=True)
+    return len(stale)
+
+
 class PackageCacheLocator(caching._CacheLocator):
     """numba's own cache locator for a function of the package (in ``__pycache__``, or
     ``NUMBA_CACHE_DIR``), with the package's :func:`source_stamp` added to its freshness."""
@@ -71,7 +92,12 @@ class PackageCacheLocator(caching._CacheLocator):
         return (self._inner.get_source_stamp(), source_stamp(self.package))
 
     def get_disambiguator(self) -> str:
-        return str(self._inner.get_disambiguator())
+        """numba's (the function's line) and :func:`stamp_tag`: a cache written for other
+        sources has other file names and is never opened. numba unpickles an index before it
+        compares the index's stamp, and the types in an index name the modules that defined
+        them, so an index left by sources whose modules have since moved would fail to load
+        instead of being found stale."""
+        return f"{self._inner.get_disambiguator()}-{stamp_tag(self.package)}"
 
     @classmethod
     def from_function(cls, py_func: Any, py_file: str) -> PackageCacheLocator | None:

@@ -138,7 +138,76 @@ def test_the_stamp_covers_the_files_kernels_import_and_no_other(tmp_path):
 
 def test_every_compiled_module_of_hcomc_is_stamped():
     stamped = set(kernel_sources(PACKAGE))
-    for name in ("sim/core.py", "models/idm.py", "control/key_vehicles.py", "config/schema.py"):
+    for name in (
+        "sim/step/loop.py",
+        "models/idm.py",
+        "control/key_vehicles.py",
+        "config/schema.py",
+    ):
         assert PACKAGE / name in stamped, name
     for name in ("cli/_app.py", "experiments/claims.py", "viz/report.py"):
         assert PACKAGE / name not in stamped, name
+
+
+_RUN_RECORD = """
+import sys
+from pathlib import Path
+sys.path.insert(0, {root!r})
+from hcomc._jit import PackageCacheLocator, use_package_stamp
+
+class Locator(PackageCacheLocator):
+    package = Path({root!r}) / "pkg"
+
+use_package_stamp(Locator)
+from pkg.caller import Pair, total
+print(total(Pair(1.0, 2.0)))
+"""
+
+
+def test_a_cache_whose_types_moved_to_another_module_is_not_opened(tmp_path):
+    """numba unpickles a cache index (with the types of its signatures, which name their
+    modules) before it compares the index's stamp: the cache files of other sources have
+    other names, so a record type that moved to another module cannot break the load; the
+    files of the earlier sources are then removed."""
+    from hcomc._jit import remove_stale_caches, stamp_tag
+
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    record = """
+        from typing import NamedTuple
+
+        class Pair(NamedTuple):
+            a: float
+            b: float
+        """
+    caller = """
+        from hcomc._jit import kernel
+        from pkg.{module} import Pair
+
+        @kernel
+        def total(p):
+            return p.a + p.b
+        """
+
+    def run() -> str:
+        script = _RUN_RECORD.format(root=str(tmp_path))
+        argv = [sys.executable, "-c", script]
+        done = subprocess.run(argv, capture_output=True, text=True, check=False, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return done.stdout.strip()
+
+    _write(pkg / "records.py", record)
+    _write(pkg / "caller.py", caller.format(module="records"))
+    assert run() == "3.0"
+    first = {p.name for p in (pkg / "__pycache__").glob("caller.total-*")}
+    assert first
+    (pkg / "records.py").rename(pkg / "shapes.py")
+    _write(pkg / "caller.py", caller.format(module="shapes"))
+    assert run() == "3.0"  # numba alone: ModuleNotFoundError: No module named 'pkg.records'
+    fresh = stamp_tag(pkg)
+    assert all(fresh not in name for name in first)
+    assert remove_stale_caches(pkg) == len(first)
+    left = {p.name for p in (pkg / "__pycache__").glob("caller.total-*")}
+    assert left
+    assert all(f"-{fresh}." in name for name in left)

@@ -6,14 +6,15 @@ silent for minutes, each compiling the same kernels. :func:`ensure_compiled` com
 first with a line per stage, running tiny real workloads in one spawned process (compiling
 leaves some 3 GB in a process, loading the cache 0.3 GB); the command then loads them.
 
-**Is the cache complete?** The marker ``hcomc-kernels-<source stamp[:16]>.ok`` sits where
-numba caches :func:`hcomc._jit.borrow`: ``NUMBA_CACHE_DIR``, else the in-tree
-``__pycache__``, else (a read-only tree) numba's user-wide cache; numba's locator checked that
-it can write there. It holds what numba's cache index is keyed on besides the sources (numba
-version, Python, target CPU: an upgrade or another machine sharing the cache recompiles) and
-the compilation's seconds (the next estimate). Deciding takes milliseconds once numba is
-imported, as the command does anyway. With the JIT disabled there is nothing to compile; when
-the marker cannot be written, every process compiles for itself, so one line says so.
+**Is the cache complete?** The marker ``hcomc-kernels-<source stamp[:16]>.ok`` sits where numba
+caches :func:`hcomc._jit.borrow`: ``NUMBA_CACHE_DIR``, else the in-tree ``__pycache__``, else
+(a read-only tree) numba's user-wide cache; numba's locator checked that it can write there. It
+holds what numba's cache index is keyed on besides the sources (numba version, Python, target
+CPU: an upgrade or another machine sharing the cache recompiles) and the compilation's seconds
+(the next estimate). A completed compilation deletes the in-tree cache files of earlier sources
+(:func:`hcomc._jit.remove_stale_caches`). Deciding takes milliseconds once numba is imported,
+as the command does anyway. With the JIT disabled there is nothing to compile; when the marker
+cannot be written, every process compiles for itself, so one line says so.
 
 **Several processes at once** (two commands, two test sessions): one compiles, holding an
 exclusive lock on ``hcomc-kernels.lock`` beside the marker; the others say that they wait for
@@ -98,10 +99,10 @@ def _runner() -> Iterator[Callable[[int], None]]:
 
 def marker_path() -> Path | None:
     """The marker of a complete cache for the current sources (None: no cache)."""
-    from hcomc._jit import borrow, source_stamp
+    from hcomc._jit import borrow, stamp_tag
 
     directory = getattr(getattr(borrow, "_cache", None), "cache_path", None)  # numba's
-    return None if directory is None else Path(directory, f"hcomc-kernels-{source_stamp()[:16]}.ok")
+    return None if directory is None else Path(directory, f"hcomc-kernels-{stamp_tag()}.ok")
 
 
 def _machine() -> str:
@@ -198,4 +199,7 @@ def _compile(marker: Path, machine: str, say: Callable[..., None]) -> None:
     seconds = time.perf_counter() - start
     for stale in marker.parent.glob("hcomc-kernels-*.ok"):
         stale.unlink(missing_ok=True)
+    from hcomc._jit import remove_stale_caches
+
+    remove_stale_caches()  # the in-tree cache files of earlier sources
     marker.write_text(json.dumps({"machine": machine, "seconds": seconds}), encoding="utf-8")
