@@ -12,7 +12,6 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.fifo import FIFOController, FIFODetails
 from hcomc.control.game import solve_cooperative
-from hcomc.control.hcomc.rollout import VMC, VR
 from hcomc.control.key_vehicles import behind_group, find_key_vehicles
 from hcomc.control.longitudinal_candidate import (
     HORIZON_STEP,
@@ -34,6 +33,7 @@ from hcomc.control.merge_game_equilibrium import (
     solve_merge_game,
 )
 from hcomc.control.merge_game_payoffs import INFEASIBLE_SAFETY, safety_term
+from hcomc.control.prediction.population import VMC, VR
 from hcomc.control.registry import make_controller
 from hcomc.control.virtual_vehicle import cubic_state
 from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, TrafficView

@@ -14,7 +14,9 @@ from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails, merge_problem
 from hcomc.control.hcomc.problem import MergeProblem
 from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND, problem_constants
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.key_vehicles import behind_group
+from hcomc.control.lane_change_game import game_params
+from hcomc.control.prediction.population import (
     C_A_MERG,
     C_D,
     C_DELAY_CAV,
@@ -25,8 +27,6 @@ from hcomc.control.hcomc.rollout import (
     VMR,
     VR,
 )
-from hcomc.control.key_vehicles import behind_group
-from hcomc.control.lane_change_game import game_params
 from hcomc.models.fuel import fuel_rate
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation

@@ -37,7 +37,7 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.hcomc.controller import HCOMCDetails, merge_problem
-from hcomc.control.hcomc.rollout import P_IIDM, VR
+from hcomc.control.prediction.population import P_IIDM, VR
 from hcomc.interface import Mode
 from hcomc.road import Lane
 from hcomc.sim.engine import Simulation

@@ -16,7 +16,8 @@ from hcomc.config import load_config
 from hcomc.control.hcomc.controller import merge_problem
 from hcomc.control.hcomc.problem import MergeProblem
 from hcomc.control.hcomc.problem_terms import AHEAD
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.prediction.passes import vmc_pre_track
+from hcomc.control.prediction.population import (
     C_DT,
     G_COLLISION,
     P_LEN,
@@ -28,7 +29,6 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     rollout,
 )
-from hcomc.control.hcomc.rollout_passes import vmc_pre_track
 from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.engine import Simulation

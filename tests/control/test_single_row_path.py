@@ -1,7 +1,7 @@
 """The merge problem's single-row path equals the population kernel bit for bit.
 
 Simulated annealing scores one row per call; :meth:`MergeProblem.evaluate_row` does that in
-one compiled call (:func:`~hcomc.control.hcomc.rollout.rollout_into` with VMC's pre-pass
+one compiled call (:func:`~hcomc.control.prediction.population.rollout_into` with VMC's pre-pass
 tracks prepared once per problem, U_fuel, the objectives, constraints and the cost), and
 :meth:`MergeProblem.evaluate` runs the same body row by row for the population optimisers.
 Both are compared, byte for byte, with the population kernel (the objectives and
@@ -31,8 +31,8 @@ from hcomc._typing import FloatArray
 from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
 from hcomc.control.hcomc.problem import MergeProblem
 from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND
-from hcomc.control.hcomc.rollout import VMC
-from hcomc.control.hcomc.rollout_score import objective_rows
+from hcomc.control.prediction.population import VMC
+from hcomc.control.prediction.scoring import objective_rows
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import RowProblem
 from recorded_decisions import recorded_instants, recorded_problem

@@ -11,8 +11,8 @@ from hcomc.experiments.runner import configuration_overrides
 from hcomc.robustness.engine import FaultedSimulation
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import rss_safe_distance
-from hcomc.sim.core_plans import P_VMC, P_VMC_CMD
 from hcomc.sim.engine import Simulation
+from hcomc.sim.step.plans import P_VMC, P_VMC_CMD
 
 
 def _config(condition="C1", configuration="HCOMC"):

@@ -24,7 +24,7 @@ _SCRIPT = textwrap.dedent(
     from numba.typed import typedlist
 
     from hcomc.config import load_config
-    from hcomc.sim.core_state import Core
+    from hcomc.sim.step.state import Core
     from hcomc.sim.engine import Simulation
     from hcomc.sim.ensemble import run_ensemble
 

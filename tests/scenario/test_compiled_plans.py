@@ -18,10 +18,10 @@ import pytest
 from hcomc.config import load_config
 from hcomc.control.virtual_vehicle import virtual_states
 from hcomc.interface import Mode
-from hcomc.sim import core_state as layout
 from hcomc.sim.engine import Simulation
-from hcomc.sim.execution import ActivePlan, virtual_leaders
 from hcomc.sim.log import EventKind
+from hcomc.sim.plan_execution import ActivePlan, virtual_leaders
+from hcomc.sim.step import state as layout
 
 CASES: dict[str, tuple[str, dict[str, Any], int]] = {
     "C1 FIFO-R": ("C1", {"controller": "fifo", "replan_period": 1.0}, 0),

@@ -1,5 +1,5 @@
 """The step's sort of lane entries (hcomc.sim.neighbours.sort_entries and the natural merge
-sort hcomc.sim.small.sort_runs it uses lane by lane) against numpy's stable argsort."""
+sort hcomc.sim.arrays.sort_runs it uses lane by lane) against numpy's stable argsort."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from hcomc.sim.arrays import sort_runs
 from hcomc.sim.neighbours import OFFSET, build_lane_index, neighbour, neighbours_into
-from hcomc.sim.small import sort_runs
 
 
 def _stable(vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, ...]:

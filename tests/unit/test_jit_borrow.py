@@ -1,5 +1,5 @@
 """Borrowed views (hcomc._jit.borrow_all) and the compiled step's state handle built on them
-(hcomc.sim.core_state.Core): the same memory, no ownership, and the handle keeps what it
+(hcomc.sim.step.state.Core): the same memory, no ownership, and the handle keeps what it
 borrows alive."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import pytest
 
 from hcomc._jit import borrow_all, kernel
 from hcomc.config import load_config
-from hcomc.sim.core_build import adopt_log_columns
-from hcomc.sim.core_state import Core
 from hcomc.sim.engine import Simulation
+from hcomc.sim.step.build import adopt_log_columns
+from hcomc.sim.step.state import Core
 
 
 @numba.njit

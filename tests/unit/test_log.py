@@ -1,4 +1,4 @@
-"""Tests of hcomc.sim.log (SimulationLog, EventKind) and its files (hcomc.sim.log_io)."""
+"""Tests of hcomc.sim.log (SimulationLog, EventKind) and its files (hcomc.sim.log.files)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from hcomc.sim import log_io
 from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
+from hcomc.sim.log import files as log_io
 
 T, N = 6, 4
 ARRAY_NAMES = ("t", "x", "y", "v", "a", "heading", "lane", "active", "kind", "length", "width")

@@ -13,12 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import ConfigError, load_config
-from hcomc.sim import core_build, log_io
-from hcomc.sim.core_build import FIRST_SLOTS
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EVENT_DTYPE, EventKind, SimulationLog
-from hcomc.sim.log_events import EventTable
-from hcomc.sim.log_layout import (
+from hcomc.sim.log import files as log_io
+from hcomc.sim.log.events import EventTable
+from hcomc.sim.log.layout import (
     ARRAY_FIELDS,
     BYTES_PER_CELL,
     CELL_FIELDS,
@@ -27,6 +26,8 @@ from hcomc.sim.log_layout import (
     as_layout,
     bytes_needed,
 )
+from hcomc.sim.step import build as core_build
+from hcomc.sim.step.build import FIRST_SLOTS
 
 
 def _allocate(n_steps: int, n_vehicles: int, slots: int | None = None) -> SimulationLog:

@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.log_layout import CELL_FIELDS
-from hcomc.sim.log_slots import OPEN, VehicleCells, active_columns
+from hcomc.sim.log.layout import CELL_FIELDS
+from hcomc.sim.log.slots import OPEN, VehicleCells, active_columns
 
 
 def _pair(seed: int, n_rows: int, n_vehicles: int, slots: int) -> tuple[SimulationLog, ...]:

@@ -16,9 +16,9 @@ from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails
 from hcomc.optim.base import ParetoResult
 from hcomc.road import KEY_ROLES
 from hcomc.sim.engine import Simulation
-from hcomc.sim.execution import plan_record
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.plans import PlanRecord, plan_records
+from hcomc.sim.log.plans import PlanRecord, plan_records
+from hcomc.sim.plan_execution import plan_record
 
 finite = st.floats(-1e4, 1e4, allow_nan=False)
 cubics = st.none() | st.lists(finite, min_size=4, max_size=4).map(np.array)

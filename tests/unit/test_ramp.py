@@ -10,7 +10,7 @@ from hcomc.config import load_config
 from hcomc.metrics.ramp import RAMP_COLUMNS, STOPPED, ramp_summary, ramp_vehicles
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.log_events import EVENT_DTYPE
+from hcomc.sim.log.events import EVENT_DTYPE
 
 
 def test_a_hand_made_ramp_gives_the_closed_forms():

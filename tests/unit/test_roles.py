@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from hcomc.control.hcomc import rollout
+from hcomc.control.prediction import population as rollout
 from hcomc.interface import MergeGroup
 from hcomc.metrics import KEY_ROLES as METRIC_ROLES
 from hcomc.road import KEY_ROLES

@@ -11,7 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.prediction.layout import R_ACC, R_FREE, R_V, R_X
+from hcomc.control.prediction.population import (
     C_DT,
     C_EMERGENCY,
     N_CONSTS,
@@ -23,9 +24,8 @@ from hcomc.control.hcomc.rollout import (
     counterfactual,
     resolve_starts,
 )
-from hcomc.control.hcomc.rollout_layout import R_ACC, R_FREE, R_V, R_X
-from hcomc.control.hcomc.rollout_score import created_pairs_safety
-from hcomc.control.hcomc.rollout_step import follow_role, integrate, new_state
+from hcomc.control.prediction.scoring import created_pairs_safety
+from hcomc.control.prediction.step import follow_role, integrate, new_state
 from hcomc.interface import Fleet, follow
 from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind

@@ -11,7 +11,7 @@ from hcomc.metrics.travel import TRAVEL_COLUMNS, travel_summary, trips
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.log_events import EVENT_DTYPE
+from hcomc.sim.log.events import EVENT_DTYPE
 
 
 def _log(events: list[tuple[float, EventKind, int, float]], kinds: list[Kind]) -> SimulationLog:

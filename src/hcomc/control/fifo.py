@@ -34,7 +34,7 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   ``config.cav.lane_change_duration``; the merge position is ``accel_lane_start + 10 m``,
   moved upstream if needed so that the predicted change, ending at
   ``x_f = merge_x + max(v_VR T, 3 L)`` with VR's *current* speed (the engine's rule of
-  :func:`hcomc.sim.core_lane_change.start_lane_changes`), ends before ``accel_lane_end``, and
+  :func:`hcomc.sim.step.lane_change.start_lane_changes`), ends before ``accel_lane_end``, and
   never upstream of ``accel_lane_start`` (if even that overruns, the engine completes the change
   past the lane end, as it does for any change begun on the acceleration lane).
 * **Virtual-vehicle horizon H.** VR's arrival time at ``merge_x``, first at constant speed,

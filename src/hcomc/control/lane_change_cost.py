@@ -19,6 +19,7 @@ from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.config import IDMParams
 from hcomc.control.lane_change_params import GameParams
+from hcomc.models.ballistic import ballistic_step
 from hcomc.models.idm import idm_accel
 from hcomc.models.iidm import iidm_accel
 from hcomc.models.quintic import quintic_shape
@@ -150,12 +151,7 @@ def _simulate_sv_kernel(
                 a_new = idm_accel(s_new, v, dv_new, v0, T, a_max, b, s0, delta)
             weight = transition_psi(dt * k, horizon, gamma) if row == 0 else 0.0
             a = max(blend(a_ori, a_new, weight), -emergency_decel)
-            v_next = v + a * dt
-            if v_next < 0.0:  # stops within the step
-                dx = v * v / (2.0 * -a)
-                v_next = 0.0
-            else:
-                dx = v * dt + 0.5 * a * dt * dt
+            dx, v_next, _ = ballistic_step(v, a, dt)
             acc[row, k] = (v_next - v) / dt
             x = x + dx
             v = v_next

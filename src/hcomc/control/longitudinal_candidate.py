@@ -82,7 +82,7 @@ def merge_position(view: TrafficView, vr: int) -> tuple[float, float]:
 def last_merge_position(view: TrafficView, vr: int) -> float:
     """The last merge position whose change, predicted at VR's current speed with the CAV
     default duration, ends on the acceleration lane: ``accel_lane_end - max(v T, 3 L)`` [m]
-    (the engine's rule, :func:`hcomc.sim.core_lane_change.start_lane_changes`)."""
+    (the engine's rule, :func:`hcomc.sim.step.lane_change.start_lane_changes`)."""
     cfg = view.config
     duration = float(cfg.cav.lane_change_duration)
     span = max(float(view.v[vr]) * duration, 3.0 * float(view.fleet.length[vr]))
@@ -100,11 +100,11 @@ def with_cooperation(problem: MergeProblem, cooperates: bool) -> MergeProblem:
     """Copy of ``problem`` in which the ``vmc`` role (the vehicle behind VR's slot) does or does
     not cooperate (follow VV1), in both sequences.
 
-    The rollout (:func:`hcomc.control.hcomc.rollout.rollout`) makes the VMC role follow VV1 iff
-    its ``KeyState.coop`` flag is set, so the flag is overridden on copies of the key states
-    (the original problem and the simulation are untouched); the Eq. 15 delays still follow the
-    vehicles' true kinds. This idealises an HDV's "yield" as tracking VV1, and models "not
-    yield" of a CAV as plain car following.
+    The rollout (:func:`hcomc.control.prediction.population.rollout`) makes the VMC role
+    follow VV1 iff its ``KeyState.coop`` flag is set, so the flag is overridden on copies of
+    the key states (the original problem and the simulation are untouched); the Eq. 15 delays
+    still follow the vehicles' true kinds. This idealises an HDV's "yield" as tracking VV1, and
+    models "not yield" of a CAV as plain car following.
     """
 
     ahead, behind = problem.states

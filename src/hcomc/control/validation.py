@@ -6,8 +6,8 @@ without asking what they mean: a longitudinal plan without VV1, a merge position
 end or ``vr_duration = -1`` (VR never merges) would run without complaint. So both engines
 pass each plan through :func:`checked`, which applies :func:`check_plan`.
 
-The rules are those the execution relies on (:mod:`hcomc.sim.execution`,
-:mod:`hcomc.sim.core_plans`), one small function each below; every built-in controller meets
+The rules are those the execution relies on (:mod:`hcomc.sim.plan_execution`,
+:mod:`hcomc.sim.step.plans`), one small function each below; every built-in controller meets
 them. The structure of every plan: a :class:`MergePlan` with a :class:`Mode`, for this VR, its
 group the key group of its sequence, ``t0`` the planning time. A fallback plan (the safe
 default) must command nobody; its other numbers are for reporting (FIFO and Game keep the

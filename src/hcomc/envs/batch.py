@@ -4,7 +4,7 @@ runs advanced, the observation and the reward's terms. One episode
 calls them for all its episodes at once, so a step of 64 environments costs a few Python
 calls instead of a few hundred.
 
-They read the runs' compiled state (:class:`hcomc.sim.core_state.Core`: positions, the
+They read the runs' compiled state (:class:`hcomc.sim.step.state.Core`: positions, the
 log rows, the event counters) and call the one home of each equation.
 """
 
@@ -20,8 +20,9 @@ from hcomc.envs.observation import observe, pair_safety
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR
-from hcomc.sim.core_lane_change import start_lane_changes
-from hcomc.sim.core_state import (
+from hcomc.sim.log.slots import rows_of
+from hcomc.sim.step.lane_change import start_lane_changes
+from hcomc.sim.step.state import (
     COLLISIONS,
     DT,
     MAIN_1,
@@ -32,7 +33,6 @@ from hcomc.sim.core_state import (
     WARMUP,
     command,
 )
-from hcomc.sim.log_slots import rows_of
 from hcomc.sim.twin import ramp_may_reach, ramp_untouched
 
 if TYPE_CHECKING:

@@ -20,7 +20,7 @@ interval counted by the fraction of its displacement still needed). A vehicle th
 covered ``D_i`` by its last row (the window ends, or it left the road) completes the rest at
 the cruise rate of its last speed ``v_e``, ``fdot(v_e, 0) (D_i - covered) / v_e`` with
 ``v_e`` at least :data:`CRUISE_MIN_SPEED` (as the controller completes a prediction's fuel to
-a common distance, :mod:`hcomc.control.hcomc.rollout_fuel`); one that is never on the road
+a common distance, :mod:`hcomc.control.prediction.fuel`); one that is never on the road
 in the factual window (its insertion blocked) drives all of ``D_i`` at the cruise rate of its
 undisturbed first speed. At constant speed ``v`` every vehicle so uses ``fdot(v, 0) D / v``.
 """

@@ -9,7 +9,7 @@ positions last, as numpy sorts): NaN outside their range, or with ``clamp`` the 
 vehicle's value; NaN everywhere if the lane is empty in that row.
 
 The kernels visit the rows of a window in the log's stored cells (T, S) through the roster
-of :func:`hcomc.sim.log_slots.active_columns` (the columns of each row's vehicles on the
+of :func:`hcomc.sim.log.slots.active_columns` (the columns of each row's vehicles on the
 road, in vehicle order), so they read only the cells on the road. Every caller goes through
 :func:`lane_knots` and :func:`profile_from_knots`.
 """
@@ -23,7 +23,7 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.log_slots import active_columns
+from hcomc.sim.log.slots import active_columns
 
 __all__ = [
     "interp_ascending_into",
@@ -54,7 +54,7 @@ def lane_knots(
     columns, ``xs[:m]`` their positions [m] (float64), sorted stably by position.
 
     ``candidates`` are the columns of the row's active vehicles in vehicle order (a row of
-    :func:`~hcomc.sim.log_slots.active_columns`); ``x_row`` and ``lane_row`` the row's
+    :func:`~hcomc.sim.log.slots.active_columns`); ``x_row`` and ``lane_row`` the row's
     stored positions and lanes. ``cols`` and ``xs`` need room for every candidate. The
     stable order makes ties come out in vehicle order, as :func:`numpy.argsort` with
     ``kind="stable"`` of the row's positions in vehicle order would.
@@ -203,7 +203,7 @@ def profile_rows(
 
     ``x_store``, ``lane_store`` and each of ``values`` (stored arrays (T, S) of one dtype)
     are read through the roster ``start, column`` of
-    :func:`~hcomc.sim.log_slots.active_columns` over rows ``[r0, r0 + start.size - 1)``,
+    :func:`~hcomc.sim.log.slots.active_columns` over rows ``[r0, r0 + start.size - 1)``,
     which hold ``rows`` (R,). ``lanes`` (R,) is the lane to profile per row, negative for
     none (NaN); ``x`` (R, Q) the positions [m]; ``out`` (len(values), R, Q) receives the
     profile of ``values[p]`` in ``out[p]``.

@@ -33,7 +33,7 @@ from hcomc.metrics.lane_profile import (
 from hcomc.metrics.window import MetricWindow, road_of, times, window_rows
 from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.log_slots import active_columns
+from hcomc.sim.log.slots import active_columns
 
 __all__ = [
     "DT_BIN",
@@ -157,7 +157,7 @@ def _field_sums(
     """Add each row's profile of lane ``lanes[q]`` at ``centres`` (its finite samples) to the
     row's time bin ``it[k]`` of ``sums[q]`` and ``counts[q]`` (each (n_t, n_x)); row
     ``r0 + k`` of the stored arrays is read through the roster ``start, column``
-    (:func:`~hcomc.sim.log_slots.active_columns`)."""
+    (:func:`~hcomc.sim.log.slots.active_columns`)."""
     width = 0
     for k in range(it.size):
         width = max(width, start[k + 1] - start[k])

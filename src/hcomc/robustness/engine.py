@@ -32,11 +32,11 @@ from hcomc.road import Kind, Lane
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import commanded_vehicles
-from hcomc.sim import core
-from hcomc.sim import core_state as layout
-from hcomc.sim.core_plans import add_plan, encode_plan
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
+from hcomc.sim.step import loop as step_loop
+from hcomc.sim.step import state as layout
+from hcomc.sim.step.plans import add_plan, encode_plan
 
 __all__ = ["FaultedSimulation"]
 
@@ -114,7 +114,7 @@ class FaultedSimulation(Impairments, Simulation):
                     and self.origin[vr] == self.target[vr])  # fmt: skip
 
     def _due(self, t: float) -> list[int]:
-        due = core.due_plans(self.core, t).tolist()
+        due = step_loop.due_plans(self.core, t).tolist()
         return [*due, *(vr for vr in self._lost_due(t) if vr not in due)]
 
     def _execute(self, plan: MergePlan, ident: int) -> None:

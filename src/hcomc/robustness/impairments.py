@@ -28,9 +28,9 @@ from hcomc.robustness.channel import Channel
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Shield
-from hcomc.sim.execution import record_decision
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
+from hcomc.sim.plan_execution import record_decision
 
 __all__ = ["Impairments"]
 
@@ -115,8 +115,8 @@ class Impairments:
 
     def _decision(self, vr: int, t: float) -> tuple[TrafficView, MergeGroup, MergePlan]:
         """Decide for ramp vehicle ``vr`` at ``t`` on the channel's view, record the decision
-        (as the engines do: :func:`hcomc.sim.execution.record_decision`) and send the plan; returns
-        the view the controller saw, the key vehicles and the plan."""
+        (as the engines do: :func:`hcomc.sim.plan_execution.record_decision`) and send the
+        plan; returns the view the controller saw, the key vehicles and the plan."""
         assert self.controller is not None
         self.planned[vr] = True
         self._next_plan.pop(vr, None)

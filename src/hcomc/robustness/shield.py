@@ -29,8 +29,8 @@ from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.road import Lane
 from hcomc.robustness.settings import ShieldParams
-from hcomc.sim import core_plans as plans
-from hcomc.sim.core_state import N_PLANS
+from hcomc.sim.step import plans
+from hcomc.sim.step.state import N_PLANS
 
 if TYPE_CHECKING:
     from hcomc.robustness.engine import FaultedSimulation

@@ -18,9 +18,9 @@ Integration is ballistic: ``x += v dt + a dt^2 / 2``, ``v += a dt``, stopping ex
 Every vehicle's deceleration is limited to ``lane_change.emergency_decel``; a collision that
 still happens is logged as an event, never hidden.
 
-The per-step work runs in compiled kernels (:mod:`hcomc.sim.core`); this class builds their
+The per-step work runs in compiled kernels (:mod:`hcomc.sim.step.loop`); this class builds their
 state and runs many steps per compiled call, live merge plans included (executed from the
-plan table of the compiled state, :mod:`hcomc.sim.core_plans`). It takes a step in Python
+plan table of the compiled state, :mod:`hcomc.sim.step.plans`). It takes a step in Python
 only at a controller decision: a ramp vehicle entering the control zone (key vehicles, a
 first plan) or a live plan due for a replan; and on every step of a run whose CAVs confirm
 their lane changes by the game (Section III-B). Such a step runs the controller and then the
@@ -40,14 +40,14 @@ from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.validation import checked, name_of
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
-from hcomc.sim import core
-from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import adopt_log_columns, widen_log
-from hcomc.sim.core_plans import add_plan, encode_plan
 from hcomc.sim.engine_setup import EngineSetup
-from hcomc.sim.execution import ActivePlan, game_confirms, plan_views, record_decision
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.neighbours import LaneIndex
+from hcomc.sim.plan_execution import ActivePlan, game_confirms, plan_views, record_decision
+from hcomc.sim.step import loop as step_loop
+from hcomc.sim.step import state as layout
+from hcomc.sim.step.build import adopt_log_columns, widen_log
+from hcomc.sim.step.plans import add_plan, encode_plan
 
 _NO_FLOAT = np.empty(0)
 
@@ -73,7 +73,7 @@ class Simulation(EngineSetup):
             stop = self.stop_step
             if progress is not None:  # report every 100 steps
                 stop = min(stop, (self.step_index // 100 + 1) * 100)
-            self.resume(core.run_steps(self.core, stop, self.logging, self.rng))
+            self.resume(step_loop.run_steps(self.core, stop, self.logging, self.rng))
             if progress is not None and self.step_index % 100 == 0:
                 progress(self.step_index, total)
         if progress is not None:
@@ -130,7 +130,7 @@ class Simulation(EngineSetup):
         control zone). Python is entered only at decision events."""
         while not self.reached(step, until_key_vehicles=until_key_vehicles):
             stop = min(self.stop_step, step)
-            self.resume(core.run_steps(self.core, stop, self.logging, self.rng))
+            self.resume(step_loop.run_steps(self.core, stop, self.logging, self.rng))
         self.flush_events()
 
     def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:
@@ -158,7 +158,7 @@ class Simulation(EngineSetup):
         if abs(int(target) - int(self.lane[i])) != 1:
             raise ValueError(f"lane change of vehicle {i}: target lane {target} is not adjacent "
                              f"to its lane {int(self.lane[i])}")  # fmt: skip
-        core.start_lane_changes(
+        step_loop.start_lane_changes(
             self.core, np.array([i]), np.array([int(target)]), self.t, np.array([duration])
         )
         self.flush_events()
@@ -173,7 +173,7 @@ class Simulation(EngineSetup):
         rows = int(self.arrays.counters[layout.ROWS])
         if rows >= self.log.n_steps:
             raise IndexError(f"row {rows} outside the log's {self.log.n_steps} rows")
-        while not core.record_row(self.core, rows, self.t):  # more vehicles than columns
+        while not step_loop.record_row(self.core, rows, self.t):  # more vehicles than columns
             widen_log(self.config, self.log, int(np.count_nonzero(self.arrays.active)))
             self.arrays = adopt_log_columns(self.arrays, self.core, self.log)
         self.arrays.counters[layout.ROWS] = rows + 1
@@ -202,7 +202,7 @@ class Simulation(EngineSetup):
         """Advance the whole traffic state by one step ``dt``, consulting the controller.
 
         Everything after the key vehicles and the controller's decisions is the compiled
-        loop's step (:func:`hcomc.sim.core.step_body`, split around the lane-change game when
+        loop's step (:func:`hcomc.sim.step.loop.step_body`, split around the lane-change game when
         CAVs confirm their changes by it), so a step taken here equals one taken there."""
         c, t = self.arrays, self.t
         self.python_steps += 1
@@ -213,7 +213,7 @@ class Simulation(EngineSetup):
         self._release(t)
         ids = np.flatnonzero(self.active)
         if ids.size == 0:
-            core.push_history(self.core)
+            step_loop.push_history(self.core)
             return
         c.counters[layout.VEHICLE_STEPS] += ids.size
         changing = self.origin[ids] != self.target[ids]
@@ -221,13 +221,13 @@ class Simulation(EngineSetup):
         if self.controller is not None:
             self._plan_new(ids, changing, t)
         if not self.config.lane_change.cav_game:
-            core.step_body(self.core, ids, t)
+            step_loop.step_body(self.core, ids, t)
             self.flush_events()
             return
-        acc, changing, vs, ls, ks, rank, lead = core.step_front(self.core, ids, t)
+        acc, changing, vs, ls, ks, rank, lead = step_loop.step_front(self.core, ids, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
-            chosen, target = core.discretionary_changes(
-                self.core, ids, changing, core.holding(self.core), lead, vs, ls, ks, rank
+            chosen, target = step_loop.discretionary_changes(
+                self.core, ids, changing, step_loop.holding(self.core), lead, vs, ls, ks, rank
             )
             if chosen.size:
                 keep = game_confirms(
@@ -235,19 +235,19 @@ class Simulation(EngineSetup):
                     lead, LaneIndex(vehicle=vs, lane=ls, key=ks, rank=rank),
                 )  # fmt: skip
                 chosen, target = chosen[keep], target[keep]
-            core.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
-        core.step_back(self.core, ids, t, acc, vs, ls)
+            step_loop.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
+        step_loop.step_back(self.core, ids, t, acc, vs, ls)
         self.flush_events()
 
     def _release(self, t: float) -> None:
         """Insert the vehicles due at t (a no-op when repeated at the same t)."""
-        core.release(self.core, t)
+        step_loop.release(self.core, t)
         self.flush_events()
 
     def _follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
         """Car-following acceleration behind ``leader`` (-1: none), HDVs perceiving Eq. 2."""
         ids = np.ascontiguousarray(ids, dtype=np.int64)
-        return core.follow_many(self.core, ids, np.ascontiguousarray(leader, dtype=np.int64))
+        return step_loop.follow_many(self.core, ids, np.ascontiguousarray(leader, dtype=np.int64))
 
     # ---------------------------------------------------------------- plans
     @property
@@ -291,7 +291,7 @@ class Simulation(EngineSetup):
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Ask the controller for a plan when a ramp vehicle enters the control zone, and again
         every ``control.replan_period`` seconds while its plan may still change (receding
-        horizon, key vehicles re-identified: :func:`hcomc.sim.core_plans.due_plans`). Each plan
+        horizon, key vehicles re-identified: :func:`hcomc.sim.step.plans.due_plans`). Each plan
         is checked first (:func:`hcomc.control.validation.checked`: an invalid one raises
         :class:`~hcomc.control.validation.InvalidPlan` or, with ``control.on_invalid_plan =
         "fallback"``, becomes the safe default). A new plan replaces its VR's live plan in the
@@ -303,7 +303,7 @@ class Simulation(EngineSetup):
             & ~self.planned[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
-        due = core.due_plans(self.core, t)
+        due = step_loop.due_plans(self.core, t)
         c = self.arrays
         for vr in [*new.tolist(), *due.tolist()]:
             self.planned[vr] = True

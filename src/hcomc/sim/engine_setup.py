@@ -2,7 +2,7 @@
 controller, the compiled state arrays, the log, and the counters read from them.
 
 :class:`EngineSetup` draws the demand and builds everything a run of
-:class:`hcomc.sim.engine.Simulation` starts from (:mod:`hcomc.sim.core_build`), or builds it on
+:class:`hcomc.sim.engine.Simulation` starts from (:mod:`hcomc.sim.step.build`), or builds it on
 another run's demand, fleet and controller (:meth:`EngineSetup._sibling`: the undisturbed twin
 of :mod:`hcomc.sim.twin`). Advancing the run is :class:`~hcomc.sim.engine.Simulation`'s.
 """
@@ -17,11 +17,11 @@ from hcomc.config import ScenarioConfig
 from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, TrafficView
 from hcomc.rng import make_rng
 from hcomc.road import Kind
-from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import allocate_log, build_arrays
-from hcomc.sim.core_state import Core
 from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sim.perception import Perception
+from hcomc.sim.step import state as layout
+from hcomc.sim.step.build import allocate_log, build_arrays
+from hcomc.sim.step.state import Core
 
 __all__ = ["EngineSetup"]
 

@@ -1,6 +1,6 @@
 """Ensembles: many runs advanced together, in one process, parallel over cores.
 
-Every run keeps its own state (:class:`hcomc.sim.core_state.Core`) and log; one compiled call
+Every run keeps its own state (:class:`hcomc.sim.step.state.Core`) and log; one compiled call
 advances all of them, each run on one core (``numba.prange``), until each stops where it needs
 Python (a decision event, an event-buffer flush, new random innovations, the end of a stage).
 The Python side of each stopped run is then done in turn and the batch continues. A run's
@@ -25,10 +25,10 @@ from numba import prange
 from numba.typed import List
 
 from hcomc._jit import kernel
-from hcomc.sim.core import run_steps
-from hcomc.sim.core_state import DONE, STEP
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
+from hcomc.sim.step.loop import run_steps
+from hcomc.sim.step.state import DONE, STEP
 
 
 @kernel(parallel=True)

@@ -31,6 +31,7 @@ from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
 from hcomc.interface import Fleet
 from hcomc.models.following import follow_accel_given, free_term
+from hcomc.models.incentive import mobil_incentive
 from hcomc.road import Lane
 from hcomc.sim.neighbours import LaneIndex, lookup_one
 
@@ -112,7 +113,7 @@ def mobil_decide_into(
             continue
         # 3. the incentive of a discretionary change
         acc0, acc2, acc4, acc5 = accel(c, lo), accel(fn, ln), accel(fo, c), accel(fo, lo)
-        gain = (acc1 - acc0) + politeness * ((acc3 - acc2) + (acc5 - acc4))
+        gain = mobil_incentive(acc1 - acc0, (acc3 - acc2) + (acc5 - acc4), politeness)
         side = bias if target[k] == _MAIN_2 else -bias
         ok[k] = gain > threshold + side
     ids, targets = ints[0], ints[1]

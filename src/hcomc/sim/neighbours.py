@@ -20,7 +20,7 @@ import numpy as np
 from hcomc._jit import borrow, kernel
 from hcomc._typing import FloatArray, IntArray
 from hcomc.road import Lane
-from hcomc.sim.small import search_right, sort_runs, stable_argsort_into
+from hcomc.sim.arrays import search_right, sort_runs, stable_argsort_into
 
 OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
@@ -68,7 +68,7 @@ def sort_entries_into(
 def _order_by_lane(lane: np.ndarray, key: np.ndarray, order: np.ndarray, buffer: np.ndarray):
     """The stable order of ``key`` in ``order[:n]``, found lane by lane: the entries are
     partitioned by lane (ramp, lane 1, lane 2) in their given order and each lane is sorted
-    by :func:`~hcomc.sim.small.sort_runs`, linear for the entries of a lane (nearly in
+    by :func:`~hcomc.sim.arrays.sort_runs`, linear for the entries of a lane (nearly in
     reverse order of position). That is the stable order of all keys when every key of a
     lane lies below every key of the next; False (``order`` then undefined) when a lane is
     not 0-2 or the lanes' keys overlap, for the general sort."""

@@ -23,12 +23,12 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.road import Lane
-from hcomc.sim import core_state as layout
-from hcomc.sim.core_build import adopt_log_columns
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.log_layout import CELL_FIELDS, FILL
-from hcomc.sim.log_slots import OPEN
+from hcomc.sim.log.layout import CELL_FIELDS, FILL
+from hcomc.sim.log.slots import OPEN
+from hcomc.sim.step import state as layout
+from hcomc.sim.step.build import adopt_log_columns
 
 # the state arrays a step changes (everything else is built from config and demand alike)
 _STATE = (

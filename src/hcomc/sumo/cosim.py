@@ -14,7 +14,7 @@ options), run in process through libsumo. Every step:
 3. As in our engine, a ramp vehicle entering the control zone gets its key vehicles
    (:func:`hcomc.control.key_vehicles.find_key_vehicles`) and the controller is asked for a
    plan on a read-only :class:`~hcomc.interface.TrafficView`.
-4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.execution`): a commanded CAV
+4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.plan_execution`): a commanded CAV
    whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
    (:func:`hcomc.interface.follow`), imposed on SUMO with ``setSpeed``; commanded lane changes
    pass our MOBIL safety criterion (b_safe, as in our engine) and are executed by
@@ -41,10 +41,10 @@ from hcomc.control.key_vehicles import find_key_vehicles
 from hcomc.control.validation import checked, name_of
 from hcomc.interface import Mode, TrafficView, follow
 from hcomc.road import Kind, Lane
-from hcomc.sim.execution import ActivePlan, commanded, record_decision, virtual_leaders
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.mobil import Snapshot, decide
 from hcomc.sim.neighbours import build_lane_index
+from hcomc.sim.plan_execution import ActivePlan, commanded, record_decision, virtual_leaders
 from hcomc.sumo.cosim_state import CosimState
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
@@ -219,7 +219,7 @@ class SumoSimulation(CosimState):
         self.sumo.vehicle.changeLane(name, sumo_lane_of(edge, target), duration)
 
     def _execute_plans(self, ids: np.ndarray, t: float) -> None:
-        """Start the lane changes the live plans command (as :mod:`hcomc.sim.execution`)."""
+        """Start the lane changes the live plans command (as :mod:`hcomc.sim.plan_execution`)."""
         road = self.config.road
         changing = self.changing()
         for p in self.plans:

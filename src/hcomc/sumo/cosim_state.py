@@ -18,9 +18,9 @@ from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, Traff
 from hcomc.rng import make_rng
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import generate_demand
-from hcomc.sim.execution import ActivePlan
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
+from hcomc.sim.plan_execution import ActivePlan
 from hcomc.sumo import import_libsumo
 from hcomc.sumo.routes import vehicle_id
 

@@ -33,7 +33,7 @@ from hcomc.road import Kind, Lane, lane_centre
 from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Override
-from hcomc.sim.execution import ActivePlan, commanded
+from hcomc.sim.plan_execution import ActivePlan, commanded
 from hcomc.sumo.cosim import _COMMANDED_LC_MODE, _DEFAULT_LC_MODE, SumoSimulation
 from hcomc.sumo.routes import vehicle_id
 

@@ -42,7 +42,11 @@ from hcomc.control.hcomc.problem_terms import (
     Prediction,
     default_starts,
 )
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.hcomc.row_scoring import load_prediction_kernels
+from hcomc.control.key_vehicles import behind_group
+from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
+from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
+from hcomc.control.prediction.population import (
     S_VV0_V,
     S_VV0_X,
     S_VV1_V,
@@ -52,10 +56,6 @@ from hcomc.control.hcomc.rollout import (
     VNF,
     VR,
 )
-from hcomc.control.hcomc.row_scoring import load_prediction_kernels
-from hcomc.control.key_vehicles import behind_group
-from hcomc.control.lane_change_game import LaneChangeDecision, game_params, game_vehicle
-from hcomc.control.lane_change_game import lane_change_game as play_lane_change_game
 from hcomc.control.virtual_vehicle import virtual_states
 from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms
 from hcomc.optim.base import Optimizer, ParetoResult

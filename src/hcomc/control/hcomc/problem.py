@@ -65,7 +65,15 @@ from hcomc.control.hcomc.problem_terms import (
     Prediction,
     problem_constants,
 )
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.hcomc.row_scoring import (
+    FUEL_COEFFICIENTS,
+    FUEL_ROLES,
+    row_constants,
+    score_row,
+    score_rows,
+)
+from hcomc.control.prediction.fuel import _fuel_to_distance_kernel, common_distance_fuel
+from hcomc.control.prediction.population import (
     N_ROLES,
     P_LEN,
     VMC,
@@ -74,15 +82,7 @@ from hcomc.control.hcomc.rollout import (
     resolve_starts,
     rollout,
 )
-from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, common_distance_fuel
-from hcomc.control.hcomc.rollout_score import objective_rows, penalised_costs
-from hcomc.control.hcomc.row_scoring import (
-    FUEL_COEFFICIENTS,
-    FUEL_ROLES,
-    row_constants,
-    score_row,
-    score_rows,
-)
+from hcomc.control.prediction.scoring import objective_rows, penalised_costs
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.safety.critical import SafetyIndex
 
@@ -286,7 +286,7 @@ class MergeProblem:
         F = np.ascontiguousarray(F, dtype=np.float64)
         G = np.ascontiguousarray(G, dtype=np.float64)
         costs: FloatArray = penalised_costs(F, G, self.safety.threshold, self._fuel_ref)
-        return costs  # the formula's one home: rollout_score.penalised_cost
+        return costs  # the formula's one home: prediction.scoring.penalised_cost
 
     # ------------------------------------------------------------ single row (SA)
     def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
@@ -370,7 +370,7 @@ class MergeProblem:
         cruise rate (a negative completion when it went further):
         ``fuel(D) = sum fe dt + fe_cruise(max(v_K, 1)) (D - dx) / max(v_K, 1)``, with the
         rates of :func:`~hcomc.models.fuel.fuel_rate_scalar`
-        (:func:`~hcomc.control.hcomc.rollout_fuel._fuel_to_distance_kernel`).
+        (:func:`~hcomc.control.prediction.fuel._fuel_to_distance_kernel`).
         """
         return _fuel_to_distance_kernel(
             cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, *FUEL_DEFAULT.coefficients()

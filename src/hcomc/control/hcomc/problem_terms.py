@@ -17,7 +17,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.prediction.population import (
     C_A_MERG,
     C_ACCEL_END,
     C_D,
@@ -36,6 +36,7 @@ from hcomc.control.hcomc.rollout import (
     P_V0,
     VMC,
 )
+from hcomc.models.transition import transition_gamma
 from hcomc.safety.critical import SafetyIndex
 
 __all__ = [
@@ -139,7 +140,7 @@ def problem_constants(config: ScenarioConfig) -> FloatArray:
     consts[C_ACCEL_END] = config.road.accel_lane_end
     consts[C_WIDTH] = config.road.lane_width
     consts[C_VMC_DUR] = config.cav.lane_change_duration
-    consts[C_GAMMA] = np.arctanh(1.0 - 2.0 * config.lane_change.transition_tolerance)
+    consts[C_GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[C_EMERGENCY] = config.lane_change.emergency_decel
     consts[C_VV_DECEL] = config.control.virtual_max_decel
     consts[C_POLITENESS] = config.lane_change.politeness

@@ -20,7 +20,11 @@ from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.config import IDMParams
 from hcomc.control.hcomc.problem_terms import CONSTRAINTS, G_LATERAL, G_SEQUENCE, KeyState
-from hcomc.control.hcomc.rollout import (
+from hcomc.control.lane_change_cost import GameVehicle, simulate_sv
+from hcomc.control.lane_change_params import GAME_DEFAULT
+from hcomc.control.prediction.fuel import _fuel_to_distance_kernel, common_distance_fuel
+from hcomc.control.prediction.layout import N_G
+from hcomc.control.prediction.population import (
     N_ROLES,
     N_STARTS,
     VMC,
@@ -32,11 +36,7 @@ from hcomc.control.hcomc.rollout import (
     warm_up,
     warm_up_instant,
 )
-from hcomc.control.hcomc.rollout_fuel import _fuel_to_distance_kernel, common_distance_fuel
-from hcomc.control.hcomc.rollout_layout import N_G
-from hcomc.control.hcomc.rollout_score import objectives_into, penalised_cost
-from hcomc.control.lane_change_cost import GameVehicle, simulate_sv
-from hcomc.control.lane_change_params import GAME_DEFAULT
+from hcomc.control.prediction.scoring import objectives_into, penalised_cost
 from hcomc.models.fuel import FUEL_DEFAULT
 
 __all__ = [
@@ -84,8 +84,9 @@ def score_row(x0, v0, a0, present, cav, coop, params, starts, consts, n_steps, c
                roles, cf_fuel, coefficients, dt, x, lateral, lateral_violation,
                sequence_violation, threshold, fuel_ref, F, G):  # fmt: skip
     """:meth:`MergeProblem.evaluate_row <hcomc.control.hcomc.problem.MergeProblem.evaluate_row>`
-    compiled: the row's rollout (:func:`~hcomc.control.hcomc.rollout.rollout_into`), U_fuel, the
-    objectives into ``F`` and the constraints into ``G`` as :meth:`MergeProblem.evaluate
+    compiled: the row's rollout
+    (:func:`~hcomc.control.prediction.population.rollout_into`), U_fuel, the objectives into
+    ``F`` and the constraints into ``G`` as :meth:`MergeProblem.evaluate
     <hcomc.control.hcomc.problem.MergeProblem.evaluate>` writes them (kernel parts, then the
     lateral and sequence flags), and the cost."""
     return score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, tracks,
@@ -99,7 +100,7 @@ def score_into(x0, v0, a0, present, cav, coop, params, starts, consts, cf, track
                 cf_fuel, coefficients, dt, x, lateral, lateral_violation, sequence_violation,
                 threshold, fuel_ref, F, G, work):  # fmt: skip
     """The body of :func:`score_row`, rolling out into the arrays ``work`` of
-    :func:`~hcomc.control.hcomc.rollout.rollout_work` (which a population reuses from row to
+    :func:`~hcomc.control.prediction.population.rollout_work` (which a population reuses from row to
     row)."""
     plan = np.empty(3)
     plan[0], plan[1], plan[2] = x[0], x[1], x[2]

@@ -33,7 +33,11 @@ from hcomc.corridor.engine import ramp_road
 from hcomc.interface import Fleet, MergeController, MergePlan, Mode, TrafficView
 from hcomc.rng import make_rng
 from hcomc.road import Kind
-from hcomc.sim.core_plans import (
+from hcomc.sim.corridor.fleet import CorridorFleet
+from hcomc.sim.corridor.layout import Layout
+from hcomc.sim.corridor.plans import fill_view
+from hcomc.sim.corridor.state import C_PENDING, C_PLANS, State, Vehicles
+from hcomc.sim.step.plans import (
     P_ID,
     P_VMC,
     P_VMC_CMD,
@@ -43,10 +47,6 @@ from hcomc.sim.core_plans import (
     add_plan,
     encode_plan,
 )  # fmt: skip
-from hcomc.sim.corridor.fleet import CorridorFleet
-from hcomc.sim.corridor.layout import Layout
-from hcomc.sim.corridor.plans import fill_view
-from hcomc.sim.corridor.state import C_PENDING, C_PLANS, State, Vehicles
 
 __all__ = ["CorridorControl", "Decision", "ramp_config"]
 

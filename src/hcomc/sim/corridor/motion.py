@@ -32,6 +32,7 @@ import math
 import numpy as np
 
 from hcomc._jit import borrow_all, kernel
+from hcomc.models.ballistic import ballistic_step
 from hcomc.models.following import follow_accel_given, free_term
 from hcomc.sim.corridor.lanes import section_at, speed_limit
 from hcomc.sim.corridor.layout import KIND_MAIN, KIND_OFF, KIND_ON, Layout
@@ -197,13 +198,8 @@ def move(road: Layout, veh: Vehicles, s: State, t: float) -> None:
     for k in range(counters[C_ON_ROAD]):
         i = s.ids[k]
         x0, v0, acc = s.x[i], s.v[i], s.acc[i]
-        v1 = v0 + acc * dt
-        if v1 < 0.0:
-            s.x[i] = x0 - v0 * v0 / (2.0 * acc)
-            s.v[i], s.a[i] = 0.0, -v0 / dt
-        else:
-            s.x[i] = x0 + v0 * dt + 0.5 * acc * dt * dt
-            s.v[i], s.a[i] = v1, acc
+        dx, s.v[i], s.a[i] = ballistic_step(v0, acc, dt)
+        s.x[i] = x0 + dx
         lane = s.code[i]
         if s.target[i] != lane and t - s.lc_start[i] >= 0.5 * s.lc_dur[i]:
             lane = s.target[i]

@@ -16,10 +16,10 @@ leader in every lane it occupies while it closes in at
 the paper's scene): the least time to collision, the largest deceleration rate to avoid a
 crash (DRAC), the hardest braking, and VMC's lowest speed.
 
-**Live plans** are rows of the plan table of :mod:`hcomc.sim.core_plans` (same columns), in
+**Live plans** are rows of the plan table of :mod:`hcomc.sim.step.plans` (same columns), in
 ``plan_int`` / ``plan_f`` of the state; Python enters only to decide (a new event, or a plan
 due for a replan every ``control.replan_period`` s: :func:`due_replans`). They are executed
-here by the rules of :mod:`hcomc.sim.execution`:
+here by the rules of :mod:`hcomc.sim.plan_execution`:
 
 * a CAV VR the plan commands follows its virtual leader VV0 and does not brake for the end
   of the acceleration lane; from the merge position on it starts its change (with the plan's
@@ -46,7 +46,25 @@ from hcomc.control.virtual_vehicle import cubic_point
 from hcomc.models.following import follow_accel_given
 from hcomc.road import VMC, VMR, VNR, VR, Lane
 from hcomc.safety.surrogate import CLOSING_SPEED
-from hcomc.sim.core_plans import (
+from hcomc.sim.corridor.lanes import section_at
+from hcomc.sim.corridor.layout import KIND_MAIN, KIND_ON, Layout
+from hcomc.sim.corridor.state import (
+    C_CONTROLLED,
+    C_ON_ROAD,
+    C_OPEN,
+    C_PENDING,
+    C_PLANS,
+    ON_ROAD,
+    P_EMERGENCY,
+    P_LC_DURATION,
+    P_REPLAN,
+    P_SAFE_DECEL,
+    P_WINDOW,
+    State,
+    Vehicles,
+)  # fmt: skip
+from hcomc.sim.corridor.step import follow_behind, gaps_clear, neighbours_in, start_change
+from hcomc.sim.step.plans import (
     F_HORIZON,
     F_MERGE_X,
     F_T0,
@@ -73,24 +91,6 @@ from hcomc.sim.core_plans import (
     replan_due,
     vr_following,
 )  # fmt: skip
-from hcomc.sim.corridor.lanes import section_at
-from hcomc.sim.corridor.layout import KIND_MAIN, KIND_ON, Layout
-from hcomc.sim.corridor.state import (
-    C_CONTROLLED,
-    C_ON_ROAD,
-    C_OPEN,
-    C_PENDING,
-    C_PLANS,
-    ON_ROAD,
-    P_EMERGENCY,
-    P_LC_DURATION,
-    P_REPLAN,
-    P_SAFE_DECEL,
-    P_WINDOW,
-    State,
-    Vehicles,
-)  # fmt: skip
-from hcomc.sim.corridor.step import follow_behind, gaps_clear, neighbours_in, start_change
 
 __all__ = [
     "due_replans", "execute", "fill_view", "finish_plans", "identify", "mark_commanded",
@@ -194,7 +194,7 @@ def track_events(veh: Vehicles, s: State, t: float) -> None:
 @kernel
 def due_replans(s: State, t: float) -> None:
     """List the VRs whose live plan is due for a replan at t (VR on its ramp keeping its
-    lane, :func:`hcomc.sim.core_plans.replan_due`)."""
+    lane, :func:`hcomc.sim.step.plans.replan_due`)."""
     s = borrow_all(s)
     pi, pf, period = s.plan_int, s.plan_f, s.params[P_REPLAN]
     for k in range(s.counters[C_PLANS]):
@@ -255,7 +255,7 @@ def _virtual(s: State, k: int, col: int, tau: float, after: int) -> tuple[bool, 
 @kernel
 def virtual_leaders(veh: Vehicles, s: State, t: float) -> None:
     """Cap the accelerations of the vehicles following a virtual vehicle (VV0, VV1, VV2 as
-    :func:`hcomc.sim.core_plans.virtual_rows`)."""
+    :func:`hcomc.sim.step.plans.virtual_rows`)."""
     veh, s = borrow_all(veh), borrow_all(s)
     pi = s.plan_int
     for k in range(s.counters[C_PLANS]):

@@ -16,9 +16,9 @@ import numpy as np
 
 from hcomc.corridor import Corridor, detector_positions
 from hcomc.road import N_ROLES
-from hcomc.sim.core_plans import N_FLOAT, N_INT
 from hcomc.sim.corridor.fleet import CorridorFleet
 from hcomc.sim.corridor.layout import Layout
+from hcomc.sim.step.plans import N_FLOAT, N_INT
 
 __all__ = ["State", "Vehicles", "allocate", "trajectory_buffer", "vehicles_of"]
 
@@ -108,7 +108,7 @@ class State(NamedTuple):
     zone: np.ndarray  # per code: where an on-ramp's control zone starts [m] (j = 0), nan
     following: np.ndarray  # a VR on its ramp following its live plan (VV0; merge commanded)
     holding: np.ndarray  # makes no discretionary change (commanded or CAV key vehicle)
-    plan_int: np.ndarray  # (capacity, N_INT): live plans, columns of hcomc.sim.core_plans
+    plan_int: np.ndarray  # (capacity, N_INT): live plans, columns of hcomc.sim.step.plans
     plan_f: np.ndarray  # (capacity, N_FLOAT)
     pending: np.ndarray  # VRs awaiting the controller (C_PENDING of them)
     view_lane: np.ndarray  # one ramp's local lanes (hcomc.road.Lane), filled on demand

@@ -45,6 +45,7 @@ import math
 
 from hcomc._jit import borrow_all, kernel
 from hcomc.models.following import follow_accel_given, free_term
+from hcomc.models.incentive import mobil_incentive
 from hcomc.sim.corridor.lanes import mandatory_target, section_at, speed_limit, stop_point
 from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.state import (
@@ -283,7 +284,7 @@ def _discretionary(road: Layout, veh: Vehicles, s: State, p: int, lead: int, t: 
             follow_behind(veh, s, fo, lead),
         )
         bias = s.params[P_BIAS] if side > 0 else -s.params[P_BIAS]
-        gain = acc1 - a_c + s.params[P_POLITENESS] * ((acc3 - acc2) + (acc5 - acc4))
+        gain = mobil_incentive(acc1 - a_c, (acc3 - acc2) + (acc5 - acc4), s.params[P_POLITENESS])
         gain -= s.params[P_THRESHOLD] + bias
         if gain > best_gain:
             best, best_gain, best_lead, best_fol = tgt, gain, ln, fn

@@ -3,10 +3,10 @@ live, its virtual vehicles and predicted path, the key roles and the commanded v
 time, and the events of the timeline.
 
 Everything is read from the log: the plan records (``log.meta["plans"]``,
-:class:`hcomc.sim.plans.PlanRecord`), the key groups (``log.meta["key_groups"]``) and the
+:class:`hcomc.sim.log.plans.PlanRecord`), the key groups (``log.meta["key_groups"]``) and the
 events. A plan is **live** from its decision time ``t0`` until its VR is planned anew, its
 merge is complete (MERGE event) or it leaves the road, whichever comes first (the engine's
-rule, :mod:`hcomc.sim.execution`). The log does not record the engine's per-step command
+rule, :mod:`hcomc.sim.plan_execution`). The log does not record the engine's per-step command
 flags, so **commanded** is derived from the live plan as the engine sets the flags when it
 adopts a plan: a CAV VR with a merge position follows the plan, VMC whenever the mode is
 not ``none``, VNR within the horizon when the plan has VV2; a FALLBACK event after ``t0``
@@ -26,7 +26,7 @@ from hcomc.control.virtual_vehicle import cubic_state
 from hcomc.models.quintic import lateral_offset
 from hcomc.road import KEY_ROLES, Kind, Lane, lane_centre
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.plans import PlanRecord, plan_records
+from hcomc.sim.log.plans import PlanRecord, plan_records
 
 __all__ = ["PlanSpan", "decisions_json", "moment_of_interest", "plan_spans", "timeline_events"]
 

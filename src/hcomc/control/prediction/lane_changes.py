@@ -4,7 +4,7 @@ As in the engine, a lane change follows the quintic path of Eq. 4-6 parametrised
 the position where it starts to ``x0 + max(v T_lc, 3 L)``, and a changing vehicle occupies
 both lanes until its change ends. The path is :func:`hcomc.models.quintic.lateral_state` (its
 one home); the progress of one candidate is a small vector (layout ``L_*`` of
-:mod:`hcomc.control.hcomc.rollout_layout`).
+:mod:`hcomc.control.prediction.layout`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     L_LATERAL,
     L_VMC_DONE,
     L_VMC_X0,

@@ -1,6 +1,6 @@
 """Accelerations of the key vehicles in one prediction step, from the step's snapshot.
 
-The prediction assumptions (module docstring of :mod:`hcomc.control.hcomc.rollout`) in code:
+The prediction assumptions (module docstring of :mod:`hcomc.control.prediction.population`) in code:
 VMF and VNF keep their speed; VR, VMC, VMR and VNR follow the nearest key vehicle ahead in
 the lane(s) they occupy; during a lane change the accelerations behind the origin and the
 target leader are blended by Eq. 14 (:func:`hcomc.models.transition.transition_psi` and
@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     L_LATERAL,
     L_VMC_DONE,
     L_VR_DONE,
@@ -33,7 +33,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_step import (
+from hcomc.control.prediction.step import (
     behind,
     behind_virtual,
     follow_role,

@@ -1,5 +1,5 @@
 """Building one run's log and the arrays of the compiled step
-(:class:`~hcomc.sim.core_state.CoreArrays`) from its config, demand, fleet and HDV
+(:class:`~hcomc.sim.step.state.CoreArrays`) from its config, demand, fleet and HDV
 perception."""
 
 from __future__ import annotations
@@ -10,14 +10,14 @@ from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.interface import Fleet
 from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
-from hcomc.sim import core_state as layout
-from hcomc.sim.core_plans import N_FLOAT, N_INT
-from hcomc.sim.core_state import Core, CoreArrays
 from hcomc.sim.demand import Demand
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.mobil import lane_change_params
 from hcomc.sim.perception import Perception
+from hcomc.sim.step import state as layout
+from hcomc.sim.step.plans import N_FLOAT, N_INT
+from hcomc.sim.step.state import Core, CoreArrays
 
 INNOVATION_STEPS = 64
 """Steps of HDV estimation-error innovations drawn at a time (refilled from the run's generator
@@ -25,7 +25,7 @@ by the compiled loop or by the engine's Python step)."""
 
 
 FIRST_SLOTS = 64
-"""Slot columns a run's log starts with (:mod:`hcomc.sim.log_slots`; :func:`widen_log` adds
+"""Slot columns a run's log starts with (:mod:`hcomc.sim.log.slots`; :func:`widen_log` adds
 more when more vehicles are on the road at once, up to one per vehicle)."""
 
 

@@ -1,5 +1,5 @@
-"""One candidate of the HCOMC prediction (:mod:`hcomc.control.hcomc.rollout`): passes 1 and 2
-and the scoring of a candidate plan, the body that the population kernel runs per candidate,
+"""One candidate of the prediction (:mod:`hcomc.control.prediction.population`): passes 1
+and 2 and the scoring of a candidate plan, the body that the population kernel runs per candidate,
 and the single-candidate entry simulated annealing uses.
 
 Simulated annealing asks for one candidate at a time. The population kernel's per-call work
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     C_DT,
     G_COLLISION,
     G_NOT_MERGED,
@@ -28,8 +28,8 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_passes import joint_pass, pre_pass, vmc_pre_track, vv0_cubic
-from hcomc.control.hcomc.rollout_score import created_pairs_safety, virtual_violation
+from hcomc.control.prediction.passes import joint_pass, pre_pass, vmc_pre_track, vv0_cubic
+from hcomc.control.prediction.scoring import created_pairs_safety, virtual_violation
 
 
 @kernel
@@ -37,14 +37,14 @@ def candidate(x0, v0, a0, present, cav, coop, params, starts, plan, lateral, con
               X, Y, V, A, HEAD, g, vvs, S, lc, box, vr_acc):  # fmt: skip
     """Passes 1 and 2 and the scoring of one candidate (``plan``: merge position, VR's
     lane-change duration, horizon H; ``lateral``: its mode variable), the body shared by the
-    population kernel (:func:`hcomc.control.hcomc.rollout.rollout`) and the single-row entry
+    population kernel (:func:`hcomc.control.prediction.population.rollout`) and the single-row entry
     :func:`rollout_into`.
 
     ``track`` is VMC's pre-pass trajectory of the candidate's mode (:func:`vmc_tracks`). The
     trajectories go to ``X`` … ``HEAD`` (K + 1, 6) (``Y``, ``A``, ``HEAD`` zeroed by the
     caller), the constraint parts to ``g`` (N_G,) (zeroed by the caller) and the cubics to
     ``vvs`` (3, 4); ``S``, ``lc``, ``box`` and ``vr_acc`` are scratch space. Returns
-    k_merge, U_safe and U_eff (see :func:`hcomc.control.hcomc.rollout.rollout`).
+    k_merge, U_safe and U_eff (see :func:`hcomc.control.prediction.population.rollout`).
     """
     horizon = plan[2]
     coop_vmc = bool(coop[VMC] and present[VMC])
@@ -111,11 +111,11 @@ def rollout_into(
     coop: np.ndarray, params: np.ndarray, starts: np.ndarray, plan: np.ndarray, lateral: bool,
     consts: np.ndarray, cf: np.ndarray, tracks: np.ndarray, work: tuple[np.ndarray, ...],
 ) -> tuple[int, float, float]:  # fmt: skip
-    """One candidate, as the population kernel (:func:`hcomc.control.hcomc.rollout.rollout`
+    """One candidate, as the population kernel (:func:`hcomc.control.prediction.population.rollout`
     with C = 1) computes it, without the per-call work a population needs and a single row
     does not: VMC's pre-pass tracks come precomputed from :func:`vmc_tracks`.
 
-    ``starts`` must be resolved (:func:`~hcomc.control.hcomc.rollout.resolve_starts`);
+    ``starts`` must be resolved (:func:`~hcomc.control.prediction.population.resolve_starts`);
     ``plan`` (3,) holds the merge position, VR's lane-change duration and the horizon H;
     ``lateral`` the mode. The trajectories, constraint parts and cubics go to the arrays
     ``work`` of :func:`rollout_work` (reused from row to row: a population allocates them

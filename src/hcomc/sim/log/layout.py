@@ -2,7 +2,7 @@
 
 This module is the one home of the log's column dtypes. A log of ``T`` logging rows and
 ``N`` vehicles reads as (the engine's log stores the (T, N) arrays in slot columns,
-:mod:`hcomc.sim.log_slots`):
+:mod:`hcomc.sim.log.slots`):
 
 =========== ========= ======== ======================================= ==============
 array       shape     dtype    meaning                                 unused cell
@@ -49,8 +49,8 @@ is one contiguous block that a compiled kernel can write directly.
 **Memory.** A stored cell costs :data:`BYTES_PER_CELL` = 22 bytes; a row adds 8 bytes
 (``t``), a vehicle 33 (``kind``, ``length``, ``width``; its column and rows, ``slot`` and
 ``span``), a stored column 8 (``owner``). The engine's log stores S slot columns, S = the
-most vehicles on the road at once (:mod:`hcomc.sim.log_slots`); a log with one column per
-vehicle stores S = N. Events are stored apart (:mod:`hcomc.sim.log_events`, 41 bytes each).
+most vehicles on the road at once (:mod:`hcomc.sim.log.slots`); a log with one column per
+vehicle stores S = N. Events are stored apart (:mod:`hcomc.sim.log.events`, 41 bytes each).
 :func:`bytes_needed` gives the exact size of the arrays before allocating them; for 1 hour
 with 2000 columns (2000 vehicles on the road at once, or one column each):
 
@@ -127,7 +127,7 @@ BYTES_PER_ROW: Final = DTYPES["t"].itemsize
 """Bytes per row outside the cells (the row time, 8)."""
 BYTES_PER_VEHICLE: Final = sum(DTYPES[name].itemsize for name in VEHICLE_FIELDS) + 3 * 8
 """Bytes per vehicle outside the cells (kind, length, width: 9; its column and the rows it
-holds it, ``slot`` and ``span`` of :mod:`hcomc.sim.log_slots`: 24)."""
+holds it, ``slot`` and ``span`` of :mod:`hcomc.sim.log.slots`: 24)."""
 BYTES_PER_SLOT: Final = 8
 """Bytes per stored column outside the cells (its current vehicle, ``owner``)."""
 

@@ -1,17 +1,17 @@
 """Executing merge plans inside the compiled step: the plan table and its kernels.
 
 The live plans of a run are rows of a table in its compiled state (``plan_int`` and
-``plan_f`` of :class:`hcomc.sim.core_state.CoreArrays`, the first ``counters[N_PLANS]`` rows,
+``plan_f`` of :class:`hcomc.sim.step.state.CoreArrays`, the first ``counters[N_PLANS]`` rows,
 in the order the plans were made; a replan replaces its VR's row and moves to the end). With
 the table in the compiled state, a step with live plans needs no Python: Python is entered
 only when the controller decides (a first plan, or a replan that :func:`replan_due` says is
-due). The rules executed here are those described in :mod:`hcomc.sim.execution`; these
+due). The rules executed here are those described in :mod:`hcomc.sim.plan_execution`; these
 kernels are their one implementation, used by the compiled loop, by the engine's Python step
 after a decision, and (on a table built from a list of plans) by the SUMO co-simulation.
 
 Columns: ``plan_int`` holds the key vehicles (role order of
 :meth:`hcomc.interface.MergeGroup.as_array`), the mode, which virtual vehicles the plan
-has, the progress flags of :class:`hcomc.sim.execution.ActivePlan` and the index of the plan
+has, the progress flags of :class:`hcomc.sim.plan_execution.ActivePlan` and the index of the plan
 in the run's decisions; ``plan_f`` holds t0, the horizon, the merge position, VR's duration
 and the cubic coefficients of VV0, VV1 and VV2.
 """
@@ -25,8 +25,8 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.sim.core_lane_change import commanded_changes
-from hcomc.sim.core_state import (
+from hcomc.sim.step.lane_change import commanded_changes
+from hcomc.sim.step.state import (
     ACCEL_END,
     CONTROLLER,
     MAIN_1,
@@ -133,7 +133,8 @@ def commanded_mask(pi: np.ndarray, n_plans: int, n: int) -> np.ndarray:
 @kernel
 def holding_mask(pi: np.ndarray, n_plans: int, is_cav: np.ndarray) -> np.ndarray:
     """Vehicles that make no discretionary change for a plan: those it commands and every
-    connected (CAV) key vehicle of a live plan but VR (:func:`hcomc.sim.execution.holding_lane`).
+    connected (CAV) key vehicle of a live plan but VR
+    (:func:`hcomc.sim.plan_execution.holding_lane`).
 
     A VR the plan does not command merges by gap acceptance, as an HDV VR does."""
     mask = commanded_mask(pi, n_plans, is_cav.size)
@@ -212,7 +213,7 @@ def replan_due(
     merge_x: float, t: float, period: float, x_vr: float, v_vr: float,
 ) -> bool:  # fmt: skip
     """Receding horizon: replan every ``period`` s until a commanded lane change began
-    (:meth:`hcomc.sim.execution.ActivePlan.may_replan`).
+    (:meth:`hcomc.sim.plan_execution.ActivePlan.may_replan`).
 
     Within one period before its merge position VR keeps the plan it is about to execute;
     if the change cannot start there, replanning resumes until VR is released."""
@@ -253,7 +254,7 @@ def due_plans(c: CoreArrays, t: float) -> np.ndarray:
 # ------------------------------------------------------------------------ execution
 @kernel
 def _command(c, ids, t, lead, vs, ls, ks, rank, i, target, duration, release_x, vr, other):
-    """One commanded lane change (:func:`hcomc.sim.core_lane_change.commanded_changes`)."""
+    """One commanded lane change (:func:`hcomc.sim.step.lane_change.commanded_changes`)."""
     result = commanded_changes(
         c, ids, t, lead, vs, ls, ks, rank, np.array([i]), np.array([target]),
         np.array([duration]), np.array([release_x]), np.array([vr]), np.array([other]),

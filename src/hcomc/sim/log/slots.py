@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.sim.log_layout import FILL
+from hcomc.sim.log.layout import FILL
 
 __all__ = [
     "OPEN", "VehicleCells", "active_columns", "cell_of", "claim_slots", "empty_slots",

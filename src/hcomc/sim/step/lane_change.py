@@ -9,7 +9,10 @@ import math
 import numpy as np
 
 from hcomc._jit import borrow, kernel
-from hcomc.sim.core_state import (
+from hcomc.sim.arrays import nonzero_into, search_left
+from hcomc.sim.mobil import mobil_decide_into
+from hcomc.sim.neighbours import neighbour
+from hcomc.sim.step.state import (
     ACCEL_END,
     ACCEL_START,
     EV_FALLBACK,
@@ -31,9 +34,6 @@ from hcomc.sim.core_state import (
     CoreArrays,
     add_event,
 )  # fmt: skip
-from hcomc.sim.mobil import mobil_decide_into
-from hcomc.sim.neighbours import neighbour
-from hcomc.sim.small import nonzero_into, search_left
 
 
 # --------------------------------------------------------------------------- decide

@@ -5,7 +5,7 @@ two parts :func:`hcomc.models.following.follow_accel` composes (``free_term``, t
 role and step, and ``follow_accel_given``), the virtual vehicles' cubics (Eq. 9) from
 :func:`hcomc.control.virtual_vehicle.cubic_point`. The ballistic step with a stop at v = 0 is
 the engine's integration scheme. The roles' state is one (8, 6) array ``S`` (rows ``R_*`` of
-:mod:`hcomc.control.hcomc.rollout_layout`), so that the compiled kernels pass few arrays.
+:mod:`hcomc.control.prediction.layout`), so that the compiled kernels pass few arrays.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     LANE0,
     N_ROLES,
     N_STATE,
@@ -38,6 +38,7 @@ from hcomc.control.hcomc.rollout_layout import (
     R_X,
 )
 from hcomc.control.virtual_vehicle import cubic_point
+from hcomc.models.ballistic import ballistic_step
 from hcomc.models.following import follow_accel_given, free_term
 
 
@@ -110,17 +111,8 @@ def integrate(S: np.ndarray, dt: float, emergency: float) -> None:
 @kernel(inline="always")
 def integrate_role(S: np.ndarray, r: int, dt: float, emergency: float) -> None:
     """The ballistic step of :func:`integrate` for role r alone."""
-    ar = max(S[R_ACC, r], -emergency)
-    v = S[R_V, r]
-    v1 = v + ar * dt
-    if v1 < 0.0:
-        S[R_X, r] += -v * v / (2.0 * ar) if ar < 0.0 else 0.0
-        S[R_A, r] = -v / dt
-        S[R_V, r] = 0.0
-    else:
-        S[R_X, r] += v * dt + 0.5 * ar * dt * dt
-        S[R_V, r] = v1
-        S[R_A, r] = ar
+    dx, S[R_V, r], S[R_A, r] = ballistic_step(S[R_V, r], max(S[R_ACC, r], -emergency), dt)
+    S[R_X, r] += dx
     S[R_FREE, r] = np.nan  # a new speed
 
 

@@ -20,7 +20,7 @@ lane change or a lateral cooperation has begun). While it is active, commanded v
 the connected (CAV) key vehicles make no discretionary (MOBIL) lane changes of their own.
 
 The engine executes these rules in its compiled step, from the plan table of its state
-(:mod:`hcomc.sim.core_plans`, their one implementation); the functions here apply the same
+(:mod:`hcomc.sim.step.plans`, their one implementation); the functions here apply the same
 kernels to a list of :class:`ActivePlan` (the SUMO co-simulation keeps its plans that way).
 """
 
@@ -34,10 +34,10 @@ import numpy as np
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
 from hcomc.road import Kind, Lane
-from hcomc.sim import core_plans as table
-from hcomc.sim.core_plans import commanded_mask, encode_plan, holding_mask, replan_due
-from hcomc.sim.log_events import EventKind
-from hcomc.sim.plans import PlanRecord
+from hcomc.sim.log.events import EventKind
+from hcomc.sim.log.plans import PlanRecord
+from hcomc.sim.step import plans as table
+from hcomc.sim.step.plans import commanded_mask, encode_plan, holding_mask, replan_due
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
@@ -71,7 +71,7 @@ class ActivePlan:
 
     def may_replan(self, t: float, period: float, x_vr: float, v_vr: float) -> bool:
         """Receding horizon: replan every ``period`` s until a commanded lane change began
-        (:func:`hcomc.sim.core_plans.replan_due`).
+        (:func:`hcomc.sim.step.plans.replan_due`).
 
         Within one period before its merge position VR keeps the plan it is about to execute
         (a replan cannot move the merge away at the last moment); if the change cannot start
@@ -86,7 +86,7 @@ class ActivePlan:
 
 
 def plan_table(plans: list[ActivePlan]) -> tuple[np.ndarray, np.ndarray]:
-    """The plan table (:mod:`hcomc.sim.core_plans`) of ``plans``, row k being ``plans[k]``."""
+    """The plan table (:mod:`hcomc.sim.step.plans`) of ``plans``, row k being ``plans[k]``."""
     n = max(1, len(plans))
     pi, pf = np.zeros((n, table.N_INT), dtype=np.int64), np.zeros((n, table.N_FLOAT))
     for k, p in enumerate(plans):
@@ -141,7 +141,7 @@ def virtual_leaders(
     VV0 leads a CAV VR that follows its plan on the ramp, VV1 a cooperating VMC in
     longitudinal mode (until VR's merge is complete), VV2 a CAV VNR in lateral mode (within
     the horizon); their states are those of :func:`hcomc.control.virtual_vehicle.virtual_states`
-    (:func:`hcomc.sim.core_plans.virtual_rows`).
+    (:func:`hcomc.sim.step.plans.virtual_rows`).
     """
     pi, pf = plan_table(plans)
     f8 = np.float64
@@ -182,7 +182,7 @@ def game_confirms(
 
 def plan_record(plan: MergePlan) -> dict[str, Any]:
     """JSON-ready summary of a plan, stored in ``SimulationLog.meta["plans"]`` for plots
-    (:class:`hcomc.sim.plans.PlanRecord` is its typed form)."""
+    (:class:`hcomc.sim.log.plans.PlanRecord` is its typed form)."""
     return PlanRecord.from_plan(plan).to_json()
 
 

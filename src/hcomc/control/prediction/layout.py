@@ -1,4 +1,4 @@
-"""Array layouts of the HCOMC prediction kernels (:mod:`hcomc.control.hcomc.rollout`).
+"""Array layouts of the HCOMC prediction kernels (:mod:`hcomc.control.prediction.population`).
 
 The compiled kernels exchange plain arrays; this module names their rows and columns: the six
 key-vehicle roles, the per-role model parameters, the constants read from the config, the

@@ -17,7 +17,7 @@ from hcomc.road import KEY_ROLES
 
 if TYPE_CHECKING:
     from hcomc._typing import FloatArray
-    from hcomc.sim.log import SimulationLog
+    from hcomc.sim.log.simulation_log import SimulationLog
 
 __all__ = ["PlanRecord", "plan_records"]
 

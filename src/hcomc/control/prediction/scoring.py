@@ -1,7 +1,7 @@
 """Scoring of predicted candidates: Eq. 15 at merge completion, Eq. 17 at VR's lane-change
 decision, the feasibility of the virtual vehicles, the objective vector and the penalised scalar
 cost of single-objective optimisers (Eq. 16 over a common distance:
-:mod:`~hcomc.control.hcomc.rollout_fuel`).
+:mod:`~hcomc.control.prediction.fuel`).
 
 Eq. 15 is :func:`hcomc.safety.critical.critical_accel` and the cubics' extremes
 :func:`hcomc.control.virtual_vehicle.cubic_minima`, their one homes. The objective vector
@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     C_A_MERG,
     C_D,
     C_DELAY_CAV,
@@ -35,8 +35,9 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_step import behind, free_road
+from hcomc.control.prediction.step import behind, free_road
 from hcomc.control.virtual_vehicle import cubic_minima
+from hcomc.models.incentive import mobil_incentive
 from hcomc.safety.critical import critical_accel
 
 U_SAFE_CAP = 1e3
@@ -120,14 +121,15 @@ def lane_change_incentive(
 ) -> float:
     """Eq. 17, the MOBIL-style incentive of VR's lane change at its decision [m/s^2].
 
-    ``U_eff = (a_VR,new - a_VR,ori) + eta sum_{VMC, VMR, VNR} (a_i,new - a_i,ori)``, each
-    acceleration the vehicle's own car-following model (:func:`~hcomc.control.hcomc.
-    rollout_step.behind`) in the predicted state ``S`` (8, 6) of the step at which VR begins
-    its change: "new" with VR in lane 1 (and, in lateral mode, the cooperating VMC in lane 2),
-    "ori" as before the merge (VR on the acceleration lane, VMC in lane 1). Each vehicle
-    follows the nearest present key vehicle ahead in its lane of that arrangement. VR's "ori"
-    acceleration is its free-road acceleration: with the lane end as its leader the incentive
-    would grow the later VR decides. Roles whose leader the change does not alter contribute 0.
+    ``U_eff = (a_VR,new - a_VR,ori) + eta sum_{VMC, VMR, VNR} (a_i,new - a_i,ori)``
+    (:func:`hcomc.models.incentive.mobil_incentive`), each acceleration the vehicle's own
+    car-following model (:func:`~hcomc.control.prediction.step.behind`) in the predicted state
+    ``S`` (8, 6) of the step at which VR begins its change: "new" with VR in lane 1 (and, in
+    lateral mode, the cooperating VMC in lane 2), "ori" as before the merge (VR on the
+    acceleration lane, VMC in lane 1). Each vehicle follows the nearest present key vehicle
+    ahead in its lane of that arrangement. VR's "ori" acceleration is its free-road
+    acceleration: with the lane end as its leader the incentive would grow the later VR
+    decides. Roles whose leader the change does not alter contribute 0.
     """
     new, ori = LANE0.copy(), LANE0.copy()
     new[VR] = 1
@@ -141,7 +143,7 @@ def lane_change_incentive(
             a_new = behind(S, params, r, _leader_in(S, r, new, new[r]))
             a_ori = behind(S, params, r, _leader_in(S, r, ori, ori[r]))
             others += a_new - a_ori
-    return gain + politeness * others
+    return mobil_incentive(gain, others, politeness)
 
 
 @kernel

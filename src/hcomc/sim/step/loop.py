@@ -1,14 +1,14 @@
 """The compiled simulation step over the struct-of-arrays state of one run
-(:class:`hcomc.sim.core_state.Core`, fields as in :class:`~hcomc.sim.core_state.CoreArrays`).
-The step is split into kernels (here, :mod:`hcomc.sim.core_motion`,
-:mod:`hcomc.sim.core_lane_change` and :mod:`hcomc.sim.core_plans`) that the engine composes
+(:class:`hcomc.sim.step.state.Core`, fields as in :class:`~hcomc.sim.step.state.CoreArrays`).
+The step is split into kernels (here, :mod:`hcomc.sim.step.motion`,
+:mod:`hcomc.sim.step.lane_change` and :mod:`hcomc.sim.step.plans`) that the engine composes
 in two ways:
 
 * :func:`run_steps` advances many steps in one compiled call while no controller decision is
   due, live merge plans included (they are executed from the plan table of the compiled
   state); it writes log rows and events itself and returns to Python when a ramp vehicle
   enters the control zone (key vehicles, a first plan), when a live plan is due for a replan
-  (:func:`hcomc.sim.core_plans.due_plans`), or on every step of a run whose CAVs confirm
+  (:func:`hcomc.sim.step.plans.due_plans`), or on every step of a run whose CAVs confirm
   their lane changes by the game (Section III-B, in Python);
 * at a decision event the engine takes that one step in Python: release, key vehicles and
   the controller's decision, then the same kernels as the compiled loop (:func:`step_body`,
@@ -26,12 +26,15 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.sim.core_lane_change import (
+from hcomc.sim.arrays import nonzero_into
+from hcomc.sim.log.slots import claim_slots
+from hcomc.sim.perception import advance_errors_of
+from hcomc.sim.step.lane_change import (
     commanded_changes,
     discretionary_changes,
     start_lane_changes,
 )
-from hcomc.sim.core_motion import (
+from hcomc.sim.step.motion import (
     bookkeeping,
     check_collisions,
     follow_many,
@@ -40,7 +43,7 @@ from hcomc.sim.core_motion import (
     release,
     step_accelerations,
 )
-from hcomc.sim.core_plans import (
+from hcomc.sim.step.plans import (
     due_plans,
     execute_plans,
     finish_plans,
@@ -48,7 +51,7 @@ from hcomc.sim.core_plans import (
     holding_mask,
     virtual_rows_into,
 )
-from hcomc.sim.core_state import (
+from hcomc.sim.step.state import (
     CAV_GAME,
     CONTROLLER,
     CZ_START,
@@ -80,9 +83,6 @@ from hcomc.sim.core_state import (
     CoreArrays,
     push_history,
 )
-from hcomc.sim.log_slots import claim_slots
-from hcomc.sim.perception import advance_errors_of
-from hcomc.sim.small import nonzero_into
 
 __all__ = [
     "commanded_changes", "discretionary_changes", "due_plans", "follow_many", "holding",
@@ -112,7 +112,7 @@ def step_finish(
 @kernel
 def record_row(c: CoreArrays, k: int, t: float) -> bool:
     """Write log row k for the vehicles on the road, each in its slot column
-    (:func:`hcomc.sim.log_slots.claim_slots`); the other cells keep the log's fill (NaN,
+    (:func:`hcomc.sim.log.slots.claim_slots`); the other cells keep the log's fill (NaN,
     lane -1, inactive), so a row costs what is on the road. False, writing nothing, when the
     log needs more columns first."""
     if not claim_slots(c.active, c.log_slot, c.log_span, c.log_owner, k):
@@ -153,7 +153,7 @@ def step_front(c: CoreArrays, ids: np.ndarray, t: float):
 @kernel
 def holding(c: CoreArrays) -> np.ndarray:
     """Vehicles that make no discretionary change now: held for a live plan
-    (:func:`hcomc.sim.core_plans.holding_mask`) or driven from outside. A vehicle that is
+    (:func:`hcomc.sim.step.plans.holding_mask`) or driven from outside. A vehicle that is
     not an HDV is a CAV (:class:`hcomc.road.Kind` has these two). A view of the step's
     work row."""
     out = c.scratch_b[S_HOLDING]

@@ -6,13 +6,13 @@ The trajectories read as ``T`` logging rows x ``N`` vehicles: ``t`` (T,) float64
 (T, N) numpy array, plus per-vehicle ``kind``, ``length``, ``width``. A log built from plain
 (T, N) arrays stores them as they are. The engine's log stores its cells in slot columns that
 vehicles leaving the road hand on to vehicles entering it, so its memory follows the number
-of vehicles on the road at once, not the number over the run (:mod:`hcomc.sim.log_slots`);
+of vehicles on the road at once, not the number over the run (:mod:`hcomc.sim.log.slots`);
 its ``x`` ... ``active`` are read views of the same (T, N) shape. The layout, the reasons
-for each dtype and the memory figures are in :mod:`hcomc.sim.log_layout`; the events in
-:mod:`hcomc.sim.log_events`.
+for each dtype and the memory figures are in :mod:`hcomc.sim.log.layout`; the events in
+:mod:`hcomc.sim.log.events`.
 
 :class:`LogData` builds, holds and reads these; :class:`hcomc.sim.log.SimulationLog` adds the
-writing, the long format and the files. The files module (:mod:`hcomc.sim.log_io`) writes and
+writing, the long format and the files. The files module (:mod:`hcomc.sim.log.files`) writes and
 reads a :class:`LogData`, so it does not depend on the log class it serves.
 """
 
@@ -25,8 +25,8 @@ import numpy as np
 import pandas as pd
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.sim.log_events import EventKind, EventTable
-from hcomc.sim.log_layout import (
+from hcomc.sim.log.events import EventKind, EventTable
+from hcomc.sim.log.layout import (
     ARRAY_FIELDS,
     CELL_FIELDS,
     FILL,
@@ -36,7 +36,7 @@ from hcomc.sim.log_layout import (
     bytes_needed,
     vehicle_arrays,
 )
-from hcomc.sim.log_slots import (
+from hcomc.sim.log.slots import (
     OPEN,
     VehicleCells,
     empty_slots,
@@ -65,7 +65,7 @@ def _conformed(
 
 def _cell_view(name: str, doc: str) -> Any:
     """The property ``log.<name>``: the stored array of a log with one column per vehicle,
-    else a (T, N) :class:`~hcomc.sim.log_slots.VehicleCells` read view."""
+    else a (T, N) :class:`~hcomc.sim.log.slots.VehicleCells` read view."""
     return property(lambda log: log._view(name), doc=doc)
 
 
@@ -150,7 +150,7 @@ class LogData:
         n_recorded: int = 0,
         events: np.ndarray | None = None,
     ) -> Self:
-        """A log stored in slot columns (:mod:`hcomc.sim.log_slots`): ``cells`` maps each of
+        """A log stored in slot columns (:mod:`hcomc.sim.log.slots`): ``cells`` maps each of
         ``x, y, v, a, heading, lane, active`` to a (T, S) array; ``slot`` (N,), ``span``
         (N, 2) and ``owner`` (S,) say which vehicle a column holds when."""
         n_vehicles, n_slots = np.shape(slot)[0], np.shape(owner)[0]
@@ -170,7 +170,7 @@ class LogData:
         (default S = N) [bytes], events excluded.
 
         Equals :attr:`nbytes` of the log :meth:`allocate` would build; see
-        :func:`hcomc.sim.log_layout.bytes_needed`.
+        :func:`hcomc.sim.log.layout.bytes_needed`.
         """
         return bytes_needed(n_steps, n_vehicles, n_slots)
 
@@ -206,7 +206,7 @@ class LogData:
         slots : int or None
             None: one column per vehicle. A number S: that many slot columns, which
             vehicles leaving the road hand on to vehicles entering it
-            (:mod:`hcomc.sim.log_slots`); :meth:`~hcomc.sim.log.SimulationLog.record` adds
+            (:mod:`hcomc.sim.log.slots`); :meth:`~hcomc.sim.log.SimulationLog.record` adds
             columns when more vehicles are on the road at once.
 
         Returns
@@ -322,7 +322,7 @@ class LogData:
     # ------------------------------------------------------------------ events
     @property
     def events(self) -> np.ndarray:
-        """All events as a structured array (:data:`~hcomc.sim.log_events.EVENT_DTYPE`), stably
+        """All events as a structured array (:data:`~hcomc.sim.log.events.EVENT_DTYPE`), stably
         sorted by t."""
         return self._event_table.sorted()
 

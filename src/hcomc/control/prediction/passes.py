@@ -1,6 +1,6 @@
 """The three passes of the HCOMC prediction over one candidate (see
-:mod:`hcomc.control.hcomc.rollout`): the no-merge counterfactual, the pre-pass that fixes the
-end states of the virtual vehicles VV1 and VV2, and the joint pass of every key vehicle.
+:mod:`hcomc.control.prediction.population`): the no-merge counterfactual, the pre-pass that
+fixes the end states of the virtual vehicles VV1 and VV2, and the joint pass of every key vehicle.
 """
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import borrow, kernel
-from hcomc.control.hcomc.rollout_accel import accelerations, vmc_accel, vr_accel
-from hcomc.control.hcomc.rollout_lanes import (
+from hcomc.control.prediction.accelerations import accelerations, vmc_accel, vr_accel
+from hcomc.control.prediction.lane_changes import (
     advance_progress,
     advance_vmc,
     collisions_at,
@@ -17,7 +17,7 @@ from hcomc.control.hcomc.rollout_lanes import (
     memberships,
     start_progress,
 )
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     C_ACCEL_END,
     C_DT,
     C_EMERGENCY,
@@ -49,8 +49,8 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_score import lane_change_incentive
-from hcomc.control.hcomc.rollout_step import (
+from hcomc.control.prediction.scoring import lane_change_incentive
+from hcomc.control.prediction.step import (
     behind,
     free_road,
     integrate,
@@ -110,7 +110,7 @@ def step(
 
     ``plan`` holds the candidate's merge position, VR's lane-change duration and horizon H;
     ``flags`` and ``vr_known`` are those of
-    :func:`~hcomc.control.hcomc.rollout_accel.accelerations`. In longitudinal mode VNR
+    :func:`~hcomc.control.prediction.accelerations.accelerations`. In longitudinal mode VNR
     follows VNF alone, exactly as in the no-merge counterfactual ``cf`` (3, K + 1, 6): its
     states are taken from there.
     """
@@ -217,7 +217,7 @@ def joint_pass(
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m], the number of colliding
     (pair, step) combinations of the key vehicles (Eq. 7) and U_eff, Eq. 17 in the state in
-    which VR begins its change (:func:`~hcomc.control.hcomc.rollout_score.
+    which VR begins its change (:func:`~hcomc.control.prediction.scoring.
     lane_change_incentive`; 0 if it never does). ``S`` (8, 6), ``lc`` (9,) and
     ``box`` (4, 6) are scratch space; VR's accelerations of the first ``n_known`` steps are
     those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge

@@ -9,11 +9,15 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
+from hcomc.models.ballistic import ballistic_step
 from hcomc.models.following import follow_accel
 from hcomc.models.quintic import lateral_state
 from hcomc.models.transition import blend, transition_psi
 from hcomc.safety.collision_kernels import vehicle_pair_collides
-from hcomc.sim.core_state import (
+from hcomc.sim.arrays import nonzero_into, search_left, unique
+from hcomc.sim.neighbours import lookup_one, neighbours_into, sort_entries_into
+from hcomc.sim.perception import perceive_into
+from hcomc.sim.step.state import (
     ACCEL_END,
     COLLISIONS,
     DT,
@@ -64,9 +68,6 @@ from hcomc.sim.core_state import (
     _centre,
     add_event,
 )  # fmt: skip
-from hcomc.sim.neighbours import lookup_one, neighbours_into, sort_entries_into
-from hcomc.sim.perception import perceive_into
-from hcomc.sim.small import nonzero_into, search_left, unique
 
 _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
@@ -342,20 +343,13 @@ def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) ->
 # ------------------------------------------------------------------------ integrate
 @kernel
 def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
-    """Ballistic update; a vehicle that would reverse stops exactly at v = 0."""
+    """Advance the vehicles ``ids`` one step with their accelerations ``acc`` (Eq. 1/3's
+    output) by :func:`~hcomc.models.ballistic.ballistic_step`."""
     dt = c.consts[DT]
     for k in range(ids.size):
         i = ids[k]
-        v0, ak = c.v[i], acc[k]
-        v1 = v0 + ak * dt
-        if v1 < 0.0:
-            c.x[i] += -(v0 * v0) / (2.0 * ak)
-            c.v[i] = 0.0
-            c.a[i] = -v0 / dt
-        else:
-            c.x[i] += v0 * dt + 0.5 * ak * dt * dt
-            c.v[i] = v1
-            c.a[i] = ak
+        dx, c.v[i], c.a[i] = ballistic_step(c.v[i], acc[k], dt)
+        c.x[i] += dx
 
 
 @kernel

@@ -35,14 +35,14 @@ The kernels are compiled with numba: a population is evaluated per optimiser gen
 a numpy time-stepping loop cannot do within the decision-time budget. Simulated annealing asks
 for one candidate at a time: :func:`rollout_into` scores one with the same per-candidate body,
 without the per-call work only a population needs. They are split by concern — array layouts
-(:mod:`~hcomc.control.hcomc.rollout_layout`), car following and integration
-(:mod:`~hcomc.control.hcomc.rollout_step`), accelerations of the roles
-(:mod:`~hcomc.control.hcomc.rollout_accel`), lane-change progress
-(:mod:`~hcomc.control.hcomc.rollout_lanes`), the passes
-(:mod:`~hcomc.control.hcomc.rollout_passes`), one candidate
-(:mod:`~hcomc.control.hcomc.rollout_candidate`), scoring
-(:mod:`~hcomc.control.hcomc.rollout_score`) and fuel
-(:mod:`~hcomc.control.hcomc.rollout_fuel`) — and every equation is called from its one home
+(:mod:`~hcomc.control.prediction.layout`), car following and integration
+(:mod:`~hcomc.control.prediction.step`), accelerations of the roles
+(:mod:`~hcomc.control.prediction.accelerations`), lane-change progress
+(:mod:`~hcomc.control.prediction.lane_changes`), the passes
+(:mod:`~hcomc.control.prediction.passes`), one candidate
+(:mod:`~hcomc.control.prediction.candidate`), scoring
+(:mod:`~hcomc.control.prediction.scoring`) and fuel
+(:mod:`~hcomc.control.prediction.fuel`) — and every equation is called from its one home
 in :mod:`hcomc.models`, :mod:`hcomc.safety` and :mod:`hcomc.control.virtual_vehicle`, the
 same functions the engine executes.
 """
@@ -55,14 +55,14 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
-from hcomc.control.hcomc.rollout_candidate import (
+from hcomc.control.prediction.candidate import (
     candidate,
     mode_index,
     rollout_into,
     rollout_work,
     vmc_tracks,
 )
-from hcomc.control.hcomc.rollout_layout import (
+from hcomc.control.prediction.layout import (
     C_A_MERG,
     C_ACCEL_END,
     C_D,
@@ -108,7 +108,7 @@ from hcomc.control.hcomc.rollout_layout import (
     VNR,
     VR,
 )
-from hcomc.control.hcomc.rollout_passes import counterfactual, vmc_pre_track
+from hcomc.control.prediction.passes import counterfactual, vmc_pre_track
 from hcomc.models.idm import equilibrium_gap
 
 __all__ = [
@@ -228,7 +228,7 @@ def rollout(
         creates (VR behind its new leader, VR's new follower; lateral mode also VMC behind its
         lane-2 leader and VNR behind VMC).
     u_eff : (C,) Eq. 17, the incentive of VR's lane change in the predicted state in which it
-        begins (:func:`~hcomc.control.hcomc.rollout_score.lane_change_incentive`), 0 if it
+        begins (:func:`~hcomc.control.prediction.scoring.lane_change_incentive`), 0 if it
         never begins [m/s^2].
     g : (C, 5) constraint parts; column ``G_COLLISION`` counts the colliding (pair, step)
         combinations of the key vehicles (oriented rectangles, Eq. 7).

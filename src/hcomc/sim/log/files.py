@@ -1,15 +1,15 @@
 """Files of a :class:`~hcomc.sim.log.SimulationLog`: ``.npz`` and ``.parquet``, atomic.
 
 ``.npz`` holds all arrays (the stored slot columns and their tables, see
-:mod:`hcomc.sim.log_slots`), events and metadata in one compressed archive. ``.parquet``
+:mod:`hcomc.sim.log.slots`), events and metadata in one compressed archive. ``.parquet``
 holds the long-format frame of :meth:`SimulationLog.to_frame`, with the run metadata in
 the Parquet schema metadata and the events in a sibling ``<stem>.events.parquet``; the two
 files share a random token so a log and an events file that do not belong together are
 detected. Both formats are read back exactly, with the dtypes of
-:mod:`hcomc.sim.log_layout`; files whose arrays have other dtypes (e.g. float64 states) are
+:mod:`hcomc.sim.log.layout`; files whose arrays have other dtypes (e.g. float64 states) are
 read and converted to that layout.
 
-The functions write and read the log's data (:class:`~hcomc.sim.log_data.LogData`, of which
+The functions write and read the log's data (:class:`~hcomc.sim.log.data.LogData`, of which
 ``SimulationLog`` is the subclass that calls them): a log is read into the class
 :meth:`SimulationLog.load` is called on, and this module does not import the log class.
 """
@@ -25,10 +25,10 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from hcomc.sim.log_data import LogData
-from hcomc.sim.log_events import EVENT_DTYPE
-from hcomc.sim.log_layout import ARRAY_FIELDS, CELL_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
-from hcomc.sim.log_slots import identity_slots
+from hcomc.sim.log.data import LogData
+from hcomc.sim.log.events import EVENT_DTYPE
+from hcomc.sim.log.layout import ARRAY_FIELDS, CELL_FIELDS, DTYPES, STATE_FIELDS, allocate_rows
+from hcomc.sim.log.slots import identity_slots
 from hcomc.sim.manifest import atomic_paths, json_default
 
 __all__ = ["events_path", "long_columns", "read_log", "write_log"]

@@ -1,14 +1,14 @@
 """Simulation log: preallocated struct-of-arrays trajectories plus a table of events.
 
-The engine writes one row per logging step (compiled: :func:`hcomc.sim.core.record_row`;
+The engine writes one row per logging step (compiled: :func:`hcomc.sim.step.loop.record_row`;
 from Python: :meth:`SimulationLog.record`) and appends rare discrete
 events (insertions, lane changes, merges, collisions, plan fallbacks ...) with
 :meth:`SimulationLog.add_event`. Metrics, tables and figures read the log afterwards.
 
 What a log holds and how it is read — ``T`` logging rows x ``N`` vehicles, in plain (T, N)
-arrays or in slot columns, and the events — is :class:`hcomc.sim.log_data.LogData`, which
+arrays or in slot columns, and the events — is :class:`hcomc.sim.log.data.LogData`, which
 :class:`SimulationLog` extends with the writing, the long format and the files (``.npz``,
-``.parquet``, written atomically and read back exactly, by :mod:`hcomc.sim.log_io` behind
+``.parquet``, written atomically and read back exactly, by :mod:`hcomc.sim.log.files` behind
 :meth:`SimulationLog.save` and :meth:`SimulationLog.load`).
 """
 
@@ -22,11 +22,11 @@ import numpy as np
 import pandas as pd
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.sim.log_data import LogData
-from hcomc.sim.log_events import EVENT_DTYPE, EventKind
-from hcomc.sim.log_io import events_path, long_columns, read_log, write_log
-from hcomc.sim.log_layout import CELL_FIELDS, FILL
-from hcomc.sim.log_slots import claim_slots
+from hcomc.sim.log.data import LogData
+from hcomc.sim.log.events import EVENT_DTYPE, EventKind
+from hcomc.sim.log.files import events_path, long_columns, read_log, write_log
+from hcomc.sim.log.layout import CELL_FIELDS, FILL
+from hcomc.sim.log.slots import claim_slots
 
 __all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
 
@@ -35,7 +35,7 @@ class SimulationLog(LogData):
     """Preallocated struct-of-arrays log of one simulation run.
 
     Build it with :meth:`allocate` (or :meth:`load`); the constructor takes ready arrays
-    and is meant for internal use. See :mod:`hcomc.sim.log_layout` for the array layout.
+    and is meant for internal use. See :mod:`hcomc.sim.log.layout` for the array layout.
 
     Parameters
     ----------
@@ -136,7 +136,7 @@ class SimulationLog(LogData):
 
     def mark_recorded(self, n: int) -> None:
         """Declare rows ``0 .. n-1`` written (by a compiled writer that fills the arrays
-        directly, as :func:`hcomc.sim.core.record_row` does)."""
+        directly, as :func:`hcomc.sim.step.loop.record_row` does)."""
         if not 0 <= n <= self.n_steps:
             raise IndexError(f"{n} rows outside the log's {self.n_steps} rows")
         self._n_recorded = max(self._n_recorded, n)
@@ -238,7 +238,7 @@ class SimulationLog(LogData):
         """Write the log to ``path`` (``.npz``, or ``.parquet`` with the events in the sibling
         ``<stem>.events.parquet``; the directory must exist), atomically: an interrupted save
         leaves existing files intact. Returns the path; ``ValueError`` on another suffix,
-        ``TypeError`` if :attr:`meta` is not JSON-serialisable (:mod:`hcomc.sim.log_io`)."""
+        ``TypeError`` if :attr:`meta` is not JSON-serialisable (:mod:`hcomc.sim.log.files`)."""
         return write_log(self, path)
 
     @staticmethod

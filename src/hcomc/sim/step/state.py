@@ -2,7 +2,7 @@
 
 :class:`CoreArrays` holds every array the step reads or writes (per-vehicle parameters and
 state, the HDV perception buffers, the demand queues, the event buffer, counters, the plan
-table of the live merge plans, the log). The kernels of :mod:`hcomc.sim.core` receive them
+table of the live merge plans, the log). The kernels of :mod:`hcomc.sim.step.loop` receive them
 as one :class:`Core`, a compiled reference record over the same buffers: passing it costs one
 pointer, whatever the number of arrays (a tuple of arrays would be unpacked and
 reference-counted array by array at every call). Its fields are borrowed views
@@ -27,7 +27,7 @@ EV_FALLBACK = 8
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
-# consts (SQUARE: the exponent 2.0, see hcomc.sim.core_plans.stopping_distance)
+# consts (SQUARE: the exponent 2.0, see hcomc.sim.step.plans.stopping_distance)
 (DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
  KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD, SQUARE) = range(15)  # fmt: skip
 N_CONSTS = 15
@@ -43,7 +43,7 @@ DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
 # (the next step)
 (S_IDS, S_LEAD, S_VEH, S_LANE, S_ORDER, S_BUFFER, S_RANK, S_VS, S_LS, S_CODES,
  S_VV_FOL) = range(11)  # fmt: skip
-# MOBIL's candidates (hcomc.sim.core_lane_change) and its work rows S_MOBIL .. S_MOBIL + 3
+# MOBIL's candidates (hcomc.sim.step.lane_change) and its work rows S_MOBIL .. S_MOBIL + 3
 # (hcomc.sim.mobil.mobil_decide_into); the changers of the Eq. 14 blend and their new leaders
 S_POS, S_CAND, S_CAND_LANE, S_CAND_LEADER, S_CAND_FOLLOWER, S_CAND_TARGET = range(11, 17)
 S_MOBIL = 17
@@ -111,7 +111,7 @@ class CoreArrays(NamedTuple):
     counters: np.ndarray  # int64, see STEP ... N_PLANS
     consts: np.ndarray  # float64, see DT ... SQUARE
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
-    plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.core_plans), first N_PLANS
+    plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
@@ -124,7 +124,7 @@ class CoreArrays(NamedTuple):
     log_heading: np.ndarray
     log_lane: np.ndarray
     log_active: np.ndarray
-    log_slot: np.ndarray  # the log's slot tables (hcomc.sim.log_slots)
+    log_slot: np.ndarray  # the log's slot tables (hcomc.sim.log.slots)
     log_span: np.ndarray
     log_owner: np.ndarray
     scratch_int: np.ndarray  # (N_SCRATCH_INT, >= 4N + 1) the step's work arrays
