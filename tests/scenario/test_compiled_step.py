@@ -1,53 +1,13 @@
-"""The compiled step reproduces the numpy step it replaced, and ensembles reproduce runs alone.
+"""Ensembles reproduce runs alone, bit for bit, and the step's typed-list cache follows its keys.
 
-The references in ``tests/data/numpy_step`` were recorded with the numpy implementation of
-the step (``make_reference.py`` there): C1-C5 with no controller, C1-C4 with FIFO, C4 with a ramp
-flow and the platoon scenario, seed 0 — FIFO's decisions included, so the Python/compiled
-hand-over at decision events is covered too.
-
-Observed: the logs (float32) and the event kinds and vehicles are identical; float64 positions
-differ by at most one unit in the last place (2.3e-13 m at x = 1.5 km). The numpy step called
-numpy's vectorised transcendental functions (SIMD implementations of pow, exp, tanh), the
-compiled step calls the C library's scalar ones, which round differently in the last bit for
-a few percent of arguments.
+The engine's recorded runs are checked in ``tests/scenario/test_recorded_runs.py``.
 """
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
-import pytest
 
 from hcomc.sim.engine import Simulation
-
-DATA = Path(__file__).parent.parent / "data" / "numpy_step"
-_spec = importlib.util.spec_from_file_location("make_reference", DATA / "make_reference.py")
-assert _spec is not None
-assert _spec.loader is not None
-reference = importlib.util.module_from_spec(_spec)  # its CASES: what was recorded
-_spec.loader.exec_module(reference)
-
-
-@pytest.mark.parametrize("name", sorted(reference.CASES))
-def test_compiled_step_reproduces_the_numpy_step(name: str) -> None:
-    from hcomc.config import load_config
-
-    preset, overrides = reference.CASES[name]
-    ref = np.load(DATA / f"{name}.npz")
-    sim = Simulation(load_config(preset, **overrides), 0)
-    log = sim.run()
-    # the float64 state after the whole run, within 1e-9 m
-    np.testing.assert_allclose(sim.x, ref["x"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(sim.v, ref["v"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(sim.y, ref["y"], rtol=0, atol=1e-9)
-    np.testing.assert_array_equal(sim.lane, ref["lane"])
-    np.testing.assert_array_equal(log.x[::10], ref["log_x"])
-    np.testing.assert_array_equal(log.v[::10], ref["log_v"])
-    events = np.asarray(log.events.tolist(), dtype=np.float64).reshape(-1, 6)
-    np.testing.assert_array_equal(events[:, :4], ref["events"][:, :4])  # t, kind, vehicles
-    np.testing.assert_allclose(events[:, 4:], ref["events"][:, 4:], rtol=0, atol=1e-9)
 
 
 def test_an_ensemble_gives_each_run_bit_identical_results() -> None:

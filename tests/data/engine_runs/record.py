@@ -1,20 +1,17 @@
-"""Record the reference trajectories of the numpy simulation step (run at revision 58b31af,
-the last numpy step; ``PYTHONPATH=<that checkout>/src python make_reference.py OUT_DIR``).
+"""Record the reference runs of ``tests/scenario/test_recorded_runs.py`` from the present engine.
 
-The runs include the controllers' decisions, so a reference holds only while the controller's
-decisions are those of that revision: HCOMC's cases were dropped when its planning changed
-(Eq. 17 at the decision, the commitment rule); the hand-over of its plans between Python and
-the compiled loop is checked by ``tests/scenario/test_compiled_plans.py``. C5 with FIFO was
-dropped when a plan stopped holding a CAV VR it does not command on the ramp: in that run
-FIFO's plans command no vehicle, and its CAV VR now merges by gap acceptance at once.
+    python tests/data/engine_runs/record.py tests/data/engine_runs
 
-Per case: the float64 state (x, v, y, lane) at the end of the run, the logged x and v of
-every 10th row and the event table, which ``tests/scenario/test_compiled_step.py`` compares
-with the compiled step.
+Cases: C1-C5 with no controller, with FIFO, with Game and with HCOMC (NSGA-II), C4 with a ramp
+flow and the platoon scenario, seed 0. Per case: the float64 state (x, v, y, lane) at the end
+of the run, the logged x and v of every 10th row and the event table; ``recorded.json`` says
+which hcomc version and git revision recorded them. Re-record only after a change of
+behaviour that is intended and stated; a change that claims to keep behaviour leaves them.
 """
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -22,13 +19,13 @@ import numpy as np
 
 from hcomc.config import load_config
 from hcomc.sim.engine import Simulation
+from hcomc.sim.manifest import git_revision
 
 CASES = {
     **{
         f"{c}-{ctrl}": (c, {"control": {"controller": ctrl}})
         for c in ("C1", "C2", "C3", "C4", "C5")
-        for ctrl in ("none", "fifo")
-        if (c, ctrl) != ("C5", "fifo")
+        for ctrl in ("none", "fifo", "game", "hcomc")
     },
     "C4-flow-none": ("C4", {"control": {"controller": "none"}, "demand": {"ramp": "flow"}}),
     "platoon": ("platoon", {}),
@@ -36,6 +33,8 @@ CASES = {
 
 
 def main(out: Path) -> None:
+    import hcomc
+
     out.mkdir(parents=True, exist_ok=True)
     for name, (preset, overrides) in CASES.items():
         sim = Simulation(load_config(preset, **overrides), 0)
@@ -46,6 +45,8 @@ def main(out: Path) -> None:
             log_x=log.x[::10], log_v=log.v[::10], events=events,
         )  # fmt: skip
         print(name, log.x.shape, len(events))
+    stamp = {"version": hcomc.__version__, "revision": git_revision(), "seed": 0}
+    (out / "recorded.json").write_text(json.dumps(stamp, indent=1) + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":
