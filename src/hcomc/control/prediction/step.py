@@ -1,11 +1,12 @@
-"""Per-step kernels of the HCOMC prediction: car following of a role, leaders, integration.
+"""Per-step kernels of the prediction: car following of a role, leaders, integration.
 
 Every equation is called from its one home: car following (Eq. 1, the IIDM, Eq. 3) from the
 two parts :func:`hcomc.models.following.follow_accel` composes (``free_term``, taken once per
 role and step, and ``follow_accel_given``), the virtual vehicles' cubics (Eq. 9) from
-:func:`hcomc.control.virtual_vehicle.cubic_point`. The ballistic step with a stop at v = 0 is
-the engine's integration scheme. The roles' state is one (8, 6) array ``S`` (rows ``R_*`` of
-:mod:`hcomc.control.prediction.layout`), so that the compiled kernels pass few arrays.
+:func:`hcomc.control.virtual_vehicle.cubic_point`, and the integration from
+:func:`hcomc.models.ballistic.ballistic_step`, the engine's. The roles' state is one (8, 6)
+array ``S`` (rows ``R_*`` of :mod:`hcomc.control.prediction.layout`), so that the compiled
+kernels pass few arrays.
 """
 
 from __future__ import annotations
