@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,19 +33,25 @@ CASES = {
 }
 
 
+def run(preset: str, overrides: dict[str, Any]) -> dict[str, np.ndarray]:
+    """What is recorded of one case, seed 0: the arrays of its ``.npz`` file."""
+    sim = Simulation(load_config(preset, **overrides), 0)
+    log = sim.run()
+    events = np.asarray(log.events.tolist(), dtype=np.float64).reshape(-1, 6)
+    return {
+        "x": sim.x, "y": sim.y, "v": sim.v, "lane": sim.lane,
+        "log_x": log.x[::10], "log_v": log.v[::10], "events": events,
+    }  # fmt: skip
+
+
 def main(out: Path) -> None:
     import hcomc
 
     out.mkdir(parents=True, exist_ok=True)
-    for name, (preset, overrides) in CASES.items():
-        sim = Simulation(load_config(preset, **overrides), 0)
-        log = sim.run()
-        events = np.asarray(log.events.tolist(), dtype=np.float64).reshape(-1, 6)
-        np.savez_compressed(
-            out / f"{name}.npz", x=sim.x, v=sim.v, y=sim.y, lane=sim.lane,
-            log_x=log.x[::10], log_v=log.v[::10], events=events,
-        )  # fmt: skip
-        print(name, log.x.shape, len(events))
+    for name, case in CASES.items():
+        arrays = run(*case)
+        np.savez_compressed(out / f"{name}.npz", **arrays)
+        print(name, arrays["log_x"].shape, len(arrays["events"]))
     stamp = {"version": hcomc.__version__, "revision": git_revision(), "seed": 0}
     (out / "recorded.json").write_text(json.dumps(stamp, indent=1) + "\n", encoding="utf-8")
 
