@@ -24,9 +24,10 @@ the figures or a controller's Python code does not.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar, overload
 
 import numpy as np
 from numba import carray, njit, types
@@ -121,8 +122,20 @@ def use_package_stamp(locator: type[PackageCacheLocator]) -> None:
 
 use_package_stamp(PackageCacheLocator)
 
-kernel: Any = partial(njit, cache=True, error_model="numpy")
-"""numba's ``njit`` with hcomc's compilation policy (module docstring)."""
+_Function = TypeVar("_Function", bound=Callable[..., Any])
+
+
+@overload
+def kernel(function: _Function, /) -> _Function: ...
+@overload
+def kernel(**options: Any) -> Callable[[_Function], _Function]: ...
+def kernel(function: Any = None, /, **options: Any) -> Any:
+    """numba's ``njit`` with hcomc's compilation policy (module docstring).
+
+    Typed as returning the function it compiles, so that mypy checks every call of a kernel
+    against the kernel's annotations (numba itself ignores them)."""
+    compile_ = partial(njit, cache=True, error_model="numpy", **options)
+    return compile_ if function is None else compile_(function)
 
 
 @intrinsic

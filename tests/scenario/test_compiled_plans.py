@@ -111,13 +111,13 @@ def test_compiled_plans_equal_python_steps(name: str) -> None:
     live = _in_python(python, _check_leaders)
     compiled = Simulation(config, seed)
     steps: list[int] = []
-    step = compiled.step
+    decision_step = compiled._decision_step
 
     def counted() -> None:
         steps.append(compiled.step_index)
-        step()
+        decision_step()
 
-    compiled.step = counted  # type: ignore[method-assign]
+    compiled._decision_step = counted  # type: ignore[method-assign]
     compiled.run()
     _same_run(python, compiled)
     assert python.decisions, "the case must make plans"

@@ -52,7 +52,9 @@ def cubic_into(h: float, x0: float, v0: float, xf: float, vf: float, out: np.nda
 
 
 @kernel
-def _coefficients_array(h, x0, v0, xf, vf):
+def _coefficients_array(
+    h: np.ndarray, x0: np.ndarray, v0: np.ndarray, xf: np.ndarray, vf: np.ndarray
+) -> np.ndarray:
     out = np.empty((h.size, 4))
     for i in range(h.size):
         cubic_into(h[i], x0[i], v0[i], xf[i], vf[i], out[i])
@@ -79,7 +81,9 @@ def cubic_point(
 
 
 @kernel
-def _state_array(b1, b2, b3, b4, tau):
+def _state_array(
+    b1: np.ndarray, b2: np.ndarray, b3: np.ndarray, b4: np.ndarray, tau: np.ndarray
+) -> np.ndarray:
     out = np.empty((tau.size, 3))
     for i in range(tau.size):
         out[i, 0], out[i, 1], out[i, 2] = cubic_point(b1[i], b2[i], b3[i], b4[i], tau[i])
@@ -111,7 +115,9 @@ def cubic_minima(b: np.ndarray, h: float) -> tuple[float, float]:
 
 
 @kernel
-def _extremes_array(b1, b2, b3, b4, h):
+def _extremes_array(
+    b1: np.ndarray, b2: np.ndarray, b3: np.ndarray, b4: np.ndarray, h: np.ndarray
+) -> np.ndarray:
     out = np.empty((h.size, 2))
     b = np.empty(4)
     for i in range(h.size):

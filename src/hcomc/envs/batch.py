@@ -31,6 +31,7 @@ from hcomc.sim.step.state import (
     ROWS,
     STEP,
     WARMUP,
+    CoreArrays,
     command,
 )
 from hcomc.sim.twin import ramp_may_reach, ramp_untouched
@@ -60,7 +61,7 @@ def parameters(config: ScenarioConfig, action_period: float) -> np.ndarray:
 
 
 @kernel
-def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
+def apply_one(c: CoreArrays, i: int, accel: float, change: float, p: np.ndarray) -> None:
     """Drive vehicle i with an action (see :func:`hcomc.envs.episode.apply_action`)."""
     a = min(max(accel, -1.0), 1.0)
     limit = c.matrix[3, i] if a >= 0 else p[P_EMERGENCY]  # its a_max, or the emergency
@@ -78,20 +79,23 @@ def apply_one(c, i: int, accel: float, change: float, p: np.ndarray) -> None:
 
 
 @kernel
-def _is_ramp(c, i: int) -> bool:
+def _is_ramp(c: CoreArrays, i: int) -> bool:
     """Whether vehicle i came from the ramp (is in the ramp's release queue)."""
     queue = c.queues[c.queue_start[RAMP] : c.queue_start[RAMP + 1]]
     return bool(np.any(queue == i))
 
 
 @kernel(inline="always")
-def _rows(c, store: np.ndarray, i: int, r0: int, r1: int) -> np.ndarray:
+def _rows(c: CoreArrays, store: np.ndarray, i: int, r0: int, r1: int) -> np.ndarray:
     """Vehicle i's cells of one of run ``c``'s log columns over rows ``[r0, r1)``."""
     return rows_of(store, c.log_slot, c.log_span, i, r0, r1)
 
 
 @kernel
-def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarray, terms):
+def step_terms(
+    c: CoreArrays, ref: CoreArrays, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarray,
+    terms: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     """Observation (into ``out``) and reward terms (into ``terms``, see :data:`N_TERMS`) of
     one episode after its run ``c`` and undisturbed twin ``ref`` advanced one period from
     log row ``r0``; returns the key vehicles. Eq. 15 of the agent's pairs (normalised, times
@@ -136,14 +140,20 @@ def step_terms(c, ref, ego: int, vr: int, r0: int, p: np.ndarray, out: np.ndarra
 
 
 @kernel
-def step_terms_batch(cores, refs, egos, vrs, r0s, p, obs, terms, groups):
+def step_terms_batch(
+    cores: list[CoreArrays], refs: list[CoreArrays], egos: np.ndarray, vrs: np.ndarray,
+    r0s: np.ndarray, p: np.ndarray, obs: np.ndarray, terms: np.ndarray, groups: np.ndarray,
+) -> None:  # fmt: skip
     """:func:`step_terms` of every episode (rows of ``obs``, ``terms`` and ``groups``)."""
     for k in range(len(cores)):
         groups[k] = step_terms(cores[k], refs[k], egos[k], vrs[k], r0s[k], p, obs[k], terms[k])
 
 
 @kernel
-def apply_batch(cores, egos, actions, drive, p):
+def apply_batch(
+    cores: list[CoreArrays], egos: np.ndarray, actions: np.ndarray, drive: np.ndarray,
+    p: np.ndarray,
+) -> None:  # fmt: skip
     """:func:`apply_one` for every episode whose ``drive`` flag is set."""
     for k in range(len(cores)):
         if drive[k]:
@@ -151,7 +161,9 @@ def apply_batch(cores, egos, actions, drive, p):
 
 
 @kernel
-def twins_due(cores, pending, horizon: float, out):
+def twins_due(
+    cores: list[CoreArrays], pending: np.ndarray, horizon: float, out: np.ndarray
+) -> None:
     """:func:`~hcomc.sim.twin.ramp_may_reach` within ``horizon`` [s] of every run whose
     ``pending`` flag is set (False for the others)."""
     for k in range(len(cores)):
@@ -159,7 +171,7 @@ def twins_due(cores, pending, horizon: float, out):
 
 
 @kernel
-def ramps_untouched(cores, pending, out):
+def ramps_untouched(cores: list[CoreArrays], pending: np.ndarray, out: np.ndarray) -> None:
     """:func:`~hcomc.sim.twin.ramp_untouched` of every run whose ``pending`` flag is set
     (False for the others)."""
     for k in range(len(cores)):

@@ -25,6 +25,9 @@ __all__ = ["BATCH_SIZE", "AnySpec", "connect", "run_dask", "run_local", "run_row
 AnySpec = RunSpec | CorridorSpec
 """A run of a scenario condition (the runner's) or of a corridor."""
 
+Store = Callable[[int, Any], None]
+"""The callback a finished run is handed to: ``store(i, (row, manifest))``."""
+
 
 def run_rows(
     runs: Sequence[AnySpec],
@@ -82,12 +85,14 @@ def _call(function: Callable[..., Any], *args: Any, **options: Any) -> Any:
     return function(*args, **options)
 
 
-def _store_batch(chunk, results, store) -> None:
+def _store_batch(chunk: list[int], results: list[Any], store: Store) -> None:
     for i, result in zip(chunk, results, strict=True):
         store(i, result)
 
 
-def run_local(runs, todo, store, workers: int, restarts: int) -> None:
+def run_local(
+    runs: Sequence[Any], todo: list[int], store: Store, workers: int, restarts: int
+) -> None:
     if workers <= 1:
         for chunk in _chunks(runs, todo):
             _store_batch(chunk, _submit(_call, runs, chunk), store)
@@ -129,7 +134,7 @@ def connect(scheduler: str) -> Any:
         ) from None
 
 
-def run_dask(scheduler: str, runs, todo, store) -> None:
+def run_dask(scheduler: str, runs: Sequence[Any], todo: list[int], store: Store) -> None:
     from distributed import as_completed as dask_completed
 
     client = connect(scheduler)

@@ -120,7 +120,9 @@ def cah_accel(s: float, v: float, v_l: float, a_l: float, a: float) -> float:
 
 
 @kernel
-def _cah_array(s, v, v_l, a_l, a):
+def _cah_array(
+    s: np.ndarray, v: np.ndarray, v_l: np.ndarray, a_l: np.ndarray, a: np.ndarray
+) -> np.ndarray:
     out = np.empty(s.size)
     for i in range(s.size):
         out[i] = cah_accel(s[i], v[i], v_l[i], a_l[i], a[i])
@@ -190,7 +192,7 @@ def acc_accel(a_idm: float, a_cah: float, b: float, c: float) -> float:
 
 
 @kernel
-def _acc_array(a_idm, a_cah, b, c):
+def _acc_array(a_idm: np.ndarray, a_cah: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = np.empty(a_idm.size)
     for i in range(a_idm.size):
         out[i] = acc_accel(a_idm[i], a_cah[i], b[i], c[i])

@@ -82,7 +82,11 @@ def follow_accel_given(
 
 
 @kernel
-def _follow_array(s, v, vl, al, v0, T, s0, a, b, delta, c, iidm):
+def _follow_array(
+    s: np.ndarray, v: np.ndarray, vl: np.ndarray, al: np.ndarray, v0: np.ndarray, T: np.ndarray,
+    s0: np.ndarray, a: np.ndarray, b: np.ndarray, delta: np.ndarray, c: np.ndarray,
+    iidm: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(s.size)
     for i in range(s.size):
         out[i] = follow_accel(

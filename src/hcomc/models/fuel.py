@@ -143,7 +143,10 @@ def fuel_rate_scalar(
 
 
 @kernel
-def _fuel_array(v, a, b0, b1, b2, b3, c0, c1, c2, positive_only):
+def _fuel_array(
+    v: np.ndarray, a: np.ndarray, b0: np.ndarray, b1: np.ndarray, b2: np.ndarray, b3: np.ndarray,
+    c0: np.ndarray, c1: np.ndarray, c2: np.ndarray, positive_only: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(v.size)
     for i in range(v.size):
         out[i] = fuel_rate_scalar(

@@ -108,7 +108,9 @@ def desired_gap_scalar(v: float, dv: float, T: float, a: float, b: float, s0: fl
 
 
 @kernel
-def _desired_gap_array(v, dv, T, a, b, s0):
+def _desired_gap_array(
+    v: np.ndarray, dv: np.ndarray, T: np.ndarray, a: np.ndarray, b: np.ndarray, s0: np.ndarray
+) -> np.ndarray:
     out = np.empty(v.size)
     for i in range(v.size):
         out[i] = desired_gap_scalar(v[i], dv[i], T[i], a[i], b[i], s0[i])
@@ -232,7 +234,10 @@ def idm_accel_given(
 
 
 @kernel
-def _idm_array(s, v, dv, v0, T, a, b, s0, delta):
+def _idm_array(
+    s: np.ndarray, v: np.ndarray, dv: np.ndarray, v0: np.ndarray, T: np.ndarray, a: np.ndarray,
+    b: np.ndarray, s0: np.ndarray, delta: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(s.size)
     for i in range(s.size):
         out[i] = idm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])

@@ -151,7 +151,10 @@ def iidm_accel_given(
 
 
 @kernel
-def _iidm_array(s, v, dv, v0, T, a, b, s0, delta):
+def _iidm_array(
+    s: np.ndarray, v: np.ndarray, dv: np.ndarray, v0: np.ndarray, T: np.ndarray, a: np.ndarray,
+    b: np.ndarray, s0: np.ndarray, delta: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(s.size)
     for i in range(s.size):
         out[i] = iidm_accel(s[i], v[i], dv[i], v0[i], T[i], a[i], b[i], s0[i], delta[i])

@@ -185,7 +185,7 @@ def quintic_shape_scalar(xi: float) -> tuple[float, float, float]:
 
 
 @kernel
-def _shape_array(xi):
+def _shape_array(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     p, dp, ddp = np.empty(xi.size), np.empty(xi.size), np.empty(xi.size)
     for i in range(xi.size):
         p[i], dp[i], ddp[i] = quintic_shape_scalar(xi[i])
@@ -259,7 +259,9 @@ def lateral_offset(
 
 
 @kernel
-def _lateral_array(x, x0, xf, y0, yf):
+def _lateral_array(
+    x: np.ndarray, x0: np.ndarray, xf: np.ndarray, y0: np.ndarray, yf: np.ndarray
+) -> np.ndarray:
     out = np.empty((x.size, 3))
     for i in range(x.size):
         out[i, 0], out[i, 1], out[i, 2] = lateral_state(x[i], x0[i], xf[i], y0[i], yf[i])

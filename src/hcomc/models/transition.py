@@ -136,7 +136,7 @@ def transition_psi(tau: float, duration: float, gamma: float) -> float:
 
 
 @kernel
-def _weight_array(tau, duration, gamma):
+def _weight_array(tau: np.ndarray, duration: np.ndarray, gamma: np.ndarray) -> np.ndarray:
     out = np.empty(tau.size)
     for i in range(tau.size):
         out[i] = transition_psi(tau[i], duration[i], gamma[i])
@@ -186,7 +186,7 @@ def blend(a_ori: float, a_new: float, weight: float) -> float:
 
 
 @kernel
-def _blend_array(a_ori, a_new, weight):
+def _blend_array(a_ori: np.ndarray, a_new: np.ndarray, weight: np.ndarray) -> np.ndarray:
     out = np.empty(a_ori.size)
     for i in range(a_ori.size):
         out[i] = blend(a_ori[i], a_new[i], weight[i])

@@ -119,7 +119,9 @@ def rectangle_corners(
 
 
 @kernel
-def _corners_array(x, y, h, length, width):
+def _corners_array(
+    x: np.ndarray, y: np.ndarray, h: np.ndarray, length: np.ndarray, width: np.ndarray
+) -> np.ndarray:
     out = np.empty((x.size, 4, 2))
     cx, cy = np.empty(4), np.empty(4)
     for i in range(x.size):
@@ -180,7 +182,7 @@ def segments_intersect(p1: ArrayLike, p2: ArrayLike, q1: ArrayLike, q2: ArrayLik
 
 
 @kernel
-def _segments_array(a1, a2, b1, b2):
+def _segments_array(a1: np.ndarray, a2: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
     out = np.empty(a1.shape[0], dtype=np.bool_)
     for i in range(a1.shape[0]):
         out[i] = segment_pair_intersects(
@@ -227,7 +229,7 @@ def point_in_rectangle(points: ArrayLike, corners: ArrayLike) -> BoolArray:
 
 
 @kernel
-def _points_array(p, c):
+def _points_array(p: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = np.empty(p.shape[0], dtype=np.bool_)
     for i in range(p.shape[0]):
         out[i] = point_in_quad(p[i, 0], p[i, 1], c[i, :, 0].copy(), c[i, :, 1].copy())
@@ -267,7 +269,7 @@ def rectangles_collide(corners_a: ArrayLike, corners_b: ArrayLike) -> BoolArray:
 
 
 @kernel
-def _quads_array(a, b):
+def _quads_array(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out = np.empty(a.shape[0], dtype=np.bool_)
     for i in range(a.shape[0]):
         out[i] = quads_collide(
@@ -345,7 +347,10 @@ def vehicles_collide(
 
 
 @kernel
-def _vehicles_array(xa, ya, ha, la, wa, xb, yb, hb, lb, wb):
+def _vehicles_array(
+    xa: np.ndarray, ya: np.ndarray, ha: np.ndarray, la: np.ndarray, wa: np.ndarray,
+    xb: np.ndarray, yb: np.ndarray, hb: np.ndarray, lb: np.ndarray, wb: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(xa.size, dtype=np.bool_)
     for i in range(xa.size):
         out[i] = vehicle_pair_collides(

@@ -68,7 +68,10 @@ def critical_accel(
 
 
 @kernel
-def _critical_array(d, v_r, v_f, delay, min_distance, emergency_decel):
+def _critical_array(
+    d: np.ndarray, v_r: np.ndarray, v_f: np.ndarray, delay: np.ndarray,
+    min_distance: np.ndarray, emergency_decel: np.ndarray,
+) -> np.ndarray:  # fmt: skip
     out = np.empty(d.size)
     for i in range(d.size):
         out[i] = critical_accel(d[i], v_r[i], v_f[i], delay[i], min_distance[i], emergency_decel[i])

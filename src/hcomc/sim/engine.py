@@ -19,12 +19,14 @@ Every vehicle's deceleration is limited to ``lane_change.emergency_decel``; a co
 still happens is logged as an event, never hidden.
 
 The per-step work runs in compiled kernels (:mod:`hcomc.sim.step.loop`); this class builds their
-state and runs many steps per compiled call, live merge plans included (executed from the
-plan table of the compiled state, :mod:`hcomc.sim.step.plans`). It takes a step in Python
-only at a controller decision: a ramp vehicle entering the control zone (key vehicles, a
-first plan) or a live plan due for a replan; and on every step of a run whose CAVs confirm
-their lane changes by the game (Section III-B). Such a step runs the controller and then the
-compiled loop's own kernels, so where a step is taken does not change the run.
+state and drives every step through one compiled driver
+(:func:`~hcomc.sim.step.loop.run_steps`), many steps per call, live merge plans included
+(executed from the plan table of the compiled state, :mod:`hcomc.sim.step.plans`). The
+driver hands a step to Python only for its decisions: a ramp vehicle entering the control
+zone (key vehicles, a first plan), a live plan due for a replan, and on every step of a run
+whose CAVs confirm their lane changes by the game (Section III-B). Python then runs the
+controller and finishes the step with the driver's own kernels, so where a step's decisions
+are taken does not change the run.
 """
 
 from __future__ import annotations
@@ -98,15 +100,17 @@ class Simulation(EngineSetup):
         return self._stage == 1
 
     def resume(self, reason: int) -> None:
-        """Do what the compiled stretch that returned ``reason`` left to Python."""
+        """Do what the compiled stretch that returned ``reason`` left to Python: empty the
+        event buffer, write a row into a log that must grow first, take a step's decisions
+        and the rest of that step (:meth:`_decision_step`, then its log row), or begin the
+        next stage."""
         if reason == layout.FLUSH:
             self.flush_events()
         elif reason == layout.GROW_LOG:
             self._record()  # the row the compiled loop could not write
         elif reason == layout.NEED_PYTHON:
-            self.step()
-            k = self.step_index - self.n_warmup
-            if self.logging and k > 0 and k % self._log_every == 0:
+            self._decision_step()
+            if not step_loop.record_due_row(self.core, self.logging):
                 self._record()
         elif self.step_index >= self.stop_step:
             self._next_stage()
@@ -189,40 +193,52 @@ class Simulation(EngineSetup):
                                    c.ev_other[:n], c.ev_x[:n], c.ev_value[:n])  # fmt: skip
         c.counters[layout.N_EVENTS] = 0
 
-    def _refill_innovations(self) -> None:
-        """Draw the next innovations of the HDV estimation errors: ``(2, N)`` standard normals
-        per step, for all vehicles, in the order the steps use them (so the random stream
-        does not depend on how many steps one compiled call runs)."""
-        c = self.arrays
-        c.innov[:] = self.rng.standard_normal(c.innov.shape)
-        c.counters[layout.INNOV_CURSOR] = 0
-
     # ----------------------------------------------------------------- step
     def step(self) -> None:
-        """Advance the whole traffic state by one step ``dt``, consulting the controller.
+        """Advance the whole traffic state by one step ``dt`` (no log row), through the same
+        driver as :meth:`run` (:func:`hcomc.sim.step.loop.run_steps`): compiled, with Python
+        only for a decision."""
+        target = self.step_index + 1
+        while self.step_index < target:
+            reason = step_loop.run_steps(self.core, target, False, self.rng)
+            if reason == layout.FLUSH:
+                self.flush_events()
+            elif reason == layout.NEED_PYTHON:
+                self._decision_step()
+        self.flush_events()
 
-        Everything after the key vehicles and the controller's decisions is the compiled
-        loop's step (:func:`hcomc.sim.step.loop.step_body`, split around the lane-change game when
-        CAVs confirm their changes by it), so a step taken here equals one taken there."""
-        c, t = self.arrays, self.t
+    def _begin_step(self) -> None:
+        """The step's start (:func:`hcomc.sim.step.loop.begin_step`; a no-op when the compiled
+        driver has done it), its events moved into the log before the decisions add theirs."""
+        while not step_loop.begin_step(self.core, self.rng):
+            self.flush_events()
+        self.flush_events()
+
+    def _decision_step(self) -> None:
+        """One step with decisions: its start, the key vehicles and the controller's plans
+        (Python), then the compiled loop's step (:func:`hcomc.sim.step.loop.step_alone`, or
+        its parts around the lane-change game when CAVs confirm their changes by it), so a
+        step taken here equals one taken there."""
         self.python_steps += 1
-        if c.flags[layout.ERRORS] and c.counters[layout.INNOV_CURSOR] >= c.innov.shape[0]:
-            self._refill_innovations()
-        if c.counters[layout.N_EVENTS] + 8 * self.x.size + 64 > c.ev_t.size:
-            self.flush_events()
-        self._release(t)
+        self._begin_step()
+        t = self.t
         ids = np.flatnonzero(self.active)
+        if ids.size:
+            changing = self.origin[ids] != self.target[ids]
+            self._identify_key_vehicles(ids, changing, t)
+            if self.controller is not None:
+                self._plan_new(ids, changing, t)
+        if self.config.lane_change.cav_game:
+            self._game_step(t)
+        else:
+            step_loop.step_alone(self.core, t)
+        self.flush_events()
+
+    def _game_step(self, t: float) -> None:
+        """The compiled step with the CAVs' discretionary changes confirmed by the lane-change
+        game (Section III-B) between its front and its back."""
+        ids = step_loop.on_road(self.core)
         if ids.size == 0:
-            step_loop.push_history(self.core)
-            return
-        c.counters[layout.VEHICLE_STEPS] += ids.size
-        changing = self.origin[ids] != self.target[ids]
-        self._identify_key_vehicles(ids, changing, t)
-        if self.controller is not None:
-            self._plan_new(ids, changing, t)
-        if not self.config.lane_change.cav_game:
-            step_loop.step_body(self.core, ids, t)
-            self.flush_events()
             return
         acc, changing, vs, ls, ks, rank, lead = step_loop.step_front(self.core, ids, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
@@ -237,7 +253,6 @@ class Simulation(EngineSetup):
                 chosen, target = chosen[keep], target[keep]
             step_loop.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
         step_loop.step_back(self.core, ids, t, acc, vs, ls)
-        self.flush_events()
 
     def _release(self, t: float) -> None:
         """Insert the vehicles due at t (a no-op when repeated at the same t)."""

@@ -28,11 +28,14 @@ from hcomc._jit import kernel
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.step.loop import run_steps
-from hcomc.sim.step.state import DONE, STEP
+from hcomc.sim.step.state import DONE, STEP, CoreArrays
 
 
 @kernel(parallel=True)
-def _advance_batch(cores, rngs, stops, logging, reasons):
+def _advance_batch(
+    cores: list[CoreArrays], rngs: list[np.random.Generator], stops: np.ndarray,
+    logging: np.ndarray, reasons: np.ndarray,
+) -> None:  # fmt: skip
     """Advance every run to its stop (or until it needs Python), one thread per run."""
     for j in prange(len(cores)):
         k = np.int64(j)
@@ -40,7 +43,10 @@ def _advance_batch(cores, rngs, stops, logging, reasons):
 
 
 @kernel
-def _advance_batch_serial(cores, rngs, stops, logging, reasons):
+def _advance_batch_serial(
+    cores: list[CoreArrays], rngs: list[np.random.Generator], stops: np.ndarray,
+    logging: np.ndarray, reasons: np.ndarray,
+) -> None:  # fmt: skip
     """The same loop on the calling thread: no thread pool (safe in forked worker processes).
 
     A function of its own, not ``kernel(_advance_batch.py_func)``: numba's cache
@@ -108,7 +114,7 @@ def _typed_list(values: list[Any]) -> List:
 
 
 @kernel
-def _list_of(first):
+def _list_of(first: Any) -> Any:
     """A compiled list holding ``first``, typed by it."""
     values = List()
     values.append(first)
@@ -116,19 +122,19 @@ def _list_of(first):
 
 
 @kernel
-def _list_append(values, item):
+def _list_append(values: Any, item: Any) -> None:
     """Append ``item`` to a compiled list."""
     values.append(item)
 
 
 @kernel
-def _list_set(values, k, item):
+def _list_set(values: Any, k: int, item: Any) -> None:
     """Replace entry k of a compiled list."""
     values[k] = item
 
 
 @kernel
-def _list_pop(values):
+def _list_pop(values: Any) -> None:
     """Drop the last entry of a compiled list."""
     values.pop()
 
@@ -215,7 +221,7 @@ def advance_ensemble(
 
 
 @kernel
-def _step_indices(cores, out):
+def _step_indices(cores: list[CoreArrays], out: np.ndarray) -> None:
     """Every run's step counter (what :attr:`Simulation.step_index` reads, for all at once)."""
     for k in range(len(cores)):
         out[k] = cores[k].counters[STEP]

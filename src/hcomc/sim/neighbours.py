@@ -65,7 +65,9 @@ def sort_entries_into(
 
 
 @kernel
-def _order_by_lane(lane: np.ndarray, key: np.ndarray, order: np.ndarray, buffer: np.ndarray):
+def _order_by_lane(
+    lane: np.ndarray, key: np.ndarray, order: np.ndarray, buffer: np.ndarray
+) -> bool:
     """The stable order of ``key`` in ``order[:n]``, found lane by lane: the entries are
     partitioned by lane (ramp, lane 1, lane 2) in their given order and each lane is sorted
     by :func:`~hcomc.sim.arrays.sort_runs`, linear for the entries of a lane (nearly in
@@ -140,7 +142,9 @@ def neighbours_into(
 
 
 @kernel
-def _neighbours_of(vehicle, lane_of, rank, entries, step):
+def _neighbours_of(
+    vehicle: np.ndarray, lane_of: np.ndarray, rank: np.ndarray, entries: np.ndarray, step: int
+) -> np.ndarray:
     out = np.empty(entries.size, dtype=np.int64)
     neighbours_into(vehicle, lane_of, rank[entries], step, out)
     return out
@@ -159,7 +163,9 @@ def lookup_into(
 
 
 @kernel
-def _lookup_many(key, lane_of, vehicle, lane, x):
+def _lookup_many(
+    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     leader = np.empty(x.size, dtype=np.int64)
     follower = np.empty(x.size, dtype=np.int64)
     lookup_into(key, lane_of, vehicle, lane, x, leader, follower)

@@ -41,6 +41,7 @@ from hcomc.sim.step.plans import commanded_mask, encode_plan, holding_mask, repl
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
+    from hcomc.control.lane_change_cost import GameVehicle
     from hcomc.interface import Fleet
     from hcomc.sim.log import SimulationLog
     from hcomc.sim.neighbours import LaneIndex
@@ -161,7 +162,7 @@ def game_confirms(
     Returns which of the ``chosen`` changes (to lanes ``target``) go ahead."""
     from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
 
-    def vehicle(i: int):
+    def vehicle(i: int) -> GameVehicle | None:
         return game_vehicle(x, v, fleet, i)
 
     keep = np.ones(chosen.size, dtype=bool)
@@ -172,8 +173,10 @@ def game_confirms(
             continue
         fol = int(new_fol[k])
         fv_idm = config.cav if fol >= 0 and fleet.kind[fol] == Kind.CAV else config.hdv
+        sv = vehicle(i)
+        assert sv is not None  # a chosen vehicle is on the road
         decision = lane_change_game(
-            vehicle(i), vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
+            sv, vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
             params=game_params(config), sv_idm=config.cav, fv_idm=fv_idm,
         )  # fmt: skip
         keep[k] = decision.change

@@ -62,7 +62,7 @@ def _copy_log_without(src: SimulationLog, dst: SimulationLog, rows: int, gone: n
 
 
 @kernel
-def ramp_untouched(c) -> bool:
+def ramp_untouched(c: layout.CoreArrays) -> bool:
     """Whether every ramp vehicle released so far in run ``c`` is still on the ramp before
     the acceleration lane and keeping its lane: the state part of :func:`can_twin`."""
     start, first = c.consts[layout.ACCEL_START], c.queue_start[layout.RAMP]
@@ -75,7 +75,7 @@ def ramp_untouched(c) -> bool:
 
 
 @kernel
-def ramp_may_reach(c, horizon: float) -> bool:
+def ramp_may_reach(c: layout.CoreArrays, horizon: float) -> bool:
     """Whether a ramp vehicle of run ``c`` might reach the acceleration lane within
     ``horizon`` [s]: a released one from its position and speed, one due for release by then
     from its release point and speed, each at its maximum acceleration all the way.

@@ -12,6 +12,7 @@ import io
 import os
 import shutil
 from pathlib import Path
+from typing import Any
 
 __all__ = ["INSTALL_HINT", "SumoFormatError", "SumoMissingError", "sumo_binary"]
 
@@ -50,7 +51,7 @@ def sumo_binary(name: str) -> str:
     return found
 
 
-def import_libsumo():
+def import_libsumo() -> Any:
     """The in-process SUMO API (``libsumo``), or :class:`SumoMissingError`."""
     # libsumo prints a pyarrow version notice with print(); keep stdout clean for --json
     notice = io.StringIO()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
@@ -110,7 +112,7 @@ def _grid(series: pd.Series, pairs: list, pens: list) -> np.ndarray:
     return grid
 
 
-def _contrast(image, value: float) -> str:
+def _contrast(image: Any, value: float) -> str:
     """Black or white text, whichever reads better on the cell's colour."""
     r, g, b, _ = image.cmap(image.norm(value))
     return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.5 else "white"

@@ -88,6 +88,7 @@ from hcomc.sim.step.plans import (
     P_VR,
     P_VR_CMD,
     P_VR_STARTED,
+    compact_plans,
     replan_due,
     vr_following,
 )  # fmt: skip
@@ -332,18 +333,13 @@ def finish_plans(road: Layout, s: State) -> None:
     """Drop the plans whose merge is complete or whose VR or VMC left the road or the
     mainline; the others keep their order."""
     road, s = borrow_all(road), borrow_all(s)
-    pi, pf = s.plan_int, s.plan_f
-    m = 0
-    for k in range(s.counters[C_PLANS]):
+    pi, n = s.plan_int, s.counters[C_PLANS]
+    for k in range(n):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
         merged = road.code_kind[s.code[vr]] == KIND_MAIN and s.code[vr] == s.target[vr]
         gone = s.status[vr] != ON_ROAD or (
             vmc >= 0 and (s.status[vmc] != ON_ROAD or road.code_kind[s.target[vmc]] != KIND_MAIN)
         )
         if merged or gone:
-            continue
-        if m != k:
-            pi[m] = pi[k]
-            pf[m] = pf[k]
-        m += 1
-    s.counters[C_PLANS] = m
+            pi[k, P_VR] = -1
+    s.counters[C_PLANS] = compact_plans(pi, s.plan_f, n)

@@ -38,7 +38,10 @@ from hcomc.sim.step.state import (
 
 # --------------------------------------------------------------------------- decide
 @kernel
-def _mobil(c, ids, cand_pos, lead, vs, ls, ks, rank, target, force):
+def _mobil(
+    c: CoreArrays, ids: np.ndarray, cand_pos: np.ndarray, lead: np.ndarray, vs: np.ndarray,
+    ls: np.ndarray, ks: np.ndarray, rank: np.ndarray, target: np.ndarray, force: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide_into`) for the vehicles at
     positions ``cand_pos`` of ``ids``: ``(vehicles, targets)`` accepted, views of the step's
     work rows."""

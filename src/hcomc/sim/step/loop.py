@@ -35,6 +35,7 @@ from hcomc.sim.step.lane_change import (
     start_lane_changes,
 )
 from hcomc.sim.step.motion import (
+    StepAccelerations,
     bookkeeping,
     check_collisions,
     follow_many,
@@ -85,9 +86,10 @@ from hcomc.sim.step.state import (
 )
 
 __all__ = [
-    "commanded_changes", "discretionary_changes", "due_plans", "follow_many", "holding",
-    "push_history", "record_row", "release", "run_steps", "start_lane_changes",
-    "step_accelerations", "step_back", "step_body", "step_finish", "step_front",
+    "begin_step", "commanded_changes", "discretionary_changes", "due_plans", "follow_many",
+    "holding", "on_road", "push_history", "record_due_row", "record_row", "release",
+    "run_steps", "start_lane_changes", "step_accelerations", "step_alone", "step_back",
+    "step_body", "step_finish", "step_front", "step_time",
 ]  # fmt: skip
 
 
@@ -133,7 +135,7 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
 
 # ---------------------------------------------------------------------- one step
 @kernel
-def step_front(c: CoreArrays, ids: np.ndarray, t: float):
+def step_front(c: CoreArrays, ids: np.ndarray, t: float) -> StepAccelerations:
     """The accelerations of a step (:func:`step_accelerations`) with the live plans' followers
     and virtual leaders, then the lane changes the plans command now. Returns
     ``(acc, changing, vehicle, lane, key, rank, lead)``, views of the step's work rows (valid
@@ -205,43 +207,75 @@ def needs_python(c: CoreArrays, t: float) -> bool:
 
 
 @kernel
-def step_alone(c: CoreArrays, t: float) -> None:
-    """One whole step after release when no decision is due (the fast path; live plans are
-    executed from the plan table)."""
+def step_time(c: CoreArrays) -> float:
+    """The time t [s] of the step the state is at (negative during the warm-up)."""
+    return -c.consts[WARMUP] + c.counters[STEP] * c.consts[DT]
+
+
+@kernel
+def begin_step(c: CoreArrays, rng: np.random.Generator) -> bool:
+    """The start of every step, before any decision: room in the event buffer for the step's
+    events (False, doing nothing, when the buffer must be emptied first), the HDVs' next
+    error innovations when the drawn ones are used up (from the run's generator, the same
+    stream whoever calls), then the release of the vehicles due at t. Doing it twice in one
+    step changes nothing."""
+    if c.counters[N_EVENTS] + 8 * c.x.size + 64 > c.ev_t.size:
+        return False
+    if c.flags[ERRORS] > 0 and c.counters[INNOV_CURSOR] >= c.innov.shape[0]:
+        c.innov[:] = rng.standard_normal(c.innov.shape)
+        c.counters[INNOV_CURSOR] = 0
+    release(c, step_time(c))
+    return True
+
+
+@kernel
+def on_road(c: CoreArrays) -> np.ndarray:
+    """The vehicles on the road, counted into the run's vehicle-steps (a view of the step's
+    work row); with none, the step ends here (its history pushed)."""
     work = c.scratch_int[S_IDS]
     ids = work[: nonzero_into(c.active, work)]
     if ids.size == 0:
         push_history(c)
-        return
     c.counters[VEHICLE_STEPS] += ids.size
-    step_body(c, ids, t)
+    return ids
+
+
+@kernel
+def step_alone(c: CoreArrays, t: float) -> None:
+    """One whole step after its start and decisions, without the game (live plans are
+    executed from the plan table)."""
+    ids = on_road(c)
+    if ids.size > 0:
+        step_body(c, ids, t)
+
+
+@kernel
+def record_due_row(c: CoreArrays, log_rows: bool) -> bool:
+    """After a step, with ``log_rows``: write the log row due now (every ``log_every``-th
+    step after the warm-up). False, writing nothing, when the log must grow first."""
+    k = c.counters[STEP] - c.flags[N_WARMUP]
+    if log_rows and k > 0 and k % c.flags[LOG_EVERY] == 0:
+        if not record_row(c, c.counters[ROWS], step_time(c)):
+            return False
+        c.counters[ROWS] += 1
+    return True
 
 
 @kernel
 def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator) -> int:
-    """Advance until step ``stop`` or until Python is needed; returns why it stopped.
-
-    With ``log_rows`` every ``log_every``-th step after the warm-up writes a log row. The
-    HDVs' error innovations are drawn from the run's generator ``rng`` when they run out,
-    exactly as the engine's Python step draws them (the same stream whichever draws).
+    """The step driver: advance until step ``stop`` or until Python is needed; returns why it
+    stopped. Each step is :func:`begin_step`, the decisions, :func:`step_alone` and
+    :func:`record_due_row`; at a decision (:func:`needs_python`) it returns ``NEED_PYTHON``
+    after the step's start, and the engine takes the decisions and the rest of that step
+    (:meth:`hcomc.sim.engine.Simulation.resume`) with the same kernels.
     """
-    dt, warmup = c.consts[DT], c.consts[WARMUP]
-    margin = 8 * c.x.size + 64
     while c.counters[STEP] < stop:
-        if c.counters[N_EVENTS] + margin > c.ev_t.size:
+        if not begin_step(c, rng):
             return FLUSH
-        if c.flags[ERRORS] > 0 and c.counters[INNOV_CURSOR] >= c.innov.shape[0]:
-            c.innov[:] = rng.standard_normal(c.innov.shape)
-            c.counters[INNOV_CURSOR] = 0
-        t = -warmup + c.counters[STEP] * dt
-        release(c, t)
+        t = step_time(c)
         if needs_python(c, t):
             return NEED_PYTHON
         step_alone(c, t)
-        k = c.counters[STEP] - c.flags[N_WARMUP]
-        if log_rows and k > 0 and k % c.flags[LOG_EVERY] == 0:
-            t_row = -warmup + c.counters[STEP] * dt
-            if not record_row(c, c.counters[ROWS], t_row):
-                return GROW_LOG  # the row is written once the log has grown
-            c.counters[ROWS] += 1
+        if not record_due_row(c, log_rows):
+            return GROW_LOG  # the row is written once the log has grown
     return DONE

@@ -73,7 +73,16 @@ _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
+StepAccelerations = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+]
+"""What :func:`step_accelerations` returns: ``(acc, changing, vehicle, lane, key, rank,
+lead)``, views of the step's work rows."""
+
+
 # ---------------------------------------------------------------------------- release
+
+
 @kernel
 def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
     """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
@@ -157,14 +166,18 @@ def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.nda
 
 
 @kernel(inline="always")
-def _follow_exact(matrix, iidm, i, s, v, vl, al):
+def _follow_exact(
+    matrix: np.ndarray, iidm: np.ndarray, i: int, s: float, v: float, vl: float, al: float
+) -> float:
     """Eq. 1/3 of vehicle i with exact inputs (lane end, virtual leaders)."""
     return follow_accel(s, v, vl, al, matrix[0, i], matrix[1, i], matrix[2, i], matrix[3, i],
                         matrix[4, i], matrix[5, i], matrix[6, i], iidm[i])  # fmt: skip
 
 
 @kernel(inline="always")  # its six views returned from a call would be reference-counted
-def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
+def lane_index(
+    c: CoreArrays, ids: np.ndarray, changing: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its
     body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``, views of
@@ -202,7 +215,7 @@ def lane_index(c: CoreArrays, ids: np.ndarray, changing: np.ndarray):
 def step_accelerations(
     c: CoreArrays, ids: np.ndarray, t: float, following: np.ndarray, vv_fol: np.ndarray,
     vv_x: np.ndarray, vv_v: np.ndarray, vv_a: np.ndarray, vv_len: np.ndarray,
-):  # fmt: skip
+) -> StepAccelerations:  # fmt: skip
     """Accelerations of every active vehicle ``ids`` for this step, from one snapshot.
 
     Car following (Eq. 1/3, HDVs perceiving Eq. 2) behind the leader of the lane it drives
@@ -234,7 +247,10 @@ def step_accelerations(
 
 
 @kernel
-def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
+def _blend_changers(
+    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, changing: np.ndarray,
+    in_ori: np.ndarray, in_tgt: np.ndarray, vs: np.ndarray, ls: np.ndarray, ks: np.ndarray,
+) -> None:  # fmt: skip
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
     overlaps."""
@@ -261,7 +277,11 @@ def _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks):
 
 
 @kernel
-def _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len):
+def _limits(
+    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, changing: np.ndarray,
+    following: np.ndarray, vv_fol: np.ndarray, vv_x: np.ndarray, vv_v: np.ndarray,
+    vv_a: np.ndarray, vv_len: np.ndarray,
+) -> None:  # fmt: skip
     """The lane end, virtual leaders, commanded accelerations, the emergency limit and
     scripted profiles."""
     n = ids.size

@@ -148,7 +148,10 @@ def holding_mask(pi: np.ndarray, n_plans: int, is_cav: np.ndarray) -> np.ndarray
 
 # ------------------------------------------------------------------ virtual leaders
 @kernel(inline="always")
-def _virtual(pf, k, col, tau, after, x, v, a):
+def _virtual(
+    pf: np.ndarray, k: int, col: int, tau: float, after: int, x: np.ndarray, v: np.ndarray,
+    a: np.ndarray,
+) -> tuple[bool, float, float, float]:  # fmt: skip
     """(exists, x, v, a) of plan k's virtual vehicle at ``col``: its cubic within the horizon,
     after it the state of vehicle ``after`` (-1: the virtual vehicle has ended)."""
     if tau <= pf[k, F_HORIZON]:
@@ -163,7 +166,7 @@ def _virtual(pf, k, col, tau, after, x, v, a):
 def virtual_rows(
     pi: np.ndarray, pf: np.ndarray, n_plans: int, t: float, x: np.ndarray, v: np.ndarray,
     a: np.ndarray, length: np.ndarray,
-):  # fmt: skip
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(followers, x_vv, v_vv, a_vv, length_vv)`` of every virtual vehicle in force at t,
     plan by plan VV0, VV1, VV2 (the states of :func:`hcomc.control.virtual_vehicle.virtual_states`).
 
@@ -253,7 +256,11 @@ def due_plans(c: CoreArrays, t: float) -> np.ndarray:
 
 # ------------------------------------------------------------------------ execution
 @kernel
-def _command(c, ids, t, lead, vs, ls, ks, rank, i, target, duration, release_x, vr, other):
+def _command(
+    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
+    ks: np.ndarray, rank: np.ndarray, i: int, target: int, duration: float, release_x: float,
+    vr: int, other: int,
+) -> bool:  # fmt: skip
     """One commanded lane change (:func:`hcomc.sim.step.lane_change.commanded_changes`)."""
     result = commanded_changes(
         c, ids, t, lead, vs, ls, ks, rank, np.array([i]), np.array([target]),
@@ -308,20 +315,30 @@ def execute_plans(
         pi[k, P_RELEASED] = started < 0
 
 
+@kernel(inline="always")
+def compact_plans(plan_int: np.ndarray, plan_f: np.ndarray, n: int) -> int:
+    """Close the gaps that dropped plans (VR set to -1) left in the first ``n`` rows of the plan
+    table, the other plans keeping their order; returns how many remain."""
+    m = 0
+    for k in range(n):
+        if plan_int[k, P_VR] < 0:
+            continue
+        if m != k:
+            plan_int[m] = plan_int[k]
+            plan_f[m] = plan_f[k]
+        m += 1
+    return m
+
+
 @kernel
 def finish_plans(c: CoreArrays) -> None:
     """Drop the plans whose merge is complete (VR on lane 1, keeping it) or whose VR or VMC
     left the road; the others keep their order."""
-    pi, pf = c.plan_int, c.plan_f
-    m = 0
-    for k in range(c.counters[N_PLANS]):
+    pi, n = c.plan_int, c.counters[N_PLANS]
+    for k in range(n):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
         merged = c.lane[vr] == MAIN_1 and c.origin[vr] == c.target[vr]
         gone = not c.active[vr] or (vmc >= 0 and not c.active[vmc])
         if merged or gone:
-            continue
-        if m != k:
-            pi[m] = pi[k]
-            pf[m] = pf[k]
-        m += 1
-    c.counters[N_PLANS] = m
+            pi[k, P_VR] = -1
+    c.counters[N_PLANS] = compact_plans(pi, c.plan_f, n)

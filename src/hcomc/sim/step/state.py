@@ -136,7 +136,7 @@ class CoreArrays(NamedTuple):
 class CoreType(types.StructRef):
     """numba type of :class:`Core`."""
 
-    def preprocess_fields(self, fields):
+    def preprocess_fields(self, fields: Any) -> tuple[tuple[str, Any], ...]:
         return tuple((name, types.unliteral(typ)) for name, typ in fields)
 
 
