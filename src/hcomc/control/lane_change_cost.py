@@ -11,7 +11,7 @@ functions and solves the game.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -32,7 +32,10 @@ if TYPE_CHECKING:
 
 __all__ = [
     "INFEASIBLE_SAFETY_COST",
+    "CarFollowing",
     "GameVehicle",
+    "LeaderTrack",
+    "Manoeuvre",
     "comfort_cost",
     "efficiency_cost",
     "fv_kinematics",
@@ -82,16 +85,44 @@ class GameVehicle:
             raise ValueError(f"desired_speed must be finite and > 0, got {self.desired_speed!r}")
 
 
-def leader_track(leader: GameVehicle | None, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+class LeaderTrack(NamedTuple):
+    """A leader's motion over the horizon, each (N,) at the sample times."""
+
+    rear: np.ndarray  # rear-bumper position [m] (+inf: no leader)
+    v: np.ndarray  # speed [m/s]
+
+
+class CarFollowing(NamedTuple):
+    """SV's car-following model (:class:`~hcomc.config.IDMParams` with SV's desired speed)."""
+
+    v0: float  # desired speed [m/s]
+    T: float  # time headway [s]
+    a_max: float  # maximum acceleration [m/s^2]
+    b: float  # comfortable deceleration [m/s^2]
+    s0: float  # minimum gap [m]
+    delta: float  # acceleration exponent [-]
+    iidm: bool  # the IIDM (else the IDM)
+
+
+class Manoeuvre(NamedTuple):
+    """How SV's motion over the horizon is integrated and blended (Eq. 14)."""
+
+    dt: float  # time step [s]
+    horizon: float  # lane-change duration H [s]
+    gamma: float  # γ of the Eq. 14 transition [-] (from its tolerance ε)
+    emergency_decel: float  # floor of the applied deceleration [m/s^2], > 0
+
+
+def leader_track(leader: GameVehicle | None, t: FloatArray) -> LeaderTrack:
     """Rear-bumper position (N,) [m] and speed (N,) [m/s] of a constant-speed leader at ``t``.
 
     An absent leader is at ``+inf`` with speed 0, so every gap to it is ``+inf`` (IDM free road,
     Eq. 15 gives 0).
     """
     if leader is None:
-        return np.full(t.shape, np.inf), np.zeros(t.shape)
+        return LeaderTrack(np.full(t.shape, np.inf), np.zeros(t.shape))
     rear = leader.x - leader.length + leader.v * t
-    return rear, np.full(t.shape, float(leader.v))
+    return LeaderTrack(rear, np.full(t.shape, float(leader.v)))
 
 
 def simulate_sv(
@@ -110,9 +141,7 @@ def simulate_sv(
     """
     n, dt = params.n_steps, params.dt
     t_start: FloatArray = dt * np.arange(n, dtype=np.float64)
-    old_rear, old_v = leader_track(old, t_start)
-    new_rear, new_v = leader_track(new, t_start)
-    car_following = (
+    model = CarFollowing(
         float(sv.desired_speed),
         idm.time_headway,
         idm.max_accel,
@@ -121,21 +150,28 @@ def simulate_sv(
         idm.exponent,
         idm.variant == "iidm",
     )
+    manoeuvre = Manoeuvre(
+        dt, params.horizon, transition_gamma(params.transition_tolerance), params.emergency_decel
+    )
     return _simulate_sv_kernel(
-        float(sv.x), float(sv.v), old_rear, old_v, new_rear, new_v, *car_following,
-        dt, params.horizon, transition_gamma(params.transition_tolerance),
-        params.emergency_decel,
+        float(sv.x), float(sv.v), leader_track(old, t_start), leader_track(new, t_start), model,
+        manoeuvre,
     )  # fmt: skip
 
 
 @kernel
 def _simulate_sv_kernel(
-    x0, v_start, old_rear, old_v, new_rear, new_v, v0, T, a_max, b, s0, delta, iidm, dt,
-    horizon, gamma, emergency_decel,
-):  # fmt: skip
-    """:func:`simulate_sv`'s loop: row 0 (LC) with Ψ(t_{k-1}) of Eq. 14, row 1 (K) with
-    weight 0; the car-following law is :func:`~hcomc.models.iidm.iidm_accel` if ``iidm``,
-    else :func:`~hcomc.models.idm.idm_accel`."""
+    x0: float, v_start: float, old: LeaderTrack, new: LeaderTrack, model: CarFollowing,
+    manoeuvre: Manoeuvre,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`simulate_sv`'s loop from SV's position ``x0`` and speed ``v_start`` behind the
+    ``old`` and ``new`` leaders: row 0 (LC) with Ψ(t_{k-1}) of Eq. 14, row 1 (K) with
+    weight 0; the car-following law is :func:`~hcomc.models.iidm.iidm_accel` if
+    ``model.iidm``, else :func:`~hcomc.models.idm.idm_accel`."""
+    old_rear, old_v = old
+    new_rear, new_v = new
+    v0, T, a_max, b, s0, delta, iidm = model
+    dt, horizon, gamma, emergency_decel = manoeuvre
     n = old_rear.size
     xs, vs, acc = np.empty((2, n)), np.empty((2, n)), np.empty((2, n))
     for row in range(2):

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.envs.observation import observe, pair_safety
+from hcomc.envs.observation import SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR
@@ -102,12 +102,12 @@ def step_terms(
     the period), Eq. 16 of VR and VMC, Eq. 17 of VR (against its free road) plus eta times
     that of VMC, VMR and VNR (against the twin)."""
     is_cav = np.logical_not(c.is_hdv)
-    group = observe(out, c.x, c.v, c.lane, c.active, is_cav, c.origin, c.target, c.lc_x0,
-                    c.lc_xf, ego, vr, p[P_ACCEL_END])  # fmt: skip
+    scene = Scene(c.x, c.v, c.lane, c.active, is_cav, c.length, c.origin, c.target, c.lc_x0,
+                  c.lc_xf)  # fmt: skip
+    group = observe(out, scene, ego, vr, p[P_ACCEL_END])
     terms[T_SAFETY] = p[P_PERIOD] * pair_safety(
-        c.x, c.v, c.lane, c.origin, c.target, c.active, c.length, is_cav, ego, p[P_DELAY_CAV],
-        p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG],
-    )  # fmt: skip
+        scene, ego, SafetyParams(p[P_DELAY_CAV], p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG])
+    )
     r1 = c.counters[ROWS]
     fuel, own, others = 0.0, 0.0, 0.0
     if r1 > r0:

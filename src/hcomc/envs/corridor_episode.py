@@ -28,7 +28,7 @@ import numpy as np
 
 from hcomc.config import ConfigError
 from hcomc.corridor import Corridor
-from hcomc.envs.observation import N_OBS, observe, pair_safety
+from hcomc.envs.observation import N_OBS, SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.options import RewardWeights
 from hcomc.models.following import follow_accel
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate_scalar
@@ -97,8 +97,10 @@ class CorridorAgents:
         self._target_view = np.zeros(n, dtype=np.int64)
         self._lc_x0, self._lc_xf = np.zeros(n), np.ones(n)
         ctl = c.control
-        self._safety = (ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
-                        ctl.safety_emergency_decel)  # fmt: skip
+        self._safety = SafetyParams(
+            ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
+            ctl.safety_emergency_decel,
+        )  # fmt: skip
         self._fuel = FUEL_DEFAULT.coefficients()
 
     @property
@@ -156,8 +158,7 @@ class CorridorAgents:
         target = self._view(i, code)
         obs = np.zeros(N_OBS)
         lane_end = float(self.layout.code_x1[code])
-        group = observe(obs, s.x, s.v, s.view_lane, s.view_active, self.veh.cav, s.view_lane,
-                        target, self._lc_x0, self._lc_xf, i, i, lane_end)  # fmt: skip
+        group = observe(obs, self._scene(target), i, i, lane_end)
         changing = s.target[i] != s.code[i]
         obs[4] = min(max((t - s.lc_start[i]) / s.lc_dur[i], 0.0), 1.0) if changing else 0.0
         return obs.astype(np.float32), group
@@ -172,6 +173,13 @@ class CorridorAgents:
         tgt = int(s.target[i])
         target[i] = 0 if tgt == code else 1 if tgt == 0 else 2 if tgt == 1 else -1
         return target
+
+    def _scene(self, target: np.ndarray) -> Scene:
+        """The local view filled by :meth:`_view` (its ``target`` lanes) as the observation's
+        kernels read it: every vehicle keeps its view lane (the origin is the view lane)."""
+        s = self.s
+        return Scene(s.x, s.v, s.view_lane, s.view_active, self.veh.cav, self.veh.length,
+                     s.view_lane, target, self._lc_x0, self._lc_xf)  # fmt: skip
 
     def apply(self, i: int, action: np.ndarray) -> None:
         """Set agent i's command for the next period: ``action[0]`` in [-1, 1] is the
@@ -238,8 +246,7 @@ class CorridorAgents:
         if s.status[i] != ON_ROAD:
             return 0.0
         target = self._view(i, int(self.fleet.start_code[i]))
-        return float(pair_safety(s.x, s.v, s.view_lane, s.view_lane, target, s.view_active,
-                                 self.veh.length, self.veh.cav, i, *self._safety))  # fmt: skip
+        return float(pair_safety(self._scene(target), i, self._safety))
 
     def _outcome(self, i: int, collisions_before: int) -> Outcome:
         """How agent i's drive ended in the last step (:data:`Outcome`)."""

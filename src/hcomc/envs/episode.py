@@ -43,7 +43,7 @@ from hcomc.envs.batch import (
     rewards,
     step_terms,
 )
-from hcomc.envs.observation import N_OBS, observe, pair_safety
+from hcomc.envs.observation import N_OBS, SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.options import EnvOptions
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.road import Kind, Lane
@@ -283,9 +283,13 @@ class MergeEpisode:
     def observe_into(self, out: np.ndarray, i: int) -> np.ndarray:
         """Write vehicle i's observation (:func:`~hcomc.envs.observation.observe`) into
         ``out``; returns the key vehicles around VR."""
+        return observe(out, self.scene(), i, self.vr, self.config.road.accel_lane_end)
+
+    def scene(self) -> Scene:
+        """The vehicles of :attr:`sim` as the observation's kernels read them."""
         s = self.sim
-        return observe(out, s.x, s.v, s.lane, s.active, self.is_cav, s.origin, s.target,
-                       s.lc_x0, s.lc_xf, i, self.vr, self.config.road.accel_lane_end)  # fmt: skip
+        return Scene(s.x, s.v, s.lane, s.active, self.is_cav, s.fleet.length, s.origin,
+                     s.target, s.lc_x0, s.lc_xf)  # fmt: skip
 
     # ------------------------------------------------- pieces of every reward
     def merged(self) -> bool:
@@ -327,11 +331,9 @@ class MergeEpisode:
     # that step_terms uses for the single agent.
     def safety_of(self, i: int) -> float:
         """Eq. 15 over vehicle i's pairs now, normalised, times the action period [s]."""
-        s, p = self.sim, self.kernel_params
-        return p[P_PERIOD] * pair_safety(
-            s.x, s.v, s.lane, s.origin, s.target, s.active, s.fleet.length, self.is_cav, i,
-            p[P_DELAY_CAV], p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG],
-        )  # fmt: skip
+        p = self.kernel_params
+        safety = SafetyParams(p[P_DELAY_CAV], p[P_DELAY_HDV], p[P_MIN_DIST], p[P_A_MERG])
+        return p[P_PERIOD] * pair_safety(self.scene(), i, safety)
 
     def fuel_of(self, i: int, r0: int, r1: int) -> float:
         """Eq. 16: vehicle i's fuel over log rows ``[r0, r1)`` [mL] (0 for i < 0)."""

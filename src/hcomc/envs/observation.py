@@ -16,6 +16,8 @@ kernel), applied to VR's current position.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from hcomc._jit import kernel
@@ -40,6 +42,31 @@ OBS_NAMES: tuple[str, ...] = EGO_NAMES + tuple(
 _V_MAX = 70.0  # [m/s] bound of speeds in the observation space
 
 
+class Scene(NamedTuple):
+    """The vehicles an agent observes, each (N,) by vehicle index."""
+
+    x: np.ndarray  # front-bumper position [m]
+    v: np.ndarray  # speed [m/s]
+    lane: np.ndarray  # int: current lane (0 ramp and acceleration lane, 1, 2; -1 elsewhere)
+    active: np.ndarray  # bool: on the road
+    is_cav: np.ndarray  # bool: connected (a CAV)
+    length: np.ndarray  # vehicle length [m]
+    origin: np.ndarray  # int: lane a lane change started from (= lane when keeping)
+    target: np.ndarray  # int: lane a lane change goes to (= lane when keeping)
+    lc_x0: np.ndarray  # position where the lane change started [m]
+    lc_xf: np.ndarray  # position where it ends [m]
+
+
+class SafetyParams(NamedTuple):
+    """The parameters of Eq. 15 (``config.control.safety_*``) as :func:`pair_safety` takes
+    them."""
+
+    delay_cav: float  # delay T of a CAV follower [s]
+    delay_hdv: float  # delay T of an HDV follower (reaction + brake) [s]
+    min_distance: float  # residual distance D [m]
+    a_merg: float  # the leader's emergency deceleration [m/s^2], > 0; the unit of the result
+
+
 def observation_bounds(road_length: float) -> tuple[np.ndarray, np.ndarray]:
     """``(low, high)`` of the observation space (float32) for a road of this length [m]."""
     ego_low = [0.0, 0.0, -road_length, 0.0, 0.0]
@@ -52,13 +79,11 @@ def observation_bounds(road_length: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 @kernel
-def observe(
-    out: np.ndarray, x: np.ndarray, v: np.ndarray, lane: np.ndarray, active: np.ndarray,
-    is_cav: np.ndarray, origin: np.ndarray, target: np.ndarray, lc_x0: np.ndarray,
-    lc_xf: np.ndarray, ego: int, vr: int, accel_end: float,
-) -> np.ndarray:  # fmt: skip
-    """Write the observation of agent ``ego`` into ``out``; returns the key vehicles (role
-    order) around ``vr``."""
+def observe(out: np.ndarray, scene: Scene, ego: int, vr: int, accel_end: float) -> np.ndarray:
+    """Write the observation of agent ``ego`` in ``scene`` into ``out`` (``accel_end``: the
+    end of the agent's acceleration lane [m]); returns the key vehicles (role order) around
+    ``vr``."""
+    x, v, lane, active, is_cav, _, origin, target, lc_x0, lc_xf = scene
     group = key_vehicle_indices(x, lane, active, vr)
     changing = origin[ego] != target[ego]
     out[0] = v[ego]
@@ -83,17 +108,16 @@ def observe(
 
 
 @kernel
-def pair_safety(
-    x: np.ndarray, v: np.ndarray, lane: np.ndarray, origin: np.ndarray, target: np.ndarray,
-    active: np.ndarray, length: np.ndarray, is_cav: np.ndarray, ego: int, delay_cav: float,
-    delay_hdv: float, min_distance: float, a_merg: float,
-) -> float:  # fmt: skip
-    """Eq. 15 over the agent's follower-leader pairs now, as a fraction of a_merg in [0, 1].
+def pair_safety(scene: Scene, ego: int, params: SafetyParams) -> float:
+    """Eq. 15 over agent ``ego``'s follower-leader pairs now, as a fraction of a_merg in
+    [0, 1].
 
     The pairs are the agent behind its leader and its follower behind it, in its lane and,
     during a lane change, also in its target lane; ``inf`` (no deceleration avoids a crash)
     and anything above a_merg count as 1.
     """
+    x, v, lane, active, is_cav, length, origin, target, _, _ = scene
+    delay_cav, delay_hdv, min_distance, a_merg = params
     worst = 0.0
     lanes = (lane[ego], target[ego] if origin[ego] != target[ego] else lane[ego])
     for in_lane in lanes:

@@ -28,6 +28,7 @@ undisturbed first speed. At constant speed ``v`` every vehicle so uses ``fdot(v,
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -42,6 +43,45 @@ __all__ = ["CRUISE_MIN_SPEED", "fuel", "fuel_per_vehicle"]
 CRUISE_MIN_SPEED = 1.0
 """Lowest speed a missing distance is completed at [m/s] (a vehicle that ends standing still
 would otherwise need infinite time); the floor of the controller's completion."""
+
+
+class FuelCoefficients(NamedTuple):
+    """The coefficients of the Eq. 16 fuel-rate polynomial as the kernels take them
+    (:func:`~hcomc.models.fuel.fuel_rate_scalar`'s, in the order of
+    :meth:`~hcomc.models.fuel.FuelParams.coefficients`; v in m/s, a in m/s^2, rates in mL/s).
+    """
+
+    b0: float  # cruise rate b0 + b1 v + b2 v^2 + b3 v^3: [mL/s]
+    b1: float  # [mL/m]
+    b2: float  # [mL s/m^2]
+    b3: float  # [mL s^2/m^3]
+    c0: float  # acceleration rate a (c0 + c1 v + c2 v^2): [mL s/m]
+    c1: float  # [mL s^2/m^2]
+    c2: float  # [mL s^3/m^3]
+    positive_only: float  # 1.0: the acceleration term for a > 0 only; 0.0: for any a
+
+    @classmethod
+    def of(cls, params: FuelParams) -> FuelCoefficients:
+        """The coefficients of the fuel model ``params``."""
+        return cls(*params.coefficients())
+
+
+class Cells(NamedTuple):
+    """The stored cells of a log (:attr:`~hcomc.sim.log.SimulationLog.cells`, each (T, S))
+    that fuel needs, and which vehicle a column holds when."""
+
+    x: np.ndarray  # front-bumper position [m]
+    v: np.ndarray  # speed [m/s]
+    a: np.ndarray  # acceleration [m/s^2]
+    active: np.ndarray  # bool: the vehicle is on the road
+    slot: np.ndarray  # (N,) each vehicle's column (-1: none)
+    span: np.ndarray  # (N, 2) the rows [first, end) its column holds it
+
+    @classmethod
+    def of(cls, log: SimulationLog) -> Cells:
+        """The cells of ``log``."""
+        cells = log.cells
+        return cls(cells["x"], cells["v"], cells["a"], cells["active"], log.slot, log.span)
 
 
 def fuel(
@@ -80,25 +120,19 @@ def fuel_per_vehicle(
     the road in neither run within the window."""
     check_reference(log, reference)
     rows = window_rows(log, window)
-    cells, ref = log.cells, reference.cells
-    distance, v_first = _reference_distances(
-        ref["x"], ref["v"], ref["active"], reference.slot, reference.span, rows.start, rows.stop
-    )
+    distance, v_first = _reference_distances(Cells.of(reference), rows.start, rows.stop)
     return _fuel_to_distance(
-        cells["x"], cells["v"], cells["a"], cells["active"], log.slot, log.span, rows.start,
-        rows.stop, distance, v_first, road_of(log).length, log.dt, CRUISE_MIN_SPEED,
-        *params.coefficients(),
+        Cells.of(log), rows.start, rows.stop, distance, v_first, road_of(log).length, log.dt,
+        CRUISE_MIN_SPEED, FuelCoefficients.of(params),
     )  # fmt: skip
 
 
 @kernel
-def _reference_distances(
-    x: np.ndarray, v: np.ndarray, active: np.ndarray, slot: np.ndarray, span: np.ndarray,
-    r0: int, r1: int,
-) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+def _reference_distances(cells: Cells, r0: int, r1: int) -> tuple[FloatArray, FloatArray]:
     """(N,) each vehicle's displacement between its first and last active rows in
-    ``[r0, r1)`` of the stored cells [m], and its speed in the first [m/s]; NaN for a
+    ``[r0, r1)`` of the stored ``cells`` [m], and its speed in the first [m/s]; NaN for a
     vehicle not on the road in those rows."""
+    x, v, _, active, slot, span = cells
     n = slot.size
     distance, v_first = np.full(n, np.nan), np.full(n, np.nan)
     for i in range(n):
@@ -118,29 +152,28 @@ def _reference_distances(
 
 
 @kernel
-def _cruise_to(
-    rest: float, v_end: float, v_min: float, b0: float, b1: float, b2: float, b3: float,
-    c0: float, c1: float, c2: float, positive_only: float,
-) -> float:  # fmt: skip
+def _cruise_to(rest: float, v_end: float, v_min: float, coefficients: FuelCoefficients) -> float:
     """Fuel [mL] to drive ``rest`` [m] at the cruise rate of ``max(v_end, v_min)``."""
     if not rest > 0.0:
         return 0.0
     speed = max(v_end, v_min)
+    b0, b1, b2, b3, c0, c1, c2, positive_only = coefficients
     rate = fuel_rate_scalar(speed, 0.0, b0, b1, b2, b3, c0, c1, c2, positive_only)
     return rate * rest / speed
 
 
 @kernel
 def _fuel_to_distance(
-    x: np.ndarray, v: np.ndarray, a: np.ndarray, active: np.ndarray, slot: np.ndarray,
-    span: np.ndarray, r0: int, r1: int, distance: np.ndarray, v_first: np.ndarray,
-    road_end: float, dt: float, v_min: float, b0: float, b1: float, b2: float, b3: float,
-    c0: float, c1: float, c2: float, positive_only: float,
+    cells: Cells, r0: int, r1: int, distance: np.ndarray, v_first: np.ndarray,
+    road_end: float, dt: float, v_min: float, coefficients: FuelCoefficients,
 ) -> FloatArray:  # fmt: skip
-    """(N,) each vehicle's fuel over its common distance [mL] from the stored cells of rows
-    ``[r0, r1)``: ``distance`` (N,) from :func:`_reference_distances`, NaN for a vehicle
-    without an undisturbed trajectory (then to ``road_end``); ``v_first`` its undisturbed
-    first speed, the cruise speed of a vehicle never on the road here."""
+    """(N,) each vehicle's fuel over its common distance [mL] from the stored ``cells`` of
+    rows ``[r0, r1)``: ``distance`` (N,) from :func:`_reference_distances`, NaN for a vehicle
+    without an undisturbed trajectory (then to ``road_end`` [m]); ``v_first`` its undisturbed
+    first speed, the cruise speed of a vehicle never on the road here; ``dt`` the rows'
+    interval [s], ``v_min`` the lowest cruise speed [m/s]."""
+    x, v, a, active, slot, span = cells
+    b0, b1, b2, b3, c0, c1, c2, positive_only = coefficients
     n = slot.size
     out = np.zeros(n)
     for i in range(n):
@@ -153,8 +186,7 @@ def _fuel_to_distance(
                 break
         if first < 0:  # not on the road in the window: its undisturbed distance at cruise
             if math.isfinite(distance[i]):
-                out[i] = _cruise_to(distance[i], v_first[i], v_min, b0, b1, b2, b3, c0, c1,
-                                    c2, positive_only)  # fmt: skip
+                out[i] = _cruise_to(distance[i], v_first[i], v_min, coefficients)
             continue
         x0 = np.float64(x[first, s])
         target = distance[i] if math.isfinite(distance[i]) else road_end - x0
@@ -164,8 +196,7 @@ def _fuel_to_distance(
             if covered >= target:
                 break
             if k + 1 >= hi or not active[k + 1, s]:  # last row: complete at cruise
-                total += _cruise_to(target - covered, np.float64(v[k, s]), v_min, b0, b1, b2,
-                                    b3, c0, c1, c2, positive_only)  # fmt: skip
+                total += _cruise_to(target - covered, np.float64(v[k, s]), v_min, coefficients)
                 break
             rate = fuel_rate_scalar(np.float64(v[k, s]), np.float64(a[k, s]), b0, b1, b2, b3,
                                     c0, c1, c2, positive_only)  # fmt: skip

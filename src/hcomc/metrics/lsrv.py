@@ -33,6 +33,8 @@ scores exactly 0.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from hcomc._jit import kernel
@@ -45,6 +47,24 @@ from hcomc.sim.log import SimulationLog
 __all__ = ["lane_spacing", "low_speed_region_volume"]
 
 _LANES = (int(Lane.MAIN_1), int(Lane.MAIN_2))
+
+
+class Cells(NamedTuple):
+    """The stored cells of a log (:attr:`~hcomc.sim.log.SimulationLog.cells`, each (T, S))
+    that LSRV needs, and which vehicle a column holds when."""
+
+    x: np.ndarray  # front-bumper position [m]
+    v: np.ndarray  # speed [m/s]
+    lane: np.ndarray  # logged lane
+    active: np.ndarray  # bool: the vehicle is on the road
+    slot: np.ndarray  # (N,) each vehicle's column (-1: none)
+    span: np.ndarray  # (N, 2) the rows [first, end) its column holds it
+
+    @classmethod
+    def of(cls, log: SimulationLog) -> Cells:
+        """The cells of ``log``."""
+        cells = log.cells
+        return cls(cells["x"], cells["v"], cells["lane"], cells["active"], log.slot, log.span)
 
 
 def low_speed_region_volume(
@@ -69,12 +89,7 @@ def low_speed_region_volume(
         return 0.0
     road = road_of(log)
     area = (road.control_zone_start, road.length)
-    cells, cells_u = log.cells, ref.cells
-    deficit = _lane_deficits(
-        cells["x"], cells["v"], cells["lane"], cells["active"], log.slot, log.span,
-        cells_u["v"], cells_u["active"], ref.slot, ref.span, rows.start, rows.stop, window.vr,
-        *area,
-    )  # fmt: skip
+    deficit = _lane_deficits(Cells.of(log), Cells.of(ref), rows.start, rows.stop, window.vr, *area)
     if window.vr >= 0:
         deficit += _vr_deficits(log, window, ref, rows, *area)
     return float(np.sum(deficit * lane_spacing(ref, rows, *area)) * log.dt)
@@ -110,14 +125,14 @@ def _vr_deficits(
 
 @kernel
 def _lane_deficits(
-    x: np.ndarray, v: np.ndarray, lane: np.ndarray, active: np.ndarray, slot: np.ndarray,
-    span: np.ndarray, v_ref: np.ndarray, active_ref: np.ndarray, slot_ref: np.ndarray,
-    span_ref: np.ndarray, r0: int, r1: int, skip: int, x_lo: float, x_hi: float,
-) -> FloatArray:  # fmt: skip
+    cells: Cells, reference: Cells, r0: int, r1: int, skip: int, x_lo: float, x_hi: float
+) -> FloatArray:
     """(2,) the speed deficits ``max(0, v_u - v)`` [m/s] of the counting cells of lanes 1
-    and 2 (module docstring) in rows ``[r0, r1)``, each vehicle against its own cell of the
-    reference, summed per lane; vehicle ``skip`` (VR) is left out. Stored cells (T, S) of
-    both logs, read through their ``slot`` and ``span``."""
+    and 2 (module docstring) in rows ``[r0, r1)`` and the area ``[x_lo, x_hi]`` [m], each
+    vehicle against its own cell of the ``reference``, summed per lane; vehicle ``skip``
+    (VR) is left out."""
+    x, v, lane, active, slot, span = cells
+    _, v_ref, _, active_ref, slot_ref, span_ref = reference
     out = np.zeros(2)
     for i in range(slot.size):
         s, s_ref = slot[i], slot_ref[i]

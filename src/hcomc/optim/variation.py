@@ -21,6 +21,7 @@ tolerance of pymoo's (``tests/unit/test_nsga2_compiled.py``).
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import numpy as np
 
@@ -30,6 +31,34 @@ from hcomc._typing import BoolArray, FloatArray
 _PROB_VAR = 0.5  # SBX: probability that a variable of a crossed mating is crossed
 _PROB_BIN = 0.5  # SBX: probability of exchanging the two children's values of a variable
 _TOO_CLOSE = 1.0e-14  # SBX: parents closer than this in a variable are not crossed there
+
+
+class Bounds(NamedTuple):
+    """The box of the decision variables, each (n_var,)."""
+
+    lower: FloatArray
+    upper: FloatArray
+
+
+class SbxDraws(NamedTuple):
+    """pymoo's ``SBX`` draws for parents (2, n_matings, n_var) and the crossed variables and
+    bases they decide (:func:`_sbx_draws`); m is the number of crossed variables."""
+
+    crossed_mating: BoolArray  # (n_matings,) the mating is crossed
+    cross: BoolArray  # (n_matings, n_var) the variable is crossed
+    p1: FloatArray  # (m,) the first parent's values of the crossed variables
+    p2: FloatArray  # (m,) the second parent's
+    beta: FloatArray  # (2 m,) spread factors towards the lower, then the upper bound
+    rand: FloatArray  # (m,) uniform draws of the spread
+    exchange: FloatArray  # (m,) uniform draws of the exchange of the children's values
+
+
+class PmDraws(NamedTuple):
+    """pymoo's ``PM`` draws for n rows (:func:`_pm_draws`)."""
+
+    mut: BoolArray  # (n, n_var) the variable is mutated
+    rand: FloatArray  # (m,) one uniform draw per mutated variable (bounds apart)
+    rows: BoolArray  # (n,) the row keeps its mutation
 
 
 @kernel  # numpy's error model: 0 ** -1 is inf, as in numpy's power
@@ -93,19 +122,15 @@ def _sbx_alpha(pw: FloatArray, rand: FloatArray) -> tuple[FloatArray, FloatArray
 @kernel
 def _sbx_children(
     X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    cross: BoolArray,
-    crossed_mating: BoolArray,
-    p1: FloatArray,
-    p2: FloatArray,
+    bounds: Bounds,
+    draws: SbxDraws,
     alpha: FloatArray,
-    rand: FloatArray,
     q_low: FloatArray,
     q_high: FloatArray,
-    exchange: FloatArray,
 ) -> FloatArray:
     """The two children of every mating, (2 * n_matings, n_var): first children, then second."""
+    xl, xu = bounds
+    crossed_mating, cross, p1, p2, _, rand, exchange = draws
     _, n_matings, n_var = X.shape
     m = rand.size
     Q = X.copy()
@@ -142,47 +167,32 @@ def _sbx_children(
 
 
 @kernel
-def _sbx(
-    X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    crossed_mating: BoolArray,
-    cross: BoolArray,
-    p1: FloatArray,
-    p2: FloatArray,
-    beta: FloatArray,
-    rand: FloatArray,
-    exchange: FloatArray,
-    eta: float,
-) -> FloatArray:
-    """SBX children (2 * n_matings, n_var) of parents ``X`` from the bases and draws; the
-    parents themselves when no mating is crossed."""
-    if not crossed_mating.any():
+def _sbx(X: FloatArray, bounds: Bounds, draws: SbxDraws, eta: float) -> FloatArray:
+    """SBX children (2 * n_matings, n_var) of parents ``X`` from the bases and ``draws``
+    with distribution index ``eta``; the parents themselves when no mating is crossed."""
+    if not draws.crossed_mating.any():
         return X.copy().reshape(-1, X.shape[2])
-    alpha, low, high = _sbx_alpha(_power(beta, -(eta + 1.0)), rand)
+    alpha, low, high = _sbx_alpha(_power(draws.beta, -(eta + 1.0)), draws.rand)
     q_low = _power(low, 1.0 / (eta + 1.0))
     q_high = _power(high, 1.0 / (eta + 1.0))
-    return _sbx_children(
-        X, xl, xu, cross, crossed_mating, p1, p2, alpha, rand, q_low, q_high, exchange
-    )
+    return _sbx_children(X, bounds, draws, alpha, q_low, q_high)
 
 
-def _sbx_draws(
-    X: FloatArray, xl: FloatArray, xu: FloatArray, prob: float, rng: np.random.Generator
-) -> tuple[BoolArray, BoolArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+def _sbx_draws(X: FloatArray, bounds: Bounds, prob: float, rng: np.random.Generator) -> SbxDraws:
     """pymoo's ``SBX`` draws for parents ``X`` (2, n_matings, n_var), in its order, with the
     crossed variables and bases they decide: crossed matings (probability ``prob``), then only
     if any is crossed: the exchange probability (1: unused), crossed variables, ``rand`` and the
-    exchange of crossed values. Arguments of :func:`_sbx` after the bounds."""
+    exchange of crossed values."""
     _, n_matings, n_var = X.shape
     crossed_mating: BoolArray = np.asarray(rng.random(n_matings) < prob)
     if not crossed_mating.any():
         none = np.empty(0)
-        return crossed_mating, np.zeros((n_matings, n_var), np.bool_), none, none, none, none, none
+        cross = np.zeros((n_matings, n_var), np.bool_)
+        return SbxDraws(crossed_mating, cross, none, none, none, none, none)
     rng.random((n_matings, 1))  # pymoo's draw for the exchange probability (1: unused)
-    cross, p1, p2, beta = _sbx_bases(X, xl, xu, rng.random((n_matings, n_var)))
+    cross, p1, p2, beta = _sbx_bases(X, *bounds, rng.random((n_matings, n_var)))
     rand = rng.random(p1.size)
-    return crossed_mating, cross, p1, p2, beta, rand, rng.random(p1.size)
+    return SbxDraws(crossed_mating, cross, p1, p2, beta, rand, rng.random(p1.size))
 
 
 @kernel
@@ -225,16 +235,11 @@ def _pm_values(pw: FloatArray, rand: FloatArray) -> FloatArray:
 
 
 @kernel
-def _pm(
-    X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    mut: BoolArray,
-    rand: FloatArray,
-    rows: BoolArray,
-    eta: float,
-) -> FloatArray:
-    """Polynomial mutation of the variables ``mut`` of rows ``X``, kept in the rows ``rows``."""
+def _pm(X: FloatArray, bounds: Bounds, draws: PmDraws, eta: float) -> FloatArray:
+    """Polynomial mutation of rows ``X`` with distribution index ``eta``: the variables
+    ``draws.mut``, kept in the rows ``draws.rows``."""
+    xl, xu = bounds
+    mut, rand, rows = draws
     n, n_var = X.shape
     x, lo, hi, xy = _pm_bases(X, xl, xu, mut)
     pv = _power(_pm_values(_power(xy, eta + 1.0), rand), 1.0 / (eta + 1.0))
@@ -254,17 +259,16 @@ def _pm(
     return out
 
 
-def _pm_draws(
-    n: int, xl: FloatArray, xu: FloatArray, prob: float, rng: np.random.Generator
-) -> tuple[BoolArray, FloatArray, BoolArray]:
+def _pm_draws(n: int, bounds: Bounds, prob: float, rng: np.random.Generator) -> PmDraws:
     """pymoo's ``PM`` draws for ``n`` rows, in its order: mutated variables (probability
     ``min(0.5, 1 / n_var)``, none where the bounds coincide), one number per mutated variable,
     and the rows kept mutated (probability ``prob``)."""
+    xl, xu = bounds
     n_var = xl.size
     mut: BoolArray = np.asarray(rng.random((n, n_var)) < min(0.5, 1.0 / n_var))
     rand = rng.random(np.count_nonzero(mut & (xl != xu)))
     rows: BoolArray = np.asarray(rng.random(n) <= prob)
-    return mut, rand, rows
+    return PmDraws(mut, rand, rows)
 
 
 def polynomial_mutation(
@@ -279,31 +283,23 @@ def polynomial_mutation(
     variables with probability ``min(0.5, 1 / n_var)`` (not where the bounds coincide), within
     the bounds."""
     X = np.ascontiguousarray(X, dtype=np.float64)
-    mut, rand, rows = _pm_draws(X.shape[0], xl, xu, prob, rng)
-    return _pm(X, xl, xu, mut, rand, rows, float(eta))
+    bounds = Bounds(xl, xu)
+    return _pm(X, bounds, _pm_draws(X.shape[0], bounds, prob, rng), float(eta))
 
 
 @kernel
 def _offspring(
     X: FloatArray,
-    xl: FloatArray,
-    xu: FloatArray,
-    crossed_mating: BoolArray,
-    cross: BoolArray,
-    p1: FloatArray,
-    p2: FloatArray,
-    beta: FloatArray,
-    rand: FloatArray,
-    exchange: FloatArray,
+    bounds: Bounds,
+    crossover: SbxDraws,
     crossover_eta: float,
-    mut: BoolArray,
-    rand_mut: FloatArray,
-    rows: BoolArray,
+    mutation: PmDraws,
     mutation_eta: float,
 ) -> FloatArray:
-    """SBX children of parents ``X``, then their polynomial mutation, in one call."""
-    children = _sbx(X, xl, xu, crossed_mating, cross, p1, p2, beta, rand, exchange, crossover_eta)
-    return _pm(children, xl, xu, mut, rand_mut, rows, mutation_eta)
+    """SBX children of parents ``X``, then their polynomial mutation, in one call
+    (``*_eta``: the operators' distribution indices)."""
+    children = _sbx(X, bounds, crossover, crossover_eta)
+    return _pm(children, bounds, mutation, mutation_eta)
 
 
 def offspring(
@@ -324,9 +320,10 @@ def offspring(
     Mutation is that of :func:`polynomial_mutation`.
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
-    sbx = _sbx_draws(X, xl, xu, crossover[1], rng)
-    pm = _pm_draws(2 * X.shape[1], xl, xu, mutation[1], rng)
-    return _offspring(X, xl, xu, *sbx, float(crossover[0]), *pm, float(mutation[0]))
+    bounds = Bounds(xl, xu)
+    sbx = _sbx_draws(X, bounds, crossover[1], rng)
+    pm = _pm_draws(2 * X.shape[1], bounds, mutation[1], rng)
+    return _offspring(X, bounds, sbx, float(crossover[0]), pm, float(mutation[0]))
 
 
 @functools.cache  # once per process

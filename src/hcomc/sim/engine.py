@@ -44,7 +44,6 @@ from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine_setup import EngineSetup
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.plan_execution import ActivePlan, game_confirms, plan_views, record_decision
 from hcomc.sim.step import loop as step_loop
 from hcomc.sim.step import state as layout
@@ -240,19 +239,19 @@ class Simulation(EngineSetup):
         ids = step_loop.on_road(self.core)
         if ids.size == 0:
             return
-        acc, changing, vs, ls, ks, rank, lead = step_loop.step_front(self.core, ids, t)
+        acc, changing, index, lead = step_loop.step_front(self.core, ids, t)
         if self.step_index % self._decide_every == 0 and self.config.scenario != "platoon":
             chosen, target = step_loop.discretionary_changes(
-                self.core, ids, changing, step_loop.holding(self.core), lead, vs, ls, ks, rank
+                self.core, ids, changing, step_loop.holding(self.core), lead, index
             )
             if chosen.size:
                 keep = game_confirms(
                     self.x, self.v, self.lane, self.fleet, self.config, chosen, target, ids,
-                    lead, LaneIndex(vehicle=vs, lane=ls, key=ks, rank=rank),
+                    lead, index,
                 )  # fmt: skip
                 chosen, target = chosen[keep], target[keep]
             step_loop.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
-        step_loop.step_back(self.core, ids, t, acc, vs, ls)
+        step_loop.step_back(self.core, ids, t, acc, index)
 
     def _release(self, t: float) -> None:
         """Insert the vehicles due at t (a no-op when repeated at the same t)."""

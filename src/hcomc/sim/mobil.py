@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -47,24 +48,54 @@ class Snapshot:
     a: FloatArray
 
 
+class Traffic(NamedTuple):
+    """The vehicles MOBIL judges: their car-following models and kinematic state, each (N,)
+    by vehicle index."""
+
+    matrix: np.ndarray  # (7, N) v0 [m/s], T [s], s0 [m], a [m/s^2], b [m/s^2], delta, coolness
+    iidm: np.ndarray  # bool: the vehicle drives the IIDM (else the IDM)
+    length: np.ndarray  # vehicle length [m]
+    x: np.ndarray  # front-bumper position [m]
+    v: np.ndarray  # speed [m/s]
+    a: np.ndarray  # acceleration [m/s^2]
+
+
+class Candidates(NamedTuple):
+    """The n candidate lane changes, each (n,)."""
+
+    vehicle: np.ndarray  # int64: the vehicle that would change
+    lane: np.ndarray  # int64: its current lane
+    leader: np.ndarray  # int64: its leader in that lane (-1: none)
+    follower: np.ndarray  # int64: its follower in that lane (-1: none)
+    target: np.ndarray  # int64: the lane it would change to
+    force: np.ndarray  # bool: commanded by a merge plan (safety criteria only)
+
+
+class MobilWork(NamedTuple):
+    """Work arrays of :func:`mobil_decide_into`, owned by the caller (the simulation step's,
+    so that a step allocates nothing)."""
+
+    ints: np.ndarray  # (4, >= n) int64: accepted vehicles, their targets, new leaders, followers
+    flags: np.ndarray  # (2, >= n) bool: mandatory change, accepted
+    floats: np.ndarray  # (2, >= N) float64: each vehicle's free-road term, its priority
+
+
 @kernel
 def mobil_decide_into(
-    matrix: np.ndarray, iidm: np.ndarray, length: np.ndarray,
-    x: np.ndarray, v: np.ndarray, a: np.ndarray,
-    key: np.ndarray, lane_of: np.ndarray, vehicle: np.ndarray,
-    cand: np.ndarray, lane: np.ndarray, leader: np.ndarray, follower: np.ndarray,
-    target: np.ndarray, force: np.ndarray, params: np.ndarray,
-    ints: np.ndarray, flags: np.ndarray, floats: np.ndarray,
+    traffic: Traffic, index: LaneIndex, candidates: Candidates, params: np.ndarray,
+    work: MobilWork,
 ) -> int:  # fmt: skip
-    """Accepted changes among the n candidates (see the module docstring), in the caller's
-    work arrays (the simulation step's, so that a step allocates nothing): ``ints``
-    (4, >= n) and ``flags`` (2, >= n) for the candidates, ``floats`` (2, >= N) for the
-    vehicles. Returns the number m of accepted changes, whose vehicles and targets are
-    ``ints[0, :m]`` and ``ints[1, :m]``.
+    """Accepted changes among the n ``candidates`` (see the module docstring), in the
+    caller's ``work`` arrays. Returns the number m of accepted changes, whose vehicles and
+    targets are ``work.ints[0, :m]`` and ``work.ints[1, :m]``.
 
-    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``key``,
-    ``lane_of``, ``vehicle`` are the sorted entries of the lane index.
+    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``index``
+    holds the sorted entries of the snapshot.
     """
+    key, lane_of, vehicle = index.key, index.lane, index.vehicle
+    matrix, iidm, length, x, v, a = traffic
+    cand, lane, leader, follower, target, force = candidates
+    ints, flags, floats = work
     min_gap, b_safe, politeness = params[0], params[1], params[2]
     threshold, bias = params[3], params[4]
     n = cand.size
@@ -135,7 +166,10 @@ def _gap(x_i: float, x_j: float, length_j: float, exists: bool) -> float:
 
 
 @kernel
-def _resolve(ids, target, new_lead, new_fol, mandatory, x):
+def _resolve(
+    ids: np.ndarray, target: np.ndarray, new_lead: np.ndarray, new_fol: np.ndarray,
+    mandatory: np.ndarray, x: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Drop changes that conflict with a higher-priority change of the same round:
     ``(vehicles, targets)`` kept (:func:`_resolve_into` on copies)."""
     ids, target = ids.copy(), target.copy()
@@ -145,7 +179,10 @@ def _resolve(ids, target, new_lead, new_fol, mandatory, x):
 
 
 @kernel
-def _resolve_into(ids, target, new_lead, new_fol, mandatory, x, priority, keep):
+def _resolve_into(
+    ids: np.ndarray, target: np.ndarray, new_lead: np.ndarray, new_fol: np.ndarray,
+    mandatory: np.ndarray, x: np.ndarray, priority: np.ndarray, keep: np.ndarray,
+) -> int:  # fmt: skip
     """Drop changes that conflict with a higher-priority change of the same round, in place:
     the m kept are ``ids[:m]``, ``target[:m]``, in order. ``priority`` (N,) and ``keep``
     (as long as ``ids``) are work arrays."""
@@ -202,10 +239,10 @@ def decide(
     force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
     ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
     m = mobil_decide_into(
-        fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a,
-        index.key, index.lane, index.vehicle, cand, lane,
-        _ints(leader), _ints(follower),
-        _ints(target), force, lane_change_params(params), ints, flags, np.empty((2, snap.x.size)),
+        Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
+        index,
+        Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force),
+        lane_change_params(params), MobilWork(ints, flags, np.empty((2, snap.x.size))),
     )  # fmt: skip
     return ints[0, :m].copy(), ints[1, :m].copy()
 

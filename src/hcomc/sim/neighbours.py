@@ -13,7 +13,7 @@ them for array callers.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -172,9 +172,9 @@ def _lookup_many(
     return leader, follower
 
 
-@dataclass(frozen=True, slots=True)
-class LaneIndex:
-    """Entries of one snapshot sorted by (lane, x).
+class LaneIndex(NamedTuple):
+    """Entries of one snapshot sorted by (lane, x); a record the compiled step also passes
+    between its kernels (its methods are for Python callers).
 
     Attributes
     ----------

@@ -27,12 +27,46 @@ exist the current values are used.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import HDVParams
+
+
+class History(NamedTuple):
+    """The ring buffers of past states that the reaction delays read, and the delays."""
+
+    x: np.ndarray  # (K, N) positions [m]; step n in row n % K
+    v: np.ndarray  # (K, N) speeds [m/s]
+    taus: np.ndarray  # (3,) reaction times on gap, own speed and approach rate [s]
+    dt: float  # time step [s]
+
+
+class ErrorScales(NamedTuple):
+    """Size of the HDVs' estimation errors (Eq. 2), the same for every driver of a run."""
+
+    gap: float  # V_s [-]: the gap s is estimated as s exp(V_s w_s)
+    inverse_ttc: float  # sigma_r [1/s]: the approach rate dv as dv + s sigma_r w_l
+    enabled: bool  # False: exact estimates (w_s, w_l are not read)
+
+
+class EstimationErrors(NamedTuple):
+    """The HDVs' estimation errors (Eq. 2): each driver's two error processes, their scales."""
+
+    w_gap: np.ndarray  # (N,) w_s of each driver [-] (Ornstein-Uhlenbeck, variance ~1)
+    w_ttc: np.ndarray  # (N,) w_l of each driver [-]
+    scales: ErrorScales
+
+
+class Estimates(NamedTuple):
+    """What drivers perceive, each (n,) in the order of the vehicles asked about."""
+
+    gap: np.ndarray  # estimated gap to the leader s_est [m] (inf: no leader)
+    speed: np.ndarray  # own (delayed) speed v [m/s]
+    leader_speed: np.ndarray  # estimated leader speed v_leader_est [m/s]
 
 
 @kernel(inline="always")
@@ -55,7 +89,9 @@ def interpolate(now: float, older: float, r: float) -> float:
 
 
 @kernel(inline="always")
-def perception_rows(step: int, taus: np.ndarray, dt: float, size: int):
+def perception_rows(
+    step: int, taus: np.ndarray, dt: float, size: int
+) -> tuple[tuple[int, int, float], tuple[int, int, float], tuple[int, int, float]]:
     """:func:`delay_rows` of the three reaction times ``taus`` (gap, speed, approach rate)."""
     return (
         delay_rows(step, taus[0], dt, size),
@@ -67,34 +103,35 @@ def perception_rows(step: int, taus: np.ndarray, dt: float, size: int):
 @kernel(inline="always")
 def perceived(
     x_i: float, x_l: float, leader_length: float, v_i: float, dv: float, has: bool,
-    w_gap: float, w_ttc: float, gap_error: float, ttc_error: float, errors: bool,
+    w_gap: float, w_ttc: float, scales: ErrorScales,
 ) -> tuple[float, float, float]:  # fmt: skip
     """Eq. 2: ``(s_est, v, v_leader_est)`` from the delayed positions ``x_i``, ``x_l``, the
     delayed speed ``v_i`` and the delayed approach rate ``dv`` (``has``: a leader exists, else
     the gap is infinite), with the driver's estimation errors ``w_gap``, ``w_ttc`` when
-    ``errors``."""
+    ``scales.enabled``."""
     s = x_l - leader_length - x_i if has else math.inf
-    if errors:
+    if scales.enabled:
         s_true = s if has else 0.0
-        dv = dv + s_true * ttc_error * w_ttc
-        s = s * math.exp(gap_error * w_gap)
+        dv = dv + s_true * scales.inverse_ttc * w_ttc
+        s = s * math.exp(scales.gap * w_gap)
     return s, v_i, v_i - (dv if has else 0.0)
 
 
 @kernel
 def perceive_into(
-    x_hist: np.ndarray, v_hist: np.ndarray, w_gap: np.ndarray, w_ttc: np.ndarray, step: int,
-    dt: float, taus: np.ndarray, ids: np.ndarray, leaders: np.ndarray,
-    leader_length: np.ndarray, gap_error: float, ttc_error: float, errors: bool,
-    only: np.ndarray, s: np.ndarray, v: np.ndarray, vl: np.ndarray,
+    history: History, step: int, errors: EstimationErrors, ids: np.ndarray,
+    leaders: np.ndarray, leader_length: np.ndarray, only: np.ndarray, out: Estimates,
 ) -> None:  # fmt: skip
-    """Delayed, noisy ``(s_est, v, v_leader_est)`` of each vehicle ``ids[k]`` with
-    ``only[ids[k]]`` behind ``leaders[k]`` (-1: none), written into ``s[k], v[k], vl[k]``;
-    the other entries are left as they are. ``taus`` = reaction times on gap, own speed and
-    approach rate [s].
+    """Delayed (``history`` at ``step``), noisy (``errors``) ``(s_est, v, v_leader_est)`` of
+    each vehicle ``ids[k]`` with ``only[ids[k]]`` behind ``leaders[k]`` (-1: none) of length
+    ``leader_length[k]``, written into entry k of ``out``; the other entries are left as
+    they are.
 
     The per-vehicle helpers take numbers, not arrays: a compiled call with array arguments
     inside the loop costs reference counting on every vehicle."""
+    x_hist, v_hist, taus, dt = history
+    w_gap, w_ttc, scales = errors
+    s, v, vl = out
     (n0, p0, r0), (n1, p1, r1), (n2, p2, r2) = perception_rows(step, taus, dt, x_hist.shape[0])
     for k in range(ids.size):
         i, j = ids[k], leaders[k]
@@ -109,9 +146,8 @@ def perceive_into(
             v_hist[n2, lead], v_hist[p2, lead], r2
         )
         s[k], v[k], vl[k] = perceived(
-            x_i, x_l, leader_length[k], v_i, dv, has, w_gap[i], w_ttc[i], gap_error, ttc_error,
-            errors,
-        )  # fmt: skip
+            x_i, x_l, leader_length[k], v_i, dv, has, w_gap[i], w_ttc[i], scales
+        )
 
 
 @kernel
@@ -195,10 +231,12 @@ class Perception:
         p = self.params
         ids, leader = _ints(ids), _ints(leader)
         s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
+        scales = ErrorScales(p.gap_error, p.inverse_ttc_error, self.errors)
         perceive_into(
-            self.x_hist, self.v_hist, self.w_gap, self.w_ttc, step, self.dt, self.taus, ids,
-            leader, np.ascontiguousarray(leader_length, dtype=np.float64), p.gap_error,
-            p.inverse_ttc_error, self.errors, np.ones(self.is_hdv.size, dtype=np.bool_), s, v, vl,
+            History(self.x_hist, self.v_hist, self.taus, self.dt), step,
+            EstimationErrors(self.w_gap, self.w_ttc, scales), ids, leader,
+            np.ascontiguousarray(leader_length, dtype=np.float64),
+            np.ones(self.is_hdv.size, dtype=np.bool_), Estimates(s, v, vl),
         )  # fmt: skip
         return s, v, vl
 

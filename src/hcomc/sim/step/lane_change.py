@@ -10,8 +10,8 @@ import numpy as np
 
 from hcomc._jit import borrow, kernel
 from hcomc.sim.arrays import nonzero_into, search_left
-from hcomc.sim.mobil import mobil_decide_into
-from hcomc.sim.neighbours import neighbour
+from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
+from hcomc.sim.neighbours import LaneIndex, neighbour
 from hcomc.sim.step.state import (
     ACCEL_END,
     ACCEL_START,
@@ -39,12 +39,13 @@ from hcomc.sim.step.state import (
 # --------------------------------------------------------------------------- decide
 @kernel
 def _mobil(
-    c: CoreArrays, ids: np.ndarray, cand_pos: np.ndarray, lead: np.ndarray, vs: np.ndarray,
-    ls: np.ndarray, ks: np.ndarray, rank: np.ndarray, target: np.ndarray, force: np.ndarray,
+    c: CoreArrays, ids: np.ndarray, cand_pos: np.ndarray, lead: np.ndarray, index: LaneIndex,
+    target: np.ndarray, force: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide_into`) for the vehicles at
     positions ``cand_pos`` of ``ids``: ``(vehicles, targets)`` accepted, views of the step's
     work rows."""
+    vs, ls, rank = index.vehicle, index.lane, index.rank
     n = cand_pos.size
     si = c.scratch_int
     cand, lanes = si[S_CAND, :n], si[S_CAND_LANE, :n]
@@ -55,17 +56,17 @@ def _mobil(
         cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
         follower[k] = neighbour(vb, lb, rank[p] - 1, lb[rank[p]])
     work = si[S_MOBIL : S_MOBIL + 4]
-    m = mobil_decide_into(c.matrix, c.iidm, c.length, c.x, c.v, c.a, ks, ls, vs, cand, lanes,
-                          leader, follower, target, force, c.lc_params, work,
-                          c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
-                          c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2])  # fmt: skip
+    m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a), index,
+                          Candidates(cand, lanes, leader, follower, target, force), c.lc_params,
+                          MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
+                                    c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2]))  # fmt: skip
     return work[0, :m], work[1, :m]
 
 
 @kernel
 def commanded_changes(
-    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
-    ks: np.ndarray, rank: np.ndarray, req_vehicle: np.ndarray, req_target: np.ndarray,
+    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, index: LaneIndex,
+    req_vehicle: np.ndarray, req_target: np.ndarray,
     req_duration: np.ndarray, req_release_x: np.ndarray, req_vr: np.ndarray,
     req_other: np.ndarray,
 ) -> np.ndarray:  # fmt: skip
@@ -80,7 +81,7 @@ def commanded_changes(
         i = req_vehicle[r]
         pos = np.array([search_left(ids, i)])
         tgt = np.array([req_target[r]])
-        chosen, _ = _mobil(c, ids, pos, lead, vs, ls, ks, rank, tgt, np.ones(1, dtype=np.bool_))
+        chosen, _ = _mobil(c, ids, pos, lead, index, tgt, np.ones(1, dtype=np.bool_))
         if chosen.size:
             start_lane_changes(c, chosen, tgt, t, req_duration[r : r + 1])
             out[r] = 1
@@ -93,7 +94,7 @@ def commanded_changes(
 @kernel
 def discretionary_changes(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
-    vs: np.ndarray, ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
+    index: LaneIndex,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
     holding its lane for a plan; ramp vehicles on the acceleration lane only)."""
@@ -110,7 +111,7 @@ def discretionary_changes(
         target[k] = MAIN_2 if c.lane[ids[pos[k]]] == MAIN_1 else MAIN_1
     force = c.scratch_b[S_FORCE, : pos.size]
     force[:] = False
-    return _mobil(c, ids, pos, lead, vs, ls, ks, rank, target, force)
+    return _mobil(c, ids, pos, lead, index, target, force)
 
 
 @kernel

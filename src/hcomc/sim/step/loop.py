@@ -1,19 +1,17 @@
 """The compiled simulation step over the struct-of-arrays state of one run
 (:class:`hcomc.sim.step.state.Core`, fields as in :class:`~hcomc.sim.step.state.CoreArrays`).
 The step is split into kernels (here, :mod:`hcomc.sim.step.motion`,
-:mod:`hcomc.sim.step.lane_change` and :mod:`hcomc.sim.step.plans`) that the engine composes
-in two ways:
-
-* :func:`run_steps` advances many steps in one compiled call while no controller decision is
-  due, live merge plans included (they are executed from the plan table of the compiled
-  state); it writes log rows and events itself and returns to Python when a ramp vehicle
-  enters the control zone (key vehicles, a first plan), when a live plan is due for a replan
-  (:func:`hcomc.sim.step.plans.due_plans`), or on every step of a run whose CAVs confirm
-  their lane changes by the game (Section III-B, in Python);
-* at a decision event the engine takes that one step in Python: release, key vehicles and
-  the controller's decision, then the same kernels as the compiled loop (:func:`step_body`,
-  or its parts :func:`step_front`, :func:`holding`, :func:`discretionary_changes`,
-  :func:`start_lane_changes` and :func:`step_back` around the game).
+:mod:`hcomc.sim.step.lane_change`, :mod:`hcomc.sim.step.collisions` and
+:mod:`hcomc.sim.step.plans`), and every step of a run is driven by one driver,
+:func:`run_steps`: :func:`begin_step` (event room, error innovations, release), the
+decisions, :func:`step_alone` (:func:`step_body`: :func:`step_front`, the discretionary lane
+changes, :func:`step_back`) and :func:`record_due_row`. It advances many steps in one
+compiled call, live merge plans included (executed from the plan table of the compiled
+state), and hands a step to Python only for its decisions (:func:`needs_python`): a ramp
+vehicle entering the control zone (key vehicles, a first plan), a live plan due for a replan
+(:func:`hcomc.sim.step.plans.due_plans`), or every step of a run whose CAVs confirm their
+lane changes by the game (Section III-B, in Python). The engine then finishes that step with
+the same kernels (:meth:`hcomc.sim.engine.Simulation.resume`).
 
 Each equation is called from its one home (:mod:`hcomc.models`, :mod:`hcomc.safety`,
 :mod:`hcomc.sim.perception`, :mod:`hcomc.sim.mobil`, :mod:`hcomc.sim.neighbours`). Semantics
@@ -28,7 +26,9 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc.sim.arrays import nonzero_into
 from hcomc.sim.log.slots import claim_slots
+from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import advance_errors_of
+from hcomc.sim.step.collisions import check_collisions
 from hcomc.sim.step.lane_change import (
     commanded_changes,
     discretionary_changes,
@@ -37,7 +37,6 @@ from hcomc.sim.step.lane_change import (
 from hcomc.sim.step.motion import (
     StepAccelerations,
     bookkeeping,
-    check_collisions,
     follow_many,
     integrate,
     lateral,
@@ -95,11 +94,11 @@ __all__ = [
 
 @kernel
 def step_finish(
-    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
+    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, index: LaneIndex
 ) -> None:
     """Collisions, integration, lateral motion, exits, the HDVs' error processes (one row of
     pre-drawn innovations per step with active vehicles) and the perception history."""
-    check_collisions(c, t, vs, ls)
+    check_collisions(c, t, index)
     integrate(c, ids, acc)
     lateral(c, t)
     bookkeeping(c, ids, t)
@@ -138,18 +137,18 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
 def step_front(c: CoreArrays, ids: np.ndarray, t: float) -> StepAccelerations:
     """The accelerations of a step (:func:`step_accelerations`) with the live plans' followers
     and virtual leaders, then the lane changes the plans command now. Returns
-    ``(acc, changing, vehicle, lane, key, rank, lead)``, views of the step's work rows (valid
+    ``(acc, changing, index, lead)``, views of the step's work rows (valid
     until the next step)."""
     n_plans = c.counters[N_PLANS]
     following = following_into(c.plan_int, n_plans, c.scratch_b[S_FOLLOWING])
     fol, rows = c.scratch_int[S_VV_FOL], c.scratch_f[S_VV : S_VV + 4]
     m = virtual_rows_into(c.plan_int, c.plan_f, n_plans, t, c.x, c.v, c.a, c.length, fol, rows)
-    acc, changing, vs, ls, ks, rank, lead = step_accelerations(
+    acc, changing, index, lead = step_accelerations(
         c, ids, t, following, fol[:m], rows[0, :m], rows[1, :m], rows[2, :m], rows[3, :m]
     )
     if n_plans > 0:
-        execute_plans(c, ids, t, lead, vs, ls, ks, rank)
-    return acc, changing, vs, ls, ks, rank, lead
+        execute_plans(c, ids, t, lead, index)
+    return acc, changing, index, lead
 
 
 @kernel
@@ -167,11 +166,9 @@ def holding(c: CoreArrays) -> np.ndarray:
 
 
 @kernel
-def step_back(
-    c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, vs: np.ndarray, ls: np.ndarray
-) -> None:
+def step_back(c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, index: LaneIndex) -> None:
     """The end of a step (:func:`step_finish`), then the plans that ended are dropped."""
-    step_finish(c, ids, t, acc, vs, ls)
+    step_finish(c, ids, t, acc, index)
     if c.counters[N_PLANS] > 0:
         finish_plans(c)
 
@@ -179,11 +176,11 @@ def step_back(
 @kernel
 def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     """One step of the vehicles ``ids`` after release and decisions, without the game."""
-    acc, changing, vs, ls, ks, rank, lead = step_front(c, ids, t)
+    acc, changing, index, lead = step_front(c, ids, t)
     if (c.counters[STEP] % c.flags[DECIDE_EVERY] == 0) and c.flags[PLATOON] == 0:
-        chosen, target = discretionary_changes(c, ids, changing, holding(c), lead, vs, ls, ks, rank)
+        chosen, target = discretionary_changes(c, ids, changing, holding(c), lead, index)
         start_lane_changes(c, chosen, target, t, c.consts[:0])  # empty: their own durations
-    step_back(c, ids, t, acc, vs, ls)
+    step_back(c, ids, t, acc, index)
 
 
 # ----------------------------------------------------------------------------- loop

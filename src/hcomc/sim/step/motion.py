@@ -1,6 +1,7 @@
 """Kernels of the compiled step that move vehicles: release, car following with HDV
-perception (Eq. 1-3), the Eq. 14 blend, lane-end and virtual leaders, collisions (Eq. 7),
-integration, quintic lateral motion (Eq. 4-6) and exits."""
+perception (Eq. 1-3), the Eq. 14 blend, lane-end and virtual leaders, integration, quintic
+lateral motion (Eq. 4-6) and exits (the collision check is
+:mod:`hcomc.sim.step.collisions`)."""
 
 from __future__ import annotations
 
@@ -13,17 +14,14 @@ from hcomc.models.ballistic import ballistic_step
 from hcomc.models.following import follow_accel
 from hcomc.models.quintic import lateral_state
 from hcomc.models.transition import blend, transition_psi
-from hcomc.safety.collision_kernels import vehicle_pair_collides
-from hcomc.sim.arrays import nonzero_into, search_left, unique
-from hcomc.sim.neighbours import lookup_one, neighbours_into, sort_entries_into
-from hcomc.sim.perception import perceive_into
+from hcomc.sim.arrays import nonzero_into, search_left
+from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
+from hcomc.sim.perception import ErrorScales, Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.state import (
     ACCEL_END,
-    COLLISIONS,
     DT,
     EMERGENCY,
     ERRORS,
-    EV_COLLISION,
     EV_EXIT,
     EV_INSERTION,
     EV_LC_END,
@@ -31,7 +29,6 @@ from hcomc.sim.step.state import (
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
-    N_COLLIDING,
     PERCEIVE,
     RAMP,
     ROAD_LENGTH,
@@ -40,7 +37,6 @@ from hcomc.sim.step.state import (
     S_CHANGER_IDS,
     S_CHANGERS,
     S_CHANGING,
-    S_CODES,
     S_GAP,
     S_IN_ORI,
     S_IN_TGT,
@@ -73,11 +69,10 @@ _WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as
 _WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
-StepAccelerations = tuple[
-    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
-]
-"""What :func:`step_accelerations` returns: ``(acc, changing, vehicle, lane, key, rank,
-lead)``, views of the step's work rows."""
+StepAccelerations = tuple[np.ndarray, np.ndarray, LaneIndex, np.ndarray]
+"""What :func:`step_accelerations` returns: ``(acc, changing, index, lead)``: the
+accelerations, whether each vehicle is changing lanes, the step's sorted entries and each
+vehicle's leader, views of the step's work rows."""
 
 
 # ---------------------------------------------------------------------------- release
@@ -153,11 +148,11 @@ def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.nda
             s[k], vl[k], al[k], ll[k] = math.inf, v[i], 0.0, length[i]
         vi[k] = v[i]
     if c.flags[PERCEIVE] > 0:
-        perceive_into(
-            c.x_hist, c.v_hist, c.w_gap, c.w_ttc, c.counters[STEP], c.consts[DT], c.taus, ids,
-            leaders, ll, c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0,
-            c.is_hdv, s, vi, vl,
-        )  # fmt: skip
+        history = History(c.x_hist, c.v_hist, c.taus, c.consts[DT])
+        scales = ErrorScales(c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0)
+        errors = EstimationErrors(c.w_gap, c.w_ttc, scales)
+        perceive_into(history, c.counters[STEP], errors, ids, leaders, ll, c.is_hdv,
+                      Estimates(s, vi, vl))  # fmt: skip
     for k in range(n):
         i = ids[k]
         out[k] = follow_accel(s[k], vi[k], vl[k], al[k], matrix[0, i], matrix[1, i],
@@ -177,11 +172,11 @@ def _follow_exact(
 @kernel(inline="always")  # its six views returned from a call would be reference-counted
 def lane_index(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[LaneIndex, np.ndarray, np.ndarray]:
     """Sorted entries of this step: every vehicle in its lane and a changer also in the
     other lane its body overlaps (the target lane from its start, the origin lane while its
-    body still overlaps it). Returns ``(vehicle, lane, key, rank, in_ori, in_tgt)``, views of
-    the step's work rows."""
+    body still overlaps it). Returns ``(index, in_ori, in_tgt)``, views of the step's work
+    rows."""
     width = c.consts[WIDTH]
     n = ids.size
     si, sf, sb = c.scratch_int, c.scratch_f, c.scratch_b
@@ -208,7 +203,7 @@ def lane_index(
         veh[:m], lanes[:m], xs[:m], si[S_ORDER], si[S_BUFFER], si[S_RANK], si[S_VS], si[S_LS],
         sf[S_KEY], sf[S_KS],
     )  # fmt: skip
-    return vs, ls, ks, rank, in_ori, in_tgt
+    return LaneIndex(vs, ls, ks, rank), in_ori, in_tgt
 
 
 @kernel
@@ -225,14 +220,15 @@ def step_accelerations(
     (``following``); commanded vehicles also follow their virtual leaders (rows ``vv_*``);
     a vehicle driven from outside (``a_cmd`` not NaN) takes its command instead; every
     deceleration is limited to the emergency value; a scripted leader follows its
-    profile exactly. Returns ``(acc, changing, vehicle, lane, key, rank, lead)``, views of
-    the step's work rows.
+    profile exactly. Returns ``(acc, changing, index, lead)``, views of the step's work
+    rows.
     """
     n = ids.size
     changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]
-    vs, ls, ks, rank, in_ori, in_tgt = lane_index(c, ids, changing)
+    index, in_ori, in_tgt = lane_index(c, ids, changing)
+    vs, ls, ks, rank = index
     lead = c.scratch_int[S_LEAD, :n]
     neighbours_into(vs, ls, rank, 1, lead)
     for k in range(n):  # a changer's leader: the one ahead of it in its origin lane
@@ -241,19 +237,20 @@ def step_accelerations(
             lead[k] = lookup_one(ks, ls, vs, c.origin[i], c.x[i])[0]
     acc = c.scratch_f[S_ACC, :n]
     follow_into(c, ids, lead, acc)
-    _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, vs, ls, ks)
+    _blend_changers(c, ids, t, acc, changing, in_ori, in_tgt, index)
     _limits(c, ids, t, acc, changing, following, vv_fol, vv_x, vv_v, vv_a, vv_len)
-    return acc, changing, vs, ls, ks, rank, lead
+    return acc, changing, index, lead
 
 
 @kernel
 def _blend_changers(
     c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, changing: np.ndarray,
-    in_ori: np.ndarray, in_tgt: np.ndarray, vs: np.ndarray, ls: np.ndarray, ks: np.ndarray,
+    in_ori: np.ndarray, in_tgt: np.ndarray, index: LaneIndex,
 ) -> None:  # fmt: skip
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
     overlaps."""
+    vs, ls, ks = index.vehicle, index.lane, index.key
     if not changing.any():
         return
     ch = c.scratch_int[S_CHANGERS]
@@ -309,55 +306,6 @@ def _limits(
         if c.scripted[i]:  # a scripted profile is followed exactly
             target = np.interp(t + dt, c.profile[:, 0], c.profile[:, 1])
             acc[k] = (target - c.v[i]) / dt
-
-
-# ---------------------------------------------------------------------------- check
-@kernel
-def check_collisions(c: CoreArrays, t: float, vs: np.ndarray, ls: np.ndarray) -> None:
-    """Oriented-rectangle test (Eq. 7) of each entry against its next two leaders per lane;
-    a pair is logged when its contact begins.
-
-    A 1-D prefilter skips pairs whose x-extents cannot overlap: a rectangle whose front
-    bumper centre is at x lies within ``[x - L - W/2, x + W/2]`` for any heading.
-    """
-    n = c.x.size
-    codes = c.scratch_int[S_CODES]  # at most 2 pairs per entry
-    m = 0
-    for gap in (1, 2):
-        for p in range(vs.size - gap):
-            i, j = vs[p], vs[p + gap]
-            if ls[p] != ls[p + gap] or i == j:
-                continue
-            if c.x[i] + 0.5 * c.width[i] < c.x[j] - c.length[j] - 0.5 * c.width[j]:
-                continue
-            if vehicle_pair_collides(
-                c.x[i],
-                c.y[i],
-                c.heading[i],
-                c.length[i],
-                c.width[i],
-                c.x[j],
-                c.y[j],
-                c.heading[j],
-                c.length[j],
-                c.width[j],
-            ):
-                codes[m] = min(i, j) * n + max(i, j)
-                m += 1
-    if m == 0:  # the usual step: nothing in contact, nothing begins
-        c.counters[N_COLLIDING] = 0
-        return
-    now = unique(codes[:m])
-    before = c.colliding[: c.counters[N_COLLIDING]]
-    for code in now:
-        k = search_left(before, code)
-        if k < before.size and before[k] == code:
-            continue
-        i, j = code // n, code % n
-        add_event(c, t, EV_COLLISION, i, j, c.x[i], math.nan)
-        c.counters[COLLISIONS] += 1
-    c.colliding[: now.size] = now
-    c.counters[N_COLLIDING] = now.size
 
 
 # ------------------------------------------------------------------------ integrate

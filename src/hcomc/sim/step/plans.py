@@ -25,6 +25,7 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.control.virtual_vehicle import cubic_point
+from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import commanded_changes
 from hcomc.sim.step.state import (
     ACCEL_END,
@@ -257,13 +258,12 @@ def due_plans(c: CoreArrays, t: float) -> np.ndarray:
 # ------------------------------------------------------------------------ execution
 @kernel
 def _command(
-    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray, ls: np.ndarray,
-    ks: np.ndarray, rank: np.ndarray, i: int, target: int, duration: float, release_x: float,
-    vr: int, other: int,
+    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, index: LaneIndex, i: int,
+    target: int, duration: float, release_x: float, vr: int, other: int,
 ) -> bool:  # fmt: skip
     """One commanded lane change (:func:`hcomc.sim.step.lane_change.commanded_changes`)."""
     result = commanded_changes(
-        c, ids, t, lead, vs, ls, ks, rank, np.array([i]), np.array([target]),
+        c, ids, t, lead, index, np.array([i]), np.array([target]),
         np.array([duration]), np.array([release_x]), np.array([vr]), np.array([other]),
     )  # fmt: skip
     return result[0]
@@ -281,9 +281,8 @@ def stopping_distance(c: CoreArrays, i: int) -> float:
 
 @kernel
 def execute_plans(
-    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, vs: np.ndarray,
-    ls: np.ndarray, ks: np.ndarray, rank: np.ndarray,
-) -> None:  # fmt: skip
+    c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, index: LaneIndex
+) -> None:
     """Start the lane changes the live plans command, each when the MOBIL safety criterion
     holds: a lateral VMC's change to lane 2 at once (failing, the plan falls back to VR's gap
     acceptance: FALLBACK), VR's change from its merge position on (until it could no longer
@@ -293,8 +292,7 @@ def execute_plans(
     for k in range(c.counters[N_PLANS]):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
         if pi[k, P_MODE] == LATERAL and pi[k, P_VMC_CMD] and not pi[k, P_VMC_STARTED]:
-            started = _command(c, ids, t, lead, vs, ls, ks, rank, vmc, MAIN_2, math.nan,
-                               -math.inf, vr, vmc)  # fmt: skip
+            started = _command(c, ids, t, lead, index, vmc, MAIN_2, math.nan, -math.inf, vr, vmc)
             if started > 0:
                 pi[k, P_VMC_STARTED] = 1
             else:
@@ -309,8 +307,8 @@ def execute_plans(
         ):
             continue
         release_x = accel_end - stopping_distance(c, vr)
-        started = _command(c, ids, t, lead, vs, ls, ks, rank, vr, MAIN_1,
-                           pf[k, F_VR_DURATION], release_x, vr, vmc)  # fmt: skip
+        started = _command(c, ids, t, lead, index, vr, MAIN_1, pf[k, F_VR_DURATION], release_x,
+                           vr, vmc)  # fmt: skip
         pi[k, P_VR_STARTED] = started > 0
         pi[k, P_RELEASED] = started < 0
 
