@@ -17,7 +17,7 @@ from hcomc.control.hcomc.controller import HCOMCController
 from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND
 from hcomc.control.lane_change_cost import GameVehicle, leader_track, simulate_sv
 from hcomc.control.lane_change_params import GAME_DEFAULT, GameParams
-from hcomc.control.prediction.fuel import _fuel_to_distance_kernel
+from hcomc.control.prediction.fuel import FuelCoefficients, _fuel_to_distance_kernel
 from hcomc.control.prediction.population import VMC, VR
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.models.idm import idm_acceleration
@@ -64,7 +64,7 @@ def test_fuel_kernel_equals_array_form(K):
     dt = 0.25
     for roles in ((VR,), (VR, VMC), (VMC,)):
         got = _fuel_to_distance_kernel(
-            cf, np.array(roles), X, V, A, dt, *FUEL_DEFAULT.coefficients()
+            cf, np.array(roles), X, V, A, dt, FuelCoefficients.of(FUEL_DEFAULT)
         )
         np.testing.assert_array_equal(got, _fuel_oracle(cf, roles, X, V, A, dt))
 

@@ -53,13 +53,10 @@ def _rollout(lateral: bool, seed: int = 0, x: np.ndarray | None = None) -> tuple
     rng = np.random.default_rng(seed)
     xl, xu = problem.xl, problem.xu
     X = xl + rng.random((N_CANDIDATES, 5)) * (xu - xl)
-    cf = np.stack(
-        counterfactual(state.x, state.v, state.a, state.present, state.params, problem.consts,
-                       problem.n_steps)
-    )  # fmt: skip
+    key = state.vehicles()
+    cf = np.stack(counterfactual(key, problem.consts, problem.n_steps))
     out = rollout(
-        state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-        state.starts, X[:, 0].copy(), X[:, 1].copy(), X[:, 2].copy(),
+        key, state.starts, X[:, 0].copy(), X[:, 1].copy(), X[:, 2].copy(),
         np.full(N_CANDIDATES, lateral), problem.consts, problem.n_steps, cf,
     )  # fmt: skip
     return (*out, cf, X)
@@ -112,10 +109,10 @@ def test_vv2_ends_at_vmc_pre_pass_state_at_the_horizon():
     *_, vv2, _, X = _rollout(lateral=True, seed=1)
     dt, K = problem.consts[C_DT], problem.n_steps
     for lateral in (False, True):
-        track = vmc_pre_track(s.x, s.v, s.a, s.present, s.params, lateral, problem.consts, K)
+        track = vmc_pre_track(s.vehicles(), lateral, problem.consts, K)
         assert track.shape == (K + 1, 2)
         np.testing.assert_array_equal(track[0], [s.x[VMC], s.v[VMC]])
-    track = vmc_pre_track(s.x, s.v, s.a, s.present, s.params, True, problem.consts, K)
+    track = vmc_pre_track(s.vehicles(), True, problem.consts, K)
     for c in range(N_CANDIDATES):
         h = X[c, 2]
         k = 0

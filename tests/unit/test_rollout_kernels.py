@@ -21,6 +21,7 @@ from hcomc.control.prediction.population import (
     P_IIDM,
     VMC,
     VR,
+    KeyVehicles,
     counterfactual,
     resolve_starts,
 )
@@ -99,7 +100,8 @@ def test_iidm_changes_the_prediction_of_a_follower():
     for variant, fleet in FLEETS.items():
         params = np.tile(_params(fleet, 1), (N_ROLES, 1))
         v = np.full(N_ROLES, params[0, 0])  # everyone at v0
-        _, _, A = counterfactual(x, v, np.zeros(N_ROLES), present, params, consts, 3)
+        key = KeyVehicles(x, v, np.zeros(N_ROLES), present, present, present, params)
+        _, _, A = counterfactual(key, consts, 3)
         accs[variant] = A[1, VMC]
     assert accs["iidm"] == pytest.approx(0.0, abs=1e-12)
     assert accs["idm"] < -0.1

@@ -68,6 +68,8 @@ from hcomc.control.hcomc.problem_terms import (
 from hcomc.control.hcomc.row_scoring import (
     FUEL_COEFFICIENTS,
     FUEL_ROLES,
+    RowConstants,
+    constants_handle,
     row_constants,
     score_row,
     score_rows,
@@ -83,7 +85,7 @@ from hcomc.control.prediction.population import (
     rollout,
 )
 from hcomc.control.prediction.scoring import objective_rows, penalised_costs
-from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
+from hcomc.models.fuel import fuel_rate
 from hcomc.safety.critical import SafetyIndex
 
 
@@ -137,9 +139,7 @@ class MergeProblem:
         self._no_merge = tuple(
             None
             if st is None
-            else np.stack(
-                counterfactual(st.x, st.v, st.a, st.present, st.params, self.consts, self.n_steps)
-            )
+            else np.stack(counterfactual(st.vehicles(), self.consts, self.n_steps))
             for st in states
         )
         # the virtual vehicles' start states (Eq. 8 defaults resolved) once per sequence
@@ -152,7 +152,7 @@ class MergeProblem:
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
         # the per-sequence constants of the compiled scoring, prepared on first use
-        self._row_cache: dict[int, tuple[object, ...]] = {}
+        self._row_cache: dict[int, RowConstants] = {}
 
     @property
     def _variants(self) -> tuple[KeyState | None, ...]:
@@ -209,8 +209,7 @@ class MergeProblem:
         if rows.size == 0 or state is None or cf is None or starts is None:
             return None
         out = rollout(
-            state.x, state.v, state.a, state.present, state.cav, state.coop, state.params,
-            starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
+            state.vehicles(), starts, X[rows, 0].copy(), X[rows, 1].copy(), X[rows, 2].copy(),
             lateral[rows], self.consts, self.n_steps, cf, resolved=True,
         )  # fmt: skip
         xs, _, vs, as_, _, _, u_safe, u_eff, g, _, _, _ = out
@@ -269,9 +268,7 @@ class MergeProblem:
             if rows.size == 0 or self._variants[which] is None:
                 continue  # "behind" rows without a vehicle to merge behind were moved ahead
             allowed = bool(self.lateral_allowed[which % 2])
-            batch = (X, rows, lateral, allowed, no_behind, self.safety.threshold, self._fuel_ref)
-            args = (*self._row_constants(which), *batch, F, G)
-            score_rows(*args)
+            score_rows(self._row_constants(which), X, rows, lateral, allowed, no_behind, F, G)
         return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
@@ -310,15 +307,15 @@ class MergeProblem:
             which = AHEAD
         lateral_violation = 1.0 if lateral and not self.lateral_allowed[which] else 0.0
         which += 2 * none
-        row = (x, lateral, lateral_violation, 1.0 if no_behind else 0.0)
-        args = (*self._row_constants(which), *row, self.safety.threshold, self._fuel_ref, F, G)
-        cost: float = score_row(*args)
-        return cost
+        sequence_violation = 1.0 if no_behind else 0.0
+        constants = self._row_constants(which)
+        return score_row(constants, x, lateral, lateral_violation, sequence_violation, F, G)
 
-    def _row_constants(self, which: int) -> tuple[object, ...]:
-        """The arguments of :func:`~hcomc.control.hcomc.row_scoring.score_row` that depend on
-        the planning instant and the sequence alone
-        (:func:`~hcomc.control.hcomc.row_scoring.row_constants`), prepared on first use."""
+    def _row_constants(self, which: int) -> RowConstants:
+        """What :func:`~hcomc.control.hcomc.row_scoring.score_row` takes from the planning
+        instant and the variant ``which`` alone
+        (:func:`~hcomc.control.hcomc.row_scoring.row_constants`), as the kernels take it
+        (:func:`~hcomc.control.hcomc.row_scoring.constants_handle`); prepared on first use."""
         cached = self._row_cache.get(which)
         if cached is not None:
             return cached
@@ -328,9 +325,10 @@ class MergeProblem:
         assert state is not None
         assert cf is not None
         assert starts is not None
-        constants = row_constants(
-            state, starts, cf, self.consts, self.n_steps, self._fuel_no_merge[seq], self.dt
-        )
+        constants = constants_handle(row_constants(
+            state, starts, cf, self.consts, self.n_steps, self._fuel_no_merge[seq], self.dt,
+            self.safety.threshold, self._fuel_ref,
+        ))  # fmt: skip
         self._row_cache[which] = constants
         return constants
 
@@ -373,5 +371,5 @@ class MergeProblem:
         (:func:`~hcomc.control.prediction.fuel._fuel_to_distance_kernel`).
         """
         return _fuel_to_distance_kernel(
-            cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, *FUEL_DEFAULT.coefficients()
+            cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, FUEL_COEFFICIENTS
         )

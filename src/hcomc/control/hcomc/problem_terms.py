@@ -35,6 +35,7 @@ from hcomc.control.prediction.population import (
     P_A,
     P_V0,
     VMC,
+    KeyVehicles,
 )
 from hcomc.models.transition import transition_gamma
 from hcomc.safety.critical import SafetyIndex
@@ -103,6 +104,10 @@ class KeyState:
     def max_accel(self, role: int) -> float:
         """Maximum acceleration a of a role [m/s^2] (Eq. 1)."""
         return float(self.params[role, P_A])
+
+    def vehicles(self) -> KeyVehicles:
+        """The arrays of the key vehicles as the prediction kernels take them."""
+        return KeyVehicles(self.x, self.v, self.a, self.present, self.cav, self.coop, self.params)
 
     def with_vmc_cooperation(self, cooperates: bool) -> KeyState:
         """This state with the VMC role's ``coop`` flag set to ``cooperates``: the rollout

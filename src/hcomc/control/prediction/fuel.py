@@ -11,17 +11,44 @@ simulated annealing alike.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.models.fuel import fuel_rate_scalar
+from hcomc.models.fuel import FuelParams, fuel_rate_scalar
 from hcomc.optim.numpy_sum import pairwise_sum
 
 
+class FuelCoefficients(NamedTuple):
+    """The coefficients of the Eq. 16 fuel-rate polynomial as the kernels take them
+    (:func:`~hcomc.models.fuel.fuel_rate_scalar`'s, in the order of
+    :meth:`~hcomc.models.fuel.FuelParams.coefficients`; v in m/s, a in m/s^2, rates in mL/s).
+    """
+
+    b0: float  # cruise rate b0 + b1 v + b2 v^2 + b3 v^3: [mL/s]
+    b1: float  # [mL/m]
+    b2: float  # [mL s/m^2]
+    b3: float  # [mL s^2/m^3]
+    c0: float  # acceleration rate a (c0 + c1 v + c2 v^2): [mL s/m]
+    c1: float  # [mL s^2/m^2]
+    c2: float  # [mL s^3/m^3]
+    positive_only: float  # 1.0: the acceleration term for a > 0 only; 0.0: for any a
+
+    @classmethod
+    def of(cls, params: FuelParams) -> FuelCoefficients:
+        """The coefficients of the fuel model ``params``."""
+        return cls(*(float(c) for c in params.coefficients()))
+
+
 @kernel
-def _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2, positive):
+def _fuel_to_distance_kernel(
+    cf: np.ndarray, roles: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, dt: float,
+    coefficients: FuelCoefficients,
+) -> np.ndarray:  # fmt: skip
     """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed
     times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still missing."""
+    b0, b1, b2, b3, c0, c1, c2, positive = coefficients
     C, K1 = X.shape[0], X.shape[1]
     out = np.empty((roles.size, C))
     rate = np.empty(K1 - 1)
@@ -49,15 +76,13 @@ def common_distance_fuel(
     A: np.ndarray,
     dt: float,
     cf_fuel: float,
-    coefficients: np.ndarray,
+    coefficients: FuelCoefficients,
 ) -> np.ndarray:
     """U_fuel [L] of each trajectory (C,), Eq. 16 over a common distance: VR's fuel
     (``roles`` ``[VR]``), or VR's plus the cooperating vehicle's minus its counterfactual fuel
-    ``cf_fuel`` [mL] (``roles`` ``[VR, VMC]``). Arguments as :func:`_fuel_to_distance_kernel`,
-    with :meth:`~hcomc.models.fuel.FuelParams.coefficients` as an array."""
-    b0, b1, b2, b3 = coefficients[0], coefficients[1], coefficients[2], coefficients[3]
-    c0, c1, c2, positive = coefficients[4], coefficients[5], coefficients[6], coefficients[7]
-    fuel = _fuel_to_distance_kernel(cf, roles, X, V, A, dt, b0, b1, b2, b3, c0, c1, c2, positive)
+    ``cf_fuel`` [mL] (``roles`` ``[VR, VMC]``). Arguments as :func:`_fuel_to_distance_kernel`.
+    """
+    fuel = _fuel_to_distance_kernel(cf, roles, X, V, A, dt, coefficients)
     out = np.empty(fuel.shape[1])
     for c in range(out.size):
         total = fuel[0, c]

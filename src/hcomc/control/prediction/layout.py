@@ -1,12 +1,17 @@
 """Array layouts of the HCOMC prediction kernels (:mod:`hcomc.control.prediction.population`).
 
-The compiled kernels exchange plain arrays; this module names their rows and columns: the six
+The compiled kernels exchange arrays; this module names their rows and columns (the six
 key-vehicle roles, the per-role model parameters, the constants read from the config, the
 start states of the virtual vehicles, the constraint columns and the lane-change progress of
-one candidate.
+one candidate) and the records that group the arrays passed together: the key vehicles
+(:class:`KeyVehicles`), one candidate's trajectories (:class:`Trajectories`) and the passes'
+scratch space (:class:`Scratch`). The records are ``NamedTuple`` classes, which numba takes as
+arguments and builds in compiled code.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -67,3 +72,35 @@ R_X, R_V, R_A, R_ACC, R_IN1, R_IN2, R_PRESENT, R_FREE = range(8)
 N_STATE = 8
 
 LANE0 = np.array([0, 1, 1, 1, 2, 2])  # lanes of the roles at planning time (0 = ramp)
+
+
+class KeyVehicles(NamedTuple):
+    """The six key vehicles at the planning instant, each array (6,) in role order VR … VNR."""
+
+    x: np.ndarray  # position [m]
+    v: np.ndarray  # speed [m/s]
+    a: np.ndarray  # acceleration [m/s^2]
+    present: np.ndarray  # bool: the role exists
+    cav: np.ndarray  # bool: the role is a CAV (its Eq. 15 delay; a CAV VR follows VV0)
+    coop: np.ndarray  # bool: the role cooperates when its mode asks it (VMC: VV1 or lateral)
+    params: np.ndarray  # (6, N_PARAMS) model parameters, columns P_*
+
+
+class Trajectories(NamedTuple):
+    """One candidate's predicted trajectories, each (K + 1, 6): step k, role."""
+
+    x: np.ndarray  # position [m]
+    y: np.ndarray  # lateral position [m] (lane 1 at 0, the ramp at -width, lane 2 at width)
+    v: np.ndarray  # speed [m/s]
+    a: np.ndarray  # acceleration [m/s^2]
+    heading: np.ndarray  # heading [rad]
+
+
+class Scratch(NamedTuple):
+    """Scratch space of one candidate's passes (pre-pass and joint pass), overwritten by
+    each; a population or a run of rows allocates it once."""
+
+    state: np.ndarray  # (N_STATE, 6) the roles' state S (rows R_*)
+    progress: np.ndarray  # (N_PROGRESS,) the lane-change progress lc (L_*)
+    boxes: np.ndarray  # (4, 6) the bounding boxes of the collision test of one step
+    vr_acc: np.ndarray  # (max(K, 1),) VR's accelerations in the pre-pass's steps [m/s^2]

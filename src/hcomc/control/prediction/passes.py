@@ -48,6 +48,9 @@ from hcomc.control.prediction.layout import (
     VNF,
     VNR,
     VR,
+    KeyVehicles,
+    Scratch,
+    Trajectories,
 )
 from hcomc.control.prediction.scoring import lane_change_incentive
 from hcomc.control.prediction.step import (
@@ -64,13 +67,7 @@ from hcomc.control.virtual_vehicle import cubic_into
 
 @kernel
 def counterfactual(
-    x0: np.ndarray,
-    v0: np.ndarray,
-    a0: np.ndarray,
-    present: np.ndarray,
-    params: np.ndarray,
-    consts: np.ndarray,
-    n_steps: int,
+    key: KeyVehicles, consts: np.ndarray, n_steps: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pass 0: the key vehicles without the merge, (n_steps + 1, 6) each of x, v, a.
 
@@ -80,7 +77,8 @@ def counterfactual(
     X = np.empty((n_steps + 1, N_ROLES))
     V = np.empty((n_steps + 1, N_ROLES))
     A = np.empty((n_steps + 1, N_ROLES))
-    S = new_state(x0, v0, a0, present)
+    params = key.params
+    S = new_state(key.x, key.v, key.a, key.present)
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
         if k == n_steps:
@@ -132,10 +130,7 @@ def step(
 
 
 @kernel
-def vmc_pre_track(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
-    lateral: bool, consts: np.ndarray, n_steps: int,
-) -> np.ndarray:  # fmt: skip
+def vmc_pre_track(key: KeyVehicles, lateral: bool, consts: np.ndarray, n_steps: int) -> np.ndarray:
     """VMC's position and speed (n_steps + 1, 2) in the pre-pass, at every step.
 
     In the pre-pass VMC follows only VMF (and VNF in lateral mode), which keep their speed, so
@@ -143,7 +138,8 @@ def vmc_pre_track(
     population and mode, with the same per-step functions as the candidates' passes.
     """
     track = np.empty((n_steps + 1, 2))
-    S = new_state(x0, v0, a0, present)
+    params = key.params
+    S = new_state(key.x, key.v, key.a, key.present)
     lc = np.empty(N_PROGRESS)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     vvs = np.zeros((3, 4))  # not followed in the pre-pass
@@ -164,27 +160,26 @@ def vmc_pre_track(
 
 @kernel
 def pre_pass(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
-    starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
-    consts: np.ndarray, vmc_track: np.ndarray, S: np.ndarray, lc: np.ndarray,
-    vr_acc: np.ndarray,
+    key: KeyVehicles, starts: np.ndarray, vvs: np.ndarray, plan: np.ndarray, controlled: bool,
+    consts: np.ndarray, vmc_track: np.ndarray, scratch: Scratch,
 ) -> int:  # fmt: skip
     """Pass 1: VR follows only VV0 and VMF, VMC only VMF and VNF, up to the horizon; fixes
     the end states of VV1 (VR's state at H) and VV2 (VMC's state at H) in ``vvs``.
 
     Nobody else enters VR's or VMC's accelerations in this pass, so only VR (with VMF, which
     keeps its speed) is rolled out here; VMC's states come from ``vmc_track``
-    (:func:`vmc_pre_track` of the candidate's mode). ``S`` (8, 6) and ``lc`` (9,) are
-    scratch space.
+    (:func:`vmc_pre_track` of the candidate's mode). The pass works in ``scratch``'s state
+    and progress.
 
     Until VR starts its change its acceleration depends on VR, VV0 and VMF alone, as in the
-    joint pass: the steps' accelerations are written to ``vr_acc`` (K,) and their number is
-    returned, so that the joint pass takes them instead of computing them again.
+    joint pass: the steps' accelerations are written to ``scratch.vr_acc`` (K,) and their
+    number is returned, so that the joint pass takes them instead of computing them again.
     """
     n_steps = vmc_track.shape[0] - 1
-    S, lc, params, vvs, plan = borrow(S), borrow(lc), borrow(params), borrow(vvs), borrow(plan)
-    vr_acc = borrow(vr_acc)
-    reset_state(S, x0, v0, a0, present)
+    S, lc, params = borrow(scratch.state), borrow(scratch.progress), borrow(key.params)
+    vvs, plan = borrow(vvs), borrow(plan)
+    vr_acc = borrow(scratch.vr_acc)
+    reset_state(S, key.x, key.v, key.a, key.present)
     start_progress(lc, False, S, consts[C_VMC_DUR], params)
     dt, em = consts[C_DT], consts[C_EMERGENCY]
     k = n_known = 0
@@ -200,35 +195,34 @@ def pre_pass(
         k += 1
     # virtual-vehicle end states at the horizon, or at the window's end if that comes first
     cubic_into(plan[2], starts[S_VV1_X], starts[S_VV1_V], S[R_X, VR], S[R_V, VR], vvs[1])
-    cubic_into(plan[2], x0[VNF], v0[VNF], vmc_track[k, 0], vmc_track[k, 1], vvs[2])
+    cubic_into(plan[2], key.x[VNF], key.v[VNF], vmc_track[k, 0], vmc_track[k, 1], vvs[2])
     return n_known
 
 
 @kernel
 def joint_pass(
-    x0: np.ndarray, v0: np.ndarray, a0: np.ndarray, present: np.ndarray, params: np.ndarray,
-    vvs: np.ndarray, plan: np.ndarray, lateral: bool, flags: tuple[bool, bool, bool],
-    consts: np.ndarray, X: np.ndarray, Y: np.ndarray, V: np.ndarray, A: np.ndarray,
-    HEAD: np.ndarray, S: np.ndarray, lc: np.ndarray, box: np.ndarray, vr_acc: np.ndarray,
-    n_known: int, cf: np.ndarray,
+    key: KeyVehicles, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
+    flags: tuple[bool, bool, bool], consts: np.ndarray, trajectories: Trajectories,
+    scratch: Scratch, n_known: int, cf: np.ndarray,
 ) -> tuple[int, float, float, float]:  # fmt: skip
-    """Pass 2: every key vehicle, trajectories written to X … HEAD (K + 1, 6).
+    """Pass 2: every key vehicle, written to ``trajectories`` (K + 1, 6).
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m], the number of colliding
     (pair, step) combinations of the key vehicles (Eq. 7) and U_eff, Eq. 17 in the state in
     which VR begins its change (:func:`~hcomc.control.prediction.scoring.
-    lane_change_incentive`; 0 if it never does). ``S`` (8, 6), ``lc`` (9,) and
-    ``box`` (4, 6) are scratch space; VR's accelerations of the first ``n_known`` steps are
-    those of the pre-pass (``vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge
-    counterfactual (:func:`step`).
+    lane_change_incentive`; 0 if it never does). The pass works in ``scratch``; VR's
+    accelerations of the first ``n_known`` steps are those of the pre-pass
+    (``scratch.vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge counterfactual
+    (:func:`step`).
     """
+    X, Y, V = borrow(trajectories.x), borrow(trajectories.y), borrow(trajectories.v)
+    A, HEAD = borrow(trajectories.a), borrow(trajectories.heading)
     n_steps = X.shape[0] - 1
-    S, lc, box = borrow(S), borrow(lc), borrow(box)
-    params, vvs, plan, consts = borrow(params), borrow(vvs), borrow(plan), borrow(consts)
-    X, Y, V, A, HEAD = borrow(X), borrow(Y), borrow(V), borrow(A), borrow(HEAD)
-    vr_acc, cf = borrow(vr_acc), borrow(cf)
-    reset_state(S, x0, v0, a0, present)
+    S, lc, box = borrow(scratch.state), borrow(scratch.progress), borrow(scratch.boxes)
+    params, vvs, plan, consts = borrow(key.params), borrow(vvs), borrow(plan), borrow(consts)
+    vr_acc, cf = borrow(scratch.vr_acc), borrow(cf)
+    reset_state(S, key.x, key.v, key.a, key.present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     k_merge, overrun, collisions, u_eff = -1, plan[0] - consts[C_ACCEL_END], 0, 0.0
     for k in range(n_steps + 1):

@@ -107,6 +107,9 @@ from hcomc.control.prediction.layout import (
     VNF,
     VNR,
     VR,
+    KeyVehicles,
+    Scratch,
+    Trajectories,
 )
 from hcomc.control.prediction.passes import counterfactual, vmc_pre_track
 from hcomc.models.idm import equilibrium_gap
@@ -117,16 +120,18 @@ __all__ = [
     "G_NOT_MERGED", "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
     "N_STARTS", "P_A", "P_B", "P_C", "P_DELTA", "P_IIDM", "P_LEN", "P_S0", "P_T", "P_V0",
     "P_WID", "S_VV0_V", "S_VV0_X", "S_VV1_V", "S_VV1_X", "VMC", "VMF", "VMR", "VNF", "VNR",
-    "VR", "counterfactual", "resolve_starts", "rollout", "rollout_into", "rollout_work",
-    "vmc_tracks", "warm_up", "warm_up_instant",
+    "VR", "KeyVehicles", "counterfactual", "resolve_starts", "rollout", "rollout_into",
+    "rollout_work", "vmc_tracks", "warm_up", "warm_up_instant",
 ]  # fmt: skip
 
 _EQ_SPEED_CAP = 0.999  # VV0's default gap is the equilibrium gap at <= 0.999 v0 (finite)
 
 
 @kernel
-def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_dur, horizon,
-                    lateral, consts, n_steps, cf):  # fmt: skip
+def _rollout_kernel(
+    key: KeyVehicles, starts: np.ndarray, merge_x: np.ndarray, vr_dur: np.ndarray,
+    horizon: np.ndarray, lateral: np.ndarray, consts: np.ndarray, n_steps: int, cf: np.ndarray,
+) -> tuple[np.ndarray, ...]:  # fmt: skip
     """The compiled body of :func:`rollout` (same arguments, ``starts`` resolved)."""
     n_c, K = merge_x.size, n_steps
     X = np.empty((n_c, K + 1, N_ROLES))
@@ -143,17 +148,18 @@ def _rollout_kernel(x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_
     tracks = np.empty((2, K + 1, 2))
     tracked = np.zeros(2, dtype=np.bool_)
     plan = np.empty(3)
-    S, lc, box = np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS), np.empty((4, N_ROLES))
-    vr_acc = np.empty(max(K, 1))
+    scratch = Scratch(np.empty((N_STATE, N_ROLES)), np.empty(N_PROGRESS),
+                      np.empty((4, N_ROLES)), np.empty(max(K, 1)))  # fmt: skip
     for c in range(n_c):
         plan[0], plan[1], plan[2] = merge_x[c], vr_dur[c], horizon[c]
-        mode = mode_index(lateral[c], coop, present)
+        mode = mode_index(lateral[c], key.coop, key.present)
         if not tracked[mode]:
-            tracks[mode] = vmc_pre_track(x0, v0, a0, present, params, mode == 1, consts, K)
+            tracks[mode] = vmc_pre_track(key, mode == 1, consts, K)
             tracked[mode] = True
+        trajectories = Trajectories(X[c], Y[c], V[c], A[c], HEAD[c])
         k_merge[c], u_safe[c], u_eff[c] = candidate(
-            x0, v0, a0, present, cav, coop, params, starts, plan, lateral[c], consts, cf,
-            tracks[mode], X[c], Y[c], V[c], A[c], HEAD[c], g[c], vvs[c], S, lc, box, vr_acc,
+            key, starts, plan, lateral[c], consts, cf, tracks[mode], trajectories, g[c], vvs[c],
+            scratch,
         )  # fmt: skip
     vv0, vv1, vv2 = vvs[:, 0].copy(), vvs[:, 1].copy(), vvs[:, 2].copy()
     return X, Y, V, A, HEAD, k_merge, u_safe, u_eff, g, vv0, vv1, vv2
@@ -181,13 +187,7 @@ def resolve_starts(
 
 
 def rollout(
-    x0: FloatArray,
-    v0: FloatArray,
-    a0: FloatArray,
-    present: np.ndarray,
-    cav: np.ndarray,
-    coop: np.ndarray,
-    params: FloatArray,
+    key: KeyVehicles,
     starts: FloatArray,
     merge_x: FloatArray,
     vr_dur: FloatArray,
@@ -203,12 +203,11 @@ def rollout(
 
     Parameters
     ----------
-    x0, v0, a0 : (6,) key-vehicle states at planning time, role order VR … VNR.
-    present : (6,) whether each role exists.
-    cav : (6,) whether each role is a CAV (selects the Eq. 15 delay; a CAV VR follows VV0).
-    coop : (6,) whether the role cooperates when its mode asks it to (VMC: VV1 or lateral
-        change; VNR: VV2); normally equal to ``cav``.
-    params : (6, 10) model parameters (columns ``P_*``; ``P_IIDM`` 1 selects the IIDM).
+    key : :class:`KeyVehicles`, the key vehicles at planning time: x, v, a; whether each
+        role exists (``present``), is a CAV (``cav``: selects the Eq. 15 delay; a CAV VR
+        follows VV0) and cooperates when its mode asks it to (``coop``; VMC: VV1 or lateral
+        change; VNR: VV2; normally equal to ``cav``); the (6, 10) model parameters (columns
+        ``P_*``; ``P_IIDM`` 1 selects the IIDM).
     starts : (4,) start states of VV0 and VV1 (``S_*``); NaN selects the defaults of
         :func:`resolve_starts`. A replanning controller passes the live virtual vehicles'
         states for continuity.
@@ -235,29 +234,24 @@ def rollout(
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
     """
     if not resolved:
-        starts = resolve_starts(x0, v0, params, starts)
-    out: tuple[np.ndarray, ...] = _rollout_kernel(
-        x0, v0, a0, present, cav, coop, params, starts, merge_x, vr_dur, horizon, lateral,
-        consts, n_steps, cf,
-    )  # fmt: skip
-    return out
+        starts = resolve_starts(key.x, key.v, key.params, starts)
+    return _rollout_kernel(key, starts, merge_x, vr_dur, horizon, lateral, consts, n_steps, cf)
 
 
 @functools.cache  # once per process
 def warm_up() -> None:
     """Load (or compile) the kernels once per process, so decision times exclude it."""
-    x, v, a, flags, params, consts, n_steps, cf = warm_up_instant()
+    key, consts, n_steps, cf = warm_up_instant()
     one = np.ones(1)
     starts = np.full(N_STARTS, np.nan)
-    rollout(x, v, a, flags, flags, flags, params, starts, one * 800.0, one * 4.0, one * 6.0,
-            np.zeros(1, dtype=np.bool_), consts, n_steps, cf)  # fmt: skip
+    rollout(key, starts, one * 800.0, one * 4.0, one * 6.0, np.zeros(1, dtype=np.bool_), consts,
+            n_steps, cf)  # fmt: skip
 
 
-def warm_up_instant() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                               np.ndarray, int, np.ndarray]:  # fmt: skip
-    """A small synthetic planning instant (x, v, a, present, params, consts, n_steps, cf)
-    with the argument types of real ones: calling a kernel on it loads (or compiles) the
-    variant that decisions use."""
+def warm_up_instant() -> tuple[KeyVehicles, np.ndarray, int, np.ndarray]:
+    """A small synthetic planning instant (key vehicles, consts, n_steps, cf) with the
+    argument types of real ones: calling a kernel on it loads (or compiles) the variant that
+    decisions use."""
     row = np.array([33.3, 1.0, 2.0, 1.4, 2.0, 4.0, 0.99, 5.0, 1.8, 0.0])
     params = np.tile(row, (N_ROLES, 1))
     consts = np.zeros(N_CONSTS)
@@ -268,5 +262,6 @@ def warm_up_instant() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, n
     flags = np.ones(N_ROLES, dtype=np.bool_)
     v, a = np.full(N_ROLES, 25.0), np.zeros(N_ROLES)
     n_steps = 4
-    cf = np.stack(counterfactual(x, v, a, flags, params, consts, n_steps))
-    return x, v, a, flags, params, consts, n_steps, cf
+    key = KeyVehicles(x, v, a, flags, flags, flags, params)
+    cf = np.stack(counterfactual(key, consts, n_steps))
+    return key, consts, n_steps, cf
