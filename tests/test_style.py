@@ -34,3 +34,16 @@ def test_mypy_is_clean() -> None:
     cmd = [exe] if exe else [sys.executable, "-m", "mypy"]
     done = subprocess.run([*cmd, "src"], cwd=ROOT, capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+MAX_MODULE_LINES = 400
+
+
+def test_every_module_is_at_most_400_lines() -> None:
+    """A module per concept: a source file that outgrows this holds more than one."""
+    long = {
+        str(path.relative_to(ROOT)): n
+        for path in sorted((ROOT / "src").rglob("*.py"))
+        if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    assert not long, long
