@@ -35,7 +35,7 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.metrics.window import MetricWindow, check_reference, road_of, window_rows
-from hcomc.models.fuel import FUEL_DEFAULT, FuelParams, fuel_rate_scalar
+from hcomc.models.fuel import FUEL_DEFAULT, FuelCoefficients, FuelParams, fuel_rate_scalar
 from hcomc.sim.log import SimulationLog
 
 __all__ = ["CRUISE_MIN_SPEED", "fuel", "fuel_per_vehicle"]
@@ -43,27 +43,6 @@ __all__ = ["CRUISE_MIN_SPEED", "fuel", "fuel_per_vehicle"]
 CRUISE_MIN_SPEED = 1.0
 """Lowest speed a missing distance is completed at [m/s] (a vehicle that ends standing still
 would otherwise need infinite time); the floor of the controller's completion."""
-
-
-class FuelCoefficients(NamedTuple):
-    """The coefficients of the Eq. 16 fuel-rate polynomial as the kernels take them
-    (:func:`~hcomc.models.fuel.fuel_rate_scalar`'s, in the order of
-    :meth:`~hcomc.models.fuel.FuelParams.coefficients`; v in m/s, a in m/s^2, rates in mL/s).
-    """
-
-    b0: float  # cruise rate b0 + b1 v + b2 v^2 + b3 v^3: [mL/s]
-    b1: float  # [mL/m]
-    b2: float  # [mL s/m^2]
-    b3: float  # [mL s^2/m^3]
-    c0: float  # acceleration rate a (c0 + c1 v + c2 v^2): [mL s/m]
-    c1: float  # [mL s^2/m^2]
-    c2: float  # [mL s^3/m^3]
-    positive_only: float  # 1.0: the acceleration term for a > 0 only; 0.0: for any a
-
-    @classmethod
-    def of(cls, params: FuelParams) -> FuelCoefficients:
-        """The coefficients of the fuel model ``params``."""
-        return cls(*params.coefficients())
 
 
 class Cells(NamedTuple):

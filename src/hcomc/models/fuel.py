@@ -24,7 +24,7 @@ References
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -33,7 +33,14 @@ from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.models._broadcast import broadcast_apply
 
-__all__ = ["FUEL_DEFAULT", "FuelParams", "fuel_consumed", "fuel_rate", "fuel_rate_scalar"]
+__all__ = [
+    "FUEL_DEFAULT",
+    "FuelCoefficients",
+    "FuelParams",
+    "fuel_consumed",
+    "fuel_rate",
+    "fuel_rate_scalar",
+]
 
 
 class FuelParams(BaseModel):
@@ -73,6 +80,27 @@ class FuelParams(BaseModel):
         :func:`fuel_rate_scalar` after ``v`` and ``a``."""
         positive = 1.0 if self.accel_term == "positive" else 0.0
         return (*self.cruise, *self.accel, positive)
+
+
+class FuelCoefficients(NamedTuple):
+    """The coefficients of the Eq. 16 fuel-rate polynomial as the kernels take them
+    (:func:`~hcomc.models.fuel.fuel_rate_scalar`'s, in the order of
+    :meth:`~hcomc.models.fuel.FuelParams.coefficients`; v in m/s, a in m/s^2, rates in mL/s).
+    """
+
+    b0: float  # cruise rate b0 + b1 v + b2 v^2 + b3 v^3: [mL/s]
+    b1: float  # [mL/m]
+    b2: float  # [mL s/m^2]
+    b3: float  # [mL s^2/m^3]
+    c0: float  # acceleration rate a (c0 + c1 v + c2 v^2): [mL s/m]
+    c1: float  # [mL s^2/m^2]
+    c2: float  # [mL s^3/m^3]
+    positive_only: float  # 1.0: the acceleration term for a > 0 only; 0.0: for any a
+
+    @classmethod
+    def of(cls, params: FuelParams) -> FuelCoefficients:
+        """The coefficients of the fuel model ``params``."""
+        return cls(*(float(c) for c in params.coefficients()))
 
 
 FUEL_DEFAULT = FuelParams()
