@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from throughput import machine  # noqa: E402
 
 from hcomc.config import load_config  # noqa: E402
-from hcomc.control.hcomc.controller import HCOMCController  # noqa: E402
+from hcomc.control.hierarchical.controller import HCOMCController  # noqa: E402
 from hcomc.sim.engine import Simulation  # noqa: E402
 
 OPTIMIZERS = ("nsga2", "nsga2-pymoo", "pso", "pso-pymoo", "sa", "sa-scipy")

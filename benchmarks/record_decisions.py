@@ -46,7 +46,7 @@ from pymoo.indicators.hv import HV  # noqa: E402
 from throughput import machine  # noqa: E402
 
 from hcomc.config import ScenarioConfig, load_config, validate_config  # noqa: E402
-from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails  # noqa: E402
+from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails  # noqa: E402
 from hcomc.interface import (  # noqa: E402
     Fleet,
     MergeGroup,

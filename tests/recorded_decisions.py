@@ -18,8 +18,8 @@ from pymoo.indicators.hv import HV
 
 from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import OBJECTIVES, MergeProblem
+from hcomc.control.hierarchical.controller import HCOMCController
+from hcomc.control.hierarchical.problem import OBJECTIVES, MergeProblem
 from hcomc.interface import MergeGroup, TrafficView
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.registry import POPULATION_BASED, make_optimizer

@@ -11,8 +11,8 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.fifo import FIFOController, FIFODetails
-from hcomc.control.game import solve_cooperative
 from hcomc.control.key_vehicles import behind_group, find_key_vehicles
+from hcomc.control.lane_change_game.solvers import solve_cooperative
 from hcomc.control.longitudinal_candidate import (
     HORIZON_STEP,
     POSITION_STEP,
@@ -22,8 +22,8 @@ from hcomc.control.longitudinal_candidate import (
     virtual_vehicle_feasible,
     with_cooperation,
 )
-from hcomc.control.merge_game import GameController, GameDetails
-from hcomc.control.merge_game_equilibrium import (
+from hcomc.control.merge_game.controller import GameController, GameDetails
+from hcomc.control.merge_game.equilibrium import (
     AHEAD,
     BEHIND,
     NOT_YIELD,
@@ -32,7 +32,7 @@ from hcomc.control.merge_game_equilibrium import (
     pure_nash,
     solve_merge_game,
 )
-from hcomc.control.merge_game_payoffs import INFEASIBLE_SAFETY, safety_term
+from hcomc.control.merge_game.payoffs import INFEASIBLE_SAFETY, safety_term
 from hcomc.control.prediction.population import VMC, VR
 from hcomc.control.registry import make_controller
 from hcomc.control.virtual_vehicle import cubic_state

@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.hcomc.commitment import (
+from hcomc.control.hierarchical.commitment import (
     GRID_HORIZONS,
     GRID_POSITIONS,
     choose,
     continuations,
     executed,
 )
-from hcomc.control.hcomc.controller import HCOMCController, merge_problem, sequence_groups
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import MODE_NONE
+from hcomc.control.hierarchical.controller import HCOMCController, merge_problem, sequence_groups
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import MODE_NONE
 from hcomc.experiments.results_row import plan_switches
 from hcomc.interface import MergeGroup, MergePlan, Mode
 from hcomc.optim.selection import eq19_costs, select_eq19

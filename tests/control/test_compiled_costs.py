@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 
 from hcomc.config import IDMParams, load_config
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND
-from hcomc.control.lane_change_cost import GameVehicle, leader_track, simulate_sv
-from hcomc.control.lane_change_params import GAME_DEFAULT, GameParams
+from hcomc.control.hierarchical.controller import HCOMCController
+from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND
+from hcomc.control.lane_change_game.params import GAME_DEFAULT, GameParams
 from hcomc.control.prediction.fuel import FuelCoefficients, _fuel_to_distance_kernel
+from hcomc.control.prediction.game_players import GameVehicle, leader_track, simulate_sv
 from hcomc.control.prediction.population import VMC, VR
 from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
 from hcomc.models.idm import idm_acceleration

@@ -12,9 +12,9 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import CONSTRAINTS
+from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import CONSTRAINTS
 from hcomc.control.report import plan_report
 from hcomc.interface import Mode
 from hcomc.optim.selection import non_dominated

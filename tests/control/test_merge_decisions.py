@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails, merge_problem
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND, problem_constants
+from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails, merge_problem
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND, problem_constants
 from hcomc.control.key_vehicles import behind_group
-from hcomc.control.lane_change_game import game_params
+from hcomc.control.lane_change_game.decision import game_params
 from hcomc.control.prediction.population import (
     C_A_MERG,
     C_D,

@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.hcomc.controller import HCOMCDetails, merge_problem
+from hcomc.control.hierarchical.controller import HCOMCDetails, merge_problem
 from hcomc.control.prediction.population import P_IIDM, VR
 from hcomc.interface import Mode
 from hcomc.road import Lane

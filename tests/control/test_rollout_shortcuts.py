@@ -13,9 +13,9 @@ from functools import cache
 import numpy as np
 
 from hcomc.config import load_config
-from hcomc.control.hcomc.controller import merge_problem
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import AHEAD
+from hcomc.control.hierarchical.controller import merge_problem
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import AHEAD
 from hcomc.control.prediction.passes import vmc_pre_track
 from hcomc.control.prediction.population import (
     C_DT,

@@ -28,9 +28,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc._typing import FloatArray
-from hcomc.control.hcomc.controller import HCOMCController, HCOMCDetails
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND
+from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND
 from hcomc.control.prediction.population import VMC
 from hcomc.control.prediction.scoring import objective_rows
 from hcomc.optim.annealing import AnnealingOptimizer

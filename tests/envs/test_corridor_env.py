@@ -17,8 +17,8 @@ from pettingzoo.test import parallel_api_test
 
 import hcomc.envs  # noqa: F401 (registers hcomc/CorridorMerge-v0)
 from hcomc.config import ConfigError
-from hcomc.envs.corridor_env import CorridorMergeEnv
-from hcomc.envs.corridor_multi_agent import CorridorParallelEnv
+from hcomc.envs.corridor.env import CorridorMergeEnv
+from hcomc.envs.corridor.multi_agent import CorridorParallelEnv
 from hcomc.envs.observation import N_EGO, N_ROLE
 from hcomc.safety.critical import critical_acceleration
 from hcomc.sim.corridor import simulate_corridor

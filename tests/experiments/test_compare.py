@@ -12,9 +12,9 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.experiments.claims import MIN_PAIRS, holm
-from hcomc.experiments.compare import PREFERS, effects, pairs
-from hcomc.experiments.compare_success import merge_success, success_pairs
-from hcomc.experiments.compare_view import EFFECTS_VIEW_COLUMNS, effects_view, success_view
+from hcomc.experiments.comparison.effects import PREFERS, effects, pairs
+from hcomc.experiments.comparison.success import merge_success, success_pairs
+from hcomc.experiments.comparison.view import EFFECTS_VIEW_COLUMNS, effects_view, success_view
 from hcomc.experiments.paper import PAPER_METRICS
 
 SEEDS = 10

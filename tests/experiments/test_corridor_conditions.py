@@ -24,9 +24,9 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.config import ControlParams
 from hcomc.corridor import load_corridor
-from hcomc.experiments.compare import PREFERS, RUN_LEVEL, effects
-from hcomc.experiments.compare_success import merge_success
-from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS, corridor_metrics
+from hcomc.experiments.comparison.effects import PREFERS, RUN_LEVEL, effects
+from hcomc.experiments.comparison.success import merge_success
+from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS, corridor_metrics
 from hcomc.experiments.paper import PAPER_METRICS
 from hcomc.sim.corridor import simulate_corridor
 
@@ -450,7 +450,7 @@ def test_bad_input_is_one_line_and_exit_2(corridor_file, tmp_path, args, fragmen
     ],
 )
 def test_configuration_labels_set_the_corridors_control_table(label, expected):
-    from hcomc.experiments.corridor_runs import with_configuration
+    from hcomc.experiments.corridor.runs import with_configuration
 
     corridor = load_corridor("corridor", {"control.replan_period": 2.0})
     control = with_configuration(corridor, label).control.model_dump()
@@ -475,7 +475,7 @@ class GapAcceptance:
 def test_a_controller_of_ones_own_runs_at_every_on_ramp(corridor_file, tmp_path):
     import hashlib
 
-    from hcomc.experiments.corridor_runs import CorridorSpec, run_corridor_batch
+    from hcomc.experiments.corridor.runs import CorridorSpec, run_corridor_batch
 
     source = tmp_path / "ga.py"
     source.write_text(GAP_ACCEPTANCE, encoding="utf-8")

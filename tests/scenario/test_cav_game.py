@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import hcomc.control.lane_change_game as game_module
+import hcomc.control.lane_change_game.decision as game_module
 from hcomc.config import load_config
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import simulate

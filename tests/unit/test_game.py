@@ -1,7 +1,7 @@
 """Tests for the lane-change game (paper Section III-B).
 
-Covers the generic solvers of :mod:`hcomc.control.game` on hand-computed games and the traffic
-game of :mod:`hcomc.control.lane_change_game` on small scenarios.
+Covers the generic solvers of :mod:`hcomc.control.lane_change_game.solvers` on hand-computed
+games and the traffic game of :mod:`hcomc.control.lane_change_game.decision` on small scenarios.
 """
 
 from __future__ import annotations
@@ -16,8 +16,7 @@ from hypothesis.extra.numpy import arrays
 from pydantic import ValidationError
 
 from hcomc.config import CAVParams, HDVParams, IDMParams, ScenarioConfig
-from hcomc.control.game import GameSolution, solve_cooperative, solve_stackelberg_harsanyi
-from hcomc.control.lane_change_game import (
+from hcomc.control.lane_change_game.decision import (
     FV_AC,
     FV_CS,
     FV_LC,
@@ -30,6 +29,11 @@ from hcomc.control.lane_change_game import (
     LaneChangeDecision,
     game_params,
     lane_change_game,
+)
+from hcomc.control.lane_change_game.solvers import (
+    GameSolution,
+    solve_cooperative,
+    solve_stackelberg_harsanyi,
 )
 
 PRIOR = (0.25, 0.5, 0.25)  # (aggressive, normal, conservative)

@@ -28,8 +28,8 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 
 from hcomc._typing import FloatArray
 from hcomc.config import load_config
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hierarchical.controller import HCOMCController
+from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.dominance import (
     crowding_distance,

@@ -17,7 +17,7 @@ from hcomc._typing import FloatArray
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import Archive, ParetoResult
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
-from hcomc.optim.pso import CompiledPSOOptimizer
+from hcomc.optim.pso.optimizer import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.registry import OPTIMIZERS, POPULATION_BASED, make_optimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer

@@ -11,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
-from hcomc.control.hcomc.controller import HCOMCDetails
+from hcomc.control.hierarchical.controller import HCOMCDetails
 from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails
 from hcomc.optim.base import ParetoResult
 from hcomc.road import KEY_ROLES

@@ -36,14 +36,14 @@ from pymoo.operators.sampling.lhs import LHS, criterion_maxmin
 import scalar_problems
 from hcomc._typing import FloatArray
 from hcomc.config import load_config
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hierarchical.controller import HCOMCController
+from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.optim import pso
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.numpy_sum import pairwise_sum
-from hcomc.optim.pso import CompiledPSOOptimizer, latin_hypercube, min_distances
-from hcomc.optim.pso_adaptation import adapt, swarm_spread
-from hcomc.optim.pso_move import improvement
+from hcomc.optim.pso.adaptation import adapt, swarm_spread
+from hcomc.optim.pso.move import improvement
+from hcomc.optim.pso.optimizer import CompiledPSOOptimizer, latin_hypercube, min_distances
 from hcomc.optim.pymoo_backend import PSOOptimizer
 from hcomc.optim.registry import make_optimizer
 from hcomc.sim.engine import Simulation

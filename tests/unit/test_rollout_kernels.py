@@ -136,7 +136,7 @@ def test_critical_scalar_is_the_array_function(d, v_r, v_f, delay):
 
 def test_created_pair_safety_is_eq15_of_vr_behind_vmf():
     """Longitudinal mode at merge completion: the pairs VR-VMF and VMC-VR, worst of both."""
-    from hcomc.control.hcomc.problem_terms import problem_constants
+    from hcomc.control.hierarchical.problem_terms import problem_constants
 
     config = load_config("C1")
     consts = problem_constants(config)

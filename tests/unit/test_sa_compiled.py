@@ -29,8 +29,8 @@ from hypothesis import strategies as st
 
 import scalar_problems
 from hcomc._typing import FloatArray
-from hcomc.control.hcomc.controller import HCOMCController
-from hcomc.control.hcomc.problem import MergeProblem
+from hcomc.control.hierarchical.controller import HCOMCController
+from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.optim import sa
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import ParetoResult

@@ -24,7 +24,7 @@ from hcomc.sim.log import SimulationLog
 from hcomc.viz.animation import animate
 from hcomc.viz.page import figure_png
 from hcomc.viz.report import write_report
-from hcomc.viz.scene import RoadScene
+from hcomc.viz.scene.frame import RoadScene
 
 # ----------------------------------------------------------------------------- animation
 

@@ -39,7 +39,7 @@ from hcomc.viz.figures import (
     trajectories_figure,
 )
 from hcomc.viz.inputs import FIGURE_KINDS, load_reports, load_runs, make_figure
-from hcomc.viz.scene import RoadScene
+from hcomc.viz.scene.frame import RoadScene
 from hcomc.viz.smoothing import adaptive_smoothing
 
 CONTROLLERS = {"FIFO": "fifo", "Game": "game", "HCOMC": "hcomc"}
@@ -329,7 +329,8 @@ def test_make_figure_errors(tmp_path: Path) -> None:
 # --------------------------------------------------------------------------- isolation
 def test_core_modules_do_not_import_matplotlib() -> None:
     code = (
-        "import sys, hcomc.cli, hcomc.sim.engine, hcomc.control.hcomc.controller, hcomc.viz; "
+        "import sys, hcomc.cli, hcomc.sim.engine, hcomc.control.hierarchical.controller; "
+        "import hcomc.viz; "
         "assert 'matplotlib' not in sys.modules, 'matplotlib imported'"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -23,7 +23,7 @@ __all__ = ["app"]
 
 def _register_sumo() -> None:
     """SUMO interoperability commands (need the optional extra only when they run)."""
-    from hcomc.sumo.cli import export_app, metrics
+    from hcomc.cli.sumo import export_app, metrics
 
     app.add_typer(export_app, name="export")
     app.command("metrics")(metrics)

@@ -232,7 +232,7 @@ Engine = Annotated[
 
 def _engine(engine: str, config: ScenarioConfig | None = None) -> str:
     """Validate --engine (SUMO installed and able to run ``config`` when asked for)."""
-    from hcomc.sumo.cli import engine_error
+    from hcomc.cli.sumo import engine_error
 
     problem = engine_error(engine, config)
     if problem is not None:

@@ -168,7 +168,7 @@ def _compare_controllers(
         run_comparison,
         status,
     )
-    from hcomc.experiments.compare import pairs
+    from hcomc.experiments.comparison.effects import pairs
     from hcomc.experiments.suite import LATEST, suite_named
 
     labels = _labels(controllers)

@@ -71,9 +71,9 @@ def _analyse(
 ) -> None:
     """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
     paper's five)."""
-    from hcomc.experiments.compare import effects
-    from hcomc.experiments.compare_success import merge_success, success_pairs
-    from hcomc.experiments.compare_view import effects_view, success_pairs_view, success_view
+    from hcomc.experiments.comparison.effects import effects
+    from hcomc.experiments.comparison.success import merge_success, success_pairs
+    from hcomc.experiments.comparison.view import effects_view, success_pairs_view, success_view
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 

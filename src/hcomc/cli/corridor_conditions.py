@@ -5,7 +5,7 @@
 paired by seed, into a resumable folder. A corridor of the paper's layout runs in the
 scenario engine and is measured with the paper's metrics; any other runs in the corridor
 engine with the configuration's controller at every on-ramp and is measured with the
-corridor metrics (:mod:`hcomc.experiments.corridor_runs`). ``--set`` takes dotted corridor
+corridor metrics (:mod:`hcomc.experiments.corridor.runs`). ``--set`` takes dotted corridor
 keys (``corridor.duration=600``, ``demand.main.cav_share=0.5``, ``control.replan_period=2``).
 """
 
@@ -69,7 +69,7 @@ def analysis_of(runs: Any) -> tuple[tuple[str, ...], dict[str, Any]]:
     """The notes and :func:`hcomc.cli.compare_output._analyse` options for a runs table: for runs
     of the corridor engine (``kind`` "corridor" in every row) the corridor metrics with their
     wording; none otherwise (the paper's metrics)."""
-    from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS
+    from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
 
     if "kind" not in runs or not runs["kind"].eq("corridor").all():
         return (), {}
@@ -101,15 +101,15 @@ def compare_corridors(
     comparison (as for cells of a suite)."""
     from hcomc.cli.compare import _command, fill_folder
     from hcomc.cli.compare_output import _analyse, _say
-    from hcomc.experiments.compare import pairs
-    from hcomc.experiments.corridor_compare import (
+    from hcomc.experiments.comparison.effects import pairs
+    from hcomc.experiments.corridor.compare import (
         CorridorComparison,
         check_folder,
         record,
         run_comparison,
         status,
     )
-    from hcomc.experiments.corridor_runs import resolve
+    from hcomc.experiments.corridor.runs import resolve
     from hcomc.experiments.suite import LATEST, suite_named
 
     _known_engine(engine or "hcomc")
@@ -155,7 +155,7 @@ def run_corridor_condition(
     and their means with 95 % CIs (or the rows as JSON)."""
     from hcomc.cli.experiments import print_merge_runs, run_label
     from hcomc.corridor import load_corridor
-    from hcomc.experiments.corridor_runs import CorridorSpec, check
+    from hcomc.experiments.corridor.runs import CorridorSpec, check
     from hcomc.experiments.workers import run_rows
 
     _known_engine(engine)
@@ -187,7 +187,7 @@ def print_corridor_runs(frame: Any, title: str) -> None:
     """Print runs of the corridor engine: per seed the merge events and the corridor
     metrics, then each metric's mean with its 95 % CI over the seeds."""
     from hcomc.cli.experiments import _frame_table
-    from hcomc.experiments.corridor_metrics import CORRIDOR_METRICS
+    from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
     from hcomc.experiments.tables import mean_ci
 
     labels = {name: metric.label for name, metric in CORRIDOR_METRICS.items()}

@@ -38,7 +38,7 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   never upstream of ``accel_lane_start`` (if even that overruns, the engine completes the change
   past the lane end, as it does for any change begun on the acceleration lane).
 * **Virtual-vehicle horizon H.** VR's arrival time at ``merge_x``, first at constant speed,
-  then refined once from the prediction of :class:`~hcomc.control.hcomc.problem.MergeProblem`
+  then refined once from the prediction of :class:`~hcomc.control.hierarchical.problem.MergeProblem`
   (VR accelerating freely on the ramp), clipped to ``[4 s, horizon_max]``. VV1 therefore ends
   at VR's predicted state when its lane change starts.
 * **VV1 end state and minimum headway.** VV1 ends exactly at VR's predicted position and speed;
@@ -47,8 +47,8 @@ Assumptions (documented; the paper gives no implementation details of its benchm
   shifting VV1. The h-respecting FIFO schedule ``t_k = max(t_k, t_{k-1} + h)`` is reported in
   :class:`FIFODetails` for information only.
 * **Prediction.** VR, VMF and the yielding vehicle are predicted with
-  :meth:`MergeProblem.predict <hcomc.control.hcomc.problem.MergeProblem.predict>` on the single
-  candidate ``[merge_x, vr_duration, H, 0, sequence]`` (longitudinal); its ``vv0[0]`` and
+  :meth:`MergeProblem.predict <hcomc.control.hierarchical.problem.MergeProblem.predict>` on
+  the single candidate ``[merge_x, vr_duration, H, 0, sequence]`` (longitudinal); its ``vv0[0]`` and
   ``vv1[0]`` are exactly the coefficients the engine executes.
 * **Nearest feasible VV1.** Ntousakis et al. give every vehicle an arrival time and the
   yielding vehicle an analytic trajectory to meet it, so the yielding vehicle yields whatever
@@ -85,8 +85,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hcomc.control.hcomc.controller import sequence_groups
-from hcomc.control.hcomc.problem_terms import AHEAD, BEHIND, Prediction
+from hcomc.control.hierarchical.controller import sequence_groups
+from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND, Prediction
 from hcomc.control.longitudinal_candidate import MIN_SPEED, feasible_candidate, merge_position
 from hcomc.control.predicting_baseline import PredictingBaseline, longitudinal_plan
 from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms

@@ -4,7 +4,7 @@ The baselines do not optimise the merge (paper Table III): VR changes lane at a 
 with the CAV default duration (:func:`merge_position`), and the virtual vehicles' horizon H is
 VR's arrival there (:func:`reach_horizon`, refined once from the prediction by
 :func:`predict_longitudinal`). The candidate ``[merge_x, vr_duration, H, 0, sequence]`` is
-predicted with HCOMC's merge problem (:class:`~hcomc.control.hcomc.problem.MergeProblem`),
+predicted with HCOMC's merge problem (:class:`~hcomc.control.hierarchical.problem.MergeProblem`),
 whose ``vv0[0]`` and ``vv1[0]`` are exactly the coefficients the engine executes. When its
 virtual vehicles are infeasible, :func:`nearest_feasible` searches a deterministic grid for the
 nearest feasible candidate (:func:`feasible_candidate`); :func:`with_cooperation` predicts the
@@ -19,8 +19,8 @@ import copy
 import numpy as np
 
 from hcomc._typing import FloatArray
-from hcomc.control.hcomc.problem import MergeProblem
-from hcomc.control.hcomc.problem_terms import AHEAD, CONSTRAINTS, Prediction
+from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_terms import AHEAD, CONSTRAINTS, Prediction
 from hcomc.interface import TrafficView
 from hcomc.road import VR
 
@@ -130,7 +130,7 @@ def predict_longitudinal(
 
     Returns
     -------
-    prediction : :class:`~hcomc.control.hcomc.problem.Prediction` of the single row.
+    prediction : :class:`~hcomc.control.hierarchical.problem.Prediction` of the single row.
     horizon : the H used [s].
     """
     row = np.array([[merge_x, vr_duration, horizon, 0.0, float(sequence)]])
@@ -178,7 +178,7 @@ def nearest_feasible(
     i :data:`POSITION_STEP` (i = 1, 2, ...) up to ``x_last`` (and ``x_last`` itself), each with
     H = ``horizon`` + k :data:`HORIZON_STEP` (k = 0, 1, ...) and ``h_max``. The candidates are
     scored in one call of :meth:`MergeProblem.evaluate
-    <hcomc.control.hcomc.problem.MergeProblem.evaluate>` (longitudinal, ``sequence``); only
+    <hcomc.control.hierarchical.problem.MergeProblem.evaluate>` (longitudinal, ``sequence``); only
     the virtual-vehicle constraint is asked of them, the criterion of the rule's own candidate.
 
     Returns

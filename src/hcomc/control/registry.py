@@ -37,9 +37,9 @@ ENTRY_POINT_GROUP = "hcomc.controllers"
 
 BUILTIN: dict[str, str] = {
     "fifo": "hcomc.control.fifo:FIFOController",
-    "game": "hcomc.control.merge_game:GameController",
-    "hcomc": "hcomc.control.hcomc.controller:HCOMCController",
-    "game-capped": "hcomc.control.merge_game:GameController",
+    "game": "hcomc.control.merge_game.controller:GameController",
+    "hcomc": "hcomc.control.hierarchical.controller:HCOMCController",
+    "game-capped": "hcomc.control.merge_game.controller:GameController",
 }
 """hcomc's own controllers: name -> ``module:Class``."""
 

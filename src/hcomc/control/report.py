@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from hcomc.control.hcomc.controller import HCOMCDetails
-from hcomc.control.hcomc.problem_terms import MODE_NONE
+from hcomc.control.hierarchical.controller import HCOMCDetails
+from hcomc.control.hierarchical.problem_terms import MODE_NONE
 from hcomc.interface import Engine, MergePlan, Mode
 from hcomc.road import Kind
 

@@ -9,7 +9,7 @@
   factory convention;
 * :mod:`hcomc.envs.policies`: the FIFO, Game and HCOMC controllers on the same
   environment, and :func:`~hcomc.envs.policies.evaluate`;
-* ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor_env.CorridorMergeEnv`): the agent
+* ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor.env.CorridorMergeEnv`): the agent
   drives a ramp CAV through its merge at one on-ramp of any corridor (N lanes, several
   ramps, continuous demand), on the corridor engine.
 
@@ -39,7 +39,7 @@ if ENV_ID not in gym.registry:
         vector_entry_point="hcomc.envs.vector:MergeVectorEnv",
     )
 if CORRIDOR_ENV_ID not in gym.registry:
-    gym.register(id=CORRIDOR_ENV_ID, entry_point="hcomc.envs.corridor_env:CorridorMergeEnv")
+    gym.register(id=CORRIDOR_ENV_ID, entry_point="hcomc.envs.corridor.env:CorridorMergeEnv")
 
 
 def parallel_env(

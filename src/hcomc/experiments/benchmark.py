@@ -103,7 +103,7 @@ def check_folder(out: Path, suite: Suite) -> None:
                 "hcomc compare"
             )
         return
-    if "corridors" in record:  # hcomc.experiments.corridor_compare's record
+    if "corridors" in record:  # hcomc.experiments.corridor.compare's record
         raise ConfigError(
             f"option '--out' = '{out}' holds a comparison on corridors "
             f"({', '.join(record['corridors'])}); allowed: another folder (runs of a suite and "

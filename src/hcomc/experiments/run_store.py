@@ -1,7 +1,7 @@
 """Where finished runs live: each run's key, and a folder that stores one part per key.
 
 A run (a scenario condition's :class:`~hcomc.experiments.runner.RunSpec` or a corridor's
-:class:`~hcomc.experiments.corridor_runs.CorridorSpec`) is identified by a key hashed from
+:class:`~hcomc.experiments.corridor.runs.CorridorSpec`) is identified by a key hashed from
 its place in its grid, its fully resolved config (or corridor), the hcomc version and the
 code that computes it (:func:`run_key`); a :class:`RunStore` keeps each finished run as
 ``parts/<key>.parquet`` (one row) plus ``manifests/<key>.json``, written atomically, so that
@@ -24,7 +24,7 @@ import pandas as pd
 import hcomc
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.registry import BUILTIN, controller_source
-from hcomc.experiments.corridor_runs import CorridorSpec, key_material
+from hcomc.experiments.corridor.runs import CorridorSpec, key_material
 from hcomc.experiments.provenance import code_stamp
 from hcomc.experiments.runner import RunSpec
 from hcomc.experiments.workers import AnySpec, run_dask, run_local
@@ -82,7 +82,7 @@ def run_key(run: AnySpec) -> str:
     controller from outside hcomc gives new keys, so a resumed sweep recomputes those runs
     instead of mixing stale results into the table. A corridor's run hashes the resolved
     corridor, and the scenario it becomes when it runs in the scenario engine
-    (:func:`hcomc.experiments.corridor_runs.key_material`), in place of the config.
+    (:func:`hcomc.experiments.corridor.runs.key_material`), in place of the config.
     """
     if isinstance(run, CorridorSpec):
         *material, controller = key_material(run)

@@ -11,9 +11,9 @@ grid order, so it is identical for any backend and worker count; run timings liv
 manifests.
 
 A corridor (:mod:`hcomc.corridor`: a preset such as ``corridor`` or a corridor file) may be
-the base: its runs are :class:`~hcomc.experiments.corridor_runs.CorridorSpec` s, its grid is
+the base: its runs are :class:`~hcomc.experiments.corridor.runs.CorridorSpec` s, its grid is
 ``[corridor_grid]`` (dotted corridor keys, each with its list of values) and its rows hold
-the corridor metrics (:mod:`hcomc.experiments.corridor_sweep`). A store holds runs of both
+the corridor metrics (:mod:`hcomc.experiments.corridor.sweep`). A store holds runs of both
 kinds side by side; each kind is batched and keyed on its own.
 """
 
@@ -30,7 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from hcomc.config import ConfigError, describe_error, load_config
 from hcomc.corridor import is_corridor_source
-from hcomc.experiments.corridor_runs import (
+from hcomc.experiments.corridor.runs import (
     CorridorSpec,
     forget,
 )
@@ -143,11 +143,11 @@ def is_corridor_sweep(spec: SweepSpec) -> bool:
 
 def expand(spec: SweepSpec) -> list[AnySpec]:
     """Runs in grid order (cell, configuration, seed); validates every cell's scenario (or
-    corridor: :func:`hcomc.experiments.corridor_sweep.expand_corridor`)."""
+    corridor: :func:`hcomc.experiments.corridor.sweep.expand_corridor`)."""
     forget_resolved()  # base files may have changed since the last expansion
     forget()
     if is_corridor_sweep(spec):
-        from hcomc.experiments.corridor_sweep import expand_corridor
+        from hcomc.experiments.corridor.sweep import expand_corridor
 
         return list(expand_corridor(spec))
     if spec.corridor_grid:
@@ -195,7 +195,7 @@ def _row(run: RunSpec, row: dict[str, Any]) -> pd.DataFrame:
 def _stored_row(spec: SweepSpec, run: AnySpec, row: dict[str, Any]) -> pd.DataFrame:
     """The one-row table stored for ``run`` of ``spec``."""
     if isinstance(run, CorridorSpec):
-        from hcomc.experiments.corridor_sweep import corridor_row
+        from hcomc.experiments.corridor.sweep import corridor_row
 
         return corridor_row(spec, run, {k: v for k, v in row.items() if k not in TIMING})
     return _row(run, row)
@@ -224,7 +224,7 @@ def assemble(spec: SweepSpec, out: Path) -> pd.DataFrame:
     table = RunStore(out).read(expand(spec))
     summ = pd.DataFrame()
     if len(table) and is_corridor_sweep(spec):
-        from hcomc.experiments.corridor_sweep import corridor_summary
+        from hcomc.experiments.corridor.sweep import corridor_summary
 
         summ = corridor_summary(spec, table)
     elif len(table):

@@ -17,7 +17,7 @@ from typing import Any
 import pandas as pd
 
 from hcomc.config import ConfigError
-from hcomc.experiments.corridor_runs import CorridorSpec, reference_group, run_corridor_batch
+from hcomc.experiments.corridor.runs import CorridorSpec, reference_group, run_corridor_batch
 from hcomc.experiments.runner import _SPAWN, RunSpec, batches, batches_by_reference, run_batch
 
 __all__ = ["BATCH_SIZE", "AnySpec", "connect", "run_dask", "run_local", "run_rows"]

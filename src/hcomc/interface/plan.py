@@ -52,8 +52,9 @@ class PlanDetails:
     """Controller-specific extras of a plan, for reporting only (the engine never reads them).
 
     This base carries none; each controller that reports more subclasses it with typed fields
-    (:class:`hcomc.control.hcomc.controller.HCOMCDetails`,
-    :class:`hcomc.control.fifo.FIFODetails`, :class:`hcomc.control.merge_game.GameDetails`).
+    (:class:`hcomc.control.hierarchical.controller.HCOMCDetails`,
+    :class:`hcomc.control.fifo.FIFODetails`,
+    :class:`hcomc.control.merge_game.controller.GameDetails`).
     """
 
     @property

@@ -5,7 +5,7 @@ terms from 0 in order, runs of up to 128 in 8 interleaved partial sums combined 
 then the rest in order, longer runs split in two at a multiple of 8. Kernels that must round
 as whole-array numpy code does sum with :func:`pairwise_sum`: the merge prediction's U_fuel
 (:mod:`hcomc.control.prediction.fuel`, equal bit for bit to ``ndarray.sum`` over the same
-samples) and PSO's adaptation (:mod:`hcomc.optim.pso_adaptation`, rounding as pymoo's numpy
+samples) and PSO's adaptation (:mod:`hcomc.optim.pso.adaptation`, rounding as pymoo's numpy
 does wherever numpy's float64 summation is this pairwise one; the tests check it is here).
 """
 

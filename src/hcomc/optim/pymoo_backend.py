@@ -220,7 +220,7 @@ class PSOOptimizer:
     Returns the feasible, mutually non-dominated subset of every evaluated row (kept by the
     adapter, so no extra evaluation is spent), with its true ``F`` and ``G``; when none is
     feasible, the best-scalarised row (the first row seen wins ties). Registered as
-    ``pso-pymoo``: ``pso`` (:class:`~hcomc.optim.pso.CompiledPSOOptimizer`) makes the same
+    ``pso-pymoo``: ``pso`` (:class:`~hcomc.optim.pso.optimizer.CompiledPSOOptimizer`) makes the same
     decisions without pymoo's per-individual objects.
     """
 

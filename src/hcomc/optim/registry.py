@@ -10,7 +10,7 @@ from hcomc.config import ControlParams
 from hcomc.optim.annealing import AnnealingOptimizer
 from hcomc.optim.base import Optimizer
 from hcomc.optim.nsga2 import CompiledNSGA2Optimizer
-from hcomc.optim.pso import CompiledPSOOptimizer
+from hcomc.optim.pso.optimizer import CompiledPSOOptimizer
 from hcomc.optim.pymoo_backend import NSGA2Optimizer, PSOOptimizer
 from hcomc.optim.sa import CompiledAnnealingOptimizer
 

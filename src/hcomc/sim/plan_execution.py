@@ -41,7 +41,7 @@ from hcomc.sim.step.plans import commanded_mask, encode_plan, holding_mask, repl
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
-    from hcomc.control.lane_change_cost import GameVehicle
+    from hcomc.control.prediction.game_players import GameVehicle
     from hcomc.interface import Fleet
     from hcomc.sim.log import SimulationLog
     from hcomc.sim.neighbours import LaneIndex
@@ -160,7 +160,7 @@ def game_confirms(
     """Section III-B: a CAV's discretionary change must be its game equilibrium action
     (SV = the CAV, FV = its new follower); ramp merges and HDV changes are unaffected.
     Returns which of the ``chosen`` changes (to lanes ``target``) go ahead."""
-    from hcomc.control.lane_change_game import game_params, game_vehicle, lane_change_game
+    from hcomc.control.lane_change_game.decision import game_params, game_vehicle, lane_change_game
 
     def vehicle(i: int) -> GameVehicle | None:
         return game_vehicle(x, v, fleet, i)

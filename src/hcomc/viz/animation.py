@@ -21,8 +21,8 @@ from matplotlib import animation as mpl_animation
 
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import atomic_paths
-from hcomc.viz.scene import DPI, RoadScene
-from hcomc.viz.scene_road import SceneRoad
+from hcomc.viz.scene.frame import DPI, RoadScene
+from hcomc.viz.scene.road import SceneRoad
 
 __all__ = ["ALLOWED_SUFFIXES", "animate"]
 

@@ -22,8 +22,8 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from hcomc.experiments.claims import MIN_PAIRS
-from hcomc.experiments.compare import paired_differences
-from hcomc.experiments.compare_view import (
+from hcomc.experiments.comparison.effects import paired_differences
+from hcomc.experiments.comparison.view import (
     effects_view,
     metric_label,
     success_pairs_view,
@@ -187,9 +187,9 @@ def write_compare_report(
     """Write ``out_dir/report.html`` (atomically) and return its path.
 
     ``runs`` is the runs table, ``effects``, ``success`` and ``pairs`` the frames of
-    :func:`hcomc.experiments.compare.effects`,
-    :func:`~hcomc.experiments.compare_success.merge_success` and
-    :func:`~hcomc.experiments.compare_success.success_pairs`, ``record`` the folder's record
+    :func:`hcomc.experiments.comparison.effects.effects`,
+    :func:`~hcomc.experiments.comparison.success.merge_success` and
+    :func:`~hcomc.experiments.comparison.success.success_pairs`, ``record`` the folder's record
     (suite, versions, command) and ``notes`` lines shown under the header (e.g. settings in
     which two compared folders differ).
     """

@@ -5,8 +5,8 @@ no-merge counterfactual at its end speed's cruise rate; the rates are
 :func:`hcomc.models.fuel.fuel_rate_scalar`, their one home, summed in numpy's pairwise order
 (:func:`hcomc.optim.numpy_sum.pairwise_sum`) so that the values equal those of
 :func:`~hcomc.models.fuel.fuel_rate` summed with ``ndarray.sum``, bit for bit. Used for whole
-populations (:meth:`hcomc.control.hcomc.problem.MergeProblem.evaluate`) and for the single rows of
-simulated annealing alike.
+populations (:meth:`hcomc.control.hierarchical.problem.MergeProblem.evaluate`) and for the
+single rows of simulated annealing alike.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ cost of single-objective optimisers (Eq. 16 over a common distance:
 Eq. 15 is :func:`hcomc.safety.critical.critical_accel` and the cubics' extremes
 :func:`hcomc.control.virtual_vehicle.cubic_minima`, their one homes. The objective vector
 (:func:`objectives_into`) and the cost (:func:`penalised_cost`) are written once here and
-called both for whole populations (:meth:`hcomc.control.hcomc.problem.MergeProblem.evaluate`,
+called both for whole populations (:meth:`hcomc.control.hierarchical.problem.MergeProblem.evaluate`,
 ``scalarise``) and for the single rows of simulated annealing (``evaluate_row``), so that both
 paths give the same values bit for bit.
 """
@@ -195,7 +195,7 @@ def objective_rows(u_safe: np.ndarray, fuel: np.ndarray, u_eff: np.ndarray) -> n
 @kernel(inline="always")
 def penalised_cost(f: np.ndarray, g: np.ndarray, threshold: float, fuel_ref: float) -> float:
     """Eq. 19 as one cost with the U_safe gate and the constraints as penalties (the formula
-    of :meth:`~hcomc.control.hcomc.problem.MergeProblem.scalarise`) for one row's objectives
+    of :meth:`~hcomc.control.hierarchical.problem.MergeProblem.scalarise`) for one row's objectives
     ``f`` (3,) and constraints ``g``; the violations are summed in order, as numpy sums a
     row of fewer than eight values."""
     gate = 10.0 * _at_least_zero(f[0] - threshold)

@@ -1,0 +1,100 @@
+"""The tables of a controller comparison as text, for a terminal or a page: the effects
+(:mod:`hcomc.experiments.comparison.effects`) and merge success
+(:mod:`hcomc.experiments.comparison.success`), each metric named with its unit and preferred
+direction."""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from hcomc.experiments.comparison.effects import PREFERS
+from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
+from hcomc.experiments.tables import LABELS
+
+__all__ = [
+    "EFFECTS_VIEW_COLUMNS",
+    "effects_view",
+    "metric_label",
+    "success_pairs_view",
+    "success_view",
+]
+
+EFFECTS_VIEW_COLUMNS = (
+    "cell", "metric", "A", "B", "median A-B [95 % CI]", "verdict", "favours", "A<B", "A>B",
+    "excluded", "p (Holm)", "verdict (Holm)",
+)  # fmt: skip
+"""The columns of :func:`effects_view`."""
+
+
+def metric_label(metric: str) -> str:
+    """A metric's name with its unit and preferred direction (↑ larger is better, ↓ smaller)."""
+    arrow = {"larger": " ↑", "smaller": " ↓"}.get(PREFERS.get(metric, ""), "")
+    corridor = CORRIDOR_METRICS.get(metric)
+    return LABELS.get(metric, corridor.label if corridor else metric) + arrow
+
+
+def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
+    """The effects as text for a terminal or a page: cell, metric, A, B, median A - B with
+    its 95 % CI, verdict, the favoured configuration, "k of n" seeds with A < B, seeds with
+    A > B, excluded seeds, the Holm-adjusted p and its verdict."""
+
+    def interval(m: float, lo: float, hi: float) -> str:
+        return "—" if not math.isfinite(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]"
+
+    rows = frame.to_dict("records")
+    return pd.DataFrame(
+        {
+            "cell": [r["condition"] for r in rows],
+            "metric": [metric_label(r["metric"]) for r in rows],
+            "A": [r["a"] for r in rows],
+            "B": [r["b"] for r in rows],
+            "median A-B [95 % CI]": [
+                interval(r["median_diff"], r["ci_low"], r["ci_high"]) for r in rows
+            ],
+            "verdict": [r["verdict"] for r in rows],
+            "favours": [r["favours"] or "—" for r in rows],
+            "A<B": [f"{r['a_lower']} of {r['n']}" for r in rows],
+            "A>B": [str(r["a_higher"]) for r in rows],
+            "excluded": [str(r["excluded"]) for r in rows],
+            "p (Holm)": [_p(r["p_holm"]) for r in rows],
+            "verdict (Holm)": [r["verdict_holm"] for r in rows],
+        },
+        columns=EFFECTS_VIEW_COLUMNS,
+    )
+
+
+def _p(p: float) -> str:
+    return "—" if not math.isfinite(p) else f"{p:.2g}"
+
+
+def success_view(frame: pd.DataFrame) -> pd.DataFrame:
+    """Merge success as text: one row per cell, one column per configuration, "k/n (rate)"."""
+    if frame.empty:
+        return pd.DataFrame()
+    text = [f"{k}/{n} ({100 * r:.0f} %)" for k, n, r in
+            zip(frame["merged"], frame["runs"], frame["rate"], strict=True)]  # fmt: skip
+    wide = frame.assign(text=text).pivot(index="condition", columns="configuration", values="text")
+    wide = wide.reindex(index=pd.unique(frame["condition"]),
+                        columns=pd.unique(frame["configuration"]))  # fmt: skip
+    return wide.fillna("—").rename_axis(index="cell", columns=None).reset_index()
+
+
+def success_pairs_view(frame: pd.DataFrame) -> pd.DataFrame:
+    """Paired merge success as text: cell, A, B, seeds where both / only A / only B /
+    neither merged, the Holm-adjusted p of the exact McNemar test and its verdict."""
+    rows = frame.to_dict("records")
+    return pd.DataFrame(
+        {
+            "cell": [r["condition"] for r in rows],
+            "A": [r["a"] for r in rows],
+            "B": [r["b"] for r in rows],
+            "both merged": [str(r["both"]) for r in rows],
+            "only A": [str(r["only_a"]) for r in rows],
+            "only B": [str(r["only_b"]) for r in rows],
+            "neither": [str(r["neither"]) for r in rows],
+            "p (Holm)": [_p(r["p_holm"]) for r in rows],
+            "verdict (Holm)": [r["verdict_holm"] for r in rows],
+        }
+    )
