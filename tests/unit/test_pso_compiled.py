@@ -38,9 +38,9 @@ from hcomc._typing import FloatArray
 from hcomc.config import load_config
 from hcomc.control.hierarchical.controller import HCOMCController
 from hcomc.control.hierarchical.problem import MergeProblem
-from hcomc.optim import pso
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.numpy_sum import pairwise_sum
+from hcomc.optim.pso import optimizer as pso_optimizer
 from hcomc.optim.pso.adaptation import adapt, swarm_spread
 from hcomc.optim.pso.move import improvement
 from hcomc.optim.pso.optimizer import CompiledPSOOptimizer, latin_hypercube, min_distances
@@ -141,14 +141,14 @@ def test_out_of_box_retries_and_repair_equal_pymoo(monkeypatch: pytest.MonkeyPat
     """On a corner optimum some moves exhaust the 20 retries and re-draw variables between
     bound and old position (``repair_random_init``): the same draws as pymoo's."""
     retries: list[int] = []
-    move = pso.move
+    move = pso_optimizer.move
 
     def counting_move(*args: Any) -> tuple[FloatArray, FloatArray, int]:
         out = move(*args)
         retries.append(out[2])
         return out
 
-    monkeypatch.setattr(pso, "move", counting_move)
+    monkeypatch.setattr(pso_optimizer, "move", counting_move)
     for seed in (0, 1):
         _assert_same(*_both(Corner, 480, seed, pop_size=16))
     assert len(retries) == 2 * 29
