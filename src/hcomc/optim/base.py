@@ -200,6 +200,12 @@ def check_budget(budget: int) -> None:
         raise ValueError(f"budget must be >= 1 row evaluation, got {budget}")
 
 
+def generations(budget: int, pop_size: int) -> int:
+    """Generations of ``pop_size`` rows a population-based optimiser runs on a budget of
+    ``budget`` row evaluations: ``max(1, budget // pop_size)`` (at least the first)."""
+    return max(1, budget // pop_size)
+
+
 def check_pop_size(pop_size: int) -> None:
     """Raise unless a population has at least two members."""
     if pop_size < 2:

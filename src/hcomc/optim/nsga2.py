@@ -35,6 +35,7 @@ from hcomc.optim.base import (
     archive_front,
     check_budget,
     check_pop_size,
+    generations,
     initial_rows,
 )
 from hcomc.optim.dominance import survival_fronts, survive_and_select
@@ -139,7 +140,7 @@ class CompiledNSGA2Optimizer:
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
         check_budget(budget)
-        n_gen = max(1, budget // self.pop_size)
+        n_gen = generations(budget, self.pop_size)
         xl = np.array(problem.xl, dtype=np.float64, copy=True)
         xu = np.array(problem.xu, dtype=np.float64, copy=True)
         n_var, n_obj, n_constr = int(problem.n_var), int(problem.n_obj), int(problem.n_constr)

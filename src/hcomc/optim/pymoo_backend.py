@@ -49,13 +49,10 @@ from hcomc.optim.base import (
     archive_front,
     check_budget,
     check_pop_size,
+    generations,
     initial_rows,
 )
 from hcomc.rng import draw_seed
-
-
-def _n_gen(budget: int, pop_size: int) -> int:
-    return max(1, budget // pop_size)
 
 
 def _as_2d(a: Any, n_cols: int) -> FloatArray:
@@ -156,7 +153,7 @@ class NSGA2Optimizer:
     ) -> ParetoResult:
         """Run ``max(1, budget // pop_size)`` generations and return the non-dominated set."""
         check_budget(budget)
-        adapter = _PymooProblem(problem, self.pop_size * _n_gen(budget, self.pop_size))
+        adapter = _PymooProblem(problem, self.pop_size * generations(budget, self.pop_size))
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = NSGA2(
             pop_size=self.pop_size,
@@ -168,7 +165,7 @@ class NSGA2Optimizer:
         res = _pymoo_minimize(
             adapter,
             algorithm,
-            get_termination("n_gen", _n_gen(budget, self.pop_size)),
+            get_termination("n_gen", generations(budget, self.pop_size)),
             seed=draw_seed(rng),
             verbose=False,
             save_history=False,
@@ -245,7 +242,7 @@ class PSOOptimizer:
         """Run ``max(1, budget // pop_size)`` generations; return the feasible non-dominated
         set of every row evaluated."""
         check_budget(budget)
-        capacity = self.pop_size * _n_gen(budget, self.pop_size)
+        capacity = self.pop_size * generations(budget, self.pop_size)
         adapter = _PymooProblem(problem, capacity, scalar=True)
         first = initial_rows(problem, initial, self.pop_size, rng)
         algorithm = PSO(
@@ -259,7 +256,7 @@ class PSOOptimizer:
         _pymoo_minimize(
             adapter,
             algorithm,
-            get_termination("n_gen", _n_gen(budget, self.pop_size)),
+            get_termination("n_gen", generations(budget, self.pop_size)),
             seed=draw_seed(rng),
             verbose=False,
             save_history=False,

@@ -63,6 +63,7 @@ from hcomc.optim.base import (
     Problem,
     check_budget,
     check_pop_size,
+    generations,
     initial_rows,
 )
 from hcomc.optim.pso.adaptation import adapt, swarm_spread
@@ -159,7 +160,7 @@ class CompiledPSOOptimizer:
         """Run ``max(1, budget // pop_size)`` generations; return the feasible non-dominated
         set of every row evaluated."""
         check_budget(budget)
-        n_gen = max(1, budget // self.pop_size)
+        n_gen = generations(budget, self.pop_size)
         xl = np.array(problem.xl, dtype=np.float64, copy=True)
         xu = np.array(problem.xu, dtype=np.float64, copy=True)
         n_var, n_obj, n_constr = int(problem.n_var), int(problem.n_obj), int(problem.n_constr)
