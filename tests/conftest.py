@@ -1,4 +1,9 @@
-"""Shared fixtures."""
+"""Shared fixtures.
+
+No test compiles kernels it does not use: each kernel compiles (or loads from numba's cache)
+on its first call, so a unit test of one model compiles that model's kernels only. A command
+run through the CLI compiles the stages it needs first (hcomc.cli._compile), with its lines on
+the process's own stderr, never in the output a test checks."""
 
 from __future__ import annotations
 
@@ -7,17 +12,6 @@ from typing import Any
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-
-
-@pytest.fixture(autouse=True, scope="session")
-def _kernels_compiled() -> None:
-    """The kernels compiled once, first, as a command would (hcomc.cli._compile): the
-    commands the tests run then print no compilation lines into the output they check."""
-    from rich.console import Console
-
-    from hcomc.cli._compile import ensure_compiled
-
-    ensure_compiled(Console(stderr=True))
 
 
 @pytest.fixture(autouse=True)

@@ -48,11 +48,6 @@ sys.meta_path.insert(0, _BlockHcomc())
 """
 
 
-@pytest.fixture(autouse=True, scope="session")
-def _kernels_compiled() -> None:
-    """Overrides conftest's fixture: building the documentation compiles no kernels."""
-
-
 @pytest.fixture(scope="module")
 def build(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     """The site, built once into a temporary directory, and mkdocs' log."""

@@ -34,12 +34,6 @@ CITATION = re.compile(r"\bEqs?\.\s?\(?(\d+)\)?(?:\s?[-–]\s?\(?(\d+)\)?)?")
 # the row is checked like the others: remove it here.
 
 
-@pytest.fixture(autouse=True, scope="session")
-def _kernels_compiled() -> None:
-    """This module calls no kernel, so it does not wait for the session's compilation of
-    them (tests/conftest.py): it stays a check of seconds after an edit of the sources."""
-
-
 def _index_rows() -> list[tuple[int, str, str, str]]:
     """``(equation, what, dotted path, test)`` of every row of the index table."""
     text = MODELS.read_text(encoding="utf-8")

@@ -11,14 +11,15 @@ Every compiled function of hcomc is declared with :data:`kernel`, numba's ``njit
 Use it bare (``@kernel``) or with numba's other options (``@kernel(inline="always")``,
 ``@kernel(parallel=True)``).
 
-**The cache follows every file the kernels depend on.** numba judges a cached function
+**The cache follows the sources each kernel depends on.** numba judges a cached function
 fresh when the file that defines it is unchanged, but a compiled function carries the code of
-the functions it calls: after an edit of :func:`hcomc.models.idm.idm_accel`, the simulation
-step (defined in other files) would go on running the old model. hcomc's kernels are
-therefore cached with a freshness stamp of the files that compile and every file of the
-package they import (:class:`PackageCacheLocator`, :mod:`hcomc._stamp`): an edit of any of
-them recompiles all kernels on first use; an edit of the command line, the experiments,
-the figures or a controller's Python code does not.
+the functions it calls: after an edit of a car-following equation, the simulation step
+(defined in other files) would go on running the old model. hcomc's kernels are therefore
+cached with the stamp of their own module (:func:`hcomc._stamp.module_stamp`: its source and
+the stamps of the hcomc modules it imports when loaded), in their freshness and in their cache
+files' names (:class:`PackageCacheLocator`): an edit recompiles on first use the kernels of the
+edited module and of the modules that import it, and nothing else; an edit of the command
+line, the experiments, the figures or a controller's Python code recompiles nothing.
 """
 
 from __future__ import annotations
@@ -34,35 +35,46 @@ from numba import carray, njit, types
 from numba.core import caching, cgutils
 from numba.extending import intrinsic
 
-from hcomc._stamp import fingerprint
-
 PACKAGE = Path(__file__).resolve().parent
 """The directory of the hcomc package, whose sources the kernels' cache stamps."""
+
+TAG_LENGTH = 16
+"""How many hex digits of a stamp go into cache file names and markers."""
 
 
 @functools.cache
 def source_stamp(package: Path = PACKAGE) -> str:
-    """Fingerprint of the package's files the kernels depend on
-    (:func:`hcomc._stamp.fingerprint`; once per process)."""
+    """Fingerprint of every kernel module's stamp (:func:`hcomc._stamp.fingerprint`; once per
+    process): it changes exactly when some kernel's cache goes stale."""
+    from hcomc._stamp import fingerprint
+
     return fingerprint(package)
 
 
 def stamp_tag(package: Path = PACKAGE) -> str:
-    """The part of :func:`source_stamp` in the names of the kernels' cache files."""
-    return source_stamp(package)[:16]
+    """The part of :func:`source_stamp` in the name of the compiled-cache marker."""
+    return source_stamp(package)[:TAG_LENGTH]
+
+
+def file_stamp(py_file: Path, package: Path = PACKAGE) -> str:
+    """The stamp of the module in ``py_file`` (:func:`hcomc._stamp.module_stamp`)."""
+    from hcomc._stamp import module_name, module_stamp
+
+    return module_stamp(module_name(py_file.resolve(), package), package)
 
 
 def remove_stale_caches(package: Path = PACKAGE) -> int:
     """Delete the cache files of ``package``'s kernels in its ``__pycache__`` directories that
-    were written for other sources (their names lack :func:`stamp_tag`); returns how many.
-    They are never read again, and a full cache takes tens of megabytes."""
-    tag = f"-{stamp_tag(package)}."
-    stale = [
-        path
-        for pattern in ("__pycache__/*.nbi", "__pycache__/*.nbc")
-        for path in package.rglob(pattern)
-        if tag not in path.name
-    ]
+    were written for other sources (their names lack their module's current stamp); returns
+    how many. They are never read again, and a full cache takes tens of megabytes."""
+    stale = []
+    for pattern in ("__pycache__/*.nbi", "__pycache__/*.nbc"):
+        for path in package.rglob(pattern):
+            source = path.parent.parent / f"{path.name.split('.')[0]}.py"  # numba's names
+            if not source.exists() or f"-{file_stamp(source, package)[:TAG_LENGTH]}." not in (
+                path.name
+            ):
+                stale.append(path)
     for path in stale:
         path.unlink(missing_ok=True)
     return len(stale)
@@ -70,13 +82,15 @@ def remove_stale_caches(package: Path = PACKAGE) -> int:
 
 class PackageCacheLocator(caching._CacheLocator):
     """numba's own cache locator for a function of the package (in ``__pycache__``, or
-    ``NUMBA_CACHE_DIR``), with the package's :func:`source_stamp` added to its freshness."""
+    ``NUMBA_CACHE_DIR``), with its module's stamp (:func:`file_stamp`) added to its
+    freshness."""
 
     package = PACKAGE
     _numbas: tuple[Any, ...] = ()  # numba's locators, tried in its order
 
-    def __init__(self, inner: Any) -> None:
+    def __init__(self, inner: Any, py_file: str) -> None:
         self._inner = inner
+        self._stamp = file_stamp(Path(py_file), self.package)
 
     def __getattr__(self, name: str) -> Any:
         """Anything else numba asks (e.g. ``_py_file`` for its warning that a function
@@ -90,15 +104,15 @@ class PackageCacheLocator(caching._CacheLocator):
         return str(self._inner.get_cache_path())
 
     def get_source_stamp(self) -> Any:
-        return (self._inner.get_source_stamp(), source_stamp(self.package))
+        return (self._inner.get_source_stamp(), self._stamp)
 
     def get_disambiguator(self) -> str:
-        """numba's (the function's line) and :func:`stamp_tag`: a cache written for other
-        sources has other file names and is never opened. numba unpickles an index before it
-        compares the index's stamp, and the types in an index name the modules that defined
-        them, so an index left by sources whose modules have since moved would fail to load
-        instead of being found stale."""
-        return f"{self._inner.get_disambiguator()}-{stamp_tag(self.package)}"
+        """numba's (the function's line) and the start of the module's stamp: a cache written
+        for other sources has other file names and is never opened. numba unpickles an index
+        before it compares the index's stamp, and the types in an index name the modules that
+        defined them, so an index left by sources whose modules have since moved would fail to
+        load instead of being found stale."""
+        return f"{self._inner.get_disambiguator()}-{self._stamp[:TAG_LENGTH]}"
 
     @classmethod
     def from_function(cls, py_func: Any, py_file: str) -> PackageCacheLocator | None:
@@ -107,7 +121,7 @@ class PackageCacheLocator(caching._CacheLocator):
         for numba_locator in cls._numbas:
             inner = numba_locator.from_function(py_func, py_file)
             if inner is not None:
-                return cls(inner)
+                return cls(inner, py_file)
         return None
 
 
@@ -192,6 +206,7 @@ __all__ = [
     "PackageCacheLocator",
     "borrow",
     "borrow_all",
+    "file_stamp",
     "kernel",
     "source_stamp",
     "use_package_stamp",

@@ -1,5 +1,6 @@
 """A command's first run in a fresh environment says that it compiles hcomc's kernels, stage
-by stage, instead of sitting silent for minutes (hcomc.cli._compile)."""
+by stage, instead of sitting silent for minutes (hcomc.cli._compile); it compiles only the
+stages it needs, and a stage compiled for the current sources is silent."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 from rich.console import Console
 
 import hcomc._jit
-from hcomc._jit import source_stamp
+from hcomc._jit import stamp_tag
 from hcomc.cli import _compile
 from hcomc.cli._compile import ensure_compiled
 
@@ -24,7 +25,7 @@ def _console() -> tuple[Console, io.StringIO]:
 
 @pytest.fixture
 def fake(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> dict:
-    """The marker in tmp_path, the stages replaced by fakes that record what was printed
+    """The markers in tmp_path, the stages replaced by fakes that record what was printed
     before they ran."""
     console, text = _console()
     state: dict = {"console": console, "text": text, "runs": [], "printed": []}
@@ -36,23 +37,24 @@ def fake(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> dict:
 
         return run
 
-    marker = tmp_path / f"hcomc-kernels-{source_stamp()[:16]}.ok"
-    monkeypatch.setattr(_compile, "marker_path", lambda: marker)
-    monkeypatch.setattr(_compile, "STAGES", (("step", stage("a")), ("optimisers", stage("b"))))
+    stages = {"step": ("step", stage("a")), "optimisers": ("optimisers", stage("b"))}
+    monkeypatch.setattr(_compile, "cache_directory", lambda: tmp_path)
+    monkeypatch.setattr(_compile, "STAGES", stages)
     monkeypatch.setattr(_compile, "IN_CHILD", False)  # the fakes record in this process
-    state["marker"] = marker
+    monkeypatch.setattr(hcomc._jit, "remove_stale_caches", lambda: 0)
+    state["stages"] = tuple(stages)
+    state["marker"] = {key: tmp_path / f"hcomc-kernels-{stamp_tag()}-{key}.ok" for key in stages}
     return state
 
 
-def test_the_first_call_says_so_before_compiling_and_writes_the_marker(fake: dict) -> None:
-    ensure_compiled(fake["console"])
+def test_the_first_call_says_so_before_compiling_and_writes_the_markers(fake: dict) -> None:
+    ensure_compiled(fake["console"], fake["stages"])
     assert fake["runs"] == ["a", "b"]
     heading = fake["printed"][0]
     assert heading.startswith("compiling hcomc's kernels, once per environment")
     assert heading.count("\n") == 1  # one line, then the first stage's label
-    assert "about " in heading
-    assert " min" in heading
-    assert fake["marker"].exists()
+    assert "(about 10 min on one core)" in heading  # both stages: all of ESTIMATE_SECONDS
+    assert all(marker.exists() for marker in fake["marker"].values())
     lines = fake["text"].getvalue().splitlines()
     assert lines[1].startswith("  step … ")
     assert lines[1].endswith(" s")
@@ -62,36 +64,48 @@ def test_the_first_call_says_so_before_compiling_and_writes_the_marker(fake: dic
 
 
 def test_a_second_call_prints_nothing(fake: dict) -> None:
-    ensure_compiled(fake["console"])
+    ensure_compiled(fake["console"], fake["stages"])
     console, text = _console()
-    ensure_compiled(console)
+    ensure_compiled(console, fake["stages"])
     assert text.getvalue() == ""
     assert fake["runs"] == ["a", "b"]  # the stages ran once
 
 
-def test_a_stale_marker_does_not_count_and_gives_the_estimate(fake: dict) -> None:
+def test_a_command_compiles_only_the_stages_it_needs(fake: dict) -> None:
+    ensure_compiled(fake["console"], ("optimisers",))
+    assert fake["runs"] == ["b"]
+    assert "(about 5 min on one core)" in fake["printed"][0]  # half of ESTIMATE_SECONDS
+    ensure_compiled(fake["console"], fake["stages"])
+    assert fake["runs"] == ["b", "a"]  # the step now; the optimisers were compiled
+
+
+def test_stale_markers_do_not_count_and_give_the_estimate(fake: dict) -> None:
     machine = _compile._machine()
-    stale = fake["marker"].with_name("hcomc-kernels-0123456789abcdef.ok")
-    stale.write_text(json.dumps({"machine": machine, "seconds": 185.0}))
-    ensure_compiled(fake["console"])
+    stale = [
+        fake["marker"]["step"].with_name("hcomc-kernels-0123456789abcdef-step.ok"),
+        fake["marker"]["step"].with_name("hcomc-kernels-0123456789abcdef-optimisers.ok"),
+    ]
+    stale[0].write_text(json.dumps({"machine": machine, "seconds": 125.0}))
+    stale[1].write_text(json.dumps({"machine": machine, "seconds": 60.0}))
+    ensure_compiled(fake["console"], fake["stages"])
     assert fake["runs"] == ["a", "b"]
-    assert "(about 3 min on this machine)" in fake["printed"][0]
-    assert fake["marker"].exists()
-    assert not stale.exists()
+    assert "(at most 3 min on this machine; only what changed compiles)" in fake["printed"][0]
+    assert all(marker.exists() for marker in fake["marker"].values())
+    assert not any(path.exists() for path in stale)
 
 
 def test_a_marker_of_another_numba_or_cpu_does_not_count(fake: dict) -> None:
-    fake["marker"].write_text(json.dumps({"machine": "another", "seconds": 1.0}))
-    ensure_compiled(fake["console"])
-    assert fake["runs"] == ["a", "b"]
-    assert json.loads(fake["marker"].read_text())["machine"] == _compile._machine()
+    fake["marker"]["step"].write_text(json.dumps({"machine": "another", "seconds": 1.0}))
+    ensure_compiled(fake["console"], ("step",))
+    assert fake["runs"] == ["a"]
+    assert json.loads(fake["marker"]["step"].read_text())["machine"] == _compile._machine()
 
 
 def test_an_unwritable_cache_is_named_and_nothing_compiles(
     fake: dict, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    monkeypatch.setattr(_compile, "marker_path", lambda: tmp_path / "missing" / "m.ok")
-    ensure_compiled(fake["console"])
+    monkeypatch.setattr(_compile, "cache_directory", lambda: tmp_path / "missing")
+    ensure_compiled(fake["console"], fake["stages"])
     assert fake["runs"] == []
     assert "cannot be cached" in fake["text"].getvalue()
 
@@ -99,43 +113,49 @@ def test_an_unwritable_cache_is_named_and_nothing_compiles(
 def test_no_cache_without_the_jit(monkeypatch: pytest.MonkeyPatch) -> None:
     """NUMBA_DISABLE_JIT: the kernels are plain Python functions, nothing to compile."""
     monkeypatch.setattr(hcomc._jit, "borrow", hcomc._jit.borrow.py_func)
-    assert _compile.marker_path() is None
+    assert _compile.cache_directory() is None
     console, text = _console()
     ensure_compiled(console)
     assert text.getvalue() == ""
 
 
-def test_the_real_kernels_leave_the_marker_and_a_second_call_is_silent() -> None:
-    """Not mocked: the stages compile (or, usually in a test session, load) every kernel, in
-    a spawned process."""
-    marker = _compile.marker_path()
-    assert marker is not None
-    assert marker.parent == Path(hcomc._jit.borrow._cache.cache_path)  # numba's, for hcomc
-    ensure_compiled(_console()[0])
-    assert marker.exists()
+def test_the_real_replay_stage_leaves_its_marker_and_a_second_call_is_silent() -> None:
+    """Not mocked: the replay's stage compiles (or loads) its kernel in a spawned process."""
+    directory = _compile.cache_directory()
+    assert directory == Path(hcomc._jit.borrow._cache.cache_path)  # numba's, for hcomc
+    ensure_compiled(_console()[0], ("replay",))
+    assert _compile.marker_path(directory, "replay").exists()
     console, text = _console()
-    ensure_compiled(console)
+    ensure_compiled(console, ("replay",))
     assert text.getvalue() == ""
+
+
+def test_every_stage_has_a_label_and_the_scenario_stages_exist() -> None:
+    assert set(_compile.SCENARIO) <= set(_compile.STAGES)
+    assert all(label for label, _ in _compile.STAGES.values())
 
 
 def test_a_process_that_finds_another_compiling_waits_and_then_loads(fake: dict) -> None:
     """While another process holds the lock (here: this test, through its own open file, which
     flock treats as another holder), ``ensure_compiled`` says it waits; when the other one
-    writes the marker and lets go, it compiles nothing."""
+    writes the markers and lets go, it compiles nothing."""
     import fcntl
     import threading
 
-    lock = fake["marker"].parent / "hcomc-kernels.lock"
+    lock = fake["marker"]["step"].parent / "hcomc-kernels.lock"
     held = lock.open("a")
     fcntl.flock(held, fcntl.LOCK_EX)
     done = threading.Event()
-    waiter = threading.Thread(target=lambda: (ensure_compiled(fake["console"]), done.set()))
+    waiter = threading.Thread(
+        target=lambda: (ensure_compiled(fake["console"], fake["stages"]), done.set())
+    )
     waiter.start()
     while "waiting" not in fake["text"].getvalue():
         assert waiter.is_alive()
         threading.Event().wait(0.01)
     assert not done.is_set()
-    fake["marker"].write_text(json.dumps({"machine": _compile._machine(), "seconds": 1.0}))
+    for marker in fake["marker"].values():
+        marker.write_text(json.dumps({"machine": _compile._machine(), "seconds": 1.0}))
     fcntl.flock(held, fcntl.LOCK_UN)
     held.close()
     waiter.join(timeout=60)

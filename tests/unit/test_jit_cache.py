@@ -1,6 +1,6 @@
-"""hcomc's kernel cache follows every source file the kernels depend on (hcomc._jit,
+"""hcomc's kernel cache follows the sources each kernel depends on (hcomc._jit,
 hcomc._stamp): a cached kernel whose callee in another file changed is compiled anew, not
-loaded stale."""
+loaded stale, and the cache files of earlier sources are never opened."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import sys
 import textwrap
 from pathlib import Path
 
-from hcomc._jit import PACKAGE, PackageCacheLocator, source_stamp
-from hcomc._stamp import kernel_sources
+from hcomc._jit import PACKAGE, PackageCacheLocator, file_stamp
+from hcomc._stamp import closure, forget_sources, kernel_modules
 
 _RUN = """
 import sys
@@ -109,44 +109,38 @@ def test_a_kernel_that_cannot_be_cached_runs_with_numbas_warning(tmp_path):
     assert str(pkg / "caller.py") in out.stderr
 
 
-def test_the_stamp_covers_the_files_kernels_import_and_no_other(tmp_path):
+def test_a_stamp_covers_the_module_and_what_it_imports_and_no_other(tmp_path):
     pkg = tmp_path / "pkg"
     (pkg / "sub").mkdir(parents=True)
     (pkg / "__init__.py").write_text("")
     (pkg / "sub" / "__init__.py").write_text("")
     (pkg / "sub" / "params.py").write_text("SCALE = 2.0\n")  # read by a kernel, not compiled
     (pkg / "model.py").write_text(
-        "from hcomc._jit import kernel\n\n\ndef f():\n    from .sub import (\n"
-        "        params,  # read by a kernel\n    )\n"
+        "from hcomc._jit import kernel\nfrom .sub import (\n    params,  # read by a kernel\n)\n"
     )
     (pkg / "cli.py").write_text("from pkg.model import X\n")  # imports a kernel file: outside
-    assert [p.relative_to(pkg).as_posix() for p in kernel_sources(pkg)] == [
-        "__init__.py",
-        "model.py",
-        "sub/__init__.py",
-        "sub/params.py",
-    ]
-    before = source_stamp.__wrapped__(pkg)
-    assert source_stamp.__wrapped__(pkg) == before
+    assert closure("pkg.model", pkg) == ["pkg.model", "pkg.sub.params"]
+    assert kernel_modules(pkg) == ["pkg.model"]
+
+    def stamp() -> str:
+        forget_sources()
+        return file_stamp(pkg / "model.py", pkg)
+
+    before = stamp()
     (pkg / "cli.py").write_text("from pkg.model import Y\n")
-    assert source_stamp.__wrapped__(pkg) == before  # the command line does not recompile
+    assert stamp() == before  # the command line does not recompile
     (pkg / "sub" / "params.py").write_text("SCALE = 3.0\n")
-    assert source_stamp.__wrapped__(pkg) != before
+    assert stamp() != before
     assert PackageCacheLocator.package == PACKAGE
     assert (PACKAGE / "_jit.py").exists()
 
 
 def test_every_compiled_module_of_hcomc_is_stamped():
-    stamped = set(kernel_sources(PACKAGE))
-    for name in (
-        "sim/step/loop.py",
-        "models/idm.py",
-        "control/key_vehicles.py",
-        "config/schema.py",
-    ):
-        assert PACKAGE / name in stamped, name
-    for name in ("cli/_app.py", "experiments/claims.py", "viz/report.py"):
-        assert PACKAGE / name not in stamped, name
+    stamped = set(kernel_modules(PACKAGE))
+    for name in ("hcomc.sim.step.loop", "hcomc.control.key_vehicles", "hcomc.sim.neighbours"):
+        assert name in stamped, name
+    for name in ("hcomc.cli._app", "hcomc.experiments.claims", "hcomc.viz.report"):
+        assert name not in stamped, name
 
 
 _RUN_RECORD = """
@@ -169,7 +163,7 @@ def test_a_cache_whose_types_moved_to_another_module_is_not_opened(tmp_path):
     modules) before it compares the index's stamp: the cache files of other sources have
     other names, so a record type that moved to another module cannot break the load; the
     files of the earlier sources are then removed."""
-    from hcomc._jit import remove_stale_caches, stamp_tag
+    from hcomc._jit import TAG_LENGTH, remove_stale_caches
 
     pkg = tmp_path / "pkg"
     pkg.mkdir()
@@ -205,7 +199,8 @@ def test_a_cache_whose_types_moved_to_another_module_is_not_opened(tmp_path):
     (pkg / "records.py").rename(pkg / "shapes.py")
     _write(pkg / "caller.py", caller.format(module="shapes"))
     assert run() == "3.0"  # numba alone: ModuleNotFoundError: No module named 'pkg.records'
-    fresh = stamp_tag(pkg)
+    forget_sources()
+    fresh = file_stamp(pkg / "caller.py", pkg)[:TAG_LENGTH]
     assert all(fresh not in name for name in first)
     assert remove_stale_caches(pkg) == len(first)
     left = {p.name for p in (pkg / "__pycache__").glob("caller.total-*")}

@@ -119,13 +119,15 @@ def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | N
         yield lambda done, _total: bar.update(task, completed=done)
 
 
-def _compiled() -> None:
-    """Compile the kernels now, with a line per stage on stderr, if this environment has not
-    (:func:`hcomc.cli._compile.ensure_compiled`); called once a command's input is checked,
-    before it simulates."""
-    from hcomc.cli._compile import ensure_compiled
+def _compiled(*stages: str) -> None:
+    """Compile the kernels of ``stages`` (default: those of the paper's scenarios) now, with a
+    line per stage, if this environment has not (:func:`hcomc.cli._compile.ensure_compiled`);
+    called once a command's input is checked, before it simulates. The lines go to the
+    process's own stderr: they are about the environment, not part of the command's output
+    (which a caller may capture and parse)."""
+    from hcomc.cli._compile import SCENARIO, ensure_compiled
 
-    ensure_compiled(err)
+    ensure_compiled(Console(file=sys.__stderr__) if sys.__stderr__ else err, stages or SCENARIO)
 
 
 def _fail(message: str) -> typer.Exit:

@@ -1,24 +1,27 @@
-"""Compile hcomc's kernels before a command needs them, and say so (:func:`ensure_compiled`).
+"""Compile the kernels a command needs before it runs, and say so (:func:`ensure_compiled`).
 
 The kernels (:mod:`hcomc._jit`) compile on first use and are cached, once per environment and
-after every change of the package's sources; a command's worker processes would otherwise sit
-silent for minutes, each compiling the same kernels. :func:`ensure_compiled` compiles them
-first with a line per stage, running tiny real workloads in one spawned process (compiling
-leaves some 3 GB in a process, loading the cache 0.3 GB); the command then loads them.
+after an edit of the sources they depend on (:mod:`hcomc._stamp`: each kernel's module and
+what it imports); a command's worker processes would otherwise sit silent for minutes, each
+compiling the same kernels. :func:`ensure_compiled` compiles the stages a command needs first,
+with a line per stage, running tiny real workloads in one spawned process (compiling leaves
+some 3 GB in a process, loading the cache 0.3 GB); the command then loads them. A stage whose
+kernels are all cached for the current sources loads them and costs seconds, so after an edit
+of one kernel module only its kernels and those of the modules importing it compile.
 
-**Is the cache complete?** The marker ``hcomc-kernels-<source stamp[:16]>.ok`` sits where numba
+**Is a stage compiled?** Its marker ``hcomc-kernels-<stamp tag>-<stage>.ok`` sits where numba
 caches :func:`hcomc._jit.borrow`: ``NUMBA_CACHE_DIR``, else the in-tree ``__pycache__``, else
-(a read-only tree) numba's user-wide cache; numba's locator checked that it can write there. It
-holds what numba's cache index is keyed on besides the sources (numba version, Python, target
-CPU: an upgrade or another machine sharing the cache recompiles) and the compilation's seconds
-(the next estimate). A completed compilation deletes the in-tree cache files of earlier sources
-(:func:`hcomc._jit.remove_stale_caches`). Deciding takes milliseconds once numba is imported,
-as the command does anyway. With the JIT disabled there is nothing to compile; when the marker
-cannot be written, every process compiles for itself, so one line says so.
+(a read-only tree) numba's user-wide cache. The stamp tag is the fingerprint of every kernel
+module's stamp, so an edit of a module no kernel imports changes no marker. A marker holds
+what numba's cache index is keyed on besides the sources (numba version, Python, target CPU:
+an upgrade or another machine sharing the cache recompiles) and the stage's seconds (the next
+estimate). A completed compilation deletes the in-tree cache files of earlier sources
+(:func:`hcomc._jit.remove_stale_caches`). With the JIT disabled there is nothing to compile;
+when the marker cannot be written, every process compiles for itself, so one line says so.
 
 **Several processes at once** (two commands, two test sessions): one compiles, holding an
-exclusive lock on ``hcomc-kernels.lock`` beside the marker; the others say that they wait for
-it, then find the marker and load the cache, instead of each compiling the same kernels.
+exclusive lock on ``hcomc-kernels.lock`` beside the markers; the others say that they wait for
+it, then find the markers and load the cache, instead of each compiling the same kernels.
 """
 
 from __future__ import annotations
@@ -33,9 +36,9 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
-ESTIMATE = "10-15 min: numba compiles on one core"
-"""The estimate before the first compilation in a cache; later ones say the last
-compilation's time."""
+ESTIMATE_SECONDS = 600.0
+"""The estimate of a cold compile of every stage before any compilation in this cache (numba
+compiles on one core); later estimates are each stage's last time on this machine."""
 
 
 def _tiny(*controls: tuple[str, str]) -> Callable[[], None]:
@@ -54,55 +57,107 @@ def _tiny(*controls: tuple[str, str]) -> Callable[[], None]:
 
 def _batches() -> None:
     """Batches as ``run``, ``sweep`` and ``reproduce`` run them (ensemble on one thread in a
-    worker, on all with ``--workers 1``; undisturbed runs; metrics), and the replay's drawing
-    of lane changes (``reproduce``'s scene)."""
+    worker, on all with ``--workers 1``; undisturbed runs; metrics)."""
     import numba
-    import numpy as np
 
     from hcomc.experiments.runner import ALL_CONFIGURATIONS, RunSpec, run_batch
-    from hcomc.models.quintic import lateral_offset
 
     specs = [RunSpec("C2", label, 0, {"duration": 40.0}) for label in ALL_CONFIGURATIONS]
     run_batch(specs, threads=1)
     if int(numba.config.NUMBA_NUM_THREADS) > 1:  # type: ignore[attr-defined]
         run_batch(specs[:2], threads=2)  # the parallel kernel
+
+
+def _replay() -> None:
+    """The replay's drawing of lane changes."""
+    import numpy as np
+
+    from hcomc.models.quintic import lateral_offset
+
     lateral_offset(np.linspace(0.0, 100.0, 3), 0.0, 100.0, 0.0, 3.75)
 
 
-STAGES: tuple[tuple[str, Callable[[], None]], ...] = (
-    ("simulation step", _tiny(("none", "nsga2"))),
-    ("merge prediction of FIFO, Game and HCOMC", _tiny(("fifo", "nsga2"), ("game", "nsga2"))),
-    ("NSGA-II", _tiny(("hcomc", "nsga2"))),
-    ("PSO, SA", _tiny(("hcomc", "pso"), ("hcomc", "sa"))),
-    ("ensemble runs, metrics and replay", _batches),
-)
-"""(label, workload): together they compile every kernel of ``hcomc simulate``, ``plan``,
-``run`` and ``reproduce`` (measured: their processes compile nothing afterwards)."""
+def _corridor() -> None:
+    """A short run of the corridor preset, uncontrolled and with HCOMC at every ramp."""
+    from hcomc.corridor.loading import load_corridor
+    from hcomc.sim.corridor import simulate_corridor
+
+    for controller in ("none", "hcomc"):
+        corridor = load_corridor("corridor", {"control.controller": controller})
+        simulate_corridor(corridor, seed=0, duration=30.0)
+
+
+def _environments() -> None:
+    """A few steps of the learning environments, single and vector (needs gymnasium)."""
+    try:
+        import gymnasium
+    except ImportError:
+        return
+    import hcomc.envs  # noqa: F401  (registers the environments)
+
+    env = gymnasium.make("hcomc/Merge-v0")
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    env.close()
+    from hcomc.envs.vector import MergeVectorEnv
+
+    vector = MergeVectorEnv(2)
+    vector.reset(seed=0)
+    vector.step(vector.action_space.sample())
+    vector.close()
+
+
+STAGES: dict[str, tuple[str, Callable[[], None]]] = {
+    "step": ("simulation step", _tiny(("none", "nsga2"))),
+    "prediction": (
+        "merge prediction of FIFO, Game and HCOMC",
+        _tiny(("fifo", "nsga2"), ("game", "nsga2")),
+    ),
+    "nsga2": ("NSGA-II", _tiny(("hcomc", "nsga2"))),
+    "pso-sa": ("PSO, SA", _tiny(("hcomc", "pso"), ("hcomc", "sa"))),
+    "batches": ("ensemble runs and metrics", _batches),
+    "replay": ("replay", _replay),
+    "corridor": ("corridor engine", _corridor),
+    "envs": ("learning environments", _environments),
+}
+"""key -> (label, workload): together they compile every kernel of the commands and the
+environments (measured: their processes compile nothing afterwards)."""
+
+SCENARIO = ("step", "prediction", "nsga2", "pso-sa", "batches")
+"""The stages of a command that runs the paper's scenarios (``simulate``, ``plan``, ``run``,
+``compare``, ``sweep``, ``reproduce``, ``faults``)."""
 
 IN_CHILD = True
 """Run the stages in a spawned process (False: in this one, as the tests' fakes do)."""
 
 
-def _stage(index: int) -> None:
-    STAGES[index][1]()
+def _stage(key: str) -> None:
+    STAGES[key][1]()
 
 
 @contextmanager
-def _runner() -> Iterator[Callable[[int], None]]:
-    """``run(i)`` runs stage i, in one spawned process for all stages (:data:`IN_CHILD`)."""
+def _runner() -> Iterator[Callable[[str], None]]:
+    """``run(key)`` runs a stage, in one spawned process for all stages (:data:`IN_CHILD`)."""
     if not IN_CHILD:
         yield _stage
         return
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
-        yield lambda index: pool.submit(_stage, index).result()
+        yield lambda key: pool.submit(_stage, key).result()
 
 
-def marker_path() -> Path | None:
-    """The marker of a complete cache for the current sources (None: no cache)."""
-    from hcomc._jit import borrow, stamp_tag
+def cache_directory() -> Path | None:
+    """Where numba caches hcomc's kernels (None: no cache, e.g. the JIT is disabled)."""
+    from hcomc._jit import borrow
 
     directory = getattr(getattr(borrow, "_cache", None), "cache_path", None)  # numba's
-    return None if directory is None else Path(directory, f"hcomc-kernels-{stamp_tag()}.ok")
+    return None if directory is None else Path(directory)
+
+
+def marker_path(directory: Path, stage: str) -> Path:
+    """The marker of ``stage``'s kernels compiled for the current sources."""
+    from hcomc._jit import stamp_tag
+
+    return directory / f"hcomc-kernels-{stamp_tag()}-{stage}.ok"
 
 
 def _machine() -> str:
@@ -122,14 +177,24 @@ def _read(path: Path) -> dict[str, Any]:
     return found if isinstance(found, dict) else {}
 
 
-def _estimate(marker: Path, machine: str) -> str:
-    """The last compilation's time in this cache (a marker of older sources), else
-    :data:`ESTIMATE`."""
-    found = [_read(p) for p in marker.parent.glob("hcomc-kernels-*.ok")]
-    seconds = [m["seconds"] for m in found if m.get("machine") == machine and "seconds" in m]
-    if seconds:
-        return f"about {max(1, round(max(seconds) / 60))} min on this machine"
-    return f"about {ESTIMATE}"
+def _estimate(directory: Path, stages: list[str], machine: str) -> str:
+    """The stages' last times on this machine in this cache, else :data:`ESTIMATE_SECONDS`
+    shared by all stages; an upper bound when only some kernel modules changed."""
+    last: dict[str, float] = {}
+    for path in directory.glob("hcomc-kernels-*.ok"):
+        found = _read(path)
+        stage = path.stem.rpartition("-")[2]
+        if found.get("machine") == machine and "seconds" in found:
+            last[stage] = max(last.get(stage, 0.0), float(found["seconds"]))
+    if not last:
+        seconds = ESTIMATE_SECONDS * len(stages) / len(STAGES)
+        return f"about {max(1, round(seconds / 60))} min on one core"
+    seconds = sum(last.get(stage, ESTIMATE_SECONDS / len(STAGES)) for stage in stages)
+    return f"at most {_duration(seconds)} on this machine; only what changed compiles"
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{round(seconds / 60)} min"
 
 
 @contextmanager
@@ -154,22 +219,27 @@ def _exclusive(path: Path, on_wait: Callable[[], None]) -> Iterator[None]:
                 fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def ensure_compiled(console: Any) -> None:
-    """Compile hcomc's kernels unless this environment's cache holds them for the current
-    sources, with a line per stage on ``console`` (a rich Console); silent when it does."""
-    marker = marker_path()
-    if marker is None:
+def ensure_compiled(console: Any, stages: tuple[str, ...] = SCENARIO) -> None:
+    """Compile the kernels of ``stages`` (keys of :data:`STAGES`) unless this environment's
+    cache holds them for the current sources, with a line per stage on ``console`` (a rich
+    Console); silent when it does."""
+    directory = cache_directory()
+    if directory is None:
         return
     machine = _machine()
-    if _read(marker).get("machine") == machine:
+
+    def missing() -> list[str]:
+        return [s for s in stages if _read(marker_path(directory, s)).get("machine") != machine]
+
+    if not missing():
         return
 
     def say(text: str, end: str = "\n") -> None:
         console.print(text, end=end, markup=False, highlight=False, soft_wrap=True)
         console.file.flush()
 
-    lock = marker.parent / "hcomc-kernels.lock"
-    try:  # fail now, not after minutes; the lock, never the marker another process may write
+    lock = directory / "hcomc-kernels.lock"
+    try:  # fail now, not after minutes; the lock, never a marker another process may write
         lock.touch()
     except OSError as exc:
         say(f"hcomc's kernels cannot be cached ({exc}): every process compiles them")
@@ -179,27 +249,28 @@ def ensure_compiled(console: Any) -> None:
         say("waiting for another process compiling hcomc's kernels …")
 
     with _exclusive(lock, waiting):
-        if _read(marker).get("machine") != machine:  # not compiled while this one waited
-            _compile(marker, machine, say)
+        todo = missing()  # not compiled while this one waited
+        if todo:
+            _compile(directory, todo, machine, say)
 
 
-def _compile(marker: Path, machine: str, say: Callable[..., None]) -> None:
-    """Run the stages, then write ``marker``."""
+def _compile(directory: Path, stages: list[str], machine: str, say: Callable[..., None]) -> None:
+    """Run ``stages``, writing each one's marker when it is done."""
     say(
-        "compiling hcomc's kernels, once per environment and after every change of its "
-        f"sources ({_estimate(marker, machine)}) …"
+        "compiling hcomc's kernels, once per environment and after an edit of their sources "
+        f"({_estimate(directory, stages, machine)}) …"
     )
-    start = time.perf_counter()
     with _runner() as run:
-        for index, (label, _) in enumerate(STAGES):
-            say(f"  {label} …", end="")
+        for key in stages:
+            say(f"  {STAGES[key][0]} …", end="")
             began = time.perf_counter()
-            run(index)
-            say(f" {time.perf_counter() - began:.0f} s")
-    seconds = time.perf_counter() - start
-    for stale in marker.parent.glob("hcomc-kernels-*.ok"):
-        stale.unlink(missing_ok=True)
+            run(key)
+            seconds = time.perf_counter() - began
+            say(f" {seconds:.0f} s")
+            for stale in directory.glob(f"hcomc-kernels-*-{key}.ok"):
+                stale.unlink(missing_ok=True)
+            record = {"machine": machine, "seconds": seconds}
+            marker_path(directory, key).write_text(json.dumps(record), encoding="utf-8")
     from hcomc._jit import remove_stale_caches
 
     remove_stale_caches()  # the in-tree cache files of earlier sources
-    marker.write_text(json.dumps({"machine": machine, "seconds": seconds}), encoding="utf-8")

@@ -11,7 +11,7 @@ from typing import Any
 
 from rich.table import Table
 
-from hcomc.cli._app import _control, _fail, _progress, _refuse_overwrite, out
+from hcomc.cli._app import _compiled, _control, _fail, _progress, _refuse_overwrite, out
 from hcomc.config import ControlParams
 from hcomc.corridor import Corridor, corridor_to_toml
 
@@ -52,6 +52,7 @@ def run_corridor(
     from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 
     _refuse_overwrite(out_dir, CORRIDOR_FILES, force)
+    _compiled("corridor")
     total = duration if duration is not None else corridor.corridor.duration
     steps = round(total / corridor.corridor.step_length)
     with _progress(f"{corridor.name}", steps) as update:

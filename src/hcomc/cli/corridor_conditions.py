@@ -172,7 +172,7 @@ def run_corridor_condition(
         raise _fail(str(exc)) from None
     if resolved.scenario is not None:
         _engine(engine, resolved.scenario)
-    _compiled()
+    _compiled(*(() if resolved.scenario is not None else ("corridor",)))
     with _progress("runs", len(specs)) as update:
         frame = run_rows(specs, workers=workers, progress=update)
     if as_json:

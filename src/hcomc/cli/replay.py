@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from hcomc.cli._app import _fail, app, out
+from hcomc.cli._app import _compiled, _fail, app, out
 from hcomc.config import ConfigError
 
 if TYPE_CHECKING:
@@ -75,6 +75,7 @@ def replay(
     if not 320 <= width <= 4096:
         raise _fail(f"option '--width' = {width}: allowed: 320 to 4096 px")
     logs = [_load_run(path) for path in runs]
+    _compiled("replay")
     try:
         page = build(logs, titles=titles, out=out_file)
     except (ValueError, ConfigError, OSError) as exc:
