@@ -18,7 +18,8 @@ from pathlib import Path
 
 from throughput import machine
 
-from hcomc.experiments.sweep import SweepGrid, SweepSpec, expand, run_sweep
+from hcomc.experiments.sweep import expand, run_sweep
+from hcomc.experiments.sweep_spec import SweepGrid, SweepSpec
 
 
 def measure(workers: int) -> dict[str, float]:

@@ -20,10 +20,10 @@ from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.hierarchical.controller import HCOMCController
 from hcomc.control.hierarchical.problem import OBJECTIVES, MergeProblem
+from hcomc.equations.selection import eq19_costs
 from hcomc.interface import MergeGroup, TrafficView
 from hcomc.optim.base import ParetoResult
 from hcomc.optim.registry import POPULATION_BASED, make_optimizer
-from hcomc.optim.selection import eq19_costs
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 Instant = tuple[str, ScenarioConfig, TrafficView, MergeGroup]
@@ -62,7 +62,7 @@ class Quality:
     of every feasible row returned on that problem (both optimisers, all seeds) and reference
     point 1.1 in every objective (the union's worst value plus 10 % of its range).
     ``cost_gap``: mean over the pairs of best(compiled) - best(library), ``best`` being the
-    lowest Eq. 19 cost (:func:`hcomc.optim.selection.eq19_costs`, the quantity the controller's
+    lowest Eq. 19 cost (:func:`hcomc.equations.selection.eq19_costs`, the quantity the controller's
     pick minimises) of a run's feasible rows, costs taken over that same union so that they are
     comparable across runs (0 is the best, 2 the worst row of the union in the gate branch).
     ``cost_spread``: the library's spread, the range (max - min) of the finite Eq. 19 costs of

@@ -1,83 +1,17 @@
-"""Test problems on a box, shared by the tests that hold an optimiser on arrays to its
-reference implementation (PSO against pymoo, SA against SciPy): single-objective ones and a
-constrained two-objective one, each keeping every batch of rows it evaluated, so that two
-runs can be compared call by call; and :class:`Recording`, any problem wrapped to keep every
-row it scores with its objectives and constraints, with :func:`expected_rows`, the set an
-optimiser must return of those rows; and :func:`numpy_math_is_libm` with the skip mark
-:data:`needs_libm_numpy` for the tests that hold a compiled optimiser to its reference bit for
-bit."""
+"""Test problems on a box, shared by the tests of the optimisers on arrays (PSO, SA):
+single-objective ones and a constrained two-objective one, each keeping every batch of rows it
+evaluated, so that two runs can be compared call by call; and :class:`Recording`, any problem
+wrapped to keep every row it scores with its objectives and constraints, with
+:func:`expected_rows`, the set an optimiser must return of those rows."""
 
 from __future__ import annotations
 
-import math
-from functools import cache
 from typing import Any
 
-import numba
 import numpy as np
-import pytest
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.optim.base import ParetoResult, archive_front
-
-
-def _python_power(base: float, exponent: float) -> float:
-    """``base ** exponent`` by Python (the C library's ``pow``), inf where it overflows."""
-    try:
-        return base**exponent
-    except OverflowError:
-        return math.inf
-
-
-@cache
-def numpy_math_is_libm() -> bool:
-    """Whether numpy's float64 ``power``, ``exp`` and ``log`` equal, bit for bit, Python's
-    ``**``, ``math.exp`` and ``math.log`` (the C library's, which the compiled kernels take)
-    on a fixed sample.
-
-    They do unless numpy brings SIMD versions of its own for the CPU (AVX-512), which differ
-    in the last bit on a good share of arguments; this sample (bases below and above 1, tiny
-    and huge, with the variation operators' default exponents and others; exp and log over
-    their whole range) then finds a difference. Arrays and scalars are both checked: pymoo
-    takes powers on arrays, SciPy's annealing takes ``exp`` and ``log`` on both. Where numba
-    itself vectorises math functions with Intel's SVML, the kernels' functions are not the C
-    library's either: False there too.
-    """
-    if getattr(numba.config, "USING_SVML", False):
-        return False
-    rng = np.random.default_rng(0)
-    bases = np.concatenate(
-        [rng.random(500), 1.0 + rng.random(500) * 1e3, np.exp(rng.uniform(-300.0, 300.0, 500)),
-         rng.uniform(0.5, 2.0, 500)]
-    )  # fmt: skip
-    exponents = [-16.0, 1.0 / 16.0, 21.0, 1.0 / 21.0, *rng.uniform(-40.0, 40.0, 3),
-                 *rng.uniform(0.0, 1.0, 3)]  # fmt: skip
-    with np.errstate(all="ignore"):
-        for e in exponents:
-            got = np.power(bases, np.full(bases.size, e)).tolist()
-            if got != [_python_power(b, float(e)) for b in bases.tolist()]:
-                return False
-        x = np.concatenate([np.exp(rng.uniform(-700.0, 700.0, 1000)), rng.random(1000)])
-        z = rng.uniform(-745.0, 709.0, 2000)
-        if np.log(x).tolist() != [math.log(b) for b in x.tolist()]:
-            return False
-        if np.exp(z).tolist() != [math.exp(c) for c in z.tolist()]:
-            return False
-        return all(
-            float(np.log(b)) == math.log(b) and float(np.exp(c)) == math.exp(c)
-            for b, c in zip(x[::20], z[::20], strict=True)  # numpy scalars
-        )
-
-
-needs_libm_numpy = pytest.mark.skipif(
-    not numpy_math_is_libm(),
-    reason="numpy's float64 power/exp/log differ from the C library's (Python's math and **) "
-    "on this CPU (SIMD versions, e.g. AVX-512; or numba uses SVML): the compiled kernels take "
-    "the C library's, so they cannot equal pymoo's/SciPy's bit for bit here; the quality tests "
-    "hold them instead",
-)
-"""Mark for a test that compares a compiled optimiser (or operator) with pymoo's or SciPy's
-bit for bit: skipped where :func:`numpy_math_is_libm` finds numpy's functions to differ."""
 
 
 class ScalarProblem:

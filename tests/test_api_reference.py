@@ -31,7 +31,11 @@ RENDERED = {
     "control": ["hcomc.control.registry.make_controller", "hcomc.control.validation.check_plan"],
     "sim": ["hcomc.sim.engine.Simulation", "hcomc.sim.log.SimulationLog"],
     "metrics": ["hcomc.metrics.compute_metrics"],
-    "models": ["hcomc.models.idm.idm_accel"],
+    "equations": [
+        "hcomc.equations.idm.idm_acceleration",
+        "hcomc.equations.car_following.follow_acceleration",
+        "hcomc.equations.selection.select_eq19",
+    ],
 }
 
 # Blocks every import of hcomc in the build's interpreter (a sitecustomize module).

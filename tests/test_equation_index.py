@@ -23,6 +23,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "docs" / "models.md"
 EQUATIONS = range(1, 20)  # the paper's Eq. 1 … Eq. 19
+PACKAGE = "hcomc.equations."  # every equation's one home
 
 START, END = "<!-- equation index -->", "<!-- /equation index -->"
 ROW = re.compile(r"^\|\s*(\d+)\s*\|(.*?)\|\s*`([\w.]+)`\s*\|\s*`([^`]+)`\s*\|$")
@@ -124,6 +125,11 @@ def test_citation_pattern() -> None:
 def test_every_equation_appears_exactly_once() -> None:
     numbers = [row[0] for row in ROWS]
     assert sorted(numbers) == list(EQUATIONS), numbers
+
+
+def test_every_equation_lives_in_the_equations_package() -> None:
+    outside = [(number, path) for number, _, path, _ in ROWS if not path.startswith(PACKAGE)]
+    assert outside == []
 
 
 @pytest.mark.parametrize("row", ROWS, ids=_ids)

@@ -9,6 +9,7 @@ TYPE_CHECKING:`` (for annotations only) count too.
 from __future__ import annotations
 
 import ast
+import sys
 from pathlib import Path
 
 import pytest
@@ -40,6 +41,7 @@ LAYERS = {
     "_typing": 0,
     "_jit": 0,
     "_stamp": 0,
+    "equations": 0,
 }
 ROOT_NAMES = {"__version__"}  # names defined in hcomc/__init__.py itself (layer 0)
 
@@ -218,3 +220,76 @@ def test_no_import_cycle_between_modules_at_load_time() -> None:
 def test_the_cycle_check_finds_a_cycle() -> None:
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}, "e": set()}
     assert _cycles(graph) == [["a", "b", "c"]]
+
+
+def _all_imports(path: Path, modules: set[str]) -> set[str]:
+    """Every module ``path`` imports anywhere, lazy and annotation-only imports included: the
+    hcomc module a name comes from (``from a import b`` gives ``a.b`` when that is a module,
+    else ``a``), or the top-level name of another package."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    found = set()
+    for target, _ in _runtime_imports(tree) + _annotation_imports(tree):
+        if target.partition(".")[0] != "hcomc":
+            found.add(target.partition(".")[0])
+            continue
+        module = target
+        while module not in modules and "." in module:
+            module = module.rpartition(".")[0]
+        found.add(module)
+    return found - {"hcomc"}
+
+
+def test_no_import_cycle_at_all() -> None:
+    """No module imports, at load time, inside a function or for annotations, a module that
+    imports it back (directly or through others)."""
+    modules = dict(_modules())
+    graph = {m: _all_imports(p, set(modules)) & set(modules) - {m} for m, p in modules.items()}
+    assert _cycles(graph) == []
+
+
+KERNEL_PACKAGES = frozenset({"numpy", "numba"})
+"""The packages besides the standard library that the kernel layer may import."""
+
+
+def _defines_kernels(path: Path) -> bool:
+    """Whether the module compiles kernels: it imports numba or :mod:`hcomc._jit` when loaded."""
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        names = (
+            [a.name for a in node.names]
+            if isinstance(node, ast.Import)
+            else [node.module or ""]
+            if isinstance(node, ast.ImportFrom)
+            else []
+        )
+        if any(n == "hcomc._jit" or n.partition(".")[0] == "numba" for n in names):
+            return True
+    return False
+
+
+def _kernel_layer() -> tuple[set[str], dict[str, set[str]]]:
+    """The kernel layer: the largest set of hcomc modules that import (anywhere, annotations
+    included) only the standard library, numpy, numba and one another; and every module's
+    imports."""
+    modules = dict(_modules())
+    imports = {m: _all_imports(p, set(modules)) - {m} for m, p in modules.items()}
+    allowed = set(sys.stdlib_module_names) | KERNEL_PACKAGES
+    layer = set(modules)
+    while True:
+        out = {m for m in layer if any(t not in layer and t not in allowed for t in imports[m])}
+        if not out:
+            return layer, imports
+        layer -= out
+
+
+def test_kernel_modules_import_only_the_kernel_layer() -> None:
+    """A module that defines compiled kernels imports only numpy, numba, the JIT helper, the
+    equations and other modules of the kernel layer: no config, engine classes or registry,
+    so that a kernel's cache stamp (its module and what that imports) is as small as its
+    code."""
+    layer, imports = _kernel_layer()
+    outside = {
+        module: sorted(t for t in imports[module] if t not in layer and t.startswith("hcomc"))
+        for module, path in _modules()
+        if _defines_kernels(path) and module not in layer
+    }
+    assert outside == {}

@@ -11,7 +11,7 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.fifo import FIFOController, FIFODetails
-from hcomc.control.key_vehicles import behind_group, find_key_vehicles
+from hcomc.control.key_group import behind_group, find_key_vehicles
 from hcomc.control.lane_change_game.solvers import solve_cooperative
 from hcomc.control.longitudinal_candidate import (
     HORIZON_STEP,
@@ -35,7 +35,7 @@ from hcomc.control.merge_game.equilibrium import (
 from hcomc.control.merge_game.payoffs import INFEASIBLE_SAFETY, safety_term
 from hcomc.control.prediction.population import VMC, VR
 from hcomc.control.registry import make_controller
-from hcomc.control.virtual_vehicle import cubic_state
+from hcomc.equations.virtual_vehicle import cubic_state
 from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation

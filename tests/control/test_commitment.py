@@ -20,9 +20,9 @@ from hcomc.control.hierarchical.commitment import (
 from hcomc.control.hierarchical.controller import HCOMCController, merge_problem, sequence_groups
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.control.hierarchical.problem_terms import MODE_NONE
+from hcomc.equations.selection import eq19_costs, select_eq19
 from hcomc.experiments.results_row import plan_switches
 from hcomc.interface import MergeGroup, MergePlan, Mode
-from hcomc.optim.selection import eq19_costs, select_eq19
 from hcomc.road import VMC
 from hcomc.sim.engine import Simulation
 

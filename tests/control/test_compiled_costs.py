@@ -1,10 +1,10 @@
-"""The compiled cost kernels equal the array forms they replaced, bit for bit.
+"""The compiled cost kernels equal the array forms of the same equations, bit for bit.
 
 U_fuel's per-candidate work (:meth:`MergeProblem._fuel_to_distance`) and the lane-change
 game's SV simulation (:func:`simulate_sv`) run as numba loops over the scalar model kernels.
 The oracles here are the array forms of the same equations (``fuel_rate``,
-``idm_acceleration``, ``transition_weight``, ``blend_acceleration``) with numpy's reductions,
-as the code computed them before.
+``idm_acceleration``, ``transition_weight``, ``blend_acceleration``), summing over time in
+time order as the kernels do.
 """
 
 from __future__ import annotations
@@ -13,41 +13,37 @@ import numpy as np
 import pytest
 
 from hcomc.config import IDMParams, load_config
+from hcomc.config.fuel import FUEL_DEFAULT
 from hcomc.control.hierarchical.controller import HCOMCController
 from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND
 from hcomc.control.lane_change_game.params import GAME_DEFAULT, GameParams
+from hcomc.control.lane_change_game.players import GameVehicle, leader_track, simulate_sv
 from hcomc.control.prediction.fuel import FuelCoefficients, _fuel_to_distance_kernel
-from hcomc.control.prediction.game_players import GameVehicle, leader_track, simulate_sv
 from hcomc.control.prediction.population import VMC, VR
-from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate
-from hcomc.models.idm import idm_acceleration
-from hcomc.models.iidm import iidm_acceleration
-from hcomc.models.transition import blend_acceleration, transition_weight
-from hcomc.optim.numpy_sum import pairwise_sum
+from hcomc.equations.fuel import fuel_rate
+from hcomc.equations.idm import idm_acceleration
+from hcomc.equations.iidm import iidm_acceleration
+from hcomc.equations.transition import blend_acceleration, transition_weight
 from hcomc.sim.engine import Simulation
 
 
 # ---------------------------------------------------------------------------- U_fuel
 def _fuel_oracle(cf, roles, X, V, A, dt):
-    """The array form: one ``fuel_rate`` call on all samples, ``ndarray.sum`` over time."""
+    """The array form: one ``fuel_rate`` call on all samples, summed over time in time order
+    (from 0, one sample at a time)."""
     n, (C, K1, _) = len(roles), X.shape
     v, a = np.empty((n, C, K1)), np.empty((n, C, K1))
     for i, r in enumerate(roles):
         v[i, :, :-1], a[i, :, :-1] = V[:, 1:, r], A[:, 1:, r]
         v[i, :, -1], a[i, :, -1] = np.maximum(V[:, -1, r], 1.0), 0.0
     rate = fuel_rate(v, a)
-    burnt = rate[..., :-1].sum(axis=-1) * dt
+    burnt = np.zeros(rate.shape[:-1])
+    for k in range(K1 - 1):
+        burnt = burnt + rate[..., k]
+    burnt = burnt * dt
     r_ = list(roles)
     rest = (cf[0, -1, r_] - cf[0, 0, r_])[:, None] - (X[:, -1, r_] - X[:, 0, r_]).T
     return burnt + rate[..., -1] * rest / v[..., -1]
-
-
-@pytest.mark.parametrize("n", [*range(0, 140), 255, 256, 257, 1000, 4097])
-def test_pairwise_sum_is_numpys_sum(n):
-    """Every block size, and the split above 128 values (several levels deep)."""
-    rng = np.random.default_rng(n)
-    a = rng.random(n + 3) * 10.0 ** rng.uniform(-4, 4, n + 3)
-    assert pairwise_sum(a, 0, n) == a[:n].sum()
 
 
 @pytest.mark.parametrize("K", [1, 5, 8, 64, 127, 128, 129, 200, 700])

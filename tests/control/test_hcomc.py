@@ -16,8 +16,8 @@ from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.control.hierarchical.problem_terms import CONSTRAINTS
 from hcomc.control.report import plan_report
+from hcomc.equations.pareto import pareto_optimal
 from hcomc.interface import Mode
-from hcomc.optim.selection import non_dominated
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind
@@ -49,11 +49,11 @@ def test_nsga2_set_is_non_dominated_and_beats_random_sampling(seed):
     result = controller.optimizer.minimize(problem, budget=360, rng=np.random.default_rng(9))
     assert result.n_eval == 360
     assert result.feasible.all()
-    assert non_dominated(result.F).all()
+    assert pareto_optimal(result.F).all()
     X = np.random.default_rng(9).uniform(problem.xl, problem.xu, size=(360, 5))
     F, G = problem.evaluate(X)
     feasible = (G <= 0).all(axis=1)
-    rand = F[feasible][non_dominated(F[feasible])]
+    rand = F[feasible][pareto_optimal(F[feasible])]
     both = np.vstack([result.F, rand])
     ref = both.max(axis=0) + 0.1 * (both.max(axis=0) - both.min(axis=0)) + 1e-9
     hv = HV(ref_point=ref)
@@ -230,7 +230,7 @@ def test_plan_cli_table_and_errors():
 
 def _accel(p: np.ndarray, role: int, lead: int, x, v, a) -> float:
     """Car following of ``role`` behind ``lead`` (-1: free road) with its parameter row."""
-    from hcomc.models.following import follow_accel
+    from hcomc.equations.car_following import follow_accel
 
     row = p[role]
     s = np.inf if lead < 0 else x[lead] - p[lead, 7] - x[role]

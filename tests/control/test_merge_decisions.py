@@ -13,8 +13,9 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails, merge_problem
 from hcomc.control.hierarchical.problem import MergeProblem
-from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND, problem_constants
-from hcomc.control.key_vehicles import behind_group
+from hcomc.control.hierarchical.problem_setup import problem_constants
+from hcomc.control.hierarchical.problem_terms import AHEAD, BEHIND
+from hcomc.control.key_group import behind_group
 from hcomc.control.lane_change_game.decision import game_params
 from hcomc.control.prediction.population import (
     C_A_MERG,
@@ -27,7 +28,7 @@ from hcomc.control.prediction.population import (
     VMR,
     VR,
 )
-from hcomc.models.fuel import fuel_rate
+from hcomc.equations.fuel import fuel_rate
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind

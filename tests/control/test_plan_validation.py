@@ -14,7 +14,7 @@ import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.fifo import FIFOController
-from hcomc.control.key_vehicles import behind_group
+from hcomc.control.key_group import behind_group
 from hcomc.control.validation import InvalidPlan, check_plan, checked
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind

@@ -29,8 +29,8 @@ from hcomc.control.prediction.population import (
     counterfactual,
     rollout,
 )
-from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.safety.collision import vehicles_collide
+from hcomc.equations.collision import vehicles_collide
+from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.sim.engine import Simulation
 
 N_CANDIDATES = 120

@@ -20,7 +20,7 @@ from hcomc.config import ConfigError
 from hcomc.envs.corridor.env import CorridorMergeEnv
 from hcomc.envs.corridor.multi_agent import CorridorParallelEnv
 from hcomc.envs.observation import N_EGO, N_ROLE
-from hcomc.safety.critical import critical_acceleration
+from hcomc.equations.safety import critical_acceleration
 from hcomc.sim.corridor import simulate_corridor
 from hcomc.sim.corridor.state import C_AGENTS
 

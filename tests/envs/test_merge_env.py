@@ -14,7 +14,7 @@ from pettingzoo.test import parallel_api_test
 
 import hcomc.envs  # noqa: F401 (registers hcomc/Merge-v0)
 from hcomc.config import ConfigError, load_config
-from hcomc.control.key_vehicles import find_key_vehicles
+from hcomc.control.key_group import find_key_vehicles
 from hcomc.envs import MergeEnv
 from hcomc.envs import episode as episode_module
 from hcomc.envs import vector as vector_module
@@ -23,10 +23,10 @@ from hcomc.envs.multi_agent import MergeParallelEnv
 from hcomc.envs.observation import N_EGO, N_OBS, N_ROLE, OBS_NAMES
 from hcomc.envs.policies import FIFO, HCOMC, evaluate, summary
 from hcomc.envs.vector import MergeVectorEnv
+from hcomc.equations.fuel import fuel_rate
+from hcomc.equations.safety import critical_acceleration
 from hcomc.metrics import compute_metrics
-from hcomc.models.fuel import fuel_rate
 from hcomc.road import KEY_ROLES, Kind
-from hcomc.safety.critical import critical_acceleration
 from hcomc.sim.engine import Simulation
 
 

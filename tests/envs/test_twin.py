@@ -12,7 +12,8 @@ from hcomc.envs import episode as episode_module
 from hcomc.envs.episode import MergeEpisode
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.sim.engine import Simulation
-from hcomc.sim.twin import can_twin, ramp_may_reach, ramp_untouched, undisturbed_twin
+from hcomc.sim.step.ramp_reach import ramp_may_reach, ramp_untouched
+from hcomc.sim.twin import can_twin, undisturbed_twin
 
 END = 10**12
 FIELDS = ("t", "x", "y", "v", "a", "heading", "lane", "active")

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
+from hcomc.equations.car_following import follow_accel
 from hcomc.experiments.runner import configuration_overrides
-from hcomc.models.following import follow_accel
 from hcomc.road import Kind
 from hcomc.robustness.engine import FaultedSimulation
 from hcomc.robustness.settings import FaultParams

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hcomc.config import RoadParams
-from hcomc.models.idm import equilibrium_gap
+from hcomc.equations.idm import equilibrium_gap
 from hcomc.sim.engine import simulate
 from hcomc.sim.log import EventKind
 

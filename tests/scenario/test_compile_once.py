@@ -68,10 +68,10 @@ def test_serial_and_parallel_ensemble_loops_have_their_own_cache_entries() -> No
     # numba's cache keys an entry by function and signature, not by ``parallel``: a serial
     # loop compiled from the parallel one's code shared its entry, so whichever was compiled
     # first was loaded for both (the parallel ensemble then ran on one thread)
-    from hcomc.sim import ensemble
+    from hcomc.sim.step import batch
 
     paths = {  # numba's cache index file of each function
         dispatcher._cache._cache_file._index_path  # type: ignore[attr-defined]
-        for dispatcher in (ensemble._advance_batch, ensemble._advance_batch_serial)
+        for dispatcher in (batch.advance_batch, batch.advance_batch_serial)
     }
     assert len(paths) == 2

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
-from hcomc.control.virtual_vehicle import virtual_states
+from hcomc.control.hierarchical.controller import virtual_states
 from hcomc.interface import Mode
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind

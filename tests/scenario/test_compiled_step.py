@@ -39,7 +39,7 @@ def test_an_ensemble_gives_each_run_bit_identical_results() -> None:
 def test_typed_list_cache_follows_its_keys_as_they_change_grow_and_shrink() -> None:
     """Entry k of each list is always its column of key k; places whose key stayed are not
     converted again."""
-    from hcomc.sim.ensemble import TypedListCache
+    from hcomc.sim.typed_lists import TypedListCache
 
     class Key:
         def __init__(self, value: float) -> None:

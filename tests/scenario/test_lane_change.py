@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.models.quintic import lateral_offset
-from hcomc.models.transition import transition_weight
+from hcomc.equations.lane_change import lateral_offset
+from hcomc.equations.transition import transition_weight
 from hcomc.road import Kind, Lane, lane_centre
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog

@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.cav (CAH and ACC blend; paper Eq. 3)."""
+"""Tests for hcomc.equations.cav (CAH and ACC blend; paper Eq. 3)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from hcomc.models.cav import acc_acceleration, cah_acceleration
+from hcomc.equations.cav import acc_acceleration, cah_acceleration
 
 A_MAX = 1.4  # [m/s^2], Kesting 2010
 B = 2.0  # [m/s^2]

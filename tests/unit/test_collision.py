@@ -1,4 +1,4 @@
-"""Tests for hcomc.safety.collision (paper Section II-C, Eq. 7).
+"""Tests for hcomc.equations.collision (paper Section II-C, Eq. 7).
 
 The ground truth is shapely (GEOS), whose ``intersects`` predicate treats polygons as closed
 sets, so touching counts, as in our convention. shapely is a test-only dependency.
@@ -17,14 +17,14 @@ from hypothesis import strategies as st
 from shapely.geometry import Polygon
 
 from hcomc._typing import BoolArray, FloatArray
-from hcomc.safety import collision
-from hcomc.safety.collision import (
+from hcomc.equations.collision import (
     point_in_rectangle,
     rectangle_corners,
     rectangles_collide,
     segments_intersect,
     vehicles_collide,
 )
+from hcomc.safety import collision
 
 CAR_L = 5.0  # [m]
 CAR_W = 1.8  # [m]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
-from hcomc.models.idm import equilibrium_gap
+from hcomc.equations.idm import equilibrium_gap
 from hcomc.rng import make_rng
 from hcomc.road import Kind, Lane
 from hcomc.sim.demand import evenly_spread, generate_demand, lane_speed

@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.fuel (paper Eq. 16, Kamal et al. 2011)."""
+"""Tests for hcomc.equations.fuel (paper Eq. 16, Kamal et al. 2011)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import numpy as np
 import pydantic
 import pytest
 
-from hcomc.models.fuel import FUEL_DEFAULT, FuelParams, fuel_consumed, fuel_rate
+from hcomc.config.fuel import FUEL_DEFAULT, FuelParams
+from hcomc.equations.fuel import DEFAULT_COEFFICIENTS, fuel_consumed, fuel_rate
 
 SPEEDS = np.array([20.0, 25.0, 30.0])
 
@@ -101,3 +102,14 @@ def test_params_are_frozen_and_strict() -> None:
     assert FUEL_DEFAULT.accel == (0.07224, 9.681e-2, 1.075e-3)
     for name in ("cruise", "accel", "accel_term"):
         assert FuelParams.model_fields[name].description
+
+
+def test_config_defaults_are_the_kernel_defaults() -> None:
+    """The configuration's FuelParams and the equations' FuelCoefficients give the same
+    numbers, so fuel_rate's default and the config's default are one model."""
+    assert FUEL_DEFAULT.coefficients() == DEFAULT_COEFFICIENTS.coefficients()
+    signed = FuelParams(accel_term="signed").coefficients()
+    assert signed == DEFAULT_COEFFICIENTS._replace(positive_only=0.0).coefficients()
+    np.testing.assert_array_equal(
+        fuel_rate(SPEEDS, 1.0, FUEL_DEFAULT), fuel_rate(SPEEDS, 1.0, DEFAULT_COEFFICIENTS)
+    )

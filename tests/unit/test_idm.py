@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.idm (paper Eq. 1)."""
+"""Tests for hcomc.equations.idm (paper Eq. 1)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hcomc.models.idm import desired_gap, equilibrium_gap, idm_acceleration
-from hcomc.models.iidm import iidm_acceleration
+from hcomc.equations.idm import desired_gap, equilibrium_gap, idm_acceleration
+from hcomc.equations.iidm import iidm_acceleration
 
 # Textbook example: v0 = 33.3 m/s, T = 1.5 s, s0 = 2 m (a, b do not enter s_e).
 HDV = {"v0": 33.3, "T": 1.5, "a": 1.0, "b": 2.0, "s0": 2.0, "delta": 4.0}
@@ -228,7 +228,7 @@ def test_power_of_a_whole_exponent_is_within_the_product_bound(base: float, n: i
     gamma_(n-1) = (n-1)u / (1 - (n-1)u) against the exact power (rational arithmetic)."""
     from fractions import Fraction
 
-    from hcomc.models.idm import power
+    from hcomc.equations.idm import power
 
     exact = Fraction(base) ** n
     error = abs(Fraction(power(base, float(n))) - exact) / exact
@@ -244,14 +244,14 @@ def test_power_of_a_whole_exponent_is_within_the_product_bound(base: float, n: i
     ),
 )
 def test_power_of_other_exponents_is_the_c_librarys(base: float, exponent: float) -> None:
-    from hcomc.models.idm import power
+    from hcomc.equations.idm import power
 
     assert power(base, exponent) == base**exponent  # Python's float power is libm's pow
 
 
 @pytest.mark.parametrize("base", [0.0, 1.0, 0.5, 2.0])
 def test_power_exact_cases(base: float) -> None:
-    from hcomc.models.idm import power
+    from hcomc.equations.idm import power
 
     for n in range(1, 17):
         assert power(base, float(n)) == base**n  # powers of two and 0, 1 are exact

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from test_metrics import PLATOON_GROUP, braking, build, cruise, cruising, merge_scene, roles
 
+from hcomc.equations.fuel import fuel_rate
 from hcomc.metrics import (
     METRICS,
     MetricWindow,
@@ -21,7 +22,6 @@ from hcomc.metrics import (
     stabilisation_time,
     stabilisation_time_entry,
 )
-from hcomc.models.fuel import fuel_rate
 from hcomc.sim.log import EventKind, SimulationLog
 
 

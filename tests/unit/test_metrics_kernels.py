@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
+from hcomc.equations.fuel import fuel_rate
 from hcomc.metrics import (
     KEY_ROLES,
     METRICS,
@@ -29,7 +30,6 @@ from hcomc.metrics.lane_profile import interp_ascending_into, interp_into, lane_
 from hcomc.metrics.paper import disturbance_metrics
 from hcomc.metrics.surrogate import closing_metrics
 from hcomc.metrics.window import EPS_T, key_pairs, road_of, window_rows
-from hcomc.models.fuel import fuel_rate
 from hcomc.sim.log import SimulationLog
 
 DT = 0.1  # logging interval of the random logs [s]

@@ -19,7 +19,8 @@ from scipy.optimize import brentq
 from hcomc.config import LaneChangeParams, load_config
 from hcomc.interface import Fleet, follow
 from hcomc.road import Kind, Lane
-from hcomc.sim.mobil import Snapshot, _resolve, decide
+from hcomc.sim.lane_change_decisions import Snapshot, decide
+from hcomc.sim.mobil import _resolve
 from hcomc.sim.neighbours import LaneIndex, build_lane_index
 
 CFG = load_config("C1")

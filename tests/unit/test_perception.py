@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 from hcomc.config import HDVParams
 from hcomc.rng import make_rng
-from hcomc.sim.perception import Perception
+from hcomc.sim.perception_state import Perception
 
 LENGTH = 5.0
 

@@ -1,19 +1,18 @@
-"""The lean PSO against pymoo, its reference: same rows evaluated, same returned set where
-numpy's power is the C library's, the same quality everywhere.
+"""The lean PSO: its runs, its pieces against pymoo's, and its quality against pymoo's PSO, its
+reference.
 
-pymoo (``pso-pymoo``) is the oracle throughout: whole runs with pymoo's PSO on the same
-problems, budgets and generators (a shifted sphere, Rastrigin, a corner optimum that drives
+Whole runs of the lean PSO on a shifted sphere, Rastrigin, a corner optimum that drives
 particles out of the box, a constrained problem, non-finite costs, odd swarm sizes, short and
 uneven budgets, warm starts, fixed and other weights, random boxes, and the HCOMC merge problem
-and controller), and the pieces with pymoo's own functions on random inputs (Latin hypercube
-sampling, improvement replacement with its duplicate check, the fuzzy adaptation). Every run
-also returns the set every optimiser returns: the feasible non-dominated subset of the rows it
-evaluated (the best-scalarised row when none is feasible), checked on a recording of them.
-The mutation of the best particle takes powers with the C library's ``pow``, pymoo with numpy's:
-whole runs equal pymoo's bit for bit only where numpy's power is the C library's, and are skipped
-elsewhere (:data:`scalar_problems.needs_libm_numpy`); on any CPU the lean PSO's hypervolume and
-best Eq. 19 cost on recorded merge problems are held within a stated tolerance of pymoo's
-(:func:`test_merge_problem_quality_matches_pymoo`).
+and controller: each returns the set every optimiser returns (the feasible non-dominated subset
+of the rows it evaluated, the best-scalarised row when none is feasible, checked on a recording
+of them), and runs again the same for the same seed. The pieces are compared with pymoo's own
+functions on random inputs: Latin hypercube sampling and its maxmin criterion, the swarm spread
+and the fuzzy adaptation within a relative 1e-12 (the sums here are plain sums in index order,
+pymoo's numpy's pairwise ones; ``w``'s ``exp`` is the C library's, pymoo's numpy's), and the
+improvement replacement with its duplicate check exactly (a decision on exact comparisons).
+pymoo is the reference for solution quality: hypervolume and best Eq. 19 cost on the recorded
+merge problems (:func:`test_merge_problem_quality_matches_pymoo`).
 """
 
 from __future__ import annotations
@@ -39,7 +38,6 @@ from hcomc.config import load_config
 from hcomc.control.hierarchical.controller import HCOMCController
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.optim.base import ParetoResult
-from hcomc.optim.numpy_sum import pairwise_sum
 from hcomc.optim.pso import optimizer as pso_optimizer
 from hcomc.optim.pso.adaptation import adapt, swarm_spread
 from hcomc.optim.pso.move import improvement
@@ -54,7 +52,6 @@ from scalar_problems import (
     ScalarProblem,
     assert_holds_best_scalarised,
     assert_returns_expected_set,
-    needs_libm_numpy,
     recording,
 )
 
@@ -88,47 +85,47 @@ class NonFinite(Sphere):
         return np.where(X[:, 1] < -3.0, np.nan, np.where(X[:, 0] > 2.0, np.inf, f))
 
 
-def _both(
+def _run(
     make: Callable[[], Any],
     budget: int,
     seed: int,
     *,
     initial: FloatArray | None = None,
     **options: Any,
-) -> tuple[ParetoResult, ParetoResult, Any, Any]:
-    p_ref, p_new = make(), make()
-    ref = PSOOptimizer(**options).minimize(
-        p_ref, budget=budget, rng=np.random.default_rng(seed), initial=initial
-    )
-    recorded = recording(p_new)
-    new = CompiledPSOOptimizer(**options).minimize(
-        recorded, budget=budget, rng=np.random.default_rng(seed), initial=initial
-    )
-    assert_returns_expected_set(new, recorded)
-    return ref, new, p_ref, p_new
-
-
-def _assert_same(ref: ParetoResult, new: ParetoResult, p_ref: Any, p_new: Any) -> None:
-    assert len(p_ref.evaluated) == len(p_new.evaluated)
-    for a, b in zip(p_ref.evaluated, p_new.evaluated, strict=True):
-        np.testing.assert_array_equal(a, b)  # the same rows, bit for bit, generation by generation
+) -> tuple[ParetoResult, Any]:
+    """The lean PSO on a fresh problem ``make()``, twice with the same seed: the same rows,
+    generation by generation, and the same result, which is the set
+    :func:`assert_returns_expected_set` asks of the rows scored. Returns the result and the
+    problem with its evaluated rows."""
+    runs = []
+    for _ in range(2):
+        problem = make()
+        recorded = recording(problem)
+        result = CompiledPSOOptimizer(**options).minimize(
+            recorded, budget=budget, rng=np.random.default_rng(seed), initial=initial
+        )
+        assert_returns_expected_set(result, recorded)
+        assert result.n_eval == sum(X.shape[0] for X in problem.evaluated)
+        assert result.algorithm == "pso"
+        runs.append((result, problem))
+    (first, p_first), (again, p_again) = runs
+    assert len(p_first.evaluated) == len(p_again.evaluated)
+    for a, b in zip(p_first.evaluated, p_again.evaluated, strict=True):
+        np.testing.assert_array_equal(a, b)
     for name in ("X", "F", "G", "feasible"):
-        np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
-    assert ref.n_eval == new.n_eval == sum(X.shape[0] for X in p_new.evaluated)
-    assert (ref.algorithm, new.algorithm) == ("pso-pymoo", "pso")
+        np.testing.assert_array_equal(getattr(first, name), getattr(again, name))
+    return first, p_first
 
 
 # --------------------------------------------------------------------------------------------
-# whole runs against pymoo
+# whole runs
 # --------------------------------------------------------------------------------------------
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 @pytest.mark.parametrize("make", [Sphere, lambda: Rastrigin(6)], ids=["sphere", "rastrigin"])
-def test_runs_equal_pymoo_and_converge(make: Callable[[], ScalarProblem], seed: int) -> None:
-    ref, new, p_ref, p_new = _both(make, 960, seed, pop_size=24)
-    _assert_same(ref, new, p_ref, p_new)
+def test_runs_converge(make: Callable[[], ScalarProblem], seed: int) -> None:
+    new, p_new = _run(make, 960, seed, pop_size=24)
     assert len(p_new.evaluated) == 40
     # converging: better than the best of the first (Latin hypercube) generation
     assert new.F[0, 0] < make().f(p_new.evaluated[0]).min()
@@ -136,10 +133,9 @@ def test_runs_equal_pymoo_and_converge(make: Callable[[], ScalarProblem], seed: 
         assert new.F[0, 0] < 1e-3
 
 
-@needs_libm_numpy
-def test_out_of_box_retries_and_repair_equal_pymoo(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_out_of_box_retries_and_repair(monkeypatch: pytest.MonkeyPatch) -> None:
     """On a corner optimum some moves exhaust the 20 retries and re-draw variables between
-    bound and old position (``repair_random_init``): the same draws as pymoo's."""
+    bound and old position (``repair_random_init``); every row stays in the box."""
     retries: list[int] = []
     move = pso_optimizer.move
 
@@ -150,24 +146,22 @@ def test_out_of_box_retries_and_repair_equal_pymoo(monkeypatch: pytest.MonkeyPat
 
     monkeypatch.setattr(pso_optimizer, "move", counting_move)
     for seed in (0, 1):
-        _assert_same(*_both(Corner, 480, seed, pop_size=16))
-    assert len(retries) == 2 * 29
+        _, p_new = _run(Corner, 480, seed, pop_size=16)
+        X = np.vstack(p_new.evaluated)
+        assert ((X >= 0.0) & (X <= 1.0)).all()
+    assert len(retries) == 2 * 2 * 29  # two seeds, each run twice
     assert max(retries) == 20  # some moves gave up: variables were re-drawn
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 5])
-def test_constrained_problem_equals_pymoo(seed: int) -> None:
-    ref, new, p_ref, p_new = _both(Constrained, 300, seed, pop_size=20)
-    _assert_same(ref, new, p_ref, p_new)
+def test_constrained_problem(seed: int) -> None:
+    new, _ = _run(Constrained, 300, seed, pop_size=20)
     assert new.feasible.all()
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_non_finite_costs_equal_pymoo(seed: int) -> None:
-    ref, new, p_ref, p_new = _both(NonFinite, 480, seed, pop_size=24)
-    _assert_same(ref, new, p_ref, p_new)
+def test_non_finite_costs(seed: int) -> None:
+    new, p_new = _run(NonFinite, 480, seed, pop_size=24)
     costs = NonFinite().f(np.vstack(p_new.evaluated))
     assert np.isnan(costs).any()  # both kinds were met
     assert np.isinf(costs).any()
@@ -176,19 +170,15 @@ def test_non_finite_costs_equal_pymoo(seed: int) -> None:
     assert np.isnan(new.F[:, 0]).sum() == np.isnan(costs).sum()
 
 
-@needs_libm_numpy
-def test_all_costs_nan_equal_pymoo() -> None:
+def test_all_costs_nan() -> None:
     class AllNaN(Sphere):
         def f(self, X: FloatArray) -> FloatArray:
             return np.full(X.shape[0], np.nan)
 
-    ref, new, p_ref, p_new = _both(AllNaN, 120, 3, pop_size=10)
-    _assert_same(ref, new, p_ref, p_new)  # every row: none dominates another
-    np.testing.assert_array_equal(new.X, np.vstack(p_new.evaluated))
+    new, p_new = _run(AllNaN, 120, 3, pop_size=10)
+    np.testing.assert_array_equal(new.X, np.vstack(p_new.evaluated))  # none dominates another
 
 
-@needs_libm_numpy
-@pytest.mark.filterwarnings(_EXP_OVERFLOW)
 @pytest.mark.parametrize(
     ("pop_size", "budget", "options"),
     [
@@ -201,22 +191,15 @@ def test_all_costs_nan_equal_pymoo() -> None:
         (2, 40, {}),  # the smallest swarm
     ],
 )
-def test_budget_layout_and_parameters_equal_pymoo(
-    pop_size: int, budget: int, options: dict[str, Any]
-) -> None:
-    ref, new, p_ref, p_new = _both(
-        lambda: Rastrigin(6), budget, pop_size, pop_size=pop_size, **options
-    )
-    _assert_same(ref, new, p_ref, p_new)
+def test_budget_layout_and_parameters(pop_size: int, budget: int, options: dict[str, Any]) -> None:
+    new, _ = _run(lambda: Rastrigin(6), budget, pop_size, pop_size=pop_size, **options)
     assert new.n_eval == pop_size * max(1, budget // pop_size)
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("n_start", [1, 3, 12, 15])
-def test_warm_start_equals_pymoo(n_start: int) -> None:
+def test_warm_start(n_start: int) -> None:
     initial = np.random.default_rng(n_start).uniform(-6.0, 6.0, (n_start, 5))  # some clipped
-    ref, new, p_ref, p_new = _both(Sphere, 240, 4, initial=initial, pop_size=12)
-    _assert_same(ref, new, p_ref, p_new)
+    _, p_new = _run(Sphere, 240, 4, initial=initial, pop_size=12)
     first = p_new.evaluated[0]
     k = min(n_start, 12)
     np.testing.assert_array_equal(first[:k], np.clip(initial[:k], -5.0, 5.0))
@@ -232,21 +215,18 @@ class FixedVariable(Sphere):
         self.xl.flags.writeable = self.xu.flags.writeable = False
 
 
-@needs_libm_numpy
 @pytest.mark.filterwarnings("ignore:invalid value encountered in divide:RuntimeWarning")
-def test_fixed_variable_like_pymoo() -> None:
-    """A variable with xl = xu: fixed weights run as pymoo's."""
-    ref, new, p_ref, p_new = _both(FixedVariable, 120, 0, pop_size=12, adaptive=False)
-    _assert_same(ref, new, p_ref, p_new)
+def test_fixed_variable_with_fixed_weights() -> None:
+    """A variable with xl = xu: fixed weights run, the variable stays fixed."""
+    _, p_new = _run(FixedVariable, 120, 0, pop_size=12, adaptive=False)
     assert (np.vstack(p_new.evaluated)[:, 2] == 0.5).all()
 
 
 @pytest.mark.filterwarnings("ignore:invalid value encountered in divide:RuntimeWarning")
 def test_fixed_variable_fails_adaptation_like_pymoo() -> None:
     """A variable with xl = xu: the fuzzy adaptation's box-normalised distances are undefined,
-    pymoo fails there and so does the lean PSO (one generation, no adaptation nor mutation,
-    runs as pymoo's on any CPU)."""
-    _assert_same(*_both(FixedVariable, 12, 0, pop_size=12))
+    pymoo fails there and so does the lean PSO (one generation, no adaptation, runs)."""
+    _run(FixedVariable, 12, 0, pop_size=12)
     with pytest.raises(TypeError):
         PSOOptimizer(pop_size=12).minimize(FixedVariable(), budget=24, rng=np.random.default_rng(0))
     with pytest.raises(ValueError, match="xl < xu"):
@@ -255,8 +235,6 @@ def test_fixed_variable_fails_adaptation_like_pymoo() -> None:
         )
 
 
-@needs_libm_numpy
-@pytest.mark.filterwarnings(_EXP_OVERFLOW)
 @settings(max_examples=25, deadline=None)
 @given(
     seed=st.integers(0, 2**31 - 1),
@@ -267,14 +245,16 @@ def test_fixed_variable_fails_adaptation_like_pymoo() -> None:
     n_gen=st.integers(1, 6),
     adaptive=st.booleans(),
 )
-def test_random_boxes_equal_pymoo(
+def test_random_boxes(
     seed: int, n_var: int, lo: float, width: float, pop_size: int, n_gen: int, adaptive: bool
 ) -> None:
     def make() -> Sphere:
         return Sphere(n_var, lo, lo + width)
 
-    budget = pop_size * n_gen
-    _assert_same(*_both(make, budget, seed, pop_size=pop_size, adaptive=adaptive))
+    new, p_new = _run(make, pop_size * n_gen, seed, pop_size=pop_size, adaptive=adaptive)
+    X = np.vstack(p_new.evaluated)
+    np.testing.assert_array_equal(np.clip(X, p_new.xl, p_new.xu), X)  # inside the box
+    assert new.n_eval == pop_size * n_gen
 
 
 def test_deterministic_per_seed_and_seed_sensitive() -> None:
@@ -310,17 +290,17 @@ def _merge_problem(seed: int) -> MergeProblem:
     return HCOMCController(config).problem(view, group)[0]
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 3])
-def test_merge_problem_runs_equal_pymoo(seed: int) -> None:
-    """On the HCOMC problem at the default budget (pop 40, 360 rows) the sets are identical:
-    the feasible non-dominated subset of every row evaluated, holding the best-scalarised."""
+def test_merge_problem_runs(seed: int) -> None:
+    """On the HCOMC problem at the default budget (pop 40, 360 rows): the feasible
+    non-dominated subset of every row evaluated, holding the best-scalarised; the same again
+    for the same seed."""
     problems = [recording(_merge_problem(seed)) for _ in range(2)]
     results = [
-        opt.minimize(problem, budget=360, rng=np.random.default_rng(seed))
-        for opt, problem in zip(
-            (PSOOptimizer(pop_size=40), CompiledPSOOptimizer(pop_size=40)), problems, strict=True
+        CompiledPSOOptimizer(pop_size=40).minimize(
+            problem, budget=360, rng=np.random.default_rng(seed)
         )
+        for problem in problems
     ]
     for name in ("X", "F", "G", "feasible"):
         np.testing.assert_array_equal(getattr(results[0], name), getattr(results[1], name))
@@ -330,19 +310,18 @@ def test_merge_problem_runs_equal_pymoo(seed: int) -> None:
     assert results[1].X.shape[0] > 1
 
 
-@needs_libm_numpy
 @pytest.mark.parametrize("seed", [0, 1])
-def test_controller_plans_equal_pymoo(seed: int) -> None:
-    """``HCOMCController.plan`` with "pso" and "pso-pymoo": the same plan, also on a replan
-    (warm-started from the first plan's solution)."""
+def test_controller_plans_are_deterministic(seed: int) -> None:
+    """``HCOMCController.plan`` with "pso", twice from the same seed: the same plan, also on a
+    replan (warm-started from the first plan's solution)."""
     config, view, group = _planning_instant(seed)
     plans = []
-    for name in ("pso-pymoo", "pso"):
-        controller = HCOMCController(config, make_optimizer(name, pop_size=40))
+    for _ in range(2):
+        controller = HCOMCController(config, make_optimizer("pso", pop_size=40))
         rng = np.random.default_rng(seed)
         plans.append([controller.plan(view, group, rng) for _ in range(2)])
     for ref, new in zip(*plans, strict=True):
-        for name in ("group", "mode", "t0", "fallback", "objectives", "sequence"):
+        for name in ("group", "mode", "t0", "fallback", "objectives", "sequence", "reason"):
             assert getattr(ref, name) == getattr(new, name), name
         for name in ("merge_x", "vr_duration", "horizon", "vv0", "vv1", "vv2"):
             np.testing.assert_array_equal(getattr(ref, name), getattr(new, name))
@@ -350,7 +329,6 @@ def test_controller_plans_equal_pymoo(seed: int) -> None:
             np.testing.assert_array_equal(
                 getattr(ref.details.pareto, name), getattr(new.details.pareto, name)
             )
-        assert ref.reason.replace("pso-pymoo", "pso") == new.reason
 
 
 # --------------------------------------------------------------------------------------------
@@ -368,7 +346,8 @@ def test_latin_hypercube_equals_pymoo(seed: int, n: int, n_var: int) -> None:
     xl, xu = np.linspace(-3.0, 1.0, n_var), np.linspace(-1.0, 7.0, n_var)
     a, b = np.random.default_rng(seed), np.random.default_rng(seed)
     expected = LHS()(_pymoo_problem(xl, xu), n, random_state=a).get("X")
-    np.testing.assert_array_equal(latin_hypercube(n, xl, xu, b), expected)
+    # the same sample (another would differ by far more than the tolerance)
+    np.testing.assert_allclose(latin_hypercube(n, xl, xu, b), expected, rtol=0.0, atol=1e-12)
     assert a.bit_generator.state == b.bit_generator.state  # the same number of draws
 
 
@@ -381,10 +360,9 @@ def test_latin_hypercube_equals_pymoo(seed: int, n: int, n_var: int) -> None:
     )
 )
 def test_min_distances_equal_pymoo_criterion(samples: FloatArray) -> None:
-    """The maxmin criterion bit for bit (a last-bit difference would rarely change which
-    Latin hypercube sample wins, so the values are compared directly)."""
+    """The maxmin criterion, within a relative 1e-12 of pymoo's (SciPy's ``cdist``)."""
     expected = [criterion_maxmin(sample) for sample in samples]
-    np.testing.assert_array_equal(min_distances(samples), expected)
+    np.testing.assert_allclose(min_distances(samples), expected, rtol=1e-12, atol=0.0)
 
 
 _coarse = st.integers(0, 2).map(float)  # few values: equal positions and costs are common
@@ -427,6 +405,14 @@ def test_improvement_rejects_duplicates() -> None:
     np.testing.assert_array_equal(improvement(X, F, P_X, np.full(4, np.nan)), [False] * 4)
 
 
+def _assert_adapts_as_pymoo(got: tuple[float, float, float], algorithm: PSO) -> None:
+    """New ``(w, c1, c2)`` within a relative 1e-12 of pymoo's: the same fuzzy state (another
+    would shift ``c1``/``c2`` by at least 0.025); the values may differ in the last bits, as the
+    spreads are plain sums here and ``exp`` is the C library's."""
+    expected = (algorithm.w, algorithm.c1, algorithm.c2)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=0.0)
+
+
 @pytest.mark.filterwarnings(_EXP_OVERFLOW)
 @settings(max_examples=200, deadline=None)
 @given(
@@ -451,33 +437,12 @@ def test_adapt_equals_pymoo(
     algorithm.random_state = np.random.default_rng(seed)
     algorithm._adapt()
     w, new_c1, new_c2 = adapt(P_X, s_x, c1, c2, xl, xu, np.random.default_rng(seed))
-    assert (w, new_c1, new_c2) == (algorithm.w, algorithm.c1, algorithm.c2)
-
-
-@settings(max_examples=300, deadline=None)
-@given(
-    seed=st.integers(0, 2**32 - 1),
-    n=st.one_of(st.integers(1, 300), st.integers(300, 5000)),
-    scale=st.integers(0, 12),
-)
-def test_pairwise_sum_is_numpys_sum(seed: int, n: int, scale: int) -> None:
-    """The compiled sum rounds as ``np.sum`` and ``sum(axis=1)`` on runs of any length: numpy
-    sums contiguous float64 runs by this pairwise summation (PSO's spread and U_fuel rely on
-    it; a numpy that sums otherwise fails here)."""
-    rng = np.random.default_rng(seed)
-    a = rng.standard_normal(n) * 10.0 ** rng.integers(-scale, scale + 1, n)
-    assert pairwise_sum(a, 0, n) == a.sum()
-    rows = a[: n - n % 7].reshape(-1, 7) if n >= 7 else a[None, :]
-    assert all(
-        pairwise_sum(row.copy(), 0, row.size) == s
-        for row, s in zip(rows, rows.sum(axis=1), strict=True)
-    )
-    assert pairwise_sum(a, 3, 0) == 0.0
+    _assert_adapts_as_pymoo((w, new_c1, new_c2), algorithm)
 
 
 def _norm_dist(A: FloatArray, B: FloatArray, xl: FloatArray, xu: FloatArray) -> FloatArray:
     """Euclidean distances between rows of ``A`` and ``B`` in box-normalised coordinates, with
-    pymoo's ``vectorized_cdist`` layout and operations (so ``sum`` rounds the same way)."""
+    pymoo's ``vectorized_cdist`` layout and operations."""
     u = np.repeat(A, B.shape[0], axis=0)
     v = np.tile(B, (A.shape[0], 1))
     D = np.sqrt((((u - v) / (xu - xl)) ** 2).sum(axis=1))
@@ -492,8 +457,7 @@ def _spread_numpy(
     n = P_X.shape[0]
     with np.errstate(invalid="ignore", divide="ignore"):
         mD = _norm_dist(P_X, P_X, xl, xu).sum(axis=1) / (n - 1)
-        # pymoo averages the (n, n) distances of n copies of s_x to the bests: n equal rows;
-        # the same n^2 values in the same layout give the same rounding
+        # pymoo averages the (n, n) distances of n copies of s_x to the bests: n equal rows
         g_D = np.tile(_norm_dist(s_x[None, :], P_X, xl, xu)[0], n).mean()
     return mD, float(g_D)
 
@@ -505,11 +469,9 @@ def _spread_numpy(
     n_var=st.integers(1, 12),
     spread=st.floats(0.01, 1.0),
 )
-def test_swarm_spread_equals_numpy_in_pymoos_layout(
-    seed: int, n: int, n_var: int, spread: float
-) -> None:
-    """The compiled spreads equal the whole-array numpy ones bit for bit (n = 1 included:
-    0 / 0 is NaN in both)."""
+def test_swarm_spread_equals_pymoos(seed: int, n: int, n_var: int, spread: float) -> None:
+    """The compiled spreads are pymoo's within a relative 1e-12 (plain sums here, numpy's
+    pairwise ones there); n = 1 included: 0 / 0 is NaN in both."""
     rng = np.random.default_rng(seed)
     xl = rng.uniform(-5.0, 5.0, n_var)
     xu = xl + rng.uniform(1e-3, 10.0, n_var)
@@ -517,8 +479,8 @@ def test_swarm_spread_equals_numpy_in_pymoos_layout(
     s_x = P_X[rng.integers(n)].copy()
     mD, g_D = swarm_spread(P_X, s_x, xl, xu)
     ref_mD, ref_g_D = _spread_numpy(P_X, s_x, xl, xu)
-    np.testing.assert_array_equal(mD, ref_mD)
-    assert g_D == ref_g_D or (np.isnan(g_D) and np.isnan(ref_g_D))
+    np.testing.assert_allclose(mD, ref_mD, rtol=1e-12, atol=0.0)
+    np.testing.assert_allclose(g_D, ref_g_D, rtol=1e-12, atol=0.0)
 
 
 def test_adapt_equals_pymoo_in_every_state() -> None:
@@ -538,7 +500,7 @@ def test_adapt_equals_pymoo_in_every_state() -> None:
         algorithm.random_state = np.random.default_rng(case)
         algorithm._adapt()
         w, new_c1, new_c2 = adapt(P_X, s_x, c1, c2, xl, xu, np.random.default_rng(case))
-        assert (w, new_c1, new_c2) == (algorithm.w, algorithm.c1, algorithm.c2)
+        _assert_adapts_as_pymoo((w, new_c1, new_c2), algorithm)
         states.add(algorithm.strategy)
         rescaled |= bool(np.isclose(algorithm.c1 + algorithm.c2, 4.0))
     assert states == {1, 2, 3, 4}
@@ -546,16 +508,17 @@ def test_adapt_equals_pymoo_in_every_state() -> None:
 
 
 def test_merge_problem_quality_matches_pymoo() -> None:
-    """On any CPU, the lean PSO's solution quality is pymoo's, paired over seeds on the
-    recorded merge problems (:func:`recorded_decisions.assert_quality_matches`: instants 0-4,
-    the first of C1-C5, seeds 0-7, the config's budget and population).
+    """The lean PSO's solution quality is pymoo's, paired over seeds on the recorded merge
+    problems (:func:`recorded_decisions.assert_quality_matches`: instants 0-4, the first of
+    C1-C5, seeds 0-7, the config's budget and population).
 
     Tolerance: mean hypervolume ratio >= 0.95, and mean best Eq. 19 cost at most 10 % of the
-    library's spread above pymoo's. Measured: here (numpy's power is the C library's) the
-    runs are pymoo's bit for bit: ratio 1, gap 0; with pymoo's powers put one unit in the last
-    place off on 30 % of results (as a SIMD power may be), 24 of the 40 pymoo runs change in
-    their last bits, ratio 1 within 3e-16, gap 0; with the runs unpaired (pymoo seeded
-    1000-1007: runs that share no draws, the worst a divergence could do) ratio 1.005 and gap
-    -0.037 against a spread of 0.55 (-6.8 %, one standard error 4.7 %).
+    library's spread above pymoo's. Measured on a CPU whose numpy takes a SIMD ``power``
+    (AVX-512), where 29 of the 40 runs part from pymoo's in the last bits (the mutation's
+    powers, the adaptation's ``exp`` and sums): ratio 0.9999997 (no pair off by more than
+    1.4e-5), gap -9.5e-7 against a spread of 0.51 (no pair off by more than 3.8e-5). With the
+    runs unpaired (pymoo seeded 1000-1007: runs that share no draws, the worst a divergence
+    could do) ratio 1.005 and gap -0.037 against a spread of 0.55 (-6.8 %, one standard error
+    4.8 %).
     """
     assert_quality_matches("pso", "pso-pymoo")

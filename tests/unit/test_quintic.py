@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.quintic (paper Eqs. 4-6)."""
+"""Tests for hcomc.equations.lane_change (paper Eqs. 4-6)."""
 
 from __future__ import annotations
 
@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial as poly
 
-from hcomc.models.lane_change_peaks import (
+from hcomc.equations.lane_change import lateral_offset, quintic_coefficients, quintic_shape
+from hcomc.equations.lane_change_peaks import (
     min_duration,
     peak_lateral_accel,
     peak_lateral_jerk,
     peak_lateral_speed,
 )
-from hcomc.models.quintic import lateral_offset, quintic_coefficients, quintic_shape
 
 W = 3.75  # lane width [m]
 

@@ -27,10 +27,10 @@ from hcomc.control.prediction.population import (
 )
 from hcomc.control.prediction.scoring import created_pairs_safety
 from hcomc.control.prediction.step import follow_role, integrate, new_state
+from hcomc.equations.idm import equilibrium_gap
+from hcomc.equations.safety import critical_accel, critical_acceleration
 from hcomc.interface import Fleet, follow
-from hcomc.models.idm import equilibrium_gap
 from hcomc.road import Kind
-from hcomc.safety.critical import critical_accel, critical_acceleration
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "hcomc" / "control" / "hcomc"
 
@@ -136,7 +136,7 @@ def test_critical_scalar_is_the_array_function(d, v_r, v_f, delay):
 
 def test_created_pair_safety_is_eq15_of_vr_behind_vmf():
     """Longitudinal mode at merge completion: the pairs VR-VMF and VMC-VR, worst of both."""
-    from hcomc.control.hierarchical.problem_terms import problem_constants
+    from hcomc.control.hierarchical.problem_setup import problem_constants
 
     config = load_config("C1")
     consts = problem_constants(config)

@@ -1,4 +1,4 @@
-"""Tests for hcomc.models.transition (paper Eq. 14)."""
+"""Tests for hcomc.equations.transition (paper Eq. 14)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from hcomc.models.transition import blend_acceleration, transition_parameters, transition_weight
+from hcomc.equations.transition import blend_acceleration, transition_parameters, transition_weight
 
 
 @pytest.mark.parametrize("duration", [3.0, 4.0, 6.0])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from hcomc.control.virtual_vehicle import cubic_coefficients, cubic_extremes, cubic_state
-from hcomc.safety.critical import critical_acceleration
+from hcomc.equations.safety import critical_acceleration
+from hcomc.equations.virtual_vehicle import cubic_coefficients, cubic_extremes, cubic_state
 
 
 def test_cubic_meets_eq10_boundary_conditions():

@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from hcomc.cli import app
+from hcomc.equations.collision import rectangle_corners
 from hcomc.road import KEY_ROLES, Kind
-from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.viz.replay import ReplayPage, write_replay
 from hcomc.viz.replay.browser import Chromium, find_chromium

@@ -72,7 +72,7 @@ def _replay() -> None:
     """The replay's drawing of lane changes."""
     import numpy as np
 
-    from hcomc.models.quintic import lateral_offset
+    from hcomc.equations.lane_change import lateral_offset
 
     lateral_offset(np.linspace(0.0, 100.0, 3), 0.0, 100.0, 0.0, 3.75)
 

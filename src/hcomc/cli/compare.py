@@ -11,11 +11,8 @@ its paired comparison and the paired effects, and write the tables and an HTML r
 from __future__ import annotations
 
 import shlex
-import time
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -23,10 +20,10 @@ from hcomc.cli._app import (
     SetOption,
     _engine,
     _fail,
-    _progress,
     _settings,
     app,
 )
+from hcomc.cli.compare_folder import _command, fill_folder
 from hcomc.cli.compare_output import OUTPUTS, _analyse, _say
 from hcomc.cli.experiments import _workers
 from hcomc.config import ConfigError
@@ -69,16 +66,6 @@ def _baseline(value: str | None, labels: list[str]) -> str | None:
             + ", ".join(labels)
         )
     return label
-
-
-def _command(args: dict[str, Any]) -> str:
-    """The command line of a comparison (what its results depend on; not --workers)."""
-    parts = ["hcomc", "compare"]
-    for key, value in args.items():
-        for item in value if isinstance(value, list) else [value]:
-            if item is not None:
-                parts += [f"--{key}", str(item)]
-    return shlex.join(parts)
 
 
 @app.command()
@@ -210,54 +197,6 @@ def _compare_controllers(
     )
     _analyse(target, filled.runs, pairs(labels, chosen), labels, filled.record)
     filled.say("the config")
-
-
-@dataclass(frozen=True)
-class FilledFolder:
-    """A comparison run into its folder: runs, record, status before, wall [s], processes."""
-
-    runs: Any
-    record: dict[str, Any]
-    before: Any
-    wall: float
-    workers: int
-    target: Path
-
-    def say(self, input_name: str) -> None:
-        """The closing line: runs new, done and recomputed (``input_name``, the code or a
-        controller file changed), processes, time, files."""
-        before = self.before
-        counts = [f"{before.new} new", f"{before.done} already done"]
-        if before.changed:
-            counts.append(f"{before.changed} recomputed because {input_name}, the hcomc code "
-                          "or the controller file changed")  # fmt: skip
-        _say(
-            f"{len(self.runs)} runs ({', '.join(counts)}) on {self.workers} processes in "
-            f"{self.wall:.1f} s · written to {self.target}/ ({', '.join(OUTPUTS)}, "
-            "compare.json)"
-        )
-
-
-def fill_folder(
-    target: Path, comparison: Any, command: str, workers: int,
-    folder: tuple[Callable[..., Any], Callable[..., dict[str, Any]], Callable[..., Any]],
-) -> FilledFolder:  # fmt: skip
-    """Run what ``target`` lacks of ``comparison`` with the ``(status, record,
-    run_comparison)`` functions of its kind (a suite's or corridors'): the folder is claimed
-    with its record before anything runs, and the record is rewritten with the runs' status
-    after."""
-    from hcomc.experiments.benchmark import write_record
-
-    status, record, run_comparison = folder
-    before = status(comparison, target)
-    write_record(target, record(comparison, command, None))  # claims the folder
-    start = time.perf_counter()
-    with _progress("runs", before.total) as update:
-        runs = run_comparison(comparison, target, workers=workers, progress=update)
-    wall = time.perf_counter() - start
-    content = record(comparison, command, before)
-    write_record(target, content)
-    return FilledFolder(runs, content, before, wall, workers, target)
 
 
 def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:

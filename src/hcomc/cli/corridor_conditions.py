@@ -99,7 +99,7 @@ def compare_corridors(
 ) -> None:
     """``hcomc compare`` on corridors: run what the folder lacks, print and write the
     comparison (as for cells of a suite)."""
-    from hcomc.cli.compare import _command, fill_folder
+    from hcomc.cli.compare_folder import _command, fill_folder
     from hcomc.cli.compare_output import _analyse, _say
     from hcomc.experiments.comparison.effects import pairs
     from hcomc.experiments.corridor.compare import (
@@ -153,7 +153,7 @@ def run_corridor_condition(
 ) -> None:
     """``hcomc run CORRIDOR``: one configuration over seeds 0..n-1; prints each run's metrics
     and their means with 95 % CIs (or the rows as JSON)."""
-    from hcomc.cli.experiments import print_merge_runs, run_label
+    from hcomc.cli.run_output import print_merge_runs, run_label
     from hcomc.corridor import load_corridor
     from hcomc.experiments.corridor.runs import CorridorSpec, check
     from hcomc.experiments.workers import run_rows
@@ -186,7 +186,7 @@ def run_corridor_condition(
 def print_corridor_runs(frame: Any, title: str) -> None:
     """Print runs of the corridor engine: per seed the merge events and the corridor
     metrics, then each metric's mean with its 95 % CI over the seeds."""
-    from hcomc.cli.experiments import _frame_table
+    from hcomc.cli.run_output import _frame_table
     from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
     from hcomc.experiments.tables import mean_ci
 

@@ -54,7 +54,8 @@ def plot(
     from hcomc.viz.common import save_figure
     from hcomc.viz.corridor import CORRIDOR_KINDS
     from hcomc.viz.corridor_inputs import make_corridor_figure, refuse_corridor_input
-    from hcomc.viz.inputs import FIGURE_KINDS, is_scenario, make_figure
+    from hcomc.viz.inputs import FIGURE_KINDS, make_figure
+    from hcomc.viz.sources import is_scenario
 
     kind = kind.lower()
     target = out_file or Path(f"{kind}.png")

@@ -23,7 +23,8 @@ from hcomc.cli._app import (
     app,
     out,
 )
-from hcomc.cli.experiments import CONDITIONS, _frame_table, _progress_grid, _workers
+from hcomc.cli.experiments import CONDITIONS, _progress_grid, _workers
+from hcomc.cli.run_output import _frame_table
 from hcomc.config import ConfigError
 
 CONTOUR_CONDITION = "C2"

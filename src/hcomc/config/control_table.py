@@ -45,9 +45,9 @@ class ControlParams(FrozenModel):
         "nsga2",
         description=(
             "HCOMC optimiser; 'nsga2' = compiled NSGA-II, 'nsga2-pymoo' = the same algorithm "
-            "through pymoo (slower; the same results where numpy's pow, exp and log are the C "
-            "library's, else the same quality); 'pso' / 'pso-pymoo' likewise for PSO; 'sa' = "
-            "simulated annealing, 'sa-scipy' = the same through SciPy's dual_annealing"
+            "through pymoo (slower; the same solution quality, not the same rows); "
+            "'pso' / 'pso-pymoo' likewise for PSO; 'sa' = simulated annealing, 'sa-scipy' = the "
+            "same through SciPy's dual_annealing"
         ),
     )
     budget: int = Field(

@@ -88,7 +88,7 @@ class ScenarioConfig(FrozenModel):
 
     def history_gib(self) -> float:
         """Memory of the perception ring buffer (x and v of every vehicle over the longest
-        reaction delay, :class:`hcomc.sim.perception.Perception`) [GiB], estimated from
+        reaction delay, :class:`hcomc.sim.perception_state.Perception`) [GiB], estimated from
         :meth:`expected_vehicles` before anything is allocated."""
         h = self.hdv
         rows = max(h.reaction_time_gap, h.reaction_time_speed, h.reaction_time_approach)

@@ -16,7 +16,7 @@ merges between VMF and VMC and VMC yields; otherwise (also on a tie: the mainlin
 priority) VR merges behind VMC and VMR yields.
 
 The plan records the sequence (``"ahead"``/``"behind"``) and executes the group of that
-sequence (:func:`hcomc.control.key_vehicles.behind_group` for "behind": the vehicle behind VR's slot
+sequence (:func:`hcomc.control.key_group.behind_group` for "behind": the vehicle behind VR's slot
 plays VMC and follows VV1). The plan's mode is :attr:`Mode.LONGITUDINAL` when the yielding
 vehicle exists and is a CAV, :attr:`Mode.NONE` otherwise (an HDV is never commanded). A CAV VR
 follows its virtual leader VV0 towards its slot, as under every controller, and the engine

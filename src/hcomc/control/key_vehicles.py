@@ -1,10 +1,11 @@
-"""Identification of the six key vehicles around a ramp vehicle (Section II-A).
+"""Identification of the six key vehicles around a ramp vehicle (Section II-A), compiled.
 
 When a ramp vehicle (VR) enters the cooperative control zone, the engine identifies its key
-vehicles here and calls ``controller.plan(view, group, rng)`` (:mod:`hcomc.interface`); it
-replans in a receding horizon — key vehicles re-identified, ``plan`` called again — every
-``control.replan_period`` seconds until VR starts its lane change (or a lateral cooperation
-has begun), and falls back to gap acceptance if the plan cannot be executed safely.
+vehicles with these kernels (on a traffic view: :mod:`hcomc.control.key_group`) and calls
+``controller.plan(view, group, rng)`` (:mod:`hcomc.interface`); it replans in a receding
+horizon — key vehicles re-identified, ``plan`` called again — every ``control.replan_period``
+seconds until VR starts its lane change (or a lateral cooperation has begun), and falls back to
+gap acceptance if the plan cannot be executed safely.
 
 Key vehicles, with VR's position projected onto lane 1 (virtual-vehicle mapping at the same
 x, Uno et al. 1999):
@@ -26,7 +27,6 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.interface import MergeGroup, TrafficView
 from hcomc.road import N_ROLES, VMC, VMF, VMR, VNF, VNR, VR, Lane
 
 _MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)
@@ -69,32 +69,3 @@ def key_vehicle_indices(x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr:
     out[VMR] = nearest_in_lane(x, lane, active, _MAIN_1, x[vmc] - 1e-9, vmc)[1]
     out[VNF], out[VNR] = nearest_in_lane(x, lane, active, _MAIN_2, x[vmc], vmc)
     return out
-
-
-def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
-    """:func:`nearest_in_lane` on a view."""
-    lead, follow = nearest_in_lane(view.x, view.lane, view.active, int(lane), float(x), exclude)
-    return int(lead), int(follow)
-
-
-def find_key_vehicles(view: TrafficView, vr: int) -> MergeGroup:
-    """The six key vehicles of Section II-A around ramp vehicle ``vr`` (rules in module doc)."""
-    return MergeGroup(*key_vehicle_indices(view.x, view.lane, view.active, vr).tolist())
-
-
-def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
-    """Relabelled key group for "VR merges behind VMC" (the old VMR cooperates).
-
-    The vehicle ahead of VR's slot (old VMC) becomes ``vmf``, the vehicle behind it (old VMR)
-    becomes ``vmc``, the lane-1 vehicle behind the old VMR becomes ``vmr`` and VNF/VNR are the
-    lane-2 neighbours of the old VMR (the rules of :func:`find_key_vehicles`). Without an old
-    VMR only ``vr`` and ``vmf`` are set (nobody to cooperate). Requires ``group.vmc >= 0``.
-    """
-    if group.vmc < 0:
-        raise ValueError("behind_group needs a VMC (the vehicle VR merges behind)")
-    new_vmc = group.vmr
-    if new_vmc < 0:
-        return MergeGroup(vr=group.vr, vmf=group.vmc)
-    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
-    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
-    return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)

@@ -15,8 +15,8 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.control.hierarchical.controller import merge_problem
 from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_setup import load_prediction_kernels
 from hcomc.control.hierarchical.problem_terms import OBJECTIVES, SEQUENCES, Prediction
-from hcomc.control.hierarchical.row_scoring import load_prediction_kernels
 from hcomc.control.longitudinal_candidate import virtual_vehicle_feasible
 from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms
 

@@ -32,7 +32,7 @@ from typing import TypeGuard
 import numpy as np
 
 from hcomc.config.vehicle_tables import IDMParams
-from hcomc.control.key_vehicles import behind_group
+from hcomc.control.key_group import behind_group
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import KEY_ROLES
 

@@ -5,23 +5,23 @@ calls them for all its episodes at once, so a step of 64 environments costs a fe
 calls instead of a few hundred.
 
 They read the runs' compiled state (:class:`hcomc.sim.step.state.Core`: positions, the
-log rows, the event counters) and call the one home of each equation.
+log rows, the event counters) and call the one home of each equation; what the terms make of
+a step (its outcome and reward) is :mod:`hcomc.envs.scoring`'s.
 """
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.envs.observation import SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
-from hcomc.models.fuel import FUEL_DEFAULT
 from hcomc.road import VMC, VMR, VNR
 from hcomc.sim.log.slots import rows_of
 from hcomc.sim.step.lane_change import start_lane_changes
+from hcomc.sim.step.ramp_reach import ramp_may_reach, ramp_untouched
 from hcomc.sim.step.state import (
     COLLISIONS,
     DT,
@@ -34,13 +34,9 @@ from hcomc.sim.step.state import (
     CoreArrays,
     command,
 )
-from hcomc.sim.twin import ramp_may_reach, ramp_untouched
 
-if TYPE_CHECKING:
-    from hcomc.config import ScenarioConfig
-    from hcomc.envs.options import RewardWeights
-
-# the episode parameters the kernels read, in one float64 vector (see parameters())
+# the episode parameters the kernels read, in one float64 vector
+# (see hcomc.envs.scoring.parameters)
 P_ACCEL_START, P_ACCEL_END, P_EMERGENCY, P_DELAY_CAV, P_DELAY_HDV, P_MIN_DIST = range(6)
 P_A_MERG, P_PERIOD, P_LOG_DT, P_ETA, P_FUEL = range(6, 11)
 N_TERMS = 9
@@ -48,16 +44,6 @@ N_TERMS = 9
 far, log rows so far, VR on the road, time [s]."""
 T_SAFETY, T_FUEL, T_EFFICIENCY, T_MERGED, T_LANE_END, T_COLLISIONS, T_ROWS = range(7)
 T_VR_ON_ROAD, T_TIME = 7, 8
-
-
-def parameters(config: ScenarioConfig, action_period: float) -> np.ndarray:
-    """The parameter vector of a scenario for the kernels (the config's values)."""
-    road, ctl = config.road, config.control
-    head = [road.accel_lane_start, road.accel_lane_end, config.lane_change.emergency_decel,
-            ctl.safety_delay_cav, ctl.safety_delay_hdv, ctl.safety_min_distance,
-            ctl.safety_emergency_decel, action_period, config.log_interval,
-            config.lane_change.politeness]  # fmt: skip
-    return np.array([*head, *FUEL_DEFAULT.coefficients()], dtype=np.float64)
 
 
 @kernel
@@ -164,7 +150,7 @@ def apply_batch(
 def twins_due(
     cores: list[CoreArrays], pending: np.ndarray, horizon: float, out: np.ndarray
 ) -> None:
-    """:func:`~hcomc.sim.twin.ramp_may_reach` within ``horizon`` [s] of every run whose
+    """:func:`~hcomc.sim.step.ramp_reach.ramp_may_reach` within ``horizon`` [s] of every run whose
     ``pending`` flag is set (False for the others)."""
     for k in range(len(cores)):
         out[k] = pending[k] and ramp_may_reach(cores[k], horizon)
@@ -172,52 +158,7 @@ def twins_due(
 
 @kernel
 def ramps_untouched(cores: list[CoreArrays], pending: np.ndarray, out: np.ndarray) -> None:
-    """:func:`~hcomc.sim.twin.ramp_untouched` of every run whose ``pending`` flag is set
+    """:func:`~hcomc.sim.step.ramp_reach.ramp_untouched` of every run whose ``pending`` flag is set
     (False for the others)."""
     for k in range(len(cores)):
         out[k] = pending[k] and ramp_untouched(cores[k])
-
-
-class Outcomes(NamedTuple):
-    """How a step ended, per episode (arrays, or scalars for one episode's terms)."""
-
-    terminated: Any
-    timeout: Any
-    crashed: Any
-    collision: Any
-    merged: Any
-    lane_end: Any
-
-
-def outcomes(
-    terms: np.ndarray, collisions_before: Any, t_start: Any, finished: Any, *,
-    lane_end_ends: bool, max_time: float,
-) -> Outcomes:  # fmt: skip
-    """How each episode's step ended, from its terms (the last axis of ``terms``) and its
-    state before the step: a new collision or (with ``lane_end_ends``: the agent drives VR)
-    VR stuck at the lane end is a crash; a crash, the merge or VR leaving the road ends the
-    episode; otherwise ``max_time`` [s] since ``t_start`` or the run's end is a timeout."""
-    collision = terms[..., T_COLLISIONS] > collisions_before
-    merged = terms[..., T_MERGED] > 0
-    lane_end = (terms[..., T_LANE_END] > 0) & lane_end_ends
-    crashed = collision | lane_end
-    terminated = crashed | merged | (terms[..., T_VR_ON_ROAD] == 0)
-    late = terms[..., T_TIME] - t_start >= max_time - 1e-9
-    timeout = ~terminated & (late | finished)
-    return Outcomes(terminated, timeout, crashed, collision, merged, lane_end)
-
-
-def rewards(
-    terms: np.ndarray, crashed: np.ndarray, timeout: np.ndarray, w: RewardWeights, period: float
-) -> np.ndarray:
-    """The reward of each episode's period from its terms (rows of ``terms``) and outcome:
-    ``- safety S - fuel F + efficiency E - time dt - collision [crash] - timeout [timeout]``
-    (:class:`~hcomc.envs.options.RewardWeights`)."""
-    return (
-        -w.safety * terms[:, T_SAFETY]
-        - w.fuel * terms[:, T_FUEL]
-        + w.efficiency * terms[:, T_EFFICIENCY]
-        - w.time * period
-        - w.collision * crashed
-        - w.timeout * timeout
-    )

@@ -38,18 +38,17 @@ from hcomc.envs.batch import (
     T_SAFETY,
     T_TIME,
     apply_one,
-    outcomes,
-    parameters,
-    rewards,
     step_terms,
 )
 from hcomc.envs.observation import N_OBS, SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.options import EnvOptions
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
+from hcomc.envs.scoring import outcomes, parameters, rewards
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.twin import can_twin, ramp_may_reach, ramp_untouched, undisturbed_twin
+from hcomc.sim.step.ramp_reach import ramp_may_reach, ramp_untouched
+from hcomc.sim.twin import can_twin, undisturbed_twin
 
 _END = np.iinfo(np.int64).max
 
@@ -60,7 +59,7 @@ def apply_action(sim: Simulation, params: np.ndarray, i: int, action: np.ndarray
     ``action[0]`` in [-1, 1] is the acceleration as a fraction of the vehicle's maximum
     acceleration (> 0) or of the emergency deceleration (< 0); ``action[1] > 0`` starts a lane
     change unless one is under way: from the acceleration lane (only between its start and
-    end) into lane 1, from a main lane to the other. ``params``: :func:`batch.parameters`.
+    end) into lane 1, from a main lane to the other. ``params``: :func:`scoring.parameters`.
     """
     apply_one(sim.core, i, float(action[0]), float(action[1]), params)
 
@@ -159,7 +158,8 @@ class MergeEpisode:
 
     def twin_due(self) -> bool:
         """Whether the pending twin must be made before the next period: a ramp vehicle
-        might reach the acceleration lane within it (:func:`~hcomc.sim.twin.ramp_may_reach`)."""
+        might reach the acceleration lane within it
+        (:func:`~hcomc.sim.step.ramp_reach.ramp_may_reach`)."""
         return self.twin_pending and ramp_may_reach(self.sim.core, self.options.action_period)
 
     def make_due_twin(self) -> None:
@@ -170,7 +170,7 @@ class MergeEpisode:
 
     def settle_twin(self, untouched: bool) -> bool:
         """After a period with the twin pending (``untouched``:
-        :func:`~hcomc.sim.twin.ramp_untouched` of :attr:`sim` now): keep it pending while
+        :func:`~hcomc.sim.step.ramp_reach.ramp_untouched` of :attr:`sim` now): keep it pending while
         :func:`~hcomc.sim.twin.can_twin` still holds, which makes the period's rows of
         :attr:`sim` those of the undisturbed run; else simulate the twin anew (True: it must
         be advanced to :attr:`sim`'s step before the period's terms are read)."""
@@ -245,7 +245,7 @@ class MergeEpisode:
 
     def conclude(self, terms: np.ndarray) -> Outcome:
         """How the step ended, from its terms (:func:`~hcomc.envs.batch.step_terms`); the
-        reward is :func:`~hcomc.envs.batch.rewards` of the terms and this outcome."""
+        reward is :func:`~hcomc.envs.scoring.rewards` of the terms and this outcome."""
         o = outcomes(
             terms, self._collisions, self.t_start, self.sim.finished,
             lane_end_ends=self.lane_end_ends, max_time=self.options.max_episode_time,

@@ -10,7 +10,7 @@ Layout of the observation vector (float32, :data:`N_OBS` values):
   relative position x_r - x [m], relative speed v_r - v [m/s], lane (-1 when absent),
   connected (1 for a CAV). Absent roles are zeros with lane -1.
 
-The key vehicles follow the rules of :func:`hcomc.control.key_vehicles.find_key_vehicles` (the same
+The key vehicles follow the rules of :func:`hcomc.control.key_group.find_key_vehicles` (the same
 kernel), applied to VR's current position.
 """
 
@@ -22,8 +22,8 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.control.key_vehicles import key_vehicle_indices, nearest_in_lane
+from hcomc.equations.safety import critical_accel
 from hcomc.road import KEY_ROLES, N_ROLES
-from hcomc.safety.critical import critical_accel
 
 N_EGO = 5
 """Values describing the agent itself."""

@@ -3,7 +3,7 @@
 A top-down view of the road around one vehicle (the agent's, or VR), to scale: lanes, ramp,
 acceleration lane and control zone (paper Section II-A), every vehicle on the road as the
 rectangle of its size and heading (front-bumper reference, as the collision test draws it,
-:func:`hcomc.safety.collision.rectangle_corners`), HDVs orange, CAVs green, the centred
+:func:`hcomc.equations.collision.rectangle_corners`), HDVs orange, CAVs green, the centred
 vehicle blue. numpy only: no display and no plotting library. To watch a whole episode
 instead, replay its log in the browser (``hcomc.viz.replay(env.episode_logs()[0])``).
 """
@@ -15,8 +15,8 @@ import math
 import numpy as np
 
 from hcomc.config import ScenarioConfig
+from hcomc.equations.collision import rectangle_corners
 from hcomc.road import Kind
-from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.engine import Simulation
 
 __all__ = ["FRAME_SIZE", "RENDER_MODES", "SCALE", "check_render_mode", "render_frame"]

@@ -8,15 +8,15 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.models.following import follow_accel
-from hcomc.models.fuel import fuel_rate_scalar
+from hcomc.equations.car_following import follow_accel
+from hcomc.equations.fuel import fuel_rate_scalar
 
 
 @kernel
 def fuel_over_rows(v: np.ndarray, a: np.ndarray, dt: float, coefs: np.ndarray) -> float:
     """Eq. 16: a vehicle's fuel over log rows with speeds ``v`` and accelerations ``a``
     [mL] (rows where it is absent, NaN, count 0; ``coefs`` as
-    :meth:`hcomc.models.fuel.FuelParams.coefficients`)."""
+    :meth:`hcomc.config.fuel.FuelParams.coefficients`)."""
     total = 0.0
     for k in range(v.size):
         rate = fuel_rate_scalar(

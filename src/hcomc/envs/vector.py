@@ -16,30 +16,26 @@ action and returns its first observation with reward 0).
 from __future__ import annotations
 
 import functools
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from numba.typed import List
 
-from hcomc.envs.batch import (
-    N_TERMS,
-    apply_batch,
-    outcomes,
-    parameters,
-    ramps_untouched,
-    step_terms_batch,
-    twins_due,
-)
-from hcomc.envs.batch import rewards as step_rewards
+from hcomc.envs.batch import N_TERMS, apply_batch, ramps_untouched, step_terms_batch, twins_due
 from hcomc.envs.episode import MergeEpisode, NoVMCError, start_drawn
 from hcomc.envs.merge_env import MergeEnv
 from hcomc.envs.render import RENDER_MODES, render_frame
+from hcomc.envs.scoring import outcomes, parameters
+from hcomc.envs.scoring import rewards as step_rewards
 from hcomc.rng import draw_seed
 from hcomc.road import N_ROLES
-from hcomc.sim.ensemble import TypedListCache, advance_ensemble
+from hcomc.sim.ensemble import advance_ensemble
+from hcomc.sim.typed_lists import TypedListCache
+
+if TYPE_CHECKING:
+    from numba.typed import List
 
 _END = np.iinfo(np.int64).max
 _INFO_KEYS = ("seed", "merged", "collision", "lane_end", "timeout")

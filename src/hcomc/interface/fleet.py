@@ -14,7 +14,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.models.following import follow_acceleration
+from hcomc.equations.car_following import follow_acceleration
 from hcomc.road import Kind
 
 

@@ -88,7 +88,7 @@ class MergePlan:
     sequence : merge sequence, "ahead" (VR in front of the vehicle that was VMC when the
         key vehicles were identified) or "behind" (VR between that VMC and VMR). ``group`` is
         the group the plan executes: for "behind" it is
-        :func:`~hcomc.control.key_vehicles.behind_group`, in which the vehicle behind VR's
+        :func:`~hcomc.control.key_group.behind_group`, in which the vehicle behind VR's
         slot plays VMC (it cooperates) and the one ahead plays VMF.
     """
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from hcomc.metrics.core import METRICS, MetricSpec, compute_metrics
 from hcomc.metrics.fuel_distance import fuel
+from hcomc.metrics.logged_profile import lane_profile_at
 from hcomc.metrics.lsrv import low_speed_region_volume
 from hcomc.metrics.outcome import OUTCOME_FIELDS, MergeOutcome, merge_outcome, realised_sequence
 from hcomc.metrics.paper import (
@@ -35,7 +36,6 @@ from hcomc.metrics.paper import (
 from hcomc.metrics.speed_field import (
     DT_BIN,
     DX_BIN,
-    lane_profile_at,
     lane_speed_field,
     reference_speed,
     speed_field,

@@ -11,7 +11,8 @@ vehicle's value; NaN everywhere if the lane is empty in that row.
 The kernels visit the rows of a window in the log's stored cells (T, S) through the roster
 of :func:`hcomc.sim.log.slots.active_columns` (the columns of each row's vehicles on the
 road, in vehicle order), so they read only the cells on the road. Every caller goes through
-:func:`lane_knots` and :func:`profile_from_knots`.
+:func:`lane_knots` and :func:`profile_from_knots`; :mod:`hcomc.metrics.logged_profile` reads
+a log's rows for them.
 """
 
 from __future__ import annotations
@@ -22,16 +23,13 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc._typing import FloatArray
-from hcomc.sim.log import SimulationLog
-from hcomc.sim.log.slots import active_columns
 
 __all__ = [
+    "field_sums",
     "interp_ascending_into",
     "interp_into",
     "lane_knots",
-    "lane_profile_at",
     "lane_profile_of",
-    "profile_along",
     "profile_from_knots",
     "profile_rows",
 ]
@@ -224,55 +222,14 @@ def profile_rows(
             profile_from_knots(m, cols, xs, values[p][r], x[k], clamp, False, ys, out[p, k])
 
 
-def profile_along(
-    log: SimulationLog, rows: np.ndarray, lanes: np.ndarray, x: FloatArray, *names: str,
-    clamp: bool,
-) -> FloatArray:  # fmt: skip
-    """Profiles of ``log``'s stored values ``names`` (e.g. ``"v"``, ``"a"``) of lane
-    ``lanes[k]`` at positions ``x[k]`` [m] in row ``rows[k]``: (len(names), R, Q).
-
-    ``rows`` (R,) are row indices in ``[0, T)``; ``lanes`` (R,) the lane per row, negative
-    for none (NaN); ``x`` (R, Q) the positions per row.
-    """
-    rows = np.ascontiguousarray(rows, dtype=np.int64)
-    lanes = np.ascontiguousarray(lanes, dtype=np.int64)
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    asked = rows[lanes >= 0]  # the roster covers only the rows profiled
-    r0, r1 = (int(asked.min()), int(asked.max()) + 1) if asked.size else (0, 0)
-    cells = log.cells
-    start, _, column = active_columns(cells["active"], log.slot, log.span, r0, r1)
-    out = np.empty((len(names), *x.shape))
-    values = tuple(cells[name] for name in names)
-    profile_rows(cells["x"], cells["lane"], values, start, column, r0, rows, lanes, x,
-                 bool(clamp), out)  # fmt: skip
-    return out
-
-
-def lane_profile_at(
-    log: SimulationLog, row: int, lane: int, x: FloatArray, *, clamp: bool = False
-) -> tuple[FloatArray, FloatArray]:
-    """Speed [m/s] and acceleration [m/s²] of lane ``lane`` at positions ``x`` [m] in one
-    logged row (negative: from the end).
-
-    Linear interpolation in x between the active vehicles of the lane (sorted by x). Outside
-    their range: NaN, or with ``clamp=True`` the nearest vehicle's value. NaN everywhere if
-    the lane is empty in that row.
-    """
-    row = int(np.arange(log.n_steps)[row])  # bounds checked, negatives resolved
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    lanes = np.array([lane], dtype=np.int64)
-    v, a = profile_along(log, np.array([row]), lanes, x.reshape(1, -1), "v", "a", clamp=clamp)
-    return v[0].reshape(x.shape), a[0].reshape(x.shape)
-
-
 def lane_profile_of(
     x_row: np.ndarray, active_row: np.ndarray, lane_row: np.ndarray, lane: int, x: FloatArray,
     clamp: bool, *value_rows: np.ndarray,
 ) -> list[FloatArray]:  # fmt: skip
-    """:func:`lane_profile_at` on one row's arrays (N,) (e.g. ``log.x[row]``,
-    ``log.active[row]``, ``log.lane[row]``): each of ``value_rows`` (e.g. ``log.v[row]``)
-    interpolated at ``x`` [m] between the active vehicles of ``lane`` (sorted by position,
-    ties in vehicle order), as :func:`numpy.interp` does."""
+    """:func:`~hcomc.metrics.logged_profile.lane_profile_at` on one row's arrays (N,) (e.g.
+    ``log.x[row]``, ``log.active[row]``, ``log.lane[row]``): each of ``value_rows`` (e.g.
+    ``log.v[row]``) interpolated at ``x`` [m] between the active vehicles of ``lane``
+    (sorted by position, ties in vehicle order), as :func:`numpy.interp` does."""
     x = np.ascontiguousarray(x, dtype=np.float64)
     x_row, lane_row = np.asarray(x_row)[None, :], np.asarray(lane_row)[None, :]
     column = np.flatnonzero(np.asarray(active_row, dtype=bool)).astype(np.int64)
@@ -286,3 +243,36 @@ def lane_profile_of(
                      profile)  # fmt: skip
         out.append(profile[0, 0].reshape(x.shape))
     return out
+
+
+@kernel
+def field_sums(
+    x_store: np.ndarray, lane_store: np.ndarray, v_store: np.ndarray, start: np.ndarray,
+    column: np.ndarray, r0: int, lanes: np.ndarray, centres: np.ndarray, it: np.ndarray,
+    sums: np.ndarray, counts: np.ndarray,
+) -> None:  # fmt: skip
+    """Add each row's profile of lane ``lanes[q]`` at ``centres`` (its finite samples) to the
+    row's time bin ``it[k]`` of ``sums[q]`` and ``counts[q]`` (each (n_t, n_x)); row
+    ``r0 + k`` of the stored arrays is read through the roster ``start, column``
+    (:func:`~hcomc.sim.log.slots.active_columns`)."""
+    width = 0
+    for k in range(it.size):
+        width = max(width, start[k + 1] - start[k])
+    cols = np.empty(width, dtype=np.int64)
+    xs, ys = np.empty(width), np.empty(width)
+    v = np.empty(centres.size)
+    for k in range(it.size):
+        r = r0 + k
+        candidates = column[start[k] : start[k + 1]]
+        for q in range(lanes.size):
+            m = lane_knots(candidates, x_store[r], lane_store[r], lanes[q], cols, xs)
+            if m == 0:
+                continue  # an empty lane samples nothing
+            profile_from_knots(m, cols, xs, v_store[r], centres, False, True, ys, v)
+            lane_sums, lane_counts = sums[q, it[k]], counts[q, it[k]]
+            for b in range(centres.size):
+                # Adding 0 for a sample that is not finite changes no sum (they start at +0
+                # and never become -0) and leaves the loop without a branch.
+                finite = np.isfinite(v[b])
+                lane_sums[b] += v[b] if finite else 0.0
+                lane_counts[b] += 1.0 if finite else 0.0

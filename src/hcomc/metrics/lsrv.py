@@ -33,13 +33,11 @@ scores exactly 0.
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 
-from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.metrics.paper import vr_counterpart
+from hcomc.metrics.speed_deficit import Cells, lane_deficits
 from hcomc.metrics.window import MetricWindow, reference_or_score, road_of, window_rows
 from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
@@ -47,24 +45,6 @@ from hcomc.sim.log import SimulationLog
 __all__ = ["lane_spacing", "low_speed_region_volume"]
 
 _LANES = (int(Lane.MAIN_1), int(Lane.MAIN_2))
-
-
-class Cells(NamedTuple):
-    """The stored cells of a log (:attr:`~hcomc.sim.log.SimulationLog.cells`, each (T, S))
-    that LSRV needs, and which vehicle a column holds when."""
-
-    x: np.ndarray  # front-bumper position [m]
-    v: np.ndarray  # speed [m/s]
-    lane: np.ndarray  # logged lane
-    active: np.ndarray  # bool: the vehicle is on the road
-    slot: np.ndarray  # (N,) each vehicle's column (-1: none)
-    span: np.ndarray  # (N, 2) the rows [first, end) its column holds it
-
-    @classmethod
-    def of(cls, log: SimulationLog) -> Cells:
-        """The cells of ``log``."""
-        cells = log.cells
-        return cls(cells["x"], cells["v"], cells["lane"], cells["active"], log.slot, log.span)
 
 
 def low_speed_region_volume(
@@ -89,7 +69,7 @@ def low_speed_region_volume(
         return 0.0
     road = road_of(log)
     area = (road.control_zone_start, road.length)
-    deficit = _lane_deficits(Cells.of(log), Cells.of(ref), rows.start, rows.stop, window.vr, *area)
+    deficit = lane_deficits(_cells(log), _cells(ref), rows.start, rows.stop, window.vr, *area)
     if window.vr >= 0:
         deficit += _vr_deficits(log, window, ref, rows, *area)
     return float(np.sum(deficit * lane_spacing(ref, rows, *area)) * log.dt)
@@ -123,30 +103,7 @@ def _vr_deficits(
     return np.array([float(np.sum(short[counts & (lane == k)])) for k in _LANES])
 
 
-@kernel
-def _lane_deficits(
-    cells: Cells, reference: Cells, r0: int, r1: int, skip: int, x_lo: float, x_hi: float
-) -> FloatArray:
-    """(2,) the speed deficits ``max(0, v_u - v)`` [m/s] of the counting cells of lanes 1
-    and 2 (module docstring) in rows ``[r0, r1)`` and the area ``[x_lo, x_hi]`` [m], each
-    vehicle against its own cell of the ``reference``, summed per lane; vehicle ``skip``
-    (VR) is left out."""
-    x, v, lane, active, slot, span = cells
-    _, v_ref, _, active_ref, slot_ref, span_ref = reference
-    out = np.zeros(2)
-    for i in range(slot.size):
-        s, s_ref = slot[i], slot_ref[i]
-        if i == skip or s < 0 or s_ref < 0:
-            continue
-        lo = max(r0, span[i, 0], span_ref[i, 0])
-        hi = min(r1, span[i, 1], span_ref[i, 1])
-        for k in range(lo, hi):
-            if not (active[k, s] and active_ref[k, s_ref]):
-                continue
-            lane_k = lane[k, s]
-            x_k = np.float64(x[k, s])
-            if 1 <= lane_k <= 2 and x_lo <= x_k <= x_hi:
-                short = np.float64(v_ref[k, s_ref]) - np.float64(v[k, s])
-                if short > 0.0:
-                    out[lane_k - 1] += short
-    return out
+def _cells(log: SimulationLog) -> Cells:
+    """The cells of ``log`` that LSRV needs."""
+    cells = log.cells
+    return Cells(cells["x"], cells["v"], cells["lane"], cells["active"], log.slot, log.span)

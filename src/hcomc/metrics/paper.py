@@ -13,7 +13,7 @@ lane, which is its own approach, not a disturbance of the traffic), and its undi
 speed and acceleration are those of the undisturbed traffic of its current lane at its
 position: the linear interpolation, in x, between the reference run's vehicles of that lane
 around VR (the nearest one beyond the ends; see
-:func:`hcomc.metrics.lane_profile.lane_profile_at`).
+:func:`hcomc.metrics.logged_profile.lane_profile_at`).
 
 A **deviation cell** (row, key vehicle) is *valid* if the row lies in the window, the vehicle
 is active in the factual run and its counterpart exists (another key vehicle: active in the
@@ -34,7 +34,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hcomc._typing import FloatArray
-from hcomc.metrics.lane_profile import profile_along
+from hcomc.metrics.logged_profile import profile_along
 from hcomc.metrics.window import (
     A_TOL,
     EPS_T,

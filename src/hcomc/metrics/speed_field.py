@@ -10,7 +10,9 @@ Two fields are defined on the same kind of bins (``dx`` = 10 m by ``dt_bin`` = 0
   at each bin's centre and averaged over the rows of the time bin (NaN if no row of the bin
   has a sample). The space between two vehicles so moves at a speed between theirs, which
   is what a contour map of the traffic state shows. The profile is that of
-  :mod:`hcomc.metrics.lane_profile` (:func:`lane_profile_at`).
+  :mod:`hcomc.metrics.lane_profile`
+  (:func:`~hcomc.metrics.logged_profile.lane_profile_at`; the binning is its
+  :func:`~hcomc.metrics.lane_profile.field_sums`).
 
 LSRV is not computed on these fields but vehicle by vehicle (:mod:`hcomc.metrics.lsrv`).
 """
@@ -21,15 +23,8 @@ import math
 
 import numpy as np
 
-from hcomc._jit import kernel
 from hcomc._typing import FloatArray
-from hcomc.metrics.lane_profile import (
-    interp_into,
-    lane_knots,
-    lane_profile_at,
-    lane_profile_of,
-    profile_from_knots,
-)
+from hcomc.metrics.lane_profile import field_sums, interp_into, lane_profile_of
 from hcomc.metrics.window import MetricWindow, road_of, times, window_rows
 from hcomc.road import Lane
 from hcomc.sim.log import SimulationLog
@@ -39,7 +34,6 @@ __all__ = [
     "DT_BIN",
     "DX_BIN",
     "interp_into",
-    "lane_profile_at",
     "lane_profile_of",
     "lane_speed_field",
     "reference_speed",
@@ -148,39 +142,6 @@ def reference_speed(log: SimulationLog, window: MetricWindow) -> float:
     return math.nan
 
 
-@kernel
-def _field_sums(
-    x_store: np.ndarray, lane_store: np.ndarray, v_store: np.ndarray, start: np.ndarray,
-    column: np.ndarray, r0: int, lanes: np.ndarray, centres: np.ndarray, it: np.ndarray,
-    sums: np.ndarray, counts: np.ndarray,
-) -> None:  # fmt: skip
-    """Add each row's profile of lane ``lanes[q]`` at ``centres`` (its finite samples) to the
-    row's time bin ``it[k]`` of ``sums[q]`` and ``counts[q]`` (each (n_t, n_x)); row
-    ``r0 + k`` of the stored arrays is read through the roster ``start, column``
-    (:func:`~hcomc.sim.log.slots.active_columns`)."""
-    width = 0
-    for k in range(it.size):
-        width = max(width, start[k + 1] - start[k])
-    cols = np.empty(width, dtype=np.int64)
-    xs, ys = np.empty(width), np.empty(width)
-    v = np.empty(centres.size)
-    for k in range(it.size):
-        r = r0 + k
-        candidates = column[start[k] : start[k + 1]]
-        for q in range(lanes.size):
-            m = lane_knots(candidates, x_store[r], lane_store[r], lanes[q], cols, xs)
-            if m == 0:
-                continue  # an empty lane samples nothing
-            profile_from_knots(m, cols, xs, v_store[r], centres, False, True, ys, v)
-            lane_sums, lane_counts = sums[q, it[k]], counts[q, it[k]]
-            for b in range(centres.size):
-                # Adding 0 for a sample that is not finite changes no sum (they start at +0
-                # and never become -0) and leaves the loop without a branch.
-                finite = np.isfinite(v[b])
-                lane_sums[b] += v[b] if finite else 0.0
-                lane_counts[b] += 1.0 if finite else 0.0
-
-
 def _lane_fields(
     log: SimulationLog, window: MetricWindow, lanes: tuple[int, ...], x_min: float, dx: float,
     dt_bin: float,
@@ -198,7 +159,7 @@ def _lane_fields(
     counts = np.zeros((len(lanes), n_t, n_x))
     cells = log.cells
     start, _, column = active_columns(cells["active"], log.slot, log.span, rows.start, rows.stop)
-    _field_sums(cells["x"], cells["lane"], cells["v"], start, column, rows.start,
+    field_sums(cells["x"], cells["lane"], cells["v"], start, column, rows.start,
                 np.array(lanes, dtype=np.int64), centres, np.asarray(it, dtype=np.int64), sums,
                 counts)  # fmt: skip
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -219,9 +180,9 @@ def lane_speed_field(
 
     Definition: space bins ``[x_min + k dx, x_min + (k+1) dx)`` up to ``road.length`` (the
     last may be narrower), time bins as in :func:`speed_field`. In each window row the
-    lane's profile of :func:`lane_profile_at` (no clamping) is sampled at the bin centres;
-    a bin's speed is the mean of the finite samples of the rows of its time bin, NaN if
-    there is none.
+    lane's profile of :func:`~hcomc.metrics.logged_profile.lane_profile_at` (no clamping)
+    is sampled at the bin centres; a bin's speed is the mean of the finite samples of the
+    rows of its time bin, NaN if there is none.
 
     Returns ``(x_edges, t_edges, V)`` shaped as in :func:`speed_field`.
     """

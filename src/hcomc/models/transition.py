@@ -1,33 +1,18 @@
-r"""Hyperbolic-tangent acceleration transition at a leader switch, paper Eq. (14).
+"""Re-exports :mod:`hcomc.equations.transition` (paper Eq. 14) for one release: import from
+there."""
 
-When a vehicle changes lane its leader switches (e.g. from VMF to VNF) and the car-following
-output jumps. Eq. (14) blends the accelerations before and after the switch,
-
-.. math:: a_\mathrm{tar} = \Psi(\tau)\,a_\mathrm{new} + (1 - \Psi(\tau))\,a_\mathrm{ori},
-          \qquad \Psi(\tau) = \tfrac12\left[\tanh(\lambda\tau - \gamma) + 1\right],
-
-with τ the time since the switch. The paper states :math:`\Psi(t_0) = 0` and
-:math:`\Psi(t_f) = 1`, which a tanh cannot reach; following docs/models.md the parameters are
-chosen from a tolerance ε so that :math:`\Psi(0) = \varepsilon`, :math:`\Psi(T) = 1 - \varepsilon`
-and the midpoint is at :math:`T/2`.
-
-References
-----------
-.. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Eq. (14).
-.. [2] docs/models.md; the same shape is SUMO EIDM's drive-off smoothing.
-"""
-
-from __future__ import annotations
-
-import math
-
-import numpy as np
-
-from hcomc._jit import kernel
-from hcomc._typing import FloatArray
-from hcomc.models._broadcast import broadcast_apply
+from hcomc.equations.transition import (
+    DEFAULT_TOLERANCE,
+    blend,
+    blend_acceleration,
+    transition_gamma,
+    transition_parameters,
+    transition_psi,
+    transition_weight,
+)
 
 __all__ = [
+    "DEFAULT_TOLERANCE",
     "blend",
     "blend_acceleration",
     "transition_gamma",
@@ -35,159 +20,3 @@ __all__ = [
     "transition_psi",
     "transition_weight",
 ]
-
-DEFAULT_TOLERANCE: float = 0.01
-"""Default ε: Ψ(0) = 0.01 and Ψ(T) = 0.99."""
-
-
-def transition_parameters(
-    duration: FloatArray | float, tolerance: FloatArray | float = DEFAULT_TOLERANCE
-) -> tuple[FloatArray, FloatArray]:
-    r"""Speed λ and phase γ of the Eq. (14) transition for a duration and tolerance.
-
-    .. math::
-       :label: eq-14-params
-
-       \gamma = \operatorname{artanh}(1 - 2\varepsilon), \qquad \lambda = \frac{2\gamma}{T}
-
-    Parameters
-    ----------
-    duration : float or array_like
-        Transition duration T (the lane-change duration T_lc) [s], > 0.
-    tolerance : float or array_like, optional
-        ε in (0, 0.5) [-]: the weight is ε at τ = 0 and 1 - ε at τ = T. Default 0.01.
-
-    Returns
-    -------
-    lam : numpy.ndarray
-        λ [1/s].
-    gamma : numpy.ndarray
-        γ [-].
-
-    References
-    ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14).
-
-    Examples
-    --------
-    >>> lam, gamma = transition_parameters(4.0)
-    >>> round(float(gamma), 4), round(float(lam), 4)
-    (2.2976, 1.1488)
-    """
-    gamma = np.arctanh(np.subtract(1.0, np.multiply(2.0, tolerance)))
-    lam = 2.0 * gamma / np.asarray(duration, dtype=np.float64)
-    return np.asarray(lam, dtype=np.float64), np.asarray(gamma, dtype=np.float64)
-
-
-def transition_weight(
-    tau: FloatArray | float,
-    duration: FloatArray | float,
-    tolerance: FloatArray | float = DEFAULT_TOLERANCE,
-) -> FloatArray:
-    r"""Transition weight Ψ(τ) of paper Eq. (14).
-
-    .. math::
-       :label: eq-14-psi
-
-       \Psi(\tau) = \tfrac12\left[\tanh(\lambda\tau - \gamma) + 1\right]
-
-    with λ, γ from :func:`transition_parameters`, so that :math:`\Psi(0) = \varepsilon`,
-    :math:`\Psi(T/2) = 1/2` and :math:`\Psi(T) = 1 - \varepsilon`.
-
-    Parameters
-    ----------
-    tau : float or array_like
-        Time since the start of the transition (lane-change start) [s]. Not clipped: for
-        ``tau > duration`` the weight keeps rising towards 1, so callers switch to ``a_new``
-        outright once the transition is over.
-    duration : float or array_like
-        Transition duration T [s], > 0; broadcast against ``tau``.
-    tolerance : float or array_like, optional
-        ε in (0, 0.5) [-]. Default 0.01.
-
-    Returns
-    -------
-    numpy.ndarray
-        Weight Ψ in (0, 1) [-], ``float64``.
-
-    References
-    ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14).
-
-    Examples
-    --------
-    >>> [round(float(w), 6) for w in transition_weight(np.array([0.0, 2.0, 4.0]), 4.0)]
-    [0.01, 0.5, 0.99]
-    """
-    _, gamma = transition_parameters(1.0, tolerance)
-    return broadcast_apply(_weight_array, tau, duration, gamma)
-
-
-def transition_gamma(tolerance: float) -> float:
-    """γ = artanh(1 − 2ε) of Eq. (14) for the tolerance ε [-] (as :func:`transition_parameters`)."""
-    return float(transition_parameters(1.0, tolerance)[1])
-
-
-@kernel
-def transition_psi(tau: float, duration: float, gamma: float) -> float:
-    """Ψ(τ) of Eq. (14) for one vehicle, with λ = 2γ/T: the one implementation of
-    :func:`transition_weight` (γ from :func:`transition_gamma`)."""
-    return 0.5 * (math.tanh(2.0 * gamma / duration * tau - gamma) + 1.0)
-
-
-@kernel
-def _weight_array(tau: np.ndarray, duration: np.ndarray, gamma: np.ndarray) -> np.ndarray:
-    out = np.empty(tau.size)
-    for i in range(tau.size):
-        out[i] = transition_psi(tau[i], duration[i], gamma[i])
-    return out
-
-
-def blend_acceleration(
-    a_ori: FloatArray | float, a_new: FloatArray | float, weight: FloatArray | float
-) -> FloatArray:
-    r"""Blend the accelerations before and after a leader switch, paper Eq. (14).
-
-    .. math::
-       :label: eq-14-blend
-
-       a_\mathrm{tar} = \Psi\,a_\mathrm{new} + (1 - \Psi)\,a_\mathrm{ori}
-
-    Parameters
-    ----------
-    a_ori : float or array_like
-        Acceleration with the original leader [m/s^2].
-    a_new : float or array_like
-        Acceleration with the new leader [m/s^2].
-    weight : float or array_like
-        Ψ from :func:`transition_weight` [-].
-
-    Returns
-    -------
-    numpy.ndarray
-        Target acceleration [m/s^2], ``float64``.
-
-    References
-    ----------
-    .. [1] HCOMC paper (arXiv:2507.11621), Eq. (14).
-
-    Examples
-    --------
-    >>> float(blend_acceleration(-1.0, 1.0, 0.25))
-    -0.5
-    """
-    return broadcast_apply(_blend_array, a_ori, a_new, weight)
-
-
-@kernel
-def blend(a_ori: float, a_new: float, weight: float) -> float:
-    """Eq. (14) blend of one vehicle: the one implementation of :func:`blend_acceleration`."""
-    return weight * a_new + (1.0 - weight) * a_ori
-
-
-@kernel
-def _blend_array(a_ori: np.ndarray, a_new: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    out = np.empty(a_ori.size)
-    for i in range(a_ori.size):
-        out[i] = blend(a_ori[i], a_new[i], weight[i])
-    return out

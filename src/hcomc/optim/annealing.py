@@ -2,8 +2,8 @@
 
 pymoo has no simulated annealing, so the SA baseline wraps SciPy's maintained generalized
 simulated annealing and minimises ``problem.scalarise(F, G)``. Registered as ``sa-scipy``, the
-reference of ``sa`` (:mod:`hcomc.optim.sa`), which runs the same annealing on arrays and makes
-the same decisions, without SciPy's per-call Python machinery.
+reference of ``sa`` (:mod:`hcomc.optim.sa`), which runs the same annealing on arrays, without
+SciPy's per-call Python machinery and with the C library's math instead of numpy's.
 
 What is returned, and why: the annealing searches on the scalarised cost, but the optimiser
 returns what every optimiser here returns, the feasible, mutually non-dominated subset of every
@@ -124,7 +124,7 @@ class AnnealingOptimizer:
     Returns the feasible non-dominated subset of every evaluated row, or the best-scalarised
     row when none is feasible; see the module docstring for this and for the budget and
     seeding rules. Registered as ``sa-scipy``: ``sa``
-    (:class:`~hcomc.optim.sa.CompiledAnnealingOptimizer`) makes the same decisions without
+    (:class:`~hcomc.optim.sa.CompiledAnnealingOptimizer`) runs the same algorithm without
     SciPy's per-call Python machinery.
     """
 

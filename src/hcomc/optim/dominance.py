@@ -4,9 +4,10 @@ NSGA-II steps built on them (rank-and-crowding survival, tournaments, an archive
 All objectives are minimised. Row ``i`` dominates row ``j`` when it is no worse in every
 objective and strictly better in at least one; identical rows do not dominate each other, and a
 comparison with NaN is false (a NaN column neither helps nor hurts). These are the building
-blocks of the compiled NSGA-II (:mod:`hcomc.optim.nsga2`) and of the non-dominated filter of
-:mod:`hcomc.optim.selection`; each follows the definition of Deb et al. (2002) in the form
-pymoo computes it, so that the compiled optimiser reproduces pymoo's decisions exactly.
+blocks of the compiled NSGA-II (:mod:`hcomc.optim.nsga2`), on the dominance of Eq. 18
+(:func:`hcomc.equations.pareto.dominates`); each follows the definition of Deb et al. (2002)
+in the form pymoo computes it, so that the compiled optimiser ranks, crowds and selects by
+pymoo's rules.
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ import functools
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc._typing import FloatArray, IntArray
+from hcomc.equations.pareto import pareto_mask
 
 
 @kernel
@@ -77,31 +79,6 @@ def pareto_ranks(F: FloatArray) -> IntArray:
     # NaN are skipped): they share the next rank, so that every row has one
     rank[rank < 0] = k
     return rank
-
-
-@kernel
-def _dominates(a: FloatArray, b: FloatArray) -> bool:
-    """``a`` no worse than ``b`` everywhere and better somewhere (False if a NaN is involved)."""
-    better = False
-    for i in range(a.shape[0]):
-        if not a[i] <= b[i]:
-            return False
-        if a[i] < b[i]:
-            better = True
-    return better
-
-
-@kernel
-def non_dominated_mask(F: FloatArray) -> BoolArray:
-    """True for the rows that no other row dominates; a NaN in either row of a pair means
-    neither dominates the other."""
-    n = F.shape[0]
-    keep = np.ones(n, dtype=np.bool_)
-    for i in range(n):
-        for j in range(n):
-            if i != j and keep[j] and _dominates(F[i], F[j]):
-                keep[j] = False
-    return keep
 
 
 @kernel
@@ -348,7 +325,7 @@ def warm_up() -> None:
     """Compile (or load from numba's cache) every kernel of this module now."""
     F = np.array([[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]])
     pareto_ranks(F)
-    non_dominated_mask(F)
+    pareto_mask(F)
     crowding_distance(F)
     feasible_front(F, np.zeros((3, 1)))
     rows = np.arange(3)

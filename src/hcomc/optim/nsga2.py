@@ -1,4 +1,4 @@
-"""A lean NSGA-II on arrays that makes pymoo's decisions, without pymoo's per-individual objects.
+"""A lean NSGA-II on arrays: pymoo's algorithm, without pymoo's per-individual objects.
 
 :class:`CompiledNSGA2Optimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 NSGA2Optimizer` (pymoo 0.6's ``NSGA2`` with SBX, polynomial mutation, binary tournament by
@@ -8,11 +8,14 @@ survival (:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival w
 tournaments (:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
 (:func:`hcomc.optim.variation.offspring`); Python draws the random numbers in between, the same
 numbers in the same order as pymoo from a generator seeded like pymoo's, and leaves to numpy the
-two sorts whose order of ties is numpy's own. Every floating-point value is computed with the
-same operations, so for the same problem, budget and ``rng`` it evaluates the same rows and
-returns the same Pareto set as the pymoo optimiser (tests hold it to that), at a fraction of the
-per-generation cost. Evaluated rows go into one preallocated archive, from which the Pareto set
-is taken in one compiled pass (:func:`hcomc.optim.base.archive_front`).
+two sorts whose order of ties is numpy's own. The formulas are pymoo's, but the powers are the C
+library's (:mod:`hcomc.optim.variation`) and the constraint violation a plain sum
+(:func:`violation`), never numpy's CPU-dispatched functions, so that a run is the same on every
+processor; where numpy's functions differ from the C library's, a run can part from pymoo's in
+the last bit and go its own way. The tests hold it to pymoo's solution quality on the recorded
+merge problems (``tests/unit/test_nsga2_compiled.py``). Evaluated rows go into one preallocated
+archive, from which the Pareto set is taken in one compiled pass
+(:func:`hcomc.optim.base.archive_front`).
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
@@ -47,10 +50,12 @@ _NO_PAIRS = np.empty((0, 2), dtype=np.int64)  # no tournament
 
 
 def violation(G: FloatArray) -> FloatArray:
-    """Constraint violation per row, ``sum(max(0, G))`` (0: feasible)."""
-    if G.shape[1] == 0:
-        return np.zeros(G.shape[0])
-    return np.maximum(0.0, G).sum(axis=1)
+    """Constraint violation per row, ``sum(max(0, G))`` (0: feasible), summed in column order
+    (a plain sum: the value does not depend on how numpy orders a reduction)."""
+    total = np.zeros(G.shape[0])
+    for j in range(G.shape[1]):
+        total += np.maximum(0.0, G[:, j])
+    return total
 
 
 def survive_and_mate(
@@ -107,7 +112,7 @@ def survive_and_mate(
 
 @dataclass(frozen=True, slots=True)
 class CompiledNSGA2Optimizer:
-    """NSGA-II on arrays with numba kernels; the pymoo optimiser's decisions (see the module).
+    """NSGA-II on arrays with numba kernels, pymoo's algorithm (see the module).
 
     Parameters
     ----------
@@ -161,7 +166,7 @@ class CompiledNSGA2Optimizer:
             G = np.asarray(G, dtype=np.float64).reshape(n, n_constr)
             end = start + n
             X_all[start:end], F_all[start:end], G_all[start:end] = X, F, G
-            cv_all[start:end] = violation(G)  # on G as given: a sum's order follows its layout
+            cv_all[start:end] = violation(G)
             return np.arange(start, end)
 
         crossover = (self.crossover_eta, self.crossover_prob)

@@ -1,4 +1,5 @@
-"""Simulated annealing on arrays that makes SciPy's decisions, without SciPy's per-call objects.
+"""Simulated annealing on arrays: SciPy's generalized simulated annealing, without SciPy's
+per-call objects.
 
 :class:`CompiledAnnealingOptimizer` runs the generalized simulated annealing of
 :class:`~hcomc.optim.annealing.AnnealingOptimizer` (SciPy's ``dual_annealing`` with
@@ -9,24 +10,18 @@ state's copies. Here one call is the generator's draws, one numba kernel for the
 row's evaluation and plain float arithmetic for the acceptance. The run draws the same random
 numbers, in the same order and shapes, from the same generator (a fresh
 ``numpy.random.default_rng(draw_seed(rng))``; ``random`` where SciPy asks ``uniform`` on
-[0, 1), the same numbers without the argument handling), and computes every value with the same
-floating-point operations in the same order.
+[0, 1), the same numbers without the argument handling), and follows SciPy's formulas in
+SciPy's order of operations.
 
-``fmod``, ``fabs`` and the four operations are exact or correctly rounded on any machine, but
-the last bit of ``exp`` and ``log`` depends on the implementation. The moves' step sizes
-(:func:`move_all` and the single-variable moves) and the acceptance probability
-(:func:`accepts`) take the C library's (through numba and Python's ``math``); SciPy takes
-numpy's. The per-temperature scale of the steps and the temperatures are numpy scalar
-expressions, as in SciPy. Where numpy's
-float64 ``exp`` and ``log`` are the C library's (the usual build, and this project's CI), the
-same problem, budget, ``rng`` and ``initial`` therefore give SciPy's run bit for bit: the same
-rows evaluated and the same set returned (tests check it, and skip those checks where a sample
-shows numpy's functions to differ). numpy builds that bring SIMD versions of their own for the
-CPU (AVX-512) differ from the C library's in the last bit on a good share of arguments; there a
-step may differ from SciPy's in the last bit and the run goes its own way. What the tests
-guarantee on any CPU is the search's quality: on the recorded merge problems the compiled SA's
-hypervolume and best Eq. 19 cost are within a stated tolerance of SciPy's
-(``tests/unit/test_sa_compiled.py``).
+Every ``exp``, ``log`` and ``sin`` is the C library's: in the kernels through numba, elsewhere
+through Python's ``math`` (:mod:`hcomc.optim.ieee`, which adds the special values where
+``math`` raises); the step scale's constant ``lgamma`` is SciPy's ``gammaln``. None is numpy's,
+whose float64 functions are chosen by the CPU at run time (SIMD versions on AVX-512 differ
+in the last bit), so a run is the same on every processor. SciPy takes numpy's: where those
+differ from the C library's, a step or an acceptance can differ from SciPy's in the last bit
+and the run goes its own way. The tests hold the compiled SA to SciPy's solution quality on the
+recorded merge problems (hypervolume and best Eq. 19 cost, ``tests/unit/test_sa_compiled.py``),
+not to SciPy's rows.
 
 The run, as SciPy makes it:
 
@@ -60,7 +55,6 @@ set, its first member in evaluation order).
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import math
 from dataclasses import dataclass, field
@@ -68,57 +62,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import gammaln
 
-from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 from hcomc.optim.annealing import _Objective
 from hcomc.optim.base import ParetoResult, Problem, check_budget
+from hcomc.optim.ieee import divide, exp, log, sin
+from hcomc.optim.visiting import TAIL_LIMIT, move_all, move_one
 from hcomc.rng import draw_seed
-
-TAIL_LIMIT = 1.0e8  # SciPy's bound on a visiting step; larger steps are re-drawn below it
-MIN_VISIT_BOUND = 1.0e-10  # a coordinate this close to its lower bound is moved off it
-
-
-@kernel
-def _wrap(x: float, lower: float, span: float) -> float:
-    """A coordinate moved back into ``[lower, lower + span)`` modulo ``span`` and off the lower
-    bound, with SciPy's operations (``fmod`` is exact, so any implementation agrees)."""
-    b = np.fmod(x - lower, span) + span
-    out = np.fmod(b, span) + lower
-    if abs(out - lower) < MIN_VISIT_BOUND:
-        out += MIN_VISIT_BOUND
-    return out
-
-
-@kernel  # x / 0 is inf, as in numpy
-def move_all(
-    x: FloatArray,
-    xy: FloatArray,
-    samples: FloatArray,
-    sigma: float,
-    visit: float,
-    box: FloatArray,
-    out: FloatArray,
-) -> None:
-    """SciPy's move of every variable, into ``out``: steps ``xy[:, 0] sigma / den`` with
-    ``den = exp((qv - 1) log|xy[:, 1]| / (3 - qv))`` (the C library's ``exp`` and ``log``),
-    steps beyond +-1e8 replaced by ``1e8 samples[0]`` or ``-1e8 samples[1]``, added to ``x``
-    and wrapped into the box (``box`` = lower, span)."""
-    above, below = TAIL_LIMIT * samples[0], -TAIL_LIMIT * samples[1]
-    for k in range(x.size):
-        d = math.exp((visit - 1.0) * math.log(abs(xy[k, 1])) / (3.0 - visit))
-        step = xy[k, 0] * sigma / d
-        if step > TAIL_LIMIT:
-            step = above
-        elif step < -TAIL_LIMIT:
-            step = below
-        out[k] = _wrap(step + x[k], box[0, k], box[1, k])
-
-
-@kernel
-def move_one(x: FloatArray, k: int, step: float, box: FloatArray, out: FloatArray) -> None:
-    """SciPy's move of variable ``k`` alone by ``step`` (already limited), into ``out``."""
-    out[:] = x
-    out[k] = _wrap(step + x[k], box[0, k], box[1, k])
 
 
 class _Visiting:
@@ -127,33 +76,28 @@ class _Visiting:
 
     def __init__(self, visit: float, box: FloatArray, gen: np.random.Generator) -> None:
         self.visit, self.box, self.gen = float(visit), box, gen
-        # SciPy's constants, with its numpy scalar operations
-        factor2 = np.exp((4.0 - visit) * np.log(visit - 1.0))
-        factor3 = np.exp((2.0 - visit) * np.log(2.0) / (visit - 1.0))
-        self.factor4_p = np.sqrt(np.pi) * factor2 / (factor3 * (3.0 - visit))
-        factor5 = 1.0 / (visit - 1.0) - 0.5
+        v = self.visit  # SciPy's constants, in SciPy's order of operations
+        factor2 = exp((4.0 - v) * log(v - 1.0))
+        factor3 = exp(divide((2.0 - v) * log(2.0), v - 1.0))
+        self.factor4_p = divide(math.sqrt(math.pi) * factor2, factor3 * (3.0 - v))
+        factor5 = divide(1.0, v - 1.0) - 0.5
         d1 = 2.0 - factor5
-        self.factor6 = (
-            np.pi * (1.0 - factor5) / np.sin(np.pi * (1.0 - factor5)) / np.exp(gammaln(d1))
-        )
+        ratio = divide(math.pi * (1.0 - factor5), sin(math.pi * (1.0 - factor5)))
+        self.factor6 = divide(ratio, exp(float(gammaln(d1))))
         self.sigma = 1.0
 
     def set_temperature(self, temperature: float) -> None:
         """The steps' scale at ``temperature`` (SciPy recomputes it on every call)."""
         v = self.visit
-        factor1 = np.exp(np.log(temperature) / (v - 1.0))
+        factor1 = exp(divide(log(temperature), v - 1.0))
         factor4 = self.factor4_p * factor1
-        self.sigma = float(np.exp(-(v - 1.0) * np.log(self.factor6 / factor4) / (3.0 - v)))
+        self.sigma = exp(divide(-(v - 1.0) * log(divide(self.factor6, factor4)), 3.0 - v))
 
     def _den_one(self, xy: FloatArray) -> float:
         """``exp((qv - 1) log|y| / (3 - qv))`` of one pair of normals ``xy`` (of ``y``, the
-        second), with ``math``; with numpy's scalar arithmetic only where ``math`` raises
-        (``log 0``, an overflow), for numpy's 0 or inf."""
+        second), with the C library's ``exp`` and ``log`` (0 where ``y`` is 0)."""
         v, y = self.visit, abs(float(xy[0, 1]))
-        with contextlib.suppress(ValueError, OverflowError):
-            return math.exp((v - 1.0) * math.log(y) / (3.0 - v))
-        with np.errstate(all="ignore"):
-            return float(np.exp((v - 1.0) * np.log(np.float64(y)) / (3.0 - v)))
+        return exp(divide((v - 1.0) * log(y), 3.0 - v))
 
     def all(self, x: FloatArray, out: FloatArray) -> None:
         """A move of every variable of ``x`` into ``out``: normals (n_var, 2), then two
@@ -165,8 +109,7 @@ class _Visiting:
     def one(self, x: FloatArray, k: int, out: FloatArray) -> None:
         """A move of variable ``k`` alone: normals (1, 2), a uniform only for a tail step."""
         xy = self.gen.normal(size=(1, 2))
-        scaled, den = float(xy[0, 0]) * self.sigma, self._den_one(xy)
-        step = scaled / den if den != 0.0 else float(np.divide(scaled, den))  # inf as numpy's
+        step = divide(float(xy[0, 0]) * self.sigma, self._den_one(xy))  # inf where den is 0
         if step > TAIL_LIMIT:
             step = TAIL_LIMIT * self.gen.random()
         elif step < -TAIL_LIMIT:
@@ -179,24 +122,14 @@ def accepts(r: float, e: float, current: float, temperature_step: float, accept:
     ``r <= (1 - (1 - qa) (e - current) / T_step)^(1 / (1 - qa))``, 0 where the base is not
     positive.
 
-    The power is taken with ``math`` (the C library's ``exp`` and ``log``; SciPy takes numpy's,
-    the same functions wherever the runs are compared bit for bit); numpy's scalar arithmetic
-    only where ``math`` raises (a temperature step of 0, an overflow, ``accept`` = 1), for
-    numpy's inf and NaN.
+    The power is taken with the C library's ``exp`` and ``log`` (:mod:`hcomc.optim.ieee`,
+    IEEE 754's inf and NaN where a temperature step of 0, an overflow or ``accept`` = 1 make
+    Python raise). A NaN base gives a NaN probability, which rejects, as in SciPy.
     """
-    try:
-        base = 1.0 - ((1.0 - accept) * (e - current) / temperature_step)
-    except ZeroDivisionError:  # a temperature that underflowed to 0: numpy's inf or NaN
-        with np.errstate(all="ignore"):
-            base = float(1.0 - ((1.0 - accept) * (e - current) / np.float64(temperature_step)))
-    if base <= 0.0:  # a NaN base goes on, to a NaN probability, as in SciPy
+    base = 1.0 - divide((1.0 - accept) * (e - current), temperature_step)
+    if base <= 0.0:
         return r <= 0.0
-    try:
-        p = math.exp(math.log(base) / (1.0 - accept))
-    except (OverflowError, ZeroDivisionError):  # outside SciPy's range of accept
-        with np.errstate(all="ignore"):
-            p = float(np.exp(np.log(np.float64(base)) / (1.0 - accept)))
-    return r <= p
+    return r <= exp(divide(log(base), 1.0 - accept))
 
 
 class _Annealing:
@@ -267,8 +200,8 @@ def warm_up() -> None:
 
 @dataclass(frozen=True, slots=True)
 class CompiledAnnealingOptimizer:
-    """Generalized simulated annealing on arrays; the SciPy optimiser's decisions (see the
-    module).
+    """Generalized simulated annealing on arrays, SciPy's algorithm with the C library's math
+    (see the module).
 
     Parameters
     ----------
@@ -276,7 +209,7 @@ class CompiledAnnealingOptimizer:
         defaults). SA has no population: ``pop_size`` is not an option (it is rejected).
     row_path : score rows through the problem's single-row fast path when it offers one
         (:class:`~hcomc.optim.base.RowProblem`); False scores them with ``evaluate`` and
-        ``scalarise`` on one-row populations (the same decisions, slower).
+        ``scalarise`` on one-row populations (the same run, slower).
 
     Notes
     -----
@@ -317,12 +250,12 @@ class CompiledAnnealingOptimizer:
         cost = _Objective(problem, budget, self.row_path)
         run = _Annealing(self, cost, lower, upper, np.random.default_rng(draw_seed(rng)))
         run.start(x0)
-        t1 = np.exp((self.visit - 1) * np.log(2.0)) - 1.0
+        t1 = exp((self.visit - 1.0) * log(2.0)) - 1.0  # the C library's, as every step
         restart = self.initial_temp * self.restart_temp_ratio
         step = iteration = 0
         while iteration < budget:  # SciPy's maxiter: never reached before maxfun
-            t2 = np.exp((self.visit - 1) * np.log(float(step) + 2.0)) - 1.0
-            temperature = float(self.initial_temp * t1 / t2)
+            t2 = exp((self.visit - 1.0) * log(float(step) + 2.0)) - 1.0
+            temperature = divide(self.initial_temp * t1, t2)
             if temperature < restart:  # re-annealing from a new random point
                 if cost.n_calls >= budget:
                     break  # the hard cap

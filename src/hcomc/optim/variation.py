@@ -2,20 +2,15 @@
 
 Random numbers are drawn from the caller's generator in Python, in the order and sizes pymoo
 draws them; the arithmetic runs in numba kernels, one call per operator, or one for a whole
-generation's offspring (:func:`offspring`), with pymoo's floating-point operations in pymoo's
-order, so that a generation's variation is one compiled call instead of pymoo's many numpy calls
-on small arrays.
+generation's offspring (:func:`offspring`), with pymoo's formulas in pymoo's order of
+operations, so that a generation's variation is one compiled call instead of pymoo's many numpy
+calls on small arrays.
 
-Powers: pymoo takes them with numpy's ``np.power``, the kernels with the C library's ``pow``
-(through numba). Where numpy's float64 power is that function (the usual build, and this
-project's CI), the operators return pymoo's ``SBX`` and ``PM`` offspring bit for bit for the same
-generator state; tests check it operator by operator and through whole runs, and skip those
-checks where a sample shows numpy's power to differ. numpy builds that bring SIMD versions of
-their own for the CPU (AVX-512) differ from the C library's in the last bit on a good share of
-arguments; there the offspring may differ from pymoo's in the last bit and a run goes its own
-way from pymoo's. What the tests guarantee on any CPU is the search's quality: on the recorded
-merge problems the compiled NSGA-II's hypervolume and best Eq. 19 cost are within a stated
-tolerance of pymoo's (``tests/unit/test_nsga2_compiled.py``).
+Powers are the C library's ``pow`` (through numba), not numpy's ``np.power`` as in pymoo:
+numpy picks its float64 power by the CPU at run time (SIMD versions on AVX-512 differ in the last
+bit), the C library's is the same on every processor. Where the two differ, an offspring can
+differ from pymoo's in the last bit; the tests hold the operators to pymoo's offspring within a
+relative 1e-12 and whole runs to pymoo's solution quality.
 """
 
 from __future__ import annotations

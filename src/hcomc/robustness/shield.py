@@ -21,20 +21,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.road import Lane
+from hcomc.robustness.run_state import ImpairedRun, ScenarioRun
 from hcomc.robustness.settings import ShieldParams
 from hcomc.sim.step import plans
 from hcomc.sim.step.state import N_PLANS
-
-if TYPE_CHECKING:
-    from hcomc.robustness.engine import FaultedSimulation
-    from hcomc.robustness.impairments import Impairments
 
 __all__ = ["Override", "Shield", "commanded_vehicles", "rss_safe_distance"]
 
@@ -115,7 +112,7 @@ class Shield:
         self.overrides: list[Override] = []
         self._braking: set[int] = set()  # vehicles the shield drives this step
 
-    def act(self, sim: FaultedSimulation, t: float, commanded: IntArray) -> None:
+    def act(self, sim: ScenarioRun, t: float, commanded: IntArray) -> None:
         """Check the ``commanded`` vehicles (:func:`commanded_vehicles`) before the next step
         (see the module docstring)."""
         if not self.params.enabled:
@@ -123,7 +120,7 @@ class Shield:
         self._gate_changes(sim, t)
         self.brake(sim, t, commanded)
 
-    def brake(self, sim: Impairments, t: float, commanded: IntArray) -> None:
+    def brake(self, sim: ImpairedRun, t: float, commanded: IntArray) -> None:
         """Brake each of the ``commanded`` vehicles closer than the RSS distance to the
         nearest vehicle ahead in a lane it occupies; hand back those that no longer are."""
         braking: dict[int, float] = {}
@@ -142,7 +139,7 @@ class Shield:
             sim.command(i, acc)
         self._braking = set(braking)
 
-    def unsafe_merge(self, sim: Impairments, vr: int) -> list[int]:
+    def unsafe_merge(self, sim: ImpairedRun, vr: int) -> list[int]:
         """The vehicles of lane 1 next to which VR's merge would start closer than the RSS
         distance: its leader there (VR behind it) and its follower there (VR ahead)."""
         leader, follower = lane_neighbours(sim.arrays, vr, int(Lane.MAIN_1))
@@ -150,16 +147,16 @@ class Shield:
                  (follower, follower < 0 or self._safe(sim, follower, vr)))  # fmt: skip
         return [j for j, ok in pairs if not ok]
 
-    def cannot_stop(self, sim: Impairments, vr: int) -> bool:
+    def cannot_stop(self, sim: ImpairedRun, vr: int) -> bool:
         """Whether VR could no longer stop before the lane end at the safe deceleration."""
         stop = sim.v[vr] ** 2 / (2 * self.config.lane_change.safe_decel) + sim.fleet.s0[vr]
         return bool(sim.x[vr] >= self.config.road.accel_lane_end - stop)
 
-    def _safe(self, sim: Impairments, rear: int, front: int) -> bool:
+    def _safe(self, sim: ImpairedRun, rear: int, front: int) -> bool:
         gap = float(sim.x[front] - sim.fleet.length[front] - sim.x[rear])
         return safe_behind(self.params, gap, float(sim.v[rear]), float(sim.v[front]))
 
-    def _gate_changes(self, sim: FaultedSimulation, t: float) -> None:
+    def _gate_changes(self, sim: ScenarioRun, t: float) -> None:
         """Hold a commanded merge about to start next to an unsafe gap; release VR to gap
         acceptance once it could no longer stop before the lane end."""
         c = sim.arrays

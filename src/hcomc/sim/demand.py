@@ -44,7 +44,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ConfigError, DemandParams, IDMParams, ScenarioConfig
-from hcomc.models.idm import equilibrium_gap
+from hcomc.equations.idm import equilibrium_gap
 from hcomc.road import Kind, Lane
 
 

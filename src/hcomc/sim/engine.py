@@ -38,7 +38,7 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
-from hcomc.control.key_vehicles import find_key_vehicles
+from hcomc.control.key_group import find_key_vehicles
 from hcomc.control.validation import checked, name_of
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane

@@ -18,7 +18,7 @@ from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, Traff
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.demand import Demand, generate_demand
-from hcomc.sim.perception import Perception
+from hcomc.sim.perception_state import Perception
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import allocate_log, build_arrays
 from hcomc.sim.step.state import Core

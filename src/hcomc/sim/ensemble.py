@@ -15,136 +15,34 @@ Use :func:`run_ensemble` on :class:`~hcomc.sim.engine.Simulation` objects::
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
-from numba import prange
-from numba.typed import List
 
-from hcomc._jit import kernel
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.step.loop import run_steps
-from hcomc.sim.step.state import DONE, STEP, CoreArrays
+from hcomc.sim.step.batch import (
+    advance_batch,
+    advance_batch_serial,
+    step_indices,
+    thread_count,
+    thread_pool,
+)
+from hcomc.sim.step.state import DONE
+from hcomc.sim.typed_lists import TypedListCache
 
-
-@kernel(parallel=True)
-def _advance_batch(
-    cores: list[CoreArrays], rngs: list[np.random.Generator], stops: np.ndarray,
-    logging: np.ndarray, reasons: np.ndarray,
-) -> None:  # fmt: skip
-    """Advance every run to its stop (or until it needs Python), one thread per run."""
-    for j in prange(len(cores)):
-        k = np.int64(j)
-        reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
-
-
-@kernel
-def _advance_batch_serial(
-    cores: list[CoreArrays], rngs: list[np.random.Generator], stops: np.ndarray,
-    logging: np.ndarray, reasons: np.ndarray,
-) -> None:  # fmt: skip
-    """The same loop on the calling thread: no thread pool (safe in forked worker processes).
-
-    A function of its own, not ``kernel(_advance_batch.py_func)``: numba's cache
-    keys an entry by the function and its signature, not by ``parallel``, so one function
-    compiled both ways loads whichever was cached first for both (the parallel ensemble then
-    ran on one thread, or forked workers started a thread pool).
-    """
-    for k in range(len(cores)):
-        reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
-
+if TYPE_CHECKING:
+    from numba.typed import List
 
 _END = np.iinfo(np.int64).max  # "no goal": to the run's end
-
-
-class TypedListCache:
-    """Compiled (numba typed) lists of values taken from the same places across calls.
-
-    Called again, only the places whose key changed are converted again, and a longer or
-    shorter list of keys appends or drops places at the end, since each entry costs
-    microseconds to convert (a learning environment passes its episodes' runs in the same
-    places every step, with a few new episodes and a varying tail of twins). Keys are held
-    weakly; the lists hold the values until the next call or :meth:`clear`. The lists are
-    built and changed by cached compiled functions (:func:`_list_of` …): numba's own
-    Python-side list methods compile anew in every process, about a second each.
-    """
-
-    def __init__(self) -> None:
-        self._keys: list[weakref.ref[Any]] = []
-        self._lists: tuple[List, ...] = ()
-
-    def lists(self, keys: Sequence[Any], *columns: Callable[[Any], Any]) -> tuple[List, ...]:
-        """One list per column function, entry k being ``column(keys[k])``."""
-        if len(self._lists) != len(columns) or not self._keys or not keys:
-            self._lists = tuple(_typed_list([column(key) for key in keys]) for column in columns)
-            self._keys = [weakref.ref(key) for key in keys]
-            return self._lists
-        kept = min(len(keys), len(self._keys))
-        for k in range(kept):
-            key = keys[k]
-            if self._keys[k]() is not key:
-                self._keys[k] = weakref.ref(key)
-                for values, column in zip(self._lists, columns, strict=True):
-                    _list_set(values, k, column(key))
-        for values, column in zip(self._lists, columns, strict=True):
-            for _ in range(len(self._keys) - len(keys)):
-                _list_pop(values)
-            for key in keys[kept:]:
-                _list_append(values, column(key))
-        self._keys = self._keys[: len(keys)] + [weakref.ref(key) for key in keys[kept:]]
-        return self._lists
-
-    def clear(self) -> None:
-        """Drop the lists (and the values they hold)."""
-        self._keys, self._lists = [], ()
-
-
-def _typed_list(values: list[Any]) -> List:
-    """A compiled list of ``values`` (all of one type)."""
-    if not values:
-        return List()
-    out = _list_of(values[0])
-    for value in values[1:]:
-        _list_append(out, value)
-    return out
-
-
-@kernel
-def _list_of(first: Any) -> Any:
-    """A compiled list holding ``first``, typed by it."""
-    values = List()
-    values.append(first)
-    return values
-
-
-@kernel
-def _list_append(values: Any, item: Any) -> None:
-    """Append ``item`` to a compiled list."""
-    values.append(item)
-
-
-@kernel
-def _list_set(values: Any, k: int, item: Any) -> None:
-    """Replace entry k of a compiled list."""
-    values[k] = item
-
-
-@kernel
-def _list_pop(values: Any) -> None:
-    """Drop the last entry of a compiled list."""
-    values.pop()
-
 
 _BATCH_LISTS = TypedListCache()  # the compiled loop's states and generators of the last batch
 
 
 def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
     """The compiled loop's lists of the runs' states and generators (kept from the last
-    batch: see :class:`TypedListCache`)."""
+    batch: see :class:`~hcomc.sim.typed_lists.TypedListCache`)."""
     cores, rngs = _BATCH_LISTS.lists(runs, lambda s: s.core, lambda s: s.rng)
     return cores, rngs
 
@@ -183,8 +81,7 @@ def advance_ensemble(
     ``flush=False`` leaves the events of the last compiled stretch in the runs' buffers (they
     reach the log at the next :meth:`Simulation.flush_events`, ``run_to`` or the run's end).
     """
-    most = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
-    threads = most if threads is None else max(1, min(threads, most))
+    threads = thread_count(threads)
     runs = list(sims)
     n = len(runs)
     if n == 0:
@@ -196,13 +93,8 @@ def advance_ensemble(
     batch = _Batch(runs, goal, keys)
     if not batch.going.any():
         return
-    advance = _advance_batch_serial if threads == 1 else _advance_batch
-    previous = threads
-    if threads > 1:  # the thread pool is touched only when used (a forked child must not)
-        previous = numba.get_num_threads()
-        numba.set_num_threads(threads)
-    chunks = numba.set_parallel_chunksize(1) if threads > 1 else 0  # runs differ in length
-    try:
+    advance = advance_batch_serial if threads == 1 else advance_batch
+    with thread_pool(threads):
         reasons = np.empty(n, dtype=np.int64)
         while batch.going.any():
             stops = np.where(batch.going, np.minimum(batch.stop, goal), batch.step)
@@ -214,17 +106,6 @@ def advance_ensemble(
         if flush:
             for sim in runs:
                 sim.flush_events()
-    finally:
-        if threads > 1:
-            numba.set_parallel_chunksize(chunks)
-            numba.set_num_threads(previous)
-
-
-@kernel
-def _step_indices(cores: list[CoreArrays], out: np.ndarray) -> None:
-    """Every run's step counter (what :attr:`Simulation.step_index` reads, for all at once)."""
-    for k in range(len(cores)):
-        out[k] = cores[k].counters[STEP]
 
 
 class _Batch:
@@ -246,7 +127,7 @@ class _Batch:
     def _update(self) -> None:
         """``going``: not finished, short of its goal, and (with ``keys``) no key vehicles yet
         (what :meth:`Simulation.reached` says, run by run)."""
-        _step_indices(self.cores, self.step)
+        step_indices(self.cores, self.step)
         going = ~self.finished & (self.step < self.goal)
         for k in np.flatnonzero(going & self.keys).tolist():
             going[k] = not self.runs[k].key_groups
@@ -255,7 +136,7 @@ class _Batch:
     def resume(self, reasons: np.ndarray) -> None:
         """Hand each run that stopped for Python to :meth:`Simulation.resume` (a run that
         only reached its goal within its stage needs nothing)."""
-        _step_indices(self.cores, self.step)
+        step_indices(self.cores, self.step)
         python = self.going & ((reasons != DONE) | (self.step >= self.stop))
         for k in np.flatnonzero(python).tolist():
             run = self.runs[k]
@@ -265,4 +146,4 @@ class _Batch:
         self._update()
 
 
-__all__ = ["TypedListCache", "advance_ensemble", "run_ensemble"]
+__all__ = ["advance_ensemble", "run_ensemble"]

@@ -16,36 +16,24 @@ Accelerations are model accelerations with exact perception (the decision, not t
 Simultaneous changes that would meet are resolved so at most one enters each gap: a change is
 dropped if its new leader or new follower changes lane in the same round with a higher
 priority (ramp vehicles first, then downstream first), or another change with higher priority
-targets the same gap.
+targets the same gap. :func:`hcomc.sim.lane_change_decisions.decide` calls these kernels
+from Python.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from hcomc._jit import borrow, kernel
-from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import LaneChangeParams
-from hcomc.interface import Fleet
-from hcomc.models.following import follow_accel_given, free_term
-from hcomc.models.incentive import mobil_incentive
+from hcomc.equations.car_following import follow_accel_given, free_term
+from hcomc.equations.incentive import mobil_incentive
 from hcomc.road import Lane
 from hcomc.sim.neighbours import LaneIndex, lookup_one
 
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
-
-
-@dataclass(frozen=True, slots=True)
-class Snapshot:
-    """Read-only kinematic state of all vehicle slots, shape (N,) each."""
-
-    x: FloatArray
-    v: FloatArray
-    a: FloatArray
 
 
 class Traffic(NamedTuple):
@@ -210,50 +198,3 @@ def _resolve_into(
             ids[m], target[m] = ids[k], target[k]
             m += 1
     return m
-
-
-def decide(
-    fleet: Fleet,
-    snap: Snapshot,
-    index: LaneIndex,
-    cand: IntArray,
-    lane: IntArray,
-    leader: IntArray,
-    follower: IntArray,
-    params: LaneChangeParams,
-    target: IntArray | None = None,
-    force: BoolArray | None = None,
-) -> tuple[IntArray, IntArray]:
-    """Accepted lane changes among candidates ``cand``: ``(vehicles, target lanes)``.
-
-    ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours.
-    ``target`` defaults to the one possible target of each lane; ``force`` marks changes
-    commanded by a merge plan, which are checked for safety only (like the ramp's).
-    """
-    cand = np.ascontiguousarray(cand, dtype=np.int64).reshape(-1)
-    if cand.size == 0:
-        return cand, cand
-    lane = np.ascontiguousarray(lane, dtype=np.int64)
-    if target is None:
-        target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
-    force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
-    ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
-    m = mobil_decide_into(
-        Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
-        index,
-        Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force),
-        lane_change_params(params), MobilWork(ints, flags, np.empty((2, snap.x.size))),
-    )  # fmt: skip
-    return ints[0, :m].copy(), ints[1, :m].copy()
-
-
-def lane_change_params(params: LaneChangeParams) -> FloatArray:
-    """The MOBIL parameters as the kernel reads them."""
-    return np.array(
-        [params.min_gap, params.safe_decel, params.politeness, params.threshold,
-         params.keep_right_bias], dtype=np.float64,
-    )  # fmt: skip
-
-
-def _ints(a: IntArray) -> IntArray:
-    return np.ascontiguousarray(a, dtype=np.int64).reshape(-1)

@@ -1,4 +1,5 @@
-"""What drivers perceive: exact for CAVs, delayed and noisy for HDVs (paper Eq. 2).
+"""What drivers perceive: exact for CAVs, delayed and noisy for HDVs (paper Eq. 2), for every
+vehicle of a step at once; Eq. 2 itself is :func:`hcomc.equations.perception.perceived`.
 
 HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
 
@@ -21,19 +22,18 @@ HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
   vehicle.)
 
 A vehicle's buffer column is filled with its release state, so before K steps of history
-exist the current values are used.
+exist the current values are used. The run's buffers and error processes are built from its
+configuration by :class:`hcomc.sim.perception_state.Perception`.
 """
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import HDVParams
+from hcomc.equations.perception import ErrorScales, delay_rows, interpolate, perceived
 
 
 class History(NamedTuple):
@@ -43,14 +43,6 @@ class History(NamedTuple):
     v: np.ndarray  # (K, N) speeds [m/s]
     taus: np.ndarray  # (3,) reaction times on gap, own speed and approach rate [s]
     dt: float  # time step [s]
-
-
-class ErrorScales(NamedTuple):
-    """Size of the HDVs' estimation errors (Eq. 2), the same for every driver of a run."""
-
-    gap: float  # V_s [-]: the gap s is estimated as s exp(V_s w_s)
-    inverse_ttc: float  # sigma_r [1/s]: the approach rate dv as dv + s sigma_r w_l
-    enabled: bool  # False: exact estimates (w_s, w_l are not read)
 
 
 class EstimationErrors(NamedTuple):
@@ -70,25 +62,6 @@ class Estimates(NamedTuple):
 
 
 @kernel(inline="always")
-def delay_rows(step: int, tau: float, dt: float, size: int) -> tuple[int, int, float]:
-    """Where ``t - tau`` lies in a ring buffer of ``size`` rows at ``step``: the rows
-    ``n - j`` and ``n - j - 1`` and the weight ``r`` of the older (``tau = (j + r) dt``). The
-    same for every vehicle, so a step computes it once per delay."""
-    lag = tau / dt
-    j = math.floor(lag + 1e-9)
-    r = max(lag - j, 0.0)
-    return (step - j) % size, (step - j - 1) % size, r
-
-
-@kernel(inline="always")
-def interpolate(now: float, older: float, r: float) -> float:
-    """The state at ``(j + r) dt`` ago from the rows ``j`` and ``j + 1`` ago (linear)."""
-    if r == 0.0:
-        return now
-    return (1.0 - r) * now + r * older
-
-
-@kernel(inline="always")
 def perception_rows(
     step: int, taus: np.ndarray, dt: float, size: int
 ) -> tuple[tuple[int, int, float], tuple[int, int, float], tuple[int, int, float]]:
@@ -98,23 +71,6 @@ def perception_rows(
         delay_rows(step, taus[1], dt, size),
         delay_rows(step, taus[2], dt, size),
     )
-
-
-@kernel(inline="always")
-def perceived(
-    x_i: float, x_l: float, leader_length: float, v_i: float, dv: float, has: bool,
-    w_gap: float, w_ttc: float, scales: ErrorScales,
-) -> tuple[float, float, float]:  # fmt: skip
-    """Eq. 2: ``(s_est, v, v_leader_est)`` from the delayed positions ``x_i``, ``x_l``, the
-    delayed speed ``v_i`` and the delayed approach rate ``dv`` (``has``: a leader exists, else
-    the gap is infinite), with the driver's estimation errors ``w_gap``, ``w_ttc`` when
-    ``scales.enabled``."""
-    s = x_l - leader_length - x_i if has else math.inf
-    if scales.enabled:
-        s_true = s if has else 0.0
-        dv = dv + s_true * scales.inverse_ttc * w_ttc
-        s = s * math.exp(scales.gap * w_gap)
-    return s, v_i, v_i - (dv if has else 0.0)
 
 
 @kernel
@@ -161,85 +117,3 @@ def advance_errors_of(
         if is_hdv[i]:
             w_gap[i] = decay * w_gap[i] + kick * xi[0, i]
             w_ttc[i] = decay * w_ttc[i] + kick * xi[1, i]
-
-
-class Perception:
-    """Ring buffer of past states plus the HDVs' estimation-error processes."""
-
-    def __init__(
-        self, params: HDVParams, is_hdv: BoolArray, dt: float, rng: np.random.Generator
-    ) -> None:
-        n = is_hdv.size
-        self.dt = dt
-        self.params = params
-        self.is_hdv = is_hdv
-        lags = [
-            params.reaction_time_gap,
-            params.reaction_time_speed,
-            params.reaction_time_approach,
-        ]
-        self.size = int(np.floor(max(lags) / dt + 1e-9)) + 2
-        self.x_hist = np.zeros((self.size, n))
-        self.v_hist = np.zeros((self.size, n))
-        self.errors = params.estimation_errors and (
-            params.gap_error > 0 or params.inverse_ttc_error > 0
-        )
-        self.w_gap = rng.standard_normal(n) if self.errors else np.zeros(n)
-        self.w_ttc = rng.standard_normal(n) if self.errors else np.zeros(n)
-        self.decay = np.exp(-dt / params.error_correlation_time)
-        self.kick = np.sqrt(2.0 * dt / params.error_correlation_time)
-
-    def fill(self, ids: IntArray, x: FloatArray, v: FloatArray) -> None:
-        """Initialise the history of newly released vehicles with their current state."""
-        self.x_hist[:, ids] = x[ids]
-        self.v_hist[:, ids] = v[ids]
-
-    def push(self, step: int, x: FloatArray, v: FloatArray) -> None:
-        """Store the state at ``step`` (all vehicles)."""
-        row = step % self.size
-        self.x_hist[row] = x
-        self.v_hist[row] = v
-
-    def advance_errors(self, ids: IntArray, rng: np.random.Generator) -> None:
-        """One OU step of both error processes for the active HDVs ``ids``.
-
-        Innovations are drawn for all N vehicles (even when ``ids`` is empty) so the random
-        stream does not depend on which vehicles are active.
-        """
-        if not self.errors:
-            return
-        xi = rng.standard_normal((2, self.is_hdv.size))
-        advance_errors_of(
-            self.w_gap, self.w_ttc, _ints(ids), self.is_hdv, xi, self.decay, self.kick
-        )
-
-    @property
-    def taus(self) -> FloatArray:
-        """Reaction times on gap, own speed and approach rate [s]."""
-        p = self.params
-        return np.array(
-            [p.reaction_time_gap, p.reaction_time_speed, p.reaction_time_approach], dtype=float
-        )
-
-    def perceive(
-        self, step: int, ids: IntArray, leader: IntArray, leader_length: FloatArray
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Delayed, noisy ``(s_est, v, v_leader_est)`` of HDVs ``ids`` behind ``leader``.
-
-        ``leader`` is -1 where there is none: the gap is then infinite.
-        """
-        p = self.params
-        ids, leader = _ints(ids), _ints(leader)
-        s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
-        scales = ErrorScales(p.gap_error, p.inverse_ttc_error, self.errors)
-        perceive_into(
-            History(self.x_hist, self.v_hist, self.taus, self.dt), step,
-            EstimationErrors(self.w_gap, self.w_ttc, scales), ids, leader,
-            np.ascontiguousarray(leader_length, dtype=np.float64),
-            np.ones(self.is_hdv.size, dtype=np.bool_), Estimates(s, v, vl),
-        )  # fmt: skip
-        return s, v, vl
-
-
-def _ints(a: IntArray) -> IntArray:
-    return np.ascontiguousarray(a, dtype=np.int64).reshape(-1)

@@ -41,7 +41,7 @@ from hcomc.sim.step.plans import commanded_mask, encode_plan, holding_mask, repl
 
 if TYPE_CHECKING:
     from hcomc.config import ScenarioConfig
-    from hcomc.control.prediction.game_players import GameVehicle
+    from hcomc.control.lane_change_game.players import GameVehicle
     from hcomc.interface import Fleet
     from hcomc.sim.log import SimulationLog
     from hcomc.sim.neighbours import LaneIndex
@@ -141,7 +141,8 @@ def virtual_leaders(
 
     VV0 leads a CAV VR that follows its plan on the ramp, VV1 a cooperating VMC in
     longitudinal mode (until VR's merge is complete), VV2 a CAV VNR in lateral mode (within
-    the horizon); their states are those of :func:`hcomc.control.virtual_vehicle.virtual_states`
+    the horizon); their states are those of
+    :func:`hcomc.control.hierarchical.controller.virtual_states`
     (:func:`hcomc.sim.step.plans.virtual_rows`).
     """
     pi, pf = plan_table(plans)

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from hcomc.models.fuel import fuel_consumed
+from hcomc.equations.fuel import fuel_consumed
 from hcomc.road import Kind, Lane
 from hcomc.sim.log import EventKind, SimulationLog
 

@@ -13,15 +13,15 @@ end of the run.
 
 The same argument lets an environment put off making the twin: while :func:`can_twin` holds,
 the undisturbed run's mainline *is* the run's own, log rows included.
-:func:`ramp_may_reach` says when that may end within the next stretch of time, and
-:func:`ramp_untouched` checks afterwards that it did not.
+:func:`~hcomc.sim.step.ramp_reach.ramp_may_reach` says when that may end within the next
+stretch of time, and :func:`~hcomc.sim.step.ramp_reach.ramp_untouched` checks afterwards that
+it did not.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from hcomc._jit import kernel
 from hcomc.road import Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
@@ -29,6 +29,7 @@ from hcomc.sim.log.layout import CELL_FIELDS, FILL
 from hcomc.sim.log.slots import OPEN
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import adopt_log_columns
+from hcomc.sim.step.ramp_reach import ramp_untouched
 
 # the state arrays a step changes (everything else is built from config and demand alike)
 _STATE = (
@@ -59,48 +60,6 @@ def _copy_log_without(src: SimulationLog, dst: SimulationLog, rows: int, gone: n
         if end == OPEN:
             dst.owner[s] = -1
         dst.slot[i], dst.span[i] = -1, 0
-
-
-@kernel
-def ramp_untouched(c: layout.CoreArrays) -> bool:
-    """Whether every ramp vehicle released so far in run ``c`` is still on the ramp before
-    the acceleration lane and keeping its lane: the state part of :func:`can_twin`."""
-    start, first = c.consts[layout.ACCEL_START], c.queue_start[layout.RAMP]
-    for q in range(first, first + c.queue_pos[layout.RAMP]):
-        i = c.queues[q]
-        on_ramp = c.active[i] and c.lane[i] == layout.RAMP and c.origin[i] == c.target[i]
-        if not (on_ramp and c.x[i] < start):
-            return False
-    return True
-
-
-@kernel
-def ramp_may_reach(c: layout.CoreArrays, horizon: float) -> bool:
-    """Whether a ramp vehicle of run ``c`` might reach the acceleration lane within
-    ``horizon`` [s]: a released one from its position and speed, one due for release by then
-    from its release point and speed, each at its maximum acceleration all the way.
-
-    Car following never exceeds that acceleration, an environment's actions are capped at it
-    and no vehicle reverses, so False means none will unless driven harder from outside; a
-    caller that relies on it checks afterwards with :func:`ramp_untouched`.
-    """
-    start = c.consts[layout.ACCEL_START]
-    t = -c.consts[layout.WARMUP] + c.counters[layout.STEP] * c.consts[layout.DT]
-    first, end = c.queue_start[layout.RAMP], c.queue_start[layout.RAMP + 1]
-    released = first + c.queue_pos[layout.RAMP]
-    for q in range(first, end):
-        i = c.queues[q]
-        if q < released:
-            if not c.active[i]:
-                continue
-            x, v = c.x[i], c.v[i]
-        elif c.d_t[i] <= t + horizon + 1e-9:
-            x, v = c.d_x[i], c.d_v[i]
-        else:
-            continue
-        if x + v * horizon + 0.5 * c.matrix[3, i] * horizon * horizon >= start:
-            return True
-    return False
 
 
 def can_twin(sim: Simulation) -> bool:
@@ -157,4 +116,4 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
     return twin
 
 
-__all__ = ["can_twin", "ramp_may_reach", "ramp_untouched", "undisturbed_twin"]
+__all__ = ["can_twin", "undisturbed_twin"]

@@ -12,7 +12,7 @@ options), run in process through libsumo. Every step:
    vehicle's centre is in, so it switches mid-manoeuvre as in our engine): the run's state
    and its reading are :class:`hcomc.sumo.cosim_state.CosimState`.
 3. As in our engine, a ramp vehicle entering the control zone gets its key vehicles
-   (:func:`hcomc.control.key_vehicles.find_key_vehicles`) and the controller is asked for a
+   (:func:`hcomc.control.key_group.find_key_vehicles`) and the controller is asked for a
    plan on a read-only :class:`~hcomc.interface.TrafficView`.
 4. Plans are executed with the engine's helpers (:mod:`hcomc.sim.plan_execution`): a commanded CAV
    whose virtual vehicle is ahead follows min(real leader, virtual leader) with our model
@@ -37,12 +37,12 @@ from pathlib import Path
 
 import numpy as np
 
-from hcomc.control.key_vehicles import find_key_vehicles
+from hcomc.control.key_group import find_key_vehicles
 from hcomc.control.validation import checked, name_of
 from hcomc.interface import Mode, TrafficView, follow
 from hcomc.road import Kind, Lane
+from hcomc.sim.lane_change_decisions import Snapshot, decide
 from hcomc.sim.log import EventKind, SimulationLog
-from hcomc.sim.mobil import Snapshot, decide
 from hcomc.sim.neighbours import build_lane_index
 from hcomc.sim.plan_execution import ActivePlan, commanded, record_decision, virtual_leaders
 from hcomc.sumo.cosim_state import CosimState

@@ -6,7 +6,7 @@ for a vehicle that started on the ramp, the merge (the first row in lane 1 once 
 offset from the lane-1 centre is below 0.1 % of a lane width, i.e. the lateral motion is done),
 collisions (the oriented-rectangle test of Eq. 7 between every pair of vehicles whose extents
 overlap in the row; one event when an overlap starts). The key vehicles of each ramp vehicle
-are found as our engine does (:func:`hcomc.control.key_vehicles.find_key_vehicles`) in the
+are found as our engine does (:func:`hcomc.control.key_group.find_key_vehicles`) in the
 first row in which it is on the ramp inside the control zone, unless they are given.
 """
 
@@ -18,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.control.key_vehicles import find_key_vehicles
+from hcomc.control.key_group import find_key_vehicles
+from hcomc.equations.collision import vehicles_collide
 from hcomc.interface import Fleet, MergeGroup, TrafficView
 from hcomc.metrics import compute_metrics, merge_window
 from hcomc.road import Lane, lane_centre
-from hcomc.safety.collision import vehicles_collide
 from hcomc.sim.log import EventKind, SimulationLog
 
 __all__ = [

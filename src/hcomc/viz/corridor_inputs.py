@@ -20,12 +20,12 @@ another engine than the one ``hcomc simulate`` uses for it. Bad input raises
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from hcomc.viz.corridor import CORRIDOR_KINDS, KIND_TABLES, corridor_figure
+from hcomc.viz.sources import Source, is_scenario
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -59,8 +59,6 @@ TABLE_COLUMNS: dict[str, tuple[str, ...]] = {
     "trips": ("origin", "outcome", "travel_time"),
 }
 """Columns each run table needs for its figure (:data:`hcomc.viz.corridor.KIND_TABLES`)."""
-
-Source = str | os.PathLike[str]
 
 
 # --------------------------------------------------------------------------- classifying
@@ -124,7 +122,6 @@ def refuse_corridor_input(kind: str, sources: Sequence[Source]) -> None:
 def _not_a_corridor(kind: str, source: Source) -> ValueError:
     """The error for a corridor kind whose input is neither a corridor run nor a corridor."""
     from hcomc.corridor import corridor_preset_names
-    from hcomc.viz.inputs import is_scenario
 
     path = Path(source)
     if path.is_dir():

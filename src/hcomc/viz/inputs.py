@@ -30,12 +30,12 @@ allowed (the CLI prints it and exits with status 2).
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from hcomc.corridor.engine import scenario_config
+from hcomc.viz.sources import Source, is_scenario
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -49,7 +49,6 @@ __all__ = [
     "PARETO_OPTIMIZERS",
     "controller_logs",
     "decision_reports",
-    "is_scenario",
     "load_log",
     "load_reports",
     "load_runs",
@@ -73,8 +72,6 @@ PARETO_OPTIMIZERS: tuple[str, ...] = ("nsga2", "pso", "sa")
 
 _LOG_SUFFIXES = (".npz", ".parquet")
 _RUNS_NAMES = ("runs.parquet", "runs.csv")
-
-Source = str | os.PathLike[str]
 
 
 # --------------------------------------------------------------------------- loading
@@ -266,21 +263,6 @@ def decision_reports(
     return reports
 
 
-def is_scenario(source: Source) -> bool:
-    """A preset name (scenario or corridor) or a TOML file: something to simulate, as
-    opposed to a data file or directory to read."""
-    path = Path(source)
-    if path.suffix.lower() == ".toml":
-        return True
-    if path.exists():
-        return False
-    from hcomc.config import preset_names
-    from hcomc.corridor import corridor_preset_names
-
-    names = [*preset_names(), *corridor_preset_names()]
-    return str(source).lower() in {name.lower() for name in names}
-
-
 def _has_merge(scenario: Source) -> bool:
     """Whether a scenario has ramp vehicles that merge (so controllers can be compared)."""
     config = scenario_config(scenario)
@@ -337,8 +319,14 @@ def make_figure(
     hcomc.config.ConfigError
         On a bad scenario.
     """
-    from hcomc.viz import figures
     from hcomc.viz.corridor_inputs import refuse_corridor_input
+    from hcomc.viz.figures import (
+        contour_figure,
+        metrics_figure,
+        pareto_figure,
+        timespace_figure,
+        trajectories_figure,
+    )
 
     if kind not in FIGURE_KINDS:
         raise ValueError(f"unknown figure kind '{kind}'; allowed: {', '.join(FIGURE_KINDS)}")
@@ -359,20 +347,20 @@ def make_figure(
             logs = controller_logs(sources[0], seed=seed)
         else:
             logs = _labelled([load_log(s) for s in sources])
-        return figures.contour_figure(logs, **options)
+        return contour_figure(logs, **options)
     if kind in ("timespace", "trajectories"):
         if scenario:
             log = controller_logs(sources[0], seed=seed, configurations=("HCOMC",))["HCOMC"]
         else:
             log = load_log(sources[0])
-        fn = figures.timespace_figure if kind == "timespace" else figures.trajectories_figure
+        fn = timespace_figure if kind == "timespace" else trajectories_figure
         return fn(log, **options)
     if kind == "pareto":
         reports = decision_reports(sources[0], seed=seed) if scenario else load_reports(sources)
-        return figures.pareto_figure(reports, **options)
+        return pareto_figure(reports, **options)
     if scenario:
         raise ValueError(
             f"figure kind 'metrics' needs a runs table (runs.parquet/.csv or a results "
             f"directory), got scenario '{sources[0]}'"
         )
-    return figures.metrics_figure(load_runs(sources[0]), **options)
+    return metrics_figure(load_runs(sources[0]), **options)

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from hcomc.experiments.sweep import GRID_KEYS
+from hcomc.experiments.sweep_spec import GRID_KEYS
 from hcomc.metrics import METRICS
 from hcomc.viz.common import new_figure
 

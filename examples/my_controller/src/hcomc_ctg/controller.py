@@ -32,7 +32,7 @@ import numpy as np
 
 from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.control.longitudinal_candidate import reach_horizon
-from hcomc.control.virtual_vehicle import cubic_coefficients, cubic_extremes
+from hcomc.equations.virtual_vehicle import cubic_coefficients, cubic_extremes
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
 
 MERGE_OFFSET = 10.0

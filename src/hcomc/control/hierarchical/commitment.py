@@ -16,7 +16,7 @@ unless
 The candidates are the optimiser's Pareto set plus the live plan continued (its merge
 position, duration and remaining horizon, re-predicted from now) and the same cooperation on
 a small grid of merge positions and horizons, and Eq. 19's cost is taken over that pool
-(:func:`hcomc.optim.selection.eq19_costs`: min-max normalised, so the margin is a share of
+(:func:`hcomc.equations.selection.eq19_costs`: min-max normalised, so the margin is a share of
 the pool's range: 0.2 of the [0, 2] range of the two normalised costs).
 """
 
@@ -29,8 +29,8 @@ import numpy as np
 from hcomc._typing import FloatArray
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.control.hierarchical.problem_terms import AHEAD, MODE_NONE, OBJECTIVES
+from hcomc.equations.selection import eq19_costs
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
-from hcomc.optim.selection import eq19_costs
 
 Commitment = tuple[int, Mode]
 """What a plan commits the traffic to: the vehicle VR merges in front of (-1: none) and that

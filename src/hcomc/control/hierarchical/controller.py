@@ -1,8 +1,8 @@
 """HCOMC merge controller (paper Section III): game -> multi-objective optimisation -> Eq. 19.
 
 1. The six key vehicles are taken from the view
-   (:func:`hcomc.control.key_vehicles.find_key_vehicles`); the "behind" sequence uses the
-   relabelled group of :func:`hcomc.control.key_vehicles.behind_group`.
+   (:func:`hcomc.control.key_group.find_key_vehicles`); the "behind" sequence uses the
+   relabelled group of :func:`hcomc.control.key_group.behind_group`.
 2. For each sequence whose cooperating vehicle is a CAV, the Stackelberg/Harsanyi lane-change
    game (Section III-B) between that vehicle (SV) and its lane-2 follower (FV) decides whether
    lateral cooperation is admissible: when SV's equilibrium action is to change lane, or when
@@ -31,9 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hcomc._typing import FloatArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.hierarchical.commitment import choose, continuations, executed
 from hcomc.control.hierarchical.problem import MergeProblem
+from hcomc.control.hierarchical.problem_setup import load_prediction_kernels
 from hcomc.control.hierarchical.problem_terms import (
     AHEAD,
     OBJECTIVES,
@@ -42,8 +44,7 @@ from hcomc.control.hierarchical.problem_terms import (
     Prediction,
     default_starts,
 )
-from hcomc.control.hierarchical.row_scoring import load_prediction_kernels
-from hcomc.control.key_vehicles import behind_group
+from hcomc.control.key_group import behind_group
 from hcomc.control.lane_change_game.decision import LaneChangeDecision, game_params, game_vehicle
 from hcomc.control.lane_change_game.decision import lane_change_game as play_lane_change_game
 from hcomc.control.prediction.population import (
@@ -56,11 +57,11 @@ from hcomc.control.prediction.population import (
     VNF,
     VR,
 )
-from hcomc.control.virtual_vehicle import virtual_states
+from hcomc.equations.selection import eq19_branch, select_eq19
+from hcomc.equations.virtual_vehicle import cubic_state
 from hcomc.interface import MergeGroup, MergePlan, Mode, PlanDetails, TrafficView, elapsed_ms
 from hcomc.optim.base import Optimizer, ParetoResult
 from hcomc.optim.registry import optimizer_from_config
-from hcomc.optim.selection import eq19_branch, select_eq19
 from hcomc.road import Kind
 
 _PHANTOM_AHEAD = 1000.0  # [m] a missing VMF/VNF is a free-road phantom this far ahead
@@ -133,6 +134,30 @@ def key_state(view: TrafficView, group: MergeGroup, starts: np.ndarray | None = 
         ids=np.where(ids >= 0, ids, -1),
         starts=default_starts() if starts is None else starts,
     )
+
+
+def virtual_states(
+    plan: MergePlan, t: float, x: FloatArray, v: FloatArray, a: FloatArray
+) -> dict[str, tuple[float, float, float]]:
+    """State (x, v, a) at time t of each virtual vehicle ``plan`` has ("vv0", "vv1", "vv2").
+
+    Within the horizon a virtual vehicle is its cubic; after it, VV0 is the projection of VR's
+    future leader (``group.vmf``, if any) and VV1 that of VR; VV2 ends at the horizon. The
+    engine executes exactly these, and a replanning controller continues them.
+    """
+    g, tau = plan.group, t - plan.t0
+    out: dict[str, tuple[float, float, float]] = {}
+    after = {"vv0": g.vmf, "vv1": g.vr, "vv2": -1}
+    for name, coeffs in (("vv0", plan.vv0), ("vv1", plan.vv1), ("vv2", plan.vv2)):
+        if coeffs is None:
+            continue
+        if tau <= plan.horizon:
+            xv, vv, av = cubic_state(coeffs, tau)
+            out[name] = (float(xv), float(vv), float(av))
+        elif after[name] >= 0:
+            j = after[name]
+            out[name] = (float(x[j]), float(v[j]), float(a[j]))
+    return out
 
 
 def continuation_starts(view: TrafficView, group: MergeGroup) -> np.ndarray:

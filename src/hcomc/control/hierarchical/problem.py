@@ -21,10 +21,10 @@ The merge sequence (Section II-C) is a decision, not a rule: "ahead" puts VR bet
 VMC, and VMC cooperates; "behind" puts VR between VMC and VMR, and VMR cooperates. Both are
 rolled out with the same kernel on their own key group: for "behind" the group is relabelled
 so that the vehicle ahead of VR's slot (VMC) plays the VMF role and the one behind it (VMR)
-the VMC role (:func:`hcomc.control.key_vehicles.behind_group`). In lateral mode the cooperating
+the VMC role (:func:`hcomc.control.key_group.behind_group`). In lateral mode the cooperating
 vehicle moves to lane 2 and VR takes its place in front of the next lane-1 vehicle.
 
-Objectives, all minimised (columns named for :func:`hcomc.optim.selection.select_eq19`):
+Objectives, all minimised (columns named for :func:`hcomc.equations.selection.select_eq19`):
 
 * ``safety`` — U_safe, Eq. 15 at merge completion over the follower-leader pairs the merge
   creates (VR behind its new leader, VR's new follower behind VR; lateral mode also the
@@ -53,6 +53,11 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
+from hcomc.control.hierarchical.problem_setup import (
+    FUEL_COEFFICIENTS,
+    problem_constants,
+    row_constants,
+)
 from hcomc.control.hierarchical.problem_terms import (
     AHEAD,
     BEHIND,
@@ -63,14 +68,11 @@ from hcomc.control.hierarchical.problem_terms import (
     OBJECTIVES,
     KeyState,
     Prediction,
-    problem_constants,
 )
 from hcomc.control.hierarchical.row_scoring import (
-    FUEL_COEFFICIENTS,
     FUEL_ROLES,
     RowConstants,
     constants_handle,
-    row_constants,
     score_row,
     score_rows,
 )
@@ -85,7 +87,7 @@ from hcomc.control.prediction.population import (
     rollout,
 )
 from hcomc.control.prediction.scoring import objective_rows, penalised_costs
-from hcomc.models.fuel import fuel_rate
+from hcomc.equations.fuel import fuel_rate
 from hcomc.safety.critical import SafetyIndex
 
 
@@ -314,7 +316,7 @@ class MergeProblem:
     def _row_constants(self, which: int) -> RowConstants:
         """What :func:`~hcomc.control.hierarchical.row_scoring.score_row` takes from the planning
         instant and the variant ``which`` alone
-        (:func:`~hcomc.control.hierarchical.row_scoring.row_constants`), as the kernels take it
+        (:func:`~hcomc.control.hierarchical.problem_setup.row_constants`), as the kernels take it
         (:func:`~hcomc.control.hierarchical.row_scoring.constants_handle`); prepared on first
         use."""
         cached = self._row_cache.get(which)
@@ -368,7 +370,7 @@ class MergeProblem:
         Each vehicle's fuel over the window is completed to that distance at its end speed's
         cruise rate (a negative completion when it went further):
         ``fuel(D) = sum fe dt + fe_cruise(max(v_K, 1)) (D - dx) / max(v_K, 1)``, with the
-        rates of :func:`~hcomc.models.fuel.fuel_rate_scalar`
+        rates of :func:`~hcomc.equations.fuel.fuel_rate_scalar`
         (:func:`~hcomc.control.prediction.fuel._fuel_to_distance_kernel`).
         """
         return _fuel_to_distance_kernel(

@@ -4,9 +4,11 @@ modes, the key vehicles' state it is posed on, and the prediction it answers wit
 The names of the objectives and constraints (the columns of ``F`` and ``G``), the merge
 sequences and the threshold of the mode "none" are those of the decision vector described in
 :mod:`hcomc.control.hierarchical.problem`; :class:`KeyState` holds the six key vehicles at the
-planning instant, :class:`Prediction` the rolled-out candidates, :func:`problem_constants` the
-rollout's constants read from the scenario, and :func:`default_starts` the virtual vehicles'
-start states of a first plan.
+planning instant, :class:`Prediction` the rolled-out candidates and :func:`default_starts` the
+virtual vehicles' start states of a first plan. The compiled row scoring
+(:mod:`~hcomc.control.hierarchical.row_scoring`) reads these terms, so they import no config:
+the rollout's constants read from the scenario are
+:func:`~hcomc.control.hierarchical.problem_setup.problem_constants`.
 """
 
 from __future__ import annotations
@@ -16,29 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ScenarioConfig
-from hcomc.control.prediction.population import (
-    C_A_MERG,
-    C_ACCEL_END,
-    C_D,
-    C_DELAY_CAV,
-    C_DELAY_HDV,
-    C_DT,
-    C_EMERGENCY,
-    C_GAMMA,
-    C_POLITENESS,
-    C_VMC_DUR,
-    C_VV_DECEL,
-    C_WIDTH,
-    N_CONSTS,
-    N_STARTS,
-    P_A,
-    P_V0,
-    VMC,
-    KeyVehicles,
-)
-from hcomc.models.transition import transition_gamma
-from hcomc.safety.critical import SafetyIndex
+from hcomc.control.prediction.population import N_STARTS, P_A, P_V0, VMC, KeyVehicles
 
 __all__ = [
     "AHEAD",
@@ -52,7 +32,6 @@ __all__ = [
     "KeyState",
     "Prediction",
     "default_starts",
-    "problem_constants",
 ]
 
 OBJECTIVES: tuple[str, ...] = ("safety", "fuel", "efficiency")
@@ -135,25 +114,6 @@ class Prediction:
     vv1: FloatArray
     vv2: FloatArray
     sequence: IntArray  # (C,) AHEAD or BEHIND
-
-
-def problem_constants(config: ScenarioConfig) -> FloatArray:
-    """The rollout's constants vector, every value read from ``config``."""
-    safety = SafetyIndex.from_config(config.control)
-    consts = np.zeros(N_CONSTS)
-    consts[C_DT] = config.control.prediction_dt
-    consts[C_ACCEL_END] = config.road.accel_lane_end
-    consts[C_WIDTH] = config.road.lane_width
-    consts[C_VMC_DUR] = config.cav.lane_change_duration
-    consts[C_GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
-    consts[C_EMERGENCY] = config.lane_change.emergency_decel
-    consts[C_VV_DECEL] = config.control.virtual_max_decel
-    consts[C_POLITENESS] = config.lane_change.politeness
-    consts[C_D] = safety.min_distance
-    consts[C_A_MERG] = safety.emergency_decel
-    consts[C_DELAY_CAV] = safety.delay_cav
-    consts[C_DELAY_HDV] = safety.delay_hdv
-    return consts
 
 
 def default_starts() -> FloatArray:

@@ -4,11 +4,14 @@
 population) and :meth:`~hcomc.control.hierarchical.problem.MergeProblem.evaluate_row` (simulated
 annealing's single rows) score each row in one compiled body (:func:`score_into`): its rollout,
 U_fuel, the objectives, the constraints and the penalised cost, on constants prepared once per
-planning instant and sequence (:func:`row_constants`). No population of trajectories is
-allocated and the values equal those of :meth:`MergeProblem.predict
+planning instant and sequence
+(:func:`~hcomc.control.hierarchical.problem_setup.row_constants`). No population of
+trajectories is allocated and the values equal those of :meth:`MergeProblem.predict
 <hcomc.control.hierarchical.problem.MergeProblem.predict>` bit for bit.
-:func:`load_prediction_kernels` loads these kernels, and the others a decision needs, once per
-process.
+:func:`~hcomc.control.hierarchical.problem_setup.load_prediction_kernels` loads these kernels,
+and the others a decision needs, once per process. What is read from the config (the fuel
+model, the game's parameters) is prepared there, beside the problem, so that these kernels'
+cache depends on the kernels alone.
 
 The constants are a :class:`RowConstants` record, which the kernels receive through its
 compiled handle (:func:`constants_handle`), as the engine's step receives its ``CoreArrays``
@@ -20,7 +23,6 @@ pointer.
 
 from __future__ import annotations
 
-import functools
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -28,49 +30,23 @@ from numba.core import types
 from numba.experimental import structref
 
 from hcomc._jit import kernel
-from hcomc._typing import FloatArray
-from hcomc.config import IDMParams
-from hcomc.control.hierarchical.problem_terms import CONSTRAINTS, G_LATERAL, G_SEQUENCE, KeyState
-from hcomc.control.lane_change_game.params import GAME_DEFAULT
+from hcomc.control.hierarchical.problem_terms import G_LATERAL, G_SEQUENCE
 from hcomc.control.prediction.candidate import RolloutWork
-from hcomc.control.prediction.fuel import (
-    FuelCoefficients,
-    _fuel_to_distance_kernel,
-    common_distance_fuel,
-)
-from hcomc.control.prediction.game_players import GameVehicle, simulate_sv
+from hcomc.control.prediction.fuel import FuelCoefficients, common_distance_fuel
 from hcomc.control.prediction.layout import N_G
-from hcomc.control.prediction.population import (
-    N_ROLES,
-    N_STARTS,
-    VMC,
-    VR,
-    KeyVehicles,
-    resolve_starts,
-    rollout_into,
-    rollout_work,
-    vmc_tracks,
-    warm_up,
-    warm_up_instant,
-)
+from hcomc.control.prediction.population import VMC, VR, KeyVehicles, rollout_into, rollout_work
 from hcomc.control.prediction.scoring import objectives_into, penalised_cost
-from hcomc.models.fuel import FUEL_DEFAULT
 
 __all__ = [
-    "FUEL_COEFFICIENTS",
     "FUEL_ROLES",
     "RowConstants",
     "RowConstantsRef",
     "constants_handle",
-    "load_prediction_kernels",
-    "row_constants",
     "score_into",
     "score_row",
     "score_rows",
 ]
 
-FUEL_COEFFICIENTS = FuelCoefficients.of(FUEL_DEFAULT)
-"""The default fuel model's coefficients as the kernels take them."""
 FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64))
 """U_fuel's roles: VR alone, or VR and the cooperating vehicle (indexed by its presence)."""
 
@@ -78,7 +54,7 @@ FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64
 class RowConstants(NamedTuple):
     """What the scoring of a row (:func:`score_row`) takes from its problem: the values that
     depend on the planning instant and the key group alone, prepared once per problem and
-    sequence (:func:`row_constants`)."""
+    sequence (:func:`~hcomc.control.hierarchical.problem_setup.row_constants`)."""
 
     key: KeyVehicles  # the key vehicles at the planning instant
     starts: np.ndarray  # (4,) start states of VV0 and VV1 [m, m/s], resolved (no NaN)
@@ -125,30 +101,6 @@ def _new_ref(*values: Any) -> Any:
     order), made in compiled code: numba's own constructor path would compile anew in every
     process, this kernel is loaded from numba's cache."""
     return RowConstantsRef(*values)
-
-
-def row_constants(
-    state: KeyState,
-    starts: FloatArray,
-    cf: FloatArray,
-    consts: FloatArray,
-    n_steps: int,
-    cf_fuel: float,
-    dt: float,
-    threshold: float,
-    fuel_ref: float,
-) -> RowConstants:
-    """The :class:`RowConstants` of the key group ``state``: its vehicles, the resolved
-    ``starts``, the rollout constants, the no-merge counterfactual ``cf`` and the cooperating
-    vehicle's fuel in it ``cf_fuel`` [mL], the cost's ``threshold`` and ``fuel_ref``, and
-    VMC's pre-pass tracks, rolled out here once instead of once per row."""
-    key = state.vehicles()
-    tracks = vmc_tracks(key, consts, n_steps)
-    roles = FUEL_ROLES[int(bool(state.present[VMC]))]
-    return RowConstants(
-        key, starts, consts, int(n_steps), cf, tracks, roles, float(cf_fuel), FUEL_COEFFICIENTS,
-        float(dt), float(threshold), float(fuel_ref),
-    )  # fmt: skip
 
 
 @kernel
@@ -207,26 +159,3 @@ def score_rows(
         lat = lateral[r]
         score_into(constants, X[r], lat, 1.0 if lat and not allowed else 0.0,
                    1.0 if no_behind[r] else 0.0, F[r], G[r], work)  # fmt: skip
-
-
-@functools.cache  # once per process
-def load_prediction_kernels() -> None:
-    """Load (or compile) the kernels of a decision once per process, so that no timed
-    decision pays for it: the rollout (population and single row), U_fuel's and the
-    lane-change game's SV simulation."""
-    warm_up()
-    key, consts, n_steps, cf = warm_up_instant()  # evaluate_row's kernel
-    starts = resolve_starts(key.x, key.v, key.params, np.full(N_STARTS, np.nan))
-    tracks = vmc_tracks(key, consts, n_steps)
-    constants = constants_handle(RowConstants(key, starts, consts, n_steps, cf, tracks,
-                                              FUEL_ROLES[1], 0.0, FUEL_COEFFICIENTS, 0.5, 1.0,
-                                              1.0))  # fmt: skip
-    row, F, G = np.array([800.0, 4.0, 6.0, 0.0, 0.0]), np.empty(3), np.empty(len(CONSTRAINTS))
-    score_row(constants, row, False, 0.0, 0.0, F, G)
-    rows, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)  # evaluate's
-    score_rows(constants, row[None], rows, lateral, True, lateral, F[None], G[None])
-    trajectory = np.zeros((1, 2, N_ROLES))
-    roles = np.zeros(1, dtype=np.int64)
-    _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, FUEL_COEFFICIENTS)
-    sv = GameVehicle(x=0.0, v=10.0, length=5.0, desired_speed=30.0, is_cav=True)
-    simulate_sv(sv, None, None, IDMParams(), GAME_DEFAULT)

@@ -7,5 +7,6 @@ discretionary change and by HCOMC for VR's lateral cooperation),
 :mod:`~hcomc.control.lane_change_game.params` holds the players' actions, driver types and
 parameters, :mod:`~hcomc.control.lane_change_game.costs` the cost terms of a joint action and
 :mod:`~hcomc.control.lane_change_game.solvers` the generic two-player solvers. The players'
-motion over the horizon is predicted in :mod:`hcomc.control.prediction.game_players`.
+motion over the horizon is predicted in :mod:`~hcomc.control.lane_change_game.players` (SV's with
+the kernel of :mod:`hcomc.control.prediction.game_players`).
 """

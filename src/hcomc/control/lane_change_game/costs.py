@@ -1,7 +1,7 @@
 r"""Cost model of the discretionary lane-change game (paper Section III-B).
 
 The simulated cost :math:`J = w_s J_s + w_e J_e + w_c J_c` of every joint action over the
-horizon, from the players' motion predicted by :mod:`hcomc.control.prediction.game_players`,
+horizon, from the players' motion predicted by :mod:`hcomc.control.lane_change_game.players`,
 under the actions and parameters of :mod:`hcomc.control.lane_change_game.params`; the
 assumptions behind them are listed in :mod:`hcomc.control.lane_change_game.decision`, whose
 :func:`~hcomc.control.lane_change_game.decision.lane_change_game` builds the cost matrices from
@@ -14,7 +14,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray
 from hcomc.control.lane_change_game.params import GameParams
-from hcomc.safety.critical import critical_acceleration
+from hcomc.equations.safety import critical_acceleration
 
 __all__ = ["INFEASIBLE_SAFETY_COST", "comfort_cost", "efficiency_cost", "safety_cost"]
 

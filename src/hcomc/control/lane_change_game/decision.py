@@ -21,7 +21,7 @@ Every joint action is simulated over the horizon :math:`H = T_{lc}` on the grid
 each term normalised to about [0, 1]:
 
 * safety :math:`J_s = \min(1, a_{cr}/a_{th})` with :math:`a_{cr}` the worst critical
-  acceleration (paper Eq. 15, :func:`hcomc.safety.critical.critical_acceleration`) over the
+  acceleration (paper Eq. 15, :func:`hcomc.equations.safety.critical_acceleration`) over the
   relevant follower/leader pairs and the horizon, :math:`a_{th}` =
   :attr:`GameParams.safety_threshold`; :math:`J_s = 10` (effectively forbidding) when a gap is
   :math:`\le 0` (overlap) or the required deceleration is infeasible (:math:`a_{cr} = \infty`,
@@ -100,18 +100,18 @@ from hcomc.control.lane_change_game.params import (
     GameParams,
     game_params,
 )
-from hcomc.control.lane_change_game.solvers import (
-    GameSolution,
-    solve_cooperative,
-    solve_stackelberg_harsanyi,
-)
-from hcomc.control.prediction.game_players import (
+from hcomc.control.lane_change_game.players import (
     GameVehicle,
     fv_kinematics,
     game_vehicle,
     lateral_accel,
     leader_track,
     simulate_sv,
+)
+from hcomc.control.lane_change_game.solvers import (
+    GameSolution,
+    solve_cooperative,
+    solve_stackelberg_harsanyi,
 )
 
 __all__ = [

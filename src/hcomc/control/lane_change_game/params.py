@@ -4,7 +4,7 @@ The action indices of the subject vehicle SV and of the follower FV, the Harsany
 of an HDV follower (:class:`DriverType`) and the game's parameters (:class:`GameParams`: types,
 prior, weights, horizon and the Eq. 15 values, these read from the scenario config by
 :func:`game_params`). The players' motion simulated with them is in
-:mod:`hcomc.control.prediction.game_players`, the costs in
+:mod:`hcomc.control.lane_change_game.players`, the costs in
 :mod:`hcomc.control.lane_change_game.costs`; the assumptions behind them are listed in
 :mod:`hcomc.control.lane_change_game.decision`.
 """

@@ -36,7 +36,7 @@ cell                  key group predicted                     follower of VR's s
 (behind, not yield)   relabelled group, old VMR car-follows   VMR
 ====================  ======================================  ==============================
 
-The relabelled group is :func:`hcomc.control.key_vehicles.behind_group` (old VMC → ``vmf``, old
+The relabelled group is :func:`hcomc.control.key_group.behind_group` (old VMC → ``vmf``, old
 VMR → ``vmc``). "Yield" / "not yield" is obtained by overriding the ``coop`` flag of the ``vmc``
 role in a copy of the prediction's key state
 (:func:`hcomc.control.longitudinal_candidate.with_cooperation`): the rollout makes that role

@@ -3,8 +3,8 @@
 The prediction assumptions (module docstring of :mod:`hcomc.control.prediction.population`) in code:
 VMF and VNF keep their speed; VR, VMC, VMR and VNR follow the nearest key vehicle ahead in
 the lane(s) they occupy; during a lane change the accelerations behind the origin and the
-target leader are blended by Eq. 14 (:func:`hcomc.models.transition.transition_psi` and
-:func:`~hcomc.models.transition.blend`, their one home); a commanded vehicle also follows its
+target leader are blended by Eq. 14 (:func:`hcomc.equations.transition.transition_psi` and
+:func:`~hcomc.equations.transition.blend`, their one home); a commanded vehicle also follows its
 cubic virtual vehicle. In the pre-pass (``joint`` False) VR follows only VV0 and VMF, VMC only
 VMF and VNF, and nobody follows VV1 or VV2 (their end states are not fixed yet).
 """
@@ -40,7 +40,7 @@ from hcomc.control.prediction.step import (
     free_road,
     leader,
 )
-from hcomc.models.transition import blend, transition_psi
+from hcomc.equations.transition import blend, transition_psi
 
 
 @kernel(inline="always")

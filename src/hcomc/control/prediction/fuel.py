@@ -2,9 +2,7 @@
 
 Each vehicle's fuel over the prediction window is completed to the distance it covers in the
 no-merge counterfactual at its end speed's cruise rate; the rates are
-:func:`hcomc.models.fuel.fuel_rate_scalar`, their one home, summed in numpy's pairwise order
-(:func:`hcomc.optim.numpy_sum.pairwise_sum`) so that the values equal those of
-:func:`~hcomc.models.fuel.fuel_rate` summed with ``ndarray.sum``, bit for bit. Used for whole
+:func:`hcomc.equations.fuel.fuel_rate_scalar`, their one home, summed in time order. Used for whole
 populations (:meth:`hcomc.control.hierarchical.problem.MergeProblem.evaluate`) and for the
 single rows of simulated annealing alike.
 """
@@ -14,8 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.models.fuel import FuelCoefficients, fuel_rate_scalar
-from hcomc.optim.numpy_sum import pairwise_sum
+from hcomc.equations.fuel import FuelCoefficients, fuel_rate_scalar
 
 
 @kernel
@@ -23,24 +20,25 @@ def _fuel_to_distance_kernel(
     cf: np.ndarray, roles: np.ndarray, X: np.ndarray, V: np.ndarray, A: np.ndarray, dt: float,
     coefficients: FuelCoefficients,
 ) -> np.ndarray:  # fmt: skip
-    """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed
-    times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still missing."""
+    """:meth:`MergeProblem._fuel_to_distance` (n, C): Eq. 16 rates of samples 1..K summed in
+    time order, times ``dt``, plus the cruise rate at ``max(v_K, 1)`` over the distance still
+    missing."""
     b0, b1, b2, b3, c0, c1, c2, positive = coefficients
     C, K1 = X.shape[0], X.shape[1]
     out = np.empty((roles.size, C))
-    rate = np.empty(K1 - 1)
     for i in range(roles.size):
         r = roles[i]
         distance = cf[0, K1 - 1, r] - cf[0, 0, r]
         for c in range(C):
+            burnt = 0.0
             for k in range(1, K1):
-                rate[k - 1] = fuel_rate_scalar(
+                burnt += fuel_rate_scalar(
                     V[c, k, r], A[c, k, r], b0, b1, b2, b3, c0, c1, c2, positive
                 )
             v_end = max(V[c, K1 - 1, r], 1.0)
             cruise = fuel_rate_scalar(v_end, 0.0, b0, b1, b2, b3, c0, c1, c2, positive)
             rest = distance - (X[c, K1 - 1, r] - X[c, 0, r])
-            out[i, c] = pairwise_sum(rate, 0, K1 - 1) * dt + cruise * rest / v_end
+            out[i, c] = burnt * dt + cruise * rest / v_end
     return out
 
 

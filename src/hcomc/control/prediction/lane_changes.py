@@ -2,7 +2,7 @@
 
 As in the engine, a lane change follows the quintic path of Eq. 4-6 parametrised in x, from
 the position where it starts to ``x0 + max(v T_lc, 3 L)``, and a changing vehicle occupies
-both lanes until its change ends. The path is :func:`hcomc.models.quintic.lateral_state` (its
+both lanes until its change ends. The path is :func:`hcomc.equations.lane_change.lateral_state` (its
 one home); the progress of one candidate is a small vector (layout ``L_*`` of
 :mod:`hcomc.control.prediction.layout`).
 """
@@ -38,8 +38,8 @@ from hcomc.control.prediction.layout import (
     VNR,
     VR,
 )
-from hcomc.models.quintic import lateral_state
-from hcomc.safety.collision_kernels import vehicle_pair_collides
+from hcomc.equations._collision_kernels import vehicle_pair_collides
+from hcomc.equations.lane_change import lateral_state
 
 
 @kernel
@@ -136,7 +136,7 @@ def collisions_at(
     Axis-aligned bounding boxes first: a rectangle of length L and width W at heading h lies
     within x in [x - L - W/2, x + W/2] and y within W/2 + L |sin h| of its front-bumper
     reference point, so only pairs whose boxes overlap can collide; those get the exact Eq. 7
-    test of :func:`hcomc.safety.collision.vehicle_pair_collides`. The boxes of the present
+    test of :func:`hcomc.equations.collision.vehicle_pair_collides`. The boxes of the present
     roles are taken once per step (columns of ``box``: y reach, x front, x rear, role).
     """
     n = 0

@@ -62,7 +62,7 @@ from hcomc.control.prediction.step import (
     new_state,
     reset_state,
 )
-from hcomc.control.virtual_vehicle import cubic_into
+from hcomc.equations.virtual_vehicle import cubic_into
 
 
 @kernel

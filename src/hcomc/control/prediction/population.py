@@ -43,7 +43,7 @@ without the per-call work only a population needs. They are split by concern —
 (:mod:`~hcomc.control.prediction.candidate`), scoring
 (:mod:`~hcomc.control.prediction.scoring`) and fuel
 (:mod:`~hcomc.control.prediction.fuel`) — and every equation is called from its one home
-in :mod:`hcomc.models`, :mod:`hcomc.safety` and :mod:`hcomc.control.virtual_vehicle`, the
+in :mod:`hcomc.equations`, :mod:`hcomc.safety` and :mod:`hcomc.control.virtual_vehicle`, the
 same functions the engine executes.
 """
 
@@ -112,7 +112,7 @@ from hcomc.control.prediction.layout import (
     Trajectories,
 )
 from hcomc.control.prediction.passes import counterfactual, vmc_pre_track
-from hcomc.models.idm import equilibrium_gap
+from hcomc.equations.idm import equilibrium_gap
 
 __all__ = [
     "C_ACCEL_END", "C_A_MERG", "C_D", "C_DELAY_CAV", "C_DELAY_HDV", "C_DT", "C_EMERGENCY",
@@ -171,7 +171,7 @@ def resolve_starts(
     """``starts`` with its NaN entries replaced by the Eq. 8 defaults.
 
     VV1 starts at VMF's state; VV0 at VR's speed, a VMF-length leader at VR's IDM equilibrium
-    gap (:func:`hcomc.models.idm.equilibrium_gap`, at a speed capped just below v0 so that
+    gap (:func:`hcomc.equations.idm.equilibrium_gap`, at a speed capped just below v0 so that
     the gap is finite).
     """
     out = np.array(starts, dtype=np.float64)

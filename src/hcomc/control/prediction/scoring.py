@@ -3,8 +3,8 @@ decision, the feasibility of the virtual vehicles, the objective vector and the 
 cost of single-objective optimisers (Eq. 16 over a common distance:
 :mod:`~hcomc.control.prediction.fuel`).
 
-Eq. 15 is :func:`hcomc.safety.critical.critical_accel` and the cubics' extremes
-:func:`hcomc.control.virtual_vehicle.cubic_minima`, their one homes. The objective vector
+Eq. 15 is :func:`hcomc.equations.safety.critical_accel` and the cubics' extremes
+:func:`hcomc.equations.virtual_vehicle.cubic_minima`, their one homes. The objective vector
 (:func:`objectives_into`) and the cost (:func:`penalised_cost`) are written once here and
 called both for whole populations (:meth:`hcomc.control.hierarchical.problem.MergeProblem.evaluate`,
 ``scalarise``) and for the single rows of simulated annealing (``evaluate_row``), so that both
@@ -36,9 +36,9 @@ from hcomc.control.prediction.layout import (
     VR,
 )
 from hcomc.control.prediction.step import behind, free_road
-from hcomc.control.virtual_vehicle import cubic_minima
-from hcomc.models.incentive import mobil_incentive
-from hcomc.safety.critical import critical_accel
+from hcomc.equations.incentive import mobil_incentive
+from hcomc.equations.safety import critical_accel
+from hcomc.equations.virtual_vehicle import cubic_minima
 
 U_SAFE_CAP = 1e3
 """Cap of the safety objective [m/s^2]: an unavoidable crash (U_safe = inf) is constrained
@@ -122,7 +122,7 @@ def lane_change_incentive(
     """Eq. 17, the MOBIL-style incentive of VR's lane change at its decision [m/s^2].
 
     ``U_eff = (a_VR,new - a_VR,ori) + eta sum_{VMC, VMR, VNR} (a_i,new - a_i,ori)``
-    (:func:`hcomc.models.incentive.mobil_incentive`), each acceleration the vehicle's own
+    (:func:`hcomc.equations.incentive.mobil_incentive`), each acceleration the vehicle's own
     car-following model (:func:`~hcomc.control.prediction.step.behind`) in the predicted state
     ``S`` (8, 6) of the step at which VR begins its change: "new" with VR in lane 1 (and, in
     lateral mode, the cooperating VMC in lane 2), "ori" as before the merge (VR on the

@@ -1,10 +1,10 @@
 """Per-step kernels of the prediction: car following of a role, leaders, integration.
 
 Every equation is called from its one home: car following (Eq. 1, the IIDM, Eq. 3) from the
-two parts :func:`hcomc.models.following.follow_accel` composes (``free_term``, taken once per
+two parts :func:`hcomc.equations.car_following.follow_accel` composes (``free_term``, taken once per
 role and step, and ``follow_accel_given``), the virtual vehicles' cubics (Eq. 9) from
-:func:`hcomc.control.virtual_vehicle.cubic_point`, and the integration from
-:func:`hcomc.models.ballistic.ballistic_step`, the engine's. The roles' state is one (8, 6)
+:func:`hcomc.equations.virtual_vehicle.cubic_point`, and the integration from
+:func:`hcomc.equations.integrate.ballistic_step`, the engine's. The roles' state is one (8, 6)
 array ``S`` (rows ``R_*`` of :mod:`hcomc.control.prediction.layout`), so that the compiled
 kernels pass few arrays.
 """
@@ -38,9 +38,9 @@ from hcomc.control.prediction.layout import (
     R_V,
     R_X,
 )
-from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.models.ballistic import ballistic_step
-from hcomc.models.following import follow_accel_given, free_term
+from hcomc.equations.car_following import follow_accel_given, free_term
+from hcomc.equations.integrate import ballistic_step
+from hcomc.equations.virtual_vehicle import cubic_point
 
 
 @kernel(inline="always")

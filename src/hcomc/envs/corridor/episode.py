@@ -27,24 +27,29 @@ from typing import Literal
 import numpy as np
 
 from hcomc.config import ConfigError
+from hcomc.config.fuel import FUEL_DEFAULT
 from hcomc.corridor import Corridor
 from hcomc.envs.observation import N_OBS, SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.options import RewardWeights
-from hcomc.models.following import follow_accel
-from hcomc.models.fuel import FUEL_DEFAULT, fuel_rate_scalar
+from hcomc.equations.car_following import follow_accel
+from hcomc.equations.fuel import fuel_rate_scalar
 from hcomc.road import VMC
-from hcomc.sim.corridor.fleet import build_fleet
-from hcomc.sim.corridor.layout import KIND_ON, build_layout
+from hcomc.sim.corridor.layout import KIND_ON
 from hcomc.sim.corridor.motion import advance
 from hcomc.sim.corridor.plans import fill_view
+from hcomc.sim.corridor.setup import (
+    allocate,
+    build_fleet,
+    build_layout,
+    ramp_code,
+    vehicles_of,
+)
 from hcomc.sim.corridor.state import (
     C_AGENTS,
     C_COLLISIONS,
     C_STEP,
     ON_ROAD,
     P_EMERGENCY,
-    allocate,
-    vehicles_of,
 )  # fmt: skip
 
 __all__ = ["CorridorAgents", "CorridorEpisode", "CorridorStep", "PeriodTerms"]
@@ -283,7 +288,7 @@ class CorridorEpisode:
                  reward: RewardWeights) -> None:  # fmt: skip
         self.run = CorridorAgents(c, seed, action_period)
         self.seed, self.reward, self.max_time = int(seed), reward, max_episode_time
-        self.code = self.run.layout.ramp_code(ramp, c)
+        self.code = ramp_code(self.run.layout, ramp, c)
         later = self.run.ramp_cavs(ramp)
         later = later[self.run.fleet.depart[later] >= start_after]
         if later.size == 0:

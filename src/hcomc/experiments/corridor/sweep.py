@@ -1,6 +1,6 @@
 """Sweeps whose base is a corridor: a grid of dotted corridor keys x configuration x seed.
 
-A sweep spec (:class:`hcomc.experiments.sweep.SweepSpec`) whose ``base`` is a corridor preset
+A sweep spec (:class:`hcomc.experiments.sweep_spec.SweepSpec`) whose ``base`` is a corridor preset
 or file sweeps ``[corridor_grid]``: dotted corridor keys (as ``--set`` takes them, e.g.
 ``"demand.main.cav_share" = [0.2, 0.8]``, or as nested tables), each with its list of
 values; every combination is a cell. ``duration`` sets ``corridor.duration``; the scenario
@@ -14,17 +14,15 @@ from __future__ import annotations
 
 import itertools
 import json
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import pandas as pd
 
 from hcomc.config import ConfigError
 from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
 from hcomc.experiments.corridor.runs import CorridorSpec, check, resolve
+from hcomc.experiments.sweep_spec import SweepSpec
 from hcomc.experiments.tables import mean_ci
-
-if TYPE_CHECKING:
-    from hcomc.experiments.sweep import SweepSpec
 
 _EXAMPLE = '[corridor_grid] with dotted corridor keys, e.g. "demand.main.cav_share" = [0.2, 0.8]'
 

@@ -2,57 +2,59 @@
 ``PSO._adapt``).
 
 :func:`swarm_spread` measures how the personal bests spread and where the social best lies
-among them in one compiled pass, rounding as pymoo's numpy does where numpy's float64 sums
-are the pairwise summation of :mod:`hcomc.optim.numpy_sum`; :func:`adapt` turns that into
-the evolutionary factor, its dominant fuzzy state and the new weights, so that
-:class:`~hcomc.optim.pso.optimizer.CompiledPSOOptimizer` adapts as pymoo's ``PSO`` (see
-:mod:`hcomc.optim.pso.optimizer`).
+among them in one compiled pass; :func:`adapt` turns that into the evolutionary factor, its
+dominant fuzzy state and the new weights, so that
+:class:`~hcomc.optim.pso.optimizer.CompiledPSOOptimizer` adapts as pymoo's ``PSO`` does (see
+:mod:`hcomc.optim.pso.optimizer`). Sums are plain sums in index order and ``w``'s ``exp`` is the
+C library's: the values depend on neither numpy's summation order nor its CPU-dispatched
+``exp``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from hcomc._jit import borrow, kernel
+from hcomc._jit import kernel
 from hcomc._typing import FloatArray
-from hcomc.optim.numpy_sum import pairwise_sum
+from hcomc.optim.ieee import exp
 
 __all__ = ["adapt", "swarm_spread"]
 
 
 @kernel(inline="always")  # called n^2 times per spread: no call with array arguments
-def _distance(p: FloatArray, q: FloatArray, width: FloatArray, terms: FloatArray) -> float:
-    """Box-normalised euclidean distance of two rows, summing the squared terms as numpy's
-    ``sum(axis=1)`` does."""
+def _distance(p: FloatArray, q: FloatArray, width: FloatArray) -> float:
+    """Box-normalised euclidean distance of two rows, its squared terms summed in variable
+    order."""
+    total = 0.0
     for k in range(p.size):
         d = (p[k] - q[k]) / width[k]
-        terms[k] = d * d
-    return float(np.sqrt(pairwise_sum(terms, 0, terms.size)))
+        total += d * d
+    return float(np.sqrt(total))
 
 
 @kernel
 def _spread_kernel(
-    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray, scratch: FloatArray
+    P_X: FloatArray, s_x: FloatArray, xl: FloatArray, xu: FloatArray
 ) -> tuple[FloatArray, float]:
-    """:func:`swarm_spread` compiled; ``scratch`` (n_var,) holds a distance's terms."""
+    """:func:`swarm_spread` compiled."""
     n = P_X.shape[0]
     width = xu - xl
     D, mD = np.empty((n, n)), np.empty(n)
-    terms = borrow(scratch)  # n^2 sums without reference counting (the caller keeps it)
     for i in range(n):
-        D[i, i] = _distance(P_X[i], P_X[i], width, terms)
+        D[i, i] = _distance(P_X[i], P_X[i], width)
         for j in range(i + 1, n):
-            # a - b is exactly -(b - a): the distance matrix is symmetric bit for bit
-            d = _distance(P_X[i], P_X[j], width, terms)
+            # a - b is exactly -(b - a): the distance matrix is symmetric
+            d = _distance(P_X[i], P_X[j], width)
             D[i, j], D[j, i] = d, d
     for i in range(n):
-        mD[i] = pairwise_sum(D[i], 0, n) / (n - 1)
-    copies = np.empty(n * n)
+        total = 0.0
+        for j in range(n):
+            total += D[i, j]
+        mD[i] = total / (n - 1)
+    social = 0.0
     for j in range(n):
-        copies[j] = _distance(s_x, P_X[j], width, terms)
-    for k in range(1, n):
-        copies[k * n : (k + 1) * n] = copies[:n]
-    return mD, pairwise_sum(copies, 0, n * n) / (n * n)
+        social += _distance(s_x, P_X[j], width)
+    return mD, social / n
 
 
 def swarm_spread(
@@ -60,11 +62,9 @@ def swarm_spread(
 ) -> tuple[FloatArray, float]:
     """pymoo's two spreads of ``PSO._adapt`` (box-normalised euclidean distances): each
     personal best's mean distance to all personal bests (itself included, divided by n - 1)
-    and the mean distance of the social best ``s_x`` to them, with pymoo's rounding.
-
-    One compiled pass; its sums are numpy's pairwise summation (:func:`pairwise_sum`).
+    and the mean distance of the social best ``s_x`` to them. One compiled pass, plain sums.
     """
-    mD, g_D = _spread_kernel(P_X, s_x, xl, xu, np.empty(P_X.shape[1]))
+    mD, g_D = _spread_kernel(P_X, s_x, xl, xu)
     return mD, float(g_D)
 
 
@@ -98,7 +98,7 @@ def adapt(
     pymoo does), and ``w = 1 / (1 + 1.5 exp(-2.6 f))``.
     """
     mD, g_D = swarm_spread(P_X, s_x, xl, xu)
-    lo, hi = mD.min(), mD.max()
+    lo, hi = float(mD.min()), float(mD.max())
     f = (g_D - lo) / (hi - lo + 1e-32)
     if np.isnan(f):  # pymoo fails here too (its memberships of NaN are None)
         raise ValueError(
@@ -114,6 +114,6 @@ def adapt(
     if c1 + c2 > 4.0:
         c1 = 4.0 * (c1 / (c1 + c2))
         c2 = 4.0 * (c2 / (c1 + c2))
-    with np.errstate(over="ignore"):  # f = +-1e32 scale when all mean distances are equal
-        w = 1 / (1 + 1.5 * np.exp(-2.6 * f))
+    # f is of the order of 1e32 when all mean distances are equal: exp overflows to inf, w is 0
+    w = 1.0 / (1.0 + 1.5 * exp(-2.6 * float(f)))
     return w, c1, c2

@@ -5,7 +5,7 @@
 equation, recomputes rows still outside the box with fresh random numbers and repairs what is
 left, as pymoo does; :func:`improvement` says which new positions replace their personal
 bests. Both draw the same random numbers as pymoo's code, in the same order, so that
-:class:`~hcomc.optim.pso.optimizer.CompiledPSOOptimizer` makes pymoo's decisions (see
+:class:`~hcomc.optim.pso.optimizer.CompiledPSOOptimizer` runs pymoo's algorithm (see
 :mod:`hcomc.optim.pso.optimizer`).
 """
 

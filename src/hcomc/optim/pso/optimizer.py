@@ -1,4 +1,4 @@
-"""A lean PSO on arrays that makes pymoo's decisions, without pymoo's per-individual objects.
+"""A lean PSO on arrays: pymoo's adaptive PSO, without pymoo's per-individual objects.
 
 :class:`CompiledPSOOptimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 PSOOptimizer` (pymoo 0.6's adaptive ``PSO`` on the scalarised problem) on plain arrays. A pymoo
@@ -10,12 +10,11 @@ generation). Here the move with its retries, the duplicate check and the Latin h
 criterion are numba kernels, the rest whole-array numpy. The run draws the same random numbers,
 in the same order and shapes, from a generator seeded like pymoo's
 (``numpy.random.default_rng(seed)``; numba's ``Generator.random`` reads the same bit generator
-and gives the same numbers), and computes every floating-point value with the same operations
-in the same order (the mutation's powers with the C library's ``pow``, the swarm spread's sums
-by numpy's pairwise summation), so for the same problem, budget and ``rng`` it evaluates the
-same rows and returns the same set as the pymoo optimiser wherever numpy's ``power`` is the C
-library's; on CPUs where numpy brings SIMD versions of its own the runs part in the last bit,
-and the tests hold the compiled run to pymoo's quality instead.
+and gives the same numbers), with pymoo's formulas. Its math is the C library's, never numpy's
+CPU-dispatched functions (the mutation's powers, the adaptation's ``exp``), and its sums are
+plain sums in index order (the swarm spread), so a run is the same on every processor; it can
+part from pymoo's in the last bit and go its own way. The tests hold it to pymoo's solution
+quality on the recorded merge problems (``tests/unit/test_pso_compiled.py``).
 
 One generation, as pymoo's ``PSO._infill`` and ``_advance`` do it:
 
@@ -78,10 +77,9 @@ _PERTURB_ROW_PROB = 0.9  # probability that the best particle's mutation happens
 @kernel
 def min_distances(samples: FloatArray) -> FloatArray:
     """The smallest pairwise euclidean distance between the rows of each sample (k, n, n_var),
-    pymoo's maxmin criterion: as scipy's ``cdist`` computes a distance (squared absolute
-    differences summed in variable order from 0, then the square root), so the values are the
-    same bit for bit; ``sqrt`` of the smallest sum is the smallest ``sqrt``, as ``sqrt`` is
-    monotonic and correctly rounded."""
+    pymoo's maxmin criterion: squared differences summed in variable order, then the square
+    root; ``sqrt`` of the smallest sum is the smallest ``sqrt``, as ``sqrt`` is monotonic and
+    correctly rounded."""
     k, n, n_var = samples.shape
     out = np.empty(k)
     for s in range(k):
@@ -122,7 +120,7 @@ def warm_up() -> None:
 
 @dataclass(frozen=True, slots=True)
 class CompiledPSOOptimizer:
-    """Adaptive PSO on arrays; the same decisions as the pymoo optimiser, without its objects.
+    """Adaptive PSO on arrays, pymoo's algorithm without its objects (see the module).
 
     Parameters
     ----------

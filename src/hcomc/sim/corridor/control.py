@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc.config import ScenarioConfig, load_config
-from hcomc.control.key_vehicles import find_key_vehicles
+from hcomc.control.key_group import find_key_vehicles
 from hcomc.control.registry import make_controller
 from hcomc.control.validation import checked, name_of
 from hcomc.corridor import Corridor, OnRamp
@@ -36,6 +36,7 @@ from hcomc.road import Kind
 from hcomc.sim.corridor.fleet import CorridorFleet
 from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.plans import fill_view
+from hcomc.sim.corridor.setup import ramp_code
 from hcomc.sim.corridor.state import C_PENDING, C_PLANS, State, Vehicles
 from hcomc.sim.step.plans import (
     P_ID,
@@ -128,7 +129,7 @@ class CorridorControl:
             config = ramp_config(c, ramp)
             controller = make_controller(config)
             assert controller is not None, "CorridorControl needs a controller"
-            controllers[layout.ramp_code(ramp.id, c)] = (ramp.id, config, controller)
+            controllers[ramp_code(layout, ramp.id, c)] = (ramp.id, config, controller)
         rng = make_rng(seed).spawn(1)[0]  # a stream of its own, beside the fleet's draws
         return cls(c, layout, view_fleet(c, fleet, veh), controllers, rng)
 

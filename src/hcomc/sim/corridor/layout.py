@@ -8,7 +8,7 @@ and its acceleration or deceleration lanes: an on-ramp's from ``x - ramp_length`
 of its acceleration lanes, where it ends; an off-ramp's from ``x`` to the end of its ramp road,
 ``x + decel_length + ramp_length``, where its vehicles arrive. Lanes exist where the
 sections of :func:`hcomc.corridor.sections` say, the one description the SUMO export reads
-too.
+too; :func:`hcomc.sim.corridor.setup.build_layout` builds the arrays from them.
 """
 
 from __future__ import annotations
@@ -17,9 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from hcomc.corridor import Corridor, OnRamp, sections
-
-__all__ = ["KIND_MAIN", "KIND_OFF", "KIND_ON", "Layout", "build_layout"]
+__all__ = ["KIND_MAIN", "KIND_OFF", "KIND_ON", "Layout"]
 
 KIND_MAIN, KIND_ON, KIND_OFF = 0, 1, 2
 """Kinds of a code (and of a section: mainline only, acceleration or deceleration lanes)."""
@@ -58,55 +56,3 @@ class Layout(NamedTuple):
     def n_codes(self) -> int:
         """Number of lane codes."""
         return int(self.code_kind.size)
-
-    def ramp_code(self, ramp_id: str, c: Corridor) -> int:
-        """Code of lane j = 0 of ramp ``ramp_id``."""
-        ids = [r.id for r in c.road.ramps]
-        return self.n_main + 2 * ids.index(ramp_id)
-
-
-def build_layout(c: Corridor) -> Layout:
-    """The :class:`Layout` of corridor ``c``."""
-    road, secs = c.road, sections(c.road)
-    n_main = max(s.lanes for s in secs)
-    n_codes = n_main + 2 * len(road.ramps)
-    base = {r.id: n_main + 2 * k for k, r in enumerate(road.ramps)}
-    kinds = {"main": KIND_MAIN, "accel": KIND_ON, "decel": KIND_OFF}
-    sec_lanes = np.array([s.lanes for s in secs], dtype=np.int64)
-    lane_end = np.full((n_main, len(secs)), np.inf)
-    for k in range(n_main):
-        end = np.inf
-        for s in range(len(secs) - 1, -1, -1):  # from downstream: the next section without k
-            if sec_lanes[s] <= k:
-                end = secs[s].x0
-            lane_end[k, s] = end
-    code_kind = np.zeros(n_codes, dtype=np.int64)
-    code_x0, code_x1, code_far, code_speed = (np.zeros(n_codes) for _ in range(4))
-    code_left = np.full(n_codes, -1, dtype=np.int64)
-    code_right = np.full(n_codes, -1, dtype=np.int64)
-    for ramp in road.ramps:
-        on = isinstance(ramp, OnRamp)
-        for j in range(2):
-            code = base[ramp.id] + j
-            code_kind[code] = KIND_ON if on else KIND_OFF
-            code_x0[code], code_x1[code] = ramp.x, ramp.end
-            code_far[code] = ramp.x - ramp.ramp_length if on else ramp.end + ramp.ramp_length
-            code_speed[code] = road.speed_at(ramp.x)
-            code_left[code] = 0 if j == 0 else code - 1
-            code_right[code] = code + 1 if j + 1 < ramp.lanes else -1
-    return Layout(
-        sec_x0=np.array([s.x0 for s in secs]),
-        sec_x1=np.array([s.x1 for s in secs]),
-        sec_lanes=sec_lanes,
-        sec_ramp=np.array([base[s.ramp] if s.ramp else -1 for s in secs], dtype=np.int64),
-        sec_kind=np.array([kinds[s.kind] for s in secs], dtype=np.int64),
-        sec_speed=np.array([s.speed_limit for s in secs]),
-        lane_end=lane_end,
-        code_kind=code_kind,
-        code_x0=code_x0,
-        code_x1=code_x1,
-        code_far=code_far,
-        code_speed=code_speed,
-        code_left=code_left,
-        code_right=code_right,
-    )

@@ -32,8 +32,8 @@ import math
 import numpy as np
 
 from hcomc._jit import borrow_all, kernel
-from hcomc.models.ballistic import ballistic_step
-from hcomc.models.following import follow_accel_given, free_term
+from hcomc.equations.car_following import follow_accel_given, free_term
+from hcomc.equations.integrate import ballistic_step
 from hcomc.sim.corridor.lanes import section_at, speed_limit
 from hcomc.sim.corridor.layout import KIND_MAIN, KIND_OFF, KIND_ON, Layout
 from hcomc.sim.corridor.plans import (

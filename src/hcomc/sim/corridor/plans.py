@@ -42,8 +42,8 @@ import math
 
 from hcomc._jit import borrow_all, kernel
 from hcomc.control.key_vehicles import key_vehicle_indices
-from hcomc.control.virtual_vehicle import cubic_point
-from hcomc.models.following import follow_accel_given
+from hcomc.equations.car_following import follow_accel_given
+from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.road import VMC, VMR, VNR, VR, Lane
 from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.corridor.lanes import section_at

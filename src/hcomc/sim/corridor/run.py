@@ -23,9 +23,10 @@ from hcomc.corridor.engine import scenario_only
 from hcomc.corridor.model import MAX_DURATION
 from hcomc.sim.corridor.control import CorridorControl
 from hcomc.sim.corridor.events import merge_events, merge_summary
-from hcomc.sim.corridor.fleet import CorridorFleet, build_fleet
-from hcomc.sim.corridor.layout import Layout, build_layout
+from hcomc.sim.corridor.fleet import CorridorFleet
+from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.motion import advance
+from hcomc.sim.corridor.setup import allocate, build_fleet, build_layout, vehicles_of
 from hcomc.sim.corridor.state import (
     ARRIVED,
     C_COLLISIONS,
@@ -48,9 +49,7 @@ from hcomc.sim.corridor.state import (
     P_PERIOD,
     TRAJECTORY_COLUMNS,
     State,
-    allocate,
     trajectory_buffer,
-    vehicles_of,
 )  # fmt: skip
 from hcomc.sim.corridor.trips import free_flow_times
 

@@ -4,23 +4,16 @@
 what does (kinematics, lanes, the sorted lane entries, counters) and what a run measures
 (detectors, the space-time grid, collisions, sampled trajectories). Scalars the step reads
 are in the float array ``params`` (index constants ``P_*``) and the int array ``counters``
-(``C_*``).
+(``C_*``). :mod:`hcomc.sim.corridor.setup` builds both from a corridor.
 """
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
-from hcomc.corridor import Corridor, detector_positions
-from hcomc.road import N_ROLES
-from hcomc.sim.corridor.fleet import CorridorFleet
-from hcomc.sim.corridor.layout import Layout
-from hcomc.sim.step.plans import N_FLOAT, N_INT
-
-__all__ = ["State", "Vehicles", "allocate", "trajectory_buffer", "vehicles_of"]
+__all__ = ["State", "Vehicles", "trajectory_buffer"]
 
 OFFSET = 4.0e6
 """Key offset between lane codes [m]; larger than any position on a code."""
@@ -131,83 +124,3 @@ def trajectory_buffer(capacity: int) -> dict[str, np.ndarray]:
     """Empty trajectory columns for ``capacity`` samples, by :class:`State` field."""
     return {f"traj_{name}": np.zeros(capacity, dtype=dtype)
             for name, dtype in TRAJECTORY_COLUMNS.items()}  # fmt: skip
-
-
-def vehicles_of(fleet: CorridorFleet) -> Vehicles:
-    """The compiled step's view of ``fleet``."""
-    idm = fleet.idm
-    return Vehicles(
-        depart=fleet.depart,
-        v0=np.minimum(idm[:, 0], fleet.max_speed),
-        T=idm[:, 1].copy(),
-        s0=idm[:, 2].copy(),
-        a=idm[:, 3].copy(),
-        b=idm[:, 4].copy(),
-        delta=idm[:, 5].copy(),
-        length=fleet.length,
-        cav=fleet.cav,
-        start_code=fleet.start_code,
-        queue_start=fleet.queue_start,
-        queue=fleet.queue,
-    )
-
-
-def allocate(
-    c: Corridor, layout: Layout, fleet: CorridorFleet, duration: float, sample_every: int,
-    controlled: bool = False,
-) -> State:  # fmt: skip
-    """A fresh state for ``fleet`` on ``layout`` over ``duration`` [s]; trajectories sampled
-    every ``sample_every`` steps (0: none); ``controlled``: a merge controller decides for
-    the vehicles entering the on-ramps' control zones."""
-    n = fleet.depart.size
-    lc, run, det = c.lane_change, c.corridor, c.detectors
-    params = np.zeros(N_PARAMS)
-    params[[P_DT, P_LC_DURATION, P_POLITENESS, P_THRESHOLD, P_BIAS, P_SAFE_DECEL, P_MIN_GAP,
-            P_EMERGENCY, P_LOOKAHEAD, P_URGENT, P_PERIOD, P_CELL, P_REPLAN, P_WINDOW]] = [
-        run.step_length, run.lane_change_duration, lc.politeness, lc.threshold,
-        lc.keep_right_bias, lc.safe_decel, lc.min_gap, lc.emergency_decel,
-        c.routes.exit_lookahead, c.routes.urgent_distance, det.period, det.cell_length,
-        c.control.replan_period, c.merges.window_after,
-    ]  # fmt: skip
-    counters = np.zeros(N_COUNTERS, dtype=np.int64)
-    counters[C_DECIDE_EVERY] = max(1, round(lc.decision_interval / run.step_length))
-    counters[C_SAMPLE_EVERY] = sample_every
-    counters[C_CONTROLLED] = controlled
-    zone = np.full(layout.n_codes, np.nan)
-    for ramp in c.road.on_ramps:
-        zone[layout.ramp_code(ramp.id, c)] = ramp.x - ramp.control_zone_length
-    plans = max(1, int(np.count_nonzero(fleet.start_code >= 0)))
-    periods = max(1, math.ceil(duration / det.period - 1e-9))
-    positions = np.array(detector_positions(c))
-    cells = max(1, math.ceil(layout.length / det.cell_length))
-    nan = np.full(n, np.nan)
-    return State(
-        x=np.zeros(n), v=np.zeros(n), a=np.zeros(n),
-        code=np.full(n, -1, dtype=np.int64), target=np.full(n, -1, dtype=np.int64),
-        lc_start=nan.copy(), lc_dur=np.full(n, run.lane_change_duration),
-        status=np.zeros(n, dtype=np.int64),
-        insert_t=nan.copy(), arrive_t=nan.copy(), exit_code=fleet.exit_code.copy(),
-        missed=np.zeros(n, dtype=np.bool_), merge_t=nan.copy(), merge_x=nan.copy(),
-        busy=np.full(n, -1, dtype=np.int64),
-        colliding=np.full(n, -1, dtype=np.int64),
-        ids=np.zeros(n, dtype=np.int64), v0e=np.zeros(n), free=np.zeros(n), acc=np.zeros(n),
-        e_veh=np.zeros(2 * n + 1, dtype=np.int64), e_code=np.zeros(2 * n + 1, dtype=np.int64),
-        e_key=np.zeros(2 * n + 1),
-        code_first=np.full(layout.n_codes, -1, dtype=np.int64),
-        queue_pos=np.zeros(len(fleet.origins), dtype=np.int64),
-        backlog=np.zeros((len(fleet.origins), periods), dtype=np.int64),
-        params=params, counters=counters,
-        detectors=np.zeros((positions.size, layout.n_main, periods, 5)), det_x=positions,
-        grid=np.zeros((cells, periods, 2)),
-        collisions=np.zeros((1024, len(COLLISION_COLUMNS))),
-        **trajectory_buffer(0),
-        zone=zone, following=np.zeros(n, dtype=np.bool_), holding=np.zeros(n, dtype=np.bool_),
-        plan_int=np.zeros((plans, N_INT), dtype=np.int64), plan_f=np.zeros((plans, N_FLOAT)),
-        pending=np.zeros(n, dtype=np.int64),
-        view_lane=np.full(n, -1, dtype=np.int64), view_active=np.zeros(n, dtype=np.bool_),
-        ev_t=nan.copy(), ev_group=np.full((n, N_ROLES), -1, dtype=np.int64),
-        ev_min_ttc=np.full(n, np.inf), ev_max_drac=np.zeros(n), ev_max_decel=np.zeros(n),
-        ev_vmc_v=nan.copy(), ev_vmc_min_v=nan.copy(), ev_released=np.zeros(n, dtype=np.bool_),
-        ev_open=np.zeros(n, dtype=np.int64),
-        agent_acc=nan.copy(), agent_lane=np.full(n, -1, dtype=np.int64),
-    )  # fmt: skip

@@ -10,7 +10,7 @@ it during the manoeuvre. Entries are sorted by ``code * OFFSET + x``; a vehicle'
 lane is the next entry of that lane. They stay nearly sorted from step to step, so an
 insertion sort is linear.
 
-**Car following.** Each vehicle drives the IDM (paper Eq. 1, :func:`hcomc.models.following.
+**Car following.** Each vehicle drives the IDM (paper Eq. 1, :func:`hcomc.equations.car_following.
 follow_accel_given`) with its desired speed capped by the speed limit, behind the nearest
 leader over its entries (the strictest acceleration wins), and brakes for the point where it
 must have left its lane (:func:`hcomc.sim.corridor.lanes.stop_point`) as for a standing
@@ -44,8 +44,8 @@ from __future__ import annotations
 import math
 
 from hcomc._jit import borrow_all, kernel
-from hcomc.models.following import follow_accel_given, free_term
-from hcomc.models.incentive import mobil_incentive
+from hcomc.equations.car_following import follow_accel_given, free_term
+from hcomc.equations.incentive import mobil_incentive
 from hcomc.sim.corridor.lanes import mandatory_target, section_at, speed_limit, stop_point
 from hcomc.sim.corridor.layout import Layout
 from hcomc.sim.corridor.state import (

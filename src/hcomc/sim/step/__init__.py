@@ -5,5 +5,6 @@
 following, collisions, integration, lateral motion), :mod:`~hcomc.sim.step.lane_change` and
 :mod:`~hcomc.sim.step.plans` (the merge plans being executed) are the step's kernels, which
 :mod:`~hcomc.sim.step.loop` composes into one step and into the loop of many steps between
-two controller decisions.
+two controller decisions; :mod:`~hcomc.sim.step.ramp_reach` reads where the ramp vehicles
+stand (for the undisturbed twin, :mod:`hcomc.sim.twin`).
 """

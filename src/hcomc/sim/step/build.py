@@ -7,14 +7,14 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc.config import ConfigError, ScenarioConfig
+from hcomc.equations.transition import transition_gamma
 from hcomc.interface import Fleet
-from hcomc.models.transition import transition_gamma
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import Demand
+from hcomc.sim.lane_change_decisions import lane_change_params
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
-from hcomc.sim.mobil import lane_change_params
-from hcomc.sim.perception import Perception
+from hcomc.sim.perception_state import Perception
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.plans import N_FLOAT, N_INT
 from hcomc.sim.step.state import Core, CoreArrays

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from hcomc._jit import kernel
-from hcomc.safety.collision_kernels import vehicle_pair_collides
+from hcomc.equations._collision_kernels import vehicle_pair_collides
 from hcomc.sim.arrays import search_left, unique
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.state import (

@@ -13,7 +13,7 @@ vehicle entering the control zone (key vehicles, a first plan), a live plan due 
 lane changes by the game (Section III-B, in Python). The engine then finishes that step with
 the same kernels (:meth:`hcomc.sim.engine.Simulation.resume`).
 
-Each equation is called from its one home (:mod:`hcomc.models`, :mod:`hcomc.safety`,
+Each equation is called from its one home (:mod:`hcomc.equations`, :mod:`hcomc.safety`,
 :mod:`hcomc.sim.perception`, :mod:`hcomc.sim.mobil`, :mod:`hcomc.sim.neighbours`). Semantics
 (order of operations, who sees whom, events) are those documented in
 :mod:`hcomc.sim.engine`.

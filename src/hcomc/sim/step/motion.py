@@ -10,13 +10,14 @@ import math
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.models.ballistic import ballistic_step
-from hcomc.models.following import follow_accel
-from hcomc.models.quintic import lateral_state
-from hcomc.models.transition import blend, transition_psi
+from hcomc.equations.car_following import follow_accel
+from hcomc.equations.integrate import ballistic_step
+from hcomc.equations.lane_change import lateral_state
+from hcomc.equations.perception import ErrorScales
+from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
-from hcomc.sim.perception import ErrorScales, Estimates, EstimationErrors, History, perceive_into
+from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.state import (
     ACCEL_END,
     DT,
@@ -312,7 +313,7 @@ def _limits(
 @kernel
 def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
     """Advance the vehicles ``ids`` one step with their accelerations ``acc`` (Eq. 1/3's
-    output) by :func:`~hcomc.models.ballistic.ballistic_step`."""
+    output) by :func:`~hcomc.equations.integrate.ballistic_step`."""
     dt = c.consts[DT]
     for k in range(ids.size):
         i = ids[k]

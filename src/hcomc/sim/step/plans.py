@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.control.virtual_vehicle import cubic_point
+from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import commanded_changes
 from hcomc.sim.step.state import (
@@ -40,7 +40,7 @@ from hcomc.sim.step.state import (
 )
 
 if TYPE_CHECKING:
-    from hcomc.interface import MergePlan
+    from hcomc.interface.plan import MergePlan
 
 # plan_int columns
 P_VR, P_VMC, P_VMF, P_VMR, P_VNF, P_VNR = range(6)  # MergeGroup.as_array order
@@ -169,7 +169,8 @@ def virtual_rows(
     a: np.ndarray, length: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``(followers, x_vv, v_vv, a_vv, length_vv)`` of every virtual vehicle in force at t,
-    plan by plan VV0, VV1, VV2 (the states of :func:`hcomc.control.virtual_vehicle.virtual_states`).
+    plan by plan VV0, VV1, VV2 (the states of
+    :func:`hcomc.control.hierarchical.controller.virtual_states`).
 
     VV0 leads a CAV VR that follows its plan on the ramp (when VR has a future leader VMF),
     VV1 a cooperating VMC in longitudinal mode, VV2 a CAV VNR in lateral mode (within the

@@ -113,7 +113,7 @@ class CoreArrays(NamedTuple):
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
-    lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.mobil.lane_change_params)
+    lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.lane_change_decisions.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
     log_t: np.ndarray  # the run's log (SimulationLog's stored arrays, the same buffers)

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from hcomc.control.virtual_vehicle import cubic_state
-from hcomc.models.quintic import lateral_offset
+from hcomc.equations.lane_change import lateral_offset
+from hcomc.equations.virtual_vehicle import cubic_state
 from hcomc.road import KEY_ROLES, Kind, Lane, lane_centre
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.log.plans import PlanRecord, plan_records
@@ -88,7 +88,7 @@ def plan_spans(log: SimulationLog) -> list[PlanSpan]:
 
 def _ghosts(span: PlanSpan, times: np.ndarray, log: SimulationLog, width: float) -> list[dict]:
     """Each virtual vehicle of the plan at the logged rows of its horizon while the plan is
-    live: the cubic of Eq. 9 (:func:`hcomc.control.virtual_vehicle.cubic_state`)."""
+    live: the cubic of Eq. 9 (:func:`hcomc.equations.virtual_vehicle.cubic_state`)."""
     rec = span.record
     stop = min(rec.t0 + rec.horizon, span.end) if math.isfinite(rec.horizon) else span.end
     rows = np.flatnonzero((times >= rec.t0 - 1e-9) & (times <= stop + 1e-9))

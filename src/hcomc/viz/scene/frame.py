@@ -12,8 +12,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from hcomc.equations.collision import rectangle_corners
 from hcomc.road import KEY_ROLES
-from hcomc.safety.collision import rectangle_corners
 from hcomc.sim.log import SimulationLog
 from hcomc.viz.scene.ghosts import plan_ghosts
 from hcomc.viz.scene.road import ROAD_COLOURS, Y_MARGIN, SceneRoad, draw_road

@@ -1,0 +1,104 @@
+"""The HDVs' perception state of a run: the ring buffers of past states that the reaction
+delays read and each driver's estimation-error processes, sized and scaled from the run's
+:class:`~hcomc.config.HDVParams`.
+
+The compiled reading of that state (paper Eq. 2) is :mod:`hcomc.sim.perception`'s; this
+Python side builds it from the configuration, so that the kernels do not import it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hcomc._typing import BoolArray, FloatArray, IntArray
+from hcomc.config import HDVParams
+from hcomc.equations.perception import ErrorScales
+from hcomc.sim.perception import (
+    Estimates,
+    EstimationErrors,
+    History,
+    advance_errors_of,
+    perceive_into,
+)
+
+
+class Perception:
+    """Ring buffer of past states plus the HDVs' estimation-error processes."""
+
+    def __init__(
+        self, params: HDVParams, is_hdv: BoolArray, dt: float, rng: np.random.Generator
+    ) -> None:
+        n = is_hdv.size
+        self.dt = dt
+        self.params = params
+        self.is_hdv = is_hdv
+        lags = [
+            params.reaction_time_gap,
+            params.reaction_time_speed,
+            params.reaction_time_approach,
+        ]
+        self.size = int(np.floor(max(lags) / dt + 1e-9)) + 2
+        self.x_hist = np.zeros((self.size, n))
+        self.v_hist = np.zeros((self.size, n))
+        self.errors = params.estimation_errors and (
+            params.gap_error > 0 or params.inverse_ttc_error > 0
+        )
+        self.w_gap = rng.standard_normal(n) if self.errors else np.zeros(n)
+        self.w_ttc = rng.standard_normal(n) if self.errors else np.zeros(n)
+        self.decay = np.exp(-dt / params.error_correlation_time)
+        self.kick = np.sqrt(2.0 * dt / params.error_correlation_time)
+
+    def fill(self, ids: IntArray, x: FloatArray, v: FloatArray) -> None:
+        """Initialise the history of newly released vehicles with their current state."""
+        self.x_hist[:, ids] = x[ids]
+        self.v_hist[:, ids] = v[ids]
+
+    def push(self, step: int, x: FloatArray, v: FloatArray) -> None:
+        """Store the state at ``step`` (all vehicles)."""
+        row = step % self.size
+        self.x_hist[row] = x
+        self.v_hist[row] = v
+
+    def advance_errors(self, ids: IntArray, rng: np.random.Generator) -> None:
+        """One OU step of both error processes for the active HDVs ``ids``.
+
+        Innovations are drawn for all N vehicles (even when ``ids`` is empty) so the random
+        stream does not depend on which vehicles are active.
+        """
+        if not self.errors:
+            return
+        xi = rng.standard_normal((2, self.is_hdv.size))
+        advance_errors_of(
+            self.w_gap, self.w_ttc, _ints(ids), self.is_hdv, xi, self.decay, self.kick
+        )
+
+    @property
+    def taus(self) -> FloatArray:
+        """Reaction times on gap, own speed and approach rate [s]."""
+        p = self.params
+        return np.array(
+            [p.reaction_time_gap, p.reaction_time_speed, p.reaction_time_approach], dtype=float
+        )
+
+    def perceive(
+        self, step: int, ids: IntArray, leader: IntArray, leader_length: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Delayed, noisy ``(s_est, v, v_leader_est)`` of HDVs ``ids`` behind ``leader``.
+
+        ``leader`` is -1 where there is none: the gap is then infinite.
+        """
+        p = self.params
+        ids, leader = _ints(ids), _ints(leader)
+        s, v, vl = np.empty(ids.size), np.empty(ids.size), np.empty(ids.size)
+        scales = ErrorScales(p.gap_error, p.inverse_ttc_error, self.errors)
+        perceive_into(
+            History(self.x_hist, self.v_hist, self.taus, self.dt), step,
+            EstimationErrors(self.w_gap, self.w_ttc, scales), ids, leader,
+            np.ascontiguousarray(leader_length, dtype=np.float64),
+            np.ones(self.is_hdv.size, dtype=np.bool_), Estimates(s, v, vl),
+        )  # fmt: skip
+        return s, v, vl
+
+
+def _ints(a: IntArray) -> IntArray:
+    return np.ascontiguousarray(a, dtype=np.int64).reshape(-1)
