@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -162,7 +163,21 @@ def _pymoo_survive_and_mate(
     return rows, parents.astype(np.int64)
 
 
+@pytest.fixture
+def stable_ties(monkeypatch: pytest.MonkeyPatch) -> None:
+    """pymoo's sorts (``np.argsort``, quicksort) with ties in a stable order, as the compiled
+    NSGA-II orders them: numpy's quicksort orders equal keys by the CPU (its AVX-512 sort
+    differently from its portable one), so pymoo's own survivors depend on the machine."""
+    argsort = np.argsort
+
+    def stable(a: Any, axis: int = -1, kind: str | None = None, **options: Any) -> Any:
+        return argsort(a, axis=axis, kind="stable", **options)
+
+    monkeypatch.setattr(np, "argsort", stable)
+
+
 @pytest.mark.parametrize("seed", range(40))
+@pytest.mark.usefixtures("stable_ties")
 def test_survive_and_mate_equal_pymoo(seed: int) -> None:
     setup = np.random.default_rng(seed)
     n, n_obj, n_constr = int(setup.integers(2, 60)), int(setup.integers(1, 4)), int(seed % 3)

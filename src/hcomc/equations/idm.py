@@ -253,6 +253,16 @@ def idm_accel_given(
 
 
 @kernel
+def _free_power_array(v: np.ndarray, v0: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """:func:`idm_free_power` of each element: the powers the step takes (C library or exact
+    squaring), never numpy's, whose ``power`` is chosen by the CPU."""
+    out = np.empty(v.size)
+    for i in range(v.size):
+        out[i] = idm_free_power(v[i], v0[i], delta[i])
+    return out
+
+
+@kernel
 def _idm_array(
     s: np.ndarray, v: np.ndarray, dv: np.ndarray, v0: np.ndarray, T: np.ndarray, a: np.ndarray,
     b: np.ndarray, s0: np.ndarray, delta: np.ndarray,
@@ -312,7 +322,7 @@ def equilibrium_gap(
     34.31
     """
     v = np.asarray(v, dtype=np.float64)
-    denom = 1.0 - np.power(v / v0, delta)
+    denom = 1.0 - broadcast_apply(_free_power_array, v, v0, delta)
     valid = denom > 0.0
     gap = (s0 + v * T) / np.sqrt(np.where(valid, denom, 1.0))
     return np.asarray(np.where(valid, gap, np.inf), dtype=np.float64)

@@ -130,10 +130,18 @@ def quintic_coefficients(
     # Coefficients c_k of the monomials xi^k, solved for the whole batch at once.
     c = np.linalg.solve(_BC_MATRIX, rhs.reshape(-1, 6).T).T.reshape(shape)
     # d_k = c_k / L^k: coefficients of (x - x0)^k.
-    d = c / np.power(length[..., None], np.arange(6))
+    d = c / _powers(length)
     # Taylor shift to absolute x: a_j = sum_k C(k, j) (-x0)^(k-j) d_k.
-    neg_x0_pow = np.power(-x0_[..., None], np.arange(6))
+    neg_x0_pow = _powers(-x0_)
     return np.einsum("jk,...jk,...k->...j", _BINOM, neg_x0_pow[..., _SHIFT_POW], d)
+
+
+def _powers(base: FloatArray) -> FloatArray:
+    """``base^0 … base^5`` along a new last axis, by repeated multiplication (numpy's ``power``
+    is chosen by the CPU and may differ in the last bit)."""
+    factors = np.repeat(base[..., None], 6, axis=-1)
+    factors[..., 0] = 1.0
+    return np.cumprod(factors, axis=-1)
 
 
 def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, FloatArray]:

@@ -17,6 +17,7 @@ References
 
 from __future__ import annotations
 
+import math
 from math import sqrt
 
 import numpy as np
@@ -160,5 +161,6 @@ def min_duration(
     """
     w = np.abs(np.asarray(width, dtype=np.float64))
     t_acc = np.sqrt(PEAK_ACCEL_FACTOR * w / a_max)
-    t_jerk = np.cbrt(PEAK_JERK_FACTOR * w / j_max)
+    # the C library's cube root (numpy's is chosen by the CPU and may differ in the last bit)
+    t_jerk = np.vectorize(math.cbrt, otypes=[np.float64])(PEAK_JERK_FACTOR * w / j_max)
     return np.asarray(np.maximum(t_acc, t_jerk), dtype=np.float64)

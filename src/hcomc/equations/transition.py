@@ -77,7 +77,10 @@ def transition_parameters(
     >>> round(float(gamma), 4), round(float(lam), 4)
     (2.2976, 1.1488)
     """
-    gamma = np.arctanh(np.subtract(1.0, np.multiply(2.0, tolerance)))
+    # the C library's artanh (numpy's is chosen by the CPU and may differ in the last bit)
+    gamma = np.vectorize(math.atanh, otypes=[np.float64])(
+        np.subtract(1.0, np.multiply(2.0, tolerance))
+    )
     lam = 2.0 * gamma / np.asarray(duration, dtype=np.float64)
     return np.asarray(lam, dtype=np.float64), np.asarray(gamma, dtype=np.float64)
 

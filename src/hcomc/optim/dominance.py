@@ -229,9 +229,9 @@ def survivors(
     ``counts``: the whole fronts, the last front cut to size, the least-violating infeasible rows.
 
     The last front (when cut) keeps its rows of largest crowding: ``perm`` is the random
-    permutation of the front and ``by_crowding`` numpy's quicksort of its crowding distances in
-    that order, read from the end; ``by_violation`` is numpy's sort of the infeasible rows by
-    violation. Both sorts are numpy's because the order of ties is their own.
+    permutation of the front and ``by_crowding`` the stable sort of its crowding distances in
+    that order, read from the end; ``by_violation`` is the stable sort of the infeasible rows
+    by violation (stable: the order of ties is the same on every machine).
     """
     n_inner, n_front, n_remove, n_infeasible = counts
     n_kept = n_front - max(n_remove, 0)

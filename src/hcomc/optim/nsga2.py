@@ -90,11 +90,13 @@ def survive_and_mate(
     order, key, rank, crowding, counts = survival_fronts(F, cv, rows, n_survive)
     n_inner, n_front, n_remove, n_infeasible = counts.tolist()
     perm, by_crowding, by_violation, P = _NONE, _NONE, _NONE, _NO_PAIRS
-    if n_remove > 0:  # the front that does not fit: numpy's sort, from a random permutation
+    # Ties are ordered stably: numpy's default sort orders equal keys by the CPU's (its
+    # AVX-512 sort differs from its portable one), so the survivors would depend on the machine
+    if n_remove > 0:  # the front that does not fit: sorted from a random permutation
         perm = rng.permutation(n_front)
-        by_crowding = key[n_inner : n_inner + n_front][perm].argsort(kind="quicksort")
+        by_crowding = key[n_inner : n_inner + n_front][perm].argsort(kind="stable")
     if n_infeasible > 0:
-        by_violation = key[n_inner + n_front :].argsort()  # numpy's default, quicksort
+        by_violation = key[n_inner + n_front :].argsort(kind="stable")
     if n_matings > 0:
         n = min(n_survive, rows.size)
         n_random = n_matings * 2 * 2

@@ -8,6 +8,8 @@ Python side builds it from the configuration, so that the kernels do not import 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
@@ -45,8 +47,8 @@ class Perception:
         )
         self.w_gap = rng.standard_normal(n) if self.errors else np.zeros(n)
         self.w_ttc = rng.standard_normal(n) if self.errors else np.zeros(n)
-        self.decay = np.exp(-dt / params.error_correlation_time)
-        self.kick = np.sqrt(2.0 * dt / params.error_correlation_time)
+        self.decay = math.exp(-dt / params.error_correlation_time)  # the C library's, not numpy's
+        self.kick = math.sqrt(2.0 * dt / params.error_correlation_time)
 
     def fill(self, ids: IntArray, x: FloatArray, v: FloatArray) -> None:
         """Initialise the history of newly released vehicles with their current state."""

@@ -68,7 +68,8 @@ def comfort_cost(
     pad = np.zeros((*a_lon.shape[:-1], 1))
     j_lon = np.diff(np.concatenate([pad, a_lon], axis=-1), axis=-1) / params.dt
     j_lat = np.diff(np.concatenate([pad, a_lat], axis=-1), axis=-1) / params.dt
-    jerk = np.hypot(j_lon, j_lat).max(axis=-1)
+    # |jerk| from exactly rounded operations (numpy's hypot is chosen by the CPU)
+    jerk = np.sqrt(j_lon * j_lon + j_lat * j_lat).max(axis=-1)
     ref = np.where(a_lon >= 0.0, a_max, b_comf)
     mean_sq = np.mean(np.square(a_lon / ref) + np.square(a_lat / a_max), axis=-1)
     return np.asarray(jerk / params.jerk_max + mean_sq, dtype=np.float64)

@@ -101,7 +101,7 @@ def latin_hypercube(n: int, xl: FloatArray, xu: FloatArray, rng: np.random.Gener
     # pymoo draws (n, n_var) uniforms for the ranks, then as many for the jitter, per sample:
     # one draw of all of them is the same stream
     draws = rng.random((_LHS_ITERATIONS, 2, n, xl.size))
-    units = (draws[:, 0].argsort(axis=1) + 1 - draws[:, 1]) / n
+    units = (draws[:, 0].argsort(axis=1, kind="stable") + 1 - draws[:, 1]) / n
     out: FloatArray = xl + units[int(np.argmax(min_distances(units)))] * (xu - xl)
     return out
 
