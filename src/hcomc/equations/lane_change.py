@@ -141,7 +141,8 @@ def _powers(base: FloatArray) -> FloatArray:
     is chosen by the CPU and may differ in the last bit)."""
     factors = np.repeat(base[..., None], 6, axis=-1)
     factors[..., 0] = 1.0
-    return np.cumprod(factors, axis=-1)
+    powers: FloatArray = np.cumprod(factors, axis=-1, dtype=np.float64)
+    return powers
 
 
 def quintic_shape(xi: FloatArray | float) -> tuple[FloatArray, FloatArray, FloatArray]:
