@@ -29,7 +29,7 @@ from hcomc.control.hierarchical.row_scoring import (
 from hcomc.control.lane_change_game.params import GAME_DEFAULT
 from hcomc.control.lane_change_game.players import GameVehicle, simulate_sv
 from hcomc.control.prediction.fuel import _fuel_to_distance_kernel
-from hcomc.control.prediction.population import (
+from hcomc.control.prediction.layout import (
     C_A_MERG,
     C_ACCEL_END,
     C_D,
@@ -46,6 +46,8 @@ from hcomc.control.prediction.population import (
     N_ROLES,
     N_STARTS,
     VMC,
+)
+from hcomc.control.prediction.population import (
     resolve_starts,
     vmc_tracks,
     warm_up,
