@@ -2,8 +2,8 @@
 
 cli -> viz -> experiments/envs/robustness/sumo -> metrics -> sim -> control -> interface ->
 safety/models/optim -> config/corridor/road (plus the small utilities ``rng``, ``_typing``,
-``_jit`` and ``_stamp``). Imports inside functions count, since they run; imports under ``if
-TYPE_CHECKING:`` (for annotations only) count too.
+``_jit``, ``_stamp`` and ``_compiling``). Imports inside functions count, since they run;
+imports under ``if TYPE_CHECKING:`` (for annotations only) count too.
 """
 
 from __future__ import annotations
@@ -41,6 +41,7 @@ LAYERS = {
     "_typing": 0,
     "_jit": 0,
     "_stamp": 0,
+    "_compiling": 0,
     "equations": 0,
 }
 ROOT_NAMES = {"__version__"}  # names defined in hcomc/__init__.py itself (layer 0)

@@ -19,6 +19,7 @@ from hcomc.envs.options import EnvOptions, RewardWeights
 from hcomc.envs.render import RENDER_MODES, check_render_mode, render_frame
 from hcomc.rng import draw_seed
 from hcomc.sim.log import SimulationLog
+from hcomc.sim.stages import SCENARIO, ensure_kernels
 
 
 def action_space() -> gym.spaces.Box:
@@ -71,6 +72,7 @@ class MergeEnv(gym.Env[np.ndarray, np.ndarray]):
             action_period=action_period, max_episode_time=max_episode_time,
         )  # fmt: skip
         self.config = self.options.config()
+        ensure_kernels(SCENARIO if self.options.controller else ("step",))
         self.action_space = action_space()
         self.observation_space = observation_space(self.options)
         self.episode: MergeEpisode | None = None

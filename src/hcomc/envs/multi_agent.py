@@ -33,6 +33,7 @@ from hcomc.envs.options import EnvOptions, RewardWeights
 from hcomc.envs.render import RENDER_MODES, check_render_mode, render_frame
 from hcomc.rng import draw_seed
 from hcomc.road import Kind
+from hcomc.sim.stages import SCENARIO, ensure_kernels
 
 
 def agent_name(i: int) -> str:
@@ -62,6 +63,7 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
             max_episode_time=max_episode_time,
         )  # fmt: skip
         self.config = self.options.config()
+        ensure_kernels(SCENARIO if self.options.controller else ("step",))
         self._obs_space = observation_space(self.options)
         self._act_space = action_space()
         self.agents: list[str] = []

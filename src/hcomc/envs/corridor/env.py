@@ -24,6 +24,7 @@ from hcomc.envs.merge_env import action_space
 from hcomc.envs.observation import observation_bounds
 from hcomc.envs.options import RewardWeights
 from hcomc.rng import draw_seed
+from hcomc.sim.stages import ensure_kernels
 
 __all__ = ["CorridorEnvSettings", "CorridorMergeEnv", "load_env_corridor"]
 
@@ -139,6 +140,7 @@ class CorridorMergeEnv(gym.Env[np.ndarray, np.ndarray]):
         self.ramp = ramps[0] if ramp is None else ramp
         if self.ramp not in ramps:
             raise ConfigError(f"key 'ramp' = {ramp!r}: allowed: {', '.join(ramps)}")
+        ensure_kernels(("corridor",))
         self.render_mode = None
         self.action_space = action_space()
         self.observation_space = self.settings.observation_space()
