@@ -21,8 +21,8 @@ from hcomc.sumo.highd import read_highd, write_highd
 
 sumolib = pytest.importorskip("sumolib")
 
-REFERENCED = ("average_acceleration", "stabilisation_time", "stabilisation_time_entry", "lsrv",
-              "fuel")  # fmt: skip
+REFERENCED = ("average_acceleration", "stabilisation_time", "stabilisation_time_from_merge",
+              "integrated_disturbance", "lsrv", "fuel")  # fmt: skip
 """The metrics that compare with the undisturbed run."""
 
 

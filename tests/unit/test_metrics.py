@@ -36,6 +36,7 @@ from hcomc.metrics import (
     reference_speed,
     speed_field,
     stabilisation_time,
+    stabilisation_time_from_merge,
 )
 from hcomc.metrics.speed_field import interp_into, lane_profile_of
 from hcomc.sim.log import EventKind, SimulationLog
@@ -203,9 +204,13 @@ def test_constant_speed_platoon() -> None:
 def test_missing_roles_are_ignored() -> None:
     log = platoon()
     log.add_event(2.0, EventKind.MERGE, 0)
-    # Without vehicle 1 the consecutive key pair 0 -> 2 has bumper gap 570 - 5 - 500 = 65.
+    # Without vehicle 1 the key vehicles are 0 and 2, but vehicle 1 still drives between
+    # them: it is 0's actual leader (gap 530 - 5 - 500 = 25 m), not 2 (65 m); 2's leader is
+    # vehicle 3 (620 - 5 - 570 = 45 m).
     w = merge_window(log, 0, roles(0, -1, 2))
-    assert critical_distance(log, w) == pytest.approx(65.0, abs=1e-4)
+    assert critical_distance(log, w) == pytest.approx(25.0, abs=1e-4)
+    # Only one key vehicle: its leader still counts.
+    assert critical_distance(log, merge_window(log, 0, roles(0))) == pytest.approx(25.0, abs=1e-4)
 
 
 # ------------------------------------------------------------------- braking
@@ -219,8 +224,10 @@ def test_braking_against_the_undisturbed_platoon() -> None:
     w = merge_window(log, 0, PLATOON_GROUP)
     assert (w.t_start, w.t_merge, w.t_end) == pytest.approx((0.0, 5.0, 15.0))
     # Vehicle 2 ends 3 m/s below its undisturbed 25 m/s: never back within 0.5 m/s, so the
-    # stabilisation time is censored at the window end.
-    assert stabilisation_time(log, w, reference=ref) == pytest.approx(10.0)
+    # stabilisation time is censored at the window end: 15 s after VR's entry, 10 s after
+    # its merge.
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(15.0)
+    assert stabilisation_time_from_merge(log, w, reference=ref) == pytest.approx(10.0)
     # 30 cells with |a - 0| = 1. Cells: VMC..VNR 5 x 151 rows, VR (0) only from its merge
     # at t = 5 s: rows 50..150 = 101 cells.
     assert average_acceleration(log, w, reference=ref) == pytest.approx(30.0 / (755 + 101))
@@ -236,12 +243,14 @@ def test_stabilisation_needs_the_full_hold() -> None:
     # only, then from t = 8 s on.
     log, ref = braking(a_rows=[*range(50, 60), *range(75, 80)], slows=False), cruising()
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w, reference=ref) == pytest.approx(3.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(8.0, abs=1e-9)
+    assert stabilisation_time_from_merge(log, w, reference=ref) == pytest.approx(3.0, abs=1e-9)
     # The 1.5 s quiet spell would meet a 1 s hold, but the braking after it counts: the
     # final settling is at t = 8 s whatever the hold.
-    assert stabilisation_time(log, w, reference=ref, hold=1.0) == pytest.approx(3.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref, hold=1.0) == pytest.approx(8.0, abs=1e-9)
     # A 7.5 s hold no longer fits after t = 8 s: censored at the window end.
-    assert stabilisation_time(log, w, reference=ref, hold=7.5) == pytest.approx(10.0)
+    assert stabilisation_time(log, w, reference=ref, hold=7.5) == pytest.approx(15.0)
+    assert stabilisation_time_from_merge(log, w, reference=ref, hold=7.5) == pytest.approx(10.0)
 
 
 def test_stabilisation_speed_criterion() -> None:
@@ -251,7 +260,8 @@ def test_stabilisation_speed_criterion() -> None:
     t = np.arange(151) * 0.1
     log.v[:, 3] = np.where(t < 9.0 - 1e-9, 24.0, 24.6)
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w, reference=ref) == pytest.approx(4.0, abs=1e-9)
+    assert stabilisation_time(log, w, reference=ref) == pytest.approx(9.0, abs=1e-9)
+    assert stabilisation_time_from_merge(log, w, reference=ref) == pytest.approx(4.0, abs=1e-9)
     assert stabilisation_time(log, w, reference=ref, v_tol=1.5) == pytest.approx(0.0, abs=1e-9)
     assert average_acceleration(log, w, reference=ref) == 0.0
 
@@ -260,7 +270,8 @@ def test_stabilisation_is_censored_at_window_end() -> None:
     # Still braking 1.2 s before the end: only 0.8 s of settling is observed.
     log = braking(a_rows=range(50, 142), slows=False)
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(10.0)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(15.0)
+    assert stabilisation_time_from_merge(log, w, reference=cruising()) == pytest.approx(10.0)
 
 
 def test_vr_counterpart_is_the_undisturbed_lane_at_its_position() -> None:
@@ -411,19 +422,24 @@ def _pair(v_leader: float, v_follower: float, x_follower: float) -> SimulationLo
 
 
 def test_ttc_drac_on_closing_pair() -> None:
-    # gap = 600 - 5 - (545 + 25 t) + 20 t = 50 - 5 t: smallest at t = 4 s (30 m).
+    # Key pair VMC -> VMF: gap = 600 - 5 - (545 + 25 t) + 20 t = 50 - 5 t, smallest at
+    # t = 4 s (30 m). TTC and DRAC skip the non-key vehicle 3 between them; the critical
+    # distance does not: VMC's actual leader is vehicle 3, gap 575 + 21.5 t - 5 - (545 + 25 t)
+    # = 25 - 3.5 t, smallest at t = 4 s (11 m). VR (2) on the ramp has no leader.
     log = _pair(20.0, 25.0, 545.0)
     w = MetricWindow(group=roles(2, 1, 0), t_start=0.0, t_merge=2.0, t_end=4.0)
     assert min_ttc(log, w) == pytest.approx(30.0 / 5.0, rel=1e-5)
     assert max_drac(log, w) == pytest.approx(5.0**2 / (2 * 30.0), rel=1e-5)
-    assert critical_distance(log, w) == pytest.approx(30.0, abs=1e-4)
+    assert critical_distance(log, w) == pytest.approx(11.0, abs=1e-4)
 
 
 def test_critical_distance_starts_at_merge() -> None:
-    # Opening pair: gap = 30 + 5 t, so 30 m at t = 0 but 35 m at the merge (t = 1 s).
+    # VMC's actual leader is the non-key vehicle 3: gap 575 + 21.5 t - 5 - (565 + 20 t)
+    # = 5 + 1.5 t, so 5 m at t = 0 but 6.5 m at the merge (t = 1 s). The key pair VMC -> VMF
+    # (30 + 5 t) opens: no TTC, no DRAC.
     log = _pair(25.0, 20.0, 565.0)
     w = MetricWindow(group=roles(2, 1, 0), t_start=0.0, t_merge=1.0, t_end=4.0)
-    assert critical_distance(log, w) == pytest.approx(35.0, abs=1e-4)
+    assert critical_distance(log, w) == pytest.approx(6.5, abs=1e-4)
     assert min_ttc(log, w) == math.inf
     assert max_drac(log, w) == 0.0
     no_merge = MetricWindow(group=w.group, t_start=0.0, t_merge=math.nan, t_end=4.0)
@@ -465,9 +481,11 @@ def test_collisions_counted_only_inside_window() -> None:
 def test_registry_specs() -> None:
     expected = {
         "critical_distance": ("m", "larger"),
+        "u_safe_at_merge": ("m/s²", "smaller"),
         "average_acceleration": ("m/s²", "smaller"),
         "stabilisation_time": ("s", "smaller"),
-        "stabilisation_time_entry": ("s", "smaller"),
+        "stabilisation_time_from_merge": ("s", "smaller"),
+        "integrated_disturbance": ("m", "smaller"),
         "lsrv": ("m²", "smaller"),
         "fuel": ("L", "smaller"),
         "min_ttc": ("s", "larger"),
@@ -484,8 +502,8 @@ def _is_nan(value: object) -> bool:
     return isinstance(value, float) and math.isnan(value)
 
 
-REFERENCED = {"average_acceleration", "stabilisation_time", "stabilisation_time_entry", "lsrv",
-              "fuel"}  # fmt: skip
+REFERENCED = {"average_acceleration", "stabilisation_time", "stabilisation_time_from_merge",
+              "integrated_disturbance", "lsrv", "fuel"}  # fmt: skip
 """The metrics that compare with the undisturbed run."""
 
 
@@ -502,10 +520,14 @@ def test_compute_metrics_floats_and_documented_nans() -> None:
     assert {name for name, spec in METRICS.items() if spec.needs_reference} == REFERENCED
     # Lane 1: VMR-VMC and VMC-VR gaps 25 m; lane 2: 30 m.
     assert values["critical_distance"] == pytest.approx(25.0, abs=1e-4)
+    # VMC (a CAV, T = 0.5 s) 25 m behind VR at the merge row, both at 20 m/s; D = 2 m,
+    # a_merg = 7.5 m/s²
+    assert values["u_safe_at_merge"] == pytest.approx(20.0**2 / (2 * (25 - 2 - 10 + 20.0**2 / 15)))
     assert values["pet"] == pytest.approx(1.25)
     # compared with itself: no disturbance
-    assert values["stabilisation_time"] == pytest.approx(0.0, abs=1e-9)
-    assert values["stabilisation_time_entry"] == 0.0
+    assert values["stabilisation_time"] == 0.0
+    assert values["stabilisation_time_from_merge"] == pytest.approx(0.0, abs=1e-9)
+    assert values["integrated_disturbance"] == 0.0
     assert values["average_acceleration"] == 0.0
     assert values["lsrv"] == 0.0
     assert values["min_ttc"] == math.inf
@@ -521,7 +543,7 @@ def test_compute_metrics_floats_and_documented_nans() -> None:
     values = compute_metrics(log, no_merge, reference=log)
     assert all(type(values[name]) is float for name in METRICS)
     nan = {name for name, val in values.items() if _is_nan(val)}
-    assert nan == {*REFERENCED, "critical_distance", "pet", "merge_time"}
+    assert nan == {*REFERENCED, "critical_distance", "u_safe_at_merge", "pet", "merge_time"}
     assert (values["merged"], values["sequence"]) == (False, "")
 
 
@@ -540,8 +562,8 @@ def test_run_without_ramp_vehicle_scores_zero_disturbance() -> None:
     assert (w.t_start, w.t_end) == (0.0, 10.0)
     assert not w.merged
     values = compute_metrics(log, reference=log)
-    for name in ("average_acceleration", "stabilisation_time", "stabilisation_time_entry",
-                 "lsrv"):  # fmt: skip
+    for name in ("average_acceleration", "stabilisation_time", "stabilisation_time_from_merge",
+                 "integrated_disturbance", "lsrv"):  # fmt: skip
         assert values[name] == 0.0, name
     # every vehicle over the 250 m it covers in the 10 s, at 25 m/s
     assert values["fuel"] == pytest.approx(8 * 10.0 * 1.23955625e-3, rel=1e-6)

@@ -1,6 +1,8 @@
 """The merge metrics measure what the paper's metrics mean, on hand-built logs with closed-form
-answers: stabilisation is the final settling, LSRV weighs each vehicle against itself, fuel is
-counted over a common distance, and a merge that never happened is an outcome."""
+answers: stabilisation is the final settling on a common clock, the integrated disturbance
+needs no clock, the critical distance is kept to the actual leader, U_safe is Eq. 15 at the
+merge, LSRV weighs each vehicle against itself, fuel is counted over a common distance, and a
+merge that never happened is an outcome."""
 
 from __future__ import annotations
 
@@ -15,13 +17,17 @@ from hcomc.metrics import (
     METRICS,
     MetricWindow,
     compute_metrics,
+    critical_distance,
     fuel,
+    integrated_disturbance,
     low_speed_region_volume,
     merge_outcome,
     merge_window,
     stabilisation_time,
-    stabilisation_time_entry,
+    stabilisation_time_from_merge,
+    u_safe_at_merge,
 )
+from hcomc.metrics.leaders import lane_follower, lane_leaders
 from hcomc.sim.log import EventKind, SimulationLog
 
 
@@ -33,39 +39,163 @@ def cruise_rate(v: float) -> float:
 # ------------------------------------------------------------------- stabilisation time
 def test_a_second_disturbance_after_a_quiet_spell_counts() -> None:
     """Vehicle 2 brakes (logged a = -1 m/s²) for t in [5, 5.5) and again in [10, 11); the
-    merge is at t = 5 s. Settled for good from t = 11 s: 6 s after the merge, 11 s after
-    VR's entry at t = 0 (the first quiet 2 s after the merge would say 0.5 s)."""
+    merge is at t = 5 s. Settled for good from t = 11 s: 11 s after VR's entry at t = 0, 6 s
+    after the merge (the first quiet 2 s after the merge would say 0.5 s)."""
     log = braking(a_rows=[*range(50, 55), *range(100, 110)], slows=False)
     w = merge_window(log, 0, PLATOON_GROUP)
     assert (w.t_start, w.t_merge) == (0.0, 5.0)
-    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(6.0, abs=1e-9)
-    assert stabilisation_time_entry(log, w, reference=cruising()) == pytest.approx(11.0)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(11.0)
+    assert stabilisation_time_from_merge(log, w, reference=cruising()) == pytest.approx(
+        6.0, abs=1e-9
+    )
 
 
 def test_braking_before_the_merge_counts_from_entry() -> None:
-    """Vehicle 2 brakes for t in [1, 3), before the merge at t = 5 s: nothing to settle after
-    the merge, but 3 s from VR's entry into the control zone."""
+    """Vehicle 2 brakes for t in [1, 3), before the merge at t = 5 s: 3 s from VR's entry
+    into the control zone, but nothing to settle after the merge."""
     log = braking(a_rows=range(10, 30), slows=False)
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w, reference=cruising()) == 0.0
-    assert stabilisation_time_entry(log, w, reference=cruising()) == pytest.approx(3.0)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(3.0)
+    assert stabilisation_time_from_merge(log, w, reference=cruising()) == 0.0
+
+
+@pytest.mark.parametrize("t_merge", [3.0, 5.0, 9.0])
+def test_the_entry_clock_does_not_reward_a_late_merge(t_merge: float) -> None:
+    """The traffic settles for good at t = 12 s (vehicle 2 brakes for t in [5, 12)) whatever
+    the merge time: from VR's entry that is 12 s for every controller; from the merge it is
+    12 - t_merge, shorter the later VR merges."""
+    log = braking(a_rows=range(50, 120), slows=False)
+    w = MetricWindow(group=PLATOON_GROUP, t_start=0.0, t_merge=t_merge, t_end=15.0)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(12.0)
+    assert stabilisation_time_from_merge(log, w, reference=cruising()) == pytest.approx(
+        12.0 - t_merge
+    )
 
 
 @pytest.mark.parametrize(
-    ("last_row", "after_merge", "after_entry"),
+    ("last_row", "after_entry", "after_merge"),
     [
-        (129, 8.0, 13.0),  # settled from t = 13 s: the 2 s hold ends exactly at t_end = 15 s
-        (135, 10.0, 15.0),  # settled from 13.6 s: 1.4 s observed, censored at the window end
-        (150, 10.0, 15.0),  # unsettled in the last row: censored
+        (129, 13.0, 8.0),  # settled from t = 13 s: the 2 s hold ends exactly at t_end = 15 s
+        (135, 15.0, 10.0),  # settled from 13.6 s: 1.4 s observed, censored at the window end
+        (150, 15.0, 10.0),  # unsettled in the last row: censored
     ],
 )
 def test_a_short_settled_tail_is_censored(
-    last_row: int, after_merge: float, after_entry: float
+    last_row: int, after_entry: float, after_merge: float
 ) -> None:
     log = braking(a_rows=range(50, last_row + 1), slows=False)
     w = merge_window(log, 0, PLATOON_GROUP)
-    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(after_merge)
-    assert stabilisation_time_entry(log, w, reference=cruising()) == pytest.approx(after_entry)
+    assert stabilisation_time(log, w, reference=cruising()) == pytest.approx(after_entry)
+    assert stabilisation_time_from_merge(log, w, reference=cruising()) == pytest.approx(after_merge)
+
+
+# ------------------------------------------------------------------- integrated disturbance
+def test_integrated_disturbance_is_the_hand_integral() -> None:
+    """Against the cruising platoon (25 m/s), merge at t = 5 s, log every 0.1 s: vehicle 3 (VMR)
+    drives 2 m/s too fast for t in [5, 8) (∫ |dv| dt = 2 x 3 = 6 m, the sign does not matter);
+    VR (0) 1 m/s too slow for t in [0, 7), of which only [5, 7) counts, from its merge on
+    (1 x 2 = 2 m). Its counterpart is the undisturbed lane at its position: the reference's
+    own vehicle 0, there at 25 m/s."""
+    log, ref = cruising(), cruising()
+    t = np.arange(151) * 0.1
+    log.v[(t > 5.0 - 1e-9) & (t < 8.0 - 1e-9), 3] = 27.0
+    log.v[t < 7.0 - 1e-9, 0] = 24.0
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert integrated_disturbance(log, w, reference=ref) == pytest.approx(6.0 + 2.0)
+    # a non-key vehicle's deviation does not count
+    log.v[:, 7] = 20.0
+    assert integrated_disturbance(log, w, reference=ref) == pytest.approx(8.0)
+    # no undisturbed run, no merge: NaN; no ramp vehicle: 0
+    assert math.isnan(integrated_disturbance(log, w))
+    never = MetricWindow(group=PLATOON_GROUP, t_start=0.0, t_merge=math.nan, t_end=15.0)
+    assert math.isnan(integrated_disturbance(log, never, reference=ref))
+    nobody = MetricWindow(group={}, t_start=0.0, t_merge=math.nan, t_end=15.0)
+    assert integrated_disturbance(log, nobody, reference=ref) == 0.0
+
+
+def test_integrated_disturbance_of_a_ramp_of_speed() -> None:
+    """:func:`braking`: vehicle 2 slows from 25 m/s by 1 m/s² for t in [5, 8), then cruises
+    3 m/s slow. Deficit s(t) = clip(t - 5, 0, 3); the rectangle rule over the rows t = 0.1 k,
+    k = 0 .. 150: 0.1 x (0.1 x (0 + 1 + ... + 30) + 70 x 3) = 25.65 m (the integral over
+    [0, 15] is 25.5 m; the rows each stand for 0.1 s)."""
+    log = braking()
+    w = merge_window(log, 0, PLATOON_GROUP)
+    assert integrated_disturbance(log, w, reference=cruising()) == pytest.approx(25.65, rel=1e-5)
+
+
+# ------------------------------------------------------------------- critical distance
+def test_a_non_key_vehicle_between_key_vehicles_sets_the_critical_distance() -> None:
+    """Lane 1 at t: VMC (1) 540 + 20 t, a non-key vehicle (6) 560 + 20 t, VMF (2) 600 + 20 t;
+    VR (0) merges at t = 1 s into lane 1 at 640 + 20 t. Lane 2: VNR (5) 520 + 20 t and a
+    non-key vehicle (7) 527 + 20 t. The key pair VMC -> VMF is 55 m apart, but VMC keeps
+    15 m to vehicle 6 and VNR only 2 m to vehicle 7."""
+    t = np.arange(21) * 0.1
+    x, v = cruise([640.0, 540.0, 600.0, 0.0, 0.0, 520.0, 560.0, 527.0], [20.0] * 8, t)
+    lane = np.array([1, 1, 1, 1, 2, 2, 1, 2])[None].repeat(t.size, axis=0)
+    lane[:10, 0] = 0
+    active = np.ones(x.shape, dtype=bool)
+    active[:, [3, 4]] = False  # VMR and VNF missing
+    log = build(x, v, lane, active=active)
+    log.add_event(1.0, EventKind.MERGE, 0)
+    w = merge_window(log, 0, roles(0, 1, 2, -1, -1, 5))
+    assert critical_distance(log, w) == pytest.approx(2.0, abs=1e-4)
+    leader, gap = lane_leaders(log, slice(10, 12), w.key_vehicles)  # keys 0, 1, 2, 5
+    assert leader.tolist() == [[-1, 6, 0, 7]] * 2
+    np.testing.assert_allclose(gap[0], [np.nan, 15.0, 35.0, 2.0], atol=1e-4)
+    # without vehicle 7 the smallest gap is VMC's 15 m to vehicle 6
+    log.active[:, 7] = False
+    assert critical_distance(log, w) == pytest.approx(15.0, abs=1e-4)
+
+
+def test_overlapping_vehicles_are_leader_and_follower() -> None:
+    """Two lane-1 vehicles at the same position: the later one in vehicle order leads, with a
+    negative gap (the overlap), instead of both skipping to the vehicle ahead."""
+    t = np.arange(3) * 0.1
+    x, v = cruise([600.0, 600.0, 650.0], [20.0] * 3, t)
+    log = build(x, v, np.ones(x.shape, dtype=np.int64))
+    leader, gap = lane_leaders(log, slice(0, 3), np.array([0, 1]))
+    assert leader.tolist() == [[1, 2]] * 3
+    np.testing.assert_allclose(gap, [[-5.0, 45.0]] * 3)
+    assert lane_follower(log, 0, 1, 1) == 0
+    assert lane_follower(log, 0, 0, 1) == -1
+
+
+# ------------------------------------------------------------------- U_safe at the merge
+def eq15(d: float, v_r: float, v_f: float, delay: float) -> float:
+    """Eq. 15 by hand with the C1 control table: D = 2 m, a_merg = 7.5 m/s²."""
+    return v_r**2 / (2.0 * (d - 2.0 - v_r * delay + v_f**2 / (2.0 * 7.5)))
+
+
+def test_u_safe_at_merge_is_eq15_of_vrs_new_follower() -> None:
+    """:func:`merge_scene` at the MERGE row (t = 1.5 s): lane 1 holds VMR (3) at 730 m, VMC
+    (1) at 760 m, VR (0) at 790 m, VMF (2) at 850 m, all at 20 m/s. VR's new follower is VMC,
+    25 m behind VR's rear."""
+    log = merge_scene()
+    w = merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
+    assert u_safe_at_merge(log, w) == pytest.approx(eq15(25.0, 20.0, 20.0, 0.5))  # a CAV
+    log.kind[1] = 0  # an HDV follower reacts later: T = 1 s
+    assert u_safe_at_merge(log, w) == pytest.approx(eq15(25.0, 20.0, 20.0, 1.0))
+    # the follower's speed is v_r, VR's v_f
+    log.v[15, 1], log.v[15, 0] = 24.0, 18.0
+    assert u_safe_at_merge(log, w) == pytest.approx(eq15(25.0, 24.0, 18.0, 1.0))
+    # the follower need not be a key vehicle
+    assert u_safe_at_merge(log, merge_window(log, 0, roles(0))) == pytest.approx(
+        eq15(25.0, 24.0, 18.0, 1.0)
+    )
+    # no deceleration avoids the crash: infinite
+    log.x[15, 1] = 783.0  # 2 m gap: 2 - 2 - 24 + 21.6 < 0
+    assert u_safe_at_merge(log, w) == np.inf
+
+
+def test_u_safe_at_merge_needs_a_merge_and_a_follower() -> None:
+    log = merge_scene()
+    w = merge_window(log, 0, roles(0, 1, 2, 3, 4, 5))
+    no_merge = MetricWindow(group=w.group, t_start=0.0, t_merge=math.nan, t_end=4.0)
+    assert math.isnan(u_safe_at_merge(log, no_merge))
+    late = MetricWindow(group=w.group, t_start=0.0, t_merge=4.5, t_end=4.0)
+    assert math.isnan(u_safe_at_merge(log, late))  # merged after the last row
+    log.active[:, [1, 3]] = False  # nobody behind VR in lane 1 (lane 2's 5 does not count)
+    assert math.isnan(u_safe_at_merge(log, w))
 
 
 # ------------------------------------------------------------------- LSRV
@@ -204,8 +334,9 @@ def test_fuel_needs_the_reference_and_a_merge() -> None:
 
 
 # ------------------------------------------------------------------- outcome
-DISTURBANCE = ("average_acceleration", "stabilisation_time", "stabilisation_time_entry",
-               "lsrv", "fuel", "critical_distance", "pet")  # fmt: skip
+DISTURBANCE = ("average_acceleration", "stabilisation_time", "stabilisation_time_from_merge",
+               "integrated_disturbance", "lsrv", "fuel", "critical_distance", "u_safe_at_merge",
+               "pet")  # fmt: skip
 
 
 def test_a_ramp_vehicle_that_never_merged_is_no_undisturbed_run() -> None:

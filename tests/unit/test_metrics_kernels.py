@@ -27,6 +27,7 @@ from hcomc.metrics import (
     low_speed_region_volume,
 )
 from hcomc.metrics.lane_profile import interp_ascending_into, interp_into, lane_knots
+from hcomc.metrics.leaders import lane_follower, lane_leaders
 from hcomc.metrics.paper import disturbance_metrics
 from hcomc.metrics.surrogate import closing_metrics
 from hcomc.metrics.window import EPS_T, key_pairs, road_of, window_rows
@@ -334,6 +335,52 @@ def test_key_pairs_follow_their_definition(seed: int, n_rows: int, n_vehicles: i
     for log in (packed, plain):
         for got, expected in zip(key_pairs(log, window, rows), want, strict=True):
             same(got, expected)
+
+
+def dense_leaders(
+    log: SimulationLog, rows: slice, vehicles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`lane_leaders` by its definition, row by row on the (T, N) arrays: the next
+    vehicle of the lane in numpy's stable order of positions (NaN last)."""
+    r_idx = list(range(*rows.indices(log.n_steps)))
+    leader = np.full((len(r_idx), vehicles.size), -1, dtype=np.int64)
+    gap = np.full((len(r_idx), vehicles.size), np.nan)
+    for q, r in enumerate(r_idx):
+        x = np.asarray(log.x)[r].astype(np.float64)
+        for j, i in enumerate(vehicles.tolist()):
+            if not log.active[r, i]:
+                continue
+            order = stable_lane(log, r, int(log.lane[r, i]))
+            k = order.tolist().index(i)
+            if k + 1 < order.size:
+                nxt = int(order[k + 1])
+                d = x[nxt] - float(log.length[nxt]) - x[i]
+                if np.isfinite(d):
+                    leader[q, j], gap[q, j] = nxt, d
+    return leader, gap
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31), n_rows=st.integers(1, 30), n_vehicles=st.integers(1, 14))
+def test_lane_leaders_follow_their_definition(seed: int, n_rows: int, n_vehicles: int) -> None:
+    """Ties in position and NaN positions included; any vehicle is a leader, key or not."""
+    packed, plain = random_logs(seed, n_rows, n_vehicles, nan_x=0.1)
+    rng = np.random.default_rng(seed)
+    vehicles = rng.permutation(n_vehicles)[: rng.integers(1, n_vehicles + 1)]
+    r0 = int(rng.integers(0, n_rows + 1))
+    rows = slice(r0, int(rng.integers(r0, n_rows + 1)))
+    want = dense_leaders(plain, rows, vehicles)
+    for log in (packed, plain):
+        for got, expected in zip(lane_leaders(log, rows, vehicles), want, strict=True):
+            same(got, expected)
+    for r in range(*rows.indices(n_rows)):  # the follower is the one whose leader it is
+        lane_1 = stable_lane(plain, r, 1)
+        for i in vehicles.tolist():
+            if not plain.active[r, i] or plain.lane[r, i] != 1 or np.isnan(plain.x[r, i]):
+                continue
+            k = lane_1.tolist().index(i)
+            want_f = int(lane_1[k - 1]) if k > 0 else -1
+            assert lane_follower(packed, r, i, 1) == lane_follower(plain, r, i, 1) == want_f
 
 
 def dense_fuel(log: SimulationLog, ref: SimulationLog, window: MetricWindow) -> float:

@@ -10,7 +10,9 @@ Lower level: every metric is a function ``metric(log, window, ...) -> float`` of
 :class:`~hcomc.sim.log.SimulationLog` and the :class:`MetricWindow` of one merge (built by
 :func:`key_window` or :func:`merge_window`). Modules: :mod:`~hcomc.metrics.window` (window,
 key vehicles, tolerances), :mod:`~hcomc.metrics.paper` (critical distance, average
-acceleration, stabilisation times), :mod:`~hcomc.metrics.lsrv` (LSRV),
+acceleration, stabilisation times, integrated disturbance),
+:mod:`~hcomc.metrics.merge_safety` (Eq. 15's U_safe at the merge),
+:mod:`~hcomc.metrics.leaders` (actual same-lane leaders), :mod:`~hcomc.metrics.lsrv` (LSRV),
 :mod:`~hcomc.metrics.fuel_distance` (fuel over a common distance),
 :mod:`~hcomc.metrics.outcome` (merged, merge time, ramp wait, sequence),
 :mod:`~hcomc.metrics.speed_field` (speed fields for the figures),
@@ -25,13 +27,15 @@ from hcomc.metrics.core import METRICS, MetricSpec, compute_metrics
 from hcomc.metrics.fuel_distance import fuel
 from hcomc.metrics.logged_profile import lane_profile_at
 from hcomc.metrics.lsrv import low_speed_region_volume
+from hcomc.metrics.merge_safety import u_safe_at_merge
 from hcomc.metrics.outcome import OUTCOME_FIELDS, MergeOutcome, merge_outcome, realised_sequence
 from hcomc.metrics.paper import (
     average_acceleration,
     critical_distance,
     deviations,
+    integrated_disturbance,
     stabilisation_time,
-    stabilisation_time_entry,
+    stabilisation_time_from_merge,
 )
 from hcomc.metrics.speed_field import (
     DT_BIN,
@@ -78,6 +82,7 @@ __all__ = [
     "critical_distance",
     "deviations",
     "fuel",
+    "integrated_disturbance",
     "key_collisions",
     "key_window",
     "lane_profile_at",
@@ -93,5 +98,6 @@ __all__ = [
     "road_of",
     "speed_field",
     "stabilisation_time",
-    "stabilisation_time_entry",
+    "stabilisation_time_from_merge",
+    "u_safe_at_merge",
 ]

@@ -1,10 +1,13 @@
 """The metric registry and :func:`compute_metrics`, the one call that evaluates a run.
 
 * ``critical_distance`` [m, larger is better]: :func:`hcomc.metrics.paper.critical_distance`
+* ``u_safe_at_merge`` [m/s², smaller]: :func:`hcomc.metrics.merge_safety.u_safe_at_merge`
 * ``average_acceleration`` [m/s², smaller]: :func:`hcomc.metrics.paper.average_acceleration`
-* ``stabilisation_time`` [s, smaller]: :func:`hcomc.metrics.paper.stabilisation_time`
-* ``stabilisation_time_entry`` [s, smaller]:
-  :func:`hcomc.metrics.paper.stabilisation_time_entry`
+* ``stabilisation_time`` [s, smaller]: :func:`hcomc.metrics.paper.stabilisation_time` (from
+  VR's control-zone entry)
+* ``stabilisation_time_from_merge`` [s, smaller; favours late merges]:
+  :func:`hcomc.metrics.paper.stabilisation_time_from_merge`
+* ``integrated_disturbance`` [m, smaller]: :func:`hcomc.metrics.paper.integrated_disturbance`
 * ``lsrv`` [m², smaller]: :func:`hcomc.metrics.lsrv.low_speed_region_volume`
 * ``fuel`` [L, smaller]: :func:`hcomc.metrics.fuel_distance.fuel`
 * ``min_ttc`` [s, larger]: :func:`hcomc.metrics.surrogate.min_ttc`
@@ -13,10 +16,11 @@
 * ``collisions`` [count, smaller]: :func:`hcomc.metrics.surrogate.collisions`
 * ``key_collisions`` [count, smaller]: :func:`hcomc.metrics.surrogate.key_collisions`
 
-Average acceleration, the stabilisation times, LSRV and fuel compare with the undisturbed run
-(same scenario and seed, no ramp vehicle released); they are NaN when no ``reference`` log is
-given. A run whose ramp vehicle never merged is an outcome, not an undisturbed run: every
-metric that measures the merge (the five above, critical distance, PET) is NaN for it, and
+Average acceleration, the stabilisation times, the integrated disturbance, LSRV and fuel
+compare with the undisturbed run (same scenario and seed, no ramp vehicle released); they are
+NaN when no ``reference`` log is given. A run whose ramp vehicle never merged is an outcome,
+not an undisturbed run: every metric that measures the merge (the six above, critical
+distance, U_safe at the merge, PET) is NaN for it, and
 :func:`compute_metrics` adds the merge's outcome (:mod:`hcomc.metrics.outcome`). Each
 function's docstring gives the exact definition, units and edge cases.
 """
@@ -31,13 +35,15 @@ from typing import Literal
 
 from hcomc.metrics.fuel_distance import fuel
 from hcomc.metrics.lsrv import low_speed_region_volume
+from hcomc.metrics.merge_safety import u_safe_at_merge
 from hcomc.metrics.outcome import OUTCOME_FIELDS, merge_outcome
 from hcomc.metrics.paper import (
     average_acceleration,
     critical_distance,
     disturbance_metrics,
+    integrated_disturbance,
     stabilisation_time,
-    stabilisation_time_entry,
+    stabilisation_time_from_merge,
 )
 from hcomc.metrics.surrogate import (
     closing_metrics,
@@ -92,7 +98,12 @@ def _takes_reference(func: Callable[..., float]) -> bool:
 _SPECS = (
     MetricSpec(
         "critical_distance", "m", "larger", critical_distance,
-        "min bumper gap of consecutive same-lane key vehicles, merge to window end",
+        "min bumper gap of a key vehicle to its actual same-lane leader (any vehicle), merge "
+        "to window end",
+    ),
+    MetricSpec(
+        "u_safe_at_merge", "m/s²", "smaller", u_safe_at_merge,
+        "Eq. 15 critical acceleration of VR's new lane-1 follower behind VR at the merge row",
     ),
     MetricSpec(
         "average_acceleration", "m/s²", "smaller", average_acceleration,
@@ -100,13 +111,17 @@ _SPECS = (
     ),
     MetricSpec(
         "stabilisation_time", "s", "smaller", stabilisation_time,
-        "merge until all key vehicles stay within abs(a - a_u) < 0.05 m/s² and abs(v - v_u) "
-        "< 0.5 m/s for the rest of the window (final settling; censored at the window end)",
+        "VR's control-zone entry until all key vehicles stay within abs(a - a_u) < 0.05 m/s² "
+        "and abs(v - v_u) < 0.5 m/s for the rest of the window (final settling; censored)",
     ),
     MetricSpec(
-        "stabilisation_time_entry", "s", "smaller", stabilisation_time_entry,
-        "the same final settling from VR's control-zone entry, braking before the merge "
-        "included",
+        "stabilisation_time_from_merge", "s", "smaller", stabilisation_time_from_merge,
+        "variant: the same final settling from VR's merge, post-merge rows only; favours "
+        "late merges",
+    ),
+    MetricSpec(
+        "integrated_disturbance", "m", "smaller", integrated_disturbance,
+        "Σ abs(v - v_undisturbed) dt over the key vehicles (VR from its merge on) and window",
     ),
     MetricSpec(
         "lsrv", "m²", "smaller", low_speed_region_volume,
@@ -119,15 +134,18 @@ _SPECS = (
     ),
     MetricSpec(
         "min_ttc", "s", "larger", min_ttc,
-        "min gap / closing speed of consecutive same-lane key vehicles",
+        "min gap / closing speed of consecutive key vehicles in a lane, a lane-changing one "
+        "in both lanes while its body overlaps both",
     ),
     MetricSpec(
         "max_drac", "m/s²", "smaller", max_drac,
-        "max closing speed² / (2 gap) of consecutive same-lane key vehicles",
+        "max closing speed² / (2 gap) of consecutive key vehicles in a lane, a lane-changing "
+        "one in both lanes while its body overlaps both",
     ),
     MetricSpec(
         "pet", "s", "larger", pet_at_merge,
-        "post-encroachment time of VR's new lane-1 follower at VR's merge point",
+        "post-encroachment time at VR's merge point: the first vehicle after VR to pass it in "
+        "lane 1 (never one changing away from lane 1)",
     ),
     MetricSpec(
         "collisions", "count", "smaller", collisions,
@@ -163,7 +181,8 @@ def compute_metrics(
     reference : SimulationLog or None
         The undisturbed run: the same scenario and seed simulated with
         ``Simulation(config, seed, counterfactual=True)``. Without it the metrics that
-        compare with it (average acceleration, stabilisation times, LSRV, fuel) are NaN.
+        compare with it (average acceleration, stabilisation times, integrated disturbance,
+        LSRV, fuel) are NaN.
 
     Returns
     -------

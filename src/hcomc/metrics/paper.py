@@ -1,11 +1,20 @@
 r"""The paper's merge metrics (Tables II-III): critical distance, average acceleration and
-stabilisation time (fuel: :mod:`hcomc.metrics.fuel_distance`; LSRV: :mod:`hcomc.metrics.lsrv`).
+stabilisation time (fuel: :mod:`hcomc.metrics.fuel_distance`; LSRV: :mod:`hcomc.metrics.lsrv`),
+with the labelled variant stabilisation time from the merge and the integrated disturbance
+(Eq. 15's safety index at the merge: :mod:`hcomc.metrics.merge_safety`).
 
-The paper names these metrics but does not define them precisely. Average acceleration and
-stabilisation time measure the **disturbance caused by the merge**: each key vehicle is
-compared with its own undisturbed counterpart, the same vehicle in the same run without the
-merge (the ``reference`` log, see :mod:`hcomc.metrics.window`). Without that comparison a
-vehicle that simply accelerates towards its desired speed would count as disturbed.
+The paper names these metrics but does not define them precisely. Average acceleration,
+stabilisation time and integrated disturbance measure the **disturbance caused by the
+merge**: each key vehicle is compared with its own undisturbed counterpart, the same vehicle
+in the same run without the merge (the ``reference`` log, see :mod:`hcomc.metrics.window`).
+Without that comparison a vehicle that simply accelerates towards its desired speed would
+count as disturbed.
+
+**A common clock.** The headline stabilisation time is measured from VR's entry into the
+control zone, the same instant for every controller on a seed. Measured from VR's merge
+(:func:`stabilisation_time_from_merge`, a labelled variant) it rewards merging late: the
+traffic's recovery takes about as long after any merge, so the time from the merge is
+roughly a constant minus the merge time. :func:`integrated_disturbance` needs no clock.
 
 **VR's counterpart.** VR does not exist in the undisturbed run. It enters these metrics
 from its merge completion ``t_merge`` on (before that it drives on the ramp and acceleration
@@ -23,7 +32,8 @@ reference vehicle in it). Its deviations are ``da = a - a_u`` [m/s²] and ``dv =
 
 **No merge.** A run whose ramp vehicle never merged is an outcome
 (:func:`hcomc.metrics.outcome.merge_outcome`), not an undisturbed run: these metrics are NaN
-for it, whereas a run without a ramp vehicle at all (empty group) scores 0.
+for it, whereas a run without a ramp vehicle at all (empty group) scores 0 on the
+disturbance metrics.
 """
 
 from __future__ import annotations
@@ -34,6 +44,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hcomc._typing import FloatArray
+from hcomc.metrics.leaders import lane_leaders
 from hcomc.metrics.logged_profile import profile_along
 from hcomc.metrics.window import (
     A_TOL,
@@ -42,7 +53,6 @@ from hcomc.metrics.window import (
     V_TOL,
     MetricWindow,
     check_reference,
-    key_pairs,
     post_merge_rows,
     reference_or_score,
     times,
@@ -56,8 +66,9 @@ __all__ = [
     "deviations",
     "disturbance_metrics",
     "final_settling",
+    "integrated_disturbance",
     "stabilisation_time",
-    "stabilisation_time_entry",
+    "stabilisation_time_from_merge",
     "vr_counterpart",
 ]
 
@@ -65,20 +76,25 @@ __all__ = [
 def critical_distance(log: SimulationLog, window: MetricWindow) -> float:
     """Critical distance [m] (paper "Crit. Dist."; larger is better).
 
-    Definition: the minimum bumper gap ``x_l - L_l - x_f`` over all consecutive same-lane
-    pairs of present, active key vehicles (consecutive in x among key vehicles only, same
-    logged lane) and all logged rows with ``max(t_merge, t_start) <= t <= t_end``.
+    Definition: the minimum, over the present key vehicles and the logged rows with
+    ``max(t_merge, t_start) <= t <= t_end``, of a key vehicle's bumper gap
+    ``x_l - L_l - x_f`` to its *actual leader*: the nearest vehicle ahead of it in its
+    logged lane, any vehicle on the road, key or not
+    (:func:`hcomc.metrics.leaders.lane_leaders`). A non-key vehicle between two key
+    vehicles is the follower's leader; rows in which a key vehicle has nobody ahead in its
+    lane add nothing for it.
 
     Returns
     -------
     float
-        Critical distance [m]; NaN if VR did not merge or no two key vehicles share a
-        lane in those rows.
+        Critical distance [m] (negative if two vehicles overlap); NaN if VR did not merge,
+        or no key vehicle has a leader in those rows.
     """
     if not window.merged:
         return math.nan
-    gap, _, valid = key_pairs(log, window, post_merge_rows(log, window))
-    return float(gap[valid].min()) if valid.any() else math.nan
+    _, gap = lane_leaders(log, post_merge_rows(log, window), window.key_vehicles)
+    found = np.isfinite(gap)
+    return float(gap[found].min()) if found.any() else math.nan
 
 
 def deviations(
@@ -159,24 +175,66 @@ def stabilisation_time(
     v_tol: float = V_TOL,
     hold: float = HOLD,
 ) -> float:
-    """Time from the merge until the key vehicles are back to their undisturbed motion for
-    good [s] (paper "Stab. Time"; smaller is better).
+    """Time from VR's entry into the control zone until the key vehicles are back to their
+    undisturbed motion for good [s] (paper "Stab. Time"; smaller is better).
+
+    The clock starts at ``t_start``, the same instant for every controller on a seed, so a
+    late merge is not rewarded (:func:`stabilisation_time_from_merge` is).
 
     Definition (final settling): a logged row is *unsettled* if a valid deviation cell in it
     has ``abs(a - a_u) >= a_tol`` (0.05 m/s²) or ``abs(v - v_u) >= v_tol`` (0.5 m/s); rows
-    without a valid cell are settled. Over the rows ``max(t_merge, t_start) <= t <= t_end``,
-    ``t_s`` is the time of the first row after the last unsettled one (``t_merge`` if no
-    row is unsettled), and the result is ``max(0, t_s - t_merge)``: every disturbance after
-    the merge counts, however long the quiet spell before it. A merge between two rows
-    adds up to one logging interval.
+    without a valid cell are settled. Over all window rows ``[t_start, t_end]`` (the key
+    vehicles other than VR are compared with their undisturbed selves before the merge too,
+    VR from its merge on, so braking to open a gap before the merge counts), ``t_s`` is the
+    time of the first row after the last unsettled one (``t_start`` if no row is unsettled),
+    and the result is ``max(0, t_s - t_start)``: every disturbance counts, however long the
+    quiet spell before it.
 
     Returns
     -------
     float
-        Stabilisation time [s]. 0 if the run has no ramp vehicle (empty group).
-        **Censored**: if the settled tail ``[t_s, t_end]`` is shorter than ``hold`` (2 s),
-        or the last row is unsettled, ``t_end - t_merge`` (a lower bound). NaN without a
-        reference, if VR did not merge, or merged after the last logged row.
+        Stabilisation time from control-zone entry [s]. 0 if the run has no ramp vehicle
+        (empty group). **Censored**: if the settled tail ``[t_s, t_end]`` is shorter than
+        ``hold`` (2 s), or the last row is unsettled, ``t_end - t_start`` (a lower bound).
+        NaN without a reference or if VR did not merge.
+    """
+    ref = reference_or_score(log, window, reference)
+    if isinstance(ref, float):
+        return ref
+    rows = window_rows(log, window)
+    unsettled = _unsettled(*deviations(log, window, ref, rows), a_tol, v_tol)
+    return final_settling(times(log)[rows], unsettled, window.t_start, window.t_end, hold)
+
+
+def stabilisation_time_from_merge(
+    log: SimulationLog,
+    window: MetricWindow,
+    *,
+    reference: SimulationLog | None = None,
+    a_tol: float = A_TOL,
+    v_tol: float = V_TOL,
+    hold: float = HOLD,
+) -> float:
+    """Time from VR's merge until the key vehicles are back to their undisturbed motion for
+    good [s] (a labelled variant; smaller is better, but it **favours late merges**: the
+    traffic recovers about as long after any merge, so this is roughly a constant minus the
+    merge time; compare controllers with :func:`stabilisation_time`).
+
+    Definition (final settling, as :func:`stabilisation_time`, on another clock): a logged
+    row is *unsettled* if a valid deviation cell in it has ``abs(a - a_u) >= a_tol``
+    (0.05 m/s²) or ``abs(v - v_u) >= v_tol`` (0.5 m/s); rows without a valid cell are
+    settled. Over the rows ``max(t_merge, t_start) <= t <= t_end`` only (a disturbance
+    before the merge does not count), ``t_s`` is the time of the first row after the last
+    unsettled one (``t_merge`` if no row is unsettled), and the result is
+    ``max(0, t_s - t_merge)``. A merge between two rows adds up to one logging interval.
+
+    Returns
+    -------
+    float
+        Stabilisation time from the merge [s]. 0 if the run has no ramp vehicle (empty
+        group). **Censored**: if the settled tail ``[t_s, t_end]`` is shorter than ``hold``
+        (2 s), or the last row is unsettled, ``t_end - t_merge`` (a lower bound). NaN
+        without a reference, if VR did not merge, or merged after the last logged row.
     """
     ref = reference_or_score(log, window, reference)
     if isinstance(ref, float):
@@ -188,35 +246,36 @@ def stabilisation_time(
     return final_settling(times(log)[rows], unsettled, window.t_merge, window.t_end, hold)
 
 
-def stabilisation_time_entry(
-    log: SimulationLog,
-    window: MetricWindow,
-    *,
-    reference: SimulationLog | None = None,
-    a_tol: float = A_TOL,
-    v_tol: float = V_TOL,
-    hold: float = HOLD,
+def integrated_disturbance(
+    log: SimulationLog, window: MetricWindow, *, reference: SimulationLog | None = None
 ) -> float:
-    """Time from VR's entry into the control zone until the key vehicles are back to their
-    undisturbed motion for good [s] (smaller is better).
+    """The key vehicles' speed deviation from their undisturbed selves, integrated over the
+    window [m] (smaller is better).
 
-    Definition: :func:`stabilisation_time` over all window rows ``[t_start, t_end]``,
-    measured from ``t_start``: the key vehicles other than VR are compared with their
-    undisturbed selves before the merge too (VR from its merge on), so braking to open a gap
-    before the merge counts. ``max(0, t_s - t_start)``, censored at ``t_end - t_start``.
+    Definition: ``sum abs(v - v_u) * dt`` over all valid deviation cells of the window rows
+    ``[t_start, t_end]`` (module docstring: VR from its merge on, against the undisturbed
+    traffic of its lane at its position), with ``dt = log.dt`` (rectangle rule, each logged
+    row standing for one logging interval). Summed over vehicles, so the distance the key
+    vehicles as a group lose (or gain) on their undisturbed selves, counted in both
+    directions. It needs no clock: a late merge is not rewarded, and a disturbance counts by
+    its size and duration, not by when it ends.
 
     Returns
     -------
     float
-        Stabilisation time from control-zone entry [s]; 0 without a ramp vehicle; NaN
-        without a reference or if VR did not merge.
+        Integrated disturbance [m]. 0 if the run has no ramp vehicle (empty group) or no
+        cell is valid. NaN without a reference or if VR never merged.
     """
     ref = reference_or_score(log, window, reference)
     if isinstance(ref, float):
         return ref
-    rows = window_rows(log, window)
-    unsettled = _unsettled(*deviations(log, window, ref, rows), a_tol, v_tol)
-    return final_settling(times(log)[rows], unsettled, window.t_start, window.t_end, hold)
+    _, dv, valid = deviations(log, window, ref, window_rows(log, window))
+    return _integral_abs(dv, valid, log.dt)
+
+
+def _integral_abs(dv: FloatArray, valid: np.ndarray, dt: float) -> float:
+    """``sum abs(dv) dt`` over the valid cells [m]."""
+    return float(np.abs(dv[valid]).sum() * dt)
 
 
 def _unsettled(
@@ -250,15 +309,17 @@ def final_settling(
 def disturbance_metrics(
     log: SimulationLog, window: MetricWindow, reference: SimulationLog | None
 ) -> dict[Callable[..., float], float]:
-    """:func:`average_acceleration`, :func:`stabilisation_time` and
-    :func:`stabilisation_time_entry` (default tolerances), keyed by function: the values
-    they return, from one table of deviation cells.
+    """:func:`average_acceleration`, :func:`stabilisation_time`,
+    :func:`stabilisation_time_from_merge` and :func:`integrated_disturbance` (default
+    tolerances), keyed by function: the values they return, from one table of deviation
+    cells.
 
-    The post-merge rows stabilisation time reads are the tail of the window rows the other
-    two read, and a row's cells depend on that row alone, so the table of the window rows
-    serves all three.
+    The post-merge rows the stabilisation time from the merge reads are the tail of the
+    window rows the others read, and a row's cells depend on that row alone, so the table of
+    the window rows serves all four.
     """
-    funcs = (average_acceleration, stabilisation_time, stabilisation_time_entry)
+    funcs = (average_acceleration, stabilisation_time, stabilisation_time_from_merge,
+             integrated_disturbance)  # fmt: skip
     ref = reference_or_score(log, window, reference)
     if isinstance(ref, float):  # no cell is read
         return dict.fromkeys(funcs, ref)
@@ -266,10 +327,11 @@ def disturbance_metrics(
     da, dv, valid = deviations(log, window, ref, rows)
     unsettled = _unsettled(da, dv, valid, A_TOL, V_TOL)
     t = times(log)
-    settling = math.nan  # VR merged after the last logged row
+    from_merge = math.nan  # VR merged after the last logged row
     if post.stop > post.start:
         tail = unsettled[post.start - rows.start : post.stop - rows.start]
-        settling = final_settling(t[post], tail, window.t_merge, window.t_end, HOLD)
+        from_merge = final_settling(t[post], tail, window.t_merge, window.t_end, HOLD)
     entry = final_settling(t[rows], unsettled, window.t_start, window.t_end, HOLD)
-    return {average_acceleration: _mean_abs(da, valid), stabilisation_time: settling,
-            stabilisation_time_entry: entry}  # fmt: skip
+    return {average_acceleration: _mean_abs(da, valid), stabilisation_time: entry,
+            stabilisation_time_from_merge: from_merge,
+            integrated_disturbance: _integral_abs(dv, valid, log.dt)}  # fmt: skip

@@ -15,7 +15,11 @@ Conventions shared by every metric:
   streams, nothing merges. It has the same rows and vehicle columns as the factual log, so a
   vehicle's undisturbed state is read from the same cell;
 * **same lane** means the *logged* lane of the row; **consecutive** key vehicles are
-  neighbours in the order of ``x`` within one lane, *among key vehicles only*; the **bumper
+  neighbours in the order of ``x`` within one lane, *among key vehicles only* (TTC, DRAC,
+  where a lane-changing key vehicle is in both lanes while its body overlaps both:
+  :func:`hcomc.metrics.surrogate.body_pairs`);
+  a vehicle's **actual leader** is the nearest vehicle ahead of it in its lane, key or not
+  (critical distance, U_safe at the merge; :mod:`hcomc.metrics.leaders`); the **bumper
   gap** of a follower f behind its leader l is :math:`x_l - L_l - x_f` [m] (``x`` is the
   front bumper, ``L`` the vehicle length);
 * integrals over time use the **rectangle rule** with the logging interval ``log.dt``.
