@@ -4,8 +4,19 @@ Mainline headways are shifted exponential, ``h = h_min + Exp(mean - h_min)``, so
 the condition's average time headway (paper Table I). The mainline is pre-filled at
 ``t = -warmup`` with vehicles spaced by headway x speed, and vehicles keep arriving at x = 0
 until the end of the run, so traffic is developed when logging starts at t = 0. Each vehicle
-is a CAV with probability ``cav_penetration``. All draws come from the run's one generator,
-in a fixed order (lane 1, lane 2, ramp, kinds), so the same seed gives the same demand.
+is a CAV with probability ``cav_penetration``.
+
+**Random streams.** The demand takes one draw from the run's generator (two 64-bit words,
+whatever the duration), the entropy of a :class:`numpy.random.SeedSequence` whose children
+``(source, part)`` are the demand's independent streams: source 0 = lane 1, 1 = lane 2,
+2 = ramp; part 0 = initial-fill headways, 1 = initial-fill kinds, 2 = arrival headways,
+3 = arrival kinds (the ramp has no fill). Headways are drawn in fixed chunks until the span
+is covered and each vehicle's kind is the next uniform of its stream's kind generator, in
+order of arrival (the fill downstream first), so a run of the same seed with a shorter
+duration has exactly the first vehicles of a longer one (same times, positions, speeds,
+kinds) and the longer one only adds vehicles released after the shorter duration. Taking a
+fixed amount from the run's generator (rather than spawning from it) leaves what the engine
+draws next (estimation errors, controllers) independent of the demand drawn.
 
 **Insertion speed.** With ``main_speed = "equilibrium"`` each mainline lane's vehicles enter
 at the lane's steady-state speed ``v*``: the speed at which the mean front-to-front spacing
@@ -28,9 +39,10 @@ accelerates nor brakes on average. A number sets a fixed insertion speed instead
 the kinds follow an evenly spread pattern with the exact share: the k-th vehicle of a lane
 (k = 0, 1, ... in order of travel, downstream first) is a CAV iff
 ``floor((k + 1) p + 1/2) - floor(k p + 1/2) = 1``, so a lone ramp vehicle takes the more
-likely kind. No random number is drawn for the demand. ``hcomc reproduce`` runs this
-scenario with ``hdv.estimation_errors = false`` (reaction delays stay), so the traffic is
-fully deterministic; only the HCOMC optimisers draw from the run's seed.
+likely kind. No random number is drawn for the demand (the run's generator is untouched).
+``hcomc reproduce`` runs this scenario with ``hdv.estimation_errors = false`` (reaction
+delays stay), so the traffic is fully deterministic; only the HCOMC optimisers draw from the
+run's seed.
 """
 
 from __future__ import annotations
@@ -75,16 +87,32 @@ class Demand:
         return int(self.t.size)
 
 
+HEADWAY_CHUNK = 256
+"""Headways drawn per call while the arrivals do not cover the span yet (fixed, so a stream's
+draws do not depend on the span and a shorter span's arrivals are a prefix of a longer's)."""
+
+
 def shifted_exponential(
     rng: np.random.Generator, mean: float, minimum: float, total: float
 ) -> FloatArray:
-    """Cumulative arrival offsets in ``[0, total)`` from shifted exponential headways [s]."""
-    n = int(total / mean * 1.5) + 16
-    while True:
-        offsets = np.cumsum(minimum + rng.exponential(mean - minimum, size=n))
-        if offsets[-1] >= total:
-            return offsets[offsets < total]
-        n *= 2  # pragma: no cover - astronomically rare with the 1.5 safety factor
+    """Cumulative arrival offsets in ``[0, total)`` from shifted exponential headways [s].
+
+    Headways are drawn in chunks of :data:`HEADWAY_CHUNK` until an offset reaches ``total``
+    and summed one after another, so the offsets are the same sequence for every ``total``:
+    the result for a shorter span is a prefix of the result for a longer one (same stream).
+    """
+    chunks: list[FloatArray] = []
+    last = 0.0
+    while last < total:
+        headways = minimum + rng.exponential(mean - minimum, size=HEADWAY_CHUNK)
+        # a running sum continued from the last offset: bit-identical to one cumsum of all
+        offsets = np.cumsum(np.concatenate(([last], headways)))[1:]
+        chunks.append(offsets)
+        last = float(offsets[-1])
+    if not chunks:
+        return np.empty(0)
+    offsets = np.concatenate(chunks)
+    return offsets[offsets < total]
 
 
 def lane_speed(config: ScenarioConfig, mean_headway: float) -> float:
@@ -139,58 +167,97 @@ def evenly_spread(n: int, share: float) -> np.ndarray:
     return np.where(cav, Kind.CAV, Kind.HDV)
 
 
+# the demand's random streams: child (source, part) of the demand's SeedSequence
+_LANE_1, _LANE_2, _RAMP = 0, 1, 2  # sources
+_FILL, _FILL_KINDS, _ARRIVALS, _ARRIVAL_KINDS = 0, 1, 2, 3  # parts
+
+
+class _Streams:
+    """The demand's independent generators, derived from one draw of the run's generator;
+    ``None`` for the uniform pattern, which draws nothing."""
+
+    def __init__(self, rng: np.random.Generator | None) -> None:
+        # two 64-bit words, a fixed amount whatever the scenario's duration
+        self.entropy = None if rng is None else rng.integers(2**64, size=2, dtype=np.uint64)
+
+    def __call__(self, source: int, part: int) -> np.random.Generator | None:
+        if self.entropy is None:
+            return None
+        seq = np.random.SeedSequence([int(w) for w in self.entropy], spawn_key=(source, part))
+        return np.random.default_rng(seq)
+
+
 def _offsets(
-    config: ScenarioConfig, rng: np.random.Generator, mean: float, total: float
+    config: ScenarioConfig, rng: np.random.Generator | None, mean: float, total: float
 ) -> FloatArray:
     """Arrival offsets in ``[0, total)``: random (shifted exponential) or uniform."""
     d = config.demand
     if d.pattern == "uniform":
         return mean * np.arange(1, int(np.floor(total / mean - 1e-9)) + 1, dtype=np.float64)
+    assert rng is not None
     return shifted_exponential(rng, mean, d.min_headway, total)
+
+
+def _kinds(config: ScenarioConfig, rng: np.random.Generator | None, n: int) -> IntArray:
+    """Kinds of n vehicles of one stream in order (random pattern); placeholders (uniform:
+    the kinds are spread per lane afterwards)."""
+    if rng is None:
+        return np.full(n, Kind.HDV, dtype=np.int64)
+    draw = rng.random(n)  # one uniform per vehicle, in order: a prefix for fewer vehicles
+    return np.where(draw < config.demand.cav_penetration, Kind.CAV, Kind.HDV).astype(np.int64)
 
 
 def _merge_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
     d, road = config.demand, config.road
     start, end = -config.warmup, config.duration
-    t_parts, x_parts, v_parts, lane_parts = [], [], [], []
-    for lane, mean in ((Lane.MAIN_1, d.mean_headway_main_1), (Lane.MAIN_2, d.mean_headway_main_2)):
+    stream = _Streams(rng if d.pattern == "random" else None)
+    t_parts, x_parts, v_parts, lane_parts, kind_parts = [], [], [], [], []
+
+    def add(t: FloatArray, x: FloatArray, v: float, lane: int, kind: IntArray) -> None:
+        t_parts.append(t)
+        x_parts.append(x)
+        v_parts.append(np.full(t.size, v))
+        lane_parts.append(np.full(t.size, lane))
+        kind_parts.append(kind)
+
+    mains = ((_LANE_1, Lane.MAIN_1, d.mean_headway_main_1),
+             (_LANE_2, Lane.MAIN_2, d.mean_headway_main_2))  # fmt: skip
+    for source, lane, mean in mains:
         speed = lane_speed(config, mean)
-        # initial fill: spacings headway * speed downstream from x = 0
-        fill = road.length - _offsets(config, rng, mean, road.length / speed)[::-1] * speed
-        fill = fill[fill > 0]
-        arrivals = start + _offsets(config, rng, mean, end - start)
-        t_parts += [np.full(fill.size, start), arrivals]
-        x_parts += [fill, np.zeros(arrivals.size)]
-        v_parts += [np.full(fill.size + arrivals.size, speed)]
-        lane_parts += [np.full(fill.size + arrivals.size, lane)]
+        # initial fill: spacings headway * speed upstream from the road's end, downstream first
+        offsets = _offsets(config, stream(source, _FILL), mean, road.length / speed)
+        fill = road.length - offsets * speed
+        kinds = _kinds(config, stream(source, _FILL_KINDS), fill.size)
+        on_road = fill > 0
+        add(np.full(int(on_road.sum()), start), fill[on_road], speed, lane, kinds[on_road])
+        arrivals = start + _offsets(config, stream(source, _ARRIVALS), mean, end - start)
+        kinds = _kinds(config, stream(source, _ARRIVAL_KINDS), arrivals.size)
+        add(arrivals, np.zeros(arrivals.size), speed, lane, kinds)
     if d.ramp == "single":
         ramp_t = np.array([d.ramp_entry_time]) if d.ramp_entry_time < end else np.empty(0)
     elif d.ramp == "flow":
-        ramp_t = start + _offsets(config, rng, d.ramp_mean_headway, end - start)
+        mean = d.ramp_mean_headway
+        ramp_t = start + _offsets(config, stream(_RAMP, _ARRIVALS), mean, end - start)
     else:
         ramp_t = np.empty(0)
-    t_parts.append(ramp_t)
-    x_parts.append(np.full(ramp_t.size, road.ramp_start))
-    v_parts.append(np.full(ramp_t.size, d.ramp_speed))
-    lane_parts.append(np.full(ramp_t.size, Lane.RAMP))
+    kinds = _kinds(config, stream(_RAMP, _ARRIVAL_KINDS), ramp_t.size)
+    add(ramp_t, np.full(ramp_t.size, road.ramp_start), d.ramp_speed, Lane.RAMP, kinds)
     t = np.concatenate(t_parts)
     x = np.concatenate(x_parts).astype(np.float64)
     lanes = np.concatenate(lane_parts).astype(np.int64)
+    kind = np.concatenate(kind_parts).astype(np.int64)
     if d.pattern == "uniform":
-        kind = np.empty(t.size, dtype=np.int64)
         for lane in np.unique(lanes):
             ids = np.flatnonzero(lanes == lane)
             travel = ids[np.lexsort((-x[ids], t[ids]))]  # order of travel, downstream first
             kind[travel] = evenly_spread(ids.size, d.cav_penetration)
-    else:
-        kind = np.where(rng.random(t.size) < d.cav_penetration, Kind.CAV, Kind.HDV)
     order = np.lexsort((-x, t))  # by time, downstream first
     return Demand(
         t=t[order],
         x=x[order],
         v=np.concatenate(v_parts)[order],
         lane=lanes[order],
-        kind=kind.astype(np.int64)[order],
+        kind=kind[order],
         scripted=np.zeros(t.size, dtype=bool),
     )
 

@@ -13,13 +13,14 @@ HDVs follow the Human Driver Model (Treiber, Kesting & Helbing 2006):
   sqrt(2 dt/tau~) xi`` (stationary variance ~1), independent per driver
   for the gap (``s_est = s exp(V_s w_s)``) and the inverse TTC
   (``dv_est = dv + s sigma_r w_l``); ``w(0) ~ N(0, 1)``.
-* **Independent of who is on the road**: every step draws the innovations ``xi`` for *all* N
-  vehicles of the run (column i always belongs to vehicle i) and applies them to the active
-  HDVs only. A vehicle's error path therefore depends on the seed and on the steps it is
-  active, never on which other vehicles exist, so a run without the ramp vehicle (the
-  undisturbed counterfactual) gives bit-identical trajectories to every vehicle the merge
-  does not touch. (The engine advances the errors on every step with at least one active
-  vehicle.)
+* **Independent of who is on the road**: every step draws the innovations ``xi`` for every
+  vehicle due by that step's time (released or not yet on the road; column i always belongs
+  to vehicle i, in release order) and applies them to the active HDVs only. A vehicle's error
+  path therefore depends on the seed and on the steps it is active, never on which other
+  vehicles are on the road, so a run without the ramp vehicle (the undisturbed
+  counterfactual) gives bit-identical trajectories to every vehicle the merge does not touch,
+  and a shorter run of a seed is a prefix of a longer one (the engine advances the stream on
+  every step).
 
 A vehicle's buffer column is filled with its release state, so before K steps of history
 exist the current values are used. The run's buffers and error processes are built from its

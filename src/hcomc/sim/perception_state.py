@@ -4,6 +4,17 @@ delays read and each driver's estimation-error processes, sized and scaled from 
 
 The compiled reading of that state (paper Eq. 2) is :mod:`hcomc.sim.perception`'s; this
 Python side builds it from the configuration, so that the kernels do not import it.
+
+**Random streams.** With estimation errors on, the perception takes one fixed-size draw from
+the run's generator (two 64-bit words, whatever the number of vehicles), the entropy of a
+:class:`numpy.random.SeedSequence` whose children ``(0,)`` and ``(1,)`` draw the initial
+``w_gap`` and ``w_ttc`` (one standard normal per vehicle, in release order). The per-step
+innovations then come from the run's generator itself, each step drawing ``(2, m)`` standard
+normals for the ``m`` vehicles due by its time
+(:func:`hcomc.sim.step.loop.draw_innovations`; :meth:`Perception.advance_errors` is the same
+step in Python). So a shorter run of a seed perceives exactly as the first vehicles of a
+longer one do up to its end, and a run without its ramp vehicles (the undisturbed twin) draws
+the same. Without estimation errors nothing is drawn.
 """
 
 from __future__ import annotations
@@ -45,8 +56,13 @@ class Perception:
         self.errors = params.estimation_errors and (
             params.gap_error > 0 or params.inverse_ttc_error > 0
         )
-        self.w_gap = rng.standard_normal(n) if self.errors else np.zeros(n)
-        self.w_ttc = rng.standard_normal(n) if self.errors else np.zeros(n)
+        if self.errors:
+            # a fixed amount of the run's generator, whatever n (Random streams, module doc)
+            entropy = rng.integers(2**64, size=2, dtype=np.uint64)
+            self.w_gap = _initial_errors(entropy, _W_GAP, n)
+            self.w_ttc = _initial_errors(entropy, _W_TTC, n)
+        else:
+            self.w_gap, self.w_ttc = np.zeros(n), np.zeros(n)
         self.decay = math.exp(-dt / params.error_correlation_time)  # the C library's, not numpy's
         self.kick = math.sqrt(2.0 * dt / params.error_correlation_time)
 
@@ -61,18 +77,27 @@ class Perception:
         self.x_hist[row] = x
         self.v_hist[row] = v
 
-    def advance_errors(self, ids: IntArray, rng: np.random.Generator) -> None:
+    def advance_errors(
+        self, ids: IntArray, rng: np.random.Generator, due: int | None = None
+    ) -> None:
         """One OU step of both error processes for the active HDVs ``ids``.
 
-        Innovations are drawn for all N vehicles (even when ``ids`` is empty) so the random
-        stream does not depend on which vehicles are active.
+        The step's innovations are ``rng.standard_normal((2, due))``, column i for vehicle i,
+        for the ``due`` vehicles due by the step's time (default: all N), even when ``ids`` is
+        empty, so the random stream does not depend on which vehicles are active; every id
+        must be below ``due``. The compiled step draws the same
+        (:func:`hcomc.sim.step.loop.draw_innovations`).
         """
         if not self.errors:
             return
-        xi = rng.standard_normal((2, self.is_hdv.size))
-        advance_errors_of(
-            self.w_gap, self.w_ttc, _ints(ids), self.is_hdv, xi, self.decay, self.kick
-        )
+        n = self.is_hdv.size
+        m = n if due is None else int(due)
+        ids = _ints(ids)
+        if not 0 <= m <= n or (ids.size and int(ids.max()) >= m):
+            raise ValueError(f"due = {m}: needs 0 <= due <= {n} and every id below it")
+        xi = np.zeros((2, n))
+        xi[:, :m] = rng.standard_normal((2, m))
+        advance_errors_of(self.w_gap, self.w_ttc, ids, self.is_hdv, xi, self.decay, self.kick)
 
     @property
     def taus(self) -> FloatArray:
@@ -100,6 +125,17 @@ class Perception:
             np.ones(self.is_hdv.size, dtype=np.bool_), Estimates(s, v, vl),
         )  # fmt: skip
         return s, v, vl
+
+
+# the children of the perception's SeedSequence: the initial error of each process
+_W_GAP, _W_TTC = 0, 1
+
+
+def _initial_errors(entropy: np.ndarray, child: int, n: int) -> FloatArray:
+    """w(0) ~ N(0, 1) of n drivers in release order, from the perception's child stream
+    ``child``: the first values of a longer run's are a shorter run's."""
+    seq = np.random.SeedSequence([int(w) for w in entropy], spawn_key=(child,))
+    return np.random.default_rng(seq).standard_normal(n)
 
 
 def _ints(a: IntArray) -> IntArray:

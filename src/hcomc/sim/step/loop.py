@@ -85,10 +85,10 @@ from hcomc.sim.step.state import (
 )
 
 __all__ = [
-    "begin_step", "commanded_changes", "discretionary_changes", "due_plans", "follow_many",
-    "holding", "on_road", "push_history", "record_due_row", "record_row", "release",
-    "run_steps", "start_lane_changes", "step_accelerations", "step_alone", "step_back",
-    "step_body", "step_finish", "step_front", "step_time",
+    "begin_step", "commanded_changes", "discretionary_changes", "draw_innovations", "due_plans",
+    "end_step", "follow_many", "holding", "on_road", "push_history", "record_due_row",
+    "record_row", "release", "run_steps", "start_lane_changes", "step_accelerations",
+    "step_alone", "step_back", "step_body", "step_finish", "step_front", "step_time",
 ]  # fmt: skip
 
 
@@ -96,16 +96,25 @@ __all__ = [
 def step_finish(
     c: CoreArrays, ids: np.ndarray, t: float, acc: np.ndarray, index: LaneIndex
 ) -> None:
-    """Collisions, integration, lateral motion, exits, the HDVs' error processes (one row of
-    pre-drawn innovations per step with active vehicles) and the perception history."""
+    """Collisions, integration, lateral motion, exits, the HDVs' error processes (the step's
+    row of pre-drawn innovations, :func:`draw_innovations`) and the end of the step."""
     check_collisions(c, t, index)
     integrate(c, ids, acc)
     lateral(c, t)
     bookkeeping(c, ids, t)
     if c.flags[ERRORS] > 0:
         xi = c.innov[c.counters[INNOV_CURSOR]]
-        c.counters[INNOV_CURSOR] += 1
         advance_errors_of(c.w_gap, c.w_ttc, ids, c.is_hdv, xi, c.consts[DECAY], c.consts[KICK])
+    end_step(c)
+
+
+@kernel
+def end_step(c: CoreArrays) -> None:
+    """The end of every step, with vehicles on the road or none: the next row of innovations
+    (so that row k of a block always belongs to its k-th step) and the step counted, its
+    state pushed into the perception history."""
+    if c.flags[ERRORS] > 0:
+        c.counters[INNOV_CURSOR] += 1
     push_history(c)
 
 
@@ -209,17 +218,44 @@ def step_time(c: CoreArrays) -> float:
     return -c.consts[WARMUP] + c.counters[STEP] * c.consts[DT]
 
 
+_DUE = 1e-9
+"""Tolerance of "due at t" (``d_t <= t + 1e-9``), the same as :func:`release`'s."""
+
+
+@kernel
+def draw_innovations(c: CoreArrays, rng: np.random.Generator) -> None:
+    """The HDVs' error innovations of the next ``len(innov)`` steps from the current one,
+    drawn from the run's generator step by step: step k's row gets
+    ``rng.standard_normal((2, m_k))`` in its first ``m_k`` columns, ``m_k`` the vehicles due
+    by step k's time (the demand is sorted by release time, so these are vehicles
+    ``0 .. m_k - 1``, and no other vehicle can be on the road at step k); the other columns
+    are not read.
+
+    The generator's consumption up to step k therefore depends only on the release times due
+    by then, not on the number of vehicles of the run (a shorter run of a seed draws exactly
+    what a longer one draws up to its end) nor on who is on the road (the undisturbed run,
+    without the ramp vehicles, draws the same)."""
+    first, warmup, dt = c.counters[STEP], c.consts[WARMUP], c.consts[DT]
+    for k in range(c.innov.shape[0]):
+        t = -warmup + (first + k) * dt  # step_time of step first + k
+        m = np.searchsorted(c.d_t, t + _DUE, side="right")
+        row = c.innov[k]
+        for j in range(2):
+            for i in range(m):
+                row[j, i] = rng.standard_normal()
+
+
 @kernel
 def begin_step(c: CoreArrays, rng: np.random.Generator) -> bool:
     """The start of every step, before any decision: room in the event buffer for the step's
-    events (False, doing nothing, when the buffer must be emptied first), the HDVs' next
-    error innovations when the drawn ones are used up (from the run's generator, the same
-    stream whoever calls), then the release of the vehicles due at t. Doing it twice in one
-    step changes nothing."""
+    events (False, doing nothing, when the buffer must be emptied first), the HDVs' error
+    innovations of the next steps when the drawn ones are used up
+    (:func:`draw_innovations`, from the run's generator, the same stream whoever calls), then
+    the release of the vehicles due at t. Doing it twice in one step changes nothing."""
     if c.counters[N_EVENTS] + 8 * c.x.size + 64 > c.ev_t.size:
         return False
     if c.flags[ERRORS] > 0 and c.counters[INNOV_CURSOR] >= c.innov.shape[0]:
-        c.innov[:] = rng.standard_normal(c.innov.shape)
+        draw_innovations(c, rng)
         c.counters[INNOV_CURSOR] = 0
     release(c, step_time(c))
     return True
@@ -228,11 +264,11 @@ def begin_step(c: CoreArrays, rng: np.random.Generator) -> bool:
 @kernel
 def on_road(c: CoreArrays) -> np.ndarray:
     """The vehicles on the road, counted into the run's vehicle-steps (a view of the step's
-    work row); with none, the step ends here (its history pushed)."""
+    work row); with none, the step ends here (:func:`end_step`)."""
     work = c.scratch_int[S_IDS]
     ids = work[: nonzero_into(c.active, work)]
     if ids.size == 0:
-        push_history(c)
+        end_step(c)
     c.counters[VEHICLE_STEPS] += ids.size
     return ids
 
