@@ -246,10 +246,11 @@ def _nearest_ahead(role: int, lanes: dict[int, int], x, present) -> int:
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_efficiency_objective_is_eq17_at_the_lane_change_decision(seed):
-    """-F[:, efficiency] is Eq. 17 recomputed from the predicted state at the step VR begins
-    its change, with the model's car following: (a_VR,new - a_VR,free) + eta * sum over
-    VMC, VMR, VNR of (a_new - a_ori), lanes "new" (VR in lane 1, VMC in lane 2 if lateral)
-    against "ori" (VR on the ramp, VMC in lane 1)."""
+    """-F[:, efficiency] is Eq. 17 recomputed from the predicted states, with the model's car
+    following: "before" at the step VR begins its change (VR at its free-road acceleration,
+    lanes "ori": VR on the ramp, VMC in lane 1), "after" at the step it completes it (lanes
+    "new": VR in lane 1, VMC in lane 2 if lateral): (a_VR,after - a_VR,before) + eta * sum
+    over VMC, VMR, VNR of (a_after - a_before)."""
     problem = _problem(seed)
     state, eta = problem.state, problem.config.lane_change.politeness
     rng = np.random.default_rng(seed)
@@ -262,18 +263,21 @@ def test_efficiency_objective_is_eq17_at_the_lane_change_decision(seed):
         start = np.flatnonzero(pred.X[c, :, 0] >= X[c, 0])
         if pred.k_merge[c] < 0 or start.size == 0:
             continue
-        k = int(start[0])
-        x, v, a = pred.X[c, k], pred.V[c, k], pred.A[c, k]
+        k0, k1 = int(start[0]), int(pred.k_merge[c])
+        xb, vb, ab = pred.X[c, k0], pred.V[c, k0], pred.A[c, k0]
+        xa, va, aa = pred.X[c, k1], pred.V[c, k1], pred.A[c, k1]
         lateral = X[c, 3] >= 0.5 and bool(state.coop[1])
         base = {0: 0, 1: 1, 2: 1, 3: 1, 4: 2, 5: 2}
         new, ori = {**base, 0: 1, 1: 2 if lateral else 1}, {**base, 0: -1}
         p, present = state.params, state.present
-        want = _accel(p, 0, _nearest_ahead(0, new, x, present), x, v, a) - _accel(p, 0, -1, x, v, a)
+        want = _accel(p, 0, _nearest_ahead(0, new, xa, present), xa, va, aa) - _accel(
+            p, 0, -1, xb, vb, ab
+        )
         for r in (1, 3, 5):
             if present[r]:
                 want += eta * (
-                    _accel(p, r, _nearest_ahead(r, new, x, present), x, v, a)
-                    - _accel(p, r, _nearest_ahead(r, ori, x, present), x, v, a)
+                    _accel(p, r, _nearest_ahead(r, new, xa, present), xa, va, aa)
+                    - _accel(p, r, _nearest_ahead(r, ori, xb, present), xb, vb, ab)
                 )
         assert -pred.F[c, 2] == pytest.approx(want, rel=1e-9, abs=1e-12)
         checked += 1

@@ -292,7 +292,7 @@ def _fallback_run(seed: int) -> tuple[Simulation, SimulationLog, int]:
 
 
 def test_a_broken_controller_falls_back_when_configured():
-    sim, log, vr = _fallback_run(1)
+    sim, log, vr = _fallback_run(2)  # a seed whose VR is an HDV
     assert sim.fleet.kind[vr] == Kind.HDV
     assert sim.decisions
     for plan in sim.decisions:

@@ -87,11 +87,12 @@ class ControlParams(FrozenModel):
         7.5, gt=0, le=15, description="Eq. 15 a_merg, leader's emergency deceleration [m/s^2]"
     )
     replan_period: float = Field(
-        1.0,
+        0.0,
         ge=0,
         le=60,
-        description="receding horizon: re-identify the key vehicles and replan every this many "
-        "seconds until VR starts its lane change; 0 = plan once at control-zone entry [s]",
+        description="0 = plan once at VR's control-zone entry, as the paper (Section III); "
+        "> 0: a receding horizon (an extension): re-identify the key vehicles and replan every "
+        "this many seconds until VR starts its lane change [s]",
     )
     commitment_margin: float = Field(
         0.2,

@@ -67,7 +67,8 @@ def plan_report(sim: Engine[object], plan: MergePlan) -> dict[str, Any]:
         else {
             "change": bool(game.change),
             "change_is_safe": bool(game.change_is_safe),
-            "lateral_allowed": bool(game.change or game.change_is_safe),
+            "lateral_allowed": bool(game.lateral_admitted),
+            "admitted_by": game.admitted_by,
             "reason": game.reason,
         },
         "pareto": pareto,

@@ -18,6 +18,16 @@ position, duration and remaining horizon, re-predicted from now) and the same co
 a small grid of merge positions and horizons, and Eq. 19's cost is taken over that pool
 (:func:`hcomc.equations.selection.eq19_costs`: min-max normalised, so the margin is a share of
 the pool's range: 0.2 of the [0, 2] range of the two normalised costs).
+
+No drift toward the lane end (HCOMC-R, a problem made with ``replanning``): a replan may not
+move the merge position of the committed cooperation further downstream than the live
+plan's (:func:`merge_bound`; VR already past it: than the first position it can still start
+at). Candidates keeping the cooperation beyond it are not feasible in the pool, and the grid
+of :func:`continuations` spans the positions up to it. Without the bound each replan could
+postpone the merge a little, until the plan lies past the point of no return. And once VR has
+reached the live plan's merge position, where the engine executes the plan (and replans at
+once, before its first attempt), a replan keeps the live cooperation whenever a feasible
+candidate keeps it (:func:`at_merge_position`): it does not switch at the moment of execution.
 """
 
 from __future__ import annotations
@@ -74,6 +84,29 @@ GRID_HORIZONS = 3
 """Horizons of the committed grid of :func:`continuations`, besides the continued one."""
 
 
+def merge_bound(live: MergePlan, problem: MergeProblem) -> float:
+    """The most downstream merge position a replan may give the live plan's cooperation [m]:
+    the live plan's, or the lower bound of the problem's merge position (VR's next position)
+    when VR is already past it (its change was refused there); ``inf`` when the problem is
+    not a replanning HCOMC's (``problem.replan_period`` 0) or the live plan has no merge
+    position."""
+    if problem.replan_period <= 0.0 or not np.isfinite(live.merge_x):
+        return np.inf
+    return max(float(live.merge_x), float(problem.xl[0]))
+
+
+def at_merge_position(view: TrafficView, live: MergePlan, problem: MergeProblem) -> bool:
+    """Whether a replan of HCOMC-R (``problem.replan_period`` > 0) comes when VR has reached
+    the live plan's merge position: the engine executes the live plan from there on, and it
+    replans at the first step there, before its first attempt, as it does after a refusal.
+    Such a replan only continues the live cooperation (from VR's next position) unless no
+    feasible candidate keeps it: switching then would race the change the engine is about
+    to start."""
+    if problem.replan_period <= 0.0 or not np.isfinite(live.merge_x):
+        return False
+    return bool(view.x[live.group.vr] >= live.merge_x)
+
+
 def continuations(
     live: MergePlan, groups: tuple[MergeGroup, MergeGroup], problem: MergeProblem, t: float
 ) -> FloatArray | None:
@@ -84,7 +117,8 @@ def continuations(
     bounds), all with its mode and the sequence whose group has the same cooperating vehicle,
     clipped to the bounds. None when that vehicle is no longer next to VR's slot or the plan
     has no merge position (a fallback). The grid lets a cooperation that is still possible in
-    another form be kept even when the optimiser did not search near it."""
+    another form be kept even when the optimiser did not search near it. For HCOMC-R the grid
+    of positions ends at :func:`merge_bound` (no drift downstream)."""
     seqs = [s for s, g in enumerate(groups) if g.vmc == live.group.vmc]
     if live.mode == Mode.LATERAL:
         seqs = [s for s in seqs if s == AHEAD]  # a lateral row is rolled out "ahead"
@@ -95,7 +129,8 @@ def continuations(
         mode = MODE_NONE + 0.25
     xl, xu = problem.xl, problem.xu
     horizon = live.horizon - (t - live.t0)
-    positions = [live.merge_x, *np.linspace(xl[0], xu[0], GRID_POSITIONS)]
+    last = min(float(xu[0]), merge_bound(live, problem))
+    positions = [live.merge_x, *np.linspace(xl[0], max(last, xl[0]), GRID_POSITIONS)]
     horizons = [horizon, *np.linspace(xl[2], xu[2], GRID_HORIZONS)]
     rows = [[live.merge_x, live.vr_duration, horizon, mode, seqs[0]]]
     rows += [[x, live.vr_duration, h, mode, seqs[0]] for x in positions[1:] for h in horizons]
@@ -109,7 +144,8 @@ class Choice:
 
     Attributes
     ----------
-    row : index of the chosen row in the pool.
+    row : index of the chosen row in the pool (-1: none is left, HCOMC-R's bound of
+        :func:`merge_bound` having ruled out every feasible one).
     kept : the chosen row keeps the live plan's commitment.
     margin : Eq. 19 cost of the best committed row minus that of the best row (inf: no
         committed row is feasible, or none passes Eq. 19's safety gate while another does).
@@ -130,22 +166,36 @@ def choose(
     live: MergePlan,
     margin: float,
 ) -> Choice:
-    """Apply the commitment rule to the feasible candidates ``pool`` = (X, F, feasible)."""
+    """Apply the commitment rule to the feasible candidates ``pool`` = (X, F, feasible).
+
+    For HCOMC-R a candidate keeping the live cooperation with its merge position beyond
+    :func:`merge_bound` counts as not feasible (no drift downstream), and once VR has reached
+    the live plan's merge position (:func:`at_merge_position`) the live cooperation is kept
+    whenever a feasible candidate keeps it and passes Eq. 19's gate as well as the best,
+    whatever the margin."""
     X, F, feasible = pool
-    costs = eq19_costs(F, OBJECTIVES, feasible=feasible, safety_threshold=problem.safety.threshold)
-    best = int(np.argmin(costs))
     promise = commitment_of(live)
     seqs, modes = _executed_rows(view, groups, problem, X)
-    committed = np.array(
-        [bool(ok) and (groups[seq].vmc, mode) == promise
-         for ok, seq, mode in zip(feasible, seqs, modes, strict=True)]
-    )  # fmt: skip
+    same = np.array(
+        [(groups[seq].vmc, mode) == promise for seq, mode in zip(seqs, modes, strict=True)],
+        dtype=bool,
+    )
+    drifts = same & (X[:, 0] > merge_bound(live, problem))
+    if drifts.any():
+        feasible = np.asarray(feasible, dtype=bool) & ~drifts
+        if not feasible.any():
+            return Choice(-1, False, np.inf, "switched: no feasible candidate")
+    costs = eq19_costs(F, OBJECTIVES, feasible=feasible, safety_threshold=problem.safety.threshold)
+    best = int(np.argmin(costs))
+    committed = np.asarray(feasible, dtype=bool) & same
     if not committed.any():
         return Choice(best, False, np.inf, "switched: no feasible candidate keeps the cooperation")
     keep = int(np.flatnonzero(committed)[np.argmin(costs[committed])])
     excess = float(costs[keep] - costs[best])
     if excess <= margin:
         return Choice(keep, True, excess, "kept")
+    if at_merge_position(view, live, problem) and np.isfinite(excess):
+        return Choice(keep, True, excess, "kept")  # VR at its merge position
     if np.isinf(excess):
         gate = f"U_safe > {problem.safety.threshold:g} m/s² (Eq. 19's gate)"
         return Choice(best, False, excess, f"switched: every candidate keeping it has {gate}")

@@ -184,12 +184,17 @@ def sequence_groups(view: TrafficView, group: MergeGroup) -> tuple[MergeGroup, M
 
 
 def merge_problem(
-    view: TrafficView, group: MergeGroup, lateral_allowed: tuple[bool, bool] = (False, False)
+    view: TrafficView,
+    group: MergeGroup,
+    lateral_allowed: tuple[bool, bool] = (False, False),
+    replanning: bool = False,
 ) -> MergeProblem:
-    """The merge problem of both sequences at this planning instant (live plans continued)."""
+    """The merge problem of both sequences at this planning instant (live plans continued);
+    ``replanning``: HCOMC-R's, with the constraints of a replanning controller
+    (:class:`~hcomc.control.hierarchical.problem.MergeProblem`)."""
     groups = sequence_groups(view, group)
     states = tuple(key_state(view, g, continuation_starts(view, g)) for g in groups)
-    return MergeProblem((states[0], states[1]), view.config, lateral_allowed)
+    return MergeProblem((states[0], states[1]), view.config, lateral_allowed, replanning)
 
 
 class HCOMCController:
@@ -227,8 +232,9 @@ class HCOMCController:
         """The merge problem of this planning instant and the lateral games per sequence
         (only the "ahead" sequence's is played, see :class:`HCOMCDetails`)."""
         game = self.lateral_game(view, group)
-        allowed = bool(game is not None and (game.change or game.change_is_safe))
-        problem = merge_problem(view, group, (allowed, False))
+        allowed = bool(game is not None and game.lateral_admitted)
+        replanning = self.config.control.replan_period > 0.0  # HCOMC-R
+        problem = merge_problem(view, group, (allowed, False), replanning)
         return problem, (game, None)
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
@@ -247,7 +253,9 @@ class HCOMCController:
         result = self.optimizer.minimize(
             problem, budget=budget, rng=rng, initial=self._pareto.get(group.vr)
         )
-        if not result.any_feasible:
+        groups = sequence_groups(view, group)
+        picked = self._pick(view, groups, problem, result) if result.any_feasible else None
+        if picked is None:  # no feasible candidate (HCOMC-R: none that does not drift)
             self._pareto.pop(group.vr, None)
             return MergePlan(
                 group,
@@ -259,8 +267,7 @@ class HCOMCController:
                 details=HCOMCDetails(pareto=result, games=games),
             )
         self._pareto[group.vr] = result.X[result.feasible]
-        groups = sequence_groups(view, group)
-        x, f, k, commitment = self._pick(view, groups, problem, result)
+        x, f, k, commitment = picked
         chosen = problem.predict(x[None, :])
         seq, exec_group, mode = executed(view, groups, problem, x)
         details = HCOMCDetails(
@@ -299,12 +306,15 @@ class HCOMCController:
         groups: tuple[MergeGroup, MergeGroup],
         problem: MergeProblem,
         result: ParetoResult,
-    ) -> tuple[np.ndarray, np.ndarray, int, str]:
+    ) -> tuple[np.ndarray, np.ndarray, int, str] | None:
         """The plan to execute: Eq. 19's pick from the Pareto set for a first plan; for a
         replan, the commitment rule (:mod:`~hcomc.control.hierarchical.commitment`) over the Pareto
         set and the rows keeping the live plan's cooperation. Returns its decision vector,
         objectives, index (in the Pareto set; ``len(result.X)`` or more for an added row) and
-        what the rule did ("" for a first plan, "kept", or "switched: ..." with the reason)."""
+        what the rule did ("" for a first plan, "kept", or "switched: ..." with the reason);
+        None when no candidate is left (HCOMC-R: every feasible one keeps the live
+        cooperation with its merge position further downstream,
+        :func:`~hcomc.control.hierarchical.commitment.merge_bound`)."""
         threshold = problem.safety.threshold
         live = view.live_plan(groups[0].vr)
         if live is None or live.fallback:
@@ -321,6 +331,8 @@ class HCOMCController:
         choice = choose(
             view, groups, problem, (X, F, feasible), live, self.config.control.commitment_margin
         )
+        if choice.row < 0:
+            return None
         return X[choice.row], F[choice.row], choice.row, choice.why
 
 

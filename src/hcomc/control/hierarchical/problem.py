@@ -35,16 +35,31 @@ Objectives, all minimised (columns named for :func:`hcomc.equations.selection.se
   over its own counterfactual distance [L] (a fixed time window would favour slow plans, and
   comparing a different cooperating vehicle's total fuel would favour one sequence by
   background);
-* ``efficiency`` — −U_eff, Eq. 17 as the paper writes it: the incentive of VR's lane change
-  at its decision (the predicted state in which VR begins its change), each vehicle's own
-  car-following acceleration after the change minus before it (VR: before = its free-road
-  acceleration), politeness eta over VMC, VMR, VNR [m/s^2].
+* ``efficiency`` — −U_eff, Eq. 17 with the paper's "acceleration before and after lane
+  change": each vehicle's own car-following acceleration after VR's change (the predicted
+  state in which VR completes it, VR in lane 1 behind its leader there; lateral mode: the
+  cooperating vehicle in lane 2) minus before it (the predicted state in which VR begins it,
+  VR on the acceleration lane at its free-road acceleration, the others behind their lanes'
+  leaders without VR), politeness eta over VMC, VMR, VNR [m/s^2].
 
 Constraints (feasible when <= 0): predicted rectangle collisions among the key vehicles
 (count of colliding pair-steps), merge not completed in the window, an unavoidable crash in
 Eq. 15 (infinite U_safe), an infeasible virtual vehicle (v < 0 or a < -b_max), a lane change
 that would end beyond the acceleration lane [m], lateral mode not admitted by the lane-change
 game (or the cooperating vehicle not a CAV), and "behind" without a vehicle to merge behind.
+
+A replanning HCOMC (HCOMC-R, ``control.replan_period > 0``: a labelled extension; the problem
+is made with ``replanning=True``) adds two, which are 0 when planning once:
+
+* ``no_return`` [m] — the merge position lies beyond the point of no return less one replan
+  period: ``x_merge <= x_end - (v^2 / (2 b_safe) + s0) - v P``, with VR's predicted speed v
+  when it begins its change, MOBIL's b_safe (the deceleration of the engine's release,
+  ``hcomc.sim.step.plans.stopping_distance``), VR's jam gap s0 and the replan period P: a
+  change the engine refuses at the merge position still leaves a replan before VR is released;
+* ``execution`` — the engine's execution criterion fails in the predicted state in which VR
+  begins its change: VR's new follower in lane 1 (or VR behind its new leader) would brake
+  harder than b_safe [m/s^2], or a bumper gap to either is below MOBIL's minimum gap [m] (the
+  engine would refuse to start the change).
 """
 
 from __future__ import annotations
@@ -100,6 +115,8 @@ class MergeProblem:
         no vehicle to merge behind).
     config : the scenario; every parameter is read from it.
     lateral_allowed : per sequence, whether the lane-change game admits lateral cooperation.
+    replanning : the problem of a replanning HCOMC (HCOMC-R): the constraints ``no_return``
+        and ``execution`` apply (module docstring), with ``control.replan_period``.
     """
 
     n_var = 5
@@ -112,6 +129,7 @@ class MergeProblem:
         states: tuple[KeyState, KeyState | None],
         config: ScenarioConfig,
         lateral_allowed: tuple[bool, bool] = (False, False),
+        replanning: bool = False,
     ) -> None:
         self.states = states
         self.state: KeyState = states[0]  # the "ahead" group always exists
@@ -130,7 +148,11 @@ class MergeProblem:
         self.xu = np.array(
             [max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, control.horizon_max, mode_max, 1.0]
         )
-        self.consts = problem_constants(config)
+        self.replan_period = float(control.replan_period) if replanning else 0.0
+        """The replan period whose soundness rules apply (0: none, the problem of a plan made
+        once): the constraints ``no_return`` and ``execution``, and the commitment's bound on
+        the merge position (:mod:`~hcomc.control.hierarchical.commitment`)."""
+        self.consts = problem_constants(config, replanning)
         # window: VR reaches the lane end at its current speed, changes lane, then settles
         reach = (end - s.x[VR]) / max(s.v[VR], 5.0)
         self.dt = control.prediction_dt
@@ -250,7 +272,7 @@ class MergeProblem:
         )
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Objectives (n, 3) and constraints (n, 7) of candidate rows ``X`` (n, 5): F(x) and the
+        """Objectives (n, 3) and constraints (n, 9) of candidate rows ``X`` (n, 5): F(x) and the
         constraints of Ω in Eq. 18, those of :meth:`predict`, without assembling the
         trajectories.
 
@@ -290,7 +312,7 @@ class MergeProblem:
     # ------------------------------------------------------------ single row (SA)
     def evaluate_row(self, x: FloatArray, F: FloatArray, G: FloatArray) -> float:
         """One candidate ``x`` (5,): its objectives into ``F`` (3,), its constraints into ``G``
-        (7,), and its :meth:`scalarise` cost returned, equal bit for bit to
+        (9,), and its :meth:`scalarise` cost returned, equal bit for bit to
         ``evaluate(x[None])`` and ``scalarise`` of them (``optim.base.RowProblem``; a NaN's
         sign and payload aside, which IEEE 754 leaves open and no optimiser observes).
 

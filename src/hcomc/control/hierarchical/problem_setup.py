@@ -32,13 +32,16 @@ from hcomc.control.prediction.fuel import _fuel_to_distance_kernel
 from hcomc.control.prediction.layout import (
     C_A_MERG,
     C_ACCEL_END,
+    C_B_SAFE,
     C_D,
     C_DELAY_CAV,
     C_DELAY_HDV,
     C_DT,
     C_EMERGENCY,
     C_GAMMA,
+    C_MIN_GAP,
     C_POLITENESS,
+    C_REPLAN,
     C_VMC_DUR,
     C_VV_DECEL,
     C_WIDTH,
@@ -63,8 +66,13 @@ FUEL_COEFFICIENTS = FuelCoefficients.of(FUEL_DEFAULT)
 """The default fuel model's coefficients as the kernels take them."""
 
 
-def problem_constants(config: ScenarioConfig) -> FloatArray:
-    """The rollout's constants vector, every value read from ``config``."""
+def problem_constants(config: ScenarioConfig, replanning: bool = False) -> FloatArray:
+    """The rollout's constants vector, every value read from ``config``.
+
+    ``replanning`` (HCOMC-R: ``control.replan_period > 0``) sets ``C_REPLAN`` to the replan
+    period, which turns on the constraints of a replanning controller (the point of no
+    return and the engine's execution criterion, ``G_NO_RETURN`` and ``G_EXECUTION``); else
+    it is 0 and they stay 0."""
     safety = SafetyIndex.from_config(config.control)
     consts = np.zeros(N_CONSTS)
     consts[C_DT] = config.control.prediction_dt
@@ -79,6 +87,9 @@ def problem_constants(config: ScenarioConfig) -> FloatArray:
     consts[C_A_MERG] = safety.emergency_decel
     consts[C_DELAY_CAV] = safety.delay_cav
     consts[C_DELAY_HDV] = safety.delay_hdv
+    consts[C_REPLAN] = config.control.replan_period if replanning else 0.0
+    consts[C_B_SAFE] = config.lane_change.safe_decel  # the engine's: hcomc.sim.step.plans
+    consts[C_MIN_GAP] = config.lane_change.min_gap
     return consts
 
 

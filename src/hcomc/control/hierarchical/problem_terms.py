@@ -43,6 +43,8 @@ CONSTRAINTS = (
     "overrun",
     "lateral",
     "sequence",
+    "no_return",
+    "execution",
 )
 SEQUENCES = ("ahead", "behind")
 AHEAD, BEHIND = 0, 1

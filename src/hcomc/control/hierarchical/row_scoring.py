@@ -136,7 +136,7 @@ def score_into(
                                 c.fuel)  # fmt: skip
     objectives_into(u_safe, fuel[0], u_eff, F)
     G[:] = 0.0
-    G[:N_G] = work.g
+    G[:N_G] = work.g  # the kernel's columns (the problem's two are 0 there)
     G[G_LATERAL] = lateral_violation
     G[G_SEQUENCE] = sequence_violation
     return penalised_cost(F, G, c.threshold, c.fuel_ref)

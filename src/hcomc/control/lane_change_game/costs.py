@@ -13,13 +13,45 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray
+from hcomc.control.lane_change_game import game_safety
+from hcomc.control.lane_change_game.game_safety import INFEASIBLE_SAFETY_COST
 from hcomc.control.lane_change_game.params import GameParams
 from hcomc.equations.safety import critical_acceleration
 
-__all__ = ["INFEASIBLE_SAFETY_COST", "comfort_cost", "efficiency_cost", "safety_cost"]
+__all__ = [
+    "INFEASIBLE_SAFETY_COST",
+    "comfort_cost",
+    "efficiency_cost",
+    "safety_cost",
+    "worst_critical_acceleration",
+]
 
-INFEASIBLE_SAFETY_COST: float = 10.0
-"""J_s of an overlapping gap or an unavoidable crash (a_cr = inf or > a_merg) [-]."""
+
+def worst_critical_acceleration(
+    gap: FloatArray,
+    v_rear: FloatArray,
+    v_front: FloatArray,
+    delay: float,
+    active: BoolArray,
+    params: GameParams,
+) -> FloatArray:
+    """The worst Eq. 15 a_cr [m/s^2] over the last (time) axis on the active entries.
+
+    ``+inf`` when an active entry is infeasible: a gap ``<= 0`` (overlap) or a required
+    deceleration that cannot be braked (a_cr infinite or above a_merg, the emergency
+    deceleration, which the follower cannot exceed); 0 without an active entry.
+    """
+    a_cr = critical_acceleration(
+        gap,
+        v_rear,
+        v_front,
+        delay=delay,
+        min_distance=params.min_distance,
+        emergency_decel=params.emergency_decel,
+    )
+    bad = active & ((gap <= 0.0) | ~(a_cr <= params.emergency_decel))
+    worst = np.where(active & ~bad, a_cr, 0.0).max(axis=-1)
+    return np.asarray(np.where(bad.any(axis=-1), np.inf, worst), dtype=np.float64)
 
 
 def safety_cost(
@@ -30,19 +62,12 @@ def safety_cost(
     active: BoolArray,
     params: GameParams,
 ) -> FloatArray:
-    """J_s over the last (time) axis from Eq. 15 on the active entries; inactive entries = 0."""
-    a_cr = critical_acceleration(
-        gap,
-        v_rear,
-        v_front,
-        delay=delay,
-        min_distance=params.min_distance,
-        emergency_decel=params.emergency_decel,
-    )
-    bad = active & ((gap <= 0.0) | ~(a_cr <= params.emergency_decel))
-    worst = np.where(active, np.where(bad, 0.0, a_cr), 0.0).max(axis=-1)
-    j_s = np.minimum(1.0, worst / params.safety_threshold)
-    return np.where(bad.any(axis=-1), INFEASIBLE_SAFETY_COST, j_s)
+    """J_s over the last (time) axis: the shared safety term
+    (:func:`hcomc.control.lane_change_game.game_safety.safety_term`, a_cr / a_merg) of the
+    worst Eq. 15 value on the active entries (:func:`worst_critical_acceleration`);
+    :data:`INFEASIBLE_SAFETY_COST` for an infeasible entry, 0 without an active entry."""
+    worst = worst_critical_acceleration(gap, v_rear, v_front, delay, active, params)
+    return game_safety.safety_term(worst, params.emergency_decel)
 
 
 def efficiency_cost(v: FloatArray, v0: float) -> FloatArray:

@@ -20,12 +20,15 @@ Every joint action is simulated over the horizon :math:`H = T_{lc}` on the grid
 
 each term normalised to about [0, 1]:
 
-* safety :math:`J_s = \min(1, a_{cr}/a_{th})` with :math:`a_{cr}` the worst critical
-  acceleration (paper Eq. 15, :func:`hcomc.equations.safety.critical_acceleration`) over the
-  relevant follower/leader pairs and the horizon, :math:`a_{th}` =
-  :attr:`GameParams.safety_threshold`; :math:`J_s = 10` (effectively forbidding) when a gap is
-  :math:`\le 0` (overlap) or the required deceleration is infeasible (:math:`a_{cr} = \infty`,
-  or :math:`a_{cr} > a_{merg}`, the emergency deceleration, which the follower cannot exceed);
+* safety :math:`J_s = a_{cr}/a_{merg}`, the safety term shared with the merge game
+  (:func:`hcomc.control.lane_change_game.game_safety.safety_term`: linear, not capped), with
+  :math:`a_{cr}` the worst critical acceleration (paper Eq. 15,
+  :func:`hcomc.equations.safety.critical_acceleration`) over the relevant follower/leader pairs
+  and the horizon and :math:`a_{merg}` = :attr:`GameParams.emergency_decel`; :math:`J_s = 10`
+  (effectively forbidding) when a gap is :math:`\le 0` (overlap) or the required deceleration
+  is infeasible (:math:`a_{cr} = \infty`, or :math:`a_{cr} > a_{merg}`, the emergency
+  deceleration, which the follower cannot exceed), so a feasible action has
+  :math:`J_s \le 1`;
 * efficiency :math:`J_e = \operatorname{mean}_k |v_k - v_0| / v_0`;
 * comfort :math:`J_c = \max_k |\mathbf j_k| / j_{max} + \operatorname{mean}_k
   \left[(a_{x,k}/a_{ref,k})^2 + (a_{y,k}/a_{max})^2\right]`, with the jerk from finite
@@ -63,6 +66,14 @@ which defines them, is only known by its abstract):
   The type's time headway is carried but not used by the constant-
   acceleration actions.
 
+The game decides as the paper says (Section III-B: "SV takes the minimization of the
+expectation of its own payoff functions as the optimal strategy"): ``change`` of the
+:class:`LaneChangeDecision` is SV's equilibrium action. HCOMC's lateral cooperation is also
+admitted by a rule *added* to the paper (an extension, docs/models.md): SV's change keeps
+:math:`a_{cr}` below :attr:`GameParams.safety_threshold` against every response FV plays with
+positive probability (``change_is_safe``). The decision records which of the two admitted a
+change (``admitted_by``: "equilibrium", "safety_rule" or "").
+
 References
 ----------
 .. [1] Wang, Wang, Pan, Jiao and Claudel, HCOMC, arXiv:2507.11621, Section III-B, Eqs. (1),
@@ -80,11 +91,13 @@ import numpy as np
 
 from hcomc._typing import FloatArray
 from hcomc.config import IDMParams
+from hcomc.control.lane_change_game import game_safety
 from hcomc.control.lane_change_game.costs import (
     INFEASIBLE_SAFETY_COST,
     comfort_cost,
     efficiency_cost,
     safety_cost,
+    worst_critical_acceleration,
 )
 from hcomc.control.lane_change_game.params import (
     FV_AC,
@@ -115,6 +128,7 @@ from hcomc.control.lane_change_game.solvers import (
 )
 
 __all__ = [
+    "ADMITTED_BY",
     "FV_AC",
     "FV_ACTIONS",
     "FV_CS",
@@ -135,14 +149,21 @@ __all__ = [
 ]
 
 
+ADMITTED_BY: tuple[str, ...] = ("equilibrium", "safety_rule", "")
+"""Values of :attr:`LaneChangeDecision.admitted_by`: SV's change admitted by the game's
+equilibrium (the paper's rule), by the added safety rule alone (an extension), or not at
+all."""
+
+
 @dataclass(frozen=True)
 class LaneChangeDecision:
-    """Outcome of :func:`lane_change_game`.
+    """Outcome of :func:`lane_change_game`: the equilibrium and how a change was admitted.
 
     Attributes
     ----------
     change : bool
-        True if SV's equilibrium action is LC.
+        True if SV's *equilibrium* action is LC (paper §III-B: SV minimises its expected
+        cost). The engine's CAV discretionary changes go by this alone.
     solution : GameSolution
         The game solution (cooperative or Stackelberg-Harsanyi).
     sv_cost : numpy.ndarray
@@ -151,9 +172,23 @@ class LaneChangeDecision:
         FV cost used: ``(2, 4, n_types)`` for an HDV follower, ``(2, 4)`` for a CAV follower
         (reference type), ``(2, 1, n_types)`` zeros without a follower.
     reason : str
-        Short explanation of the solver used and the outcome.
+        Short explanation of the solver used, the outcome and how a change was admitted.
     sv_safety : numpy.ndarray
-        SV's safety cost J_s per joint action, shape ``(2, F)``.
+        SV's safety cost J_s = a_cr / a_merg per joint action, shape ``(2, F)`` (the shared
+        term, :func:`hcomc.control.lane_change_game.game_safety.safety_term`).
+    sv_critical_accel : numpy.ndarray
+        SV's worst Eq. 15 a_cr [m/s^2] per joint action (the worse of SV behind its leader and
+        FV behind SV), shape ``(2, F)``; ``inf`` for an infeasible action.
+    safety_threshold : float
+        a_th [m/s^2] of the added safety rule (:attr:`GameParams.safety_threshold`).
+    change_is_safe : bool
+        The added safety rule (an extension, not the paper's): SV's change keeps
+        ``sv_critical_accel < safety_threshold`` against every response FV plays with positive
+        probability in the equilibrium.
+    admitted_by : str
+        How a change of SV is admitted (one of :data:`ADMITTED_BY`): ``"equilibrium"`` when
+        ``change`` (whatever the safety rule says), ``"safety_rule"`` when only the added rule
+        admits it (``change_is_safe`` and not ``change``), ``""`` when neither does.
     """
 
     change: bool
@@ -162,13 +197,16 @@ class LaneChangeDecision:
     fv_cost: FloatArray
     reason: str
     sv_safety: FloatArray
+    sv_critical_accel: FloatArray
+    safety_threshold: float
+    change_is_safe: bool
+    admitted_by: str
 
     @property
-    def change_is_safe(self) -> bool:
-        """Whether SV's lane change keeps J_s < 1 (a_cr below the threshold) against every
-        response FV plays with positive probability in the equilibrium."""
-        support = self.solution.fv_mixed[SV_LC] > 0.0
-        return bool(np.all(self.sv_safety[SV_LC][support] < 1.0))
+    def lateral_admitted(self) -> bool:
+        """Whether SV's change is admitted at all (equilibrium or added safety rule): HCOMC's
+        gate of lateral cooperation, ``change or change_is_safe``."""
+        return self.admitted_by != ""
 
 
 def lane_change_game(
@@ -239,19 +277,23 @@ def lane_change_game(
     lead_rear = np.stack([tl_rear, old_rear])
     lead_v = np.stack([tl_v, old_v])
     all_on = np.ones((2, n), dtype=bool)
-    sv_js_lead = safety_cost(lead_rear - sv_x, sv_v, lead_v, sv_delay, all_on, params)  # (2,)
+    sv_acr_lead = worst_critical_acceleration(
+        lead_rear - sv_x, sv_v, lead_v, sv_delay, all_on, params
+    )  # (2,)
     sv_je = efficiency_cost(sv_v, sv.desired_speed)  # (2,)
     sv_lat = np.stack([lat, np.zeros(n)])
     sv_jc = comfort_cost(sv_a, sv_lat, sv_idm.max_accel, sv_idm.comfort_decel, params)  # (2,)
     w_s, w_e, w_c = params.sv_weights
 
     if fv is None:
-        sv_cost = (w_s * sv_js_lead + w_e * sv_je + w_c * sv_jc)[:, None]  # (2, 1)
+        sv_js = game_safety.safety_term(sv_acr_lead[:, None], params.emergency_decel)  # (2, 1)
+        sv_cost = w_s * sv_js + (w_e * sv_je + w_c * sv_jc)[:, None]  # (2, 1)
         fv_cost = np.zeros((2, 1, len(params.types)))
         solution = solve_stackelberg_harsanyi(sv_cost, fv_cost, params.prior)
         return _decision(
-            solution, sv_cost, fv_cost, sv_js_lead[:, None], "no follower in target lane"
-        )
+            solution, sv_cost, fv_cost, sv_js, sv_acr_lead[:, None], params,
+            "no follower in target lane",
+        )  # fmt: skip
 
     fv_delay = params.delay_cav if fv.is_cav else params.delay_hdv
     fv_x, fv_v, fv_a = fv_kinematics(fv, t, params)  # (4, N)
@@ -260,8 +302,9 @@ def lane_change_game(
     with_sv[FV_LC] = t <= 0.5 * params.horizon + 1e-9
     gap_sv = sv_rear[SV_LC][None, :] - fv_x  # (4, N): FV behind SV in the target lane
     v_sv_lc = np.broadcast_to(sv_v[SV_LC], (4, n))
-    sv_js_fv = safety_cost(gap_sv, fv_v, v_sv_lc, fv_delay, with_sv, params)  # (4,)
-    sv_js = np.maximum(sv_js_lead[:, None], np.stack([sv_js_fv, np.zeros(4)]))  # (2, 4)
+    sv_acr_fv = worst_critical_acceleration(gap_sv, fv_v, v_sv_lc, fv_delay, with_sv, params)
+    sv_acr = np.maximum(sv_acr_lead[:, None], np.stack([sv_acr_fv, np.zeros(4)]))  # (2, 4)
+    sv_js = game_safety.safety_term(sv_acr, params.emergency_decel)  # J_s is increasing in a_cr
     sv_cost = w_s * sv_js + (w_e * sv_je + w_c * sv_jc)[:, None]  # (2, 4)
 
     # FV's leader: SV if SV changes (while FV is still in the lane), else the target leader.
@@ -279,8 +322,9 @@ def lane_change_game(
         fv_cost = ref.w_safety * fv_js + ref.w_efficiency * fv_je + ref.w_comfort * fv_jc
         solution = solve_cooperative(sv_cost, fv_cost)
         return _decision(
-            solution, sv_cost, fv_cost, sv_js, "CAV follower: cooperative joint minimum"
-        )
+            solution, sv_cost, fv_cost, sv_js, sv_acr, params,
+            "CAV follower: cooperative joint minimum",
+        )  # fmt: skip
 
     a_max = np.array([ty.max_accel for ty in params.types])
     b_comf = np.array([ty.comfort_decel for ty in params.types])
@@ -291,8 +335,9 @@ def lane_change_game(
     )  # (2, 4, n_types)
     solution = solve_stackelberg_harsanyi(sv_cost, fv_cost, params.prior)
     return _decision(
-        solution, sv_cost, fv_cost, sv_js, "HDV follower: Stackelberg-Harsanyi equilibrium"
-    )
+        solution, sv_cost, fv_cost, sv_js, sv_acr, params,
+        "HDV follower: Stackelberg-Harsanyi equilibrium",
+    )  # fmt: skip
 
 
 def _decision(
@@ -300,13 +345,28 @@ def _decision(
     sv_cost: FloatArray,
     fv_cost: FloatArray,
     sv_safety: FloatArray,
+    sv_critical_accel: FloatArray,
+    params: GameParams,
     context: str,
 ) -> LaneChangeDecision:
-    """Wrap a solution with its cost matrices and a one-line reason."""
+    """Wrap a solution with its cost matrices, the added safety rule's verdict, how a change
+    is admitted and a one-line reason."""
     change = solution.sv_action == SV_LC
+    support = solution.fv_mixed[SV_LC] > 0.0
+    worst = float(sv_critical_accel[SV_LC][support].max())
+    change_is_safe = bool(worst < params.safety_threshold)
+    admitted_by = "equilibrium" if change else "safety_rule" if change_is_safe else ""
     e_lc, e_k = solution.expected_cost[SV_LC], solution.expected_cost[SV_K]
     verdict = "change lane" if change else "keep lane"
-    reason = f"{context}; {verdict} (cost LC {e_lc:.3f} vs K {e_k:.3f})"
+    admission = {
+        "equilibrium": "change admitted by the equilibrium",
+        "safety_rule": "change admitted only by the added safety rule (extension)",
+        "": "change not admitted",
+    }[admitted_by]
+    reason = (
+        f"{context}; {verdict} (cost LC {e_lc:.3f} vs K {e_k:.3f}); {admission} "
+        f"(worst a_cr of LC {worst:.2f} vs threshold {params.safety_threshold:g} m/s^2)"
+    )
     return LaneChangeDecision(
         change=change,
         solution=solution,
@@ -314,4 +374,8 @@ def _decision(
         fv_cost=fv_cost,
         reason=reason,
         sv_safety=sv_safety,
+        sv_critical_accel=sv_critical_accel,
+        safety_threshold=float(params.safety_threshold),
+        change_is_safe=change_is_safe,
+        admitted_by=admitted_by,
     )

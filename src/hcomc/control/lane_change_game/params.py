@@ -144,7 +144,7 @@ class GameParams(FrozenModel):
         _default(ControlParams, "safety_threshold"),
         gt=0,
         le=20,
-        description="a_th, critical acceleration mapped to J_s = 1 [m/s^2]",
+        description="a_th, a_cr bound of the added safety rule (not in J_s) [m/s^2]",
     )
     jerk_max: float = Field(5.0, gt=0, le=100, description="j_max, jerk normaliser [m/s^3]")
     delay_cav: float = Field(

@@ -59,12 +59,13 @@ over the whole prediction window:
   :math:`a_{merg}` (the same rule as :mod:`hcomc.control.lane_change_game.decision`'s
   :math:`a_{cr} > a_{merg}`: a cut-in that forces emergency braking is a near-crash that
   U_safe at merge completion alone does not show). :math:`J_s` is shared by both players (a
-  property of the group).
+  property of the group) and is the same function as the lane-change game's,
+  :func:`hcomc.control.lane_change_game.game_safety.safety_term`.
 
   Why linear: Kita's merge game has payoffs linear in the safety measure (there the time to
-  collision), and Section IV-A says the lag vehicle cooperates. The lane-change game's capped
-  term :math:`\min(1, U_{safe}/a_{th})` (:math:`a_{th}` = ``control.safety_threshold``,
-  4 m/s²) saturates at highway speed — a CAV at its equilibrium gap at 30 m/s already has
+  collision), and Section IV-A says the lag vehicle cooperates. A term capped at the Eq. 19
+  threshold, :math:`\min(1, U_{safe}/a_{th})` (:math:`a_{th}` = ``control.safety_threshold``,
+  4 m/s²), saturates at highway speed — a CAV at its equilibrium gap at 30 m/s already has
   :math:`U_{safe} \approx 4.6` m/s² — so every cell of most games scores 1 and comfort alone
   decides against yielding, whatever gap the yield opens. That term is kept as the variant
   ``safety="capped"`` (controller ``"game-capped"``), which differs in :math:`J_s` only.

@@ -1,7 +1,9 @@
 r"""Payoffs of the 2x2 merge game: each player's cost :math:`J = w_s J_s + w_e J_e + w_c J_c`
 over a predicted joint action.
 
-:func:`safety_term` is the shared safety term :math:`J_s` (linear in Eq. 15's U_safe, or the
+:func:`safety_term` is the safety term :math:`J_s` of a predicted joint action: the merge game's
+infeasibility rules, then the term both games share,
+:func:`hcomc.control.lane_change_game.game_safety.safety_term` (linear in Eq. 15's U_safe, or the
 capped variant; :data:`INFEASIBLE_SAFETY` for an infeasible prediction), :func:`player_cost`
 adds a player's efficiency and comfort terms with its weights (:data:`CAV_WEIGHTS`,
 :data:`NORMAL_WEIGHTS`). The module docstring of :mod:`hcomc.control.merge_game` states the
@@ -14,7 +16,8 @@ import numpy as np
 
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.control.hierarchical.problem_terms import CONSTRAINTS, Prediction
-from hcomc.control.lane_change_game.costs import INFEASIBLE_SAFETY_COST
+from hcomc.control.lane_change_game import game_safety
+from hcomc.control.lane_change_game.game_safety import INFEASIBLE_SAFETY_COST, SAFETY_TERMS
 from hcomc.control.longitudinal_candidate import virtual_vehicle_feasible
 
 __all__ = [
@@ -31,10 +34,6 @@ CAV_WEIGHTS = (0.5, 0.3, 0.2)
 
 NORMAL_WEIGHTS = (0.4, 0.4, 0.2)
 """(w_s, w_e, w_c) of the "normal" driving type (Hang et al. 2021)."""
-
-SAFETY_TERMS = ("linear", "capped")
-"""The shared safety term J_s: ``"linear"`` U_safe / a_merg (the published game),
-``"capped"`` min(1, U_safe / threshold) (the variant "game-capped")."""
 
 INFEASIBLE_SAFETY = INFEASIBLE_SAFETY_COST
 """J_s of an infeasible prediction (collision, unavoidable crash, infeasible VV1) [-]; the
@@ -79,8 +78,10 @@ def safety_term(
     safety: str = "linear",
     row: int = 0,
 ) -> float:
-    """Shared safety term ``J_s`` of one predicted joint action (module docstring).
+    """Safety term ``J_s`` of one predicted joint action (module docstring).
 
+    The term both games share,
+    :func:`hcomc.control.lane_change_game.game_safety.safety_term`:
     ``u_safe / a_merg`` (``safety="linear"``; ``a_merg`` = ``control.safety_emergency_decel``)
     or ``min(1, u_safe / threshold)`` (``"capped"``; ``control.safety_threshold``), or
     :data:`INFEASIBLE_SAFETY` when the prediction has a collision, VR not merged, an
@@ -100,8 +101,7 @@ def safety_term(
         or not virtual_vehicle_feasible(pred, row)
         or a_min < -a_merg
     )
-    if infeasible:
-        return INFEASIBLE_SAFETY
-    if safety == "capped":
-        return float(min(1.0, u_safe / problem.safety.threshold))
-    return float(u_safe / a_merg)
+    j_s = game_safety.safety_term(
+        u_safe, a_merg, infeasible=infeasible, form=safety, threshold=problem.safety.threshold
+    )
+    return float(j_s)

@@ -18,6 +18,8 @@ from hcomc._jit import kernel
 from hcomc.control.prediction.layout import (
     C_DT,
     G_COLLISION,
+    G_EXECUTION,
+    G_NO_RETURN,
     G_NOT_MERGED,
     G_OVERRUN,
     G_UNSAFE,
@@ -76,7 +78,7 @@ def candidate(
     vv0_cubic(starts, horizon, cf, consts[C_DT], vvs[0])
     flags = (bool(cav[VR]), lon, lat and bool(coop[VNR] and present[VNR]))
     n_known = pre_pass(key, starts, vvs, plan, flags[0], consts, track, scratch)
-    k_merge, g[G_OVERRUN], g[G_COLLISION], u_eff = joint_pass(
+    k_merge, g[G_OVERRUN], g[G_COLLISION], u_eff, g[G_NO_RETURN], g[G_EXECUTION] = joint_pass(
         key, vvs, plan, lat, flags, consts, trajectories, scratch, n_known, cf
     )
     g[G_VIRTUAL] = virtual_violation(vvs, horizon, flags, consts)

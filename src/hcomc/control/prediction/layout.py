@@ -39,16 +39,23 @@ N_PARAMS = 10
     C_A_MERG,
     C_DELAY_CAV,
     C_DELAY_HDV,
-) = range(12)
-N_CONSTS = 12
+    C_REPLAN,  # replan period [s] of HCOMC-R; 0 (planning once): G_NO_RETURN, G_EXECUTION off
+    C_B_SAFE,  # MOBIL's safe deceleration b_safe [m/s^2] (the engine's execution criterion)
+    C_MIN_GAP,  # MOBIL's minimum bumper gap to accept [m] (the same criterion)
+) = range(15)
+N_CONSTS = 15
 
 # start states of the virtual vehicles VV0 and VV1 (NaN: the Eq. 8 default)
 S_VV0_X, S_VV0_V, S_VV1_X, S_VV1_V = range(4)
 N_STARTS = 4
 
-# constraint columns
+# constraint columns, in the order of the merge problem's constraints
+# (hcomc.control.hierarchical.problem_terms.CONSTRAINTS); columns 5 and 6 are the problem's own
+# (lateral mode not admitted, "behind" without a vehicle), left 0 by the kernels;
+# G_NO_RETURN and G_EXECUTION only with C_REPLAN > 0, else 0
 G_COLLISION, G_NOT_MERGED, G_UNSAFE, G_VIRTUAL, G_OVERRUN = range(5)
-N_G = 5
+G_NO_RETURN, G_EXECUTION = 7, 8
+N_G = 9
 
 # lane-change progress of one candidate in one pass (flags stored as 0.0 / 1.0)
 (

@@ -19,19 +19,25 @@ from hcomc.control.prediction.lane_changes import (
 )
 from hcomc.control.prediction.layout import (
     C_ACCEL_END,
+    C_B_SAFE,
     C_DT,
     C_EMERGENCY,
     C_GAMMA,
+    C_MIN_GAP,
     C_POLITENESS,
+    C_REPLAN,
     C_VMC_DUR,
     C_WIDTH,
     L_LATERAL,
+    L_VMC_DONE,
+    L_VR_DONE,
     L_VR_STARTED,
     L_VR_XF,
     LANE0,
     N_PROGRESS,
     N_ROLES,
     P_LEN,
+    P_S0,
     R_A,
     R_ACC,
     R_FREE,
@@ -52,7 +58,13 @@ from hcomc.control.prediction.layout import (
     Scratch,
     Trajectories,
 )
-from hcomc.control.prediction.scoring import lane_change_incentive
+from hcomc.control.prediction.scoring import (
+    accels_after,
+    accels_before,
+    execution_violation,
+    incentive_of,
+    no_return_violation,
+)
 from hcomc.control.prediction.step import (
     behind,
     free_road,
@@ -204,17 +216,24 @@ def joint_pass(
     key: KeyVehicles, vvs: np.ndarray, plan: np.ndarray, lateral: bool,
     flags: tuple[bool, bool, bool], consts: np.ndarray, trajectories: Trajectories,
     scratch: Scratch, n_known: int, cf: np.ndarray,
-) -> tuple[int, float, float, float]:  # fmt: skip
+) -> tuple[int, float, float, float, float, float]:  # fmt: skip
     """Pass 2: every key vehicle, written to ``trajectories`` (K + 1, 6).
 
     Returns the step at which VR's change ends (-1: not within the window), how far the end
     of its path lies beyond the acceleration lane [m], the number of colliding
-    (pair, step) combinations of the key vehicles (Eq. 7) and U_eff, Eq. 17 in the state in
-    which VR begins its change (:func:`~hcomc.control.prediction.scoring.
-    lane_change_incentive`; 0 if it never does). The pass works in ``scratch``; VR's
-    accelerations of the first ``n_known`` steps are those of the pre-pass
-    (``scratch.vr_acc``, see :func:`pre_pass`); ``cf`` is the no-merge counterfactual
-    (:func:`step`).
+    (pair, step) combinations of the key vehicles (Eq. 7), U_eff (Eq. 17,
+    :func:`~hcomc.control.prediction.scoring.incentive_of`: the accelerations "before" in the
+    state in which VR begins its change, :func:`~hcomc.control.prediction.scoring.
+    accels_before`, and "after" in the state in which it completes it, or at the window's end
+    if it does not, :func:`~hcomc.control.prediction.scoring.accels_after`; 0 if it never
+    begins), and, for a replanning controller (``consts[C_REPLAN] > 0``, else 0), how far the
+    merge position lies beyond the point of no return
+    (:func:`~hcomc.control.prediction.scoring.no_return_violation`) and how far the engine's
+    execution criterion fails when VR begins its change
+    (:func:`~hcomc.control.prediction.scoring.execution_violation`; both 0 if VR never
+    begins). The pass works in ``scratch``; VR's accelerations of the first ``n_known``
+    steps are those of the pre-pass (``scratch.vr_acc``, see :func:`pre_pass`); ``cf`` is
+    the no-merge counterfactual (:func:`step`).
     """
     X, Y, V = borrow(trajectories.x), borrow(trajectories.y), borrow(trajectories.v)
     A, HEAD = borrow(trajectories.a), borrow(trajectories.heading)
@@ -225,6 +244,9 @@ def joint_pass(
     reset_state(S, key.x, key.v, key.a, key.present)
     start_progress(lc, lateral, S, consts[C_VMC_DUR], params)
     k_merge, overrun, collisions, u_eff = -1, plan[0] - consts[C_ACCEL_END], 0, 0.0
+    no_return = execution = 0.0
+    period = consts[C_REPLAN]
+    before = (0.0, 0.0)
     for k in range(n_steps + 1):
         record(S, X, V, A, k)
         lateral_pose(lc, S, consts[C_WIDTH], Y, HEAD, k)
@@ -235,12 +257,22 @@ def joint_pass(
         started, done = step(k, S, lc, params, vvs, plan, flags, consts, True, vr_known, cf)
         if started:
             overrun = lc[L_VR_XF] - consts[C_ACCEL_END]
-            u_eff = lane_change_incentive(S, params, lateral, consts[C_POLITENESS])
+            before = accels_before(S, params)
+            if period > 0.0:
+                no_return = no_return_violation(plan[0], S[R_V, VR], params[VR, P_S0],
+                                                consts[C_ACCEL_END], consts[C_B_SAFE],
+                                                period)  # fmt: skip
+                vmc_in_lane1 = not (lc[L_LATERAL] > 0.5 and lc[L_VMC_DONE] > 0.5)
+                execution = execution_violation(S, params, vmc_in_lane1, consts[C_B_SAFE],
+                                                consts[C_MIN_GAP])  # fmt: skip
         if done:
             k_merge = k + 1
+            u_eff = incentive_of(before, accels_after(S, params, lateral), consts[C_POLITENESS])
     if not lc[L_VR_STARTED]:
         overrun = plan[0] - consts[C_ACCEL_END]
-    return k_merge, overrun, float(collisions), u_eff
+    elif not lc[L_VR_DONE]:  # the change does not end within the window: "after" at its end
+        u_eff = incentive_of(before, accels_after(S, params, lateral), consts[C_POLITENESS])
+    return k_merge, overrun, float(collisions), u_eff, no_return, execution
 
 
 @kernel

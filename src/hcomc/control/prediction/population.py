@@ -29,7 +29,8 @@ Three passes per candidate population:
    end states of VV1 and VV2 at H exactly as the engine executes them (the cubics are fixed
    when the plan is made);
 2. the **joint pass** of every key vehicle, from which trajectories, constraints, Eq. 15 (at
-   VR's merge completion) and Eq. 17 (at VR's lane-change decision) are taken.
+   VR's merge completion) and Eq. 17 (the accelerations before VR's lane change, at its start,
+   and after it, at its end) are taken.
 
 The kernels are compiled with numba: a population is evaluated per optimiser generation, which
 a numpy time-stepping loop cannot do within the decision-time budget. Simulated annealing asks
@@ -65,17 +66,22 @@ from hcomc.control.prediction.candidate import (
 from hcomc.control.prediction.layout import (
     C_A_MERG,
     C_ACCEL_END,
+    C_B_SAFE,
     C_D,
     C_DELAY_CAV,
     C_DELAY_HDV,
     C_DT,
     C_EMERGENCY,
     C_GAMMA,
+    C_MIN_GAP,
     C_POLITENESS,
+    C_REPLAN,
     C_VMC_DUR,
     C_VV_DECEL,
     C_WIDTH,
     G_COLLISION,
+    G_EXECUTION,
+    G_NO_RETURN,
     G_NOT_MERGED,
     G_OVERRUN,
     G_UNSAFE,
@@ -115,9 +121,10 @@ from hcomc.control.prediction.passes import counterfactual, vmc_pre_track
 from hcomc.equations.idm import equilibrium_gap
 
 __all__ = [
-    "C_ACCEL_END", "C_A_MERG", "C_D", "C_DELAY_CAV", "C_DELAY_HDV", "C_DT", "C_EMERGENCY",
-    "C_GAMMA", "C_POLITENESS", "C_VMC_DUR", "C_VV_DECEL", "C_WIDTH", "G_COLLISION",
-    "G_NOT_MERGED", "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
+    "C_ACCEL_END", "C_A_MERG", "C_B_SAFE", "C_D", "C_DELAY_CAV", "C_DELAY_HDV", "C_DT",
+    "C_EMERGENCY", "C_GAMMA", "C_MIN_GAP", "C_POLITENESS", "C_REPLAN", "C_VMC_DUR",
+    "C_VV_DECEL", "C_WIDTH", "G_COLLISION", "G_EXECUTION", "G_NOT_MERGED", "G_NO_RETURN",
+    "G_OVERRUN", "G_UNSAFE", "G_VIRTUAL", "N_CONSTS", "N_PARAMS", "N_ROLES",
     "N_STARTS", "P_A", "P_B", "P_C", "P_DELTA", "P_IIDM", "P_LEN", "P_S0", "P_T", "P_V0",
     "P_WID", "S_VV0_V", "S_VV0_X", "S_VV1_V", "S_VV1_X", "VMC", "VMF", "VMR", "VNF", "VNR",
     "VR", "KeyVehicles", "counterfactual", "resolve_starts", "rollout", "rollout_into",
@@ -212,7 +219,7 @@ def rollout(
         :func:`resolve_starts`. A replanning controller passes the live virtual vehicles'
         states for continuity.
     merge_x, vr_dur, horizon, lateral : (C,) candidate variables.
-    consts : (12,) constants (``C_*``).
+    consts : (15,) constants (``C_*``).
     n_steps : prediction steps K.
     cf : (3, K + 1, 6) x, v and a of the no-merge :func:`counterfactual` (candidate-independent:
         the caller computes it once per planning instant, not once per population).
@@ -226,11 +233,14 @@ def rollout(
     u_safe : (C,) Eq. 15 at k_merge, the largest over the follower-leader pairs the merge
         creates (VR behind its new leader, VR's new follower; lateral mode also VMC behind its
         lane-2 leader and VNR behind VMC).
-    u_eff : (C,) Eq. 17, the incentive of VR's lane change in the predicted state in which it
-        begins (:func:`~hcomc.control.prediction.scoring.lane_change_incentive`), 0 if it
-        never begins [m/s^2].
-    g : (C, 5) constraint parts; column ``G_COLLISION`` counts the colliding (pair, step)
-        combinations of the key vehicles (oriented rectangles, Eq. 7).
+    u_eff : (C,) Eq. 17, the incentive of VR's lane change from the accelerations before it
+        (predicted state in which it begins) and after it (state in which it ends, or the
+        window's end) (:func:`~hcomc.control.prediction.scoring.lane_change_incentive`), 0 if
+        it never begins [m/s^2].
+    g : (C, 9) constraint parts (columns ``G_*``; columns 5 and 6 are the merge problem's,
+        left 0); column ``G_COLLISION`` counts the colliding (pair, step) combinations of the
+        key vehicles (oriented rectangles, Eq. 7); ``G_NO_RETURN`` and ``G_EXECUTION`` are 0
+        unless ``consts[C_REPLAN] > 0``.
     vv0, vv1, vv2 : (C, 4) cubic coefficients of the virtual vehicles (relative time).
     """
     if not resolved:
