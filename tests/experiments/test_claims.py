@@ -13,13 +13,16 @@ from hypothesis import strategies as st
 
 from hcomc.experiments.claims import (
     COLUMNS,
+    FAMILIES,
     GROUPS,
     MIN_PAIRS,
     Claim,
     ModeClaim,
+    all_claims,
     ci_verdict,
     claims,
     holm,
+    mcnemar_exact,
     paper_claims,
     sign_test,
     verdict_counts,
@@ -264,10 +267,74 @@ def test_the_extension_is_a_holm_family_of_its_own() -> None:
     plus["critical_distance"] = [99.0 + (s % 2) * 3.0 for s in range(30)]  # 15 of 30 above
     alone, both = claims(runs), claims(pd.concat([runs, plus], ignore_index=True))
     ext = both[both["group"] == GROUPS["extension"]]
-    paper = both[both["group"] != GROUPS["extension"]].reset_index(drop=True)
+    paper = both[both["family"] != "extension"].reset_index(drop=True)
     pd.testing.assert_frame_equal(paper, alone)
     assert len(ext) == len(alone[alone["group"] == GROUPS["table3"]])
     row = ext.set_index("claim").loc["HCOMC+ critical distance higher than FIFO"]
     assert (row["holds"], row["against"], row["verdict"]) == (15, 15, "undecided")
     assert (row["condition"], row["paper"]) == ("C1", "114.21 vs 104.67")
     np.testing.assert_allclose(ext["p_holm"], holm(ext["p_value"]))
+
+
+def test_the_paper_family_has_its_85_claims_and_none_against_a_replanning_variant() -> None:
+    """Section IV and Tables II-III make 85 comparative claims (50 of Table III, 26 of Table
+    II, 6 on CAV penetration, 3 on the cooperation mode); the replanning variants', the
+    extension's and the merge outcomes' are families of their own."""
+    listed = all_claims()
+    family = [FAMILIES[c.group] for c in listed]
+    assert family.count("paper") == 85
+    assert family.count("replanning") == 50
+    assert family.count("extension") == 50
+    assert family.count("outcome") == 20
+    for c in paper_claims():
+        cells = (c.a, c.b) if isinstance(c, Claim) else ()
+        assert not any(conf.endswith("-R") for _, conf in cells)
+    replanning = [c for c in listed if c.group == "replanning"]
+    assert all(isinstance(c, Claim) and c.a[1] == "HCOMC-R" for c in replanning)
+    assert {c.b[1] for c in replanning if isinstance(c, Claim)} == {"FIFO-R", "Game-R"}
+
+
+def _with_failures() -> pd.DataFrame:
+    """C1, FIFO and HCOMC over 12 seeds: where both merge HCOMC's critical distance is larger
+    (seeds 0-5); on seeds 6-11 HCOMC's VR does not merge (its merge metrics NaN)."""
+    rows = []
+    for seed in range(12):
+        failed = seed >= 6
+        for conf, cd, merged in (("HCOMC", np.nan if failed else 120.0 + seed, not failed),
+                                 ("FIFO", 100.0, True)):  # fmt: skip
+            rows.append({"condition": "C1", "configuration": conf, "seed": seed,
+                         "critical_distance": cd, "merged": merged, "merge_time": 20.0,
+                         "mode": "longitudinal"})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_a_run_without_a_merge_is_the_worst_outcome_in_the_sign_test() -> None:
+    """Six seeds where HCOMC's critical distance is larger and six where its VR never merged:
+    the median and CI describe the six merged pairs, but the sign test counts the failures
+    against HCOMC (6 for, 6 against: p = 1), instead of dropping them (6 of 6: p = 0.03)."""
+    rows = claims(_with_failures()).set_index("claim")
+    cd = rows.loc["HCOMC critical distance higher than FIFO"]
+    assert (cd["holds"], cd["against"], cd["n"]) == (6, 6, 12)
+    assert (cd["failed_a"], cd["failed_b"]) == (6, 0)
+    assert cd["median_diff"] == pytest.approx(22.5)  # the merged pairs: 20 … 25
+    assert cd["p_value"] == pytest.approx(1.0)
+    assert cd["verdict_holm"] == "undecided"
+    assert cd["family"] == "paper"
+
+
+def test_merge_success_is_a_claim_with_the_exact_mcnemar_test() -> None:
+    rows = claims(_with_failures()).set_index("claim")
+    success = rows.loc["HCOMC merges at least as often as FIFO"]
+    assert success["family"] == "outcome"
+    assert (success["holds"], success["against"], success["n"]) == (0, 6, 12)
+    assert (success["failed_a"], success["failed_b"]) == (6, 0)
+    assert success["p_value"] == pytest.approx(2 * 0.5**6)  # all six discordant seeds: FIFO
+    assert success["p_value"] == mcnemar_exact(0, 6)
+    assert success["verdict"] == "reversed"
+    assert success["ours"] == "6/12 vs 12/12 merged"
+
+
+def test_each_family_is_adjusted_alone() -> None:
+    frame = claims(_with_failures())
+    for _, part in frame.groupby("family"):
+        np.testing.assert_allclose(part["p_holm"], holm(part["p_value"]))

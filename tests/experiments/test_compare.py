@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -71,31 +72,46 @@ def test_fewer_differing_seeds_than_min_pairs_is_undecided():
     assert (frame["verdict"] == "undecided").all()
 
 
-def test_unmerged_runs_are_counted_and_excluded_from_pairs():
+def test_an_unmerged_run_is_the_worse_value_of_its_pair():
+    """A (2 above B where both merge) fails to merge on two seeds: each is A's worse outcome
+    (higher for a metric that prefers smaller values, lower for the critical distance), never
+    a missing pair."""
     merged = {"B": [True] * SEEDS, "A": [True] * SEEDS}
     merged["A"][0] = merged["A"][3] = False
     runs = _runs({"B": BASE, "A": BASE + 2.0}, merged=merged)
-    frame = effects(runs, ["B", "A"])
-    assert (frame["n"] == SEEDS - 2).all()
-    assert (frame["excluded"] == 2).all()
-    assert (frame["verdict"] == "higher").all()
+    frame = effects(runs, ["B", "A"]).set_index("metric")
+    assert (frame["n"] == SEEDS).all()
+    assert (frame["excluded"] == 0).all()
+    assert (frame["failed_a"] == 2).all()
+    assert (frame["failed_b"] == 0).all()
+    fuel = frame.loc["fuel"]  # smaller is better: A's failures count as A > B
+    assert (fuel["a_higher"], fuel["a_lower"]) == (SEEDS, 0)
+    assert fuel["median_diff"] == pytest.approx(2.0)  # the eight seeds both merged on
+    assert fuel["p_value"] == pytest.approx(2 * 0.5**SEEDS)
+    cd = frame.loc["critical_distance"]  # larger is better: A's failures count as A < B
+    assert (cd["a_higher"], cd["a_lower"]) == (SEEDS - 2, 2)
+    assert cd["p_value"] == pytest.approx(2 * sum(math.comb(SEEDS, k) for k in range(3)) / 2**SEEDS)
     success = merge_success(runs).set_index("configuration")
     assert (success.loc["A", "merged"], success.loc["A", "runs"]) == (SEEDS - 2, SEEDS)
     assert success.loc["A", "rate"] == pytest.approx(0.8)
     assert success.loc["B", "merged"] == SEEDS
     view = success_view(merge_success(runs))
     assert view.loc[0, "A"] == "8/10 (80 %)"
-    shown = effects_view(frame)
-    assert shown.loc[0, "A>B"] == "8"
-    assert shown.loc[0, "A<B"] == "0 of 8"
-    assert shown.loc[0, "excluded"] == "2"
+    shown = effects_view(effects(runs, ["B", "A"]))
+    row = shown[shown["metric"].str.startswith("Fuel")].iloc[0]
+    assert row["A>B"] == "10"
+    assert row["A<B"] == "0 of 10"
+    assert row["failed A/B"] == "2/0"
+    assert row["excluded"] == "0"
 
 
-def test_a_merged_flag_false_excludes_a_run_even_with_values():
+def test_a_merged_flag_false_is_a_failure_even_with_values():
     runs = _runs({"A": BASE, "B": BASE - 1.0})
     runs.loc[(runs["configuration"] == "A") & (runs["seed"] == 1), "merged"] = False
-    frame = effects(runs)
-    assert (frame["n"] == SEEDS - 1).all()
+    frame = effects(runs)  # B against A (listed first)
+    assert (frame["n"] == SEEDS).all()
+    assert (frame["failed_b"] == 1).all()
+    assert (frame["excluded"] == 0).all()
 
 
 def test_merge_success_is_compared_paired_by_seed():
@@ -107,9 +123,15 @@ def test_merge_success_is_compared_paired_by_seed():
     assert row["p_value"] == pytest.approx(2 * 0.5**SEEDS)
     assert row["verdict"] == row["verdict_holm"] == "lower"
     effect_rows = effects(runs, comparisons=[("A", "B")])
-    assert (effect_rows["n"] == 0).all()
-    assert (effect_rows["excluded"] == SEEDS).all()
+    # every seed is A's failure: the worse value in the sign test of every metric, while the
+    # median (of no pair) is undefined and the CI rule undecided
+    assert (effect_rows["n"] == SEEDS).all()
+    assert (effect_rows["excluded"] == 0).all()
     assert (effect_rows["verdict"] == "undecided").all()
+    np.testing.assert_allclose(effect_rows["p_value"], 2 * 0.5**SEEDS)
+    worse = effect_rows["favours"].eq("")  # no CI verdict; the Holm verdict names the side
+    assert worse.all()
+    assert set(effect_rows["verdict_holm"]) == {"lower", "higher"}
 
 
 def test_holm_is_applied_over_the_whole_family():

@@ -27,8 +27,10 @@ def test_grid_is_the_ordered_cartesian_product():
         ("C2", "FIFO", 3), ("C2", "FIFO", 5), ("C2", "HCOMC", 3), ("C2", "HCOMC", 5),
     ]  # fmt: skip
     spec = RunSpec("C1", "HCOMC-SA", 0, {"control": {"budget": 100}})
-    assert spec.config_overrides()["control"] == {"budget": 100, "controller": "hcomc",
-                                                  "optimizer": "sa"}  # fmt: skip
+    control = {"budget": 100, "controller": "hcomc", "optimizer": "sa", "replan_period": 0.0}
+    assert spec.config_overrides()["control"] == control  # plans once, as published
+    replanning = RunSpec("C1", "HCOMC-R", 0).config_overrides()["control"]
+    assert replanning == {"controller": "hcomc", "optimizer": "nsga2", "replan_period": 1.0}
 
 
 def test_mean_ci_matches_the_t_interval():

@@ -1,4 +1,4 @@
-"""Tables II and III on the seeds common to a condition's rows, and merge success."""
+"""Tables II and III, each row on its own seeds, and merge success."""
 
 from __future__ import annotations
 
@@ -45,13 +45,17 @@ def test_rows_of_table_iii_include_unnamed_configurations_after_hcomc() -> None:
     assert table_rows(_runs(), "II") == [("C1", "NSGA-II", "HCOMC", rows[2][3])]
 
 
-def test_means_are_over_the_seeds_common_to_every_row_of_the_condition() -> None:
+def test_each_row_is_summarised_over_its_own_seeds() -> None:
     table = table_summary(_runs(), "III").set_index("configuration")
-    # critical distance: seeds 0 and 1 only (Game lacks seed 2, HCOMC+ seed 3)
-    assert (table["critical_distance_n"] == 2).all()
+    # critical distance: Game lacks seed 2, HCOMC+ seed 3; the others have all four
+    assert table["critical_distance_n"].to_dict() == {"FIFO": 4, "Game": 3, "HCOMC": 4,
+                                                       "HCOMC+": 3}  # fmt: skip
     for i, conf in enumerate(("FIFO", "Game", "HCOMC", "HCOMC+")):
-        assert table.loc[conf, "critical_distance"] == pytest.approx(5.0 + i)
-        half = stats.t.ppf(0.975, 1) * np.std([0.0, 10.0], ddof=1) / np.sqrt(2)
+        seeds = [s for s in range(4) if (conf, s) not in {("Game", 2), ("HCOMC+", 3)}]
+        values = [10.0 * s + i for s in seeds]
+        assert table.loc[conf, "critical_distance"] == pytest.approx(np.mean(values))
+        assert table.loc[conf, "critical_distance_median"] == pytest.approx(np.median(values))
+        half = stats.t.ppf(0.975, len(values) - 1) * np.std(values, ddof=1) / np.sqrt(len(values))
         assert table.loc[conf, "critical_distance_ci"] == pytest.approx(half)
         assert table.loc[conf, "fuel"] == pytest.approx(15.0 + i)  # all four seeds
     assert (table["fuel_n"] == 4).all()
@@ -59,21 +63,33 @@ def test_means_are_over_the_seeds_common_to_every_row_of_the_condition() -> None
     assert table.loc["FIFO", "merged"] == table.loc["FIFO", "runs"] == 4
     assert np.isnan(table.loc["HCOMC+", "fuel_paper"])
     assert table.loc["HCOMC", "fuel_paper"] == 8.0375
-    # a table of fewer rows has more common seeds: Table II's only row here is HCOMC
-    assert table_summary(_runs(), "II").iloc[0]["critical_distance_n"] == 4
+
+
+def test_no_other_configuration_changes_a_row() -> None:
+    """HCOMC's Table II and III values are the same with and without the extension's runs
+    (whose NaNs once removed seeds from every row of the condition)."""
+    runs = _runs()
+    without = runs[runs["configuration"] != "HCOMC+"]
+    for which in ("II", "III"):
+        full = table_summary(runs, which).set_index("configuration").loc["HCOMC"]
+        alone = table_summary(without, which).set_index("configuration").loc["HCOMC"]
+        pd.testing.assert_series_equal(full, alone)
 
 
 def test_the_formatted_table_shows_n_per_metric_and_merge_success() -> None:
     shown = paper_table(_runs(), "III").set_index("Model")
-    assert list(shown.columns) == ["Condition", "merged", "n", *LABELS.values()]
+    labels = list(LABELS.values())
+    assert list(shown.columns) == ["Condition", "merged", "n", labels[0], "Crit. Dist. median",
+                                   *labels[1:], "VR delay [s]"]  # fmt: skip
     assert shown.loc["HCOMC", "merged"] == "3/4"
-    assert shown.loc["HCOMC", "n"] == "2 · 4 · 4 · 4 · 4"
+    assert shown.loc["HCOMC", "n"] == "4"
+    assert shown.loc["Game", "n"] == "3 · 4 · 4 · 4 · 4"
     assert shown.loc["HCOMC", "Fuel Cons. [L]"].endswith("(8.0375)")
     assert shown.loc["HCOMC+", "Fuel Cons. [L]"] == "18.000 ± 20.543 (—)"
     # without a merged column the table has none, and equal n shows once
     plain = format_table(table_summary(_runs(merged=False).dropna(), "III"))
     assert "merged" not in plain
-    assert set(plain["n"]) == {"2"}
+    assert set(plain["n"]) == {"3", "4"}  # one number per row: its metrics share their seeds
 
 
 def test_merge_success() -> None:

@@ -272,9 +272,11 @@ def test_c_large_gaps_equal_speeds_keep() -> None:
 
 
 def test_d_follower_kind_selects_solver() -> None:
-    # SV at 15 m/s stuck 20 m behind a 15 m/s leader, target lane free ahead, FV 120 m behind
-    # at 20 m/s.
-    args = (veh(0.0, 15.0), veh(25.0, 15.0), None)
+    # SV at 15 m/s stuck 15 m behind a 15 m/s leader, target lane free ahead, FV 120 m behind
+    # at 20 m/s. (With the linear safety term a_cr / a_merg shared with the merge game, the
+    # 20 m gap of test (a) is not enough for the HDV game to cut in: keeping costs J_s = 0.65
+    # there, no longer the saturated 1 of the former capped term.)
+    args = (veh(0.0, 15.0), veh(20.0, 15.0), None)
     hdv = play(args[0], veh(-125.0, 20.0, cav=False), *args[1:])
     cav = play(args[0], veh(-125.0, 20.0, cav=True), *args[1:])
     assert hdv.solution.cooperative is False

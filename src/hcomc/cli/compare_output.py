@@ -9,8 +9,8 @@ from typing import Any
 
 from hcomc.cli._app import out
 
-NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "excluded", "p (Holm)", "both merged",
-           "only A", "only B", "neither")  # fmt: skip
+NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "failed A/B", "excluded", "p (Holm)",
+           "both merged", "only A", "only B", "neither")  # fmt: skip
 """Columns right-aligned on the terminal (the others, names and words, left-aligned)."""
 
 OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
@@ -103,7 +103,8 @@ def _analyse(
             effects_view(effect_rows),
             "Paired effects — median A-B over seeds [95 % bootstrap CI]; verdict by the CI; "
             f"favours by the metric's better direction (↑ larger, ↓ smaller); {pairs_note}; "
-            "excluded: seeds without a pair; p: sign test, Holm-adjusted over the table",
+            "failed A/B: seeds without a merge, each the worse value in A<B / A>B; excluded: "
+            "seeds without a pair; p: sign test, Holm-adjusted over the table",
         )
     )
     _say(f"report: {report}")

@@ -18,14 +18,19 @@ CHECKS = {
     "cd_larger": 3,
     "game_c2": 0.50,
     "final_switch": 0.05,
+    "merged": 0.99,
+    "fallback_r": 0.02,
+    "paper_claims": 85,
 }
 """Thresholds of the checks of a faithful reproduction: VR behind VMC in at least this share
 of HCOMC's runs; lateral cooperation in at least this share of its C2 runs; average
 acceleration and LSRV not worse than each baseline in at least this many conditions;
 critical distance larger than FIFO's (paired median) in at least this many conditions;
 Game's VMC cooperating longitudinally in at least this share of C2 runs (Section IV-A: "VMC
-implements longitudinal cooperation both in FIFO and game theory"); HCOMC's last plan
-switching the commanded vehicle in at most this share of runs."""
+implements longitudinal cooperation both in FIFO and game theory"); the replanning HCOMC-R's
+last plan switching the commanded vehicle in at most this share of runs; the faithful HCOMC
+merging in at least this share of runs, without a fallback and with one plan per run; HCOMC-R
+falling back in at most this share of runs; the paper's family holding this many claims."""
 
 
 def _worse(row: pd.Series) -> bool:
@@ -36,6 +41,7 @@ def _worse(row: pd.Series) -> bool:
 
 
 def _against(d: Digest, metric: str, base: str) -> pd.DataFrame:
+    """HCOMC's Table III claims on ``metric`` against ``base``."""
     part = d.claims[(d.claims["group"] == GROUPS["table3"]) & (d.claims["metric"] == metric)]
     return part[part["claim"].str.endswith(f"than {base}")]
 
@@ -108,7 +114,6 @@ def _decision_checks(d: Digest) -> list[tuple[str, str, bool | None]]:
     """Game's longitudinal cooperation in C2 and HCOMC's switches in its last plan (None:
     the runs do not record it)."""
     game, runs_c2 = cell(d, "C2", "Game", "longitudinal")
-    switch, runs = total(d, "final_switch", "HCOMC")
     return [
         (
             f"Game's VMC cooperates longitudinally in ≥ {num(100 * CHECKS['game_c2'])} % of "
@@ -116,12 +121,65 @@ def _decision_checks(d: Digest) -> list[tuple[str, str, bool | None]]:
             f"{pct(game, runs_c2)} ({num(game)} of {runs_c2})",
             runs_c2 > 0 and game / runs_c2 >= CHECKS["game_c2"],
         ),
+        *_faithful_checks(d),
+        _share_check(
+            d, "HCOMC-R", "fallback", "falls back (no feasible candidate)", CHECKS["fallback_r"]
+        ),
+        _share_check(
+            d,
+            "HCOMC-R",
+            "final_switch",
+            "last plan switches the commanded vehicle",
+            CHECKS["final_switch"],
+        ),
+    ]
+
+
+def _share_check(
+    d: Digest, configuration: str, column: str, what: str, most: float
+) -> tuple[str, str, bool | None]:
+    """``configuration``'s runs with ``column`` in at most the share ``most`` (None: the
+    runs do not record it or have no such configuration)."""
+    k, runs = total(d, column, configuration)
+    ok = None if not np.isfinite(k) or runs == 0 else k / runs <= most
+    return (
+        f"{configuration} {what} in ≤ {num(100 * most)} % of runs",
+        f"{pct(k, runs)} ({num(k)} of {runs})" if runs else "—",
+        ok,
+    )
+
+
+def _faithful_checks(d: Digest) -> list[tuple[str, str, bool | None]]:
+    """HCOMC as published plans once: it merges, never falls back, makes one plan per run;
+    the paper's family has its claims, none against a replanning variant."""
+    merged, runs = total(d, "merged", "HCOMC")
+    own = d.decisions[d.decisions["configuration"] == "HCOMC"]
+    planned = own["runs"] - own["no_plan"]
+    plans = float((own["plans_per_merge"] * planned).sum()) if len(own) else float("nan")
+    paper = d.claims[d.claims["family"] == "paper"]
+    against_r = paper["claim"].str.endswith("-R").sum()
+    success = d.claims[d.claims["metric"] == "merged"]
+    return [
         (
-            f"HCOMC's last plan switches the commanded vehicle in ≤ "
-            f"{num(100 * CHECKS['final_switch'])} % of runs",
-            f"{pct(switch, runs)} ({num(switch)} of {runs})",
-            None
-            if not np.isfinite(switch)
-            else runs > 0 and switch / runs <= CHECKS["final_switch"],
+            f"HCOMC (plans once, as published) merges in ≥ {num(100 * CHECKS['merged'])} % of runs",
+            f"{pct(merged, runs)} ({num(merged)} of {runs})",
+            None if not np.isfinite(merged) else runs > 0 and merged / runs >= CHECKS["merged"],
+        ),
+        _share_check(d, "HCOMC", "fallback", "falls back (no feasible candidate)", 0.0),
+        (
+            "HCOMC makes one plan per run that plans",
+            f"{num(plans)} plans in {num(planned.sum())} runs",
+            None if not np.isfinite(plans) else bool(np.isclose(plans, planned.sum())),
+        ),
+        (
+            f"the paper's Holm family holds its {CHECKS['paper_claims']} claims, none against "
+            "a replanning variant",
+            f"{len(paper)} claims, {int(against_r)} against FIFO-R/Game-R",
+            len(paper) == CHECKS["paper_claims"] and against_r == 0,
+        ),
+        (
+            "merge success is a claim (exact McNemar) per condition and baseline",
+            f"{len(success)} claims",
+            len(success) > 0,
         ),
     ]

@@ -160,7 +160,9 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
     (VMC an HDV), ``switched`` (at least one plan switch), ``final_switch`` (the last plan
     switched), ``unmerged_fallback`` (VR never merged after its last plan fell back),
     ``lateral_equilibrium`` / ``lateral_safety_rule`` (why
-    a lateral plan was admissible); and ``plans_per_merge`` (mean plans over runs with a
+    a lateral plan was admissible); ``games`` / ``games_change`` / ``games_safety_rule``
+    (summed: the lane-change games played, those whose equilibrium is to change lane and those
+    only the added safety rule admitted); and ``plans_per_merge`` (mean plans over runs with a
     plan), ``plan_switches`` (mean), ``decision_ms`` (median), and per last-plan mode
     (``longitudinal``, ``lateral``, ``none``) ``cd_<mode>`` and ``cd_n_<mode>``: the mean
     critical distance of those runs and the runs it is defined in. A count whose column the
@@ -183,6 +185,8 @@ def decisions(runs: pd.DataFrame) -> pd.DataFrame:
             ("lateral_safety_rule", "lateral_cause", "safety_rule"),
         ):  # fmt: skip
             rec[name] = _count(part, column, value)
+        for column in ("games", "games_change", "games_safety_rule"):
+            rec[column] = float(part[column].sum()) if column in part else np.nan
         rec["switched"] = (
             float(part["plan_switches"].gt(0).sum()) if "plan_switches" in part else np.nan
         )

@@ -12,11 +12,23 @@ import numpy as np
 import pandas as pd
 
 from hcomc.experiments.checks import checks_table
-from hcomc.experiments.claims import ALPHA, GROUPS, MIN_PAIRS, VERDICTS, verdict_counts
+from hcomc.experiments.claim_text import (
+    claims_table,
+    families_line,
+    family_share,
+    mode_sentence,
+    paper_share,
+    reading,
+    seeds_sentence,
+    table3_matrix,
+    verdict_lists,
+    verdict_summary,
+    verdict_table,
+)
+from hcomc.experiments.claims import ALPHA, GROUPS, MIN_PAIRS
 from hcomc.experiments.digest import Digest
 from hcomc.experiments.paper import PAPER_METRICS, TABLE_III
 from hcomc.experiments.prose import (
-    METRIC_NAMES,
     cell,
     g,
     join,
@@ -123,6 +135,11 @@ def decisions_table(d: Digest) -> str:
                 if count("lateral") > 0
                 else "—"
             )
+        if np.isfinite(count("games_safety_rule")) and count("games") > 0:
+            rec["lane-change games: equilibrium change / safety rule only"] = (
+                f"{num(count('games_change'))} / {num(count('games_safety_rule'))} "
+                f"of {num(count('games'))}"
+            )
         rec["decision time median [ms]"] = g(float(part["decision_ms"].median()))
         rec["fallbacks"] = num(count("fallback"))
         rows.append(rec)
@@ -164,134 +181,6 @@ def paper_tables(d: Digest) -> dict[str, str]:
     return out
 
 
-# --------------------------------------------------------------------------- claims
-def paper_share(claims: pd.DataFrame) -> pd.DataFrame:
-    """The rows of a claims table that are the paper's: every group but the extension's."""
-    return claims[claims["group"] != GROUPS["extension"]]
-
-
-def extension_share(claims: pd.DataFrame) -> pd.DataFrame:
-    """The rows of a claims table that are the labelled extension HCOMC+'s."""
-    return claims[claims["group"] == GROUPS["extension"]]
-
-
-def paper_claims(d: Digest) -> pd.DataFrame:
-    """The claims of the paper in a digest."""
-    return paper_share(d.claims)
-
-
-def extension_claims(d: Digest) -> pd.DataFrame:
-    """The claims of the labelled extension HCOMC+ in a digest."""
-    return extension_share(d.claims)
-
-
-def verdict_table(d: Digest) -> str:
-    """Claims per group and verdict, by the CI rule and by the Holm-corrected test; the
-    total counts the paper's claims, the extension's row follows it."""
-    rows = []
-    for part, label in ((paper_claims(d), "all of the paper's"), (extension_claims(d), "")):
-        if part.empty:
-            continue
-        ci, holm = verdict_counts(part, "verdict"), verdict_counts(part, "verdict_holm")
-        for group in ci.index if label else ci.index[:-1]:
-            name = label if group == "all" else str(group)
-            rec = {"group": name, "claims": str(int(ci.loc[group].sum()))}
-            for v in VERDICTS:
-                rec[f"{v} (CI)"] = str(int(ci.loc[group, v]))
-            for v in VERDICTS:
-                rec[f"{v} (Holm)"] = str(int(holm.loc[group, v]))
-            rows.append(rec)
-    return md(pd.DataFrame(rows))
-
-
-def verdict_summary(claims: pd.DataFrame, column: str) -> str:
-    """The counts of one verdict column of ``claims`` as prose: "a hold, b are reversed and
-    c undecided"."""
-    if claims.empty:
-        return "none evaluated"
-    counts = verdict_counts(claims, column).loc["all"]
-    return (
-        f"{counts['holds']} hold, {counts['reversed']} are reversed and "
-        f"{counts['undecided']} undecided"
-    )
-
-
-def table3_matrix(d: Digest, group: str = "table3") -> str:
-    """Table III's claims (of HCOMC, or of HCOMC+ for ``group="extension"``) by metric
-    (rows) and condition (columns): the CI verdict against FIFO / against Game, with the
-    Holm verdict where it differs."""
-    part = d.claims[d.claims["group"] == GROUPS[group]]
-    if part.empty:
-        return "(no runs for these claims)"
-    conditions = list(dict.fromkeys(part["condition"]))
-    rows = []
-    for metric in dict.fromkeys(part["metric"]):
-        rec = {"metric": METRIC_NAMES.get(metric, metric)}
-        for cond in conditions:
-            cells = []
-            for base in ("FIFO", "Game"):
-                hit = part[
-                    (part["metric"] == metric)
-                    & (part["condition"] == cond)
-                    & part["claim"].str.endswith(f"than {base}")
-                ]
-                if hit.empty:
-                    cells.append("—")
-                    continue
-                ci, holm = hit["verdict"].iloc[0], hit["verdict_holm"].iloc[0]
-                cells.append(ci if ci == holm else f"{ci} (Holm: {holm})")
-            rec[cond] = " / ".join(cells)
-        rows.append(rec)
-    return md(pd.DataFrame(rows))
-
-
-def claims_table(d: Digest, group: str) -> str:
-    """The claims of one group (a key of :data:`GROUPS`) as a Markdown table."""
-    part = d.claims[d.claims["group"] == GROUPS[group]]
-    if part.empty:
-        return "(no runs for these claims)"
-    rows = []
-    for _, r in part.iterrows():
-        rec = {"claim": r["claim"], "condition": r["condition"]}
-        if r["metric"] == "mode":
-            rec["ours"] = r["ours"]
-        else:
-            effect = f"{g(r['median_diff'])} [{g(r['ci_low'])}, {g(r['ci_high'])}]"
-            rec["median A − B [CI]"] = effect
-        rec["verdict"] = r["verdict"]
-        rec["p (Holm)"] = p_text(r["p_holm"])
-        rec["verdict (Holm)"] = r["verdict_holm"]
-        rec["k of n"] = f"{int(r['holds'])} of {int(r['n'])}"
-        if "uniform" in part:
-            rec["uniform"] = r["uniform"] or "—"
-        rows.append(rec)
-    return md(pd.DataFrame(rows))
-
-
-def verdict_lists(d: Digest, column: str = "verdict") -> dict[str, str]:
-    """The paper's claims that hold and those reversed (replanning comparisons and the
-    extension left out), claim by claim with their conditions: "HCOMC fuel lower than FIFO
-    (C1, C3)"."""
-    part = paper_claims(d)
-    part = part[part["group"] != GROUPS["replanning"]]
-    out = {}
-    for verdict in ("holds", "reversed"):
-        hits = part[part[column] == verdict]
-        items = [
-            f"{claim} ({', '.join(group['condition'])})"
-            for claim, group in hits.groupby("claim", sort=False)
-        ]
-        out[verdict] = "; ".join(items) if items else "none"
-    return out
-
-
-def mode_sentence(d: Digest) -> str:
-    """HCOMC's cooperation modes in the conditions of the mode claims."""
-    part = d.claims[d.claims["group"] == GROUPS["mode"]]
-    items = [f"{r['condition']}: {r['ours']} (of {int(r['n'])} runs)" for _, r in part.iterrows()]
-    return "HCOMC's last plan's cooperation mode — " + "; ".join(items) + "."
-
-
 def decision_facts(d: Digest) -> dict[str, str]:
     """Counts quoted in the prose: "k of n (p %)" per configuration (over all conditions)
     of the last plan switching (``final_switch_*``), of at least one switch
@@ -301,7 +190,7 @@ def decision_facts(d: Digest) -> dict[str, str]:
     last plan's mode; ``unmerged_fallback_*``: "k of its m" runs without a merge whose last
     plan fell back."""
     out = {}
-    for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "FIFO-R", "Game-R"):
+    for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "FIFO-R", "Game-R", "HCOMC-R"):
         key = conf.lower().replace("+", "_plus").replace("-", "_")
         for column, name in (
             ("final_switch", "final_switch"),
@@ -342,7 +231,7 @@ def _cd_by_mode(d: Digest, configuration: str) -> str:
 def scenario_table(d: Digest) -> str:
     """The deterministic paper scenario's runs of FIFO, Game, HCOMC and any configuration
     the paper does not name (not the replanning baselines or the other optimisers)."""
-    variants = ("FIFO-R", "Game-R", "HCOMC-PSO", "HCOMC-SA")  # Table III's controllers only
+    variants = ("FIFO-R", "Game-R", "HCOMC-R", "HCOMC-PSO", "HCOMC-SA")  # Table III's only
     part = d.scenario[~d.scenario["configuration"].isin(variants)].copy()
     for m in PAPER_METRICS:
         if m in part:
@@ -353,7 +242,9 @@ def scenario_table(d: Digest) -> str:
 
 def values(d: Digest) -> dict[str, str]:
     """Every placeholder value of the templates, from the digest alone."""
-    lists = verdict_lists(d)
+    claims = d.claims
+    lists = verdict_lists(claims)
+    paper = paper_share(claims)
     out = {
         **run_facts(d),
         **paper_tables(d),
@@ -361,22 +252,28 @@ def values(d: Digest) -> dict[str, str]:
         "decisions_table": decisions_table(d),
         "decisions_by_condition": decisions_by_condition(d),
         **decision_facts(d),
-        "n_claims": str(len(paper_claims(d))),
-        "verdicts_ci": verdict_summary(paper_claims(d), "verdict"),
-        "verdicts_holm": verdict_summary(paper_claims(d), "verdict_holm"),
-        "n_claims_extension": str(len(extension_claims(d))),
-        "verdicts_extension": verdict_summary(extension_claims(d), "verdict"),
-        "verdicts_extension_holm": verdict_summary(extension_claims(d), "verdict_holm"),
-        "table3_matrix_extension": table3_matrix(d, "extension"),
-        "verdict_table": verdict_table(d),
-        "table3_matrix": table3_matrix(d),
+        "n_claims": str(len(paper)),
+        "verdicts_ci": verdict_summary(paper, "verdict"),
+        "verdicts_holm": verdict_summary(paper, "verdict_holm"),
+        "families_line": families_line(claims),
+        "verdict_table": verdict_table(claims),
+        "table3_matrix": table3_matrix(claims),
+        "table3_matrix_replanning": table3_matrix(claims, "replanning"),
+        "table3_matrix_extension": table3_matrix(claims, "extension"),
         "holds_list": lists["holds"],
         "reversed_list": lists["reversed"],
-        "mode_sentence": mode_sentence(d),
+        "mode_sentence": mode_sentence(claims),
+        "reading": reading(claims),
+        "seeds_sentence": seeds_sentence(d.provenance.seeds),
         "checks_table": checks_table(d),
         "scenario_table": scenario_table(d),
-        "holm_first_step": p_text(ALPHA / max(len(paper_claims(d)), 1)),
+        "holm_first_step": p_text(ALPHA / max(len(paper), 1)),
     }
+    for family in ("outcome", "replanning", "extension"):
+        part = family_share(claims, family)
+        out[f"n_claims_{family}"] = str(len(part))
+        out[f"verdicts_{family}"] = verdict_summary(part, "verdict")
+        out[f"verdicts_{family}_holm"] = verdict_summary(part, "verdict_holm")
     for group in GROUPS:
-        out[f"claims_{group}"] = claims_table(d, group)
+        out[f"claims_{group}"] = claims_table(claims, group)
     return out

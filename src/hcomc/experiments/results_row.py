@@ -25,7 +25,8 @@ __all__ = ["lateral_cause", "plan_switches", "run_columns"]
 def _plan_columns(sim: Engine[SimulationLog], vr: int) -> dict[str, Any]:
     """Columns of VR's plans: the last plan's mode, fallback, Eq. 19 branch and lateral
     admission (:func:`lateral_cause`); the Section III-B lane-change games played over the
-    plans and how many chose "change lane" at equilibrium; the number of replans (plans for
+    plans, how many chose "change lane" at equilibrium and how many only the added safety
+    rule admitted (an extension); the number of replans (plans for
     VR minus one) and of fallbacks; the mean decision time; and the plan switches
     (:func:`plan_switches`: their number, and whether the last plan is one)."""
     plans = [p for p in sim.decisions if p.group.vr == vr]
@@ -42,6 +43,7 @@ def _plan_columns(sim: Engine[SimulationLog], vr: int) -> dict[str, Any]:
         "lateral_cause": lateral_cause(last),
         "games": len(games),
         "games_change": sum(bool(g.change) for g in games),
+        "games_safety_rule": sum(g.admitted_by == "safety_rule" for g in games),
         "replans": len(plans) - 1,
         "plan_switches": len(switches),
         "final_switch": bool(switches) and switches[-1] == len(plans) - 1,
@@ -65,7 +67,7 @@ def lateral_cause(plan: Any) -> str:
     game = getattr(plan.details, "game", None)
     if plan.mode.name != "LATERAL" or game is None:
         return ""
-    return "equilibrium" if game.change else "safety_rule"
+    return str(game.admitted_by)
 
 
 def run_columns(
@@ -93,6 +95,7 @@ def run_columns(
         "lateral_cause": "",
         "games": 0,
         "games_change": 0,
+        "games_safety_rule": 0,
         "replans": 0,
         "plan_switches": 0,
         "final_switch": False,

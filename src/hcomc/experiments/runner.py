@@ -1,8 +1,9 @@
 """Run grids of conditions x configurations x seeds, locally in parallel, into one table.
 
 A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
-HCOMC with NSGA-II, PSO or SA; FIFO and Game plan once, as published), two baseline variants
-that replan every second ("FIFO-R", "Game-R"), the labelled extension "HCOMC+", or any
+HCOMC with NSGA-II, PSO or SA; all plan once, at VR's control-zone entry, as Section III
+publishes them), their variants that replan every second ("FIFO-R", "Game-R", "HCOMC-R",
+not in the paper), the labelled extension "HCOMC+", or any
 controller named as :mod:`hcomc.control.registry` accepts (a researcher's own). Every
 run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file,
 configuration, seed, overrides) that returns one results row and the run's manifest. Seeds
@@ -49,11 +50,13 @@ CONFIGURATIONS: dict[str, tuple[str, str]] = {
 """The paper's configurations: label -> (controller, optimiser); the optimiser only matters
 for HCOMC."""
 
-REPLANNING_BASELINES: dict[str, tuple[str, str]] = {
+REPLANNING: dict[str, tuple[str, str]] = {
     "FIFO-R": ("fifo", "nsga2"),
     "Game-R": ("game", "nsga2"),
+    "HCOMC-R": ("hcomc", "nsga2"),
 }
-"""FIFO and Game replanning every second as HCOMC does (not in the paper)."""
+"""FIFO, Game and HCOMC replanning every second over a receding horizon until VR starts its
+lane change (a labelled extension: the paper plans once)."""
 
 EXTENSIONS: dict[str, tuple[str, str]] = {"HCOMC+": ("hcomc", "nsga2")}
 """Labelled extensions of HCOMC, reported beside the faithful method (not in the paper):
@@ -61,21 +64,19 @@ HCOMC+ may also choose to leave the mainline alone (``control.no_cooperation``).
 
 ALL_CONFIGURATIONS: dict[str, tuple[str, str]] = {
     **CONFIGURATIONS,
-    **REPLANNING_BASELINES,
+    **REPLANNING,
     **EXTENSIONS,
 }
 """Every configuration label ``run_one`` accepts."""
 
 CONTROL_OVERRIDES: dict[str, dict[str, Any]] = {
-    "FIFO": {"replan_period": 0.0},
-    "Game": {"replan_period": 0.0},
-    "FIFO-R": {"replan_period": 1.0},
-    "Game-R": {"replan_period": 1.0},
-    "HCOMC+": {"no_cooperation": True},
+    **{label: {"replan_period": 0.0} for label in CONFIGURATIONS},
+    **{label: {"replan_period": 1.0} for label in REPLANNING},
+    "HCOMC+": {"replan_period": 0.0, "no_cooperation": True},
 }
-"""``control`` values a configuration sets beyond its controller and optimiser: FIFO and Game
-plan once, as published (``replan_period = 0``), their -R variants replan every second; the
-HCOMC configurations use the config's values, HCOMC+ adds the mode "none"."""
+"""``control`` values a configuration sets beyond its controller and optimiser: the paper's
+configurations and HCOMC+ plan once, as published (``replan_period = 0``), the -R variants
+replan every second; HCOMC+ adds the mode "none"."""
 
 
 def configuration_label(name: str) -> str:

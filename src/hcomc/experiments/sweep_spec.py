@@ -55,7 +55,7 @@ class SweepSpec(BaseModel):
         ["FIFO", "Game", "HCOMC"],
         min_length=1,
         description="configuration labels (FIFO, Game, HCOMC, HCOMC-PSO, HCOMC-SA, FIFO-R, "
-        "Game-R, HCOMC+) or controller names (a registered name, package.module:Class, "
+        "Game-R, HCOMC-R, HCOMC+) or controller names (a registered name, package.module:Class, "
         "path/to/file.py:Class)",
     )
     seeds: int = Field(3, ge=1, le=10_000, description="seeds 0 .. seeds-1 per cell")

@@ -1,10 +1,13 @@
 """Summaries of a results table: mean and 95 % CI, median and bootstrap CI, the paper's
 Tables II-III side by side with ours, and merge success.
 
-Tables II and III compare the configurations of a condition on the same seeds: a metric's
-mean and CI in a condition are taken over the seeds on which *every* configuration of that
-table has a finite value (n = seeds common to all rows of the condition), so the rows of a
-condition are comparable. Merge success (runs in which VR merged, k of n) counts every run.
+Tables II and III show each row on its own runs: a metric's mean, CI and median in a row are
+taken over the seeds on which that row has a finite value (n), so that no other row, and no
+configuration added to the run, can change a row's numbers. Every row of a condition runs the
+same seeds; a seed missing from a metric's n is a run without a merge (merge metrics are
+undefined for it) or without a defined value, and the merged column (runs in which VR merged,
+k of n) and VR's delay (from its control-zone entry to its merge) count every run. The
+paired comparisons, with failed merges as outcomes, are :mod:`hcomc.experiments.claims`.
 The claims built on the same runs are :mod:`hcomc.experiments.claims`. Nothing here is
 written by hand: every number comes from the runs, the paper's values from
 :mod:`hcomc.experiments.paper`.
@@ -21,7 +24,7 @@ from hcomc.experiments.paper import PAPER_METRICS, TABLE_II, TABLE_III
 LABELS = {
     "critical_distance": "Crit. Dist. [m]",
     "average_acceleration": "Aver. Acc. [m/s²]",
-    "stabilisation_time": "Stab. Time [s]",
+    "stabilisation_time": "Stab. Time from entry [s]",
     "lsrv": "LSRV [m²]",
     "fuel": "Fuel Cons. [L]",
 }
@@ -40,7 +43,10 @@ DIGITS = {
     "stabilisation_time": 1,
     "lsrv": 1,
     "fuel": 3,
+    "merge_time": 1,
 }
+MEDIAN_SHOWN = ("critical_distance",)
+"""Metrics whose median is shown beside the mean (a minimum over a run, heavy-tailed)."""
 
 
 def mean_ci(values: pd.Series | np.ndarray) -> tuple[float, float, int]:
@@ -67,13 +73,15 @@ def summary(runs: pd.DataFrame, metrics: tuple[str, ...] = PAPER_METRICS) -> pd.
     return pd.DataFrame(records)
 
 
-REPLANNING = {"FIFO": "FIFO-R", "Game": "Game-R"}
-"""The baselines as published (one plan) -> their replanning variants (not in the paper)."""
+REPLANNING = {"FIFO": "FIFO-R", "Game": "Game-R", "HCOMC": "HCOMC-R"}
+"""The configurations as published (one plan) -> their variants replanning every second (a
+labelled extension, not in the paper)."""
 
 TABLE_CAPTION = (
-    "ours: mean ± 95 % CI (paper value in brackets); n = seeds common to all rows of the "
-    "condition (every row has a finite value on them), per metric in column order when they "
-    "differ; merged: runs in which VR merged, k/n"
+    "ours: mean ± 95 % CI (paper value in brackets) over the row's own seeds with a value; "
+    "n = those seeds, per metric in column order when they differ; merged: runs in which VR "
+    "merged, k/n; VR delay: from VR's control-zone entry to its merge, over its merged runs "
+    "(not in the paper's tables); the critical distance's median beside its mean"
 )
 """What a cell of :func:`paper_table` means (the caption wherever the tables are shown)."""
 
@@ -82,8 +90,8 @@ def table_rows(runs: pd.DataFrame, which: str) -> list[tuple[str, str, str, tupl
     """``(condition, model, configuration, paper values or None)`` of every row of Table II
     ("II": optimisers, C1-C3) or III ("III": controllers, C1-C5) the runs have, in order.
 
-    Table III lists the replanning baselines (FIFO-R, Game-R) under the paper's FIFO and
-    Game values, and after a condition's HCOMC every other configuration of the runs that
+    Table III lists the replanning variants (FIFO-R, Game-R, HCOMC-R) under the paper's FIFO,
+    Game and HCOMC values, and after a condition's HCOMC every other configuration of the runs that
     neither table names (e.g. a variant of HCOMC), without a paper value.
     """
     reference, names = (TABLE_II, TABLE_II_ROWS) if which == "II" else (TABLE_III, TABLE_III_ROWS)
@@ -110,36 +118,33 @@ def table_summary(runs: pd.DataFrame, which: str) -> pd.DataFrame:
 
     Columns: ``table``, ``condition``, ``model``, ``configuration``, ``runs`` (rows of the
     cell), ``merged`` (runs with ``merged`` true; NaN when the runs have no such column) and
-    per paper metric ``m``: ``m`` (mean over the seeds common to all rows of the condition),
-    ``m_ci`` (half-width of its 95 % t interval), ``m_n`` (those seeds) and ``m_paper``.
+    per paper metric ``m`` and ``merge_time`` (VR's delay): ``m`` (mean over the row's
+    seeds with a finite value), ``m_ci`` (half-width of its 95 % t interval), ``m_n`` (those
+    seeds), ``m_median`` and ``m_paper`` (NaN for ``merge_time``).
     """
-    rows = table_rows(runs, which)
     records = []
-    for cond in dict.fromkeys(r[0] for r in rows):
-        mine = [r for r in rows if r[0] == cond]
-        confs = [r[2] for r in mine]
-        part = runs[(runs["condition"] == cond) & runs["configuration"].isin(confs)]
-        stats_of: dict[str, dict[str, tuple[float, float, int]]] = {c: {} for c in confs}
-        for m in PAPER_METRICS:
-            if m not in part:
-                wide = pd.DataFrame(columns=confs, dtype=np.float64)
-            else:
-                wide = part.groupby(["seed", "configuration"])[m].first().unstack()
-                wide = wide.reindex(columns=confs).astype(np.float64)
-            common = wide[np.isfinite(wide.to_numpy()).all(axis=1)]
-            for c in confs:
-                stats_of[c][m] = mean_ci(common[c])
-        for _, model, conf, paper in mine:
-            cell = part[part["configuration"] == conf]
-            rec: dict[str, object] = {
-                "table": which, "condition": cond, "model": model, "configuration": conf,
-                "runs": len(cell), "merged": _merged(cell),
-            }  # fmt: skip
-            for i, m in enumerate(PAPER_METRICS):
-                rec[m], rec[f"{m}_ci"], rec[f"{m}_n"] = stats_of[conf][m]
-                rec[f"{m}_paper"] = paper[i] if paper is not None else float("nan")
-            records.append(rec)
+    for cond, model, conf, paper in table_rows(runs, which):
+        cell = runs[(runs["condition"] == cond) & (runs["configuration"] == conf)]
+        rec: dict[str, object] = {
+            "table": which, "condition": cond, "model": model, "configuration": conf,
+            "runs": len(cell), "merged": _merged(cell),
+        }  # fmt: skip
+        for i, m in enumerate((*PAPER_METRICS, "merge_time")):
+            values = _finite(cell, m)
+            rec[m], rec[f"{m}_ci"], rec[f"{m}_n"] = mean_ci(values)
+            rec[f"{m}_median"] = float(np.median(values)) if values.size else float("nan")
+            shown = paper is not None and i < len(PAPER_METRICS)
+            rec[f"{m}_paper"] = paper[i] if shown else float("nan")  # type: ignore[index]
+        records.append(rec)
     return pd.DataFrame(records)
+
+
+def _finite(cell: pd.DataFrame, metric: str) -> np.ndarray:
+    """The finite values of ``metric`` in the runs ``cell`` (none without the column)."""
+    if metric not in cell:
+        return np.empty(0)
+    values = cell[metric].to_numpy(dtype=np.float64)
+    return values[np.isfinite(values)]
 
 
 def _fmt(value: float, half: float, digits: int) -> str:
@@ -168,6 +173,10 @@ def format_table(table: pd.DataFrame) -> pd.DataFrame:
             paper = row[f"{m}_paper"]
             shown = f"{paper:g}" if np.isfinite(paper) else "—"
             rec[LABELS[m]] = f"{_fmt(row[m], row[f'{m}_ci'], DIGITS[m])} ({shown})"
+            if m in MEDIAN_SHOWN:
+                rec[f"{LABELS[m].split(' [')[0]} median"] = _fmt(row[f"{m}_median"], np.nan,
+                                                                 DIGITS[m])  # fmt: skip
+        rec["VR delay [s]"] = _fmt(row["merge_time"], row["merge_time_ci"], DIGITS["merge_time"])
         out.append(rec)
     return pd.DataFrame(out)
 

@@ -183,8 +183,8 @@ def controller_logs(
     overrides: dict[str, Any] | None = None,
 ) -> dict[str, SimulationLog]:
     """Simulate one scenario and seed with several configurations (common random numbers),
-    each as ``hcomc run`` and ``hcomc reproduce`` run it (FIFO and Game plan once, FIFO-R
-    and Game-R replan: :func:`hcomc.experiments.runner.configuration_overrides`).
+    each as ``hcomc run`` and ``hcomc reproduce`` run it (FIFO, Game and HCOMC plan once,
+    FIFO-R, Game-R and HCOMC-R replan: :func:`hcomc.experiments.runner.configuration_overrides`).
 
     Parameters
     ----------

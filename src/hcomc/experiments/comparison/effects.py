@@ -18,8 +18,13 @@ that take no side, since a comparison of your own has no expected direction:
 * ``p_value``: the two-sided exact sign test of the non-zero differences; ``p_holm``: Holm's
   adjustment over every effect of the comparison together (all cells, pairs and metrics),
   ``verdict_holm`` by ``p_holm < ALPHA``;
-* "k of n": ``a_lower`` seeds where A < B, ``a_higher`` where A > B, ``n`` pairs in which
-  both runs merged with a defined value.
+* "k of n": ``a_lower`` seeds where A < B, ``a_higher`` where A > B, ``n`` seeds in which
+  both runs merged with a defined value or exactly one of them merged. **A run without a
+  merge is the worst outcome**, never a missing pair: on a seed where only B merged, A's
+  value counts as worse than B's in the metric's preferred direction (a_higher for a metric
+  that prefers smaller values, a_lower for one that prefers larger), so it enters the sign
+  test, ``p_holm`` and ``verdict_holm``; the median and its CI describe the seeds on which
+  both merged; ``failed_a`` and ``failed_b`` show the seeds each did not merge on.
 
 The corridor metrics (:data:`~hcomc.experiments.corridor.metrics.CORRIDOR_METRICS`, of runs
 on a corridor) are run-level figures whose failures are inside them (an unmerged ramp
@@ -27,9 +32,10 @@ vehicle lowers ``merged_share``), so their pairs are the seeds in which both run
 defined value, whatever the runs' ``merged`` says (:data:`RUN_LEVEL`).
 
 A run whose ramp vehicle (VR) never merged has no metrics of the merge: it is an outcome, not
-a run without disturbance. It never vanishes: ``excluded`` counts the seeds both
-configurations ran but that give no pair, and :mod:`hcomc.experiments.comparison.success`
-counts and compares merge success itself. :mod:`hcomc.experiments.comparison.view` turns the
+a run without disturbance. It never vanishes: it is the worst outcome in the sign test (see
+above), ``excluded`` counts the seeds both configurations ran that give neither a pair nor a
+failure on one side, and :mod:`hcomc.experiments.comparison.success` counts and compares
+merge success itself. :mod:`hcomc.experiments.comparison.view` turns the
 tables into text.
 """
 
@@ -86,11 +92,13 @@ class Effect:
     p_value: float  # two-sided exact sign test
     p_holm: float  # Holm-adjusted over the whole comparison
     verdict_holm: str
-    a_lower: int  # seeds with A < B
-    a_higher: int  # seeds with A > B
+    a_lower: int  # seeds with A < B (a failed merge counted as the worse value)
+    a_higher: int  # seeds with A > B (likewise)
     ties: int
-    n: int  # pairs: seeds in which both merged with a defined value
-    excluded: int  # seeds both ran that give no pair (a run unmerged or undefined)
+    n: int  # seeds in which both merged with a defined value, or exactly one failed
+    excluded: int  # seeds both ran that give no pair (both unmerged, or undefined)
+    failed_a: int  # seeds both ran on which A's VR did not merge
+    failed_b: int
     mean_a: float  # means over the n pairs
     mean_b: float
 
@@ -139,13 +147,25 @@ def _pair_values(
     """A's and B's values of ``metric`` on the seeds where both merged with a defined value
     (for a :data:`RUN_LEVEL` metric: with a defined value), and the number of seeds both
     ran."""
+    va, vb, seeds, _, _ = _pairs_and_failures(side_a, side_b, metric)
+    return va, vb, seeds
+
+
+def _pairs_and_failures(
+    side_a: pd.DataFrame, side_b: pd.DataFrame, metric: str
+) -> tuple[np.ndarray, np.ndarray, int, np.ndarray, np.ndarray]:
+    """:func:`_pair_values` and, per seed both ran, whether A's and B's VR failed to merge
+    (never for a :data:`RUN_LEVEL` metric, whose failures are inside its value)."""
     seeds = side_a.index.intersection(side_b.index)
     va = pd.to_numeric(side_a.loc[seeds, metric], errors="coerce").to_numpy(np.float64)
     vb = pd.to_numeric(side_b.loc[seeds, metric], errors="coerce").to_numpy(np.float64)
     both = np.isfinite(va) & np.isfinite(vb)
+    fail_a = fail_b = np.zeros(len(seeds), dtype=bool)
     if metric not in RUN_LEVEL:
-        both &= (_merged(side_a.loc[seeds]) & _merged(side_b.loc[seeds])).to_numpy()
-    return va[both], vb[both], len(seeds)
+        fail_a = ~_merged(side_a.loc[seeds]).to_numpy()
+        fail_b = ~_merged(side_b.loc[seeds]).to_numpy()
+        both &= ~fail_a & ~fail_b
+    return va[both], vb[both], len(seeds), fail_a, fail_b
 
 
 def _differences(va: np.ndarray, vb: np.ndarray) -> np.ndarray:
@@ -169,9 +189,16 @@ def paired_differences(
 def _effect(
     condition: str, metric: str, a: str, b: str, side_a: pd.DataFrame, side_b: pd.DataFrame
 ) -> Effect:
-    va, vb, seeds = _pair_values(side_a, side_b, metric)
+    va, vb, seeds, fail_a, fail_b = _pairs_and_failures(side_a, side_b, metric)
     diff = _differences(va, vb)
-    lower, higher = int((diff < 0).sum()), int((diff > 0).sum())
+    only_a, only_b = int((fail_a & ~fail_b).sum()), int((fail_b & ~fail_a).sum())
+    prefers = PREFERS.get(metric, "")
+    if prefers not in ("larger", "smaller"):  # no worse side: a failure gives no pair
+        only_a = only_b = 0
+    a_worse_is_higher = prefers == "smaller"
+    lower = int((diff < 0).sum()) + (only_b if a_worse_is_higher else only_a)
+    higher = int((diff > 0).sum()) + (only_a if a_worse_is_higher else only_b)
+    n = int(diff.size) + only_a + only_b
     median, low, high = median_ci(diff)
     decidable = lower + higher >= MIN_PAIRS
     verdict = _WORDS[ci_verdict(low, high, "lower")] if decidable else "undecided"
@@ -180,10 +207,10 @@ def _effect(
         condition=condition, metric=metric, a=a, b=b, prefers=PREFERS.get(metric, ""),
         median_diff=median, ci_low=low, ci_high=high, verdict=verdict,
         favours=favoured(verdict, PREFERS.get(metric, ""), a, b),
-        p_value=sign_test(lower, higher) if diff.size else nan, p_holm=nan,
+        p_value=sign_test(lower, higher) if n else nan, p_holm=nan,
         verdict_holm="undecided", a_lower=lower, a_higher=higher,
-        ties=int(diff.size) - lower - higher, n=int(diff.size),
-        excluded=int(seeds - diff.size),
+        ties=n - lower - higher, n=n, excluded=int(seeds - n),
+        failed_a=int(fail_a.sum()), failed_b=int(fail_b.sum()),
         mean_a=float(va.mean()) if va.size else nan, mean_b=float(vb.mean()) if vb.size else nan,
     )  # fmt: skip
 

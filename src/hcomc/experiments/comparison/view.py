@@ -23,7 +23,7 @@ __all__ = [
 
 EFFECTS_VIEW_COLUMNS = (
     "cell", "metric", "A", "B", "median A-B [95 % CI]", "verdict", "favours", "A<B", "A>B",
-    "excluded", "p (Holm)", "verdict (Holm)",
+    "failed A/B", "excluded", "p (Holm)", "verdict (Holm)",
 )  # fmt: skip
 """The columns of :func:`effects_view`."""
 
@@ -38,7 +38,8 @@ def metric_label(metric: str) -> str:
 def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
     """The effects as text for a terminal or a page: cell, metric, A, B, median A - B with
     its 95 % CI, verdict, the favoured configuration, "k of n" seeds with A < B, seeds with
-    A > B, excluded seeds, the Holm-adjusted p and its verdict."""
+    A > B (a failed merge counted as the worse value), the seeds A / B did not merge on,
+    excluded seeds, the Holm-adjusted p and its verdict."""
 
     def interval(m: float, lo: float, hi: float) -> str:
         return "—" if not math.isfinite(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]"
@@ -57,6 +58,7 @@ def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
             "favours": [r["favours"] or "—" for r in rows],
             "A<B": [f"{r['a_lower']} of {r['n']}" for r in rows],
             "A>B": [str(r["a_higher"]) for r in rows],
+            "failed A/B": [f"{r['failed_a']}/{r['failed_b']}" for r in rows],
             "excluded": [str(r["excluded"]) for r in rows],
             "p (Holm)": [_p(r["p_holm"]) for r in rows],
             "verdict (Holm)": [r["verdict_holm"] for r in rows],

@@ -1,4 +1,4 @@
-"""The paper's comparative claims, evaluated on paired runs, with verdicts.
+"""How a claim (:mod:`hcomc.experiments.claims.statements`) is tested on paired runs.
 
 A claim is a comparative statement of the paper's Section IV (text and Tables II-III),
 evaluated on paired runs (the same seed; the same condition unless the claim compares
@@ -9,17 +9,25 @@ reports, and nothing here is written by hand:
 * **descriptive**: the median paired difference with its 95 % bootstrap CI
   (:func:`hcomc.experiments.tables.median_ci`), and "k of n seeds": ``holds`` = k seeds
   where d has the paper's sign, ``against`` seeds where it has the other sign, ``n`` seeds
-  where both values are defined (ties are the rest);
+  where both values are defined or a merge failed (ties are the rest);
 * ``verdict`` (the CI rule): "holds" when the CI excludes 0 in the paper's direction,
   "reversed" when it excludes 0 in the other direction, "undecided" otherwise, and
   "undecided" when fewer than :data:`MIN_PAIRS` seeds differ at all;
 * ``p_value``: the two-sided exact **sign test** of the non-zero differences (binomial
   test of ``holds`` against ``holds + against`` at 1/2); ``p_holm``: Holm's step-down
-  adjustment over the family of every claim of the paper evaluated together (the claims of
-  the labelled extension HCOMC+, :func:`extension_claims`, are a family of their own, so
-  adding them changes no verdict of the paper's claims); ``verdict_holm``:
+  adjustment within the claim's ``family`` (:data:`FAMILIES`): the paper's own claims are
+  one family, the replanning variants', the extension HCOMC+'s and the merge outcomes' are
+  families of their own, so adding one changes no verdict of another; ``verdict_holm``:
   "holds" or "reversed" by the direction of the majority of the non-zero differences
   when ``p_holm < ALPHA``, "undecided" otherwise.
+
+**A run without a merge is an outcome, never a missing pair.** Its merge metrics are
+undefined (NaN), so the median and CI describe the seeds on which both runs merged; in the
+sign test, and so in ``p_value`` and ``verdict_holm``, a seed on which only one of the two
+runs merged counts for the one that merged (the worst outcome for the other), and a seed on
+which neither merged is a tie. ``failed_a`` and ``failed_b`` show how many seeds A and B
+failed on. Merge success itself is a claim (:func:`outcome_claims`: the exact McNemar test of
+the seeds on which exactly one of the two merged).
 
 Why the sign test (not the Wilcoxon signed-rank test): the verdicts are about the
 *median* paired difference, and the sign test's null hypothesis is exactly that the
@@ -40,14 +48,20 @@ p_holm < ALPHA, in the same Holm family).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-
 import numpy as np
 import pandas as pd
 from scipy import stats
 
-from hcomc.experiments.paper import PAPER_METRICS, TABLE_II, TABLE_III
-from hcomc.experiments.tables import REPLANNING, TIE_TOLERANCE, median_ci
+from hcomc.experiments.claims.statements import (
+    FAMILIES,
+    GROUPS,
+    AnyClaim,
+    Claim,
+    ModeClaim,
+    SuccessClaim,
+    all_claims,
+)
+from hcomc.experiments.tables import TIE_TOLERANCE, median_ci
 
 ALPHA = 0.05
 """Significance level of the tests (and 1 - the CI's coverage)."""
@@ -60,132 +74,6 @@ interval of so few values (one value: the value itself) says nothing, so the CI 
 
 VERDICTS = ("holds", "reversed", "undecided")
 """The three verdicts, in display order."""
-
-GROUPS = {
-    "table3": "Table III (HCOMC vs FIFO/Game)",
-    "replanning": "HCOMC vs FIFO-R/Game-R",
-    "table2": "Table II (NSGA-II vs PSO/SA)",
-    "penetration": "CAV penetration (LSRV)",
-    "mode": "cooperation mode",
-    "extension": "HCOMC+ (extension) vs FIFO/Game",
-}
-"""Claim group key -> its name (the ``group`` column), in display order."""
-
-
-@dataclass(frozen=True)
-class Claim:
-    """A comparative statement of the paper: metric of cell A lower/higher than of cell B.
-
-    A cell is (condition, configuration); ``paper_a`` and ``paper_b`` are the paper's values;
-    ``group`` a key of :data:`GROUPS`.
-    """
-
-    text: str
-    metric: str
-    a: tuple[str, str]
-    b: tuple[str, str]
-    expect: str  # "lower" or "higher"
-    paper_a: float
-    paper_b: float
-    group: str = "table3"
-
-
-@dataclass(frozen=True)
-class ModeClaim:
-    """HCOMC's chosen cooperation mode in a condition."""
-
-    condition: str
-    mode: str
-    group: str = "mode"
-
-
-_T2_MODEL = {"HCOMC": "NSGA-II", "HCOMC-PSO": "PSO", "HCOMC-SA": "SA"}
-
-
-def _paper_value(cell: tuple[str, str], metric: str) -> float:
-    cond, conf = cell
-    i = PAPER_METRICS.index(metric)
-    if (cond, conf) in TABLE_III:
-        return TABLE_III[(cond, conf)][i]
-    return TABLE_II[(cond, _T2_MODEL[conf])][i]
-
-
-def _pairwise(
-    metric: str,
-    a: tuple[str, str],
-    b: tuple[str, str],
-    group: str,
-    names: dict[str, str] | None = None,
-) -> Claim | None:
-    """The claim the paper's tables make about cells A and B on ``metric`` (None if tied);
-    ``names`` maps configurations to the paper's model names in the text."""
-    pa, pb = _paper_value(a, metric), _paper_value(b, metric)
-    if pa == pb:
-        return None
-    expect = "lower" if pa < pb else "higher"
-    name = metric.replace("_", " ")
-    label_a, label_b = ((names or {}).get(c, c) for c in (a[1], b[1]))
-    if a[0] == b[0]:
-        text = f"{label_a} {name} {expect} than {label_b}"
-    else:
-        text = f"{label_a} {name} {expect} in {a[0]} than in {b[0]}"
-    return Claim(text, metric, a, b, expect, pa, pb, group)
-
-
-def paper_claims() -> list[Claim | ModeClaim]:
-    """The comparative claims of Section IV, in the direction the paper's tables give.
-
-    * Sections IV-A to IV-D with Table III: HCOMC versus FIFO and versus Game on critical
-      distance, average acceleration, stabilisation time, LSRV and fuel in every condition
-      (the text: HCOMC improves safety in all conditions, stability and rapidity "almost
-      under all", traffic efficiency, and fuel except in C2, where it uses more). Where the
-      table has HCOMC worse (average acceleration vs FIFO in C2, fuel in C2) the claim says
-      so.
-    * The same HCOMC claims against FIFO-R and Game-R, the baselines replanning every second
-      as HCOMC does (not in the paper: it separates HCOMC's method from replanning alone).
-    * Section IV-A: HCOMC's VMC cooperates laterally in C2, longitudinally in C1 and C3.
-    * Section IV-C: fewer CAVs, larger LSRV: C1 (90 %) < C4 (60 %) < C5 (30 %) for each
-      controller (two paired claims per controller).
-    * Table II: NSGA-II versus PSO and SA on all five metrics in C1 and C3 (longitudinal
-      cooperation, where the text says NSGA-II is best) and, in C2 (lateral cooperation), on
-      the three metrics the text discusses: LSRV ("NSGA-II also performs the best"), critical
-      distance and fuel (NSGA-II "performs inferior ... only about 1 %").
-    """
-    out: list[Claim | ModeClaim | None] = []
-    for cond in ("C1", "C2", "C3", "C4", "C5"):
-        for metric in PAPER_METRICS:
-            for base in ("FIFO", "Game"):
-                out.append(_pairwise(metric, (cond, "HCOMC"), (cond, base), "table3"))
-    # the same claims against the baselines replanning as HCOMC does (paper's values kept)
-    out += [
-        replace(c, text=f"{c.text}-R", b=(c.b[0], REPLANNING[c.b[1]]), group="replanning")
-        for c in list(out)
-        if isinstance(c, Claim) and c.b[1] in REPLANNING
-    ]
-    out += [ModeClaim("C1", "longitudinal"), ModeClaim("C2", "lateral"),
-            ModeClaim("C3", "longitudinal")]  # fmt: skip
-    for conf in ("FIFO", "Game", "HCOMC"):
-        for more, fewer in (("C1", "C4"), ("C4", "C5")):
-            out.append(_pairwise("lsrv", (fewer, conf), (more, conf), "penetration"))
-    c2 = ("critical_distance", "lsrv", "fuel")  # the three the text discusses for C2
-    for cond, metrics in (("C1", PAPER_METRICS), ("C3", PAPER_METRICS), ("C2", c2)):
-        for metric in metrics:
-            for rival in ("HCOMC-PSO", "HCOMC-SA"):
-                out.append(_pairwise(metric, (cond, "HCOMC"), (cond, rival), "table2", _T2_MODEL))
-    return [c for c in out if c is not None]
-
-
-def extension_claims() -> list[Claim]:
-    """The Table III claims of HCOMC made of HCOMC+, the labelled extension that may also
-    leave the mainline alone (mode "none" among its candidates; not in the paper): does it
-    keep HCOMC's published advantages over FIFO and Game? The paper's values are HCOMC's, for
-    reference; these claims form a Holm family of their own."""
-    out = []
-    for c in paper_claims():
-        if isinstance(c, Claim) and c.group == "table3":
-            text = "HCOMC+" + c.text.removeprefix("HCOMC")
-            out.append(replace(c, text=text, a=(c.a[0], "HCOMC+"), group="extension"))
-    return out
 
 
 def sign_test(holds: int, against: int) -> float:
@@ -235,22 +123,35 @@ def _values(runs: pd.DataFrame, cell: tuple[str, str], metric: str) -> pd.Series
     return part.groupby("seed")[metric].first()
 
 
+def _failed(runs: pd.DataFrame, cell: tuple[str, str], seeds: pd.Index) -> np.ndarray:
+    """Whether the run of ``cell`` failed to merge, on each of ``seeds`` (all False when the
+    runs have no ``merged`` column)."""
+    if "merged" not in runs:
+        return np.zeros(len(seeds), dtype=bool)
+    merged = _values(runs, cell, "merged").reindex(seeds)
+    return ~merged.fillna(False).astype(bool).to_numpy()
+
+
 def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, object] | None:
-    """Paired differences A - B by seed: median, bootstrap CI, counts, sign test, means."""
+    """Paired differences A - B by seed: median, bootstrap CI, counts, sign test (a failed
+    merge the worst outcome), means."""
     if claim.metric not in runs:
         return None
     a, b = _values(runs, claim.a, claim.metric), _values(runs, claim.b, claim.metric)
     if a.empty or b.empty:
         return None
     a, b = a.align(b, join="inner")
-    both = (a.notna() & b.notna()).to_numpy()
+    fail_a, fail_b = _failed(runs, claim.a, a.index), _failed(runs, claim.b, b.index)
+    both = (a.notna() & b.notna()).to_numpy() & ~fail_a & ~fail_b
     va, vb = a.to_numpy(dtype=np.float64)[both], b.to_numpy(dtype=np.float64)[both]
     diff = va - vb
     # float round-off (e.g. two stabilisation times from differently summed row times) is a tie
     scale = np.maximum(1.0, np.maximum(np.abs(va), np.abs(vb)))
     diff[np.abs(diff) <= TIE_TOLERANCE * scale] = 0.0
     sign = -1.0 if claim.expect == "lower" else 1.0
-    holds, against = int((sign * diff > 0).sum()), int((sign * diff < 0).sum())
+    only_a, only_b = int((fail_a & ~fail_b).sum()), int((fail_b & ~fail_a).sum())
+    holds = int((sign * diff > 0).sum()) + only_b  # B alone failed: A's outcome is better
+    against = int((sign * diff < 0).sum()) + only_a
     median, low, high = median_ci(diff)
     nan = float("nan")
     p = sign_test(holds, against) if diff.size else nan
@@ -265,9 +166,52 @@ def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, object] | None:
         "direction": int(np.sign(holds - against)),
         "holds": holds,
         "against": against,
-        "n": int(diff.size),
+        "n": int(diff.size + (fail_a | fail_b).sum()),
+        "failed_a": int(fail_a.sum()),
+        "failed_b": int(fail_b.sum()),
         "mean_a": float(a[both].mean()) if both.any() else nan,
         "mean_b": float(b[both].mean()) if both.any() else nan,
+    }
+
+
+def mcnemar_exact(a_only: int, b_only: int) -> float:
+    """Two-sided exact McNemar test: the seeds on which exactly one of the two merged, A's
+    share of them against 1/2 (1 when there are none)."""
+    return sign_test(a_only, b_only)
+
+
+def _success_row(runs: pd.DataFrame, claim: SuccessClaim) -> dict[str, object] | None:
+    """Merge success of A against B on their common seeds (exact McNemar)."""
+    if "merged" not in runs:
+        return None
+    a = _values(runs, (claim.condition, claim.a), "merged")
+    b = _values(runs, (claim.condition, claim.b), "merged")
+    a, b = a.align(b, join="inner")
+    if a.empty:
+        return None
+    ma, mb = a.fillna(False).astype(bool).to_numpy(), b.fillna(False).astype(bool).to_numpy()
+    a_only, b_only = int((ma & ~mb).sum()), int((mb & ~ma).sum())
+    p = mcnemar_exact(a_only, b_only)
+    direction = int(np.sign(a_only - b_only))
+    nan = float("nan")
+    return {
+        "claim": f"{claim.a} merges at least as often as {claim.b}",
+        "condition": claim.condition,
+        "metric": "merged",
+        "paper": "every VR merges",
+        "paper_diff": nan,
+        "median_diff": nan,
+        "ci_low": nan,
+        "ci_high": nan,
+        "verdict": p_verdict(p, direction),
+        "p_value": p,
+        "direction": direction,
+        "holds": a_only,
+        "against": b_only,
+        "n": int(ma.size),
+        "failed_a": int((~ma).sum()),
+        "failed_b": int((~mb).sum()),
+        "ours": f"{int(ma.sum())}/{ma.size} vs {int(mb.sum())}/{mb.size} merged",
     }
 
 
@@ -299,9 +243,11 @@ def _mode_row(runs: pd.DataFrame, claim: ModeClaim) -> dict[str, object] | None:
     }
 
 
-def _row(runs: pd.DataFrame, claim: Claim | ModeClaim) -> dict[str, object] | None:
+def _row(runs: pd.DataFrame, claim: AnyClaim) -> dict[str, object] | None:
     if isinstance(claim, ModeClaim):
         rec = _mode_row(runs, claim)
+    elif isinstance(claim, SuccessClaim):
+        rec = _success_row(runs, claim)
     else:
         result = _evaluate(runs, claim)
         if result is None:
@@ -316,34 +262,36 @@ def _row(runs: pd.DataFrame, claim: Claim | ModeClaim) -> dict[str, object] | No
             **{k: v for k, v in result.items() if k not in ("mean_a", "mean_b")},
             "ours": f"{result['mean_a']:.4g} vs {result['mean_b']:.4g}",
         }
-    return None if rec is None else {"group": GROUPS[claim.group], **rec}
+    if rec is None:
+        return None
+    return {"family": FAMILIES[claim.group], "group": GROUPS[claim.group], **rec}
 
 
 COLUMNS = (
-    "group", "claim", "condition", "metric", "paper", "paper_diff", "median_diff", "ci_low",
-    "ci_high", "verdict", "p_value", "p_holm", "verdict_holm", "holds", "against", "n",
-    "share", "ours",
+    "family", "group", "claim", "condition", "metric", "paper", "paper_diff", "median_diff",
+    "ci_low", "ci_high", "verdict", "p_value", "p_holm", "verdict_holm", "holds", "against", "n",
+    "failed_a", "failed_b", "share", "ours",
 )  # fmt: skip
 """The columns of :func:`claims`, in order (``uniform`` last when given)."""
 
 
 def claims(runs: pd.DataFrame, uniform: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Every claim of :func:`paper_claims` and :func:`extension_claims` the runs can
-    evaluate, one row each.
+    """Every claim of :func:`all_claims` the runs can evaluate, one row each.
 
-    Columns (:data:`COLUMNS`): ``group`` (:data:`GROUPS`), ``claim``, ``condition``,
-    ``metric``, ``paper`` (the paper's "A vs B", or the mode), ``paper_diff`` (A - B in the
-    paper), ``median_diff`` (median over seeds of the paired A - B), ``ci_low`` and
-    ``ci_high`` (its 95 % bootstrap CI), ``verdict`` (the CI rule; the binomial test for a
-    mode), ``p_value`` (sign test; binomial test for a mode), ``p_holm`` (Holm over the
-    paper's claims, and over the extension's apart), ``verdict_holm``, ``holds`` (k),
-    ``against``, ``n``, ``share`` (k / n), ``ours`` (our means "A vs B", or the mode
-    counts) and, when ``uniform`` (runs of the deterministic paper scenario) is given,
+    Columns (:data:`COLUMNS`): ``family`` (:data:`FAMILIES`), ``group`` (:data:`GROUPS`),
+    ``claim``, ``condition``, ``metric``, ``paper`` (the paper's "A vs B", or the mode),
+    ``paper_diff`` (A - B in the paper), ``median_diff`` (median over seeds of the paired A -
+    B), ``ci_low`` and ``ci_high`` (its 95 % bootstrap CI), ``verdict`` (the CI rule; the
+    binomial test for a mode), ``p_value`` (sign test; binomial test for a mode, exact McNemar
+    for merge success), ``p_holm`` (Holm within the family), ``verdict_holm``, ``holds`` (k),
+    ``against``, ``n`` (seeds, failed merges included), ``failed_a`` and ``failed_b`` (seeds on
+    which A's or B's VR did not merge), ``share`` (k / n), ``ours`` (our means "A vs B", or the
+    mode counts) and, when ``uniform`` (runs of the deterministic paper scenario) is given,
     ``uniform``: "yes" or "no" for the claim on those runs, "" if undefined there. See the
     module docstring for the rules.
     """
     records: list[dict[str, object]] = []
-    for claim in [*paper_claims(), *extension_claims()]:
+    for claim in all_claims():
         rec = _row(runs, claim)
         if rec is None:
             continue
@@ -358,11 +306,10 @@ def claims(runs: pd.DataFrame, uniform: pd.DataFrame | None = None) -> pd.DataFr
     if not records:
         return pd.DataFrame(columns=[*COLUMNS, *extra])
     frame = pd.DataFrame(records)
-    family = frame["group"] == GROUPS["extension"]
     frame["p_holm"] = np.nan
-    for members in (~family, family):
-        if members.any():
-            frame.loc[members, "p_holm"] = holm(frame.loc[members, "p_value"])
+    for family in pd.unique(frame["family"]):
+        members = frame["family"] == family
+        frame.loc[members, "p_holm"] = holm(frame.loc[members, "p_value"])
     frame["verdict_holm"] = [
         p_verdict(p, int(d)) for p, d in zip(frame["p_holm"], frame["direction"], strict=True)
     ]
