@@ -53,7 +53,7 @@ def _write_tables(target: Path, runs: Any, effects: Any, success: Any, pairs: An
 SUCCESS_TITLE = "Merge success — runs in which VR merged"
 """Title of the merge-success table (for runs of the scenario engine)."""
 
-PAIRS_NOTE = "A<B: k of n pairs (both merged)"
+PAIRS_NOTE = "A<B: k of n seeds (a failed merge the worse value)"
 """How the effects title explains n (for the paper's metrics)."""
 
 
