@@ -64,10 +64,11 @@ def test_unknown_option_is_a_one_line_error(workdir: Path) -> None:
     assert message.endswith("allowed: time_gap, lane_change_duration")
 
 
-@pytest.mark.parametrize("seed", [4, 9])
+@pytest.mark.parametrize("seed", [1, 9])  # seeds in which VMC cooperates to the end
 def test_vmc_opens_the_time_gap_by_the_merge(seed: int) -> None:
     """Where VMC cooperates to the end, VR starts its change about ``time_gap * v`` ahead of
-    it (the engine checks every plan with hcomc.control.validation on the way)."""
+    it when the engine replans every second, correcting the controller's constant-speed
+    prediction (the engine checks every plan with hcomc.control.validation on the way)."""
     from hcomc.config import load_config
     from hcomc.control.registry import make_controller
     from hcomc.sim.engine import Simulation
@@ -75,7 +76,8 @@ def test_vmc_opens_the_time_gap_by_the_merge(seed: int) -> None:
 
     gaps = []
     for time_gap in (1.5, 3.0):
-        config = load_config("C2", control={"controller": SPEC, "options": {"time_gap": time_gap}})
+        control = {"controller": SPEC, "options": {"time_gap": time_gap}, "replan_period": 1.0}
+        config = load_config("C2", control=control)
         log = Simulation(config, seed, controller=make_controller(config)).run()
         plans = log.meta["plans"]
         assert all(p["mode"] == "longitudinal" for p in plans)

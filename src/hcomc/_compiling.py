@@ -7,8 +7,9 @@ caller (a command, a learning environment) instead names the :class:`Stage` s it
 :func:`ensure` runs each missing stage's tiny real workload first, with a line per stage. A
 stage whose kernels are all cached for the current sources loads them and costs seconds, so
 after an edit of one kernel module only its kernels and those of the modules importing it
-compile. The stages themselves live with what they exercise (:mod:`hcomc.sim.stages`,
-:mod:`hcomc.envs.stages`, ``hcomc.cli._compile``); this module only knows how to run them.
+compile. The stages themselves live with what they exercise (:mod:`hcomc.sim.stages` for the
+engines, ``hcomc.cli._compile`` for the batches and the learning environments); this module
+only knows how to run them.
 
 **Is a stage compiled?** Its marker ``hcomc-kernels-<stamp tag>-<stage>.ok`` sits where numba
 caches :func:`hcomc._jit.borrow`: ``NUMBA_CACHE_DIR``, else the in-tree ``__pycache__``, else

@@ -23,7 +23,9 @@ from hcomc.sim.corridor.control import CorridorControl
 CAR = {"length": 5.0, "desired_speed": 30.0, "max_speed": 50.0, "cav": {}}
 
 
-def busy_ramp(controller: str = "none", lanes: int = 2, **run: Any) -> Corridor:
+def busy_ramp(
+    controller: str = "none", lanes: int = 2, replan_period: float = 0.0, **run: Any
+) -> Corridor:
     """Two lanes, one on-ramp at 1000 m, dense mainline and ramp demand, half CAVs."""
     return Corridor.model_validate({
         "corridor": {"duration": 200.0, "seed": 3, **run},
@@ -34,7 +36,7 @@ def busy_ramp(controller: str = "none", lanes: int = 2, **run: Any) -> Corridor:
                    "on1": {"flow": 700.0, "cav_share": 0.5, "classes": {"car": 1.0}}},
         "vehicles": {"car": CAR},
         "detectors": {"spacing": 0.0, "around_ramps": False},
-        "control": {"controller": controller},
+        "control": {"controller": controller, "replan_period": replan_period},
     })  # fmt: skip
 
 
@@ -142,7 +144,8 @@ def test_without_a_controller_nothing_is_planned_and_merged_matches_the_trips(un
 
 @pytest.fixture(scope="module")
 def with_fifo(monkeypatch_module: pytest.MonkeyPatch) -> tuple[Any, list[list[int]]]:
-    """The busy ramp with FIFO; after every decision, the vehicles two live plans command."""
+    """The busy ramp with FIFO replanning every second (FIFO-R, so that plans compete for
+    vehicles); after every decision, the vehicles two live plans command."""
     twice: list[list[int]] = []
     decide = CorridorControl.decide
 
@@ -151,7 +154,7 @@ def with_fifo(monkeypatch_module: pytest.MonkeyPatch) -> tuple[Any, list[list[in
         twice.append(self.commanded_twice(s))
 
     monkeypatch_module.setattr(CorridorControl, "decide", checked)
-    return simulate_corridor(busy_ramp("fifo")), twice
+    return simulate_corridor(busy_ramp("fifo", replan_period=1.0)), twice
 
 
 @pytest.fixture(scope="module")

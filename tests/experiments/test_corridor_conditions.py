@@ -443,9 +443,10 @@ def test_bad_input_is_one_line_and_exit_2(corridor_file, tmp_path, args, fragmen
         ("Game", {"controller": "game", "replan_period": 0.0}),
         ("FIFO-R", {"controller": "fifo", "replan_period": 1.0}),
         ("Game-R", {"controller": "game", "replan_period": 1.0}),
-        ("HCOMC-PSO", {"controller": "hcomc", "optimizer": "pso", "replan_period": 2.0}),
-        ("HCOMC-SA", {"controller": "hcomc", "optimizer": "sa"}),
-        ("HCOMC+", {"controller": "hcomc", "no_cooperation": True}),
+        ("HCOMC-R", {"controller": "hcomc", "optimizer": "nsga2", "replan_period": 1.0}),
+        ("HCOMC-PSO", {"controller": "hcomc", "optimizer": "pso", "replan_period": 0.0}),
+        ("HCOMC-SA", {"controller": "hcomc", "optimizer": "sa", "replan_period": 0.0}),
+        ("HCOMC+", {"controller": "hcomc", "no_cooperation": True, "replan_period": 0.0}),
         ("none", {"controller": "none", "replan_period": 2.0}),
     ],
 )

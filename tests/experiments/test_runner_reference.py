@@ -69,10 +69,11 @@ def test_batches_keep_runs_of_one_undisturbed_run_together() -> None:
 
 def test_baselines_plan_once_as_published_and_replan_in_their_r_variants() -> None:
     assert set(CONFIGURATIONS) == {"FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA"}
-    assert set(ALL_CONFIGURATIONS) - set(CONFIGURATIONS) == {"FIFO-R", "Game-R", "HCOMC+"}
+    assert set(ALL_CONFIGURATIONS) - set(CONFIGURATIONS) == {"FIFO-R", "Game-R", "HCOMC-R",
+                                                             "HCOMC+"}  # fmt: skip
     control = {
         label: RunSpec("C1", label, 0).config_overrides()["control"]
-        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC", "HCOMC+")
+        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC", "HCOMC-R", "HCOMC+")
     }
     assert "no_cooperation" not in control["HCOMC"]  # the paper's HCOMC: the config's value
     assert control["HCOMC+"]["no_cooperation"] is True
@@ -81,4 +82,6 @@ def test_baselines_plan_once_as_published_and_replan_in_their_r_variants() -> No
     assert control["Game-R"]["controller"] == "game"
     assert control["FIFO"]["replan_period"] == 0.0
     assert control["FIFO-R"]["replan_period"] == pytest.approx(1.0)
-    assert "replan_period" not in control["HCOMC"]  # HCOMC uses the config default
+    assert control["HCOMC"]["replan_period"] == 0.0  # HCOMC plans once, as published
+    assert control["HCOMC-R"]["replan_period"] == pytest.approx(1.0)
+    assert control["HCOMC-R"]["controller"] == "hcomc"

@@ -253,7 +253,7 @@ def test_changing_vehicles_apply_the_eq14_blend():
     check the applied acceleration is Psi a_new + (1 - Psi) a_ori, capped by a_ori while
     the body overlaps the origin lane and by a_new while it overlaps the target lane."""
     config = _config(duration=60.0, main_speed=30.0)  # traffic with HDV lane changes
-    sim = Simulation(config, seed=5)
+    sim = Simulation(config, seed=1)  # a seed in which HDVs and CAVs change lanes
     tol = config.lane_change.transition_tolerance
     checked, kinds, psis = 0, set(), []
     for _ in range(sim.n_warmup + sim.n_steps):

@@ -11,8 +11,9 @@ from hcomc.config import ScenarioConfig, load_config
 
 @pytest.fixture(scope="session")
 def c1() -> ScenarioConfig:
-    """Condition 1, shortened to keep the SUMO tests fast (the merge ends near t = 35 s)."""
-    return load_config("C1", duration=50.0)
+    """Condition 1, shortened to keep the SUMO tests fast: long enough for the ramp vehicle
+    (released at t = 5 s) to merge and leave the road (near t = 51 s in SUMO, seed 0)."""
+    return load_config("C1", duration=60.0)
 
 
 @pytest.fixture(scope="session")

@@ -24,6 +24,9 @@ sumolib = pytest.importorskip("sumolib")
 REFERENCED = ("average_acceleration", "stabilisation_time", "stabilisation_time_from_merge",
               "integrated_disturbance", "lsrv", "fuel")  # fmt: skip
 """The metrics that compare with the undisturbed run."""
+AT_MERGE = ("u_safe_at_merge",)
+"""Metrics read in the row of the merge, which the trajectory gives within two steps of the
+engine's event (0.2 s of closing speed: a few per cent of Eq. 15's index)."""
 
 
 def _same_trajectories(a: SimulationLog, b: SimulationLog, heading_atol: float) -> None:
@@ -81,7 +84,7 @@ def test_fcd_round_trip_and_metrics(c1: ScenarioConfig, c1_run: Path, tmp_path: 
             # VR enters the comparisons with the undisturbed run at its merge, derived from
             # the trajectory within two steps of the engine's event: those may differ by
             # that sliver
-            rel = 1e-2 if name in REFERENCED else 1e-4
+            rel = 1e-2 if name in REFERENCED else 5e-2 if name in AT_MERGE else 1e-4
             assert score.metrics[name] == pytest.approx(value, rel=rel, abs=1e-4), name
 
 

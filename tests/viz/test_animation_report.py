@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html
 import io
 import re
 import shutil
@@ -203,7 +204,8 @@ def test_report_content(report: Path, runs: pd.DataFrame, png: bytes) -> None:
     assert text.count('<tr class="') == len(frame)
     assert "<th>Verdict (Holm)</th>" in text
     holds = int((frame["verdict"] == "holds").sum())  # no HCOMC+ runs: every claim the paper's
-    assert f"Of {len(frame)} claims of the paper, {holds} hold" in text
+    assert set(frame["family"]) == {"paper"}
+    assert html.escape(f"the paper's claims: {len(frame)} claims, {holds} hold") in text
     assert "The runs do not record merge success." in text  # no merged column
     # Escaped text, no markup injection.
     assert "<script" not in text.lower()

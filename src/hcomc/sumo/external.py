@@ -38,7 +38,14 @@ _SETTLED = 1e-3  # lateral offset [lane widths] below which a lane change is com
 
 
 def derive_events(log: SimulationLog, config: ScenarioConfig) -> None:
-    """Add insertion, exit, lane-change end, merge and collision events to ``log``."""
+    """Add insertion, exit, lane-change start and end, merge and collision events to ``log``.
+
+    A lane change is where the logged lane switches (the middle of the manoeuvre); it starts
+    at the first row after the last one in which the vehicle sat on its origin lane's centre
+    (within :data:`_SETTLED` lane widths) and ends at the first row in which it sits on the
+    target lane's centre, as the engine's LANE_CHANGE_START and LANE_CHANGE_END events
+    bracket the manoeuvre (the surrogate measures count a changing vehicle in both lanes
+    between them)."""
     n_rows = log.n_recorded
     width = config.road.lane_width
     for i in np.flatnonzero(log.active[:n_rows].any(axis=0)).tolist():
@@ -48,10 +55,18 @@ def derive_events(log: SimulationLog, config: ScenarioConfig) -> None:
         if last < n_rows - 1:
             log.add_event(log.t[last], EventKind.EXIT, i, x=float(log.x[last, i]))
         lanes = log.lane[rows, i].astype(np.int64)
+        y = log.y[rows, i].astype(np.float64)
         for k in np.flatnonzero(np.diff(lanes)).tolist():
-            r = int(rows[k + 1])
-            log.add_event(log.t[r], EventKind.LANE_CHANGE_END, i, x=float(log.x[r, i]),
-                          value=int(lanes[k + 1]))  # fmt: skip
+            origin, target = int(lanes[k]), int(lanes[k + 1])
+            on_origin = np.flatnonzero(np.abs(y[: k + 1] - lane_centre(Lane(origin), width))
+                                       < _SETTLED * width)  # fmt: skip
+            s = int(on_origin[-1]) + 1 if on_origin.size else 0
+            on_target = np.flatnonzero(np.abs(y[k + 1 :] - lane_centre(Lane(target), width))
+                                       < _SETTLED * width)  # fmt: skip
+            e = k + 1 + int(on_target[0]) if on_target.size else len(rows) - 1
+            for r, kind in ((int(rows[min(s, k + 1)]), EventKind.LANE_CHANGE_START),
+                            (int(rows[e]), EventKind.LANE_CHANGE_END)):  # fmt: skip
+                log.add_event(log.t[r], kind, i, x=float(log.x[r, i]), value=target)
         if lanes[0] == Lane.RAMP:
             offset = np.abs(log.y[rows, i] - lane_centre(Lane.MAIN_1, width)) / width
             merged = (lanes == Lane.MAIN_1) & (offset < _SETTLED)

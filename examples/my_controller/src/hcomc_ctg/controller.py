@@ -12,10 +12,12 @@ VR starts its lane change:
    moved back by the part of the time gap VMC's headway T does not keep already,
    ``(time_gap - T) v``. VMC keeps ``s0 + T v`` behind VV1, so at the merge it is
    ``time_gap * v`` (plus s0) behind VR.
-3. After H the engine replaces VV1 by VR's projection. The engine replans every
-   ``control.replan_period`` seconds until VR starts its change, with the key vehicles
-   identified anew: the constant-speed prediction is corrected as the merge draws near, and
-   a VMC that has overtaken VR is VMF from then on (VR merges behind it).
+3. After H the engine replaces VV1 by VR's projection. By default the engine plans once, as
+   the paper does; with ``control.replan_period`` > 0 (e.g. ``--set
+   control.replan_period=1``) it replans every that many seconds until VR starts its change,
+   with the key vehicles identified anew: the constant-speed prediction is corrected as the
+   merge draws near, and a VMC that has overtaken VR is VMF from then on (VR merges behind
+   it).
 
 Otherwise nobody cooperates (``Mode.NONE``): an HDV VR merges by gap acceptance; a CAV VR
 starts its change at ``merge_x`` when that is safe (the engine's MOBIL check), and falls
