@@ -174,6 +174,13 @@ def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, object] | None:
     }
 
 
+def _no_difference() -> dict[str, float]:
+    """The paired-difference columns, undefined for a claim that counts runs (a mode, merge
+    success)."""
+    nan = float("nan")
+    return {"paper_diff": nan, "median_diff": nan, "ci_low": nan, "ci_high": nan}
+
+
 def mcnemar_exact(a_only: int, b_only: int) -> float:
     """Two-sided exact McNemar test: the seeds on which exactly one of the two merged, A's
     share of them against 1/2 (1 when there are none)."""
@@ -193,16 +200,12 @@ def _success_row(runs: pd.DataFrame, claim: SuccessClaim) -> dict[str, object] |
     a_only, b_only = int((ma & ~mb).sum()), int((mb & ~ma).sum())
     p = mcnemar_exact(a_only, b_only)
     direction = int(np.sign(a_only - b_only))
-    nan = float("nan")
     return {
         "claim": f"{claim.a} merges at least as often as {claim.b}",
         "condition": claim.condition,
         "metric": "merged",
         "paper": "every VR merges",
-        "paper_diff": nan,
-        "median_diff": nan,
-        "ci_low": nan,
-        "ci_high": nan,
+        **_no_difference(),
         "verdict": p_verdict(p, direction),
         "p_value": p,
         "direction": direction,
@@ -222,17 +225,13 @@ def _mode_row(runs: pd.DataFrame, claim: ModeClaim) -> dict[str, object] | None:
     n, k = len(part), int((part["mode"] == claim.mode).sum())
     p = float(stats.binomtest(k, n, 0.5).pvalue)
     direction = int(np.sign(2 * k - n))
-    nan = float("nan")
     counts = part["mode"].replace("", "no plan").value_counts().to_dict()
     return {
         "claim": f"HCOMC chooses {claim.mode} cooperation",
         "condition": claim.condition,
         "metric": "mode",
         "paper": claim.mode,
-        "paper_diff": nan,
-        "median_diff": nan,
-        "ci_low": nan,
-        "ci_high": nan,
+        **_no_difference(),
         "verdict": p_verdict(p, direction),
         "p_value": p,
         "direction": direction,
