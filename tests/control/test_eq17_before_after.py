@@ -10,6 +10,8 @@ computed by hand with the IDM of :func:`hcomc.equations.idm.idm_accel`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -19,7 +21,6 @@ from hcomc.control.prediction.scoring import (
     accels_before,
     lane_change_incentive,
 )
-from hcomc.control.prediction.step import new_state
 from hcomc.equations.idm import idm_accel
 from hcomc.equations.incentive import mobil_incentive
 from hcomc.road import VMC, VMF, VMR, VNF, VNR, VR
@@ -33,14 +34,6 @@ def _params() -> np.ndarray:
     row = np.array([V0, T, S0, A_MAX, B, DELTA, 0.0, LENGTH, 1.8, 0.0])
     assert row.size == N_PARAMS
     return np.tile(row, (N_ROLES, 1))
-
-
-def _state(x: dict[int, float], v: dict[int, float]) -> np.ndarray:
-    """The predicted state S of the roles at ``x``, ``v`` (absent roles: not in ``x``)."""
-    present = np.array([r in x for r in range(N_ROLES)])
-    xs = np.array([x.get(r, -1e9) for r in range(N_ROLES)])
-    vs = np.array([v.get(r, 0.0) for r in range(N_ROLES)])
-    return new_state(xs, vs, np.zeros(N_ROLES), present)
 
 
 def _idm(x: dict[int, float], v: dict[int, float], r: int, lead: int | None) -> float:
@@ -58,21 +51,25 @@ X_AFTER = {VR: 900.0, VMC: 870.0, VMF: 930.0, VMR: 830.0, VNF: 960.0, VNR: 900.0
 V_AFTER = {VR: 24.0, VMC: 25.0, VMF: 25.0, VMR: 24.0, VNF: 27.0, VNR: 26.0}
 
 
-def test_before_is_the_arrangement_before_the_change_in_its_own_state():
+def test_before_is_the_arrangement_before_the_change_in_its_own_state(
+    role_state: Callable[..., np.ndarray],
+):
     """VR at its free-road acceleration; VMC behind VMF, VMR behind VMC, VNR behind VNF."""
     x, v = X_BEFORE, V_BEFORE
-    a_vr, others = accels_before(_state(x, v), _params())
+    a_vr, others = accels_before(role_state(x, v), _params())
     assert a_vr == pytest.approx(_idm(x, v, VR, None), rel=1e-12)
     want = _idm(x, v, VMC, VMF) + _idm(x, v, VMR, VMC) + _idm(x, v, VNR, VNF)
     assert others == pytest.approx(want, rel=1e-12)
 
 
 @pytest.mark.parametrize("lateral", [False, True])
-def test_after_is_vr_in_lane_1_in_the_state_it_completes_its_change(lateral):
+def test_after_is_vr_in_lane_1_in_the_state_it_completes_its_change(
+    lateral, role_state: Callable[..., np.ndarray]
+):
     """Longitudinal: VR behind VMF, VMC behind VR, VMR behind VMC, VNR behind VNF. Lateral:
     VMC in lane 2 behind VNR (the nearest ahead there), VMR behind VR, VNR behind VNF."""
     x, v = X_AFTER, V_AFTER
-    a_vr, others = accels_after(_state(x, v), _params(), lateral)
+    a_vr, others = accels_after(role_state(x, v), _params(), lateral)
     assert a_vr == pytest.approx(_idm(x, v, VR, VMF), rel=1e-12)
     if lateral:
         want = _idm(x, v, VMC, VNR) + _idm(x, v, VMR, VR) + _idm(x, v, VNR, VNF)
@@ -82,7 +79,7 @@ def test_after_is_vr_in_lane_1_in_the_state_it_completes_its_change(lateral):
 
 
 @pytest.mark.parametrize("lateral", [False, True])
-def test_u_eff_compares_the_two_states(lateral):
+def test_u_eff_compares_the_two_states(lateral, role_state: Callable[..., np.ndarray]):
     """U_eff = (a_VR,after - a_VR,before) + eta sum_i (a_i,after - a_i,before) over two
     different predicted states, in closed form."""
     xb, vb, xa, va = X_BEFORE, V_BEFORE, X_AFTER, V_AFTER
@@ -92,14 +89,16 @@ def test_u_eff_compares_the_two_states(lateral):
     else:
         after = _idm(xa, va, VMC, VR) + _idm(xa, va, VMR, VMC) + _idm(xa, va, VNR, VNF)
     want = (_idm(xa, va, VR, VMF) - _idm(xb, vb, VR, None)) + ETA * (after - before)
-    got = lane_change_incentive(_state(xb, vb), _state(xa, va), _params(), lateral, ETA)
+    got = lane_change_incentive(role_state(xb, vb), role_state(xa, va), _params(), lateral, ETA)
     assert got == pytest.approx(want, rel=1e-12)
     assert got == pytest.approx(
         mobil_incentive(_idm(xa, va, VR, VMF) - _idm(xb, vb, VR, None), after - before, ETA)
     )
 
 
-def test_behind_plan_beside_its_future_leader_no_longer_scores_zero():
+def test_behind_plan_beside_its_future_leader_no_longer_scores_zero(
+    role_state: Callable[..., np.ndarray],
+):
     """A "behind" plan (roles relabelled: VMF is the vehicle VR will follow, VMC the one that
     will follow VR) in which VR begins its change beside its future leader (1 m ahead of its
     front bumper) and, once in lane 1, has to brake behind it.
@@ -112,13 +111,13 @@ def test_behind_plan_beside_its_future_leader_no_longer_scores_zero():
     v_b = {VR: 25.0, VMC: 25.0, VMF: 25.0, VNF: 25.0}
     x_a = {VR: 900.0, VMC: 860.0, VMF: 920.0, VNF: 1600.0}
     v_a = {VR: 26.0, VMC: 25.0, VMF: 25.0, VNF: 25.0}
-    start = _state(x_b, v_b)
+    start = role_state(x_b, v_b)
     assert lane_change_incentive(start, start, params, False, ETA) == 0.0  # the former bias
     a_vr_after = _idm(x_a, v_a, VR, VMF)
     assert a_vr_after < -2.0  # VR brakes behind its new leader
     want = (a_vr_after - _idm(x_b, v_b, VR, None)) + ETA * (
         _idm(x_a, v_a, VMC, VR) - _idm(x_b, v_b, VMC, VMF)
     )
-    got = lane_change_incentive(start, _state(x_a, v_a), params, False, ETA)
+    got = lane_change_incentive(start, role_state(x_a, v_a), params, False, ETA)
     assert got == pytest.approx(want, rel=1e-12)
     assert got < -2.0

@@ -14,6 +14,7 @@ changes.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from functools import cache
 
 import numpy as np
@@ -24,7 +25,7 @@ from hcomc.control.hierarchical.controller import HCOMCController
 from hcomc.control.hierarchical.problem_terms import CONSTRAINTS
 from hcomc.control.prediction.layout import N_PARAMS, N_ROLES, P_S0
 from hcomc.control.prediction.scoring import execution_violation, no_return_violation
-from hcomc.control.prediction.step import behind, new_state
+from hcomc.control.prediction.step import behind
 from hcomc.equations.safety import stopping_distance
 from hcomc.road import VMC, VMF, VMR, VNF, VNR, VR, Kind
 from hcomc.sim.engine import Simulation
@@ -60,26 +61,19 @@ def _params() -> np.ndarray:
     return np.tile(row, (N_ROLES, 1))
 
 
-def _state(x: dict[int, float], v: dict[int, float]) -> np.ndarray:
-    present = np.array([r in x for r in range(N_ROLES)])
-    xs = np.array([x.get(r, -1e9) for r in range(N_ROLES)])
-    vs = np.array([v.get(r, 0.0) for r in range(N_ROLES)])
-    return new_state(xs, vs, np.zeros(N_ROLES), present)
-
-
-def test_execution_violation_is_the_engines_criterion():
+def test_execution_violation_is_the_engines_criterion(role_state: Callable[..., np.ndarray]):
     """VR beginning its change between VMF (ahead) and VMC (its new follower): feasible with
     room, infeasible when the new follower would brake harder than b_safe, or when VR is
     beside a vehicle (bumper gap below the minimum)."""
     params = _params()
     v = {VR: 25.0, VMC: 25.0, VMF: 25.0, VMR: 25.0, VNF: 25.0, VNR: 25.0}
     roomy = {VR: 800.0, VMC: 760.0, VMF: 840.0, VMR: 700.0, VNF: 900.0, VNR: 780.0}
-    S = _state(roomy, v)
+    S = role_state(roomy, v)
     assert execution_violation(S, params, True, 4.0, 2.0) <= 0.0
     # the new follower 10 m behind at 30 m/s: it brakes hard behind VR
     fast = {**v, VMC: 30.0}
     tight = {**roomy, VMC: 785.0}
-    S = _state(tight, fast)
+    S = role_state(tight, fast)
     a_fol = behind(S, params, VMC, VR)
     assert a_fol < -4.0
     got = execution_violation(S, params, True, 4.0, 2.0)
@@ -88,7 +82,7 @@ def test_execution_violation_is_the_engines_criterion():
     assert execution_violation(S, params, False, 4.0, 2.0) <= 0.0
     # VR beside its future leader (VMF 1 m behind VR's front): the gap criterion fails
     beside = {**roomy, VMF: 799.0}
-    assert execution_violation(_state(beside, v), params, True, 4.0, 2.0) > 0.0
+    assert execution_violation(role_state(beside, v), params, True, 4.0, 2.0) > 0.0
 
 
 # ---------------------------------------------------------------- the merge problem

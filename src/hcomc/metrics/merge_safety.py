@@ -10,7 +10,7 @@ import math
 from hcomc.config import ControlParams
 from hcomc.equations.safety import critical_accel
 from hcomc.metrics.leaders import lane_follower
-from hcomc.metrics.window import MetricWindow, post_merge_rows
+from hcomc.metrics.window import MetricWindow, post_merge_rows, recorded_section
 from hcomc.road import Kind, Lane
 from hcomc.safety.critical import SafetyIndex
 from hcomc.sim.log import SimulationLog
@@ -27,13 +27,7 @@ def safety_index_of(log: SimulationLog) -> SafetyIndex:
     ValueError
         If the log's metadata holds no control section.
     """
-    try:
-        control = log.meta["config"]["control"]
-    except (KeyError, TypeError) as exc:
-        raise ValueError(
-            "the control parameters are missing from log.meta['config']['control'] "
-            "(the resolved scenario config a run records)"
-        ) from exc
+    control = recorded_section(log, "control", "the control parameters")
     return SafetyIndex.from_config(ControlParams.model_validate(control))
 
 

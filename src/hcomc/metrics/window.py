@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -113,14 +114,19 @@ def road_of(log: SimulationLog) -> RoadParams:
     pydantic.ValidationError
         If the stored road section is invalid.
     """
+    return RoadParams.model_validate(recorded_section(log, "road", "the road geometry"))
+
+
+def recorded_section(log: SimulationLog, section: str, what: str) -> Any:
+    """``log.meta["config"][section]``: a section of the resolved scenario config the run
+    recorded; ValueError naming ``what`` is missing if the log holds none."""
     try:
-        road = log.meta["config"]["road"]
+        return log.meta["config"][section]
     except (KeyError, TypeError) as exc:
         raise ValueError(
-            "the road geometry is missing from log.meta['config']['road'] "
+            f"{what} is missing from log.meta['config']['{section}'] "
             "(the resolved scenario config a run records)"
         ) from exc
-    return RoadParams.model_validate(road)
 
 
 def times(log: SimulationLog) -> FloatArray:
