@@ -64,9 +64,13 @@ class Quality:
     ``cost_gap``: mean over the pairs of best(compiled) - best(library), ``best`` being the
     lowest Eq. 19 cost (:func:`hcomc.equations.selection.eq19_costs`, the quantity the controller's
     pick minimises) of a run's feasible rows, costs taken over that same union so that they are
-    comparable across runs (0 is the best, 2 the worst row of the union in the gate branch).
+    comparable across runs (0 is the best, 2 the worst row of the union in the gate branch). A
+    row above the gate while other rows of the union pass it costs 2 plus its U_safe min-max
+    normalised over those rows (:func:`union_costs`): worse than every row that passes, as
+    Eq. 19 ranks them, so a run that found no row passing the gate scores in [2, 3].
     ``cost_spread``: the library's spread, the range (max - min) of the finite Eq. 19 costs of
-    the rows a library run returns, on the same scale, averaged over its runs: how much the
+    the rows a library run returns (those of :func:`~hcomc.equations.selection.eq19_costs`, the
+    rows outside the gate left out), on the same scale, averaged over its runs: how much the
     candidates it offers the controller differ. ``pairs`` holds (problem index, seed,
     HV compiled, HV library, best compiled, best library) per pair.
     """
@@ -91,6 +95,19 @@ def _run(name: str, index: int, seed: int) -> ParetoResult:
 def _feasible(result: ParetoResult) -> FloatArray:
     F: FloatArray = result.F[result.feasible]
     return F
+
+
+def union_costs(union: FloatArray, threshold: float) -> FloatArray:
+    """Eq. 19's cost of every row of ``union`` (:func:`~hcomc.equations.selection.eq19_costs`),
+    the rows outside the gate, when some pass it, at 2 plus their U_safe min-max normalised
+    over them (:class:`Quality`)."""
+    costs = eq19_costs(union, OBJECTIVES, safety_threshold=threshold)
+    above = ~np.isfinite(costs)
+    if above.any() and not above.all():
+        safety = union[above, OBJECTIVES.index("safety")]
+        span = np.ptp(safety)
+        costs[above] = 2.0 + ((safety - safety.min()) / span if span > 0.0 else 0.0)
+    return costs
 
 
 def compare_quality(
@@ -118,10 +135,13 @@ def compare_quality(
         lo, span = union.min(axis=0), np.ptp(union, axis=0)
         span[span == 0.0] = 1.0
         hv = HV(ref_point=np.full(union.shape[1], 1.1))
-        costs = eq19_costs(union, OBJECTIVES, safety_threshold=threshold)
-        ends = np.cumsum([0] + [F.shape[0] for F in runs])
-        run_costs = [costs[a:b][np.isfinite(costs[a:b])] for a, b in itertools.pairwise(ends)]
-        best = [float(c.min()) if c.size else np.inf for c in run_costs]
+        costs, gate = (
+            union_costs(union, threshold),
+            eq19_costs(union, OBJECTIVES, safety_threshold=threshold),
+        )
+        ends = list(itertools.pairwise(np.cumsum([0] + [F.shape[0] for F in runs])))
+        best = [float(costs[a:b].min()) if b > a else np.inf for a, b in ends]
+        run_costs = [gate[a:b][np.isfinite(gate[a:b])] for a, b in ends]  # the spreads' rows
         volumes = [float(hv((F - lo) / span)) if F.shape[0] else 0.0 for F in runs]
         for k, seed in enumerate(seeds):
             i, j = 2 * k, 2 * k + 1  # the pair's compiled and library runs

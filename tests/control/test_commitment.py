@@ -72,6 +72,21 @@ def test_a_replan_keeps_the_live_cooperation_within_the_margin():
     assert executed(view, groups, problem, X[1])[1].vmc == groups[1].vmc != live.group.vmc
 
 
+def test_by_default_a_replan_switches_for_safety_never_for_cost_alone():
+    _config, view, group = _cav_vmc_instant()
+    problem = merge_problem(view, group)
+    groups = sequence_groups(view, group)
+    margin = ScenarioConfig().control.commitment_margin
+    X, F, feasible = _pool(problem)
+    F[1, 2] = -0.11  # "behind" better on both objectives: the whole cost range, 2, apart
+    choice = choose(view, groups, problem, (X, F, feasible), _live(groups), margin)
+    assert (choice.row, choice.kept, choice.margin) == (0, True, 2.0)
+    F[0, 0] = 4.5  # the committed "ahead" now fails Eq. 19's gate (U_safe > 4), "behind" passes
+    choice = choose(view, groups, problem, (X, F, feasible), _live(groups), margin)
+    assert (choice.row, choice.kept, choice.margin) == (1, False, np.inf)
+    assert "Eq. 19's gate" in choice.why
+
+
 def test_a_replan_switches_when_the_commitment_is_no_longer_feasible():
     _config, view, group = _cav_vmc_instant()
     problem = merge_problem(view, group)

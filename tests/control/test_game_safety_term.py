@@ -182,7 +182,8 @@ def _check_record(d: LaneChangeDecision) -> None:
     assert d.safety_threshold == GAME_DEFAULT.safety_threshold == 4.0
     np.testing.assert_array_equal(d.sv_safety, safety_term(d.sv_critical_accel, A_MERG))
     assert d.admitted_by in ADMITTED_BY
-    assert d.lateral_admitted == (d.change or d.change_is_safe)  # HCOMC's lateral gate
+    assert d.admits() == (d.change or d.change_is_safe)  # HCOMC's lateral gate
+    assert d.admits(safety_rule=False) == d.change  # HCOMC-eq's
 
 
 def test_equilibrium_admits_the_change() -> None:
@@ -201,7 +202,8 @@ def test_only_the_added_safety_rule_admits_the_change() -> None:
     assert not d.change
     assert d.change_is_safe
     assert d.admitted_by == "safety_rule"
-    assert d.lateral_admitted
+    assert d.admits()
+    assert not d.admits(safety_rule=False)  # HCOMC-eq: the equilibrium alone
     assert "only by the added safety rule (extension)" in d.reason
     assert d.solution.expected_cost[SV_LC] > d.solution.expected_cost[1]
 
@@ -210,7 +212,7 @@ def test_neither_admits_a_change_into_an_occupied_slot() -> None:
     d = _play(*_NEITHER_STATE)
     _check_record(d)
     assert (d.change, d.change_is_safe, d.admitted_by) == (False, False, "")
-    assert not d.lateral_admitted
+    assert not d.admits()
     assert np.isinf(d.sv_critical_accel[SV_LC]).all()
     assert (d.sv_safety[SV_LC] == INFEASIBLE_SAFETY_COST).all()
 
@@ -267,3 +269,18 @@ def _merge_view() -> TrafficView:
 
 def _rng() -> np.random.Generator:
     return np.random.default_rng(0)
+
+
+def test_hcomc_eq_drops_the_lateral_plans_only_the_safety_rule_admitted() -> None:
+    """C2 seed 2: HCOMC's one plan is lateral, admitted by the added safety rule alone. HCOMC-eq
+    plays the same game at the same instant (planning once, nothing has acted yet) and, the
+    equilibrium being "keep", is not allowed the lateral mode."""
+    from hcomc.experiments.runner import RunSpec, run_one
+
+    hcomc, _ = run_one(RunSpec("C2", "HCOMC", 2))
+    eq, _ = run_one(RunSpec("C2", "HCOMC-eq", 2))
+    assert (hcomc["mode"], hcomc["lateral_cause"]) == ("lateral", "safety_rule")
+    assert (hcomc["games"], hcomc["games_change"], hcomc["games_safety_rule"]) == (1, 0, 1)
+    assert (eq["games"], eq["games_change"], eq["games_safety_rule"]) == (1, 0, 1)
+    assert eq["mode"] in ("longitudinal", "none")
+    assert eq["lateral_cause"] == ""

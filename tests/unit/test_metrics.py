@@ -422,15 +422,20 @@ def _pair(v_leader: float, v_follower: float, x_follower: float) -> SimulationLo
 
 
 def test_ttc_drac_on_closing_pair() -> None:
-    # Key pair VMC -> VMF: gap = 600 - 5 - (545 + 25 t) + 20 t = 50 - 5 t, smallest at
-    # t = 4 s (30 m). TTC and DRAC skip the non-key vehicle 3 between them; the critical
-    # distance does not: VMC's actual leader is vehicle 3, gap 575 + 21.5 t - 5 - (545 + 25 t)
-    # = 25 - 3.5 t, smallest at t = 4 s (11 m). VR (2) on the ramp has no leader.
+    # VMC's actual leader is the non-key vehicle 3: gap 575 + 21.5 t - 5 - (545 + 25 t) =
+    # 25 - 3.5 t, closing at 3.5 m/s, smallest at t = 4 s (11 m): TTC 11 / 3.5 s, DRAC
+    # 3.5² / 22 m/s², and the critical distance 11 m. Vehicle 3 behind VMF (a pair with a key
+    # vehicle too): gap 600 + 20 t - 5 - (575 + 21.5 t) = 20 - 1.5 t, 14 m and TTC 9.3 s at
+    # t = 4 s, DRAC 1.5² / 28 m/s²: not the extreme. VR (2) on the ramp has no leader.
     log = _pair(20.0, 25.0, 545.0)
     w = MetricWindow(group=roles(2, 1, 0), t_start=0.0, t_merge=2.0, t_end=4.0)
+    assert min_ttc(log, w) == pytest.approx(11.0 / 3.5, rel=1e-5)
+    assert max_drac(log, w) == pytest.approx(3.5**2 / (2 * 11.0), rel=1e-5)
+    assert critical_distance(log, w) == pytest.approx(11.0, abs=1e-4)
+    # without vehicle 3 (off the road) the key pair VMC -> VMF: gap 50 - 5 t, 30 m at t = 4 s
+    log.active[:, 3] = False
     assert min_ttc(log, w) == pytest.approx(30.0 / 5.0, rel=1e-5)
     assert max_drac(log, w) == pytest.approx(5.0**2 / (2 * 30.0), rel=1e-5)
-    assert critical_distance(log, w) == pytest.approx(11.0, abs=1e-4)
 
 
 def test_critical_distance_starts_at_merge() -> None:
@@ -530,7 +535,9 @@ def test_compute_metrics_floats_and_documented_nans() -> None:
     assert values["integrated_disturbance"] == 0.0
     assert values["average_acceleration"] == 0.0
     assert values["lsrv"] == 0.0
-    assert values["min_ttc"] == math.inf
+    # the key vehicles do not close on each other; the upstream vehicle 6 closes on VNR at
+    # 5 m/s: gap 720 + 20 t - 5 - (100 + 25 t) = 615 - 5 t, 595 m at t = 4 s
+    assert values["min_ttc"] == pytest.approx(595.0 / 5.0, rel=1e-6)
     assert values["collisions"] == 0.0
     # the outcome: VR merged 1.5 s after its entry, ahead of VMC, without waiting
     assert (values["merged"], values["sequence"], values["ramp_wait"]) == (True, "ahead", 0.0)

@@ -30,7 +30,7 @@ from hcomc.metrics.lane_profile import interp_ascending_into, interp_into, lane_
 from hcomc.metrics.leaders import lane_follower, lane_leaders
 from hcomc.metrics.paper import disturbance_metrics
 from hcomc.metrics.surrogate import closing_metrics
-from hcomc.metrics.window import EPS_T, key_pairs, road_of, window_rows
+from hcomc.metrics.window import EPS_T, road_of, window_rows
 from hcomc.sim.log import SimulationLog
 
 DT = 0.1  # logging interval of the random logs [s]
@@ -304,39 +304,7 @@ def test_deviations_follow_their_definition(seed: int, n_rows: int, n_vehicles: 
             same(got, expected)
 
 
-# ------------------------------------------------------------------- pairs, fuel
-def dense_key_pairs(
-    log: SimulationLog, window: MetricWindow, rows: slice
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`key_pairs` by its definition: numpy's lexsort by (lane, x), inactive last."""
-    keys = window.key_vehicles
-    act = np.asarray(log.active)[rows][:, keys]
-    x, v = (np.asarray(arr)[rows][:, keys].astype(np.float64) for arr in (log.x, log.v))
-    lane = np.asarray(log.lane)[rows][:, keys].astype(np.int64)
-    length = np.broadcast_to(log.length[keys].astype(np.float64), x.shape)
-    order = np.lexsort((np.where(act, x, np.inf), np.where(act, lane, np.iinfo(np.int64).max)),
-                       axis=1)  # fmt: skip
-    act_s, x_s, v_s, lane_s, len_s = (np.take_along_axis(arr, order, axis=1)
-                                      for arr in (act, x, v, lane, length))  # fmt: skip
-    valid = act_s[:, :-1] & act_s[:, 1:] & (lane_s[:, :-1] == lane_s[:, 1:])
-    return x_s[:, 1:] - len_s[:, 1:] - x_s[:, :-1], v_s[:, :-1] - v_s[:, 1:], valid
-
-
-@settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**31), n_rows=st.integers(1, 30), n_vehicles=st.integers(2, 14))
-def test_key_pairs_follow_their_definition(seed: int, n_rows: int, n_vehicles: int) -> None:
-    """Ties in position and NaN positions included."""
-    packed, plain = random_logs(seed, n_rows, n_vehicles, nan_x=0.1)
-    window = random_window(np.random.default_rng(seed), n_rows, n_vehicles)
-    rows = window_rows(plain, window)
-    if window.key_vehicles.size < 2:
-        return
-    want = dense_key_pairs(plain, window, rows)
-    for log in (packed, plain):
-        for got, expected in zip(key_pairs(log, window, rows), want, strict=True):
-            same(got, expected)
-
-
+# ------------------------------------------------------------------- leaders, fuel
 def dense_leaders(
     log: SimulationLog, rows: slice, vehicles: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

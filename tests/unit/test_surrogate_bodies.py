@@ -1,5 +1,6 @@
 """PET, least TTC and largest DRAC follow the vehicles' bodies through lane changes, on
-hand-built logs with closed-form answers (hcomc.metrics.surrogate).
+hand-built logs with closed-form answers (hcomc.metrics.surrogate), and the pairs they read
+against their definition on random logs (hcomc.metrics.bodies).
 
 Road of preset C1: lane width W = 3.75 m, lane centres y = -W (ramp), 0 (lane 1), W (lane 2);
 every vehicle 5 m long and 1.8 m wide, so a body overlaps a lane while
@@ -9,6 +10,7 @@ every vehicle 5 m long and 1.8 m wide, so a body overlaps a lane while
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 from collections.abc import Iterable
 from functools import cache
@@ -19,6 +21,7 @@ import pytest
 
 from hcomc.config import load_config
 from hcomc.metrics import KEY_ROLES, MetricWindow, max_drac, min_ttc, pet_at_merge
+from hcomc.metrics.bodies import body_pairs
 from hcomc.metrics.surrogate import closing_metrics
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -180,3 +183,110 @@ def test_a_finished_lane_change_leaves_one_lane() -> None:
     it counts in its logged lane only, so the lane-2 follower never has it as leader."""
     log = build(PAIR_X0, PAIR_V0, [-W, 0.4 * T, W], changes=[(1, 0.0, 2.0, 2)])
     assert min_ttc(log, pair_window(4.0)) == math.inf
+
+
+@pytest.mark.parametrize("slots", [None, 2])
+def test_a_vehicle_that_is_not_key_counts_against_a_key_vehicle(slots: int | None) -> None:
+    """Only vehicle 1 (VMC, leader at 600 + 20 t) and VR are key vehicles. A non-key vehicle
+    3 at 570 + 20 t drives between VMC and the follower 2 (545 + 25 t, not key): the pair
+    (2, 3) has no key vehicle, (3, 1) does not close, so no TTC. Made key, the follower 2
+    closes on vehicle 3, its actual leader: gap 570 - 5 - 545 - 5 t = 20 - 5 t, TTC
+    (20 - 5 t) / 5 at the last row, not VMC's (50 - 5 t) / 5."""
+    log = build([*PAIR_X0, 570.0], [*PAIR_V0, 20.0], [-W, 0.0, 0.0, 0.0], slots=slots)
+    w = MetricWindow(group=roles(0, 1), t_start=0.0, t_merge=math.nan, t_end=4.0)
+    assert (min_ttc(log, w), max_drac(log, w)) == (math.inf, 0.0)
+    w = MetricWindow(group=roles(0, 1, -1, 2), t_start=0.0, t_merge=math.nan, t_end=4.0)
+    assert min_ttc(log, w) == pytest.approx((20.0 - 5.0 * 4.0 + 1e-9) / 5.0, abs=1e-5)
+    w = MetricWindow(group=roles(0, 1, -1, 2), t_start=0.0, t_merge=math.nan, t_end=3.0)
+    assert min_ttc(log, w) == pytest.approx(5.0 / 5.0, rel=1e-5)
+    assert max_drac(log, w) == pytest.approx(25.0 / (2.0 * 5.0), rel=1e-5)
+
+
+@pytest.mark.parametrize("slots", [None, 2])
+def test_a_car_cutting_in_that_is_not_key_counts_while_its_body_is_in_the_lane(
+    slots: int | None,
+) -> None:
+    """The key follower 2 (545 + 25 t, lane 1) and a non-key car 3 at 575 + 20 t changing
+    from lane 2 to lane 1 (y = W - 0.4 t from t = 0): its body enters lane 1 (y < 2.775 m)
+    from the row t = 2.5 s on, while it is still logged in lane 2. From then on it is the
+    follower's leader: gap 575 - 5 - 545 - 5 t = 25 - 5 t; at t = 4 s, 5 m and TTC 1 s."""
+    log = build([*PAIR_X0, 575.0], [*PAIR_V0, 20.0], [-W, 0.0, 0.0, W - 0.4 * T],
+                changes=[(3, 0.0, math.nan, 1)], slots=slots)  # fmt: skip
+    assert log.lane[-1, 3] == 2
+    group = roles(0, 1, -1, 2)
+    at = {t: MetricWindow(group=group, t_start=0.0, t_merge=math.nan, t_end=t) for t in (2.4, 4)}
+    assert min_ttc(log, at[2.4]) == pytest.approx((50.0 - 5.0 * 2.4) / 5.0, rel=1e-5)  # VMC's
+    assert min_ttc(log, at[4]) == pytest.approx(5.0 / 5.0, rel=1e-5)
+    assert max_drac(log, at[4]) == pytest.approx(25.0 / (2.0 * 5.0), rel=1e-5)
+
+
+def _random_body_log(seed: int, slots: int | None) -> tuple[SimulationLog, np.ndarray]:
+    """Random vehicles, each on the road for one stretch of rows, over lanes 0-2 with lateral
+    positions near and between the centre lines, logged lane from y, positions on a 5 m grid
+    (ties) with NaN now and then, and random lane changes (some never ended); and a random
+    set of key vehicles."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 12))
+    x = np.round(rng.uniform(0.0, 200.0, (T.size, n)) / 5.0) * 5.0
+    x[rng.random(x.shape) < 0.05] = np.nan
+    y = rng.uniform(-W - 1.0, W + 1.0, (T.size, n))
+    v = rng.uniform(0.0, 30.0, (T.size, n))
+    first = rng.integers(0, T.size, n)  # each vehicle on the road for one stretch of rows
+    end = first + rng.integers(1, T.size + 1, n)
+    on = (np.arange(T.size)[:, None] >= first) & (np.arange(T.size)[:, None] < end)
+    log = SimulationLog.allocate(
+        T.size, n, dt=0.1, kind=np.ones(n, dtype=np.int64), length=rng.uniform(4.0, 6.0, n),
+        width=np.full(n, 1.8), meta={"config": copy.deepcopy(_config())}, slots=slots,
+    )  # fmt: skip
+    zeros = np.zeros(n)
+    for k, t in enumerate(T):
+        log.record(k, float(t), x[k], y[k], v[k], zeros, zeros, lane_of(y[k]).clip(0, 2), on[k])
+    for i in range(n):
+        t_s = float(T[0])
+        for _ in range(int(rng.integers(0, 3))):
+            t_s = float(rng.choice(T[t_s <= T]))
+            log.add_event(t_s, EventKind.LANE_CHANGE_START, i, value=int(rng.integers(0, 3)))
+            if rng.random() < 0.7:
+                t_s = float(rng.choice(T[t_s <= T]))
+                log.add_event(t_s, EventKind.LANE_CHANGE_END, i, value=0)
+    return log, rng.permutation(n)[: rng.integers(1, n + 1)]
+
+
+def _dense_body_pairs(log: SimulationLog, rows: slice, keys: np.ndarray) -> np.ndarray:
+    """Row by row from the definition: each lane's occupants (logged lane; a changer's second
+    lane on the side of its offset while its body overlaps it) in stable order of position,
+    NaN last; (gap, closing) of each neighbour pair with a key vehicle, sorted."""
+    starts = log.events_of(EventKind.LANE_CHANGE_START)
+    ends = log.events_of(EventKind.LANE_CHANGE_END)
+    out = []
+    for r in range(*rows.indices(log.n_steps)):
+        t = float(log.t[r])
+        lanes: dict[int, list[int]] = {0: [], 1: [], 2: []}
+        for i in np.flatnonzero(np.asarray(log.active)[r]).tolist():
+            lane, y = int(log.lane[r, i]), float(log.y[r, i])
+            lanes[lane].append(i)
+            begun = np.count_nonzero((starts["vehicle"] == i) & (starts["t"] <= t + 1e-6))
+            ended = np.count_nonzero((ends["vehicle"] == i) & (ends["t"] < t - 1e-6))
+            side = int(np.sign(y - (lane - 1) * W))
+            other = lane + side
+            if begun > ended and side and 0 <= other <= 2 and abs(y - (other - 1) * W) < 2.775:
+                lanes[other].append(i)
+        for members in lanes.values():
+            xs = np.array([float(log.x[r, i]) for i in sorted(members)])
+            order = [sorted(members)[k] for k in np.argsort(xs, kind="stable")]
+            for f, ld in itertools.pairwise(order):
+                if f in keys or ld in keys:
+                    gap = float(log.x[r, ld]) - float(log.length[ld]) - float(log.x[r, f])
+                    if math.isfinite(gap):
+                        out.append((gap, float(log.v[r, f]) - float(log.v[r, ld])))
+    return np.array(sorted(out)).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_body_pairs_follow_their_definition(seed: int) -> None:
+    for slots in (None, 12):
+        log, keys = _random_body_log(seed, slots)
+        rows = slice(seed % 7, T.size - seed % 5)
+        gap, closing = body_pairs(log, rows, keys)
+        got = np.array(sorted(zip(gap.tolist(), closing.tolist(), strict=True))).reshape(-1, 2)
+        np.testing.assert_array_equal(got, _dense_body_pairs(log, rows, keys))

@@ -242,7 +242,7 @@ def reproduce(
 ) -> None:
     """Reproduce the paper: Table I conditions x (FIFO, Game, HCOMC with NSGA-II, PSO, SA,
     all planning once as published; the replanning variants FIFO-R, Game-R, HCOMC-R and the
-    labelled extension HCOMC+), seeded runs
+    labelled extension HCOMC+, the equilibrium-only HCOMC-eq), seeded runs
     plus the deterministic paper scenario. --set changes a config value for every run (e.g. a
     sensitivity check); --controllers adds controllers of your own; --docs regenerates the
     published documentation from the run."""

@@ -95,12 +95,21 @@ class ControlParams(FrozenModel):
         "this many seconds until VR starts its lane change [s]",
     )
     commitment_margin: float = Field(
-        0.2,
+        2.0,
         ge=0,
         le=2,
         description="HCOMC replanning keeps the live plan's cooperating vehicle, mode and "
-        "sequence unless the best new plan's Eq. 19 cost (min-max normalised over the new "
-        "Pareto set, range 0-2) is lower by more than this; 0 = always take the best [-]",
+        "sequence unless no feasible candidate keeps them, every one fails Eq. 19's safety gate, "
+        "or the best new plan's Eq. 19 cost (min-max normalised over the candidates, range 0-2) "
+        "is lower by more than this; 2 = never for cost alone (a replan corrects the plan, it "
+        "does not re-choose it); 0 = always take the best [-]",
+    )
+    lateral_safety_rule: bool = Field(
+        True,
+        description="HCOMC admits VMC's lateral cooperation when the Section III-B lane-change "
+        "game's equilibrium is to change lane, or (an extension, not in the paper) when that "
+        "change keeps Eq. 15's a_cr below safety_threshold against every response its follower "
+        "plays; false = the equilibrium alone (the configuration HCOMC-eq)",
     )
     no_cooperation: bool = Field(
         False,

@@ -67,7 +67,7 @@ def plan_report(sim: Engine[object], plan: MergePlan) -> dict[str, Any]:
         else {
             "change": bool(game.change),
             "change_is_safe": bool(game.change_is_safe),
-            "lateral_allowed": bool(game.lateral_admitted),
+            "lateral_allowed": game.admits(sim.config.control.lateral_safety_rule),
             "admitted_by": game.admitted_by,
             "reason": game.reason,
         },

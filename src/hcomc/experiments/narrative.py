@@ -184,19 +184,21 @@ def paper_tables(d: Digest) -> dict[str, str]:
 def decision_facts(d: Digest) -> dict[str, str]:
     """Counts quoted in the prose: "k of n (p %)" per configuration (over all conditions)
     of the last plan switching (``final_switch_*``), of at least one switch
-    (``switched_*``), of merges (``merged_*``) and of fallbacks (``fallbacks_*``), and
+    (``switched_*``), of merges (``merged_*``), of fallbacks (``fallbacks_*``) and of lateral
+    last plans (``lateral_*``), and
     Game's and FIFO's longitudinal cooperation in C2 (``longitudinal_c2_*``); a
     configuration the run lacks gives "—"; ``cd_by_mode_*``: the mean critical distance by the
     last plan's mode; ``unmerged_fallback_*``: "k of its m" runs without a merge whose last
     plan fell back."""
     out = {}
-    for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "FIFO-R", "Game-R", "HCOMC-R"):
+    for conf in ("FIFO", "Game", "HCOMC", "HCOMC+", "HCOMC-eq", "FIFO-R", "Game-R", "HCOMC-R"):
         key = conf.lower().replace("+", "_plus").replace("-", "_")
         for column, name in (
             ("final_switch", "final_switch"),
             ("switched", "switched"),
             ("merged", "merged"),
             ("fallback", "fallbacks"),
+            ("lateral", "lateral"),
         ):
             k, n = total(d, column, conf) if column in d.decisions else (float("nan"), 0)
             out[f"{name}_{key}"] = f"{num(k)} of {n} ({pct(k, n)})" if n else "—"

@@ -2,13 +2,14 @@
 
 A *configuration* is a merge controller with its optimiser: the paper's five (FIFO, Game,
 HCOMC with NSGA-II, PSO or SA; all plan once, at VR's control-zone entry, as Section III
-publishes them), their variants that replan every second ("FIFO-R", "Game-R", "HCOMC-R",
-not in the paper), the labelled extension "HCOMC+", or any
-controller named as :mod:`hcomc.control.registry` accepts (a researcher's own). Every
-run is ``run_one(spec)``: a pure function of its spec (condition preset or TOML file,
-configuration, seed, overrides) that returns one results row and the run's manifest. Seeds
-are shared across configurations within a condition (common random numbers: the same traffic
-for every controller), so comparisons are paired by seed.
+publishes them), their variants that replan every second ("FIFO-R", "Game-R", "HCOMC-R", not
+in the paper), the labelled extension "HCOMC+", HCOMC with the lane-change game's
+equilibrium alone admitting lateral cooperation ("HCOMC-eq"), or any controller named as
+:mod:`hcomc.control.registry` accepts (a researcher's own). Every run is ``run_one(spec)``:
+a pure function of its spec (condition preset or TOML file, configuration, seed, overrides)
+that returns one results row and the run's manifest. Seeds are shared across configurations
+within a condition (common random numbers: the same traffic for every controller), so
+comparisons are paired by seed.
 
 Every run is measured against its undisturbed counterpart: the same condition, overrides and
 seed simulated without releasing the ramp vehicle (:mod:`hcomc.metrics`). That run does not
@@ -62,10 +63,16 @@ EXTENSIONS: dict[str, tuple[str, str]] = {"HCOMC+": ("hcomc", "nsga2")}
 """Labelled extensions of HCOMC, reported beside the faithful method (not in the paper):
 HCOMC+ may also choose to leave the mainline alone (``control.no_cooperation``)."""
 
+EQUILIBRIUM_ONLY: dict[str, tuple[str, str]] = {"HCOMC-eq": ("hcomc", "nsga2")}
+"""HCOMC whose lateral cooperation only the lane-change game's equilibrium admits
+(``control.lateral_safety_rule`` false): the paper's game without the safety rule HCOMC adds,
+run beside HCOMC so that what rests on the rule is seen (no claims of its own)."""
+
 ALL_CONFIGURATIONS: dict[str, tuple[str, str]] = {
     **CONFIGURATIONS,
     **REPLANNING,
     **EXTENSIONS,
+    **EQUILIBRIUM_ONLY,
 }
 """Every configuration label ``run_one`` accepts."""
 
@@ -73,10 +80,12 @@ CONTROL_OVERRIDES: dict[str, dict[str, Any]] = {
     **{label: {"replan_period": 0.0} for label in CONFIGURATIONS},
     **{label: {"replan_period": 1.0} for label in REPLANNING},
     "HCOMC+": {"replan_period": 0.0, "no_cooperation": True},
+    "HCOMC-eq": {"replan_period": 0.0, "lateral_safety_rule": False},
 }
 """``control`` values a configuration sets beyond its controller and optimiser: the paper's
-configurations and HCOMC+ plan once, as published (``replan_period = 0``), the -R variants
-replan every second; HCOMC+ adds the mode "none"."""
+configurations, HCOMC+ and HCOMC-eq plan once, as published (``replan_period = 0``), the -R
+variants replan every second; HCOMC+ adds the mode "none"; HCOMC-eq drops the added safety
+rule of the lateral gate."""
 
 
 def configuration_label(name: str) -> str:

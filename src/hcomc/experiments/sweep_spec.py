@@ -55,8 +55,8 @@ class SweepSpec(BaseModel):
         ["FIFO", "Game", "HCOMC"],
         min_length=1,
         description="configuration labels (FIFO, Game, HCOMC, HCOMC-PSO, HCOMC-SA, FIFO-R, "
-        "Game-R, HCOMC-R, HCOMC+) or controller names (a registered name, package.module:Class, "
-        "path/to/file.py:Class)",
+        "Game-R, HCOMC-R, HCOMC+, HCOMC-eq) or controller names (a registered name, "
+        "package.module:Class, path/to/file.py:Class)",
     )
     seeds: int = Field(3, ge=1, le=10_000, description="seeds 0 .. seeds-1 per cell")
     ramp: Literal["single", "flow"] | None = Field(None, description="one key merge or a flow")

@@ -9,9 +9,9 @@ positions); two vehicles at the same ``x`` are leader and follower with a negati
 overlap), not hidden from each other. A vehicle with a NaN position has no leader, and is
 nobody's leader.
 
-Unlike the consecutive *key-vehicle* pairs of :func:`hcomc.metrics.window.key_pairs`, a
-vehicle between two key vehicles is the follower's leader: the gap measured is the one the
-follower actually keeps.
+A vehicle between two key vehicles is the follower's leader: the gap measured is the one the
+follower actually keeps. (TTC and DRAC also count a vehicle in a lane change in both lanes
+while its body overlaps both: :mod:`hcomc.metrics.bodies`.)
 """
 
 from __future__ import annotations

@@ -14,12 +14,11 @@ Conventions shared by every metric:
   vehicle is released (``Simulation(..., counterfactual=True)``): same demand, same random
   streams, nothing merges. It has the same rows and vehicle columns as the factual log, so a
   vehicle's undisturbed state is read from the same cell;
-* **same lane** means the *logged* lane of the row; **consecutive** key vehicles are
-  neighbours in the order of ``x`` within one lane, *among key vehicles only* (TTC, DRAC,
-  where a lane-changing key vehicle is in both lanes while its body overlaps both:
-  :func:`hcomc.metrics.surrogate.body_pairs`);
-  a vehicle's **actual leader** is the nearest vehicle ahead of it in its lane, key or not
-  (critical distance, U_safe at the merge; :mod:`hcomc.metrics.leaders`); the **bumper
+* **same lane** means the *logged* lane of the row; a vehicle's **actual leader** is the
+  nearest vehicle ahead of it in its lane, key or not (critical distance, U_safe at the
+  merge; :mod:`hcomc.metrics.leaders`); TTC and DRAC take lanes from the bodies instead, a
+  vehicle in a lane change counting in both lanes while its body overlaps both
+  (:mod:`hcomc.metrics.bodies`); the **bumper
   gap** of a follower f behind its leader l is :math:`x_l - L_l - x_f` [m] (``x`` is the
   front bumper, ``L`` the vehicle length);
 * integrals over time use the **rectangle rule** with the logging interval ``log.dt``.
@@ -36,7 +35,6 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import RoadParams
-from hcomc.metrics.pairs import consecutive_pairs
 from hcomc.road import KEY_ROLES
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -235,26 +233,3 @@ def reference_or_score(
         return math.nan
     check_reference(log, reference)
     return reference if window.merged else math.nan
-
-
-def key_pairs(
-    log: SimulationLog, window: MetricWindow, rows: slice
-) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """Gaps, closing speeds and validity of consecutive same-lane key-vehicle pairs.
-
-    Returns ``(gap, closing, valid)``, each of shape (R, K - 1) for R rows and K present
-    key vehicles: per row, the key vehicles are sorted by (logged lane, x), inactive ones
-    last; pair j is (follower = sorted[j], leader = sorted[j + 1]), valid if both are
-    active and in the same lane. ``gap`` = x_l - L_l - x_f [m], ``closing`` = v_f - v_l
-    [m/s].
-    """
-    keys = window.key_vehicles
-    n_rows = len(range(*rows.indices(log.n_steps)))
-    if keys.size < 2 or n_rows == 0:
-        empty = np.empty((n_rows, 0))
-        return empty, empty, np.empty((n_rows, 0), dtype=bool)
-    gap, closing = np.empty((n_rows, keys.size - 1)), np.empty((n_rows, keys.size - 1))
-    valid = np.empty((n_rows, keys.size - 1), dtype=bool)
-    consecutive_pairs(log.active[rows, keys], log.x[rows, keys], log.v[rows, keys],
-                       log.lane[rows, keys], log.length[keys], gap, closing, valid)  # fmt: skip
-    return gap, closing, valid

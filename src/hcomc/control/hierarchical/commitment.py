@@ -1,5 +1,5 @@
-"""Commitment of a replanning HCOMC: keep the live plan's cooperation unless a new plan is
-clearly better.
+"""Commitment of a replanning HCOMC: keep the live plan's cooperation while it stays
+feasible and safe.
 
 The paper plans a merge once; a receding horizon (remaking the plan every second until VR
 starts its lane change) lets the plan follow the traffic, but a plain re-optimisation also
@@ -9,15 +9,21 @@ assumption of ours, the paper being silent on replanning) keeps what the live pl
 the traffic to — which vehicle VR merges in front of, and that vehicle's cooperation mode —
 unless
 
-* no candidate with that commitment is feasible any more, or
+* no candidate with that commitment is feasible any more,
+* every feasible one fails Eq. 19's safety gate (U_safe above the threshold while another
+  candidate is below it), or
 * the best new candidate's Eq. 19 cost is lower than the best committed one's by more than
-  ``control.commitment_margin``.
+  ``control.commitment_margin``. Its default, 2, is the whole range of the cost, so that a
+  replan never switches for cost alone: replanning corrects the committed plan for what the
+  traffic did differently from its prediction (the merge position, duration and horizon are
+  optimised again), and re-chooses the cooperation only when that plan can no longer be
+  carried out or is no longer safe, as the one plan of the paper is carried out.
 
 The candidates are the optimiser's Pareto set plus the live plan continued (its merge
 position, duration and remaining horizon, re-predicted from now) and the same cooperation on
 a small grid of merge positions and horizons, and Eq. 19's cost is taken over that pool
 (:func:`hcomc.equations.selection.eq19_costs`: min-max normalised, so the margin is a share of
-the pool's range: 0.2 of the [0, 2] range of the two normalised costs).
+the pool's range, the [0, 2] range of the two normalised costs).
 
 No drift toward the lane end (HCOMC-R, a problem made with ``replanning``): a replan may not
 move the merge position of the committed cooperation further downstream than the live

@@ -17,8 +17,8 @@
    search and the live virtual vehicles are continued, so the commanded motion stays smooth.
 4. Eq. 19 picks one plan from the Pareto set; without any feasible candidate the safe fallback
    applies: VR merges by gap acceptance and nobody is commanded. A replan keeps the live
-   plan's cooperating vehicle, mode and sequence unless a new plan is better by a stated
-   margin or the live one has become infeasible (:mod:`~hcomc.control.hierarchical.commitment`).
+   plan's cooperating vehicle, mode and sequence unless it has become infeasible or fails
+   Eq. 19's safety gate (:mod:`~hcomc.control.hierarchical.commitment`).
 
 The labelled extension HCOMC+ (``control.no_cooperation``) also lets the optimiser choose to
 leave the mainline alone (mode "none"); the paper's HCOMC always commands a CAV VMC.
@@ -232,7 +232,7 @@ class HCOMCController:
         """The merge problem of this planning instant and the lateral games per sequence
         (only the "ahead" sequence's is played, see :class:`HCOMCDetails`)."""
         game = self.lateral_game(view, group)
-        allowed = bool(game is not None and game.lateral_admitted)
+        allowed = game is not None and game.admits(self.config.control.lateral_safety_rule)
         replanning = self.config.control.replan_period > 0.0  # HCOMC-R
         problem = merge_problem(view, group, (allowed, False), replanning)
         return problem, (game, None)

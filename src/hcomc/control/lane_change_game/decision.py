@@ -202,11 +202,11 @@ class LaneChangeDecision:
     change_is_safe: bool
     admitted_by: str
 
-    @property
-    def lateral_admitted(self) -> bool:
-        """Whether SV's change is admitted at all (equilibrium or added safety rule): HCOMC's
-        gate of lateral cooperation, ``change or change_is_safe``."""
-        return self.admitted_by != ""
+    def admits(self, safety_rule: bool = True) -> bool:
+        """Whether SV's change is admitted: HCOMC's gate of lateral cooperation. By the
+        equilibrium (``change``, the paper's game) or, with ``safety_rule`` (the extension,
+        ``control.lateral_safety_rule``), by the added safety rule (``change_is_safe``)."""
+        return self.change or (safety_rule and self.change_is_safe)
 
 
 def lane_change_game(
