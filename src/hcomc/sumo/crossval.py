@@ -3,7 +3,9 @@
 :func:`traffic_stats` gives the uncontrolled traffic figures that must agree (mean speed per
 main lane, flow past the merge); :func:`cross_validate` runs every configuration on both
 engines through the experiment runner, so the rows are those of ``hcomc run``.
-``python -m hcomc.sumo.crossval C1 --seeds 5`` prints the side-by-side table of docs/sumo.md.
+``python -m hcomc.sumo.crossval C1 --seeds 5`` prints the side-by-side table of docs/sumo.md,
+``python -m hcomc.sumo.crossval C1,C2,C3,C4,C5 --traffic`` its uncontrolled traffic table
+(:func:`traffic_table`).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ __all__ = [
     "markdown_table",
     "side_by_side",
     "traffic_stats",
+    "traffic_table",
 ]
 
 
@@ -45,6 +48,37 @@ def traffic_stats(log: SimulationLog) -> TrafficStats:
         return float(log.v[cells].astype(np.float64).mean())
 
     return TrafficStats(mean_speed(Lane.MAIN_1), mean_speed(Lane.MAIN_2), throughput(log))
+
+
+def traffic_table(conditions: Iterable[str], seeds: Iterable[int]) -> str:
+    """The uncontrolled traffic of ``conditions`` on both engines (no merge controller), as
+    the Markdown table of docs/sumo.md: per condition and figure of :func:`traffic_stats`
+    the means over ``seeds``, SUMO's mean relative difference and the largest absolute
+    relative difference of a seed [%]."""
+    from hcomc.config import load_config
+    from hcomc.sim.engine import Simulation
+    from hcomc.sumo.cosim import SumoSimulation
+
+    names = {"speed_lane_1": "speed lane 1 [m/s]", "speed_lane_2": "speed lane 2 [m/s]",
+             "flow": "flow [veh/h]"}  # fmt: skip
+    lines = [
+        "| condition | figure | ours | SUMO | difference (mean) | largest abs. difference of a "
+        "seed [%] |",
+        "|---|---|---|---|---|---|",
+    ]
+    for condition in conditions:
+        config = load_config(condition, control={"controller": "none"})
+        runs = [(Simulation(config, s).run(), SumoSimulation(config, s).run()) for s in seeds]
+        pairs = [(traffic_stats(ours), traffic_stats(sumo)) for ours, sumo in runs]
+        for name, label in names.items():
+            ours = np.array([getattr(a, name) for a, _ in pairs])
+            sumo = np.array([getattr(b, name) for _, b in pairs])
+            diff = (sumo - ours) / ours
+            lines.append(
+                f"| {condition} | {label} | {ours.mean():.4g} | {sumo.mean():.4g} | "
+                f"{100 * diff.mean():+.2f} % | {100 * np.abs(diff).max():.2f} |"
+            )
+    return "\n".join(lines)
 
 
 def cross_validate(
@@ -93,11 +127,17 @@ def _main() -> None:  # pragma: no cover - documentation helper
     from hcomc.metrics import METRICS
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("condition")
+    parser.add_argument("condition", help="a condition (with --traffic: several, comma-separated)")
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--configurations", default="FIFO,Game,HCOMC")
     parser.add_argument("--out", help="also write every run's row to this CSV file")
+    parser.add_argument(
+        "--traffic", action="store_true", help="the uncontrolled traffic table instead"
+    )
     args = parser.parse_args()
+    if args.traffic:
+        print(traffic_table(args.condition.split(","), range(args.seeds)))
+        return
     runs = cross_validate(args.condition, range(args.seeds), args.configurations.split(","))
     if args.out:
         runs.to_csv(args.out, index=False)
