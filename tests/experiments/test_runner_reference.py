@@ -70,12 +70,15 @@ def test_batches_keep_runs_of_one_undisturbed_run_together() -> None:
 def test_baselines_plan_once_as_published_and_replan_in_their_r_variants() -> None:
     assert set(CONFIGURATIONS) == {"FIFO", "Game", "HCOMC", "HCOMC-PSO", "HCOMC-SA"}
     assert set(ALL_CONFIGURATIONS) - set(CONFIGURATIONS) == {"FIFO-R", "Game-R", "HCOMC-R",
-                                                             "HCOMC+"}  # fmt: skip
+                                                             "HCOMC+", "HCOMC-eq"}  # fmt: skip
     control = {
         label: RunSpec("C1", label, 0).config_overrides()["control"]
-        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC", "HCOMC-R", "HCOMC+")
+        for label in ("FIFO", "FIFO-R", "Game-R", "HCOMC", "HCOMC-R", "HCOMC+", "HCOMC-eq")
     }
     assert "no_cooperation" not in control["HCOMC"]  # the paper's HCOMC: the config's value
+    assert "lateral_safety_rule" not in control["HCOMC"]
+    assert control["HCOMC-eq"] == {"replan_period": 0.0, "lateral_safety_rule": False,
+                                   "controller": "hcomc", "optimizer": "nsga2"}  # fmt: skip
     assert control["HCOMC+"]["no_cooperation"] is True
     assert control["HCOMC+"]["controller"] == "hcomc"
     assert control["FIFO-R"]["controller"] == "fifo"
