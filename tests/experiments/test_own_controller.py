@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import textwrap
 from pathlib import Path
 
@@ -49,6 +50,16 @@ class Broken(FIFOController):
         value = None if self.field == "vv1" else self.value
         mode = Mode.LONGITUDINAL if self.field == "vv1" else plan.mode
         return dataclasses.replace(plan, **{self.field: value}, mode=mode)
+
+
+class Raises:
+    """A controller with a bug: every plan divides by zero."""
+
+    def __init__(self, config: ScenarioConfig) -> None:
+        pass
+
+    def plan(self, view, group, rng):
+        return {}[group.vr] / 0
 '''
 
 runner = CliRunner()
@@ -108,6 +119,28 @@ def test_a_broken_plan_is_a_one_line_error_or_a_recorded_fallback(
     assert row["fallback"]
     assert row["mode"] == "none"
     assert row["fallbacks"] >= 1  # recorded, not hidden
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_raising_controller_is_one_line_with_its_context(own: Path, workers: str) -> None:
+    """The message names the controller, what it raised, VR, time, condition and seed, also
+    from a worker process; ``hcomc --traceback`` prints the controller's own traceback
+    first (its file and line)."""
+    args = ["run", "C2", "--controller", f"{own}:Raises", "--seeds", "2", "--workers", workers,
+            "--set", "duration=40"]  # fmt: skip
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    message = result.stderr.strip()
+    assert message.count("\n") == 0, message
+    assert message.startswith("error: controller 'Raises' raised KeyError: ")
+    assert re.search(r"while planning for VR \d+ at t = [\d.]+ s \(C2, seed [01]\)", message)
+    assert "hcomc --traceback" in message
+    traced = runner.invoke(app, ["--traceback", *args])
+    assert traced.exit_code == 2
+    assert "Traceback (most recent call last)" in traced.stderr
+    assert f'File "{own}"' in traced.stderr
+    assert "return {}[group.vr] / 0" in traced.stderr
+    assert traced.stderr.strip().splitlines()[-1].startswith("error: controller 'Raises' raised")
 
 
 def test_an_unmerged_run_is_an_outcome_not_a_smooth_run(own: Path) -> None:

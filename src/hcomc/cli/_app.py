@@ -18,23 +18,30 @@ from hcomc.config import ConfigError, ControlParams, ScenarioConfig, load_config
 
 
 class _Commands(TyperGroup):
-    """The command group: a config that cannot be realised, or a controller's plan that
-    fails its checks, is a one-line error, exit 2.
+    """The command group: a config that cannot be realised, a controller's plan that fails
+    its checks, or a controller that raises, is a one-line error, exit 2.
 
     Loading checks most of a config; what only shows when a run is set up (a log larger
     than ``log_memory_limit``, for one) raises :class:`~hcomc.config.ConfigError` later, in
     any command, and is reported here the same way instead of as a traceback; so is an
     :class:`~hcomc.control.validation.InvalidPlan` (with ``control.on_invalid_plan =
-    "error"``), also when a worker process raised it.
+    "error"``) and a :class:`~hcomc.control.validation.ControllerFailed` (the controller,
+    VR, time, scenario and seed), also when a worker process raised it. ``hcomc --traceback``
+    prints the controller's own traceback first.
     """
 
     def invoke(self, ctx: Any) -> Any:  # ctx: typer's click Context
-        from hcomc.control.validation import InvalidPlan
+        from hcomc.control.validation import ControllerFailed, InvalidPlan
 
         try:
             return super().invoke(ctx)
         except (ConfigError, InvalidPlan) as exc:
             raise _fail(str(exc)) from None
+        except ControllerFailed as exc:
+            if (ctx.obj or {}).get("traceback"):
+                err.print(exc.trace.rstrip(), highlight=False, markup=False, soft_wrap=True)
+                raise _fail(str(exc)) from None
+            raise _fail(f"{exc}; hcomc --traceback ... shows its traceback") from None
 
 
 app = typer.Typer(
@@ -91,14 +98,22 @@ def _show_version(value: bool) -> None:
 
 @app.callback()
 def _main(
+    ctx: typer.Context,
     version: Annotated[
         bool,
         typer.Option(
             "--version", callback=_show_version, is_eager=True, help="Print the version and exit."
         ),
     ] = False,
+    traceback: Annotated[
+        bool,
+        typer.Option(
+            "--traceback", help="When a controller raises, print its traceback, not one line."
+        ),
+    ] = False,
 ) -> None:
     """Cooperative on-ramp merging (HCOMC) in mixed traffic on two-lane highways."""
+    ctx.ensure_object(dict)["traceback"] = traceback
 
 
 @contextmanager

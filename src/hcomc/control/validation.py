@@ -18,12 +18,15 @@ report their merge position for every VR, and the engine ignores it (it commands
 
 A broken rule raises :class:`InvalidPlan` naming the field, its value and what is allowed; with
 ``control.on_invalid_plan = "fallback"`` :func:`checked` returns the safe default instead (VR
-merges by gap acceptance) with the broken rule in its ``reason``.
+merges by gap acceptance) with the broken rule in its ``reason``. A controller that raises
+while planning is reported the same way: :func:`planned`, the engines' one call of a plan,
+turns the exception into :class:`ControllerFailed` naming the controller, VR, time and run.
 """
 
 from __future__ import annotations
 
 import math
+import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
@@ -33,10 +36,10 @@ import numpy as np
 
 from hcomc.config.vehicle_tables import IDMParams
 from hcomc.control.key_group import behind_group
-from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.interface import MergeController, MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import KEY_ROLES
 
-__all__ = ["InvalidPlan", "check_plan", "checked", "name_of"]
+__all__ = ["ControllerFailed", "InvalidPlan", "check_plan", "checked", "name_of", "planned"]
 
 SEQUENCES = ("ahead", "behind")
 CUBICS = ("vv0", "vv1", "vv2")
@@ -66,6 +69,48 @@ class InvalidPlan(ValueError):  # noqa: N818 (reads as what it reports: an inval
     def rule(self) -> str:
         """``field = value; allowed: ...`` on one line."""
         return f"{self.field} = {_show(self.value)}; allowed: {self.allowed}"
+
+
+class ControllerFailed(RuntimeError):  # noqa: N818 (reads as what happened)
+    """A controller raised while planning.
+
+    Attributes: ``controller``, ``vr`` and ``t`` [s]: who planned for whom when; ``where``:
+    the run (its scenario and seed); ``error``: what the controller raised, its type and
+    message on one line; ``trace``: that exception's traceback as text (text survives the
+    trip out of a worker process, where the exception itself is re-created without it).
+    """
+
+    def __init__(
+        self, controller: str, vr: int, t: float, where: str, error: str, trace: str
+    ) -> None:
+        self.controller, self.vr, self.t = controller, vr, t
+        self.where, self.error, self.trace = where, error, trace
+        super().__init__(f"controller '{controller}' raised {error} while planning for VR {vr} "
+                         f"at t = {t:.10g} s ({where})")  # fmt: skip
+
+    def __reduce__(self) -> tuple[type[ControllerFailed], tuple[object, ...]]:
+        """Pickled with its attributes (a run in a worker process raises it)."""
+        args = (self.controller, self.vr, self.t, self.where, self.error, self.trace)
+        return type(self), args
+
+
+def planned(
+    controller: MergeController,
+    view: TrafficView,
+    group: MergeGroup,
+    rng: np.random.Generator,
+    where: str,
+) -> MergePlan:
+    """``controller.plan(view, group, rng)``, the one call of a controller's plan every engine
+    makes; an exception the controller raises becomes :class:`ControllerFailed`, naming the
+    controller, VR, time and ``where`` (the run: scenario and seed)."""
+    try:
+        return controller.plan(view, group, rng)
+    except Exception as exc:
+        error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
+        raise ControllerFailed(
+            name_of(controller), group.vr, float(view.t), where, error, traceback.format_exc()
+        ) from exc
 
 
 def _show(value: object) -> str:

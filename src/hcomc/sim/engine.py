@@ -39,7 +39,7 @@ import numpy as np
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.key_group import find_key_vehicles
-from hcomc.control.validation import checked, name_of
+from hcomc.control.validation import checked, name_of, planned
 from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine_setup import EngineSetup
@@ -323,7 +323,8 @@ class Simulation(EngineSetup):
             self.planned[vr] = True
             view = self._view(t)
             group = find_key_vehicles(view, vr)
-            plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+            where = f"{self.config.name}, seed {self.seed}"
+            plan = planned(self.controller, view, group, self.rng.spawn(1)[0], where)
             plan = checked(plan, view, group, name_of(self.controller))
             record_decision(self, view, group, plan, t)
             cav_vr = bool(self.fleet.kind[vr] == Kind.CAV)

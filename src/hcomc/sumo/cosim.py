@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from hcomc.control.key_group import find_key_vehicles
-from hcomc.control.validation import checked, name_of
+from hcomc.control.validation import checked, name_of, planned
 from hcomc.interface import Mode, TrafficView, follow
 from hcomc.road import Kind, Lane
 from hcomc.sim.lane_change_decisions import Snapshot, decide
@@ -148,7 +148,8 @@ class SumoSimulation(CosimState):
         self.planned[vr] = True
         view = self._view(t)
         group = find_key_vehicles(view, vr)
-        plan = self.controller.plan(view, group, self.rng.spawn(1)[0])
+        where = f"{self.config.name}, seed {self.seed}, SUMO"
+        plan = planned(self.controller, view, group, self.rng.spawn(1)[0], where)
         plan = checked(plan, view, group, name_of(self.controller))  # as the engine does
         record_decision(self, view, group, plan, t)
         cav = self.fleet.kind == Kind.CAV

@@ -27,7 +27,7 @@ import numpy as np
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.control.key_group import find_key_vehicles
 from hcomc.control.registry import make_controller
-from hcomc.control.validation import checked, name_of
+from hcomc.control.validation import checked, name_of, planned
 from hcomc.corridor import Corridor, OnRamp
 from hcomc.corridor.engine import ramp_road
 from hcomc.interface import Fleet, MergeController, MergePlan, Mode, TrafficView
@@ -117,6 +117,7 @@ class CorridorControl:
     fleet: Fleet
     controllers: dict[int, tuple[str, ScenarioConfig, MergeController]]
     rng: np.random.Generator
+    seed: int
     decisions: list[Decision] = field(default_factory=list)
     decision_seconds: float = 0.0
 
@@ -131,7 +132,7 @@ class CorridorControl:
             assert controller is not None, "CorridorControl needs a controller"
             controllers[ramp_code(layout, ramp.id, c)] = (ramp.id, config, controller)
         rng = make_rng(seed).spawn(1)[0]  # a stream of its own, beside the fleet's draws
-        return cls(c, layout, view_fleet(c, fleet, veh), controllers, rng)
+        return cls(c, layout, view_fleet(c, fleet, veh), controllers, rng, seed)
 
     def view(self, s: State, t: float, ramp_code: int) -> TrafficView:
         """The controller's read-only view of ramp ``ramp_code`` at t."""
@@ -151,7 +152,8 @@ class CorridorControl:
             ramp, _, controller = self.controllers[code]
             view = self.view(s, t, code)
             group = find_key_vehicles(view, vr)
-            plan = controller.plan(view, group, self.rng.spawn(1)[0])
+            where = f"{self.corridor.name}, ramp {ramp}, seed {self.seed}"
+            plan = planned(controller, view, group, self.rng.spawn(1)[0], where)
             self._enter(s, ramp, checked(plan, view, group, name_of(controller)))
         s.counters[C_PENDING] = 0
         self.decision_seconds += time.perf_counter() - started
