@@ -124,6 +124,27 @@ def test_wrong_option_type_is_a_usage_error():
     assert "valid integer" in result.output
 
 
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["run", "C1", "--bogus"], "error: No such option: --bogus (hcomc run -h lists"),
+        (["nonsense"], "error: No such command 'nonsense' (hcomc -h lists"),
+        (["run"], "error: Missing argument 'CONFIG' (hcomc run -h lists"),
+        (["--bogus"], "error: No such option: --bogus (hcomc -h lists"),
+        (["simulate", "C1", "--seed", "abc"], "error: Invalid value for '--seed': "),
+        (["run", "C1", "--seeds", "0"], "error: option '--seeds' = 0: must be >= 1"),
+    ],
+)
+def test_every_command_line_error_has_one_style(args, message):
+    """click's own parse errors read like the commands' checks: one line, ``error:``."""
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    line = result.stderr.strip()
+    assert line.count("\n") == 0, line
+    assert line.startswith(message), line
+    assert "Usage:" not in result.output
+
+
 # --------------------------------------------------------------------------- a new user's path
 def test_simulate_refuses_to_overwrite_a_run_unless_forced(tmp_path):
     out = tmp_path / "run"

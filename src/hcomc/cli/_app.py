@@ -16,10 +16,19 @@ from typer.core import TyperGroup
 
 from hcomc.config import ConfigError, ControlParams, ScenarioConfig, load_config
 
+UsageError: type[Exception] = next(
+    c for c in typer.BadParameter.__mro__ if c.__name__ == "UsageError"
+)
+"""click's error for a command line it cannot parse, found from typer's public
+``BadParameter``: recent typer releases carry their own copy of click (``typer._click``), older
+ones use click itself."""
+
 
 class _Commands(TyperGroup):
-    """The command group: a config that cannot be realised, a controller's plan that fails
-    its checks, or a controller that raises, is a one-line error, exit 2.
+    """The command group: a command line click cannot parse, a config that cannot be
+    realised, a controller's plan that fails its checks, or a controller that raises, is a
+    one-line error in one style (``error: ...``, as every command's own checks print them),
+    exit 2.
 
     Loading checks most of a config; what only shows when a run is set up (a log larger
     than ``log_memory_limit``, for one) raises :class:`~hcomc.config.ConfigError` later, in
@@ -30,11 +39,22 @@ class _Commands(TyperGroup):
     prints the controller's own traceback first.
     """
 
+    def make_context(
+        self, info_name: str | None, args: list[str], parent: Any = None, **extra: Any
+    ) -> Any:
+        """click's, with an unparsable command line (``hcomc --bogus``) in our style."""
+        try:
+            return super().make_context(info_name, args, parent, **extra)
+        except UsageError as exc:
+            raise _fail(_usage(exc)) from None
+
     def invoke(self, ctx: Any) -> Any:  # ctx: typer's click Context
         from hcomc.control.validation import ControllerFailed, InvalidPlan
 
         try:
             return super().invoke(ctx)
+        except UsageError as exc:  # a command or its options and arguments
+            raise _fail(_usage(exc)) from None
         except (ConfigError, InvalidPlan) as exc:
             raise _fail(str(exc)) from None
         except ControllerFailed as exc:
@@ -143,6 +163,15 @@ def _compiled(*stages: str) -> None:
     from hcomc.cli._compile import SCENARIO, ensure_compiled
 
     ensure_compiled(Console(file=sys.__stderr__) if sys.__stderr__ else err, stages or SCENARIO)
+
+
+def _usage(exc: Exception) -> str:
+    """click's message of a command line it cannot parse (a :data:`UsageError`), with where
+    to find what is allowed."""
+    ctx = getattr(exc, "ctx", None)
+    path = ctx.command_path if ctx is not None else "hcomc"
+    message = exc.format_message() if hasattr(exc, "format_message") else str(exc)
+    return f"{message.rstrip('.')} ({path} -h lists what is allowed)"
 
 
 def _fail(message: str) -> typer.Exit:
