@@ -263,6 +263,15 @@ def test_version_and_short_help():
     assert "Measured duration [s]" in short.stdout  # units are not eaten as markup
 
 
+@pytest.mark.parametrize("command", ["simulate", "run", "plan", "compare", "reproduce"])
+def test_help_names_every_form_of_a_controller(command):
+    """A researcher's own controller works wherever a controller is named (a registered
+    name, a module or a file), and every such command's help says so."""
+    text = " ".join(runner.invoke(app, [command, "--help"], terminal_width=200).stdout.split())
+    for form in ("registered name", "package.module:Class", "path/to/file.py:Class"):
+        assert form in text, (command, form)
+
+
 def test_simulate_summary_names_the_controller_and_units():
     result = runner.invoke(app, ["simulate", "C2", "--duration", "5", "--controller", "fifo"])
     assert result.exit_code == 0, result.output

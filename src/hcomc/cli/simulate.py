@@ -115,7 +115,10 @@ def simulate(
     as_json: Annotated[bool, typer.Option("--json", help="Print the summary as JSON.")] = False,
     controller: Annotated[
         str | None,
-        typer.Option(help="Merge controller: none, fifo, game, hcomc (default: the config's)."),
+        typer.Option(
+            help="Merge controller: none, fifo, game, hcomc, another registered name, "
+            "package.module:Class or path/to/file.py:Class (default: the config's)."
+        ),
     ] = None,
     optimizer: Optimizer = None,
     settings: SetOption = None,
