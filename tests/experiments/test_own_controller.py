@@ -172,3 +172,32 @@ def test_a_sweep_runs_the_controller_beside_the_papers(own: Path, tmp_path: Path
 
     table = pd.read_parquet(tmp_path / "out" / "sweep.parquet")
     assert sorted(table["configuration"]) == sorted(["FIFO", f"{own}:GapAcceptance"])
+
+
+def test_a_controller_whose_plans_fall_back_is_flagged_in_a_comparison(
+    own: Path, tmp_path: Path
+) -> None:
+    """Every plan of ``Broken`` is invalid; with ``on_invalid_plan = "fallback"`` each becomes
+    the safe default. The comparison still scores its runs (VR merges by gap acceptance),
+    but counts its fallbacks in the success table and CSV, marks the cell ⚑ and says why, on
+    the console and in the report; FIFO's cell shows no fallback."""
+    import pandas as pd
+
+    spec = f"{own}:Broken"
+    args = ["compare", "--controllers", f"fifo,{spec}", "--conditions", "C2", "--seeds", "2",
+            "--workers", "1", "--out", str(tmp_path / "cmp"), "--set", "duration=40",
+            "--set", "on_invalid_plan='fallback'"]  # fmt: skip
+    result = runner.invoke(app, args, terminal_width=400)
+    assert result.exit_code == 0, result.output
+    success = pd.read_csv(tmp_path / "cmp" / "success.csv").set_index("configuration")
+    broken, fifo = success.loc[spec], success.loc["FIFO"]
+    assert broken["fallbacks"] == broken["plans"] >= 2
+    assert bool(broken["flagged"])
+    assert (fifo["fallbacks"], bool(fifo["flagged"])) == (0, False)
+    text = " ".join(result.stdout.split())
+    assert f"{broken['plans']}/{broken['plans']} plans fell back ⚑" in text
+    assert "note: flagged (more than 50 % of the plans fell back" in text
+    assert f"{spec} in C2 ({broken['fallbacks']} of {broken['plans']} plans)" in text
+    report = (tmp_path / "cmp" / "report.html").read_text(encoding="utf-8")
+    assert "plans fell back ⚑" in report
+    assert "flagged (more than 50 % of the plans fell back" in report

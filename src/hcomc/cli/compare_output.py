@@ -72,7 +72,7 @@ def _analyse(
     """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
     paper's five)."""
     from hcomc.experiments.comparison.effects import effects
-    from hcomc.experiments.comparison.success import merge_success, success_pairs
+    from hcomc.experiments.comparison.success import flagged_note, merge_success, success_pairs
     from hcomc.experiments.comparison.view import effects_view, success_pairs_view, success_view
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
@@ -82,6 +82,8 @@ def _analyse(
     )
     success = merge_success(runs, configurations)
     pairs = success_pairs(runs, comparisons)
+    flagged = flagged_note(success)
+    notes = (*notes, flagged) if flagged else notes
     _write_tables(target, runs, effect_rows, success, pairs)
     report = write_compare_report(target, runs, effect_rows, success, pairs, record, notes=notes)
     for note in notes:

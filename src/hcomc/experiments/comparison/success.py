@@ -1,11 +1,16 @@
 """Merge success of a controller comparison: k of n runs merged per cell and configuration,
-and A against B paired by seed.
+with the plans that fell back, and A against B paired by seed.
 
 A run whose ramp vehicle (VR) never merged has no metrics of the merge
 (:mod:`hcomc.experiments.comparison.effects`), but it is an outcome: :func:`merge_success`
 counts it (k of n runs merged), and :func:`success_pairs` compares merge success itself,
 paired by seed: the exact McNemar test (the sign test of the seeds where exactly one of the two
 merged), Holm-adjusted over its own family.
+
+A plan that fell back (no feasible plan, or an invalid one under ``control.on_invalid_plan =
+"fallback"``) is the safe default: VR merges by gap acceptance and nobody is commanded. A
+configuration whose plans fell back in more than :data:`FALLBACK_FLAG` of its decisions in a
+cell is flagged: its scores there are those of gap acceptance, not of its plans.
 """
 
 from __future__ import annotations
@@ -21,24 +26,35 @@ from hcomc.experiments.claims import holm, p_verdict, sign_test
 from hcomc.experiments.comparison.effects import _by_seed, _merged, check_runs, configurations_of
 
 __all__ = [
+    "FALLBACK_FLAG",
     "SUCCESS_COLUMNS",
     "SUCCESS_PAIR_COLUMNS",
     "Success",
     "SuccessPair",
+    "flagged_note",
     "merge_success",
     "success_pairs",
 ]
 
 
+FALLBACK_FLAG = 0.5
+"""Share of a configuration's plans in a cell above which it is flagged (module docstring)."""
+
+
 @dataclass(frozen=True)
 class Success:
-    """Merge success of one configuration in one cell: k of n runs in which VR merged."""
+    """Merge success of one configuration in one cell: k of n runs in which VR merged; the
+    plans made for VR over those runs and how many fell back (0 and 0 when the runs do not
+    record plans), and whether more than :data:`FALLBACK_FLAG` of them did."""
 
     condition: str
     configuration: str
     merged: int
     runs: int
     rate: float
+    plans: int
+    fallbacks: int
+    flagged: bool
 
 
 @dataclass(frozen=True)
@@ -72,8 +88,38 @@ def merge_success(runs: pd.DataFrame, configurations: Sequence[str] | None = Non
             if part.empty:
                 continue
             k, n = int(_merged(part).sum()), len(part)
-            records.append(Success(str(condition), conf, k, n, k / n))
+            plans, fallbacks = _plans(part)
+            flagged = plans > 0 and fallbacks > FALLBACK_FLAG * plans
+            records.append(Success(str(condition), conf, k, n, k / n, plans, fallbacks, flagged))
     return pd.DataFrame([asdict(r) for r in records], columns=list(SUCCESS_COLUMNS))
+
+
+def _plans(part: pd.DataFrame) -> tuple[int, int]:
+    """Plans made for VR over the runs ``part`` and how many fell back, from the run rows'
+    ``replans`` (plans minus one, in runs with a plan: a non-empty ``mode``) and
+    ``fallbacks``; (0, 0) when the rows do not have them."""
+    if not {"replans", "fallbacks", "mode"} <= set(part.columns):
+        return 0, 0
+    planned = part["mode"].fillna("").astype(str).ne("")
+    plans = int((part.loc[planned, "replans"].fillna(0) + 1).sum())
+    return plans, int(part["fallbacks"].fillna(0).sum())
+
+
+def flagged_note(success: pd.DataFrame) -> str | None:
+    """One line naming the configurations flagged in some cell, with their fallback counts,
+    or None if none is."""
+    rows = success[success["flagged"]] if "flagged" in success else success.iloc[0:0]
+    if rows.empty:
+        return None
+    cells = "; ".join(
+        f"{r.configuration} in {r.condition} ({r.fallbacks} of {r.plans} plans)"
+        for r in rows.itertuples()
+    )
+    return (
+        f"flagged (more than {100 * FALLBACK_FLAG:.0f} % of the plans fell back to the safe "
+        f"default, VR merging by gap acceptance): {cells}; their results there are those of "
+        "gap acceptance, not of their plans"
+    )
 
 
 def success_pairs(

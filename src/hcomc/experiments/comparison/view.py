@@ -6,6 +6,7 @@ direction."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import pandas as pd
 
@@ -72,15 +73,29 @@ def _p(p: float) -> str:
 
 
 def success_view(frame: pd.DataFrame) -> pd.DataFrame:
-    """Merge success as text: one row per cell, one column per configuration, "k/n (rate)"."""
+    """Merge success as text: one row per cell, one column per configuration, "k/n (rate)",
+    then, if some plans fell back, "f/p fell back" (plans), marked "⚑" when the configuration
+    is flagged (:data:`~hcomc.experiments.comparison.success.FALLBACK_FLAG`)."""
     if frame.empty:
         return pd.DataFrame()
-    text = [f"{k}/{n} ({100 * r:.0f} %)" for k, n, r in
-            zip(frame["merged"], frame["runs"], frame["rate"], strict=True)]  # fmt: skip
+    text = [
+        f"{r['merged']}/{r['runs']} ({100 * r['rate']:.0f} %)" + _fell_back(r)
+        for r in frame.to_dict("records")
+    ]
     wide = frame.assign(text=text).pivot(index="condition", columns="configuration", values="text")
     wide = wide.reindex(index=pd.unique(frame["condition"]),
                         columns=pd.unique(frame["configuration"]))  # fmt: skip
     return wide.fillna("—").rename_axis(index="cell", columns=None).reset_index()
+
+
+def _fell_back(row: dict[str, Any]) -> str:
+    """What follows "k/n (rate)" when plans fell back: ", f/p plans fell back", with "⚑"
+    when the configuration is flagged; nothing when none did."""
+    fallbacks = int(row.get("fallbacks", 0) or 0)
+    if not fallbacks:
+        return ""
+    flag = " ⚑" if row.get("flagged") else ""
+    return f", {fallbacks}/{row['plans']} plans fell back{flag}"
 
 
 def success_pairs_view(frame: pd.DataFrame) -> pd.DataFrame:
