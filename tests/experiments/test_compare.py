@@ -15,7 +15,12 @@ from hcomc.cli import app
 from hcomc.experiments.claims import MIN_PAIRS, holm
 from hcomc.experiments.comparison.effects import PREFERS, effects, pairs
 from hcomc.experiments.comparison.success import merge_success, success_pairs
-from hcomc.experiments.comparison.view import EFFECTS_VIEW_COLUMNS, effects_view, success_view
+from hcomc.experiments.comparison.view import (
+    EFFECTS_VIEW_COLUMNS,
+    controller_labels,
+    effects_view,
+    success_view,
+)
 from hcomc.experiments.paper import PAPER_METRICS
 
 SEEDS = 10
@@ -191,6 +196,22 @@ def controller_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
     monkeypatch.chdir(tmp_path)
     (tmp_path / "ga.py").write_text(GAP_ACCEPTANCE)
     return "./ga.py:GapAcceptance"
+
+
+def test_tables_name_a_controller_of_a_file_by_its_name(controller_file, tmp_path):
+    """A file's controller is shown by its ``name`` (else its class name); a name that two
+    configurations would share, or a spec that does not load, keeps the spec."""
+    (tmp_path / "twin.py").write_text(GAP_ACCEPTANCE)
+    (tmp_path / "plain.py").write_text(GAP_ACCEPTANCE.replace('    name = "gap-acceptance"\n', ""))
+    labels = controller_labels([
+        "FIFO", "hcomc", controller_file, "./plain.py:GapAcceptance", "HCOMC [one]",
+    ])  # fmt: skip
+    assert labels == {
+        controller_file: "gap-acceptance",
+        "./plain.py:GapAcceptance": "GapAcceptance",
+    }
+    assert controller_labels([controller_file, "./twin.py:GapAcceptance"]) == {}
+    assert controller_labels(["FIFO", "./plain.py:GapAcceptance", "gapacceptance"]) == {}
 
 
 def _invoke(*args: str):

@@ -180,7 +180,8 @@ def test_a_controller_whose_plans_fall_back_is_flagged_in_a_comparison(
     """Every plan of ``Broken`` is invalid; with ``on_invalid_plan = "fallback"`` each becomes
     the safe default. The comparison still scores its runs (VR merges by gap acceptance),
     but counts its fallbacks in the success table and CSV, marks the cell ⚑ and says why, on
-    the console and in the report; FIFO's cell shows no fallback."""
+    the console and in the report; FIFO's cell shows no fallback. The tables name the
+    controller by its class ("Broken"), the runs keep its file (provenance)."""
     import pandas as pd
 
     spec = f"{own}:Broken"
@@ -190,14 +191,17 @@ def test_a_controller_whose_plans_fall_back_is_flagged_in_a_comparison(
     result = runner.invoke(app, args, terminal_width=400)
     assert result.exit_code == 0, result.output
     success = pd.read_csv(tmp_path / "cmp" / "success.csv").set_index("configuration")
-    broken, fifo = success.loc[spec], success.loc["FIFO"]
+    broken, fifo = success.loc["Broken"], success.loc["FIFO"]
+    runs = pd.read_parquet(tmp_path / "cmp" / "runs.parquet")
+    assert set(runs["configuration"]) == {"FIFO", spec}
     assert broken["fallbacks"] == broken["plans"] >= 2
     assert bool(broken["flagged"])
     assert (fifo["fallbacks"], bool(fifo["flagged"])) == (0, False)
     text = " ".join(result.stdout.split())
     assert f"{broken['plans']}/{broken['plans']} plans fell back ⚑" in text
     assert "note: flagged (more than 50 % of the plans fell back" in text
-    assert f"{spec} in C2 ({broken['fallbacks']} of {broken['plans']} plans)" in text
+    assert f"Broken in C2 ({broken['fallbacks']} of {broken['plans']} plans)" in text
+    assert f"note: controllers by name: Broken = {spec}" in text
     report = (tmp_path / "cmp" / "report.html").read_text(encoding="utf-8")
     assert "plans fell back ⚑" in report
     assert "flagged (more than 50 % of the plans fell back" in report

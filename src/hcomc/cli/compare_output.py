@@ -73,7 +73,12 @@ def _analyse(
     paper's five)."""
     from hcomc.experiments.comparison.effects import effects
     from hcomc.experiments.comparison.success import flagged_note, merge_success, success_pairs
-    from hcomc.experiments.comparison.view import effects_view, success_pairs_view, success_view
+    from hcomc.experiments.comparison.view import (
+        controller_labels,
+        effects_view,
+        success_pairs_view,
+        success_view,
+    )
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 
@@ -82,10 +87,18 @@ def _analyse(
     )
     success = merge_success(runs, configurations)
     pairs = success_pairs(runs, comparisons)
+    labels = controller_labels(configurations)
+    if labels:  # the tables by name; runs.parquet and compare.json keep the specs
+        effect_rows = effect_rows.replace({"a": labels, "b": labels})
+        success = success.replace({"configuration": labels})
+        pairs = pairs.replace({"a": labels, "b": labels})
+        names = ", ".join(f"{name} = {spec}" for spec, name in labels.items())
+        notes = (*notes, f"controllers by name: {names}")
     flagged = flagged_note(success)
     notes = (*notes, flagged) if flagged else notes
     _write_tables(target, runs, effect_rows, success, pairs)
-    report = write_compare_report(target, runs, effect_rows, success, pairs, record, notes=notes)
+    shown = runs.replace({"configuration": labels}) if labels else runs
+    report = write_compare_report(target, shown, effect_rows, success, pairs, record, notes=notes)
     for note in notes:
         _say(f"note: {note}")
     rates = success_view(success)

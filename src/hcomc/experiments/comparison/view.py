@@ -6,6 +6,8 @@ direction."""
 from __future__ import annotations
 
 import math
+from collections import Counter
+from collections.abc import Sequence
 from typing import Any
 
 import pandas as pd
@@ -16,6 +18,7 @@ from hcomc.experiments.tables import LABELS
 
 __all__ = [
     "EFFECTS_VIEW_COLUMNS",
+    "controller_labels",
     "effects_view",
     "metric_label",
     "success_pairs_view",
@@ -27,6 +30,32 @@ EFFECTS_VIEW_COLUMNS = (
     "failed A/B", "excluded", "p (Holm)", "verdict (Holm)",
 )  # fmt: skip
 """The columns of :func:`effects_view`."""
+
+
+def controller_labels(configurations: Sequence[str]) -> dict[str, str]:
+    """The names under which a comparison's tables show the controllers named by module or
+    file (``package.module:Class``, ``path/to/file.py:Class``): the ``name`` the class itself
+    defines (not one inherited: a subclass of FIFO is not "fifo"), else the class name. A
+    configuration keeps its spec when that name is taken, in any case (by another
+    configuration or label), or its class cannot be loaded; configurations of
+    other kinds (FIFO, HCOMC-R, a registered name, "HCOMC [one]") are not in the result. The
+    spec stays the run's provenance (``runs.parquet``, ``compare.json``)."""
+    from hcomc.config import ConfigError
+    from hcomc.control.registry import controller_class
+
+    names = {}
+    for conf in configurations:
+        if ":" not in conf:
+            continue
+        try:
+            cls = controller_class(conf)
+        except ConfigError:
+            continue
+        attr = vars(cls).get("name")
+        names[conf] = attr if isinstance(attr, str) and attr else cls.__name__
+    others = (c for c in configurations if c not in names)
+    taken = Counter(n.lower() for n in names.values()) + Counter(c.lower() for c in others)
+    return {conf: name for conf, name in names.items() if taken[name.lower()] == 1}
 
 
 def metric_label(metric: str) -> str:
