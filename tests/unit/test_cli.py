@@ -318,3 +318,37 @@ def test_set_values_reach_the_run_and_conflicts_with_options_are_errors():
     clash = runner.invoke(app, ["simulate", "C1", "--set", "duration=5", "--duration", "6"])
     assert clash.exit_code == 2
     assert "conflicts with '--set duration=5'" in clash.stderr
+
+
+def test_readme_synopsis_names_every_command_and_option():
+    """Every command has a line in the README's synopsis naming each of its options, so the
+    synopsis cannot fall behind the commands."""
+    import re
+    from pathlib import Path
+
+    import typer
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    block = readme.split("## Command line\n\n```text\n", 1)[1].split("```", 1)[0]
+    group = typer.main.get_command(app)
+
+    def commands(cmd, path):
+        subs = getattr(cmd, "commands", None)
+        if subs is None:
+            yield path, cmd
+            return
+        for name, sub in subs.items():
+            yield from commands(sub, (*path, name))
+
+    missing = []
+    for path, cmd in commands(group, ("hcomc",)):
+        lines = [line for line in block.splitlines() if line.startswith(" ".join(path) + " ")]
+        options = {o for p in cmd.params for o in p.opts if o.startswith("--")} - {"--help"}
+        if not lines:
+            missing.append(" ".join(path))
+        for option in sorted(options):
+            if not any(re.search(rf"{re.escape(option)}\b", line) for line in lines):
+                missing.append(f"{' '.join(path)} {option}")
+    assert missing == [], missing
+    for flag in ("--version", "--traceback"):
+        assert f"hcomc {flag}" in block
