@@ -74,17 +74,14 @@ def _check_against_summary(doc: str, block: str, data: Path) -> None:
     assert block == render_readme_block(summary)
     paper = claims[claims["family"] == "paper"]  # every other family is counted apart
     counts = {c: verdict_counts(paper, c).loc["all"] for c in ("verdict", "verdict_holm")}
-    sentence = (
-        f"Of the\n{len(paper)} claims, {counts['verdict']['holds']} hold, "
-        f"{counts['verdict']['reversed']} are reversed and {counts['verdict']['undecided']} "
-        "undecided"
-    )
-    assert sentence in block
-    holm = (
-        f"{counts['verdict_holm']['holds']} hold, {counts['verdict_holm']['reversed']} are "
-        f"reversed and {counts['verdict_holm']['undecided']} undecided"
-    )
-    assert holm in block
+
+    def verdicts(c: pd.Series) -> str:  # "1 holds, 1 is reversed", "2 hold, 2 are reversed"
+        hold = "holds" if c["holds"] == 1 else "hold"
+        are = "is" if c["reversed"] == 1 else "are"
+        return f"{c['holds']} {hold}, {c['reversed']} {are} reversed and {c['undecided']} undecided"
+
+    assert f"Of the\n{len(paper)} claims, {verdicts(counts['verdict'])}" in block
+    assert verdicts(counts["verdict_holm"]) in block
     prov = summary.provenance
     assert f"(hcomc {prov.version}, git revision" in block
     assert f"from the run `{prov.command}` (hcomc {prov.version}, git revision" in doc

@@ -14,6 +14,7 @@ from hcomc.experiments.claim_text import (
     families_line,
     reading,
     seeds_sentence,
+    verdict_summary,
     verdict_table,
 )
 from hcomc.experiments.claims import MIN_PAIRS
@@ -61,6 +62,13 @@ def test_a_quick_look_says_that_it_cannot_decide_a_claim() -> None:
     assert f"at least {MIN_PAIRS}" in few
     assert seeds_sentence(MIN_PAIRS) == ""
     assert seeds_sentence(30) == ""
+
+
+def test_a_count_of_one_takes_the_singular() -> None:
+    one = _claims([("fuel", "holds"), ("lsrv", "reversed"), ("fuel", "undecided")])
+    assert verdict_summary(one, "verdict") == "1 holds, 1 is reversed and 1 undecided"
+    two = _claims([("fuel", "holds")] * 2 + [("lsrv", "reversed")] * 2)
+    assert verdict_summary(two, "verdict") == "2 hold, 2 are reversed and 0 undecided"
 
 
 def test_every_family_is_counted_apart() -> None:

@@ -41,12 +41,14 @@ def extension_share(claims: pd.DataFrame) -> pd.DataFrame:
 
 def verdict_summary(claims: pd.DataFrame, column: str) -> str:
     """The counts of one verdict column of ``claims`` as prose: "a hold, b are reversed and
-    c undecided"."""
+    c undecided" (for a count of one "holds" and "is reversed")."""
     if claims.empty:
         return "none evaluated"
     counts = verdict_counts(claims, column).loc["all"]
+    holds, reversed_ = int(counts["holds"]), int(counts["reversed"])
     return (
-        f"{counts['holds']} hold, {counts['reversed']} are reversed and "
+        f"{holds} {'holds' if holds == 1 else 'hold'}, "
+        f"{reversed_} {'is' if reversed_ == 1 else 'are'} reversed and "
         f"{counts['undecided']} undecided"
     )
 

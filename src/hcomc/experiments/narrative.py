@@ -99,7 +99,8 @@ def hcomc_facts(d: Digest) -> str:
     return (
         f"{merge}behind VMC in {num(behind)} ({pct(behind, runs)}); lateral cooperation in "
         f"{num(lat_c2)} of {runs_c2} C2 runs ({pct(lat_c2, runs_c2)}) and {num(lateral)} of "
-        f"{all_runs} runs overall; {g(mean_plans)} plans per merge on average"
+        f"{all_runs} runs overall; {g(mean_plans)} "
+        f"{'plan' if g(mean_plans) == '1' else 'plans'} per merge on average"
     )
 
 
