@@ -146,6 +146,9 @@ def test_reproduce_writes_every_output(tmp_path):
     scenario = pd.read_csv(tmp_path / "paper_scenario.csv")
     assert len(scenario) == 5 * len(ALL_CONFIGURATIONS)  # one per condition x configuration
     assert len(list((tmp_path / "manifests").glob("*.json"))) == len(runs) + len(scenario)
+    counted = f"{len(runs)} seeded runs"  # the same count on the console and in the report
+    assert f"{counted} and {len(scenario)} of the paper scenario" in " ".join(result.stdout.split())
+    assert f"{counted} · conditions" in report
     claims_csv = pd.read_csv(tmp_path / "claims.csv")
     assert (claims_csv["n"] <= 1).all()
     for col in ("median_diff", "ci_low", "ci_high", "paper", "uniform"):

@@ -311,7 +311,8 @@ def reproduce(
     _print_results(runs, paper_runs, claim_rows)
     out.print(f"report: {report}")
     out.print(
-        f"{_verdict_line(claim_rows)} · {len(both)} runs · {n_workers} workers · {wall:.1f} s "
+        f"{_verdict_line(claim_rows)} · {len(runs)} seeded runs and {len(paper_runs)} of the "
+        f"paper scenario · {n_workers} workers · {wall:.1f} s "
         f"· written to {out_dir}/"
     )
     from hcomc.experiments.claim_text import seeds_sentence

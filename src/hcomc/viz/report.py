@@ -103,7 +103,7 @@ def _run_summary(runs: pd.DataFrame) -> str:
         return ", ".join(values) if values else "none"
 
     return (
-        f"{len(runs)} runs · conditions: {listing('condition')} · configurations: "
+        f"{len(runs)} seeded runs · conditions: {listing('condition')} · configurations: "
         f"{listing('configuration')} · {runs['seed'].nunique()} seeds"
     )
 
