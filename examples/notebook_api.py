@@ -6,7 +6,7 @@ notebook. docs/api.md explains every call. The test suite runs this file, so it 
 """
 
 # %% 1. Load a preset with overrides
-from hcomc.config import load_config
+from hcomc import load_config
 
 # flat keys resolve to their one home (cav_penetration -> demand.cav_penetration); dotted
 # keys and nested tables work too; every value is validated like a config file's
@@ -17,7 +17,7 @@ print(config.name, "|", config.description)
 print("lane-2 headway from C2:", config.demand.mean_headway_main_2, "s")
 
 # %% 2. Simulate and step
-from hcomc.sim.engine import Simulation
+from hcomc import Simulation
 
 sim = Simulation(config, seed=4)  # the merge controller is config.control.controller
 for _ in range(50):  # step() advances every vehicle by dt without logging
@@ -28,7 +28,7 @@ log = Simulation(config, seed=4).run()  # warm-up, then `duration` seconds, logg
 print(log)
 
 # %% 3. The paper's metrics of the merge, from the log
-from hcomc.metrics import compute_metrics
+from hcomc import compute_metrics
 
 # The engine records the six key vehicles (Section II-A) of every ramp vehicle when it
 # enters the control zone, with or without a merge controller; the metrics compare them
@@ -56,7 +56,7 @@ print(f"HCOMC: mode {plan.mode.name}, merge at {plan.merge_x:.1f} m, {plan.decis
 # %% 6. A custom merge controller
 import numpy as np
 
-from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
+from hcomc import MergeGroup, MergePlan, Mode, TrafficView
 
 
 class GapAcceptance:

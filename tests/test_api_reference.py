@@ -112,6 +112,22 @@ def test_reference_pages_render_the_objects_users_use(build):
     assert "MergePlan" in _html(site, "control")
 
 
+def test_the_library_face_is_rendered_name_by_name(build):
+    """Every name ``hcomc`` exports (its ``__all__``, read from the source like the build)
+    has its entry on reference/hcomc."""
+    import ast
+
+    tree = ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8"))
+    (names,) = [
+        ast.literal_eval(node.value)
+        for node in tree.body
+        if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "__all__"
+    ]
+    html = _html(build[0], "hcomc")
+    missing = [n for n in names if n != "__version__" and f'id="hcomc.{n}"' not in html]
+    assert not missing, missing
+
+
 def test_docstring_cross_references_become_links(build):
     """``:func:`load_config``` in a docstring is a link on the site, not the role's text."""
     site, _ = build
@@ -125,10 +141,12 @@ def test_every_public_package_has_a_reference_page():
     """A new public package fails this until it has docs/reference/<name>.md, in the nav,
     documenting ``hcomc.<name>`` (or is listed in UNDOCUMENTED, with the reason)."""
     pages = {p.stem for p in REFERENCE.glob("*.md")}
-    expected = _public_packages() - set(UNDOCUMENTED)
+    expected = (_public_packages() - set(UNDOCUMENTED)) | {"hcomc"}  # and the library face
     assert pages == expected, f"missing pages: {expected - pages}; extra: {pages - expected}"
     nav = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
-    for name in sorted(pages):
+    for name in sorted(pages - {"hcomc"}):
         assert f"hcomc.{name}: reference/{name}.md" in nav, name
         text = (REFERENCE / f"{name}.md").read_text(encoding="utf-8")
         assert re.search(rf"^::: hcomc\.{name}$", text, flags=re.M), name
+    assert "- hcomc: reference/hcomc.md" in nav
+    assert re.search(r"^::: hcomc$", (REFERENCE / "hcomc.md").read_text(encoding="utf-8"), re.M)
