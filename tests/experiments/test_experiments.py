@@ -147,6 +147,8 @@ def test_reproduce_writes_every_output(tmp_path):
     assert len(scenario) == 5 * len(ALL_CONFIGURATIONS)  # one per condition x configuration
     assert len(list((tmp_path / "manifests").glob("*.json"))) == len(runs) + len(scenario)
     counted = f"{len(runs)} seeded runs"  # the same count on the console and in the report
+    done = len(runs) + len(scenario)
+    assert f"runs: {done}/{done} (100 %)" in result.stderr  # progress, off a terminal
     assert f"{counted} and {len(scenario)} of the paper scenario" in " ".join(result.stdout.split())
     assert f"{counted} · conditions" in report
     claims_csv = pd.read_csv(tmp_path / "claims.csv")

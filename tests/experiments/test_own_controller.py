@@ -190,6 +190,7 @@ def test_a_controller_whose_plans_fall_back_is_flagged_in_a_comparison(
             "--set", "on_invalid_plan='fallback'"]  # fmt: skip
     result = runner.invoke(app, args, terminal_width=400)
     assert result.exit_code == 0, result.output
+    assert "runs: 4/4 (100 %)" in result.stderr  # progress, off a terminal as lines
     success = pd.read_csv(tmp_path / "cmp" / "success.csv").set_index("configuration")
     broken, fifo = success.loc["Broken"], success.loc["FIFO"]
     runs = pd.read_parquet(tmp_path / "cmp" / "runs.parquet")

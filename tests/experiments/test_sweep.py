@@ -104,6 +104,7 @@ def test_killed_sweep_resumes_without_losing_or_repeating_runs(spec_file, tmp_pa
                                       "--workers", "2"])  # fmt: skip
     assert result.exit_code == 0, result.output
     assert f"{8 - len(before)} new, {len(before)} already done" in result.stdout
+    assert "sweep: 8/8 (100 %)" in result.stderr
     after = {p.name: (p.stat().st_mtime_ns, p.read_bytes()) for p in parts.glob("*.parquet")}
     assert len(after) == 8
     assert not list(parts.glob("*.tmp*"))  # the killed run's temporary files are gone

@@ -28,6 +28,7 @@ def test_campaign_runs_resumes_and_refuses_to_mix(tmp_path, monkeypatch):
     out = tmp_path / "faults"
     first = runner.invoke(app, [*SMALL, "--out", str(out)])
     assert first.exit_code == 0, first.output
+    assert "cells: 16/16 (100 %)" in first.stderr  # progress, off a terminal as lines
     runs = pd.read_csv(out / "runs.csv")
     assert (
         len(runs) == 1 * 2 * 2 * 2 * 2 * 2

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -352,3 +353,36 @@ def test_readme_synopsis_names_every_command_and_option():
     assert missing == [], missing
     for flag in ("--version", "--traceback"):
         assert f"hcomc {flag}" in block
+
+
+def test_progress_is_a_bar_on_a_terminal_and_lines_in_a_log(monkeypatch):
+    """A terminal gets rich's bar with the counts and the time left; other output (a log, CI)
+    lines on stderr at each tenth and at the end, with the time left until then."""
+    import io
+
+    from rich.console import Console
+
+    from hcomc.cli import _app
+
+    screen = io.StringIO()
+    monkeypatch.setattr(_app, "out", Console(file=screen, force_terminal=True, width=100))
+    with _app._progress("runs", 20) as update:
+        assert update is not None
+        update(5, 20)
+    shown = screen.getvalue()  # the bar's last frame, drawn as it closes
+    assert "runs" in shown
+    assert "5/20" in shown
+    assert re.search(r"(-:--:--|\d:\d\d:\d\d)", shown)  # the time left
+    log = io.StringIO()
+    monkeypatch.setattr(_app, "out", Console(file=io.StringIO(), force_terminal=False))
+    monkeypatch.setattr(_app, "err", Console(file=log, force_terminal=False, width=200))
+    with _app._progress("cells", 20) as update:
+        assert update is not None
+        for done in range(1, 21):
+            update(done, 20)
+    lines = log.getvalue().splitlines()
+    assert len(lines) == 10  # 2/20, 4/20, ..., 20/20
+    assert lines[0].startswith("cells: 2/20 (10 %), ")
+    assert "left" in lines[0]
+    assert lines[-1].startswith("cells: 20/20 (100 %), ")
+    assert "left" not in lines[-1]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import math
 import sys
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -136,11 +138,50 @@ def _main(
     ctx.ensure_object(dict)["traceback"] = traceback
 
 
+class _ProgressLines:
+    """Progress as lines on stderr, for output that is not a terminal (a log, CI): one line
+    at each tenth of the way and at the end, ``label: done/total (p %), elapsed, about T
+    left``."""
+
+    def __init__(self, label: str, total: int) -> None:
+        self.label, self.total = label, max(total, 1)
+        self.start, self.tenths = time.perf_counter(), 0
+
+    def __call__(self, done: int, total: int) -> None:
+        tenths = 10 * done // max(total, 1)
+        if tenths <= self.tenths and done < total:
+            return
+        self.tenths = tenths
+        elapsed = time.perf_counter() - self.start
+        left = elapsed * (total - done) / done if done else math.nan
+        err.print(
+            f"{self.label}: {done}/{total} ({100 * done / max(total, 1):.0f} %), "
+            f"{_duration(elapsed)} elapsed"
+            + (f", about {_duration(left)} left" if done < total and math.isfinite(left) else ""),
+            highlight=False,
+            markup=False,
+        )
+        if done >= total:
+            self.tenths = 11  # the end is said once
+
+
+def _duration(seconds: float) -> str:
+    """A duration in words: "42 s", "3 min 05 s", "1 h 02 min"."""
+    s = round(seconds)
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
 @contextmanager
 def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | None]:
-    """A progress-bar callback ``(done, total)`` on a terminal; None when output is piped."""
+    """A progress callback ``(done, total)``: on a terminal a bar with the counts and the time
+    left; otherwise (a log, CI) :class:`_ProgressLines` on stderr, so that a long wait shows
+    its progress either way and stdout keeps only the command's output."""
     if not out.is_terminal:
-        yield None
+        yield _ProgressLines(label, total)
         return
     with Progress(
         TextColumn(f"[bold]{escape(label)}"),
