@@ -143,9 +143,8 @@ class _ProgressLines:
     at each tenth of the way and at the end, ``label: done/total (p %), elapsed, about T
     left``."""
 
-    def __init__(self, label: str, total: int) -> None:
-        self.label, self.total = label, max(total, 1)
-        self.start, self.tenths = time.perf_counter(), 0
+    def __init__(self, label: str) -> None:
+        self.label, self.start, self.tenths = label, time.perf_counter(), 0
 
     def __call__(self, done: int, total: int) -> None:
         tenths = 10 * done // max(total, 1)
@@ -181,7 +180,7 @@ def _progress(label: str, total: int) -> Iterator[Callable[[int, int], None] | N
     left; otherwise (a log, CI) :class:`_ProgressLines` on stderr, so that a long wait shows
     its progress either way and stdout keeps only the command's output."""
     if not out.is_terminal:
-        yield _ProgressLines(label, total)
+        yield _ProgressLines(label)
         return
     with Progress(
         TextColumn(f"[bold]{escape(label)}"),
