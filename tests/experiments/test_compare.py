@@ -14,11 +14,13 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.experiments.claims import MIN_PAIRS, holm
 from hcomc.experiments.comparison.effects import PREFERS, effects, pairs
+from hcomc.experiments.comparison.means import means
 from hcomc.experiments.comparison.success import merge_success, success_pairs
 from hcomc.experiments.comparison.view import (
     EFFECTS_VIEW_COLUMNS,
     controller_labels,
     effects_view,
+    means_view,
     success_view,
 )
 from hcomc.experiments.paper import PAPER_METRICS
@@ -164,6 +166,24 @@ def test_pairs_every_one_against_those_before_or_against_a_baseline():
         pairs(["fifo"], "game")
 
 
+def test_means_are_over_the_runs_with_a_value_with_the_t_interval():
+    """A: the values 1, 2, 3 and a run without a merge; B: one value. Mean 2, half-width
+    t(0.975, 2) s / sqrt(3) = 4.303 * 1 / 1.732 = 2.484; n 3 of 4 runs; B's interval NaN."""
+    runs = pd.concat([
+        _runs({"A": np.array([1.0, 2.0, 3.0, 9.0])}, merged={"A": [1, 1, 1, 0]}),
+        _runs({"B": np.array([5.0])}),
+    ])  # fmt: skip
+    frame = means(runs, ["A", "B"], PAPER_METRICS).set_index(["configuration", "metric"])
+    a, b = frame.loc[("A", "lsrv")], frame.loc[("B", "lsrv")]
+    assert (a["mean"], a["n"], a["runs"]) == (2.0, 3, 4)
+    assert a["ci"] == pytest.approx(4.302653 / math.sqrt(3.0), rel=1e-6)
+    assert (b["mean"], b["n"], b["runs"]) == (5.0, 1, 1)
+    assert math.isnan(b["ci"])
+    view = means_view(means(runs, ["A", "B"], ["lsrv"]))
+    assert view.loc[0, "A"] == "2 ± 2.5 (3)"
+    assert view.loc[0, "B"] == "5 (1)"
+
+
 def test_a_comparison_missing_from_a_cell_is_left_out():
     runs = pd.concat([_runs({"A": BASE, "B": BASE}, "C1"), _runs({"A": BASE}, "C2")])
     frame = effects(runs)
@@ -221,7 +241,7 @@ def _invoke(*args: str):
 def _check_written(folder: Path, text: str, controller: str) -> None:
     """The files of a first comparison of Game, HCOMC and ``controller`` on C1, C2, 2 seeds."""
     for name in ("runs.parquet", "runs.csv", "effects.csv", "success.csv",
-                 "success_pairs.csv", "report.html", "compare.json"):  # fmt: skip
+                 "success_pairs.csv", "means.csv", "report.html", "compare.json"):  # fmt: skip
         assert (folder / name).is_file(), name
     runs = pd.read_parquet(folder / "runs.parquet")
     assert len(runs) == 12

@@ -115,9 +115,10 @@ def compare(
 ) -> None:
     """Compare merge controllers on a benchmark suite, paired by seed; rerun to resume.
 
-    Prints merge success and the paired effects on the paper's five metrics (median
-    difference, 95 % CI, verdict, sign test with Holm's correction) and writes runs.parquet,
-    runs.csv, effects.csv, success.csv, success_pairs.csv, compare.json and report.html."""
+    Prints merge success, each controller's means and the paired effects on the paper's five
+    metrics (median difference, 95 % CI, verdict, sign test with Holm's correction) and writes
+    runs.parquet, runs.csv, effects.csv, success.csv, success_pairs.csv, means.csv,
+    compare.json and report.html."""
     if folders:
         given = {"--controllers": controllers, "--conditions": conditions, "--seeds": seeds,
                  "--suite": suite, "--baseline": baseline, "--engine": engine,

@@ -14,7 +14,7 @@ NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "failed A/B", "excluded", "p (H
 """Columns right-aligned on the terminal (the others, names and words, left-aligned)."""
 
 OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
-           "report.html")  # fmt: skip
+           "means.csv", "report.html")  # fmt: skip
 """What a comparison writes into its folder (besides its record and run store)."""
 
 
@@ -39,19 +39,25 @@ def _table(frame: Any, title: str, numeric: tuple[str, ...] = NUMERIC) -> Any:
     return table
 
 
-def _write_tables(target: Path, runs: Any, effects: Any, success: Any, pairs: Any) -> None:
+def _write_tables(
+    target: Path, runs: Any, effects: Any, success: Any, pairs: Any, means: Any
+) -> None:
     from hcomc.sim.manifest import atomic_paths
 
-    with atomic_paths(*(target / n for n in OUTPUTS[:5])) as tmp:
+    with atomic_paths(*(target / n for n in OUTPUTS[:6])) as tmp:
         runs.to_parquet(tmp[0], index=False)
         runs.to_csv(tmp[1], index=False)
         effects.to_csv(tmp[2], index=False)
         success.to_csv(tmp[3], index=False)
         pairs.to_csv(tmp[4], index=False)
+        means.to_csv(tmp[5], index=False)
 
 
 SUCCESS_TITLE = "Merge success — runs in which VR merged"
 """Title of the merge-success table (for runs of the scenario engine)."""
+
+MEANS_TITLE = "Means — over each controller's runs with a value, ± 95 % t interval (n runs)"
+"""Title of the means table."""
 
 PAIRS_NOTE = "A<B: k of n seeds (a failed merge the worse value)"
 """How the effects title explains n (for the paper's metrics)."""
@@ -72,10 +78,12 @@ def _analyse(
     """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
     paper's five)."""
     from hcomc.experiments.comparison.effects import effects
+    from hcomc.experiments.comparison.means import means
     from hcomc.experiments.comparison.success import flagged_note, merge_success, success_pairs
     from hcomc.experiments.comparison.view import (
         controller_labels,
         effects_view,
+        means_view,
         success_pairs_view,
         success_view,
     )
@@ -85,20 +93,24 @@ def _analyse(
     effect_rows = effects(
         runs, configurations, comparisons=comparisons, metrics=metrics or PAPER_METRICS
     )
+    mean_rows = means(runs, configurations, metrics or PAPER_METRICS)
     success = merge_success(runs, configurations)
     pairs = success_pairs(runs, comparisons)
     labels = controller_labels(configurations)
     if labels:  # the tables by name; runs.parquet and compare.json keep the specs
         effect_rows = effect_rows.replace({"a": labels, "b": labels})
         success = success.replace({"configuration": labels})
+        mean_rows = mean_rows.replace({"configuration": labels})
         pairs = pairs.replace({"a": labels, "b": labels})
         names = ", ".join(f"{name} = {spec}" for spec, name in labels.items())
         notes = (*notes, f"controllers by name: {names}")
     flagged = flagged_note(success)
     notes = (*notes, flagged) if flagged else notes
-    _write_tables(target, runs, effect_rows, success, pairs)
+    _write_tables(target, runs, effect_rows, success, pairs, mean_rows)
     shown = runs.replace({"configuration": labels}) if labels else runs
-    report = write_compare_report(target, shown, effect_rows, success, pairs, record, notes=notes)
+    report = write_compare_report(
+        target, shown, effect_rows, success, pairs, record, notes=notes, means=mean_rows
+    )
     for note in notes:
         _say(f"note: {note}")
     rates = success_view(success)
@@ -113,6 +125,9 @@ def _analyse(
     else:
         out.print("merge success paired by seed: in no seed did only one of two compared "
                   "configurations merge", highlight=False)  # fmt: skip
+    if not mean_rows.empty:
+        table = means_view(mean_rows)
+        out.print(_table(table, MEANS_TITLE, tuple(table.columns[2:])))
     out.print(
         _table(
             effects_view(effect_rows),

@@ -25,6 +25,7 @@ from hcomc.experiments.claims import MIN_PAIRS
 from hcomc.experiments.comparison.effects import paired_differences
 from hcomc.experiments.comparison.view import (
     effects_view,
+    means_view,
     metric_label,
     success_pairs_view,
     success_view,
@@ -183,6 +184,7 @@ def write_compare_report(
     *,
     notes: Sequence[str] = (),
     title: str = "hcomc compare",
+    means: pd.DataFrame | None = None,
 ) -> Path:
     """Write ``out_dir/report.html`` (atomically) and return its path.
 
@@ -191,7 +193,8 @@ def write_compare_report(
     :func:`~hcomc.experiments.comparison.success.merge_success` and
     :func:`~hcomc.experiments.comparison.success.success_pairs`, ``record`` the folder's record
     (suite, versions, command) and ``notes`` lines shown under the header (e.g. settings in
-    which two compared folders differ).
+    which two compared folders differ); ``means``, the frame of
+    :func:`~hcomc.experiments.comparison.means.means`, adds the per-controller means.
     """
     note_html = "".join(f'<p class="note">{_e(n)}</p>\n' for n in notes)
     sections = []
@@ -214,6 +217,12 @@ def write_compare_report(
         list(pairs["verdict_holm"] != "undecided") if len(pairs) else None,
     )
     effects_html = "\n".join(sections) or '<p class="empty">No paired effects.</p>'
+    means_html = (
+        ""
+        if means is None or means.empty
+        else "<h2>Means</h2>\n"
+        + _table(means_view(means), "Over each controller's runs with a value, ± 95 % t interval")
+    )
     body = html_page(
         title,
         f"""<h1>{_e(title)}</h1>
@@ -225,6 +234,7 @@ def write_compare_report(
 {success_html}
 <h2>Merge success, paired</h2>
 {pairs_html}
+{means_html}
 {effects_html}
 """,
         css=_CSS,

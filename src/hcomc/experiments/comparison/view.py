@@ -20,6 +20,7 @@ __all__ = [
     "EFFECTS_VIEW_COLUMNS",
     "controller_labels",
     "effects_view",
+    "means_view",
     "metric_label",
     "success_pairs_view",
     "success_view",
@@ -95,6 +96,28 @@ def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
         },
         columns=EFFECTS_VIEW_COLUMNS,
     )
+
+
+def means_view(frame: pd.DataFrame) -> pd.DataFrame:
+    """The means (:func:`~hcomc.experiments.comparison.means.means`) as text: one row per cell
+    and metric (with its unit and preferred direction), one column per configuration,
+    "mean ± half-width (n)"; "—" without a value."""
+    if frame.empty:
+        return pd.DataFrame()
+
+    def text(r: dict[str, Any]) -> str:
+        if r["n"] == 0:
+            return "—"
+        half = f" ± {r['ci']:.2g}" if math.isfinite(r["ci"]) else ""
+        return f"{r['mean']:.4g}{half} ({r['n']})"
+
+    rows = frame.to_dict("records")
+    labels = [metric_label(r["metric"]) for r in rows]
+    shown = frame.assign(text=[text(r) for r in rows], label=labels)
+    wide = shown.pivot(index=["condition", "label"], columns="configuration", values="text")
+    order = pd.MultiIndex.from_frame(shown[["condition", "label"]].drop_duplicates())
+    wide = wide.reindex(index=order, columns=pd.unique(frame["configuration"]))
+    return wide.fillna("—").rename_axis(index=["cell", "metric"], columns=None).reset_index()
 
 
 def _p(p: float) -> str:
