@@ -42,7 +42,7 @@ tables into text.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
@@ -132,6 +132,18 @@ def pairs(configurations: Sequence[str], baseline: str | None = None) -> list[tu
 def _by_seed(runs: pd.DataFrame, condition: str, configuration: str) -> pd.DataFrame:
     part = runs[(runs["condition"] == condition) & (runs["configuration"] == configuration)]
     return part.drop_duplicates("seed").set_index("seed")
+
+
+def _cells(
+    runs: pd.DataFrame, configurations: Sequence[str] | None
+) -> Iterator[tuple[str, str, pd.DataFrame]]:
+    """(cell, configuration, its runs by seed) of every cell of ``runs`` and configuration
+    (default: those of ``runs``) that has runs, cell by cell."""
+    for condition in pd.unique(runs["condition"]):
+        for conf in configurations or configurations_of(runs):
+            part = _by_seed(runs, condition, conf)
+            if not part.empty:
+                yield str(condition), conf, part
 
 
 def _merged(part: pd.DataFrame) -> pd.Series:

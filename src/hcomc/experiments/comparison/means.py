@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, fields
 
 import pandas as pd
 
-from hcomc.experiments.comparison.effects import _by_seed, check_runs, configurations_of
+from hcomc.experiments.comparison.effects import _cells, check_runs
 from hcomc.experiments.tables import mean_ci
 
 __all__ = ["MEANS_COLUMNS", "Mean", "means"]
@@ -43,13 +43,9 @@ def means(
     """:class:`Mean` per cell, configuration (one run per seed) and metric of ``runs``."""
     check_runs(runs)
     records = []
-    for condition in pd.unique(runs["condition"]):
-        for conf in configurations or configurations_of(runs):
-            part = _by_seed(runs, condition, conf)
-            if part.empty:
-                continue
-            for metric in metrics:
-                values = part[metric] if metric in part else pd.Series(dtype=float)
-                mean, half, n = mean_ci(values)
-                records.append(Mean(str(condition), conf, metric, mean, half, n, len(part)))
+    for condition, conf, part in _cells(runs, configurations):
+        for metric in metrics:
+            values = part[metric] if metric in part else pd.Series(dtype=float)
+            mean, half, n = mean_ci(values)
+            records.append(Mean(condition, conf, metric, mean, half, n, len(part)))
     return pd.DataFrame([asdict(r) for r in records], columns=list(MEANS_COLUMNS))

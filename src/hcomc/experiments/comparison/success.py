@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from hcomc.experiments.claims import holm, p_verdict, sign_test
-from hcomc.experiments.comparison.effects import _by_seed, _merged, check_runs, configurations_of
+from hcomc.experiments.comparison.effects import _by_seed, _cells, _merged, check_runs
 
 __all__ = [
     "FALLBACK_FLAG",
@@ -82,15 +82,11 @@ def merge_success(runs: pd.DataFrame, configurations: Sequence[str] | None = Non
     """Merge success (:class:`Success`) per cell and configuration: every run counts."""
     check_runs(runs)
     records = []
-    for condition in pd.unique(runs["condition"]):
-        for conf in configurations or configurations_of(runs):
-            part = _by_seed(runs, condition, conf)
-            if part.empty:
-                continue
-            k, n = int(_merged(part).sum()), len(part)
-            plans, fallbacks = _plans(part)
-            flagged = plans > 0 and fallbacks > FALLBACK_FLAG * plans
-            records.append(Success(str(condition), conf, k, n, k / n, plans, fallbacks, flagged))
+    for condition, conf, part in _cells(runs, configurations):
+        k, n = int(_merged(part).sum()), len(part)
+        plans, fallbacks = _plans(part)
+        flagged = plans > 0 and fallbacks > FALLBACK_FLAG * plans
+        records.append(Success(condition, conf, k, n, k / n, plans, fallbacks, flagged))
     return pd.DataFrame([asdict(r) for r in records], columns=list(SUCCESS_COLUMNS))
 
 
