@@ -332,3 +332,33 @@ def test_built_in_plans_pass(controller):
         assert sim.decisions
         for plan, (view, group) in zip(sim.decisions, sim.requests, strict=True):
             check_plan(plan, view, group, controller)
+
+
+class _Raises:
+    """A controller whose plan raises ``error``."""
+
+    def __init__(self, error: Exception) -> None:
+        self.error = error
+
+    def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
+        raise self.error
+
+
+def test_a_raising_controller_becomes_one_pickled_line(request_):
+    """The exception's type and message on one line (the type alone without a message),
+    the controller, VR, time and run; the traceback kept as text across a pickle."""
+    from hcomc.control.validation import ControllerFailed, planned
+
+    _, view, group = request_
+    rng = np.random.default_rng(0)
+    for error, shown in ((ValueError("bad\n  gap:"), "ValueError: bad gap:"),
+                         (KeyError(), "KeyError")):  # fmt: skip
+        with pytest.raises(ControllerFailed) as info:
+            planned(_Raises(error), view, group, rng, "C1, seed 0")
+        failed = info.value
+        assert failed.error == shown
+        assert str(failed) == (f"controller '_Raises' raised {shown} while planning for VR "
+                               f"{group.vr} at t = {view.t:.10g} s (C1, seed 0)")  # fmt: skip
+        again = pickle.loads(pickle.dumps(failed))
+        assert (str(again), again.trace) == (str(failed), failed.trace)
+        assert "raise self.error" in again.trace

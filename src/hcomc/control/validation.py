@@ -107,7 +107,8 @@ def planned(
     try:
         return controller.plan(view, group, rng)
     except Exception as exc:
-        error = f"{type(exc).__name__}: {' '.join(str(exc).split())}".rstrip(": ")
+        message = " ".join(str(exc).split())
+        error = f"{type(exc).__name__}: {message}" if message else type(exc).__name__
         raise ControllerFailed(
             name_of(controller), group.vr, float(view.t), where, error, traceback.format_exc()
         ) from exc

@@ -11,7 +11,7 @@ engines through the experiment runner, so the rows are those of ``hcomc run``.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +50,7 @@ def traffic_stats(log: SimulationLog) -> TrafficStats:
     return TrafficStats(mean_speed(Lane.MAIN_1), mean_speed(Lane.MAIN_2), throughput(log))
 
 
-def traffic_table(conditions: Iterable[str], seeds: Iterable[int]) -> str:
+def traffic_table(conditions: Iterable[str], seeds: Sequence[int]) -> str:
     """The uncontrolled traffic of ``conditions`` on both engines (no merge controller), as
     the Markdown table of docs/sumo.md: per condition and figure of :func:`traffic_stats`
     the means over ``seeds``, SUMO's mean relative difference and the largest absolute
@@ -68,8 +68,10 @@ def traffic_table(conditions: Iterable[str], seeds: Iterable[int]) -> str:
     ]
     for condition in conditions:
         config = load_config(condition, control={"controller": "none"})
-        runs = [(Simulation(config, s).run(), SumoSimulation(config, s).run()) for s in seeds]
-        pairs = [(traffic_stats(ours), traffic_stats(sumo)) for ours, sumo in runs]
+        pairs = [  # (ours, SUMO's) per seed
+            tuple(traffic_stats(engine(config, s).run()) for engine in (Simulation, SumoSimulation))
+            for s in seeds
+        ]
         for name, label in names.items():
             ours = np.array([getattr(a, name) for a, _ in pairs])
             sumo = np.array([getattr(b, name) for _, b in pairs])

@@ -68,7 +68,7 @@ def derive_events(log: SimulationLog, config: ScenarioConfig) -> None:
                             (int(rows[e]), EventKind.LANE_CHANGE_END)):  # fmt: skip
                 log.add_event(log.t[r], kind, i, x=float(log.x[r, i]), value=target)
         if lanes[0] == Lane.RAMP:
-            offset = np.abs(log.y[rows, i] - lane_centre(Lane.MAIN_1, width)) / width
+            offset = np.abs(y - lane_centre(Lane.MAIN_1, width)) / width
             merged = (lanes == Lane.MAIN_1) & (offset < _SETTLED)
             if merged.any():
                 r = int(rows[int(np.argmax(merged))])
