@@ -90,24 +90,22 @@ def _analyse(
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 
-    effect_rows = effects(
-        runs, configurations, comparisons=comparisons, metrics=metrics or PAPER_METRICS
-    )
-    mean_rows = means(runs, configurations, metrics or PAPER_METRICS)
-    success = merge_success(runs, configurations)
-    pairs = success_pairs(runs, comparisons)
     labels = controller_labels(configurations)
-    if labels:  # the tables by name; runs.parquet and compare.json keep the specs
-        effect_rows = effect_rows.replace({"a": labels, "b": labels})
-        success = success.replace({"configuration": labels})
-        mean_rows = mean_rows.replace({"configuration": labels})
-        pairs = pairs.replace({"a": labels, "b": labels})
+    shown = runs  # the tables by name; runs.parquet and compare.json keep the specs
+    if labels:
+        shown = runs.replace({"configuration": labels})
+        configurations = [labels.get(c, c) for c in configurations]
+        comparisons = [(labels.get(a, a), labels.get(b, b)) for a, b in comparisons]
         names = ", ".join(f"{name} = {spec}" for spec, name in labels.items())
         notes = (*notes, f"controllers by name: {names}")
+    metrics = metrics or PAPER_METRICS
+    effect_rows = effects(shown, configurations, comparisons=comparisons, metrics=metrics)
+    mean_rows = means(shown, configurations, metrics)
+    success = merge_success(shown, configurations)
+    pairs = success_pairs(shown, comparisons)
     flagged = flagged_note(success)
     notes = (*notes, flagged) if flagged else notes
     _write_tables(target, runs, effect_rows, success, pairs, mean_rows)
-    shown = runs.replace({"configuration": labels}) if labels else runs
     report = write_compare_report(
         target, shown, effect_rows, success, pairs, record, notes=notes, means=mean_rows
     )
