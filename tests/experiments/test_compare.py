@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ from hcomc.experiments.comparison.effects import PREFERS, effects, pairs
 from hcomc.experiments.comparison.means import means
 from hcomc.experiments.comparison.success import merge_success, success_pairs
 from hcomc.experiments.comparison.view import (
-    EFFECTS_VIEW_COLUMNS,
+    PAIR_VIEW_COLUMNS,
     controller_labels,
     effects_view,
     means_view,
@@ -180,8 +181,8 @@ def test_means_are_over_the_runs_with_a_value_with_the_t_interval():
     assert (b["mean"], b["n"], b["runs"]) == (5.0, 1, 1)
     assert math.isnan(b["ci"])
     view = means_view(means(runs, ["A", "B"], ["lsrv"]))
-    assert view.loc[0, "A"] == "2 ± 2.5 (3)"
-    assert view.loc[0, "B"] == "5 (1)"
+    assert view.loc[0, "A"] == "2.0 ± 2.5 (3)"  # rounded to the half-width; 3 of 4 runs
+    assert view.loc[0, "B"] == "5.00"  # no interval: three significant digits
 
 
 def test_a_comparison_missing_from_a_cell_is_left_out():
@@ -380,14 +381,17 @@ def test_the_report_holds_the_tables_and_a_figure_per_cell(tmp_path):
 
 
 def _documented_rows(text: str) -> list[list[str]]:
-    """The paired-effects rows of the example output in docs/benchmark.md."""
+    """The paired-effects rows of the example output in docs/benchmark.md, each led by its
+    comparison's A and B (from the table's title)."""
     block = text.split("--seeds 3`, run a second time", 1)[1].split("```text", 1)[1]
     block = block.split("```", 1)[0]
-    rows = []
+    rows, pair = [], None
     for line in block.splitlines():
-        cells = [c.strip() for c in line.strip().strip("│").split("│")]
-        if len(cells) == len(EFFECTS_VIEW_COLUMNS) and cells[0].startswith("C"):
-            rows.append(cells)
+        title = re.match(r"Paired effects: .* \(A = (.+), B = (.+)\)", line)
+        if title:
+            pair = [title[1], title[2]]
+        elif pair and re.match(r"C\d ", line):
+            rows.append(pair + re.split(r"\s{2,}", line.strip()))
     return rows
 
 
@@ -400,8 +404,8 @@ def test_the_documented_example_is_what_the_command_computes(tmp_path):
     result = _invoke("--controllers", "fifo,game,hcomc", "--conditions", "C1,C2",
                      "--seeds", "3", "--out", str(out))  # fmt: skip
     assert result.exit_code == 0, result.output
-    frame = pd.read_csv(out / "effects.csv")
-    computed = effects_view(frame.assign(favours=frame["favours"].astype(object).fillna("")))
-    computed_rows = computed.astype(str).values.tolist()
+    frame = pd.read_csv(out / "effects.csv", keep_default_na=False)
+    computed = effects_view(frame).rename(columns={"favours": "favours (CI)"})
+    computed_rows = computed[["A", "B", *PAIR_VIEW_COLUMNS]].astype(str).values.tolist()
     for row in rows:
         assert row in computed_rows, row

@@ -11,6 +11,8 @@ its paired comparison and the paired effects, and write the tables and an HTML r
 from __future__ import annotations
 
 import shlex
+import sys
+from contextlib import nullcontext, redirect_stdout
 from pathlib import Path
 from typing import Annotated
 
@@ -24,7 +26,7 @@ from hcomc.cli._app import (
     app,
 )
 from hcomc.cli.compare_folder import _command, fill_folder
-from hcomc.cli.compare_output import OUTPUTS, _analyse, _say
+from hcomc.cli.compare_output import FORMATS, OUTPUTS, Presentation, _analyse, _say
 from hcomc.cli.experiments import _workers
 from hcomc.config import ConfigError
 
@@ -112,13 +114,53 @@ def compare(
         typer.Option("--out", help="Results folder (default: compare/SUITE, or compare/A-vs-B)."),
     ] = None,
     settings: SetOption = None,
+    fmt: Annotated[
+        str,
+        typer.Option(
+            "--format",
+            help="How the tables print: console (fitted to 120 columns), markdown or latex "
+            "(one document on stdout, also written to tables.md / tables.tex; the other lines "
+            "go to stderr).",
+        ),
+    ] = "console",
+    wide: Annotated[
+        bool,
+        typer.Option(
+            help="Console tables on one line each, every column (all comparisons in "
+            "one effects table)."
+        ),
+    ] = False,
 ) -> None:
     """Compare merge controllers on a benchmark suite, paired by seed; rerun to resume.
 
-    Prints merge success, each controller's means and the paired effects on the paper's five
-    metrics (median difference, 95 % CI, verdict, sign test with Holm's correction) and writes
-    runs.parquet, runs.csv, effects.csv, success.csv, success_pairs.csv, means.csv,
-    compare.json and report.html."""
+    Prints merge success, each controller's means ± 95 % CI and the paired effects on the
+    paper's five metrics (median difference with its 95 % CI, sign test with Holm's
+    correction, the controller each favours) and writes runs.parquet, runs.csv, effects.csv,
+    success.csv, success_pairs.csv, means.csv, compare.json and report.html."""
+    if fmt not in FORMATS:
+        raise _fail(f"option '--format' = '{fmt}': allowed: {', '.join(FORMATS)}")
+    if wide and fmt != "console":
+        raise _fail(f"option '--wide' applies to --format console, not '{fmt}'")
+    presentation = Presentation(fmt, wide, None if fmt == "console" else sys.stdout)
+    with redirect_stdout(sys.stderr) if presentation.document else nullcontext():
+        _compare(folders, controllers, conditions, seeds, suite, baseline, engine, workers,
+                 out_dir, settings, presentation)  # fmt: skip
+
+
+def _compare(
+    folders: list[Path] | None,
+    controllers: str | None,
+    conditions: str | None,
+    seeds: int | None,
+    suite: str | None,
+    baseline: str | None,
+    engine: str | None,
+    workers: int | None,
+    out_dir: Path | None,
+    settings: list[str] | None,
+    presentation: Presentation,
+) -> None:
+    """``hcomc compare`` once its presentation is settled: folders or controllers."""
     if folders:
         given = {"--controllers": controllers, "--conditions": conditions, "--seeds": seeds,
                  "--suite": suite, "--baseline": baseline, "--engine": engine,
@@ -129,10 +171,19 @@ def compare(
                 f"option '{extra[0]}' does not apply when comparing folders; allowed: "
                 "hcomc compare A/ B/ [--out DIR]"
             )
-        _compare_folders(folders, out_dir)
+        _compare_folders(folders, out_dir, presentation)
         return
     _compare_controllers(
-        controllers, conditions, seeds, suite, baseline, engine, workers, out_dir, settings
+        controllers,
+        conditions,
+        seeds,
+        suite,
+        baseline,
+        engine,
+        workers,
+        out_dir,
+        settings,
+        presentation,
     )
 
 
@@ -146,6 +197,7 @@ def _compare_controllers(
     workers: int | None,
     out_dir: Path | None,
     settings: list[str] | None,
+    presentation: Presentation,
 ) -> None:
     from hcomc.cli.corridor_conditions import compare_corridors, corridor_conditions
     from hcomc.config import nest_overrides
@@ -167,7 +219,15 @@ def _compare_controllers(
     corridors = corridor_conditions(conditions, suite_name)
     if corridors:
         compare_corridors(
-            labels, chosen, corridors, seeds, engine, n_workers, out_dir, settings or []
+            labels,
+            chosen,
+            corridors,
+            seeds,
+            engine,
+            n_workers,
+            out_dir,
+            settings or [],
+            presentation,
         )
         return
     try:
@@ -196,11 +256,12 @@ def _compare_controllers(
         f"suite {bench.name} · cells {', '.join(c.id for c in cells)} · {comparison.seeds} "
         f"seeds · {', '.join(labels)} · engine {comparison.engine}",
     )
-    _analyse(target, filled.runs, pairs(labels, chosen), labels, filled.record)
+    _analyse(target, filled.runs, pairs(labels, chosen), labels, filled.record,
+             presentation=presentation)  # fmt: skip
     filled.say("the config")
 
 
-def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
+def _compare_folders(folders: list[Path], out_dir: Path | None, presentation: Presentation) -> None:
     from hcomc.cli.corridor_conditions import analysis_of
     from hcomc.experiments.benchmark import folder_runs, stored_record
     from hcomc.sim.manifest import build_manifest
@@ -235,5 +296,5 @@ def _compare_folders(folders: list[Path], out_dir: Path | None) -> None:
     )
     notes, options = analysis_of(both.runs)  # corridor runs: the corridor metrics
     _analyse(target, both.runs, list(both.comparisons), confs, content, (*both.notes, *notes),
-             **options)  # fmt: skip
+             presentation=presentation, **options)  # fmt: skip
     _say(f"written to {target}/ ({', '.join(OUTPUTS)})")

@@ -4,39 +4,70 @@ report (:mod:`hcomc.viz.compare_report`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 from hcomc.cli._app import out
+from hcomc.viz.text_tables import (
+    TextTable,
+    console_table,
+    print_fitted,
+    table_width,
+    to_latex,
+    to_markdown,
+)
 
 NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "failed A/B", "excluded", "p (Holm)",
            "both merged", "only A", "only B", "neither")  # fmt: skip
-"""Columns right-aligned on the terminal (the others, names and words, left-aligned)."""
+"""Columns right-aligned (the others, names and words, left-aligned)."""
 
 OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
            "means.csv", "report.html")  # fmt: skip
 """What a comparison writes into its folder (besides its record and run store)."""
 
 
+FORMATS = ("console", "markdown", "latex")
+"""How a comparison prints its tables (``--format``)."""
+
+CONSOLE_WIDTH = 120
+"""The width a comparison's console tables fit unless ``--wide`` (a wider terminal
+notwithstanding)."""
+
+
+@dataclass(frozen=True)
+class Presentation:
+    """How a comparison shows its tables: ``format`` "console" (rich tables fitted to
+    :data:`CONSOLE_WIDTH` columns, or each on one line when ``wide``), "markdown" or
+    "latex" (the tables as one document, written to ``tables.md`` / ``tables.tex`` in the
+    folder and printed to ``document``, the command's stdout, while its other lines go to
+    stderr)."""
+
+    format: str = "console"
+    wide: bool = False
+    document: TextIO | None = None
+
+
 def _say(text: str) -> None:
-    """Print a line of plain text (names such as "HCOMC [results]" are not markup)."""
+    """Print a line of plain text (names such as "HCOMC [results]" are not markup), wrapped
+    at the tables' width."""
     from rich.markup import escape
 
-    out.print(escape(text), highlight=False)
+    out.print(escape(text), highlight=False, width=_width())
 
 
-def _table(frame: Any, title: str, numeric: tuple[str, ...] = NUMERIC) -> Any:
-    """A rich table of a text frame: the ``numeric`` columns right-aligned, names and
-    verdicts left-aligned."""
-    from rich.markup import escape
-    from rich.table import Table
+def _width() -> int:
+    """:data:`CONSOLE_WIDTH`, or a narrower terminal's width."""
+    return min(CONSOLE_WIDTH, out.width) if out.is_terminal else CONSOLE_WIDTH
 
-    table = Table(title=escape(title))
-    for col in frame.columns:
-        table.add_column(escape(str(col)), justify="right" if col in numeric else "left")
-    for row in frame.itertuples(index=False):
-        table.add_row(*(escape(str(v)) for v in row))
-    return table
+
+def _print(table: TextTable, keys: int, wide: bool) -> None:
+    """``table`` on the console: on one line when ``wide``, else in blocks of columns (each
+    led by the ``keys`` columns) that fit :data:`CONSOLE_WIDTH` or a narrower terminal."""
+    if wide:
+        out.print(console_table(table), width=max(table_width(table.frame), 80), crop=False)
+        return
+    print_fitted(out, table, keys, _width())
 
 
 def _write_tables(
@@ -56,11 +87,21 @@ def _write_tables(
 SUCCESS_TITLE = "Merge success — runs in which VR merged"
 """Title of the merge-success table (for runs of the scenario engine)."""
 
-MEANS_TITLE = "Means — over each controller's runs with a value, ± 95 % t interval (n runs)"
+MEANS_TITLE = "Means per controller and cell"
 """Title of the means table."""
 
+MEANS_CAPTION = (
+    "mean over each controller's runs with a value ± the half-width of its 95 % t interval, "
+    "rounded to two digits of the half-width; (n): the runs with a value, when fewer than "
+    "the cell's runs"
+)
+"""What the means table shows."""
+
+EFFECTS_TITLE = "Paired effects"
+"""Title of the effects tables (followed by the comparison on the console)."""
+
 PAIRS_NOTE = "A<B: k of n seeds (a failed merge the worse value)"
-"""How the effects title explains n (for the paper's metrics)."""
+"""How the effects caption explains n (for the paper's metrics)."""
 
 
 def _analyse(
@@ -74,19 +115,14 @@ def _analyse(
     metrics: tuple[str, ...] | None = None,
     success_title: str = SUCCESS_TITLE,
     pairs_note: str = PAIRS_NOTE,
+    presentation: Presentation = Presentation(),
 ) -> None:
     """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
     paper's five)."""
     from hcomc.experiments.comparison.effects import effects
     from hcomc.experiments.comparison.means import means
     from hcomc.experiments.comparison.success import flagged_note, merge_success, success_pairs
-    from hcomc.experiments.comparison.view import (
-        controller_labels,
-        effects_view,
-        means_view,
-        success_pairs_view,
-        success_view,
-    )
+    from hcomc.experiments.comparison.view import controller_labels
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 
@@ -111,28 +147,82 @@ def _analyse(
     )
     for note in notes:
         _say(f"note: {note}")
+    tables = _tables(mean_rows, effect_rows, success, pairs, success_title, pairs_note)
+    if presentation.format == "console":
+        _print_console(tables, presentation.wide)
+    else:
+        _write_document(target, tables, presentation)
+    _say(f"report: {report}")
+
+
+def _tables(
+    mean_rows: Any, effect_rows: Any, success: Any, pairs: Any, success_title: str,
+    pairs_note: str,
+) -> list[tuple[TextTable, int]]:  # fmt: skip
+    """The comparison's tables with the number of columns that name a row: merge success,
+    its paired comparison (where some seed merged on one side only), the means and the
+    effects (all comparisons in one table)."""
+    from hcomc.experiments.comparison.view import (
+        EFFECTS_LEGEND,
+        effects_view,
+        means_view,
+        success_pairs_view,
+        success_view,
+    )
+
     rates = success_view(success)
-    out.print(_table(rates, success_title, tuple(rates.columns[1:])))
+    tables = [(TextTable(rates, success_title, numeric=tuple(rates.columns[1:])), 1)]
     discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
     if len(discordant):
-        title = (
-            "Merge success paired by seed (exact McNemar test, Holm-adjusted) — comparisons "
-            "in which only one of the two merged in some seed"
-        )
-        out.print(_table(success_pairs_view(discordant), title))
-    else:
-        out.print("merge success paired by seed: in no seed did only one of two compared "
-                  "configurations merge", highlight=False)  # fmt: skip
+        title = ("Merge success paired by seed — comparisons in which only one of the two "
+                 "merged in some seed")  # fmt: skip
+        caption = "p: exact McNemar test, Holm-adjusted over the comparisons"
+        tables.append((TextTable(success_pairs_view(discordant), title, caption, NUMERIC), 3))
     if not mean_rows.empty:
-        table = means_view(mean_rows)
-        out.print(_table(table, MEANS_TITLE, tuple(table.columns[2:])))
-    out.print(
-        _table(
-            effects_view(effect_rows),
-            "Paired effects — median A-B over seeds [95 % bootstrap CI]; verdict by the CI; "
-            f"favours by the metric's better direction (↑ larger, ↓ smaller); {pairs_note}; "
-            "failed A/B: seeds without a merge, each the worse value in A<B / A>B; excluded: "
-            "seeds without a pair; p: sign test, Holm-adjusted over the table",
-        )
-    )
-    _say(f"report: {report}")
+        shown = means_view(mean_rows)
+        tables.append((TextTable(shown, MEANS_TITLE, MEANS_CAPTION, tuple(shown.columns[2:])), 2))
+    if len(effect_rows):
+        legend = f"median A-B over the pairs [95 % bootstrap CI]; {pairs_note}; {EFFECTS_LEGEND}"
+        tables.append((TextTable(effects_view(effect_rows), EFFECTS_TITLE, legend, NUMERIC), 4))
+    return tables
+
+
+def _print_console(tables: list[tuple[TextTable, int]], wide: bool) -> None:
+    """The tables on the console; the effects one table per comparison unless ``wide``."""
+    paired = any(t.title.startswith("Merge success paired") for t, _ in tables)
+    for i, (table, keys) in enumerate(tables):
+        if table.title == EFFECTS_TITLE and not wide:
+            _print_by_comparison(table)
+            continue
+        _print(table, keys, wide)
+        if i == 0 and not paired:
+            _say("merge success paired by seed: in no seed did only one of two compared "
+                 "configurations merge")  # fmt: skip
+
+
+def _print_by_comparison(effects: TextTable) -> None:
+    """The effects table as one table per comparison (A, B), without the A and B columns,
+    its verdicts by the configuration each favours; the legend under the last."""
+    from hcomc.experiments.comparison.view import PAIR_VIEW_COLUMNS
+
+    frame = effects.frame.rename(columns={"favours": "favours (CI)"})
+    groups = list(dict.fromkeys(zip(frame["A"], frame["B"], strict=True)))
+    for i, (a, b) in enumerate(groups):
+        rows = frame[(frame["A"] == a) & (frame["B"] == b)][list(PAIR_VIEW_COLUMNS)]
+        caption = effects.caption if i == len(groups) - 1 else ""
+        title = f"{EFFECTS_TITLE}: {a} - {b} (A = {a}, B = {b})"
+        _print(TextTable(rows, title, caption, NUMERIC), 2, wide=False)
+
+
+def _write_document(target: Path, tables: list[tuple[TextTable, int]], how: Presentation) -> None:
+    """The tables as one Markdown or LaTeX document: into the folder and onto stdout."""
+    from hcomc.sim.manifest import atomic_paths
+
+    text = (to_markdown if how.format == "markdown" else to_latex)([t for t, _ in tables])
+    name = "tables.md" if how.format == "markdown" else "tables.tex"
+    with atomic_paths(target / name) as (tmp,):
+        tmp.write_text(text, encoding="utf-8")
+    if how.document is not None:
+        how.document.write(text)
+        how.document.flush()
+    _say(f"tables: {target / name}")

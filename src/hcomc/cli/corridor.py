@@ -9,11 +9,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rich.table import Table
+import pandas as pd
 
 from hcomc.cli._app import _compiled, _control, _fail, _progress, _refuse_overwrite, out
 from hcomc.config import ControlParams
 from hcomc.corridor import Corridor, corridor_to_toml
+from hcomc.viz.text_tables import TextTable, print_fitted
 
 CORRIDOR_FILES = (
     "summary.json", "manifest.json", "corridor.toml", "trips.csv", "detectors.csv", "grid.csv",
@@ -117,26 +118,49 @@ def _print(summary: dict[str, Any]) -> None:
         f"{summary['not_inserted']} waiting to enter · {summary['collisions']} collisions · "
         f"{summary['vehicle_steps_per_s']:,} vehicle-steps/s"
     )
-    table = Table(title="per origin")
-    for col in ("origin", "vehicles", "arrived", "travel time [s]", "delay [s]", "max backlog"):
-        table.add_column(col, justify="right")
-    for origin, row in summary["origins"].items():
-        table.add_row(origin, str(row["vehicles"]), str(row["arrived"]),
-                      _num(row["mean_travel_time"]), _num(row["mean_delay"]),
-                      str(row["max_backlog"]))  # fmt: skip
-    out.print(table)
-    ramps = Table(title=f"per on-ramp (controller: {summary['controller']})")
-    for col in ("ramp", "entered", "merged", "merges/h", "merge position [m]",
-                "zone to merge [s]", "least TTC, 5 % [s]", "plans", "fallbacks"):  # fmt: skip
-        ramps.add_column(col, justify="right")
-    for ramp, row in summary["on_ramps"].items():
-        ev = row["merge_events"]
-        ramps.add_row(
-            ramp, str(row["entered"]), str(row["merged"]), f"{row['merges_per_hour']:.0f}",
-            _num(row["mean_merge_position"]), _num(ev["mean_time_to_merge"]),
-            _num(ev["min_ttc_p05"]), str(ev["plans"]), str(ev["fallbacks"]),
-        )  # fmt: skip
-    out.print(ramps)
+    origins = pd.DataFrame(
+        [
+            (origin, str(row["vehicles"]), str(row["arrived"]), _num(row["mean_travel_time"]),
+             _num(row["mean_delay"]), str(row["max_backlog"]))
+            for origin, row in summary["origins"].items()
+        ],
+        columns=["origin", "vehicles", "arrived", "travel time [s]", "delay [s]",
+                 "max backlog [veh]"],
+    )  # fmt: skip
+    legend = "travel time and delay: means over the arrived trips"
+    print_fitted(out, TextTable(origins, "Per origin", legend, tuple(origins.columns[1:])), 1, 120)
+    ramps = pd.DataFrame(
+        [_ramp_row(ramp, row) for ramp, row in summary["on_ramps"].items()], columns=RAMP_COLUMNS
+    )
+    title = f"Per on-ramp (controller: {summary['controller']})"
+    print_fitted(out, TextTable(ramps, title, RAMP_LEGEND, RAMP_COLUMNS[1:]), 1, 120)
+
+
+RAMP_COLUMNS = (
+    "ramp", "entered", "merged", "merges/h", "merge position [m]", "zone to merge [s]",
+    "least TTC, 5 % [s]", "max DRAC [m/s²]", "hardest braking [m/s²]", "plans", "fallbacks",
+)  # fmt: skip
+"""The columns of the per-on-ramp table."""
+
+RAMP_LEGEND = (
+    "merge position: mean distance of the merges from the start of the acceleration lane; "
+    "zone to merge: mean "
+    "time from entering the control zone to the merge; least TTC, 5 %: 5th percentile over "
+    "the merges of each merge's least time to collision; max DRAC and hardest braking: the "
+    "largest over every merge's key vehicles; plans, fallbacks: the controller's plans and "
+    "those that fell back to car following"
+)
+"""What the per-on-ramp table's columns mean."""
+
+
+def _ramp_row(ramp: str, row: dict[str, Any]) -> tuple[str, ...]:
+    ev = row["merge_events"]
+    return (
+        ramp, str(row["entered"]), str(row["merged"]), f"{row['merges_per_hour']:.0f}",
+        _num(row["mean_merge_position"]), _num(ev["mean_time_to_merge"]),
+        _num(ev["min_ttc_p05"]), _num(ev["max_drac"]), _num(ev["max_decel"]),
+        str(ev["plans"]), str(ev["fallbacks"]),
+    )  # fmt: skip
 
 
 def _num(value: float | None) -> str:

@@ -13,12 +13,15 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 
 from hcomc.cli._app import _compiled, _engine, _fail, _progress, _settings, out
 from hcomc.config import ConfigError
+
+if TYPE_CHECKING:
+    from hcomc.cli.compare_output import Presentation
 
 CORRIDOR_SUCCESS = (
     "Merge success — runs in which every ramp vehicle that reached a control zone merged "
@@ -96,6 +99,7 @@ def compare_corridors(
     workers: int,
     out_dir: Path | None,
     settings: list[str],
+    presentation: Presentation,
 ) -> None:
     """``hcomc compare`` on corridors: run what the folder lacks, print and write the
     comparison (as for cells of a suite)."""
@@ -137,7 +141,7 @@ def compare_corridors(
          f"· {engine_name}")  # fmt: skip
     notes, options = analysis_of(filled.runs)
     _analyse(target, filled.runs, pairs(labels, baseline), labels, filled.record, notes,
-             **options)  # fmt: skip
+             presentation=presentation, **options)  # fmt: skip
     filled.say("the corridor")
 
 
@@ -186,14 +190,14 @@ def run_corridor_condition(
 def print_corridor_runs(frame: Any, title: str) -> None:
     """Print runs of the corridor engine: per seed the merge events and the corridor
     metrics, then each metric's mean with its 95 % CI over the seeds."""
-    from hcomc.cli.run_output import _frame_table
+    from hcomc.cli.run_output import print_frame
     from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
     from hcomc.experiments.tables import mean_ci
 
     labels = {name: metric.label for name, metric in CORRIDOR_METRICS.items()}
     heads = {"merged": "all merged", "events": "events", "merged_events": "merged events"}
     cols = ["seed", *heads, *labels]
-    out.print(_frame_table(frame[cols].rename(columns={**heads, **labels}), title))
+    print_frame(frame[cols].rename(columns={**heads, **labels}), title)
     merged = frame["merged"].astype(bool)
     out.print(
         f"every merge event merged in {int(merged.sum())} of {len(frame)} runs (a ramp vehicle "

@@ -4,6 +4,7 @@ documentation regenerated from a reproduction's results)."""
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import replace
 from functools import partial
@@ -24,7 +25,7 @@ from hcomc.cli._app import (
     out,
 )
 from hcomc.cli.experiments import CONDITIONS, _progress_grid, _workers
-from hcomc.cli.run_output import _frame_table
+from hcomc.cli.run_output import print_frame
 from hcomc.config import ConfigError
 
 CONTOUR_CONDITION = "C2"
@@ -70,10 +71,10 @@ spread evenly, no HDV estimation errors (reaction delays stay); seed 0 seeds the
 
 def _claims_view(frame: Any) -> Any:
     """The claims for the terminal: the verdicts (CI rule, Holm-corrected sign test) with
-    "k of n seeds" beside them, numbers to 4 significant digits."""
-    view = frame[["claim", "condition"]].copy()
+    "k of n seeds" beside them, the median and its CI rounded to the CI's precision."""
+    view = frame[["claim", "condition"]].rename(columns={"condition": "cell"})
     view["median A-B [95 % CI]"] = [
-        f"{m:.4g} [{lo:.4g}, {hi:.4g}]"
+        _interval(m, lo, hi)
         for m, lo, hi in zip(frame["median_diff"], frame["ci_low"], frame["ci_high"], strict=True)
     ]
     view["verdict"] = frame["verdict"]
@@ -83,6 +84,35 @@ def _claims_view(frame: Any) -> Any:
     if "uniform" in frame:
         view["uniform"] = frame["uniform"]
     return view
+
+
+def _interval(median: float, low: float, high: float) -> str:
+    """The median and its interval, "median [low, high]", rounded to the interval's precision;
+    "—" without pairs."""
+    from hcomc.experiments.comparison.view import rounded
+
+    if math.isnan(median):
+        return "—"
+    half = (high - low) / 2
+    return f"{rounded(median, half)} [{rounded(low, half)}, {rounded(high, half)}]"
+
+
+CLAIMS_CAPTION = (
+    "median of the paired differences A - B [95 % bootstrap CI]; verdict: the CI rule; "
+    "verdict (Holm): the sign test (a run without a merge the worst outcome), Holm-corrected "
+    "within the claim's family; seeds: k of n seeds in the paper's direction; uniform: "
+    "whether the claim holds on the paper scenario's deterministic runs (one per "
+    "configuration; empty where it is undefined there, e.g. a metric of a merge that did not "
+    "happen)"
+)
+"""The legend of the claims table on the terminal."""
+
+SCENARIO_CAPTION = (
+    "deterministic demand: every headway its mean, CAVs spread evenly, no estimation errors "
+    "of human drivers; merged no: VR waited at the end of the acceleration lane until the run "
+    "ended, so the merge has no metrics (—) and no cooperation mode (none)"
+)
+"""The legend of the paper-scenario table on the terminal."""
 
 
 def _verdict_line(frame: Any) -> str:
@@ -131,21 +161,20 @@ def _save_results(out_dir: Path, runs: Any, paper_runs: Any, claim_rows: Any, re
 
 
 def _print_results(runs: Any, paper_runs: Any, claim_rows: Any) -> None:
+    from hcomc.experiments.comparison.view import rounded
     from hcomc.experiments.paper import PAPER_METRICS
-    from hcomc.experiments.tables import TABLE_CAPTION, paper_table
+    from hcomc.experiments.tables import LABELS, TABLE_CAPTION, paper_table
 
-    note = TABLE_CAPTION
-    out.print(_frame_table(paper_table(runs, "II"), f"Table II — optimisers · {note}"))
-    out.print(_frame_table(paper_table(runs, "III"), f"Table III — controllers · {note}"))
-    scenario = paper_runs[["condition", "configuration", "mode", "sequence", *PAPER_METRICS]]
-    view = scenario.assign(**{m: [f"{v:.4g}" for v in scenario[m]] for m in PAPER_METRICS})
-    out.print(_frame_table(view, "Paper scenario — deterministic demand, one run each"))
-    title = (
-        "Claims of Section IV — median paired difference A - B [95 % bootstrap CI]; verdict: "
-        "the CI rule; verdict (Holm): the sign test (a run without a merge the worst outcome), "
-        "Holm-corrected within the claim's family; seeds: k of n seeds in the paper's direction"
-    )
-    out.print(_frame_table(_claims_view(claim_rows), title))
+    print_frame(paper_table(runs, "II"), "Table II — optimisers", TABLE_CAPTION, keys=2)
+    print_frame(paper_table(runs, "III"), "Table III — controllers", TABLE_CAPTION, keys=2)
+    scenario = paper_runs[["condition", "configuration", "merged", "mode", "sequence",
+                           *PAPER_METRICS]]  # fmt: skip
+    view = scenario.assign(
+        merged=scenario["merged"].map({True: "yes", False: "no"}),
+        **{m: [rounded(v) for v in scenario[m]] for m in PAPER_METRICS},
+    ).rename(columns=LABELS)
+    print_frame(view, "Paper scenario — one run per configuration", SCENARIO_CAPTION, keys=2)
+    print_frame(_claims_view(claim_rows), "Claims of Section IV", CLAIMS_CAPTION, keys=2)
 
 
 def _publish(out_dir: Path, docs: Path | None, readme: Path | None, force: bool) -> None:

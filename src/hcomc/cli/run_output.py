@@ -5,23 +5,32 @@ their means. Shared by ``hcomc run`` on scenarios (:mod:`hcomc.cli.experiments`)
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from rich.markup import escape
-from rich.table import Table
 
 from hcomc.cli._app import _control, _fail, out
+from hcomc.viz.text_tables import TextTable, print_fitted
+
+NAMES = ("claim", "Model", "cell", "condition", "Condition", "configuration", "mode", "sequence")
+"""Columns of names and words, left-aligned (the others, numbers, right-aligned)."""
 
 
-def _frame_table(frame: Any, title: str) -> Table:
-    """A rich table of ``frame``: the columns of names (``claim``, ``Model``) left-aligned,
-    the others right-aligned, floats with two decimals."""
-    table = Table(title=escape(title))
-    for col in frame.columns:
-        table.add_column(escape(str(col)), justify="left" if col in ("claim", "Model") else "right")
-    for _, row in frame.iterrows():
-        table.add_row(*(escape(f"{v:.2f}" if isinstance(v, float) else str(v)) for v in row))
-    return table
+def _cell(value: Any) -> str:
+    """A table cell: a float with two decimals ("—" for NaN), anything else as text."""
+    if isinstance(value, float):
+        return "—" if math.isnan(value) else f"{value:.2f}"
+    return str(value)
+
+
+def print_frame(frame: Any, title: str, caption: str = "", keys: int = 1) -> None:
+    """Print ``frame`` as a booktabs-style table fitted to 120 columns (in blocks of columns
+    led by its first ``keys`` columns when wider), floats with two decimals and NaN as "—",
+    ``caption`` (its legend) under it."""
+    text = frame.map(_cell)
+    numeric = tuple(c for c in frame.columns if c not in NAMES)
+    print_fitted(out, TextTable(text, title, caption, numeric), keys, 120)
 
 
 def run_label(
@@ -32,6 +41,8 @@ def run_label(
     is ``table``): ``--controller`` / ``--optimizer`` or the table's; a one-line error when
     neither names a controller. A given optimiser is kept in ``overrides``
     (``control.optimizer``) for a controller name that is not a paper label."""
+    from hcomc.experiments.runner import configuration_of
+
     control = _control(table, controller, optimizer)
     if control["controller"] == "none":
         raise _fail(
@@ -43,17 +54,6 @@ def run_label(
     return configuration_of(control)
 
 
-def configuration_of(control: dict[str, Any]) -> str:
-    """The configuration label a ``[control]`` table's controller and optimiser stand for
-    (``fifo`` is FIFO, planning once as published; HCOMC with PSO is HCOMC-PSO), else the
-    controller's name."""
-    from hcomc.experiments.runner import CONFIGURATIONS
-
-    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
-    name = control["controller"]
-    return labels.get((name, control["optimizer"] if name == "hcomc" else "nsga2"), name)
-
-
 def print_merge_runs(frame: Any, title: str, duration: float) -> None:
     """Print runs of the scenario engine: per seed the paper's metrics, merge success, and
     each metric's mean with its 95 % CI."""
@@ -61,7 +61,7 @@ def print_merge_runs(frame: Any, title: str, duration: float) -> None:
 
     frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
     cols = ["seed", "merged", "mode", "decision_ms", *LABELS]
-    out.print(_frame_table(frame[cols].rename(columns=LABELS), title))
+    print_frame(frame[cols].rename(columns=LABELS), title)
     merged = frame["merged"].fillna(False).astype(bool)
     out.print(
         f"VR merged in {int(merged.sum())} of {len(frame)} runs; a run in which it did not is "

@@ -165,12 +165,15 @@ metric, <em>median A−B</em> is the median over seeds of the paired difference 
 bootstrap CI. <em>verdict</em>: "lower" (A lower than B) when the CI lies below 0, "higher"
 when above 0, "undecided" otherwise or when fewer than {MIN_PAIRS} seeds differ.
 <em>favours</em> names the configuration the verdict favours by the metric's preferred
-direction (↑ larger is better, ↓ smaller is better). <em>A&lt;B</em>: k of n pairs (seeds in
-which both runs merged) with A lower; <em>A&gt;B</em> with A higher; <em>excluded</em>: seeds
-both ran without a pair (VR did not merge in one of them, so the merge has no metrics).
+direction (↑ larger is better, ↓ smaller is better). <em>A&lt;B</em>: k of n seeds with A
+lower, a run without a merge counting as its pair's worse value; <em>A&gt;B</em>: seeds with A
+higher; <em>failed A/B</em>: the seeds on which A's / B's ramp vehicle did not merge;
+<em>excluded</em>: seeds both ran that give no pair (neither merged, or a value is undefined).
 <em>p (Holm)</em>: two-sided exact sign test, Holm-adjusted over every effect on this page;
-<em>verdict (Holm)</em> at p &lt; 0.05. Merge success counts every run; its paired comparison
-is the exact McNemar test of the seeds in which only one of the two merged, Holm-adjusted
+<em>verdict (Holm)</em> at p &lt; 0.05 and <em>favours (Holm)</em> the configuration it
+favours. Numbers are rounded to two significant digits of their interval's half-width. Merge
+success counts every run; its paired comparison is the exact McNemar test of the seeds in
+which only one of the two merged, Holm-adjusted
 over its own table. Shaded rows are decided.</p></div>"""
 
 

@@ -12,25 +12,61 @@ from typing import Any
 
 import pandas as pd
 
-from hcomc.experiments.comparison.effects import PREFERS
+from hcomc.experiments.comparison.effects import PREFERS, favoured
 from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
 from hcomc.experiments.tables import LABELS
 
 __all__ = [
+    "EFFECTS_LEGEND",
     "EFFECTS_VIEW_COLUMNS",
+    "PAIR_VIEW_COLUMNS",
     "controller_labels",
     "effects_view",
     "means_view",
     "metric_label",
+    "rounded",
     "success_pairs_view",
     "success_view",
 ]
 
 EFFECTS_VIEW_COLUMNS = (
-    "cell", "metric", "A", "B", "median A-B [95 % CI]", "verdict", "favours", "A<B", "A>B",
-    "failed A/B", "excluded", "p (Holm)", "verdict (Holm)",
+    "cell", "metric", "A", "B", "median A-B [95 % CI]", "A<B", "A>B", "failed A/B",
+    "excluded", "verdict", "favours", "p (Holm)", "verdict (Holm)", "favours (Holm)",
 )  # fmt: skip
 """The columns of :func:`effects_view`."""
+
+PAIR_VIEW_COLUMNS = (
+    "cell", "metric", "median A-B [95 % CI]", "A<B", "A>B", "failed A/B", "excluded",
+    "p (Holm)", "favours (CI)", "favours (Holm)",
+)  # fmt: skip
+"""The columns of one comparison's effects on a terminal of 120 columns: those of
+:data:`EFFECTS_VIEW_COLUMNS` without A and B (the comparison is the table's title) and the
+verdicts (the favoured configuration says them)."""
+
+EFFECTS_LEGEND = (
+    "A>B: seeds; failed A/B: seeds without a merge; excluded: seeds without a pair; p: "
+    "two-sided sign test, Holm-adjusted over every effect shown; favours: the configuration "
+    "that the CI rule (CI) or the Holm-adjusted sign test (Holm) finds better by the metric's "
+    "direction (↑ larger, ↓ smaller), — if undecided"
+)
+"""What the effects tables' columns after A<B mean (the end of their caption)."""
+
+
+def rounded(value: float, uncertainty: float = float("nan")) -> str:
+    """``value`` to the precision its ``uncertainty`` (a CI half-width) supports: two
+    significant digits of the uncertainty (54.2 ± 3.1, 0.0612 ± 0.0048), or three of the
+    value itself without one (n < 2, or an interval of width 0); "—" for NaN."""
+    if not math.isfinite(value):
+        return "—"
+    scale = abs(uncertainty) if math.isfinite(uncertainty) and uncertainty != 0 else 0.0
+    if scale:
+        places = 1 - math.floor(math.log10(scale))
+    elif value:
+        places = 2 - math.floor(math.log10(abs(value)))
+    else:
+        places = 0
+    text = f"{value:.{min(max(places, 0), 9)}f}"
+    return text.lstrip("-") if float(text) == 0 else text  # no "-0.00"
 
 
 def controller_labels(configurations: Sequence[str]) -> dict[str, str]:
@@ -67,14 +103,12 @@ def metric_label(metric: str) -> str:
 
 
 def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
-    """The effects as text for a terminal or a page: cell, metric, A, B, median A - B with
-    its 95 % CI, verdict, the favoured configuration, "k of n" seeds with A < B, seeds with
-    A > B (a failed merge counted as the worse value), the seeds A / B did not merge on,
-    excluded seeds, the Holm-adjusted p and its verdict."""
-
-    def interval(m: float, lo: float, hi: float) -> str:
-        return "—" if not math.isfinite(m) else f"{m:.4g} [{lo:.4g}, {hi:.4g}]"
-
+    """The effects as text for a page or a wide terminal, one row per cell, comparison and
+    metric (:data:`EFFECTS_VIEW_COLUMNS`): the median A - B with its 95 % CI rounded to the
+    CI's precision (:func:`rounded`), "k of n" seeds with A < B, seeds with A > B (a failed
+    merge counted as the worse value), the seeds A / B did not merge on, excluded seeds, the
+    CI rule's verdict and the configuration it favours, the Holm-adjusted p, its verdict and
+    the configuration that favours."""
     rows = frame.to_dict("records")
     return pd.DataFrame(
         {
@@ -82,34 +116,49 @@ def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
             "metric": [metric_label(r["metric"]) for r in rows],
             "A": [r["a"] for r in rows],
             "B": [r["b"] for r in rows],
-            "median A-B [95 % CI]": [
-                interval(r["median_diff"], r["ci_low"], r["ci_high"]) for r in rows
-            ],
-            "verdict": [r["verdict"] for r in rows],
-            "favours": [r["favours"] or "—" for r in rows],
+            "median A-B [95 % CI]": [_interval(r) for r in rows],
             "A<B": [f"{r['a_lower']} of {r['n']}" for r in rows],
             "A>B": [str(r["a_higher"]) for r in rows],
             "failed A/B": [f"{r['failed_a']}/{r['failed_b']}" for r in rows],
             "excluded": [str(r["excluded"]) for r in rows],
+            "verdict": [r["verdict"] for r in rows],
+            "favours": [r["favours"] or "—" for r in rows],
             "p (Holm)": [_p(r["p_holm"]) for r in rows],
             "verdict (Holm)": [r["verdict_holm"] for r in rows],
+            "favours (Holm)": [_favoured_by_holm(r) or "—" for r in rows],
         },
         columns=EFFECTS_VIEW_COLUMNS,
     )
 
 
+def _interval(row: dict[str, Any]) -> str:
+    """The median with its CI, "median [low, high]", each rounded to the CI's half-width;
+    "—" without pairs."""
+    m, lo, hi = row["median_diff"], row["ci_low"], row["ci_high"]
+    if not math.isfinite(m):
+        return "—"
+    half = (hi - lo) / 2 if math.isfinite(hi - lo) else math.nan
+    return f"{rounded(m, half)} [{rounded(lo, half)}, {rounded(hi, half)}]"
+
+
+def _favoured_by_holm(row: dict[str, Any]) -> str:
+    return favoured(row["verdict_holm"], row["prefers"], row["a"], row["b"])
+
+
 def means_view(frame: pd.DataFrame) -> pd.DataFrame:
     """The means (:func:`~hcomc.experiments.comparison.means.means`) as text: one row per cell
     and metric (with its unit and preferred direction), one column per configuration,
-    "mean ± half-width (n)"; "—" without a value."""
+    "mean ± half-width", rounded to the half-width (:func:`rounded`), followed by "(n)" when
+    only n of the cell's runs have a value; "—" without a value."""
     if frame.empty:
         return pd.DataFrame()
 
     def text(r: dict[str, Any]) -> str:
         if r["n"] == 0:
             return "—"
-        half = f" ± {r['ci']:.2g}" if math.isfinite(r["ci"]) else ""
-        return f"{r['mean']:.4g}{half} ({r['n']})"
+        half = f" ± {rounded(r['ci'], r['ci'])}" if math.isfinite(r["ci"]) else ""
+        fewer = f" ({r['n']})" if r["n"] < r["runs"] else ""
+        return f"{rounded(r['mean'], r['ci'])}{half}{fewer}"
 
     rows = frame.to_dict("records")
     labels = [metric_label(r["metric"]) for r in rows]
