@@ -89,10 +89,13 @@ def _args(target: Path) -> tuple[str, ...]:
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory) -> tuple[Path, str]:
-    """The folder of :func:`_args`' comparison and what it printed on stdout."""
+    """The folder of :func:`_args`' comparison and what it printed on stdout; its progress,
+    on stderr off a terminal, counts the runs with the time left."""
     target = tmp_path_factory.mktemp("compare") / "four"
     result = _invoke(*_args(target))
     assert result.exit_code == 0, result.output
+    assert re.search(r"runs: \d+/16 \(\d+ %\), \d+ s elapsed, about \d+ s left", result.stderr)
+    assert "runs: 16/16 (100 %)" in result.stderr
     return target, result.stdout
 
 

@@ -190,9 +190,8 @@ def run_corridor_condition(
 def print_corridor_runs(frame: Any, title: str) -> None:
     """Print runs of the corridor engine: per seed the merge events and the corridor
     metrics, then each metric's mean with its 95 % CI over the seeds."""
-    from hcomc.cli.run_output import print_frame
+    from hcomc.cli.run_output import mean_line, print_frame
     from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
-    from hcomc.experiments.tables import mean_ci
 
     labels = {name: metric.label for name, metric in CORRIDOR_METRICS.items()}
     heads = {"merged": "all merged", "events": "events", "merged_events": "merged events"}
@@ -206,5 +205,4 @@ def print_corridor_runs(frame: Any, title: str) -> None:
         highlight=False,
     )
     for metric, name in labels.items():
-        mean, half, n = mean_ci(frame[metric])
-        out.print(escape(f"{name}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
+        out.print(escape(mean_line(name, frame[metric])), highlight=False)

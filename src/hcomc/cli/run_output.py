@@ -5,7 +5,6 @@ their means. Shared by ``hcomc run`` on scenarios (:mod:`hcomc.cli.experiments`)
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from rich.markup import escape
@@ -18,15 +17,30 @@ NAMES = ("claim", "Model", "cell", "condition", "Condition", "configuration", "m
 
 
 def _cell(value: Any) -> str:
-    """A table cell: a float with two decimals ("—" for NaN), anything else as text."""
+    """A table cell: a float to three significant digits ("—" for NaN), a flag as yes/no,
+    anything else as text."""
+    from hcomc.experiments.comparison.view import rounded
+
+    if isinstance(value, bool):
+        return "yes" if value else "no"
     if isinstance(value, float):
-        return "—" if math.isnan(value) else f"{value:.2f}"
+        return rounded(value)
     return str(value)
+
+
+def mean_line(name: str, values: Any) -> str:
+    """One mean as a line, "name: mean ± half-width (95 % CI, n = n)", rounded to the
+    half-width."""
+    from hcomc.experiments.comparison.view import rounded
+    from hcomc.experiments.tables import mean_ci
+
+    mean, half, n = mean_ci(values)
+    return f"{name}: {rounded(mean, half)} ± {rounded(half, half)} (95 % CI, n = {n})"
 
 
 def print_frame(frame: Any, title: str, caption: str = "", keys: int = 1) -> None:
     """Print ``frame`` as a booktabs-style table fitted to 120 columns (in blocks of columns
-    led by its first ``keys`` columns when wider), floats with two decimals and NaN as "—",
+    led by its first ``keys`` columns when wider; cells as :func:`_cell` writes them),
     ``caption`` (its legend) under it."""
     text = frame.map(_cell)
     numeric = tuple(c for c in frame.columns if c not in NAMES)
@@ -57,11 +71,11 @@ def run_label(
 def print_merge_runs(frame: Any, title: str, duration: float) -> None:
     """Print runs of the scenario engine: per seed the paper's metrics, merge success, and
     each metric's mean with its 95 % CI."""
-    from hcomc.experiments.tables import LABELS, mean_ci
+    from hcomc.experiments.tables import LABELS
 
     frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
     cols = ["seed", "merged", "mode", "decision_ms", *LABELS]
-    print_frame(frame[cols].rename(columns=LABELS), title)
+    print_frame(frame[cols].rename(columns={**LABELS, "decision_ms": "decision [ms]"}), title)
     merged = frame["merged"].fillna(False).astype(bool)
     out.print(
         f"VR merged in {int(merged.sum())} of {len(frame)} runs; a run in which it did not is "
@@ -75,5 +89,4 @@ def print_merge_runs(frame: Any, title: str, duration: float) -> None:
             f"zone within duration = {duration} s, so these seeds have no metrics"
         )
     for metric, name in LABELS.items():
-        mean, half, n = mean_ci(frame[metric].dropna())
-        out.print(escape(f"{name}: {mean:.4g} ± {half:.2g} (95 % CI, n = {n})"))
+        out.print(escape(mean_line(name, frame[metric].dropna())), highlight=False)
