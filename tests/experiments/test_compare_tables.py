@@ -4,12 +4,14 @@ files and in the HTML report, and written as Markdown and LaTeX."""
 
 from __future__ import annotations
 
+import io
 import math
 import re
 from pathlib import Path
 
 import pandas as pd
 import pytest
+from rich.console import Console
 from typer.testing import CliRunner
 
 from hcomc.cli import app
@@ -20,7 +22,14 @@ from hcomc.experiments.comparison.view import (
     means_view,
     rounded,
 )
-from hcomc.viz.text_tables import TextTable, column_blocks, table_width, to_latex, to_markdown
+from hcomc.viz.text_tables import (
+    TextTable,
+    column_blocks,
+    print_fitted,
+    table_width,
+    to_latex,
+    to_markdown,
+)
 
 CONTROLLERS = ("FIFO", "Game", "HCOMC", "none")
 UNITS = ("Crit. Dist. [m] ↑", "Aver. Acc. [m/s²] ↓", "Stab. Time from entry [s] ↓",
@@ -57,6 +66,22 @@ def test_a_wide_table_is_split_into_blocks_that_fit_each_led_by_its_names():
     assert all(table_width(b) <= 120 for b in blocks)
     assert len(blocks) == 2  # 4 + 2 + 5 * 22 = 116 fits, a sixth column does not
     assert len(column_blocks(_frame(3, 20), 1, 120)) == 1
+
+
+def test_a_table_a_little_too_wide_folds_its_widest_text_column():
+    frame = pd.DataFrame({"claim": ["a claim of many words " * 3] * 2, "n": ["12345678"] * 2,
+                          "p": ["0.5"] * 2})  # fmt: skip
+    table = TextTable(frame, "claims", numeric=("n", "p"))
+    console = Console(file=io.StringIO(), width=200)
+    print_fitted(console, table, 1, 60)  # 66 + 2 + 8 + 2 + 3 = 81: the claim wraps
+    lines = console.file.getvalue().splitlines()
+    assert max(len(line.rstrip()) for line in lines) <= 60
+    assert sum("12345678" in line for line in lines) == 2  # one table, numbers unwrapped
+    assert len(lines) > 2 + 2 + 1  # title, header, rule and rows on more than one line each
+    wide = TextTable(_frame(9, 20), "wide")
+    console = Console(file=io.StringIO(), width=200)
+    print_fitted(console, wide, 1, 120)  # no text column to fold: two blocks
+    assert "wide (1 of 2)" in console.file.getvalue()
 
 
 def test_latex_is_ascii_escaped_and_markdown_keeps_the_cells():
