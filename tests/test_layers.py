@@ -26,6 +26,8 @@ LAYERS = {
     # (imported only when engine="sumo" is asked for, so SUMO stays an optional extra); its
     # faulted form applies the robustness layer's faults, hence the same layer.
     "sumo": 6,
+    # CommonRoad's scenario format: an exporter of the runs, beside the SUMO exports
+    "commonroad": 6,
     "envs": 6,
     "metrics": 5,
     "sim": 4,
