@@ -78,3 +78,16 @@ custom = Simulation(config, seed=4, controller=controller)
 custom_log = custom.run()
 print("custom plans:", [p["reason"] for p in custom_log.meta["plans"]])
 assert len(controller.seen) == len(custom.decisions) >= 1
+
+# %% 7. Runs and comparisons: hcomc run and hcomc compare from Python
+import hcomc
+
+# one scenario, one controller, over seeds: the rows of `hcomc run C2 --controller hcomc`
+runs = hcomc.run("C2", "hcomc", seeds=2, overrides={"cav_penetration": 0.5, "duration": 60.0})
+print(runs[["seed", "merged", "mode", "critical_distance", "fuel"]])
+
+# cells of the benchmark suite x controllers x seeds, paired by seed: `hcomc compare`
+result = hcomc.compare(["fifo", "hcomc"], conditions=["C1"], seeds=2, overrides={"duration": 40.0})
+print(result)
+print(result.success[["condition", "configuration", "merged", "runs"]])
+print(result.effects[["condition", "metric", "a", "b", "median_diff", "a_lower", "n"]])

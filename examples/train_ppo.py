@@ -31,9 +31,14 @@ from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.vec_env import VecNormalize
 
 import hcomc
-from hcomc.envs import MergeEnv
-from hcomc.envs.policies import FIFO, GAME, HCOMC, evaluate, paired, summary
-from hcomc.sim.manifest import git_revision
+from hcomc import (
+    ControllerPolicy,
+    MergeEnv,
+    compare_policies,
+    evaluate_policies,
+    git_revision,
+    policy_summary,
+)
 
 TRAIN_SEEDS = 10_000
 COLUMNS = ("episodes", "merged", "collision", "lane_end", "timeout", "episode_return",
@@ -97,14 +102,16 @@ def main(argv: list[str] | None = None) -> pd.DataFrame:
         action, _ = model.predict(venv.normalize_obs(obs), deterministic=True)
         return np.asarray(action)
 
-    policies = {"PPO": ppo, "FIFO": FIFO, "Game": GAME, "HCOMC": HCOMC}
-    results = evaluate(policies, seeds=range(args.eval_seeds), scenario=args.scenario,
-                       action_period=args.action_period)  # fmt: skip
+    baselines = {p.name: p for p in map(ControllerPolicy, ["fifo", "game", "hcomc"])}
+    results = evaluate_policies(
+        {"PPO": ppo, **baselines},
+        seeds=range(args.eval_seeds),
+        scenario=args.scenario,
+        action_period=args.action_period,
+    )
     pd.DataFrame([r.row() for r in results]).to_csv(args.out / "episodes.csv", index=False)
-    table = summary(results)
-    versus = [
-        paired(results, "PPO", name).assign(versus=name) for name in ("FIFO", "Game", "HCOMC")
-    ]
+    table = policy_summary(results)
+    versus = [compare_policies(results, "PPO", name).assign(versus=name) for name in baselines]
     pairs = pd.concat(versus).reset_index().set_index(["versus", "metric"])
     pairs.to_csv(args.out / "paired.csv")
     (args.out / "comparison.md").write_text(markdown(table) + "\n" + paired_markdown(pairs))

@@ -15,8 +15,23 @@ light (the command line starts without numpy's or numba's import cost).
   :class:`MergePlan`, :class:`MergeGroup`, :class:`Mode`, :class:`TrafficView`,
   :func:`make_controller`, :func:`registered`, :class:`InvalidPlan`, :class:`ControllerFailed`
 * metrics: :func:`compute_metrics`, :data:`METRICS`
-* corridors: :func:`load_corridor`, :func:`simulate_corridor`
+* runs and comparisons: :func:`run` (``hcomc run``), :func:`compare` (``hcomc compare``),
+  :class:`ComparisonResult`
+* corridors: :func:`load_corridor`, :func:`simulate_corridor`, :func:`sections`,
+  :func:`export_corridor` (a SUMO scenario; SUMO's netconvert, extra ``sumo``)
 * robustness: :class:`FaultedSimulation`, :data:`CHANNELS`, :data:`FAULTS`, :class:`ShieldParams`
+* learning environments (extra ``envs``): :class:`MergeEnv`, :class:`MergeParallelEnv`,
+  :class:`CorridorMergeEnv`, :class:`CorridorParallelEnv` (loading any of them registers
+  ``hcomc/Merge-v0`` and ``hcomc/CorridorMerge-v0`` with Gymnasium), the merge controllers as
+  policies (:class:`ControllerPolicy`) and :func:`evaluate_policies`, :func:`policy_summary`,
+  :func:`compare_policies`
+* replay and provenance: :func:`replay` (the browser replay of runs), :func:`git_revision`
+* CommonRoad (extra ``commonroad``): :func:`export_commonroad` (a run as a CommonRoad
+  scenario), :func:`commonroad_contacts` (which vehicles of a scenario touch when, by
+  CommonRoad's collision checker)
+
+A name whose module needs an optional extra that is not installed raises an ImportError
+naming the extra to install (``pip install 'hcomc[envs]'``) when it is used, not before.
 """
 
 from importlib import import_module
@@ -24,10 +39,24 @@ from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from hcomc.commonroad.contacts import commonroad_contacts
+    from hcomc.commonroad.export import export_commonroad
     from hcomc.config import ConfigError, ScenarioConfig, load_config
     from hcomc.control.registry import make_controller, registered
     from hcomc.control.validation import ControllerFailed, InvalidPlan
     from hcomc.corridor import load_corridor
+    from hcomc.corridor.road import sections
+    from hcomc.envs.corridor.env import CorridorMergeEnv
+    from hcomc.envs.corridor.multi_agent import CorridorParallelEnv
+    from hcomc.envs.merge_env import MergeEnv
+    from hcomc.envs.multi_agent import MergeParallelEnv
+    from hcomc.envs.policies import (
+        ControllerPolicy,
+        compare_policies,
+        evaluate_policies,
+        policy_summary,
+    )
+    from hcomc.experiments.library import ComparisonResult, compare, run
     from hcomc.interface import MergeController, MergeGroup, MergePlan, Mode, TrafficView
     from hcomc.metrics import METRICS, compute_metrics
     from hcomc.road import Lane
@@ -37,6 +66,9 @@ if TYPE_CHECKING:
     from hcomc.sim.engine import Simulation, simulate
     from hcomc.sim.ensemble import run_ensemble
     from hcomc.sim.log import SimulationLog
+    from hcomc.sim.manifest import git_revision
+    from hcomc.sumo.corridor import export_corridor
+    from hcomc.viz.replay import replay
 
 try:
     __version__ = version("hcomc")
@@ -69,20 +101,53 @@ _HOMES: dict[str, str] = {
     "CHANNELS": "hcomc.robustness",
     "FAULTS": "hcomc.robustness",
     "ShieldParams": "hcomc.robustness",
+    "run": "hcomc.experiments.library",
+    "compare": "hcomc.experiments.library",
+    "ComparisonResult": "hcomc.experiments.library",
+    "sections": "hcomc.corridor.road",
+    "export_corridor": "hcomc.sumo.corridor",
+    "MergeEnv": "hcomc.envs.merge_env",
+    "MergeParallelEnv": "hcomc.envs.multi_agent",
+    "CorridorMergeEnv": "hcomc.envs.corridor.env",
+    "CorridorParallelEnv": "hcomc.envs.corridor.multi_agent",
+    "ControllerPolicy": "hcomc.envs.policies",
+    "evaluate_policies": "hcomc.envs.policies",
+    "policy_summary": "hcomc.envs.policies",
+    "compare_policies": "hcomc.envs.policies",
+    "replay": "hcomc.viz.replay",
+    "git_revision": "hcomc.sim.manifest",
+    "export_commonroad": "hcomc.commonroad.export",
+    "commonroad_contacts": "hcomc.commonroad.contacts",
 }
 """Each name of the library face and the module that defines it (loaded on first use)."""
+
+_EXTRAS: dict[str, str] = {
+    "gymnasium": "envs",
+    "pettingzoo": "envs",
+    "libsumo": "sumo",
+    "sumolib": "sumo",
+    "commonroad": "commonroad",
+    "commonroad_dc": "commonroad",
+}
+"""The packages of hcomc's optional extras: package -> the extra that installs it."""
 
 __all__ = [
     "CHANNELS",
     "FAULTS",
     "METRICS",
+    "ComparisonResult",
     "ConfigError",
     "ControllerFailed",
+    "ControllerPolicy",
+    "CorridorMergeEnv",
+    "CorridorParallelEnv",
     "FaultedSimulation",
     "InvalidPlan",
     "Lane",
     "MergeController",
+    "MergeEnv",
     "MergeGroup",
+    "MergeParallelEnv",
     "MergePlan",
     "Mode",
     "ScenarioConfig",
@@ -91,12 +156,23 @@ __all__ = [
     "SimulationLog",
     "TrafficView",
     "__version__",
+    "commonroad_contacts",
+    "compare",
+    "compare_policies",
     "compute_metrics",
+    "evaluate_policies",
+    "export_commonroad",
+    "export_corridor",
+    "git_revision",
     "load_config",
     "load_corridor",
     "make_controller",
+    "policy_summary",
     "registered",
+    "replay",
+    "run",
     "run_ensemble",
+    "sections",
     "simulate",
     "simulate_corridor",
 ]
@@ -107,7 +183,18 @@ def __getattr__(name: str) -> Any:
     home = _HOMES.get(name)
     if home is None:
         raise AttributeError(f"module 'hcomc' has no attribute {name!r}")
-    value = getattr(import_module(home), name)
+    try:
+        module = import_module(home)
+    except ModuleNotFoundError as missing:
+        extra = _EXTRAS.get((missing.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        raise ImportError(
+            f"hcomc.{name} needs the optional extra '{extra}' ({missing.name} is not "
+            f"installed): pip install 'hcomc[{extra}]'",
+            name=missing.name,
+        ) from missing
+    value = getattr(module, name)
     globals()[name] = value
     return value
 

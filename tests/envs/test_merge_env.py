@@ -21,7 +21,7 @@ from hcomc.envs import vector as vector_module
 from hcomc.envs.episode import SEED_TRIES, MergeEpisode, NoVMCError
 from hcomc.envs.multi_agent import MergeParallelEnv
 from hcomc.envs.observation import N_EGO, N_OBS, N_ROLE, OBS_NAMES
-from hcomc.envs.policies import FIFO, HCOMC, evaluate, summary
+from hcomc.envs.policies import FIFO, HCOMC, evaluate_policies, policy_summary
 from hcomc.envs.vector import MergeVectorEnv
 from hcomc.equations.fuel import fuel_rate
 from hcomc.equations.safety import critical_acceleration
@@ -271,7 +271,7 @@ def test_controller_policy_episode_is_the_controllers_run() -> None:
 
 
 def test_evaluate_compares_policies_on_the_same_seeds() -> None:
-    results = evaluate({"drive": drive, "HCOMC": HCOMC}, seeds=[0, 1], scenario="C1")
+    results = evaluate_policies({"drive": drive, "HCOMC": HCOMC}, seeds=[0, 1], scenario="C1")
     assert [(r.policy, r.seed) for r in results] == [
         ("drive", 0),
         ("drive", 1),
@@ -279,7 +279,7 @@ def test_evaluate_compares_policies_on_the_same_seeds() -> None:
         ("HCOMC", 1),
     ]
     assert all(math.isfinite(r.metrics["critical_distance"]) for r in results)
-    table = summary(results)
+    table = policy_summary(results)
     assert table.loc["HCOMC", "episodes"] == 2
     assert table.loc["HCOMC", "collision"] == 0
 

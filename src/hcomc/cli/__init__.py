@@ -23,6 +23,7 @@ __all__ = ["app"]
 
 def _register_sumo() -> None:
     """SUMO interoperability commands (need the optional extra only when they run)."""
+    from hcomc.cli import trajectories  # noqa: F401  (registers `export trajectories`)
     from hcomc.cli.sumo import export_app, metrics
 
     app.add_typer(export_app, name="export")

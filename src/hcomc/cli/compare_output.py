@@ -119,31 +119,23 @@ def _analyse(
 ) -> None:
     """Compute, print and write the comparison of ``runs`` on ``metrics`` (default: the
     paper's five)."""
-    from hcomc.experiments.comparison.effects import effects
-    from hcomc.experiments.comparison.means import means
-    from hcomc.experiments.comparison.success import flagged_note, merge_success, success_pairs
-    from hcomc.experiments.comparison.view import controller_labels
+    from hcomc.experiments.comparison.analysis import comparison_tables
+    from hcomc.experiments.comparison.success import flagged_note
     from hcomc.experiments.paper import PAPER_METRICS
     from hcomc.viz.compare_report import write_compare_report
 
-    labels = controller_labels(configurations)
-    shown = runs  # the tables by name; runs.parquet and compare.json keep the specs
-    if labels:
-        shown = runs.replace({"configuration": labels})
-        configurations = [labels.get(c, c) for c in configurations]
-        comparisons = [(labels.get(a, a), labels.get(b, b)) for a, b in comparisons]
-        names = ", ".join(f"{name} = {spec}" for spec, name in labels.items())
+    # the tables by name; runs.parquet and compare.json keep the specs
+    found = comparison_tables(runs, configurations, comparisons, metrics or PAPER_METRICS)
+    if found.names:
+        names = ", ".join(f"{name} = {spec}" for spec, name in found.names.items())
         notes = (*notes, f"controllers by name: {names}")
-    metrics = metrics or PAPER_METRICS
-    effect_rows = effects(shown, configurations, comparisons=comparisons, metrics=metrics)
-    mean_rows = means(shown, configurations, metrics)
-    success = merge_success(shown, configurations)
-    pairs = success_pairs(shown, comparisons)
+    effect_rows, mean_rows = found.effects, found.means
+    success, pairs = found.success, found.success_pairs
     flagged = flagged_note(success)
     notes = (*notes, flagged) if flagged else notes
     _write_tables(target, runs, effect_rows, success, pairs, mean_rows)
     report = write_compare_report(
-        target, shown, effect_rows, success, pairs, record, notes=notes, means=mean_rows
+        target, found.runs, effect_rows, success, pairs, record, notes=notes, means=mean_rows
     )
     for note in notes:
         _say(f"note: {note}")

@@ -67,6 +67,11 @@ def _error(spec: str, problem: str) -> ConfigError:
     )
 
 
+_FILE_MODULE = "hcomc_user_"
+"""How the module of a controller's Python file is named in ``sys.modules`` (then its stem
+and a hash of its path)."""
+
+
 def _is_file(target: str) -> bool:
     return target.endswith(".py") or "/" in target or "\\" in target
 
@@ -76,7 +81,7 @@ def _load_file(spec: str, target: str) -> Any:
     path = Path(target).expanduser().resolve()
     if not path.is_file():
         raise _error(spec, f"file '{target}' does not exist")
-    name = f"hcomc_user_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:8]}"
+    name = f"{_FILE_MODULE}{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:8]}"
     if name in sys.modules:
         return sys.modules[name]
     found = importlib.util.spec_from_file_location(name, path)
@@ -115,6 +120,23 @@ def controller_class(spec: str) -> type:
     if not callable(getattr(cls, "plan", None)):
         raise _error(spec, f"class '{attr}' has no method plan(view, group, rng)")
     return cls
+
+
+def class_spec(cls: type) -> str:
+    """The name a controller class goes by: ``package.module:Class``, or
+    ``path/to/file.py:Class`` for a class loaded from a file; ConfigError for a class that
+    cannot be loaded by name in another process (one defined in the running script, a
+    notebook, or inside a function or class)."""
+    module = cls.__module__
+    if module in ("__main__", "__mp_main__") or cls.__qualname__ != cls.__name__:
+        raise ConfigError(
+            f"class {cls.__qualname__} of {module}: defined in the running script, a notebook "
+            "or a function, so another process cannot load it by name; allowed: a class at "
+            "the top of a module or a file (then 'path/to/file.py:Class')"
+        )
+    if module.startswith(_FILE_MODULE):  # loaded from a file by _load_file
+        return f"{sys.modules[module].__file__}:{cls.__name__}"
+    return f"{module}:{cls.__name__}"
 
 
 def canonical_name(spec: str) -> str:

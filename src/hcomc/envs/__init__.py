@@ -8,7 +8,7 @@
   agent (PettingZoo ``ParallelEnv``), also made by :func:`parallel_env`, PettingZoo's
   factory convention;
 * :mod:`hcomc.envs.policies`: the FIFO, Game and HCOMC controllers on the same
-  environment, and :func:`~hcomc.envs.policies.evaluate`;
+  environment, and :func:`~hcomc.envs.policies.evaluate_policies`;
 * ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor.env.CorridorMergeEnv`): the agent
   drives a ramp CAV through its merge at one on-ramp of any corridor (N lanes, several
   ramps, continuous demand), on the corridor engine.

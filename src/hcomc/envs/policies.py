@@ -5,7 +5,7 @@ with stable-baselines3's ``predict(obs, deterministic=True)``. The merge control
 Game and HCOMC are available as :class:`ControllerPolicy`: in an environment built for one
 (``controller="hcomc"``) the controller drives VR through the engine exactly as
 ``hcomc run`` executes it (plans, replanning, cooperation of the key vehicles), and the
-action is not used. :func:`evaluate` runs any of them on the same seeds and scores each
+action is not used. :func:`evaluate_policies` runs any of them on the same seeds and scores each
 episode with the environment's reward and with :func:`hcomc.metrics.compute_metrics`.
 """
 
@@ -116,7 +116,7 @@ def run_episode(
     )  # fmt: skip
 
 
-def evaluate(
+def evaluate_policies(
     policies: dict[str, Policy], seeds: Iterable[int], **env_kwargs: Any
 ) -> list[EpisodeResult]:
     """Run every policy on every seed (the same traffic for all) and score the episodes.
@@ -136,7 +136,7 @@ def evaluate(
     return results
 
 
-def summary(results: Sequence[EpisodeResult]) -> pd.DataFrame:
+def policy_summary(results: Sequence[EpisodeResult]) -> pd.DataFrame:
     """Per policy: episodes, merge/collision/timeout shares, and the median of the return
     and of every metric."""
     frame = pd.DataFrame([r.row() for r in results])
@@ -152,11 +152,11 @@ def summary(results: Sequence[EpisodeResult]) -> pd.DataFrame:
 
 PAIRED = ("episode_return", "critical_distance", "average_acceleration", "stabilisation_time",
           "lsrv", "fuel", "min_ttc", "pet")  # fmt: skip
-"""The quantities :func:`paired` compares by default."""
+"""The quantities :func:`compare_policies` compares by default."""
 
 
-def paired(results: Sequence[EpisodeResult], a: str, b: str,
-           metrics: Sequence[str] = PAIRED) -> pd.DataFrame:  # fmt: skip
+def compare_policies(results: Sequence[EpisodeResult], a: str, b: str,
+                     metrics: Sequence[str] = PAIRED) -> pd.DataFrame:  # fmt: skip
     """Paired comparison of policies ``a`` and ``b`` seed by seed: per metric the median of
     the differences a - b over the seeds where both are finite, its 95 % bootstrap interval
     (the experiments' :func:`~hcomc.experiments.tables.median_ci`), n, and in how many of
@@ -182,5 +182,5 @@ def paired(results: Sequence[EpisodeResult], a: str, b: str,
 
 __all__ = [
     "FIFO", "GAME", "HCOMC", "ControllerPolicy", "EpisodeResult", "Predictor", "as_function",
-    "evaluate", "paired", "run_episode", "summary",
+    "compare_policies", "evaluate_policies", "policy_summary", "run_episode",
 ]  # fmt: skip

@@ -60,6 +60,13 @@ class Comparison:
             for seed in range(self.seeds)
         ]  # fmt: skip
 
+    def row(self, cell: Cell, results: dict[str, Any]) -> dict[str, Any]:
+        """A run's results row as the comparison's runs table holds it: ``suite``,
+        ``condition`` (the cell id), ``base`` (the cell's preset) and ``engine`` first."""
+        head = {"suite": self.suite.name, "condition": cell.id, "base": cell.condition,
+                "engine": self.engine}  # fmt: skip
+        return {**head, **{k: v for k, v in results.items() if k not in head}}
+
     def check(self) -> None:
         """Load every cell with every configuration (ConfigError naming the bad value), so
         that nothing runs unless everything can."""
@@ -173,11 +180,7 @@ def run_comparison(
     store = RunStore(out)
 
     def frame(i: int, row: dict[str, Any]) -> pd.DataFrame:
-        cell = pairs[i][0]
-        head = {"suite": comparison.suite.name, "condition": cell.id, "base": cell.condition,
-                "engine": comparison.engine}  # fmt: skip
-        rest = {k: v for k, v in row.items() if k not in head}
-        return pd.DataFrame([{**head, **rest}])
+        return pd.DataFrame([comparison.row(pairs[i][0], row)])
 
     store.run(runs, frame, workers=workers, progress=progress)
     return store.read(runs)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import json
 import multiprocessing
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
@@ -98,6 +98,15 @@ def configuration_label(name: str) -> str:
         if label.lower() == name.lower():
             return label
     return canonical_name(name)
+
+
+def configuration_of(control: Mapping[str, Any]) -> str:
+    """The configuration label a ``[control]`` table's controller and optimiser stand for
+    (``fifo`` is FIFO, planning once as published; HCOMC with PSO is HCOMC-PSO), else the
+    controller's name: what ``hcomc run`` and :func:`hcomc.run` run."""
+    labels = {pair: label for label, pair in CONFIGURATIONS.items()}
+    name = control["controller"]
+    return labels.get((name, control["optimizer"] if name == "hcomc" else "nsga2"), name)
 
 
 def configuration_controller(configuration: str) -> tuple[str, str]:

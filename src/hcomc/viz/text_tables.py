@@ -108,8 +108,9 @@ def console_table(table: TextTable) -> Table:
     fold = _fold_column(table)
     for col in table.frame.columns:
         values = table.frame[col]
-        justify = "right" if col in table.numeric else "left"
-        shown.add_column(escape(_header(str(col), values)), justify=justify, no_wrap=col != fold)
+        shown.add_column(escape(_header(str(col), values)),
+                         justify="right" if col in table.numeric else "left",
+                         no_wrap=col != fold)  # fmt: skip
     for row in table.frame.itertuples(index=False):
         shown.add_row(*(escape(str(v)) for v in row))
     return shown

@@ -32,10 +32,10 @@ import time
 
 import numpy as np
 
-from hcomc.config import ConfigError, ScenarioConfig
+from hcomc import ConfigError, MergeGroup, MergePlan, Mode, ScenarioConfig, TrafficView
 from hcomc.control.longitudinal_candidate import reach_horizon
 from hcomc.equations.virtual_vehicle import cubic_coefficients, cubic_extremes
-from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView, elapsed_ms
+from hcomc.interface import elapsed_ms
 
 MERGE_OFFSET = 10.0
 """VR starts its lane change this far downstream of the acceleration-lane start [m]."""
