@@ -16,6 +16,7 @@ rounding of touching (the file stores 6 decimals), which real runs do not come n
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from importlib import import_module
@@ -75,7 +76,7 @@ def log_contacts(log: SimulationLog) -> tuple[Contact, ...]:
     for row in range(n):
         ids = np.flatnonzero(active[row])
         # a rectangle's centre is half a length behind its front bumper
-        centre = {int(i): float(x[row, i] - 0.5 * length[i] * np.cos(h[row, i])) for i in ids}
+        centre = {int(i): float(x[row, i] - 0.5 * length[i] * math.cos(h[row, i])) for i in ids}
         pairs = np.array(list(_near_pairs(centre, reach)), dtype=np.int64).reshape(-1, 2)
         if pairs.size == 0:
             continue
@@ -101,7 +102,7 @@ def _collision_objects() -> Any:
 
 
 def _half_diagonal(length: float, width: float) -> float:
-    return 0.5 * float(np.hypot(length, width))
+    return 0.5 * math.hypot(length, width)
 
 
 def _near_pairs(centre: dict[int, float], reach: dict[int, float]) -> Iterator[tuple[int, int]]:

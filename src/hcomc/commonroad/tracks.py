@@ -23,6 +23,7 @@ CommonRoad (at least one state after the initial one) and is left out.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -53,7 +54,9 @@ def body_centre(
     heading [rad], longitudinal speed ``v`` [m/s] and acceleration ``a`` [m/s^2] and body
     ``length`` [m] (module docstring)."""
     h = np.asarray(heading, dtype=np.float64)
-    cos, sin = np.cos(h), np.sin(h)
+    # the C library's cosine and sine (math), not numpy's, whose last bit depends on the CPU
+    cos = np.vectorize(math.cos, otypes=[np.float64])(h)
+    sin = np.vectorize(math.sin, otypes=[np.float64])(h)
     half = 0.5 * np.asarray(length, dtype=np.float64)
     return BodyStates(
         x=np.asarray(x, dtype=np.float64) - half * cos,
