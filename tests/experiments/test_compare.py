@@ -409,3 +409,21 @@ def test_the_documented_example_is_what_the_command_computes(tmp_path):
     computed_rows = computed[["A", "B", *PAIR_VIEW_COLUMNS]].astype(str).values.tolist()
     for row in rows:
         assert row in computed_rows, row
+
+
+def test_safety_extremes_take_the_worst_run_and_its_seed():
+    from hcomc.experiments.comparison.safety import safety_extremes
+
+    runs = _runs({"A": BASE})
+    runs["min_ttc"] = [5.0, 2.0, np.inf, np.nan, 3.0, 9.0, 4.0, 8.0, 7.0, 6.0]
+    runs["max_drac"] = [0.1, 0.5, 0.2, 0.9, np.nan, 0.3, 0.1, 0.1, 0.1, 0.1]
+    runs["collisions"] = [0, 1, 0, 0, 0, 0, 2, 0, 0, 0]
+    runs["key_collisions"] = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0]
+    row = safety_extremes(runs, ["A"]).iloc[0]
+    assert (row["least_ttc"], row["least_ttc_seed"]) == (2.0, 1)
+    assert (row["max_drac"], row["max_drac_seed"]) == (0.9, 3)
+    assert (row["collisions"], row["key_collisions"], row["runs"]) == (3, 1, SEEDS)
+    none = safety_extremes(runs.assign(min_ttc=np.inf), ["A"]).iloc[0]
+    assert math.isnan(none["least_ttc"])
+    assert none["least_ttc_seed"] == -1
+    assert safety_extremes(runs.drop(columns="min_ttc"), ["A"]).empty  # corridor runs

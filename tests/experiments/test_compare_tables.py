@@ -159,6 +159,24 @@ def test_the_console_fits_120_columns_with_units_names_and_the_files_numbers(fol
         assert rows == expected.astype(str).values.tolist()
 
 
+def test_safety_extremes_are_the_runs_worst_values_with_their_seeds(folder):
+    target, text = folder
+    runs = pd.read_csv(target / "runs.csv")
+    safety = pd.read_csv(target / "safety.csv").set_index(["condition", "configuration"])
+    html = (target / "report.html").read_text(encoding="utf-8")
+    for (cell, conf), part in runs.groupby(["condition", "configuration"]):
+        row = safety.loc[(cell, conf)]
+        worst = part.loc[part["min_ttc"].idxmin()]
+        assert row["least_ttc"] == pytest.approx(worst["min_ttc"], rel=1e-12)
+        assert row["least_ttc_seed"] == worst["seed"]
+        assert row["max_drac"] == pytest.approx(part["max_drac"].max(), rel=1e-12)
+        assert row["collisions"] == part["collisions"].sum()
+        shown = f"{rounded(row['least_ttc'])} (seed {int(row['least_ttc_seed'])})"
+        assert shown in text
+        assert shown in html
+    assert "Safety extremes per controller and cell" in text
+
+
 def test_counts_agree_between_console_csv_and_report(folder):
     target, text = folder
     success = pd.read_csv(target / "success.csv")
@@ -184,7 +202,7 @@ def test_latex_and_markdown_hold_the_means_and_the_effects(folder):
     assert done.stdout == latex  # stdout is the document alone; the other lines on stderr
     assert "16 runs (0 new" in done.stderr
     assert latex.isascii()
-    assert latex.count(r"\begin{tabular}") == 3  # success, means, effects
+    assert latex.count(r"\begin{tabular}") == 4  # success, means, safety, effects
     assert r"\caption{Means per controller and cell." in latex
     assert r"\caption{Paired effects." in latex
     effects = pd.read_csv(target / "effects.csv", keep_default_na=False)

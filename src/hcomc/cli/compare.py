@@ -133,10 +133,11 @@ def compare(
 ) -> None:
     """Compare merge controllers on a benchmark suite, paired by seed; rerun to resume.
 
-    Prints merge success, each controller's means ± 95 % CI and the paired effects on the
-    paper's five metrics (median difference with its 95 % CI, sign test with Holm's
-    correction, the controller each favours) and writes runs.parquet, runs.csv, effects.csv,
-    success.csv, success_pairs.csv, means.csv, compare.json and report.html."""
+    Prints merge success, each controller's means ± 95 % CI and safety extremes (least TTC,
+    largest DRAC, collisions) and the paired effects on the paper's five metrics (median
+    difference with its 95 % CI, sign test with Holm's correction, the controller each
+    favours) and writes runs.parquet, runs.csv, effects.csv, success.csv, success_pairs.csv,
+    means.csv, safety.csv, compare.json and report.html."""
     if fmt not in FORMATS:
         raise _fail(f"option '--format' = '{fmt}': allowed: {', '.join(FORMATS)}")
     if wide and fmt != "console":

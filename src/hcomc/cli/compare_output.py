@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from hcomc.cli._app import out
 from hcomc.viz.text_tables import (
@@ -22,8 +22,11 @@ NUMERIC = ("median A-B [95 % CI]", "A<B", "A>B", "failed A/B", "excluded", "p (H
            "both merged", "only A", "only B", "neither")  # fmt: skip
 """Columns right-aligned (the others, names and words, left-aligned)."""
 
+if TYPE_CHECKING:
+    from hcomc.experiments.comparison.analysis import ComparisonTables
+
 OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pairs.csv",
-           "means.csv", "report.html")  # fmt: skip
+           "means.csv", "safety.csv", "report.html")  # fmt: skip
 """What a comparison writes into its folder (besides its record and run store)."""
 
 
@@ -70,18 +73,17 @@ def _print(table: TextTable, keys: int, wide: bool) -> None:
     print_fitted(out, table, keys, _width())
 
 
-def _write_tables(
-    target: Path, runs: Any, effects: Any, success: Any, pairs: Any, means: Any
-) -> None:
+def _write_tables(target: Path, runs: Any, found: ComparisonTables) -> None:
     from hcomc.sim.manifest import atomic_paths
 
-    with atomic_paths(*(target / n for n in OUTPUTS[:6])) as tmp:
+    with atomic_paths(*(target / n for n in OUTPUTS[:7])) as tmp:
         runs.to_parquet(tmp[0], index=False)
         runs.to_csv(tmp[1], index=False)
-        effects.to_csv(tmp[2], index=False)
-        success.to_csv(tmp[3], index=False)
-        pairs.to_csv(tmp[4], index=False)
-        means.to_csv(tmp[5], index=False)
+        found.effects.to_csv(tmp[2], index=False)
+        found.success.to_csv(tmp[3], index=False)
+        found.success_pairs.to_csv(tmp[4], index=False)
+        found.means.to_csv(tmp[5], index=False)
+        found.safety.to_csv(tmp[6], index=False)
 
 
 SUCCESS_TITLE = "Merge success — runs in which VR merged"
@@ -96,6 +98,16 @@ MEANS_CAPTION = (
     "the cell's runs"
 )
 """What the means table shows."""
+
+SAFETY_TITLE = "Safety extremes per controller and cell"
+"""Title of the safety-extremes table."""
+
+SAFETY_CAPTION = (
+    "the least time to collision and the largest deceleration to avoid a crash over each "
+    "controller's runs (every follower-leader pair of a lane with a key vehicle in it), with "
+    "the seed each came from, and the collisions of those runs"
+)
+"""What the safety-extremes table shows."""
 
 EFFECTS_TITLE = "Paired effects"
 """Title of the effects tables (followed by the comparison on the console)."""
@@ -129,17 +141,23 @@ def _analyse(
     if found.names:
         names = ", ".join(f"{name} = {spec}" for spec, name in found.names.items())
         notes = (*notes, f"controllers by name: {names}")
-    effect_rows, mean_rows = found.effects, found.means
-    success, pairs = found.success, found.success_pairs
-    flagged = flagged_note(success)
+    flagged = flagged_note(found.success)
     notes = (*notes, flagged) if flagged else notes
-    _write_tables(target, runs, effect_rows, success, pairs, mean_rows)
+    _write_tables(target, runs, found)
     report = write_compare_report(
-        target, found.runs, effect_rows, success, pairs, record, notes=notes, means=mean_rows
+        target,
+        found.runs,
+        found.effects,
+        found.success,
+        found.success_pairs,
+        record,
+        notes=notes,
+        means=found.means,
+        safety=found.safety,
     )
     for note in notes:
         _say(f"note: {note}")
-    tables = _tables(mean_rows, effect_rows, success, pairs, success_title, pairs_note)
+    tables = _tables(found, success_title, pairs_note)
     if presentation.format == "console":
         _print_console(tables, presentation.wide)
     else:
@@ -148,34 +166,39 @@ def _analyse(
 
 
 def _tables(
-    mean_rows: Any, effect_rows: Any, success: Any, pairs: Any, success_title: str,
-    pairs_note: str,
-) -> list[tuple[TextTable, int]]:  # fmt: skip
+    found: ComparisonTables, success_title: str, pairs_note: str
+) -> list[tuple[TextTable, int]]:
     """The comparison's tables with the number of columns that name a row: merge success,
-    its paired comparison (where some seed merged on one side only), the means and the
-    effects (all comparisons in one table)."""
+    its paired comparison (where some seed merged on one side only), the means, the safety
+    extremes and the effects (all comparisons in one table)."""
     from hcomc.experiments.comparison.view import (
         EFFECTS_LEGEND,
         effects_view,
         means_view,
+        safety_view,
         success_pairs_view,
         success_view,
     )
 
-    rates = success_view(success)
+    rates = success_view(found.success)
     tables = [(TextTable(rates, success_title, numeric=tuple(rates.columns[1:])), 1)]
+    pairs = found.success_pairs
     discordant = pairs[(pairs["only_a"] + pairs["only_b"]) > 0] if len(pairs) else pairs
     if len(discordant):
         title = ("Merge success paired by seed — comparisons in which only one of the two "
                  "merged in some seed")  # fmt: skip
         caption = "p: exact McNemar test, Holm-adjusted over the comparisons"
         tables.append((TextTable(success_pairs_view(discordant), title, caption, NUMERIC), 3))
-    if not mean_rows.empty:
-        shown = means_view(mean_rows)
+    if not found.means.empty:
+        shown = means_view(found.means)
         tables.append((TextTable(shown, MEANS_TITLE, MEANS_CAPTION, tuple(shown.columns[2:])), 2))
-    if len(effect_rows):
+    if not found.safety.empty:
+        shown = safety_view(found.safety)
+        tables.append((TextTable(shown, SAFETY_TITLE, SAFETY_CAPTION, tuple(shown.columns[2:])), 2))
+    if len(found.effects):
         legend = f"median A-B over the pairs [95 % bootstrap CI]; {pairs_note}; {EFFECTS_LEGEND}"
-        tables.append((TextTable(effects_view(effect_rows), EFFECTS_TITLE, legend, NUMERIC), 4))
+        shown = effects_view(found.effects)
+        tables.append((TextTable(shown, EFFECTS_TITLE, legend, NUMERIC), 4))
     return tables
 
 

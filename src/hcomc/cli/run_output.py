@@ -68,14 +68,23 @@ def run_label(
     return configuration_of(control)
 
 
+RUN_LEGEND = (
+    "decision: the controller's time for its first plan; least TTC and max DRAC: over every "
+    "follower-leader pair of a lane with a key vehicle in it"
+)
+"""The legend of ``hcomc run``'s table of scenario runs."""
+
+
 def print_merge_runs(frame: Any, title: str, duration: float) -> None:
     """Print runs of the scenario engine: per seed the paper's metrics, merge success, and
     each metric's mean with its 95 % CI."""
     from hcomc.experiments.tables import LABELS
 
-    frame = frame.reindex(columns=[*frame.columns, *(m for m in LABELS if m not in frame)])
-    cols = ["seed", "merged", "mode", "decision_ms", *LABELS]
-    print_frame(frame[cols].rename(columns={**LABELS, "decision_ms": "decision [ms]"}), title)
+    shown = {**LABELS, "min_ttc": "least TTC [s]", "max_drac": "max DRAC [m/s²]"}
+    frame = frame.reindex(columns=[*frame.columns, *(m for m in shown if m not in frame)])
+    cols = ["seed", "merged", "mode", "decision_ms", *shown]
+    print_frame(frame[cols].rename(columns={**shown, "decision_ms": "decision [ms]"}), title,
+                RUN_LEGEND)  # fmt: skip
     merged = frame["merged"].fillna(False).astype(bool)
     out.print(
         f"VR merged in {int(merged.sum())} of {len(frame)} runs; a run in which it did not is "

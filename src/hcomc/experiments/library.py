@@ -63,12 +63,14 @@ class ComparisonResult:
     The tables are those of ``hcomc compare`` (its CSV files): ``success`` (merge success,
     k of n runs per cell and configuration), ``success_pairs`` (merge success of A against
     B, paired by seed), ``means`` (per cell, configuration and metric: mean, 95 % t
-    half-width, n) and ``effects`` (per cell, comparison and metric: the paired effect of A
-    against B, its CI, verdicts and sign test); their columns are the fields of
-    :class:`~hcomc.experiments.comparison.success.Success`,
+    half-width, n), ``effects`` (per cell, comparison and metric: the paired effect of A
+    against B, its CI, verdicts and sign test) and ``safety`` (per cell and configuration: the
+    least TTC and largest DRAC over the runs, with their seeds, and the collisions); their
+    columns are the fields of :class:`~hcomc.experiments.comparison.success.Success`,
     :class:`~hcomc.experiments.comparison.success.SuccessPair`,
-    :class:`~hcomc.experiments.comparison.means.Mean` and
-    :class:`~hcomc.experiments.comparison.effects.Effect`. ``runs`` has a row per run
+    :class:`~hcomc.experiments.comparison.means.Mean`,
+    :class:`~hcomc.experiments.comparison.effects.Effect` and
+    :class:`~hcomc.experiments.comparison.safety.SafetyExtremes`. ``runs`` has a row per run
     (cell, configuration, seed): ``suite``, ``condition`` (the cell), ``base``, ``engine``,
     then the columns of :func:`hcomc.run`.
     """
@@ -86,6 +88,7 @@ class ComparisonResult:
     success_pairs: pd.DataFrame
     means: pd.DataFrame
     effects: pd.DataFrame
+    safety: pd.DataFrame
 
     def __repr__(self) -> str:
         return (
@@ -268,6 +271,7 @@ def compare(
         comparisons=tables.comparisons, names=tables.names, overrides=plan.overrides,
         engine=plan.engine, runs=tables.runs, success=tables.success,
         success_pairs=tables.success_pairs, means=tables.means, effects=tables.effects,
+        safety=tables.safety,
     )  # fmt: skip
 
 

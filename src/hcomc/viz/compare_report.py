@@ -27,6 +27,7 @@ from hcomc.experiments.comparison.view import (
     effects_view,
     means_view,
     metric_label,
+    safety_view,
     success_pairs_view,
     success_view,
 )
@@ -188,6 +189,7 @@ def write_compare_report(
     notes: Sequence[str] = (),
     title: str = "hcomc compare",
     means: pd.DataFrame | None = None,
+    safety: pd.DataFrame | None = None,
 ) -> Path:
     """Write ``out_dir/report.html`` (atomically) and return its path.
 
@@ -197,7 +199,9 @@ def write_compare_report(
     :func:`~hcomc.experiments.comparison.success.success_pairs`, ``record`` the folder's record
     (suite, versions, command) and ``notes`` lines shown under the header (e.g. settings in
     which two compared folders differ); ``means``, the frame of
-    :func:`~hcomc.experiments.comparison.means.means`, adds the per-controller means.
+    :func:`~hcomc.experiments.comparison.means.means`, adds the per-controller means, and
+    ``safety``, the frame of :func:`~hcomc.experiments.comparison.safety.safety_extremes`,
+    the safety extremes.
     """
     note_html = "".join(f'<p class="note">{_e(n)}</p>\n' for n in notes)
     sections = []
@@ -226,6 +230,12 @@ def write_compare_report(
         else "<h2>Means</h2>\n"
         + _table(means_view(means), "Over each controller's runs with a value, ± 95 % t interval")
     )
+    if safety is not None and not safety.empty:
+        means_html += "\n<h2>Safety extremes</h2>\n" + _table(
+            safety_view(safety),
+            "Least TTC and largest DRAC over each controller's runs (with their seed), and "
+            "the collisions of those runs",
+        )
     body = html_page(
         title,
         f"""<h1>{_e(title)}</h1>

@@ -1,8 +1,9 @@
 """The tables of a controller comparison, computed from its runs in one call: merge success
 (:func:`~hcomc.experiments.comparison.success.merge_success`), its paired comparison
 (:func:`~hcomc.experiments.comparison.success.success_pairs`), the means
-(:func:`~hcomc.experiments.comparison.means.means`) and the paired effects
-(:func:`~hcomc.experiments.comparison.effects.effects`).
+(:func:`~hcomc.experiments.comparison.means.means`), the paired effects
+(:func:`~hcomc.experiments.comparison.effects.effects`) and the safety extremes
+(:func:`~hcomc.experiments.comparison.safety.safety_extremes`).
 
 A controller named by module or file (``package.module:Class``, ``path/to/file.py:Class``)
 is shown by its name (:func:`~hcomc.experiments.comparison.view.controller_labels`) in the
@@ -19,6 +20,7 @@ import pandas as pd
 
 from hcomc.experiments.comparison.effects import effects
 from hcomc.experiments.comparison.means import means
+from hcomc.experiments.comparison.safety import safety_extremes
 from hcomc.experiments.comparison.success import merge_success, success_pairs
 from hcomc.experiments.comparison.view import controller_labels
 from hcomc.experiments.paper import PAPER_METRICS
@@ -41,6 +43,7 @@ class ComparisonTables:
     success_pairs: pd.DataFrame  # ... .success.SuccessPair
     means: pd.DataFrame  # hcomc.experiments.comparison.means.Mean
     effects: pd.DataFrame  # hcomc.experiments.comparison.effects.Effect
+    safety: pd.DataFrame  # hcomc.experiments.comparison.safety.SafetyExtremes
 
 
 def comparison_tables(
@@ -64,4 +67,5 @@ def comparison_tables(
         success_pairs=success_pairs(shown, pairs),
         means=means(shown, confs, metrics),
         effects=effects(shown, confs, comparisons=pairs, metrics=metrics),
+        safety=safety_extremes(shown, confs),
     )

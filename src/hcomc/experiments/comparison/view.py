@@ -25,6 +25,7 @@ __all__ = [
     "means_view",
     "metric_label",
     "rounded",
+    "safety_view",
     "success_pairs_view",
     "success_view",
 ]
@@ -167,6 +168,34 @@ def means_view(frame: pd.DataFrame) -> pd.DataFrame:
     order = pd.MultiIndex.from_frame(shown[["condition", "label"]].drop_duplicates())
     wide = wide.reindex(index=order, columns=pd.unique(frame["configuration"]))
     return wide.fillna("—").rename_axis(index=["cell", "metric"], columns=None).reset_index()
+
+
+SAFETY_ROWS = (
+    ("least TTC [s] ↑", "least_ttc", "least_ttc_seed"),
+    ("max DRAC [m/s²] ↓", "max_drac", "max_drac_seed"),
+)
+"""The rows of :func:`safety_view` with a value and its seed: label, value, seed column."""
+
+
+def safety_view(frame: pd.DataFrame) -> pd.DataFrame:
+    """The safety extremes (:func:`~hcomc.experiments.comparison.safety.safety_extremes`) as
+    text: per cell the least TTC and the largest DRAC over each configuration's runs, "value
+    (seed s)" to three significant digits, and its collisions ("k, j with a key vehicle");
+    "—" without a value."""
+    if frame.empty:
+        return pd.DataFrame()
+    rows = []
+    for condition, cell in frame.groupby("condition", sort=False):
+        by_conf = cell.set_index("configuration")
+        for label, value, seed in SAFETY_ROWS:
+            rows.append({"cell": condition, "measure": label, **{
+                c: "—" if r[seed] < 0 else f"{rounded(r[value])} (seed {r[seed]})"
+                for c, r in by_conf.iterrows()}})  # fmt: skip
+        rows.append({"cell": condition, "measure": "collisions ↓", **{
+            c: str(r["collisions"]) + (f", {r['key_collisions']} with a key vehicle"
+                                       if r["key_collisions"] else "")
+            for c, r in by_conf.iterrows()}})  # fmt: skip
+    return pd.DataFrame(rows).fillna("—")
 
 
 def _p(p: float) -> str:
