@@ -235,13 +235,12 @@ def run_batch(
 ) -> list[tuple[dict[str, Any], dict[str, Any]]]:
     """Simulate runs as one batch and compute their metrics: ``(row, manifest)`` per spec.
 
-    Runs on our engine, with the undisturbed runs they need that this process has not
-    simulated yet, advance together as one ensemble (:func:`hcomc.sim.ensemble.run_ensemble`,
-    on ``threads`` cores); each run's result is bit-identical to running it alone. SUMO runs
-    are simulated one after the other. ``wall_s`` is each run's share of the batch's time.
+    The runs, with the undisturbed runs they need that this process has not simulated yet,
+    run by :func:`hcomc.interface.run_all`: those of our engine together as one ensemble (on
+    ``threads`` cores; each run's result is bit-identical to running it alone), SUMO runs one
+    after the other. ``wall_s`` is each run's share of the batch's time.
     """
-    from hcomc.sim.engine import Simulation
-    from hcomc.sim.ensemble import run_ensemble
+    from hcomc.interface import run_all
 
     start = time.perf_counter()
     configs = [load_config(spec.condition, **spec.config_overrides()) for spec in specs]
@@ -251,11 +250,7 @@ def run_batch(
         key = _reference_key(spec)
         if key not in _REFERENCES and key not in missing:
             missing[key] = _reference_simulation(spec)
-    batch = [*sims, *missing.values()]
-    run_ensemble([sim for sim in batch if isinstance(sim, Simulation)], threads=threads)
-    for sim in batch:
-        if not isinstance(sim, Simulation):
-            sim.run()
+    run_all([*sims, *missing.values()], threads=threads)
     for key, sim in missing.items():
         _remember(key, sim.log)
     share = (time.perf_counter() - start) / max(len(specs), 1)

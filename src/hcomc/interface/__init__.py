@@ -9,7 +9,7 @@ the per-vehicle model parameters both read. To write your own controller, import
 """
 
 from hcomc.interface.controller import MergeController, elapsed_ms
-from hcomc.interface.engine import Engine
+from hcomc.interface.engine import Engine, run_all
 from hcomc.interface.fleet import Fleet, follow
 from hcomc.interface.plan import MergeGroup, MergePlan, Mode, PlanDetails
 from hcomc.interface.view import TrafficView
@@ -25,4 +25,5 @@ __all__ = [
     "TrafficView",
     "elapsed_ms",
     "follow",
+    "run_all",
 ]

@@ -2,14 +2,20 @@
 
 Both our engine (:class:`hcomc.sim.engine.Simulation`) and the SUMO co-simulation
 (:class:`hcomc.sumo.cosim.SumoSimulation`) implement it, so experiments, metrics and reports
-run on either. ``LogT_co`` is the type of the run's log (both engines write a
+run on either; :func:`hcomc.sim.contract.check_engine` checks an implementation (the test
+suite runs it on both). ``LogT_co`` is the type of the run's log (both engines write a
 :class:`hcomc.sim.log.SimulationLog`; the protocol lives below the engine and does not name it).
+
+Batching is a capability, not a kind of engine: a class that can run many runs of its own
+as one batch defines the class method ``run_together(engines, threads=None)`` itself (not
+inherited: a subclass that changes how a run advances must not be batched by its parent's
+method), and :func:`run_all` uses it for that class's runs and runs every other one alone.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Protocol, TypeVar
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 
@@ -99,3 +105,20 @@ class Engine(Protocol[LogT_co]):
 
     def run(self, progress: Callable[[int, int], None] | None = None) -> LogT_co:
         """Warm up, simulate the scenario's duration and return the log."""
+
+
+def run_all(engines: Sequence[Engine[Any]], *, threads: int | None = None) -> None:
+    """Run every engine of ``engines`` to its end: the runs of a class that defines
+    ``run_together`` as one batch per class (on ``threads`` cores), every other run alone,
+    classes in order of first appearance. The logs are each engine's ``log``."""
+    groups: dict[type, list[Engine[Any]]] = {}
+    for engine in engines:
+        groups.setdefault(type(engine), []).append(engine)
+    for kind, group in groups.items():
+        own = "run_together" in vars(kind)  # defined by the class itself, not inherited
+        together = getattr(kind, "run_together", None) if own else None
+        if together is not None:
+            together(group, threads=threads)
+        else:
+            for engine in group:
+                engine.run()

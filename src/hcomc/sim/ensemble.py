@@ -16,11 +16,10 @@ Use :func:`run_ensemble` on :class:`~hcomc.sim.engine.Simulation` objects::
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
-from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.step.batch import (
     advance_batch,
@@ -37,10 +36,35 @@ if TYPE_CHECKING:
 
 _END = np.iinfo(np.int64).max  # "no goal": to the run's end
 
+
+class EnsembleRun(Protocol):
+    """What an ensemble needs of a run (:class:`~hcomc.sim.engine.Simulation` is one): its
+    compiled state and generator, where it stands, and its Python side for a stop. Stated
+    here, not imported, so that the engine can batch its runs through this module
+    (:meth:`Simulation.run_together`) without an import cycle."""
+
+    core: Any  # hcomc.sim.step.state.Core
+    rng: Any  # its generator (numpy's, as the compiled loop draws from it)
+    key_groups: dict[int, Any]
+    log: SimulationLog
+
+    @property
+    def finished(self) -> bool: ...
+
+    @property
+    def stop_step(self) -> int: ...
+
+    @property
+    def logging(self) -> bool: ...
+
+    def resume(self, reason: int) -> None: ...
+
+    def flush_events(self) -> None: ...
+
 _BATCH_LISTS = TypedListCache()  # the compiled loop's states and generators of the last batch
 
 
-def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
+def _typed_lists(runs: list[EnsembleRun]) -> tuple[List, List]:
     """The compiled loop's lists of the runs' states and generators (kept from the last
     batch: see :class:`~hcomc.sim.typed_lists.TypedListCache`)."""
     cores, rngs = _BATCH_LISTS.lists(runs, lambda s: s.core, lambda s: s.rng)
@@ -48,7 +72,7 @@ def _typed_lists(runs: list[Simulation]) -> tuple[List, List]:
 
 
 def run_ensemble(
-    sims: Sequence[Simulation],
+    sims: Sequence[EnsembleRun],
     *,
     threads: int | None = None,
     progress: Callable[[int, int], None] | None = None,
@@ -65,7 +89,7 @@ def run_ensemble(
 
 
 def advance_ensemble(
-    sims: Sequence[Simulation],
+    sims: Sequence[EnsembleRun],
     steps: Sequence[int] | None,
     *,
     until_key_vehicles: Sequence[bool] | None = None,
@@ -113,7 +137,7 @@ class _Batch:
     whether it must go on, as arrays, so that a batch step costs Python only for the runs
     that stopped for it (a decision event, a flush, the end of a stage)."""
 
-    def __init__(self, runs: list[Simulation], goal: np.ndarray, keys: np.ndarray) -> None:
+    def __init__(self, runs: list[EnsembleRun], goal: np.ndarray, keys: np.ndarray) -> None:
         self.runs, self.goal, self.keys = runs, goal, keys
         self.cores, self.rngs = _typed_lists(runs)  # one batch, the same places
         n = len(runs)
@@ -146,4 +170,4 @@ class _Batch:
         self._update()
 
 
-__all__ = ["advance_ensemble", "run_ensemble"]
+__all__ = ["EnsembleRun", "advance_ensemble", "run_ensemble"]

@@ -1,0 +1,105 @@
+"""The engine contract (:func:`hcomc.sim.contract.check_engine`) on our engine and on the SUMO
+co-simulation, engines that break it, and batching as a capability of an engine class
+(:func:`hcomc.interface.run_all`) instead of a test of its type."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+from hcomc import Simulation, load_config
+from hcomc.interface import run_all
+from hcomc.sim.contract import check_engine
+
+
+def _scenario(controller: str = "fifo") -> Any:
+    return load_config("C2", duration=30.0, control={"controller": controller})
+
+
+@pytest.mark.parametrize("controller", ["fifo", "hcomc"])
+def test_our_engine_keeps_the_contract(controller):
+    check_engine(Simulation, _scenario(controller))
+
+
+def test_the_sumo_cosimulation_keeps_the_contract():
+    pytest.importorskip("libsumo")
+    from hcomc.sumo.cosim import SumoSimulation
+
+    check_engine(SumoSimulation, _scenario())
+
+
+class _Silent(Simulation):
+    """Reports no progress."""
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Any:
+        return super().run(None)
+
+
+class _Forgetful(Simulation):
+    """Returns something else than its log."""
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Any:
+        super().run(progress)
+        return None
+
+
+def _shifted(config, seed, ctl):
+    return Simulation(config, seed + 1, ctl)  # runs another seed than it says
+
+
+def _frozen(config, seed, ctl):
+    return Simulation(config, 3, ctl)  # every seed the same traffic
+
+
+@pytest.mark.parametrize(
+    ("make", "broken"),
+    [
+        (_Silent, "run reports its progress"),
+        (_Forgetful, "run returns the engine's log"),
+        (_shifted, "the engine's seed is 4, made with 3"),
+        (lambda config, seed, ctl: Simulation(config, seed), "keeps the controller"),
+        (_frozen, "another seed gives the same traffic"),
+    ],
+)
+def test_an_engine_that_breaks_a_promise_fails_naming_it(make, broken):
+    with pytest.raises(AssertionError, match=broken):
+        check_engine(make, _scenario())
+
+
+class _Batched(Simulation):
+    """Runs its kind as one batch, and counts the batches."""
+
+    batches: list[int] = []  # noqa: RUF012  (a class-level record the test reads)
+
+    @classmethod
+    def run_together(cls, sims: Any, *, threads: int | None = None) -> None:
+        cls.batches.append(len(sims))
+        super().run_together(sims, threads=threads)
+
+
+class _Stepwise(Simulation):
+    """Changes how a run advances: must not be batched by its parent's run_together."""
+
+    runs = 0
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Any:
+        type(self).runs += 1
+        return super().run(progress)
+
+
+def test_run_all_batches_a_class_that_defines_run_together_and_runs_others_alone():
+    config = load_config("C1", duration=10.0)
+    batched = [_Batched(config, seed) for seed in (1, 2, 3)]
+    stepwise = [_Stepwise(config, seed) for seed in (1, 2)]
+    plain = Simulation(config, 1)
+    run_all([batched[0], *stepwise, *batched[1:], plain])
+    assert _Batched.batches == [3]  # one batch of its three runs
+    assert _Stepwise.runs == 2  # the subclass of Simulation ran alone, each run
+    for sim in (*batched, *stepwise, plain):
+        assert sim.finished
+    alone = Simulation(config, 2)
+    alone.run()
+    assert np.array_equal(alone.log.x, batched[1].log.x, equal_nan=True)  # batched = alone
