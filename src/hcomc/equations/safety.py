@@ -155,9 +155,8 @@ def stopping_distance(v: float, decel: float, s0: float) -> float:
 
     Notes
     -----
-    :math:`v^2` is taken as ``v * v``, correctly rounded. The engine's compiled step
-    (``hcomc.sim.step.plans``) takes C's ``pow(v, 2)`` instead, and the robustness shield
-    numpy's ``v ** 2``, for the reproducibility of earlier runs; the three may differ in the
-    last bit.
+    The one stopping distance of hcomc: the engine's release of a ramp vehicle from its plan
+    (``hcomc.sim.step.plans``), the corridor engine's (``hcomc.sim.corridor.plans``), the
+    robustness shield's and the planners' cap on the merge position all take it from here.
     """
     return v * v / (2.0 * decel) + s0

@@ -27,6 +27,7 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
+from hcomc.equations.safety import stopping_distance
 from hcomc.road import Lane
 from hcomc.robustness.run_state import ImpairedRun, ScenarioRun
 from hcomc.robustness.settings import ShieldParams
@@ -149,7 +150,9 @@ class Shield:
 
     def cannot_stop(self, sim: ImpairedRun, vr: int) -> bool:
         """Whether VR could no longer stop before the lane end at the safe deceleration."""
-        stop = sim.v[vr] ** 2 / (2 * self.config.lane_change.safe_decel) + sim.fleet.s0[vr]
+        stop = stopping_distance(
+            float(sim.v[vr]), self.config.lane_change.safe_decel, float(sim.fleet.s0[vr])
+        )
         return bool(sim.x[vr] >= self.config.road.accel_lane_end - stop)
 
     def _safe(self, sim: ImpairedRun, rear: int, front: int) -> bool:

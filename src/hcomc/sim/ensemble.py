@@ -61,6 +61,7 @@ class EnsembleRun(Protocol):
 
     def flush_events(self) -> None: ...
 
+
 _BATCH_LISTS = TypedListCache()  # the compiled loop's states and generators of the last batch
 
 

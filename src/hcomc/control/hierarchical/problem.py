@@ -54,7 +54,7 @@ is made with ``replanning=True``) adds two, which are 0 when planning once:
 * ``no_return`` [m] — the merge position lies beyond the point of no return less one replan
   period: ``x_merge <= x_end - (v^2 / (2 b_safe) + s0) - v P``, with VR's predicted speed v
   when it begins its change, MOBIL's b_safe (the deceleration of the engine's release,
-  ``hcomc.sim.step.plans.stopping_distance``), VR's jam gap s0 and the replan period P: a
+  :func:`hcomc.equations.safety.stopping_distance`), VR's jam gap s0 and the replan period P: a
   change the engine refuses at the merge position still leaves a replan before VR is released;
 * ``execution`` — the engine's execution criterion fails in the predicted state in which VR
   begins its change: VR's new follower in lane 1 (or VR behind its new leader) would brake

@@ -43,6 +43,7 @@ import math
 from hcomc._jit import borrow_all, kernel
 from hcomc.control.key_vehicles import key_vehicle_indices
 from hcomc.equations.car_following import follow_accel_given
+from hcomc.equations.safety import stopping_distance
 from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.road import VMC, VMR, VNR, VR, Lane
 from hcomc.safety.surrogate import CLOSING_SPEED
@@ -322,7 +323,7 @@ def execute(road: Layout, veh: Vehicles, s: State, t: float, step: int) -> None:
                        default if math.isnan(duration) else duration):  # fmt: skip
             pi[k, P_VR_STARTED] = 1
             continue
-        stop = s.v[vr] * s.v[vr] / (2.0 * s.params[P_SAFE_DECEL]) + veh.s0[vr]
+        stop = stopping_distance(s.v[vr], s.params[P_SAFE_DECEL], veh.s0[vr])
         if s.x[vr] >= road.code_x1[c] - stop:
             pi[k, P_RELEASED] = 1
             s.ev_released[vr] = True

@@ -116,7 +116,6 @@ def build_arrays(
     consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
     consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
     consts[layout.REPLAN_PERIOD] = config.control.replan_period
-    consts[layout.SQUARE] = 2.0
     flags = np.zeros(layout.N_FLAGS, dtype=i8)
     flags[layout.PERCEIVE], flags[layout.ERRORS] = perceive, per.errors
     flags[layout.PLATOON] = config.scenario == "platoon"

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from hcomc._jit import kernel
+from hcomc.equations.safety import stopping_distance
 from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import commanded_changes
@@ -35,7 +36,6 @@ from hcomc.sim.step.state import (
     N_PLANS,
     RAMP,
     REPLAN_PERIOD,
-    SQUARE,
     CoreArrays,
 )
 
@@ -271,16 +271,6 @@ def _command(
 
 
 @kernel
-def stopping_distance(c: CoreArrays, i: int) -> float:
-    """Distance vehicle i needs to stop at the MOBIL safe deceleration, plus s0 [m].
-
-    v^2 is libm's ``pow(v, 2)`` (the exponent read from the state, so that the compiler
-    keeps the call): numpy's scalar power, with which plans were executed before, rounds
-    that way, which a multiplication does not always."""
-    return c.v[i] ** c.consts[SQUARE] / (2.0 * c.lc_params[_MOBIL_SAFE_DECEL]) + c.matrix[2, i]
-
-
-@kernel
 def execute_plans(
     c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, index: LaneIndex
 ) -> None:
@@ -307,7 +297,9 @@ def execute_plans(
             or c.x[vr] < pf[k, F_MERGE_X]
         ):
             continue
-        release_x = accel_end - stopping_distance(c, vr)
+        release_x = accel_end - stopping_distance(
+            c.v[vr], c.lc_params[_MOBIL_SAFE_DECEL], c.matrix[2, vr]
+        )  # s0, row 2 of the matrix
         started = _command(c, ids, t, lead, index, vr, MAIN_1, pf[k, F_VR_DURATION], release_x,
                            vr, vmc)  # fmt: skip
         pi[k, P_VR_STARTED] = started > 0

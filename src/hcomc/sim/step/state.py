@@ -27,10 +27,10 @@ EV_FALLBACK = 8
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
-# consts (SQUARE: the exponent 2.0, see hcomc.sim.step.plans.stopping_distance)
+# consts
 (DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
- KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD, SQUARE) = range(15)  # fmt: skip
-N_CONSTS = 15
+ KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD) = range(14)  # fmt: skip
+N_CONSTS = 14
 # flags
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
  CAV_GAME) = range(8)  # fmt: skip
@@ -109,7 +109,7 @@ class CoreArrays(NamedTuple):
     ev_x: np.ndarray
     ev_value: np.ndarray
     counters: np.ndarray  # int64, see STEP ... N_PLANS
-    consts: np.ndarray  # float64, see DT ... SQUARE
+    consts: np.ndarray  # float64, see DT ... REPLAN_PERIOD
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
