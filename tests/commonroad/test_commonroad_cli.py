@@ -17,10 +17,10 @@ from commonroad.common.file_reader import CommonRoadFileReader
 from commonroad_cli import invoke
 
 import hcomc.commonroad
-from hcomc.commonroad.lanes import RAMP_SLOPE
 from hcomc.commonroad.scenario import OBSTACLE_IDS
 from hcomc.commonroad.schema import schema_valid
 from hcomc.corridor import Corridor
+from hcomc.corridor.layout import RAMP_SLOPE
 from hcomc.sim.log import SimulationLog
 
 

@@ -49,6 +49,7 @@ def run_corridor(
 ) -> None:  # fmt: skip
     """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
     from hcomc.sim.corridor import simulate_corridor
+    from hcomc.sim.corridor.record import CORRIDOR_ENGINE
     from hcomc.sim.manifest import build_manifest, write_json_atomic
     from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 
@@ -74,7 +75,7 @@ def run_corridor(
         out_dir.mkdir(parents=True, exist_ok=True)
         manifest = build_manifest(
             seed=run.seed, config=corridor.model_dump(mode="json"),
-            extra={"engine": "hcomc-corridor", "duration": run.duration,
+            extra={"engine": CORRIDOR_ENGINE, "duration": run.duration,
                    "controller": run.controller},
         )  # fmt: skip
         write_json_atomic(out_dir / "manifest.json", manifest)

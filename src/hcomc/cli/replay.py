@@ -11,20 +11,24 @@ from hcomc.cli._app import _compiled, _fail, app, out
 from hcomc.config import ConfigError
 
 if TYPE_CHECKING:
-    from hcomc.sim.log import SimulationLog
+    from hcomc.viz.replay.runs import ReplayRun
 
 
-def _load_run(path: Path) -> SimulationLog:
-    """The log of a run directory (or a saved log file); a one-line error without one."""
-    from hcomc.viz.inputs import load_log
+def _load_run(path: Path) -> ReplayRun:
+    """The run of a run directory (a scenario run's log, a corridor run's trajectories) or a
+    saved log file; a one-line error without one."""
+    from hcomc.sim.corridor.record import is_corridor_run
+    from hcomc.viz.replay.runs import load_run
 
-    if path.is_dir() and not any((path / n).is_file() for n in ("log.npz", "log.parquet")):
+    logs = ("log.npz", "log.parquet")
+    if path.is_dir() and not is_corridor_run(path) and not any((path / n).is_file() for n in logs):
         raise _fail(
-            f"run directory '{path}' holds no log.npz or log.parquet; allowed: a directory "
-            f"written by 'hcomc simulate CONFIG --out {path}', or a saved log file"
+            f"run directory '{path}' holds no log.npz or log.parquet and is no corridor run; "
+            "allowed: the --out directory of 'hcomc simulate SCENARIO', or of 'hcomc simulate "
+            "CORRIDOR --trajectory-interval S', or a saved log file"
         )
     try:
-        return load_log(path)
+        return load_run(path)
     except (ValueError, OSError) as exc:
         raise _fail(str(exc)) from None
 
@@ -36,7 +40,8 @@ def replay(
         typer.Argument(
             metavar="RUN_DIR...",
             help="Runs to play side by side on one clock: 'hcomc simulate --out' directories "
-            "(or saved logs), e.g. the same seed with FIFO, Game and HCOMC.",
+            "(or saved logs), e.g. the same seed with FIFO, Game and HCOMC; corridor runs "
+            "need --trajectory-interval.",
         ),
     ],
     out_file: Annotated[
@@ -62,7 +67,7 @@ def replay(
     """Write an interactive replay of runs: one HTML file that plays offline in a browser."""
     from hcomc.viz.replay import replay as build
     from hcomc.viz.replay.browser import BrowserError, find_chromium, replay_screenshot
-    from hcomc.viz.replay.decisions import moment_of_interest
+    from hcomc.viz.replay.runs import check_together, moment
 
     if titles is not None and len(titles) != len(runs):
         raise _fail(f"option '--title' given {len(titles)} times for {len(runs)} runs; "
@@ -75,6 +80,10 @@ def replay(
     if not 320 <= width <= 4096:
         raise _fail(f"option '--width' = {width}: allowed: 320 to 4096 px")
     logs = [_load_run(path) for path in runs]
+    try:
+        check_together(logs, [str(path) for path in runs])
+    except ValueError as exc:
+        raise _fail(str(exc)) from None
     _compiled("replay")
     try:
         page = build(logs, titles=titles, out=out_file)
@@ -83,9 +92,9 @@ def replay(
     out.print(f"wrote {out_file} ({page.nbytes / 1e6:.2f} MB, {len(logs)} run(s))")
     if screenshot is None:
         return
-    moment = moment_of_interest(logs) if at is None else at
+    shown = moment(logs) if at is None else at
     try:
-        replay_screenshot(out_file, screenshot, t=moment, width=width)
+        replay_screenshot(out_file, screenshot, t=shown, width=width)
     except (BrowserError, OSError) as exc:
         raise _fail(f"screenshot failed: {exc}") from None
-    out.print(f"wrote {screenshot} (t = {moment:.1f} s)")
+    out.print(f"wrote {screenshot} (t = {shown:.1f} s)")

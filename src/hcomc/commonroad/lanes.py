@@ -13,20 +13,14 @@ requires.
   the ramp runs parallel to lane 1 from ``ramp_start`` (a solid line: no change) and becomes
   the acceleration lane (a broad dashed line: merging allowed), which ends at
   ``accel_lane_end``.
-* **A corridor** (:func:`corridor_strips`, a run of the corridor engine) is cut at its
-  sections (:func:`hcomc.corridor.sections`), the description its SUMO export and the
-  corridor engine read. The mainline's right border lies on ``y = 0``, so mainline lane k
-  (0 = rightmost) is centred at ``(k + 1/2) W`` and ramp lane j at ``-(j + 1/2) W``, as in
-  :mod:`hcomc.sumo.corridor_network`. An on-ramp road ends at ``x`` and an off-ramp road
-  starts at the end of its deceleration lane; both run at the slope :data:`RAMP_SLOPE` away
-  from the mainline (the SUMO export's), over their ``ramp_length`` along the centre line,
-  so that ramps of neighbouring junctions never overlap.
+* **A corridor** (:func:`corridor_strips`, a run of the corridor engine) is cut into the
+  lane stretches of :func:`hcomc.corridor.layout.lane_stretches` (its sections, the
+  description its SUMO export and the corridor engine read, and its ramp roads sloping away
+  from the mainline), the layout the browser replay draws too.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import Enum
 from itertools import pairwise
@@ -34,22 +28,11 @@ from itertools import pairwise
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.corridor import Corridor, OffRamp, OnRamp, sections
+from hcomc.corridor import Corridor
+from hcomc.corridor.layout import LaneStretch, StretchKind, lane_stretches, side_by_side
 from hcomc.road import Lane
 
-__all__ = [
-    "RAMP_SLOPE",
-    "Marking",
-    "Strip",
-    "StripKind",
-    "corridor_strips",
-    "paper_road_strips",
-    "ramp_road_pose",
-]
-
-RAMP_SLOPE = 0.1
-"""Lateral offset per metre along the mainline of a corridor's ramp road [-] (as exported to
-SUMO, :mod:`hcomc.sumo.corridor_network`)."""
+__all__ = ["Marking", "Strip", "StripKind", "corridor_strips", "paper_road_strips"]
 
 _EPS = 1e-6  # [m] stretches shorter than this are left out
 
@@ -109,22 +92,6 @@ class Strip:
         return float(self.centre[-1, 0])
 
 
-@dataclass(frozen=True, slots=True)
-class _Cut:
-    """A lane over one stretch [x0, x1] before ids and links: its identity ``key`` (the same
-    along the lane), lateral bounds and kind."""
-
-    key: tuple[object, ...]
-    x0: float
-    x1: float
-    y_right: float
-    y_left: float
-    kind: StripKind
-    lane: int
-    ramp: str | None = None
-    drop: tuple[float, float] = (0.0, 0.0)  # lateral shift of the two ends [m] (a ramp road)
-
-
 def paper_road_strips(config: ScenarioConfig) -> tuple[Strip, ...]:
     """The strips of the paper's road (module docstring), upstream first, right to left."""
     r = config.road
@@ -137,67 +104,25 @@ def paper_road_strips(config: ScenarioConfig) -> tuple[Strip, ...]:
             lanes.insert(0, Lane.RAMP)
         for lane in lanes:
             y = (int(lane) - 1) * r.lane_width
-            kind = StripKind.MAIN
+            kind: StretchKind = "main"
             if lane == Lane.RAMP:
-                kind = StripKind.ACCEL if x0 >= r.accel_lane_start else StripKind.RAMP
-            pieces.append(_Cut((int(lane),), x0, x1, y - half, y + half, kind, int(lane)))
+                kind = "accel" if x0 >= r.accel_lane_start else "ramp"
+            pieces.append(LaneStretch((int(lane),), x0, x1, y - half, y + half, kind, int(lane)))
     return _linked([p for p in pieces if p.x1 - p.x0 > _EPS])
 
 
 def corridor_strips(corridor: Corridor) -> tuple[Strip, ...]:
     """The strips of a corridor's road (module docstring), upstream first, right to left;
     ramp roads after the mainline."""
-    road, width = corridor.road, corridor.road.lane_width
-    pieces = []
-    for s in sections(road):
-        for k in range(s.lanes):
-            pieces.append(_Cut(("main", k), s.x0, s.x1, k * width, (k + 1) * width,
-                               StripKind.MAIN, k))  # fmt: skip
-        kind = StripKind.ACCEL if s.kind == "accel" else StripKind.DECEL
-        for j in range(s.ramp_lanes):
-            pieces.append(_Cut(("ramp", s.ramp, j), s.x0, s.x1, -(j + 1) * width, -j * width,
-                               kind, -1 - j, s.ramp))  # fmt: skip
-    for ramp in road.ramps:
-        road_kind = StripKind.RAMP if isinstance(ramp, OnRamp) else StripKind.EXIT
-        x0, x1 = _ramp_road_span(ramp)
-        for j in range(ramp.lanes):
-            pieces.append(_Cut(("ramp", ramp.id, j), x0, x1, -(j + 1) * width, -j * width,
-                               road_kind, -1 - j, ramp.id, _drop(ramp)))  # fmt: skip
-    return _linked(pieces)
+    return _linked(list(lane_stretches(corridor.road)))
 
 
-def ramp_road_pose(ramp: OnRamp | OffRamp, distance: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Where a point ``distance`` [m] along a corridor's ramp road, measured from its junction
-    with the mainline (upstream for an on-ramp, downstream for an off-ramp), lies relative to
-    the junction: ``(dx, dy, heading)`` [m, m, rad] of the ramp's slope (heading of a vehicle
-    driving on it)."""
-    angle = math.atan(RAMP_SLOPE)
-    d = np.asarray(distance, dtype=np.float64)
-    sign = -1.0 if isinstance(ramp, OnRamp) else 1.0
-    heading = np.full(d.shape, angle if isinstance(ramp, OnRamp) else -angle)
-    return sign * d * math.cos(angle), -d * math.sin(angle), heading
-
-
-def _ramp_road_span(ramp: OnRamp | OffRamp) -> tuple[float, float]:
-    """The ramp road's extent along x [m] (its slant shortens it by cos(atan(slope)))."""
-    run = ramp.ramp_length * math.cos(math.atan(RAMP_SLOPE))
-    if isinstance(ramp, OnRamp):
-        return ramp.x - run, ramp.x
-    return ramp.end, ramp.end + run
-
-
-def _drop(ramp: OnRamp | OffRamp) -> tuple[float, float]:
-    """Lateral shift [m] of a ramp road's upstream and downstream ends (the junction: 0)."""
-    drop = -ramp.ramp_length * math.sin(math.atan(RAMP_SLOPE))
-    return (drop, 0.0) if isinstance(ramp, OnRamp) else (0.0, drop)
-
-
-def _linked(pieces: list[_Cut]) -> tuple[Strip, ...]:
+def _linked(pieces: list[LaneStretch]) -> tuple[Strip, ...]:
     """Number the pieces and link them: a lane's pieces in a row are predecessor and successor
     (a ramp road joins its acceleration lane and leaves its deceleration lane), pieces side by
     side over the same stretch sharing a bound are neighbours."""
     ids = {id(p): k + 1 for k, p in enumerate(pieces)}
-    by_key: dict[tuple[object, ...], list[_Cut]] = {}
+    by_key: dict[tuple[object, ...], list[LaneStretch]] = {}
     for p in sorted(pieces, key=lambda p: p.x0):
         by_key.setdefault(p.key, []).append(p)
     after: dict[int, int] = {}
@@ -209,12 +134,12 @@ def _linked(pieces: list[_Cut]) -> tuple[Strip, ...]:
     strips = []
     for p in pieces:
         sid = ids[id(p)]
-        left, right = _side_by_side(p, pieces)
+        left, right = side_by_side(p, pieces)
         shift = np.array(p.drop)
         xs = np.array([p.x0, p.x1])
         strips.append(Strip(
             id=sid, left=np.column_stack([xs, p.y_left + shift]),
-            right=np.column_stack([xs, p.y_right + shift]), kind=p.kind, lane=p.lane,
+            right=np.column_stack([xs, p.y_right + shift]), kind=StripKind(p.kind), lane=p.lane,
             ramp=p.ramp, left_marking=_marking(p, left),
             right_marking=_marking(p, right),
             predecessors=_some(before.get(sid)), successors=_some(after.get(sid)),
@@ -224,30 +149,16 @@ def _linked(pieces: list[_Cut]) -> tuple[Strip, ...]:
     return tuple(strips)
 
 
-def _side_by_side(p: _Cut, pieces: Iterable[_Cut]) -> tuple[_Cut | None, _Cut | None]:
-    """The pieces to the left and right of ``p`` over the same stretch (sharing a bound)."""
-    left = right = None
-    for q in pieces:
-        same = abs(q.x0 - p.x0) < _EPS and abs(q.x1 - p.x1) < _EPS and q.drop == p.drop
-        if q is p or not same:
-            continue
-        if abs(q.y_right - p.y_left) < _EPS:
-            left = q
-        elif abs(q.y_left - p.y_right) < _EPS:
-            right = q
-    return left, right
-
-
-def _marking(p: _Cut, beside: _Cut | None) -> Marking:
+def _marking(p: LaneStretch, beside: LaneStretch | None) -> Marking:
     """The line between ``p`` and ``beside``: solid at the road's edge and between the paper
     road's ramp and lane 1, broad dashed along an acceleration or deceleration lane, dashed
     between mainline lanes."""
     if beside is None:
         return Marking.SOLID
     kinds = {p.kind, beside.kind}
-    if StripKind.RAMP in kinds:
+    if "ramp" in kinds:
         return Marking.SOLID
-    if kinds & {StripKind.ACCEL, StripKind.DECEL}:
+    if kinds & {"accel", "decel"}:
         return Marking.BROAD_DASHED
     return Marking.DASHED
 

@@ -19,11 +19,12 @@ from pathlib import Path
 from typing import Any
 
 import hcomc
-from hcomc.commonroad.corridor_run import CorridorTracks, corridor_tracks, is_corridor_run
+from hcomc.commonroad.corridor_run import CorridorTracks, corridor_tracks
 from hcomc.commonroad.lanes import Strip, StripKind, corridor_strips, paper_road_strips
 from hcomc.commonroad.tracks import Track, first_ramp_vehicle, log_tracks
 from hcomc.config import ConfigError, ScenarioConfig, validate_config
 from hcomc.road import Lane
+from hcomc.sim.corridor.record import is_corridor_run
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import git_revision
 

@@ -12,7 +12,8 @@ its lanes continue as the acceleration lanes, which end (no successor) at ``x +
 accel_length``, so ramp vehicles must change left on them; mainline vehicles may not change
 onto them. An off-ramp is an edge named by its id leaving at ``x + decel_length`` from the
 deceleration lanes, which open at ``x`` and are reached by changing right. Ramp edges are
-drawn at a slight angle to the mainline and have their exact ``ramp_length``.
+drawn at a slight angle to the mainline (:data:`hcomc.corridor.layout.RAMP_SLOPE`, the slope
+the CommonRoad export and the browser replay draw) and have their exact ``ramp_length``.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from itertools import pairwise
 from pathlib import Path
 
 from hcomc.corridor import Corridor, Section, sections
+from hcomc.corridor.layout import RAMP_SLOPE
 from hcomc.sumo import SumoFormatError, sumo_binary
 
 __all__ = ["NET_FILE", "CorridorEdge", "build_corridor_network", "corridor_edges", "route_edges"]
@@ -30,7 +32,6 @@ __all__ = ["NET_FILE", "CorridorEdge", "build_corridor_network", "corridor_edges
 NET_FILE = "net.xml"
 _PLAIN = ("corridor.nod.xml", "corridor.edg.xml", "corridor.con.xml")
 _NO_CHANGE = "authority"  # only this vehicle class (none of ours) may change across the line
-_RAMP_ANGLE = 0.1  # lateral offset per metre of ramp length [-]
 _STRAIGHT = 20.0  # [m] of a ramp run parallel to the mainline at the junction, which keeps
 # the junction a point (an angled edge would give it an area and shorten the mainline edges)
 
@@ -87,10 +88,10 @@ def _nodes_xml(corridor: Corridor, edges: tuple[CorridorEdge, ...]) -> str:
         'type="priority" radius="0"/>'
     )
     for ramp in corridor.road.on_ramps:
-        x, y = ramp.x - ramp.ramp_length, -_RAMP_ANGLE * ramp.ramp_length
+        x, y = ramp.x - ramp.ramp_length, -RAMP_SLOPE * ramp.ramp_length
         rows.append(f'    <node id="{ramp.id}_start" x="{x:.3f}" y="{y:.3f}" type="priority"/>')
     for off in corridor.road.off_ramps:
-        x, y = off.end + off.ramp_length, -_RAMP_ANGLE * off.ramp_length
+        x, y = off.end + off.ramp_length, -RAMP_SLOPE * off.ramp_length
         rows.append(f'    <node id="{off.id}_end" x="{x:.3f}" y="{y:.3f}" type="priority"/>')
     return "<nodes>\n" + "\n".join(rows) + "\n</nodes>\n"
 
@@ -110,7 +111,7 @@ def _edges_xml(corridor: Corridor, edges: tuple[CorridorEdge, ...]) -> str:
             rows.append(f'        <lane index="{s.ramp_lanes}" changeRight="{_NO_CHANGE}"/>')
         rows.append("    </edge>")
     for ramp in road.on_ramps:
-        start_y = -_RAMP_ANGLE * ramp.ramp_length  # its left border meets y = 0 at x
+        start_y = -RAMP_SLOPE * ramp.ramp_length  # its left border meets y = 0 at x
         rows.append(
             f'    <edge id="{ramp.id}" from="{ramp.id}_start" to="{_node_at(edges, ramp.x)}" '
             f'numLanes="{ramp.lanes}" speed="{road.speed_at(ramp.x):.3f}" width="{width:.3f}" '
@@ -119,7 +120,7 @@ def _edges_xml(corridor: Corridor, edges: tuple[CorridorEdge, ...]) -> str:
             f'{ramp.x:.3f},0.000"/>'
         )
     for off in road.off_ramps:
-        end_y = -_RAMP_ANGLE * off.ramp_length
+        end_y = -RAMP_SLOPE * off.ramp_length
         rows.append(
             f'    <edge id="{off.id}" from="{_node_at(edges, off.end)}" to="{off.id}_end" '
             f'numLanes="{off.lanes}" speed="{road.speed_at(off.x):.3f}" width="{width:.3f}" '

@@ -48,9 +48,7 @@ from hcomc.experiments.runner import (
     configuration_overrides,
     run_batch,
 )
-
-CORRIDOR_ENGINE = "hcomc-corridor"
-"""The ``engine`` a manifest of a corridor-engine run names."""
+from hcomc.sim.corridor.record import CORRIDOR_ENGINE
 
 Result = tuple[dict[str, Any], dict[str, Any]]
 """A run's results row and manifest."""

@@ -8,7 +8,8 @@ and its acceleration or deceleration lanes: an on-ramp's from ``x - ramp_length`
 of its acceleration lanes, where it ends; an off-ramp's from ``x`` to the end of its ramp road,
 ``x + decel_length + ramp_length``, where its vehicles arrive. Lanes exist where the
 sections of :func:`hcomc.corridor.sections` say, the one description the SUMO export reads
-too; :func:`hcomc.sim.corridor.setup.build_layout` builds the arrays from them.
+too; :func:`hcomc.sim.corridor.setup.build_layout` builds the arrays from them, with the codes
+of :mod:`hcomc.corridor.layout` (which also places them in the plane for the views of a run).
 """
 
 from __future__ import annotations

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from hcomc.corridor import Corridor, OnRamp, detector_positions, sections
+from hcomc.corridor.layout import main_lane_count, ramp_codes
 from hcomc.corridor.schedule import departure_times
 from hcomc.rng import make_rng
 from hcomc.road import N_ROLES
@@ -53,9 +54,9 @@ __all__ = ["allocate", "build_fleet", "build_layout", "ramp_code", "vehicles_of"
 def build_layout(c: Corridor) -> Layout:
     """The :class:`Layout` of corridor ``c``."""
     road, secs = c.road, sections(c.road)
-    n_main = max(s.lanes for s in secs)
+    n_main = main_lane_count(road)
     n_codes = n_main + 2 * len(road.ramps)
-    base = {r.id: n_main + 2 * k for k, r in enumerate(road.ramps)}
+    base = ramp_codes(road)
     kinds = {"main": KIND_MAIN, "accel": KIND_ON, "decel": KIND_OFF}
     sec_lanes = np.array([s.lanes for s in secs], dtype=np.int64)
     lane_end = np.full((n_main, len(secs)), np.inf)

@@ -7,6 +7,12 @@ the live plan's virtual vehicles as ghosts with its predicted path, a timeline o
 events and plans, a panel and a speed/acceleration chart of the vehicle under the pointer or
 selected. Its controls are described in docs/replay.md.
 
+Runs of the corridor engine play too (``hcomc simulate CORRIDOR --trajectory-interval S
+--out DIR``): the corridor's road with every lane, ramp and lane drop, the sampled vehicles
+on it, and the merge events of ``merges.csv`` on the timeline
+(:mod:`hcomc.viz.replay.corridor_run`). One page plays runs of one engine, and corridor runs
+of one corridor (:mod:`hcomc.viz.replay.runs`).
+
 :func:`replay` builds the page from logs (or saved runs) for notebooks and scripts,
 :func:`write_replay` writes it for other writers (the HTML report links each run's page);
 ``hcomc replay`` is the command line. :mod:`hcomc.viz.replay.browser` drives headless
@@ -25,12 +31,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Union
 
 if TYPE_CHECKING:
+    from hcomc.sim.corridor import CorridorRun
+    from hcomc.sim.corridor.record import CorridorRecord
     from hcomc.sim.log import SimulationLog
+    from hcomc.viz.replay.runs import ReplayRun
 
 __all__ = ["ReplayPage", "replay", "write_replay"]
 
-Source = Union["SimulationLog", str, os.PathLike[str]]
-"""A log, a saved log file (.npz/.parquet) or a ``hcomc simulate --out`` directory."""
+Source = Union["SimulationLog", "CorridorRun", "CorridorRecord", str, os.PathLike[str]]
+"""A log, a saved log file (.npz/.parquet) or a ``hcomc simulate --out`` directory; a
+corridor-engine run (in memory, or its ``--out`` directory with ``trajectories.csv``)."""
 
 
 @dataclass(frozen=True)
@@ -61,13 +71,10 @@ class ReplayPage:
         )
 
 
-def _load(source: Source) -> SimulationLog:
-    from hcomc.sim.log import SimulationLog
-    from hcomc.viz.inputs import load_log
+def _load(source: Source) -> ReplayRun:
+    from hcomc.viz.replay.runs import load_run
 
-    if isinstance(source, SimulationLog):
-        return source
-    return load_log(source)
+    return load_run(source)
 
 
 def replay(
@@ -81,10 +88,11 @@ def replay(
 
     Parameters
     ----------
-    logs : SimulationLog, path, or a sequence of them
-        The runs: logs, saved log files or ``hcomc simulate --out`` directories.
+    logs : SimulationLog, CorridorRun, path, or a sequence of them
+        The runs: logs, saved log files or ``hcomc simulate --out`` directories, of the
+        scenario engine or (all of them) of the corridor engine on one corridor.
     titles : sequence of str, optional
-        One title per run; default: controller, scenario and seed from each log.
+        One title per run; default: controller, scenario or corridor, and seed.
     title : str
         The page's title.
     out : path, optional
@@ -93,14 +101,18 @@ def replay(
     Raises
     ------
     ValueError
-        If a source holds no log, a log has no rows or no road geometry, or the titles do
-        not match the runs.
+        If a source holds no log, a log has no rows or no road geometry, a corridor run has
+        no trajectories, scenario and corridor runs (or runs of two corridor roads) are
+        mixed, or the titles do not match the runs.
     """
-    from hcomc.viz.replay.page import page_html, run_title
+    from hcomc.viz.replay.page import page_html
+    from hcomc.viz.replay.runs import check_together, title_of
 
     items = logs if isinstance(logs, Sequence) and not isinstance(logs, str) else [logs]
     loaded = [_load(s) for s in items]
-    names = [run_title(log) for log in loaded] if titles is None else list(titles)
+    names = [title_of(run) for run in loaded] if titles is None else list(titles)
+    check_together(loaded, [str(s) if isinstance(s, str | os.PathLike) else title_of(run)
+                            for s, run in zip(items, loaded, strict=True)])  # fmt: skip
     page = ReplayPage(page_html(loaded, names, title))
     if out is not None:
         page.save(out)

@@ -28,7 +28,10 @@ from hcomc.road import KEY_ROLES, Kind, Lane, lane_centre
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.log.plans import PlanRecord, plan_records
 
-__all__ = ["PlanSpan", "decisions_json", "moment_of_interest", "plan_spans", "timeline_events"]
+__all__ = [
+    "PlanSpan", "decisions_json", "json_ready", "moment_of_interest", "plan_spans",
+    "timeline_events",
+]  # fmt: skip
 
 MERGE_PATH_POINTS = 25
 """Points of a plan's drawn merge path (the quintic of Eqs. 4-6)."""
@@ -187,14 +190,14 @@ def timeline_events(log: SimulationLog) -> dict[str, Any]:
     }
 
 
-def _finite(value: Any) -> Any:
+def json_ready(value: Any) -> Any:
     """``value`` with non-finite floats as None (JSON has no NaN)."""
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
+        return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_finite(v) for v in value]
+        return [json_ready(v) for v in value]
     return value
 
 
@@ -212,7 +215,7 @@ def decisions_json(log: SimulationLog, lane_width: float) -> dict[str, Any]:
         plans.append(entry)
     commanded = [c for s in spans for c in _commanded(s, log)]
     roles = _roles(log, spans)
-    return _finite({
+    return json_ready({
         "plans": plans,
         "roles": {"vehicle": [r[0] for r in roles], "role": [r[1] for r in roles],
                   "t0": [r[2] for r in roles], "t1": [r[3] for r in roles],

@@ -2,10 +2,11 @@
 coordinates [m].
 
 The page knows no road layout of its own: it draws the shapes listed here (to scale, with
-pan and zoom), so another road layout only needs another list. The layout is that of paper
-Section II-A as :class:`hcomc.config.RoadParams` describes it (read from the run by
-:func:`hcomc.metrics.road_of`): lane 2 at y = +W, lane 1 at y = 0, the ramp and acceleration
-lane at y = -W, the cooperative control zone upstream of the acceleration lane.
+pan and zoom), so another road layout only needs another list. :func:`road_shapes` lists the
+layout of paper Section II-A as :class:`hcomc.config.RoadParams` describes it (read from the
+run by :func:`hcomc.metrics.road_of`): lane 2 at y = +W, lane 1 at y = 0, the ramp and
+acceleration lane at y = -W, the cooperative control zone upstream of the acceleration lane.
+A corridor's road is listed by :mod:`hcomc.viz.replay.corridor_road`.
 """
 
 from __future__ import annotations
@@ -27,13 +28,17 @@ FOCUS_MARGIN = 100.0
 
 @dataclass(frozen=True, slots=True)
 class Area:
-    """A rectangle of road surface (or the control zone's overlay) [m]."""
+    """A rectangle of road surface (or the control zone's overlay) [m] from ``x0`` to ``x1``
+    and ``y0`` to ``y1``; its upstream end shifted laterally by ``dy0`` and its downstream
+    end by ``dy1`` [m] (a parallelogram: a ramp road sloping away from the mainline)."""
 
     surface: Surface
     x0: float
     x1: float
     y0: float
     y1: float
+    dy0: float = 0.0
+    dy1: float = 0.0
 
 
 @dataclass(frozen=True, slots=True)

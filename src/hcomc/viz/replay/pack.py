@@ -13,6 +13,10 @@ into a few of them, each sent as base64 of its little-endian bytes:
 * per vehicle: ``kind``, ``length``, ``width`` and its ``column``, ``first`` and ``last``
   row, from which the page rebuilds which vehicle each cell holds.
 
+A corridor run's samples are packed the same way (:mod:`hcomc.viz.replay.corridor_run`),
+with one more int16 cell array, ``dx``: where the vehicle is drawn minus its ``x`` (1 mm
+steps; non-zero on a ramp road, which slopes away from the mainline).
+
 A 90-s Condition 1 run makes a page of 0.43 MB, player included.
 """
 
@@ -27,7 +31,10 @@ import numpy as np
 
 from hcomc.sim.log import SimulationLog
 
-__all__ = ["STEPS", "Columns", "columns_of", "encode", "pack_cells", "quantise"]
+__all__ = [
+    "STEPS", "Columns", "columns_of", "encode", "pack_cells", "pack_fleet", "pack_samples",
+    "pack_vehicles", "partition", "quantise",
+]  # fmt: skip
 
 STEPS: dict[str, float] = {"y": 1e-3, "heading": 1e-4, "v": 1e-3, "a": 1e-3}
 """Nominal quantisation steps of the int16 cell arrays: y [m], heading [rad], v [m/s],
@@ -89,14 +96,22 @@ def _active_cells(log: SimulationLog) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def columns_of(log: SimulationLog) -> Columns:
-    """Columns for the vehicles of ``log`` by interval partitioning: vehicles in order of
-    their first row, each taking the column freed earliest (a new one when none is free)."""
+    """Columns for the vehicles of ``log`` (:func:`partition`)."""
     rows, _, ids = _active_cells(log)
     n = log.n_vehicles
     first = np.full(n, np.iinfo(np.int32).max, dtype=np.int64)
     last = np.full(n, -1, dtype=np.int64)
     np.minimum.at(first, ids, rows)
     np.maximum.at(last, ids, rows)
+    return partition(first, last)
+
+
+def partition(first: np.ndarray, last: np.ndarray) -> Columns:
+    """Columns for vehicles on the road from row ``first`` to row ``last`` (-1: never) by
+    interval partitioning: vehicles in order of their first row, each taking the column
+    freed earliest (a new one when none is free)."""
+    first, last = np.asarray(first, dtype=np.int64).copy(), np.asarray(last, dtype=np.int64)
+    n = last.size
     on_road = np.flatnonzero(last >= 0)
     column = np.full(n, -1, dtype=np.int32)
     free: list[tuple[int, int]] = []  # (first row the column is free, column)
@@ -116,31 +131,46 @@ def pack_cells(log: SimulationLog, layout: Columns) -> dict[str, dict[str, Any]]
     """The encoded (rows x columns) cell arrays ``x, y, heading, v, a, lane`` and ``t``."""
     n = log.n_recorded
     rows, cols, ids = _active_cells(log)
-    target = layout.column[ids]
-    shape = (n, max(layout.n_columns, 1))
-    packed: dict[str, dict[str, Any]] = {
-        "t": encode(np.asarray(log.t[:n], dtype="<f8")),
-    }
+    values = {name: log.cells[name][rows, cols] for name in ("x", "lane", *STEPS)}
+    return pack_samples(log.t[:n], layout, rows, layout.column[ids], values)
+
+
+def pack_samples(
+    t: np.ndarray, layout: Columns, rows: np.ndarray, columns: np.ndarray,
+    values: dict[str, np.ndarray], steps: dict[str, float] = STEPS,
+) -> dict[str, dict[str, Any]]:  # fmt: skip
+    """The encoded cell arrays of samples at ``(rows, columns)``: ``t`` (one per row),
+    ``x`` as float32, ``lane`` as int8 and each name of ``steps`` quantised to int16 with
+    its nominal step (:func:`quantise`); ``values`` holds one value per sample each."""
+    shape = (len(t), max(layout.n_columns, 1))
+    packed: dict[str, dict[str, Any]] = {"t": encode(np.asarray(t, dtype="<f8"))}
     x = np.full(shape, np.nan, dtype="<f4")
-    x[rows, target] = log.cells["x"][rows, cols]
+    x[rows, columns] = values["x"]
     packed["x"] = encode(x)
     lane = np.full(shape, -1, dtype=np.int8)
-    lane[rows, target] = log.cells["lane"][rows, cols]
+    lane[rows, columns] = values["lane"]
     packed["lane"] = encode(lane)
-    for name, nominal in STEPS.items():
-        values = np.full(shape, np.nan, dtype=np.float32)
-        values[rows, target] = log.cells[name][rows, cols]
-        q, step = quantise(values, nominal)
+    for name, nominal in steps.items():
+        cells = np.full(shape, np.nan, dtype=np.float32)
+        cells[rows, columns] = values[name]
+        q, step = quantise(cells, nominal)
         packed[name] = encode(q, step)
     return packed
 
 
 def pack_vehicles(log: SimulationLog, layout: Columns) -> dict[str, dict[str, Any]]:
     """The encoded per-vehicle arrays ``kind, length, width, column, first, last``."""
+    return pack_fleet(log.kind, log.length, log.width, layout)
+
+
+def pack_fleet(kind: np.ndarray, length: np.ndarray, width: np.ndarray,
+               layout: Columns) -> dict[str, dict[str, Any]]:  # fmt: skip
+    """The encoded per-vehicle arrays of vehicles of ``kind`` (:class:`hcomc.road.Kind`),
+    ``length`` and ``width`` [m] laid out in ``layout``."""
     return {
-        "kind": encode(np.asarray(log.kind, dtype=np.int8)),
-        "length": encode(np.asarray(log.length, dtype="<f4")),
-        "width": encode(np.asarray(log.width, dtype="<f4")),
+        "kind": encode(np.asarray(kind, dtype=np.int8)),
+        "length": encode(np.asarray(length, dtype="<f4")),
+        "width": encode(np.asarray(width, dtype="<f4")),
         "column": encode(layout.column.astype("<i4")),
         "first": encode(layout.first.astype("<i4")),
         "last": encode(layout.last.astype("<i4")),

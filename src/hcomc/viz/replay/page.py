@@ -3,7 +3,8 @@
 The page template, its stylesheet and scripts are package data (``assets/``); the runs go
 into a ``<script type="application/json">`` block (the per-cell arrays as base64 typed
 arrays, :mod:`hcomc.viz.replay.pack`; the plans, roles and events as JSON,
-:mod:`hcomc.viz.replay.decisions`). Nothing is loaded from anywhere else, so the file opens
+:mod:`hcomc.viz.replay.decisions`; a corridor-engine run's from
+:mod:`hcomc.viz.replay.corridor_run`). Nothing is loaded from anywhere else, so the file opens
 offline from disk.
 """
 
@@ -18,11 +19,13 @@ from typing import Any
 
 from hcomc.metrics import road_of
 from hcomc.sim.log import SimulationLog
+from hcomc.viz.replay.corridor_run import corridor_run_json
 from hcomc.viz.replay.decisions import decisions_json
 from hcomc.viz.replay.geometry import road_shapes
 from hcomc.viz.replay.pack import columns_of, pack_cells, pack_vehicles
+from hcomc.viz.replay.runs import ReplayRun
 
-__all__ = ["SCRIPTS", "page_html", "run_json", "run_title"]
+__all__ = ["SCRIPTS", "page_html", "run_json"]
 
 SCRIPTS = ("core.js", "draw.js", "timeline.js", "ui.js")
 """The player's scripts (package data), in the order the page runs them."""
@@ -32,23 +35,6 @@ _SLOT = re.compile(r"\{\{(\w+)\}\}")
 
 def _asset(name: str) -> str:
     return (resources.files("hcomc.viz.replay") / "assets" / name).read_text(encoding="utf-8")
-
-
-def run_title(log: SimulationLog) -> str:
-    """A run's default title: controller (and optimiser), scenario and seed."""
-    meta = log.meta
-    config = meta.get("config") or {}
-    control = config.get("control") or {}
-    controller = str(control.get("controller") or "none")
-    label = {"none": "no controller", "fifo": "FIFO", "game": "Game", "hcomc": "HCOMC"}.get(
-        controller, controller
-    )
-    if controller == "hcomc" and control.get("optimizer"):
-        label += f" ({control['optimizer']})"
-    parts = [label, str(config.get("name") or "run")]
-    if meta.get("seed") is not None:
-        parts.append(f"seed {meta['seed']}")
-    return " · ".join(parts)
 
 
 def run_json(log: SimulationLog, title: str) -> dict[str, Any]:
@@ -85,13 +71,17 @@ def _json_for_script(data: Any) -> str:
     return text.replace("<", "\\u003c")
 
 
-def page_html(logs: Sequence[SimulationLog], titles: Sequence[str], page_title: str) -> str:
-    """The page playing ``logs`` side by side (time-synced), each under its title."""
+def page_html(logs: Sequence[ReplayRun], titles: Sequence[str], page_title: str) -> str:
+    """The page playing ``logs`` (scenario-engine logs or corridor-engine records,
+    :mod:`hcomc.viz.replay.runs`) side by side (time-synced), each under its title."""
     if not logs:
         raise ValueError("no runs to replay; allowed: one log or more")
     if len(titles) != len(logs):
         raise ValueError(f"{len(titles)} titles for {len(logs)} runs; allowed: one per run")
-    runs = [run_json(log, title) for log, title in zip(logs, titles, strict=True)]
+    runs = [
+        run_json(log, title) if isinstance(log, SimulationLog) else corridor_run_json(log, title)
+        for log, title in zip(logs, titles, strict=True)
+    ]
     data = {"version": 1, "title": page_title, "runs": runs}
     parts = {
         "title": html.escape(page_title),

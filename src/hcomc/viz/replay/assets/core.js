@@ -29,6 +29,10 @@ HC.Run = class {
     this.roles = d.roles;
     this.commanded = d.commanded;
     this.events = d.events;
+    this.merges = d.merges || null;  // a corridor run's merge events (its table)
+    this.note = d.note || "";
+    // a corridor run has no lateral motion: a lane change is a jump, never interpolated
+    this.jumps = Boolean(d.lane_jumps);
     this.t = HC.decode(A.t);
     this.x = HC.decode(A.x);
     this.lane = HC.decode(A.lane);
@@ -36,6 +40,8 @@ HC.Run = class {
     this.h = HC.decode(A.heading); this.hStep = A.heading.step;
     this.v = HC.decode(A.v); this.vStep = A.v.step;
     this.a = HC.decode(A.a); this.aStep = A.a.step;
+    // where a vehicle is drawn minus its x (a corridor's sloping ramp roads), or none
+    this.shift = A.dx ? HC.decode(A.dx) : null; this.shiftStep = A.dx ? A.dx.step : 0;
     this.kind = HC.decode(A.kind);
     this.length = HC.decode(A.length);
     this.width = HC.decode(A.width);
@@ -61,6 +67,7 @@ HC.Run = class {
     this.dh = new Float64Array(this.cols);
     this.roleOf = new Int8Array(this.n).fill(-1);
     this.rolePlan = new Int32Array(this.n).fill(-1);  // the plan the role is from, -1: key group
+    this.roleVR = new Int32Array(this.n).fill(-1);  // whose key vehicle (where roles name it)
     this.cmdOf = new Int32Array(this.n).fill(-1);
     this.live = [];  // indices of the plans live at the frame's time
   }
@@ -81,7 +88,11 @@ HC.Run = class {
     this.frac = f < 1e-9 ? 0 : f;
   }
 
-  // Positions of every vehicle at time t (interpolated between rows), roles, commands, plans.
+  // Where the cell at idx is drawn along x: its x, shifted where the road slopes.
+  drawnX(idx) { return this.shift ? this.x[idx] + this.shift[idx] * this.shiftStep : this.x[idx]; }
+
+  // Positions of every vehicle at time t (interpolated between rows, but not across a lane
+  // change of a run whose lane changes are jumps), roles, commands, plans.
   frame(t) {
     this.locate(t);
     const C = this.cols, base = this.row * C, next = base + C;
@@ -90,11 +101,13 @@ HC.Run = class {
       const i = this.inside ? this.owner[base + c] : -1;
       const x0 = i >= 0 ? this.x[base + c] : NaN;
       if (i < 0 || x0 !== x0) { this.did[c] = -1; continue; }
-      let x = x0, y = this.y[base + c] * this.yStep, h = this.h[base + c] * this.hStep;
+      let x = this.drawnX(base + c), y = this.y[base + c] * this.yStep, h = this.h[base + c] * this.hStep;
       if (interp && this.owner[next + c] === i && this.x[next + c] === this.x[next + c]) {
-        x += f * (this.x[next + c] - x0);
-        y += f * (this.y[next + c] * this.yStep - y);
-        h += f * (this.h[next + c] * this.hStep - h);
+        x += f * (this.drawnX(next + c) - x);
+        if (!this.jumps || this.lane[next + c] === this.lane[base + c]) {
+          y += f * (this.y[next + c] * this.yStep - y);
+          h += f * (this.h[next + c] * this.hStep - h);
+        }
       }
       this.did[c] = i; this.dx[c] = x; this.dy[c] = y; this.dh[c] = h;
     }
@@ -110,6 +123,7 @@ HC.Run = class {
       if (R.t0[k] <= t && (t < R.t1[k] || R.t1[k] >= this.t1)) {
         this.roleOf[R.vehicle[k]] = R.role[k];
         this.rolePlan[R.vehicle[k]] = R.plan[k];
+        this.roleVR[R.vehicle[k]] = R.vr ? R.vr[k] : -1;
       }
     }
     for (let k = 0; k < K.vehicle.length; k++) {

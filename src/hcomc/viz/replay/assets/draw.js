@@ -2,6 +2,15 @@
 // hcomc replay, drawing: the road to scale, vehicles by kind and heading, the key roles,
 // the live plans' virtual vehicles (ghosts) and predicted paths, and the road overview.
 
+// An area whose ends are shifted laterally (dy0 upstream, dy1 downstream: a ramp road
+// sloping away from the mainline), filled through the canvas mapping X, Y.
+HC.fillArea = function (ctx, a, X, Y) {
+  ctx.beginPath();
+  ctx.moveTo(X(a.x0), Y(a.y0 + a.dy0)); ctx.lineTo(X(a.x1), Y(a.y0 + a.dy1));
+  ctx.lineTo(X(a.x1), Y(a.y1 + a.dy1)); ctx.lineTo(X(a.x0), Y(a.y1 + a.dy0));
+  ctx.closePath(); ctx.fill();
+};
+
 // One run's canvas. World (x, y) [m] maps to the canvas with one scale for both axes.
 HC.Scene = class {
   constructor(canvas, run) {
@@ -51,7 +60,8 @@ HC.Scene = class {
       const x0 = Math.max(a.x0, left), x1 = Math.min(a.x1, right);
       if (x1 <= x0) continue;
       ctx.fillStyle = HC.COLOURS[a.surface];
-      ctx.fillRect(this.sx(x0), this.sy(a.y1), (x1 - x0) * s, (a.y1 - a.y0) * s);
+      if (a.dy0 || a.dy1) HC.fillArea(ctx, a, (x) => this.sx(x), (y) => this.sy(y));
+      else ctx.fillRect(this.sx(x0), this.sy(a.y1), (x1 - x0) * s, (a.y1 - a.y0) * s);
     }
     ctx.strokeStyle = HC.COLOURS.marking;
     for (const m of road.markings) {
@@ -61,11 +71,15 @@ HC.Scene = class {
       if (vertical) { x0 = m.x0; x1 = m.x1; if (x0 < left || x0 > right) continue; }
       const dashed = m.stroke === "dashed" && 3 * s >= 2;
       if (dashed) x0 = Math.max(m.x0, Math.floor(x0 / 9) * 9);  // dashes fixed to the road
+      // the ends' y where the line is cut to the view (a line may slope: a ramp road)
+      const slope = vertical ? 0 : (m.y1 - m.y0) / (m.x1 - m.x0);
+      const y0 = vertical ? m.y0 : m.y0 + (x0 - m.x0) * slope;
+      const y1 = vertical ? m.y1 : m.y0 + (x1 - m.x0) * slope;
       ctx.lineWidth = m.stroke === "barrier" ? Math.max(1.5, 0.3 * s) : Math.max(1, 0.15 * s);
       ctx.setLineDash(dashed ? [3 * s, 6 * s] : []);
       ctx.beginPath();
-      ctx.moveTo(this.sx(x0), this.sy(m.y0));
-      ctx.lineTo(this.sx(x1), this.sy(m.y1));
+      ctx.moveTo(this.sx(x0), this.sy(y0));
+      ctx.lineTo(this.sx(x1), this.sy(y1));
       ctx.stroke();
     }
     ctx.setLineDash([]);
@@ -251,7 +265,8 @@ HC.Overview = class {
     ctx.fillStyle = HC.COLOURS.verge; ctx.fillRect(0, 0, this.w, this.h);
     for (const a of run.road.areas) {
       ctx.fillStyle = HC.COLOURS[a.surface];
-      ctx.fillRect(this.ox(a.x0), this.oy(a.y1), this.ox(a.x1) - this.ox(a.x0), this.oy(a.y0) - this.oy(a.y1));
+      if (a.dy0 || a.dy1) HC.fillArea(ctx, a, (x) => this.ox(x), (y) => this.oy(y));
+      else ctx.fillRect(this.ox(a.x0), this.oy(a.y1), this.ox(a.x1) - this.ox(a.x0), this.oy(a.y0) - this.oy(a.y1));
     }
     for (let kind = 0; kind < 2; kind++) {
       ctx.beginPath();

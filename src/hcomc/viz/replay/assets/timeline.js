@@ -45,11 +45,12 @@ HC.Timeline = class {
         const p = run.plans.find((q) => Math.abs(q.t0 - E.t[k]) < 1e-6 && q.group.VR === E.vehicle[k]);
         if (p) text = "PLAN " + (p.index + 1) + " · VR " + p.group.VR + " · " + p.mode + " · " + p.sequence;
       }
+      if (E.text && E.text[k]) text = E.text[k];  // a corridor run's own wording
       this.marks.push({ t: E.t[k], run: run.index, colour: HC.EVENT_COLOURS[name] || "#333", text });
     }
     for (let k = 0; k < E.zone_t.length; k++) {
-      this.marks.push({ t: E.zone_t[k], run: run.index, colour: HC.EVENT_COLOURS.ZONE,
-        text: "CONTROL ZONE ENTRY · VR " + E.zone_vr[k] });
+      const text = E.zone_text ? E.zone_text[k] : "CONTROL ZONE ENTRY · VR " + E.zone_vr[k];
+      this.marks.push({ t: E.zone_t[k], run: run.index, colour: HC.EVENT_COLOURS.ZONE, text });
     }
   }
 

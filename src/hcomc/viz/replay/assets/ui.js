@@ -55,6 +55,7 @@ HC.App = class {
   }
 
   planTable(run) {
+    if (run.merges) return this.mergeTable(run);
     const wrap = document.createElement("div"), box = document.createElement("div");
     const name = document.createElement("h3");
     name.textContent = run.title + " — " + run.plans.length + " plan(s)";
@@ -76,6 +77,35 @@ HC.App = class {
     }
     if (!run.plans.length) body.insertRow().insertCell().textContent = "no merge plans in this run";
     this.planRows.push(rows);
+    box.append(table);
+    wrap.append(name, box);
+    return wrap;
+  }
+
+  // A corridor run's merge events (merges.csv): a click goes to the control-zone entry and
+  // follows its ramp vehicle.
+  mergeTable(run) {
+    const wrap = document.createElement("div"), box = document.createElement("div");
+    const name = document.createElement("h3"), merged = run.merges.filter((m) => m.merged).length;
+    name.textContent = run.title + " — " + run.merges.length + " merge event(s), " + merged +
+      " merged (the corridor engine does not record its plans)";
+    box.className = "plans";
+    const table = document.createElement("table");
+    const head = ["VR", "ramp", "kind", "zone entry [s]", "VMC", "VMF", "VMR", "VNF", "VNR",
+      "merged at [s]", "position [m]", "least TTC [s]", "max DRAC [m/s²]", "plans", "mode"];
+    table.createTHead().insertRow().append(...head.map((h) => { const th = document.createElement("th"); th.textContent = h; return th; }));
+    const body = table.createTBody(), key = (k) => (k >= 0 ? k : "–");
+    for (const m of run.merges) {
+      const tr = body.insertRow();
+      const cells = [m.vr, m.ramp, m.cav ? "CAV" : "HDV", HC.fmt(m.zone_time, 2), key(m.vmc), key(m.vmf),
+        key(m.vmr), key(m.vnf), key(m.vnr), m.merged ? HC.fmt(m.merge_time, 2) : "no",
+        HC.fmt(m.merge_position, 1), HC.fmt(m.min_ttc, 2), HC.fmt(m.max_drac, 2), m.plans, m.final_mode || "–"];
+      for (const c of cells) tr.insertCell().textContent = String(c);
+      tr.title = "position: past the start of the acceleration lane; least TTC and max DRAC over the event's window";
+      tr.addEventListener("click", () => { this.pause(); this.seek(m.zone_time); this.select(m.vr); this.setFollow(true); });
+    }
+    if (!run.merges.length) body.insertRow().insertCell().textContent = "no ramp vehicle reached its control zone";
+    this.planRows.push([]);
     box.append(table);
     wrap.append(name, box);
     return wrap;
@@ -218,17 +248,19 @@ HC.App = class {
     const head = "vehicle " + id + " · " + (HC.KIND_NAMES[r.kind[id]] || "?") + " · " + r.title;
     if (idx < 0) return head + "\nnot on the road at t = " + this.t.toFixed(2) + " s";
     const k = r.cmdOf[id], plan = r.rolePlan[id];
-    const role = r.roleOf[id] < 0 ? "–" : HC.ROLE_NAMES[r.roleOf[id]] +
+    const vr = r.roleVR[id], of = r.roleOf[id] > 0 && vr >= 0 ? " of VR " + vr : "";
+    const role = r.roleOf[id] < 0 ? "–" : HC.ROLE_NAMES[r.roleOf[id]] + of +
       (plan >= 0 ? " of plan " + (plan + 1) : " at VR's control-zone entry");
     return [head,
       "t " + this.t.toFixed(2) + " s · x " + r.x[idx].toFixed(2) + " m · lane " + r.lane[idx],
       "speed " + (r.v[idx] * r.vStep).toFixed(2) + " m/s · acceleration " + (r.a[idx] * r.aStep).toFixed(2) + " m/s²",
-      "role " + role + " · commanded: " + (k >= 0 ? "yes, " + r.commanded.what[k] : "no")].join("\n");
+      "role " + role + " · commanded: " +
+        (r.merges ? "not recorded" : k >= 0 ? "yes, " + r.commanded.what[k] : "no")].join("\n");
   }
 
   liveText(run) {
     const p = run.livePlan();
-    if (!p) return run.plans.length ? "no live plan" : "";
+    if (!p) return run.plans.length ? "no live plan" : run.note;
     return "live plan " + (p.index + 1) + "/" + run.plans.length + " · t0 " + p.t0.toFixed(1) + " s · " +
       p.mode + " · VR " + (p.sequence === "ahead" ? "ahead of" : "behind") + " VMC · Eq. 19: " + (p.eq19_branch || "–") + " · " +
       HC.fmt(p.decision_ms, 1) + " ms" + (p.merge_x !== null ? " · merge at x = " + p.merge_x.toFixed(0) + " m" : "");
