@@ -318,7 +318,7 @@ def test_compare_runs_resumes_and_compares_folders(controller_file, tmp_path):
         (["--controllers", "fifo,game", "--conditions", "C9"], "'C9' is not a cell"),
         (["--controllers", "fifo,game", "--seeds", "0"], "'--seeds' = 0"),
         (["--controllers", "fifo,game", "--suite", "merge-v0"], "no such suite"),
-        (["--controllers", "fifo,game", "--baseline", "hcomc"], "not among --controllers"),
+        (["--controllers", "fifo,game", "--baseline", "hcomc"], "not among the controllers"),
         (["--controllers", "fifo,game", "--workers", "0"], "'--workers' = 0"),
         (["--controllers", "fifo,game", "--set", "demand.ramp=none"], "no ramp demand"),
         (["--controllers", "fifo,game", "--set", "colour=1"], "colour"),

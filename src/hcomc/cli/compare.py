@@ -32,42 +32,28 @@ from hcomc.config import ConfigError
 
 
 def _labels(names: str | None) -> list[str]:
-    """``--controllers``: configuration labels or controller names, each checked now."""
-    from hcomc.experiments.runner import configuration_label
+    """``--controllers``: configuration labels or controller names, each checked now
+    (:func:`hcomc.experiments.library.configuration_labels`)."""
+    from hcomc.experiments.library import configuration_labels
 
     if names is None:
         raise _fail("option '--controllers' is missing; allowed: two or more, e.g. fifo,game,hcomc")
-    labels: list[str] = []
-    for name in (n.strip() for n in names.split(",")):
-        if not name:
-            raise _fail(f"option '--controllers' = '{names}': an empty name")
-        try:
-            label = configuration_label(name)
-        except ConfigError as exc:
-            raise _fail(f"option '--controllers' ({exc})") from None
-        if label in labels:
-            raise _fail(f"option '--controllers' = '{names}': '{name}' is given twice")
-        labels.append(label)
-    if len(labels) < 2:
-        raise _fail(f"option '--controllers' = '{names}': allowed: two or more to compare")
-    return labels
+    try:
+        return configuration_labels(names, key="option '--controllers'")
+    except ConfigError as exc:
+        raise _fail(str(exc)) from None
 
 
 def _baseline(value: str | None, labels: list[str]) -> str | None:
-    from hcomc.experiments.runner import configuration_label
+    """``--baseline``: one of the compared configurations, checked now."""
+    from hcomc.experiments.library import baseline_label
 
     if value is None:
         return None
     try:
-        label = configuration_label(value)
+        return baseline_label(value, labels, key="option '--baseline'")
     except ConfigError as exc:
-        raise _fail(f"option '--baseline' ({exc})") from None
-    if label not in labels:
-        raise _fail(
-            f"option '--baseline' = '{value}' is not among --controllers; allowed: "
-            + ", ".join(labels)
-        )
-    return label
+        raise _fail(str(exc)) from None
 
 
 @app.command()
@@ -144,48 +130,30 @@ def compare(
         raise _fail(f"option '--wide' applies to --format console, not '{fmt}'")
     presentation = Presentation(fmt, wide, None if fmt == "console" else sys.stdout)
     with redirect_stdout(sys.stderr) if presentation.document else nullcontext():
-        _compare(folders, controllers, conditions, seeds, suite, baseline, engine, workers,
-                 out_dir, settings, presentation)  # fmt: skip
-
-
-def _compare(
-    folders: list[Path] | None,
-    controllers: str | None,
-    conditions: str | None,
-    seeds: int | None,
-    suite: str | None,
-    baseline: str | None,
-    engine: str | None,
-    workers: int | None,
-    out_dir: Path | None,
-    settings: list[str] | None,
-    presentation: Presentation,
-) -> None:
-    """``hcomc compare`` once its presentation is settled: folders or controllers."""
-    if folders:
-        given = {"--controllers": controllers, "--conditions": conditions, "--seeds": seeds,
-                 "--suite": suite, "--baseline": baseline, "--engine": engine,
-                 "--workers": workers, "--set": settings}  # fmt: skip
-        extra = [k for k, v in given.items() if v]
-        if extra:
-            raise _fail(
-                f"option '{extra[0]}' does not apply when comparing folders; allowed: "
-                "hcomc compare A/ B/ [--out DIR]"
-            )
-        _compare_folders(folders, out_dir, presentation)
-        return
-    _compare_controllers(
-        controllers,
-        conditions,
-        seeds,
-        suite,
-        baseline,
-        engine,
-        workers,
-        out_dir,
-        settings,
-        presentation,
-    )
+        if folders:
+            given = {"--controllers": controllers, "--conditions": conditions, "--seeds": seeds,
+                     "--suite": suite, "--baseline": baseline, "--engine": engine,
+                     "--workers": workers, "--set": settings}  # fmt: skip
+            extra = [k for k, v in given.items() if v]
+            if extra:
+                raise _fail(
+                    f"option '{extra[0]}' does not apply when comparing folders; allowed: "
+                    "hcomc compare A/ B/ [--out DIR]"
+                )
+            _compare_folders(folders, out_dir, presentation)
+            return
+        _compare_controllers(
+            controllers,
+            conditions,
+            seeds,
+            suite,
+            baseline,
+            engine,
+            workers,
+            out_dir,
+            settings,
+            presentation,
+        )
 
 
 def _compare_controllers(

@@ -47,7 +47,14 @@ from hcomc.experiments.runner import (
 )
 from hcomc.experiments.suite import LATEST, suite_named
 
-__all__ = ["ComparisonResult", "Progress", "compare", "configuration_labels", "run"]
+__all__ = [
+    "ComparisonResult",
+    "Progress",
+    "baseline_label",
+    "compare",
+    "configuration_labels",
+    "run",
+]
 
 Progress = Callable[[int, int], None]
 """A progress callback: ``progress(done, total)`` after each finished run."""
@@ -259,7 +266,7 @@ def compare(
     _check_count("workers", workers)
     with _as_arguments():
         plan = _comparison(controllers, conditions, seeds, suite, overrides, engine)
-        chosen = None if baseline is None else _baseline(baseline, plan.configurations)
+        chosen = None if baseline is None else baseline_label(baseline, plan.configurations)
     tables = comparison_tables(
         _comparison_runs(plan, workers, progress),
         plan.configurations,
@@ -298,42 +305,47 @@ def _comparison(
     return plan
 
 
-def configuration_labels(controllers: str | Sequence[Controller]) -> list[str]:
+def configuration_labels(
+    controllers: str | Sequence[Controller], *, key: str = "argument 'controllers'"
+) -> list[str]:
     """The configurations ``controllers`` stand for
     (:func:`~hcomc.experiments.runner.configuration_label`): two or more, none empty or
-    given twice; ConfigError naming the one that is not."""
+    given twice; ConfigError naming the one that is not, as ``key`` (the command line's
+    ``option '--controllers'``)."""
     names = controllers.split(",") if isinstance(controllers, str) else list(controllers)
     shown = ", ".join(map(str, names))
     labels: list[str] = []
     for name in names:
         spec = _spec(name, "controllers").strip()
         if not spec:
-            raise ConfigError(f"argument 'controllers' = [{shown}]: an empty name")
+            raise ConfigError(f"{key} = [{shown}]: an empty name")
         try:
             label = configuration_label(spec)
         except ConfigError as exc:
-            raise ConfigError(f"argument 'controllers' ({exc})") from None
+            raise ConfigError(f"{key} ({exc})") from None
         if label in labels:
-            raise ConfigError(f"argument 'controllers' = [{shown}]: '{spec}' is given twice")
+            raise ConfigError(f"{key} = [{shown}]: '{spec}' is given twice")
         labels.append(label)
     if len(labels) < 2:
         raise ConfigError(
-            f"argument 'controllers' = [{shown}]: allowed: two or more to compare, e.g. "
-            "['fifo', 'game', 'hcomc']"
+            f"{key} = [{shown}]: allowed: two or more to compare, e.g. fifo,game,hcomc"
         )
     return labels
 
 
-def _baseline(baseline: Controller, configurations: Sequence[str]) -> str:
-    """The configuration ``baseline`` stands for, one of those compared."""
+def baseline_label(
+    baseline: Controller, configurations: Sequence[str], *, key: str = "argument 'baseline'"
+) -> str:
+    """The configuration ``baseline`` stands for, one of those compared; ConfigError naming
+    it as ``key`` (the command line's ``option '--baseline'``) otherwise."""
     spec = _spec(baseline, "baseline")
     try:
         label = configuration_label(spec)
     except ConfigError as exc:
-        raise ConfigError(f"argument 'baseline' ({exc})") from None
+        raise ConfigError(f"{key} ({exc})") from None
     if label not in configurations:
         raise ConfigError(
-            f"argument 'baseline' = '{spec}' is not among the controllers compared; allowed: "
+            f"{key} = '{spec}' is not among the controllers compared; allowed: "
             + ", ".join(configurations)
         )
     return label
