@@ -46,6 +46,27 @@ class _Forgetful(Simulation):
         return None
 
 
+class _Unasked(Simulation):
+    """Forgets what its decisions were asked."""
+
+    @property
+    def requests(self) -> Any:
+        return []
+
+    @requests.setter
+    def requests(self, value: Any) -> None:
+        pass
+
+
+class _Mislabelled(Simulation):
+    """Writes another seed into its log."""
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Any:
+        log = super().run(progress)
+        log.meta["seed"] = self.seed + 100
+        return log
+
+
 def _shifted(config, seed, ctl):
     return Simulation(config, seed + 1, ctl)  # runs another seed than it says
 
@@ -62,6 +83,8 @@ def _frozen(config, seed, ctl):
         (_shifted, "the engine's seed is 4, made with 3"),
         (lambda config, seed, ctl: Simulation(config, seed), "keeps the controller"),
         (_frozen, "another seed gives the same traffic"),
+        (_Unasked, "each decision has the request it answered"),
+        (_Mislabelled, "the log records seed 103"),
     ],
 )
 def test_an_engine_that_breaks_a_promise_fails_naming_it(make, broken):

@@ -169,6 +169,8 @@ def test_corridor_run_exports_its_sampled_vehicles(corridor_run: Path, tmp_path:
     centre = front - 0.5 * length * np.array([math.cos(angle), math.sin(angle)])
     np.testing.assert_allclose(state.position, centre, atol=1e-5)
     assert state.orientation == pytest.approx(angle, abs=1e-6)
+    # the engine's speed runs along the slanted road already: not divided by cos(angle)
+    assert state.velocity == pytest.approx(on_ramp_road["v"], abs=1e-5)
 
 
 def test_corridor_planning_problem_is_the_first_vehicle_of_the_first_on_ramp(

@@ -22,6 +22,7 @@ from hcomc.experiments.comparison.view import (
     controller_labels,
     effects_view,
     means_view,
+    safety_view,
     success_view,
 )
 from hcomc.experiments.paper import PAPER_METRICS
@@ -419,10 +420,14 @@ def test_safety_extremes_take_the_worst_run_and_its_seed():
     runs["max_drac"] = [0.1, 0.5, 0.2, 0.9, np.nan, 0.3, 0.1, 0.1, 0.1, 0.1]
     runs["collisions"] = [0, 1, 0, 0, 0, 0, 2, 0, 0, 0]
     runs["key_collisions"] = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0]
+    overlap = runs.assign(max_drac=runs["max_drac"].where(runs["seed"] != 6, np.inf))
     row = safety_extremes(runs, ["A"]).iloc[0]
     assert (row["least_ttc"], row["least_ttc_seed"]) == (2.0, 1)
     assert (row["max_drac"], row["max_drac_seed"]) == (0.9, 3)
     assert (row["collisions"], row["key_collisions"], row["runs"]) == (3, 1, SEEDS)
+    worst = safety_extremes(overlap, ["A"]).iloc[0]  # a pair that overlapped is the worst
+    assert (worst["max_drac"], worst["max_drac_seed"]) == (np.inf, 6)
+    assert "∞ (seed 6)" in safety_view(safety_extremes(overlap, ["A"])).to_string()
     none = safety_extremes(runs.assign(min_ttc=np.inf), ["A"]).iloc[0]
     assert math.isnan(none["least_ttc"])
     assert none["least_ttc_seed"] == -1

@@ -19,6 +19,7 @@ from hcomc.experiments.comparison.view import (
     EFFECTS_VIEW_COLUMNS,
     PAIR_VIEW_COLUMNS,
     effects_view,
+    interval_text,
     means_view,
     rounded,
 )
@@ -43,10 +44,11 @@ UNITS = ("Crit. Dist. [m] ↑", "Aver. Acc. [m/s²] ↓", "Stab. Time from entry
         (0.05675, 0.1288, "0.06"),  # 0.13
         (3.584, 0.0152, "3.584"),  # 0.015
         (2.0, 2.484, "2.0"),
-        (25315.7, 62501.1, "25316"),  # never fewer than 0 decimals
+        (25315.7, 62501.1, "25000"),  # two digits of 63000: to the thousand
+        (-0.004, 0.5, "0.00"),  # no "-0.00"
+        (math.inf, math.nan, "∞"),
         (5.0, math.nan, "5.00"),  # no uncertainty: three significant digits
         (38.95, 0.0, "39.0"),
-        (-0.00001, 0.5, "0.00"),  # no "-0.00"
         (math.nan, 1.0, "—"),
     ],
 )
@@ -56,6 +58,14 @@ def test_a_number_is_rounded_to_two_digits_of_its_uncertainty(value, uncertainty
 
 def _frame(columns: int, width: int) -> pd.DataFrame:
     return pd.DataFrame({"cell": ["C1"], **{f"c{i}": ["x" * width] for i in range(columns)}})
+
+
+def test_a_bound_that_rounds_to_zero_keeps_its_sign():
+    assert interval_text(1.0, -0.04, 1.96) == "1.0 [-0.040, 2.0]"  # undecided: the CI holds 0
+    assert interval_text(1.0, 0.04, 2.04) == "1.0 [0.040, 2.0]"
+    assert interval_text(12925.0, 2671.0, 23179.0) == "13000 [3000, 23000]"
+    assert interval_text(0.0, 0.0, 0.0) == "0 [0, 0]"
+    assert interval_text(math.nan, math.nan, math.nan) == "—"
 
 
 def test_a_wide_table_is_split_into_blocks_that_fit_each_led_by_its_names():
@@ -84,22 +94,26 @@ def test_a_table_a_little_too_wide_folds_its_widest_text_column():
     assert "wide (1 of 2)" in console.file.getvalue()
 
 
-def test_latex_is_ascii_escaped_and_markdown_keeps_the_cells():
-    frame = pd.DataFrame({"metric": ["LSRV [m²] ↓"], "A<B": ["3 of 4"], "x_y": ["5 ± 1 (2 %)"]})
+def test_latex_is_escaped_and_markdown_keeps_the_cells_as_written():
+    frame = pd.DataFrame({
+        "metric": ["LSRV [m²] ↓", "[C1] a|b"], "A<B": ["3 of 4", "0.0700"],
+        "x_y": ["5 ± 1 (2 %)", "12345678"],
+    })  # fmt: skip
     table = TextTable(frame, "Title & more", "legend — here", numeric=("A<B",))
     latex = to_latex([table])
     assert latex.isascii()
     assert r"LSRV [m\textsuperscript{2}] $\downarrow$" in latex
     assert r"A\textless{}B & x\_y \\" in latex
     assert r"5 $\pm$ 1 (2 \%)" in latex
+    assert r"{}[C1] a\textbar{}b & 0.0700 & 12345678 \\" in latex  # no optional argument
     assert r"\caption{Title \& more. legend --- here}" in latex
     assert r"\begin{tabular}{lrl}" in latex
+    assert "Zürich" in to_latex([TextTable(pd.DataFrame({"a": ["Zürich"]}), "t")])  # UTF-8
     lines = to_markdown([table]).splitlines()
     assert lines[0] == "**Title & more**"
-    row = [c.strip() for c in lines[4].strip("|").split("|")]
-    assert row == ["LSRV [m²] ↓", "3 of 4", "5 ± 1 (2 %)"]
-    with pytest.raises(ValueError, match="no LaTeX form"):
-        to_latex([TextTable(pd.DataFrame({"a": ["☃"]}), "t")])
+    rows = [[c.strip() for c in re.split(r"(?<!\\)\|", line.strip("|"))] for line in lines[4:6]]
+    assert rows[0] == ["LSRV [m²] ↓", "3 of 4", "5 ± 1 (2 %)"]
+    assert rows[1] == [r"[C1] a\|b", "0.0700", "12345678"]  # not re-read as numbers
 
 
 def _invoke(*args: str):
@@ -170,6 +184,7 @@ def test_safety_extremes_are_the_runs_worst_values_with_their_seeds(folder):
         assert row["least_ttc"] == pytest.approx(worst["min_ttc"], rel=1e-12)
         assert row["least_ttc_seed"] == worst["seed"]
         assert row["max_drac"] == pytest.approx(part["max_drac"].max(), rel=1e-12)
+        assert row["max_drac_seed"] == part.loc[part["max_drac"].idxmax(), "seed"]
         assert row["collisions"] == part["collisions"].sum()
         shown = f"{rounded(row['least_ttc'])} (seed {int(row['least_ttc_seed'])})"
         assert shown in text

@@ -180,7 +180,7 @@ def test_compare_gives_the_numbers_of_hcomc_compare(tmp_path: Path) -> None:
     assert len(found.runs) == 4
     assert len(found.effects) == 5  # the paper's five metrics, one comparison, one cell
     assert found.effects["median_diff"].abs().sum() > 0  # the controllers differ
-    for table in ("success", "success_pairs", "means", "effects"):
+    for table in ("success", "success_pairs", "means", "effects", "safety"):
         written = pd.read_csv(tmp_path / f"{table}.csv")
         pd.testing.assert_frame_equal(_as_csv(getattr(found, table)), written, obj=table)
     written = pd.read_csv(tmp_path / "runs.csv")

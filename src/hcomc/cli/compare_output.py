@@ -10,10 +10,11 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 from hcomc.cli._app import out
 from hcomc.viz.text_tables import (
+    WIDTH,
     TextTable,
-    console_table,
+    fit_width,
     print_fitted,
-    table_width,
+    print_wide,
     to_latex,
     to_markdown,
 )
@@ -33,7 +34,7 @@ OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pa
 FORMATS = ("console", "markdown", "latex")
 """How a comparison prints its tables (``--format``)."""
 
-CONSOLE_WIDTH = 120
+CONSOLE_WIDTH = WIDTH
 """The width a comparison's console tables fit unless ``--wide`` (a wider terminal
 notwithstanding)."""
 
@@ -56,21 +57,16 @@ def _say(text: str) -> None:
     at the tables' width."""
     from rich.markup import escape
 
-    out.print(escape(text), highlight=False, width=_width())
-
-
-def _width() -> int:
-    """:data:`CONSOLE_WIDTH`, or a narrower terminal's width."""
-    return min(CONSOLE_WIDTH, out.width) if out.is_terminal else CONSOLE_WIDTH
+    out.print(escape(text), highlight=False, width=fit_width(out))
 
 
 def _print(table: TextTable, keys: int, wide: bool) -> None:
     """``table`` on the console: on one line when ``wide``, else in blocks of columns (each
     led by the ``keys`` columns) that fit :data:`CONSOLE_WIDTH` or a narrower terminal."""
     if wide:
-        out.print(console_table(table), width=max(table_width(table.frame), 80), crop=False)
-        return
-    print_fitted(out, table, keys, _width())
+        print_wide(out, table)
+    else:
+        print_fitted(out, table, keys)
 
 
 def _write_tables(target: Path, runs: Any, found: ComparisonTables) -> None:

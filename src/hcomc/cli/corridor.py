@@ -129,12 +129,12 @@ def _print(summary: dict[str, Any]) -> None:
                  "max backlog [veh]"],
     )  # fmt: skip
     legend = "travel time and delay: means over the arrived trips"
-    print_fitted(out, TextTable(origins, "Per origin", legend, tuple(origins.columns[1:])), 1, 120)
+    print_fitted(out, TextTable(origins, "Per origin", legend, tuple(origins.columns[1:])), 1)
     ramps = pd.DataFrame(
         [_ramp_row(ramp, row) for ramp, row in summary["on_ramps"].items()], columns=RAMP_COLUMNS
     )
     title = f"Per on-ramp (controller: {summary['controller']})"
-    print_fitted(out, TextTable(ramps, title, RAMP_LEGEND, RAMP_COLUMNS[1:]), 1, 120)
+    print_fitted(out, TextTable(ramps, title, RAMP_LEGEND, RAMP_COLUMNS[1:]), 1)
 
 
 RAMP_COLUMNS = (

@@ -4,7 +4,6 @@ documentation regenerated from a reproduction's results)."""
 from __future__ import annotations
 
 import json
-import math
 import time
 from dataclasses import replace
 from functools import partial
@@ -72,9 +71,11 @@ spread evenly, no HDV estimation errors (reaction delays stay); seed 0 seeds the
 def _claims_view(frame: Any) -> Any:
     """The claims for the terminal: the verdicts (CI rule, Holm-corrected sign test) with
     "k of n seeds" beside them, the median and its CI rounded to the CI's precision."""
+    from hcomc.experiments.comparison.view import interval_text
+
     view = frame[["claim", "condition"]].rename(columns={"condition": "cell"})
     view["median A-B [95 % CI]"] = [
-        _interval(m, lo, hi)
+        interval_text(m, lo, hi)
         for m, lo, hi in zip(frame["median_diff"], frame["ci_low"], frame["ci_high"], strict=True)
     ]
     view["verdict"] = frame["verdict"]
@@ -84,17 +85,6 @@ def _claims_view(frame: Any) -> Any:
     if "uniform" in frame:
         view["uniform"] = frame["uniform"]
     return view
-
-
-def _interval(median: float, low: float, high: float) -> str:
-    """The median and its interval, "median [low, high]", rounded to the interval's precision;
-    "—" without pairs."""
-    from hcomc.experiments.comparison.view import rounded
-
-    if math.isnan(median):
-        return "—"
-    half = (high - low) / 2
-    return f"{rounded(median, half)} [{rounded(low, half)}, {rounded(high, half)}]"
 
 
 CLAIMS_CAPTION = (

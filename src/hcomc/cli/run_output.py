@@ -5,6 +5,7 @@ their means. Shared by ``hcomc run`` on scenarios (:mod:`hcomc.cli.experiments`)
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from rich.markup import escape
@@ -30,21 +31,24 @@ def _cell(value: Any) -> str:
 
 def mean_line(name: str, values: Any) -> str:
     """One mean as a line, "name: mean ± half-width (95 % CI, n = n)", rounded to the
-    half-width."""
+    half-width ("name: mean (n = 1)" without an interval)."""
     from hcomc.experiments.comparison.view import rounded
     from hcomc.experiments.tables import mean_ci
 
     mean, half, n = mean_ci(values)
+    if math.isnan(half):  # fewer than two values: no interval
+        return f"{name}: {rounded(mean)} (n = {n})"
     return f"{name}: {rounded(mean, half)} ± {rounded(half, half)} (95 % CI, n = {n})"
 
 
 def print_frame(frame: Any, title: str, caption: str = "", keys: int = 1) -> None:
-    """Print ``frame`` as a booktabs-style table fitted to 120 columns (in blocks of columns
+    """Print ``frame`` as a booktabs-style table fitted to 120 columns or a narrower
+    terminal (in blocks of columns
     led by its first ``keys`` columns when wider; cells as :func:`_cell` writes them),
     ``caption`` (its legend) under it."""
     text = frame.map(_cell)
     numeric = tuple(c for c in frame.columns if c not in NAMES)
-    print_fitted(out, TextTable(text, title, caption, numeric), keys, 120)
+    print_fitted(out, TextTable(text, title, caption, numeric), keys)
 
 
 def run_label(
@@ -70,7 +74,8 @@ def run_label(
 
 RUN_LEGEND = (
     "decision: the controller's time for its first plan; least TTC and max DRAC: over every "
-    "follower-leader pair of a lane with a key vehicle in it"
+    "follower-leader pair of a lane with a key vehicle in it (a least TTC of ∞: no pair closed "
+    "in; a max DRAC of ∞: a pair overlapped)"
 )
 """The legend of ``hcomc run``'s table of scenario runs."""
 
@@ -78,9 +83,10 @@ RUN_LEGEND = (
 def print_merge_runs(frame: Any, title: str, duration: float) -> None:
     """Print runs of the scenario engine: per seed the paper's metrics, merge success, and
     each metric's mean with its 95 % CI."""
+    from hcomc.experiments.comparison.view import SAFETY_LABELS
     from hcomc.experiments.tables import LABELS
 
-    shown = {**LABELS, "min_ttc": "least TTC [s]", "max_drac": "max DRAC [m/s²]"}
+    shown = {**LABELS, **SAFETY_LABELS}
     frame = frame.reindex(columns=[*frame.columns, *(m for m in shown if m not in frame)])
     cols = ["seed", "merged", "mode", "decision_ms", *shown]
     print_frame(frame[cols].rename(columns={**shown, "decision_ms": "decision [ms]"}), title,

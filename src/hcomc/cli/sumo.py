@@ -292,14 +292,9 @@ def engine_error(engine: str, config: ScenarioConfig | None = None) -> str | Non
     if engine not in ENGINES:
         return f"option '--engine' = '{engine}': allowed: {', '.join(ENGINES)}"
     if engine == "sumo":
-        from hcomc.sumo import SumoMissingError, import_libsumo, sumo_binary
-        from hcomc.sumo.routes import check_exportable
+        from hcomc.sumo import sumo_problem
 
-        try:
-            import_libsumo()
-            sumo_binary("netconvert")
-            if config is not None:
-                check_exportable(config)
-        except (SumoMissingError, ValueError) as exc:
-            return f"option '--engine' = 'sumo': {exc}"
+        problem = sumo_problem(config)
+        if problem is not None:
+            return f"option '--engine' = 'sumo': {problem}"
     return None

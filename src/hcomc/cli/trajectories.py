@@ -15,8 +15,14 @@ from hcomc.config import ScenarioConfig
 def _run_log(run_dir: Path) -> tuple[Any, ScenarioConfig]:
     """The log of a `hcomc simulate --out` directory (or a log file) and its config."""
     from hcomc.config import ConfigError, validate_config
+    from hcomc.sim.corridor.record import is_corridor_run
     from hcomc.viz.inputs import load_log
 
+    if is_corridor_run(run_dir):
+        raise fail(
+            f"RUN_DIR = '{run_dir}' is a run of the corridor engine, whose sampled trajectories "
+            "are its trajectories.csv; allowed for it: --format commonroad"
+        )
     try:
         log = load_log(run_dir)
         config = validate_config(log.meta["config"], f"{run_dir} (config in the log)")

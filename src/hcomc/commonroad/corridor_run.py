@@ -53,12 +53,13 @@ def corridor_tracks(run_dir: Path) -> CorridorTracks:
     samples = record.require_trajectories()
     corridor = record.corridor
     px, py, heading = code_poses(corridor.road, samples.x, samples.code)
+    classes = record.vehicle_classes()
     tracks = []
     for vid, start, stop in zip(samples.ids.tolist(), samples.start.tolist(),
                                 samples.stop.tolist(), strict=True):  # fmt: skip
         if stop - start < 2:
             continue
-        vclass: VehicleClass = corridor.vehicles[str(record.trips.loc[vid, "vclass"])]
+        vclass: VehicleClass = classes[vid]
         rows = slice(start, stop)
         v, a = samples.v[rows], samples.a[rows]
         # the engine's speed is along its lane (the ramp road's too): it is the speed along

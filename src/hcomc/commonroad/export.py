@@ -39,7 +39,7 @@ class ExportSummary:
                 f"obstacles ({self.states} states, dt = {self.dt:g} s)")  # fmt: skip
         if self.vr is not None:
             text += (f" · planning problem {OBSTACLE_IDS + self.vr} for VR (vehicle {self.vr}), "
-                     f"time step 0 = row {self.first_row}")  # fmt: skip
+                     f"time step 0 = t {self.first_row * self.dt:g} s of the run")  # fmt: skip
         if self.left_out:
             text += f" · {len(self.left_out)} vehicles entering after time step 0 left out"
         if not self.schema_errors:

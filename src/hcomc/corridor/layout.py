@@ -12,8 +12,10 @@ module, so that they draw the same road and put a vehicle at the same place:
   over one section of :func:`hcomc.corridor.sections` (mainline, acceleration and
   deceleration lanes), and each lane of each ramp road. An on-ramp road ends at the ramp's
   ``x`` and an off-ramp road starts at the end of its deceleration lane; both run at the
-  slope :data:`RAMP_SLOPE` away from the mainline (the SUMO export's) over their
-  ``ramp_length`` along the centre line, so that the ramps of neighbouring junctions lie
+  slope :data:`RAMP_SLOPE` away from the mainline over their ``ramp_length`` along the
+  centre line (the SUMO export has the same slope, but starts its ramp edges at ``x -
+  ramp_length`` with a short straight at the junction, so its ramp nodes lie a few metres
+  from these ends), so that the ramps of neighbouring junctions lie
   apart (an off-ramp road that reaches past the start of the next on-ramp's road crosses
   it, as a flyover would).
 * Lane codes are the corridor engine's numbering of the lanes

@@ -302,6 +302,12 @@ def _comparison(
     plan = Comparison(bench, cells, tuple(labels), seeds or bench.seeds,
                       nest_overrides(dict(overrides or {})), engine)  # fmt: skip
     plan.check()
+    if engine == "sumo":
+        from hcomc.sumo import sumo_problem
+
+        problem = sumo_problem(cells[0].config(**plan.overrides))
+        if problem is not None:
+            raise ConfigError(f"argument 'engine' = 'sumo': {problem}")
     return plan
 
 

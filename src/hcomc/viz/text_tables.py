@@ -18,12 +18,16 @@ from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+from rich.text import Text
 
 __all__ = [
     "TextTable",
     "column_blocks",
     "console_table",
+    "fit_width",
     "print_fitted",
+    "print_table",
+    "print_wide",
     "table_width",
     "to_latex",
     "to_markdown",
@@ -31,6 +35,9 @@ __all__ = [
 
 GAP = 2
 """Spaces between two columns of a console table."""
+
+WIDTH = 120
+"""The width console tables are fitted to (a narrower terminal's, if less)."""
 
 FOLDED = 28
 """The narrowest a text column is folded to (its text wrapped onto more lines) to fit a
@@ -49,6 +56,7 @@ _LATEX = {
     "≤": r"$\leq$",
     "≥": r"$\geq$",
     "×": r"$\times$",
+    "∞": r"$\infty$",
 }
 """The non-ASCII characters of hcomc's tables and their LaTeX."""
 
@@ -65,6 +73,7 @@ _SPECIAL = {
     "\\": r"\textbackslash{}",
     "<": r"\textless{}",
     ">": r"\textgreater{}",
+    "|": r"\textbar{}",
 }
 """LaTeX's special characters and their escaped forms."""
 
@@ -98,13 +107,10 @@ def _width(name: str, values: pd.Series) -> int:
 
 
 def console_table(table: TextTable) -> Table:
-    """A rich table of ``table`` in the booktabs style, its title above and caption below;
-    only its widest text column may wrap (:func:`print_fitted`)."""
-    shown = Table(
-        title=escape(table.title), caption=escape(table.caption) or None,
-        box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, collapse_padding=True,
-        title_justify="left", caption_justify="left",
-    )  # fmt: skip
+    """A rich table of ``table``'s frame in the booktabs style (its title and caption are
+    printed as lines of their own, :func:`print_table`); only its widest text column may
+    wrap (:func:`print_fitted`)."""
+    shown = Table(box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, collapse_padding=True)
     fold = _fold_column(table)
     for col in table.frame.columns:
         values = table.frame[col]
@@ -114,6 +120,28 @@ def console_table(table: TextTable) -> Table:
     for row in table.frame.itertuples(index=False):
         shown.add_row(*(escape(str(v)) for v in row))
     return shown
+
+
+def print_table(console: Console, table: TextTable, width: int) -> None:
+    """``table`` on ``console`` within ``width`` characters: its title in bold, the table,
+    its caption wrapped at ``width``."""
+    console.print(Text(table.title, style="bold"), width=width)
+    console.print(console_table(table), width=width, crop=False)
+    if table.caption:
+        console.print(Text(table.caption), width=width)
+
+
+def fit_width(console: Console) -> int:
+    """The width tables are fitted to: :data:`WIDTH`, or a narrower terminal's."""
+    return min(WIDTH, console.width) if console.is_terminal else WIDTH
+
+
+def print_wide(console: Console, table: TextTable) -> None:
+    """``table`` with every column on one line, whatever the terminal's width (a terminal
+    wraps its lines)."""
+    wide = Console(file=console.file, width=max(table_width(table.frame), WIDTH),
+                   force_terminal=False, no_color=True, highlight=False)  # fmt: skip
+    print_table(wide, table, max(table_width(table.frame), WIDTH))
 
 
 def _fold_column(table: TextTable) -> str | None:
@@ -140,22 +168,22 @@ def column_blocks(frame: pd.DataFrame, keys: int, width: int) -> list[pd.DataFra
     return [frame.iloc[:, lead_cols + block] for block in blocks if block or len(blocks) == 1]
 
 
-def print_fitted(console: Console, table: TextTable, keys: int, width: int) -> None:
-    """Print ``table`` on ``console`` within ``width`` characters: whole, its widest text
-    column folded onto more lines when that column can give up the excess and keep
-    :data:`FOLDED` characters, else in blocks of columns (:func:`column_blocks`), each
-    block's title numbered and the caption under the last."""
+def print_fitted(console: Console, table: TextTable, keys: int, width: int | None = None) -> None:
+    """Print ``table`` on ``console`` within ``width`` characters (default:
+    :func:`fit_width`): whole, its widest text column folded onto more lines when that column
+    can give up the excess and keep :data:`FOLDED` characters, else in blocks of columns
+    (:func:`column_blocks`), each block's title numbered and the caption under the last."""
+    width = width or fit_width(console)
     excess = table_width(table.frame) - width
     texts = [_width(str(c), table.frame[c]) for c in table.frame.columns if c not in table.numeric]
     if excess <= 0 or (texts and max(texts) - excess >= FOLDED):
-        console.print(console_table(table), width=width)
+        print_table(console, table, width)
         return
     blocks = column_blocks(table.frame, keys, width)
     for i, block in enumerate(blocks):
         title = table.title + (f" ({i + 1} of {len(blocks)})" if len(blocks) > 1 else "")
         caption = table.caption if i == len(blocks) - 1 else ""
-        shown = replace(table, frame=block, title=title, caption=caption)
-        console.print(console_table(shown), width=width)
+        print_table(console, replace(table, frame=block, title=title, caption=caption), width)
 
 
 def table_width(frame: pd.DataFrame) -> int:
@@ -166,24 +194,27 @@ def table_width(frame: pd.DataFrame) -> int:
 
 def to_markdown(tables: Sequence[TextTable]) -> str:
     """``tables`` as one Markdown document: per table a bold title, the table (GitHub
-    flavour, by pandas and ``tabulate``) and its caption."""
+    flavour, by pandas and ``tabulate``; every cell as written, ``|`` escaped) and its
+    caption."""
     parts = []
     for table in tables:
         align = tuple("right" if c in table.numeric else "left" for c in table.frame.columns)
-        body = table.frame.to_markdown(index=False, colalign=align)
+        cells = table.frame.map(lambda v: str(v).replace("|", "\\|"))
+        cells.columns = [str(c).replace("|", "\\|") for c in table.frame.columns]
+        # the cells are text already rounded: tabulate must not read them as numbers again
+        body = cells.to_markdown(index=False, colalign=align, disable_numparse=True)
         parts.append(f"**{table.title}**\n\n{body}\n" + (f"\n{table.caption}\n" if
                                                             table.caption else ""))  # fmt: skip
     return "\n".join(parts)
 
 
 def _latex_text(text: str) -> str:
-    """``text`` escaped for LaTeX, its non-ASCII characters as LaTeX (:data:`_LATEX`);
-    a character without a LaTeX form is a ValueError, so the output is always ASCII."""
+    """``text`` escaped for LaTeX, the symbols of hcomc's tables as LaTeX (:data:`_LATEX`);
+    other non-ASCII characters (a controller's name) as they are, which LaTeX reads as UTF-8
+    (the default since 2018). A cell that starts with ``[`` is led by ``{}``, so that it is
+    not read as the optional argument of the ``\\`` or rule before it."""
     out = "".join(_SPECIAL.get(c, _LATEX.get(c, c)) for c in text)
-    odd = sorted({c for c in out if ord(c) > 127})
-    if odd:
-        raise ValueError(f"no LaTeX form for {', '.join(map(repr, odd))} in {text!r}")
-    return out
+    return "{}" + out if out.startswith("[") else out
 
 
 def to_latex(tables: Sequence[TextTable]) -> str:

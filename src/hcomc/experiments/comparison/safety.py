@@ -6,8 +6,9 @@ Means hide the worst case, which is what a safety argument is about; these are t
 values the runs reached. Each run's ``min_ttc`` and ``max_drac`` are taken over every
 follower–leader pair of a lane with a key vehicle in it (:mod:`hcomc.metrics.bodies`), and
 ``collisions`` counts every collision of the run (``key_collisions`` those involving a key
-vehicle). A run without a value (no pair ever closed in) does not enter the extreme; ``runs``
-says how many runs the row covers.
+vehicle). A run without a least TTC (no pair ever closed in) does not enter its extreme; an
+infinite DRAC (a pair that overlapped) is the largest; ``runs`` says how many runs the row
+covers.
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ class SafetyExtremes:
     condition: str
     configuration: str
     runs: int
-    least_ttc: float  # [s], the least of the runs' least TTC (NaN: no run has one)
+    least_ttc: float  # [s], the least of the runs' finite least TTC (NaN: no run has one)
     least_ttc_seed: int  # the seed it came from (-1 without)
-    max_drac: float  # [m/s^2], the largest of the runs' largest DRAC
+    max_drac: float  # [m/s^2], the largest of the runs' largest DRAC (inf: an overlap)
     max_drac_seed: int
     collisions: int  # of all runs
     key_collisions: int  # of those, involving a key vehicle
@@ -64,11 +65,13 @@ def safety_extremes(runs: pd.DataFrame, configurations: Sequence[str] | None) ->
 
 
 def _extreme(values: pd.Series, *, lowest: bool) -> tuple[float, int]:
-    """The least (or largest) finite value of ``values`` (indexed by seed) and its seed;
-    (NaN, -1) without one."""
-    finite = pd.to_numeric(values, errors="coerce").dropna()
-    finite = finite[finite.map(math.isfinite)]
-    if finite.empty:
+    """The least (``lowest``) or largest value of ``values`` (indexed by seed) and its seed;
+    (NaN, -1) without one. A run's least TTC of +inf (no pair ever closed in) is no value;
+    a largest DRAC of +inf (a pair that overlapped) is the worst value there is."""
+    found = pd.to_numeric(values, errors="coerce").dropna()
+    if lowest:
+        found = found[found.map(math.isfinite)]
+    if found.empty:
         return math.nan, -1
-    seed = finite.idxmin() if lowest else finite.idxmax()
-    return float(finite[seed]), int(seed)
+    seed = found.idxmin() if lowest else found.idxmax()
+    return float(found[seed]), int(seed)

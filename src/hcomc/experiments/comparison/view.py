@@ -20,8 +20,10 @@ __all__ = [
     "EFFECTS_LEGEND",
     "EFFECTS_VIEW_COLUMNS",
     "PAIR_VIEW_COLUMNS",
+    "SAFETY_LABELS",
     "controller_labels",
     "effects_view",
+    "interval_text",
     "means_view",
     "metric_label",
     "rounded",
@@ -55,10 +57,13 @@ EFFECTS_LEGEND = (
 
 def rounded(value: float, uncertainty: float = float("nan")) -> str:
     """``value`` to the precision its ``uncertainty`` (a CI half-width) supports: two
-    significant digits of the uncertainty (54.2 ± 3.1, 0.0612 ± 0.0048), or three of the
-    value itself without one (n < 2, or an interval of width 0); "—" for NaN."""
-    if not math.isfinite(value):
+    significant digits of the uncertainty (54.2 ± 3.1, 0.0612 ± 0.0048, 25000 ± 63000), or
+    three of the value itself without one (n < 2, or an interval of width 0); "—" for NaN,
+    "∞" / "-∞" for an infinite value."""
+    if math.isnan(value):
         return "—"
+    if math.isinf(value):
+        return "∞" if value > 0 else "-∞"
     scale = abs(uncertainty) if math.isfinite(uncertainty) and uncertainty != 0 else 0.0
     if scale:
         places = 1 - math.floor(math.log10(scale))
@@ -66,8 +71,25 @@ def rounded(value: float, uncertainty: float = float("nan")) -> str:
         places = 2 - math.floor(math.log10(abs(value)))
     else:
         places = 0
-    text = f"{value:.{min(max(places, 0), 9)}f}"
+    places = min(places, 9)
+    text = f"{round(value, places):.{max(places, 0)}f}"  # places < 0: to tens, hundreds, ...
     return text.lstrip("-") if float(text) == 0 else text  # no "-0.00"
+
+
+def interval_text(median: float, low: float, high: float) -> str:
+    """ "median [low, high]", rounded to the interval's half-width (:func:`rounded`); a bound
+    that would round to 0 keeps its first significant digit, so that its sign shows (an
+    interval from -0.04 to 1.96 reads [-0.040, 2.0], not [0.0, 2.0]); "—" without a
+    median."""
+    if math.isnan(median):
+        return "—"
+    half = (high - low) / 2 if math.isfinite(high - low) else math.nan
+
+    def bound(b: float) -> str:
+        text = rounded(b, half)
+        return rounded(b, abs(b)) if b and math.isfinite(b) and float(text) == 0 else text
+
+    return f"{rounded(median, half)} [{bound(low)}, {bound(high)}]"
 
 
 def controller_labels(configurations: Sequence[str]) -> dict[str, str]:
@@ -133,13 +155,7 @@ def effects_view(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def _interval(row: dict[str, Any]) -> str:
-    """The median with its CI, "median [low, high]", each rounded to the CI's half-width;
-    "—" without pairs."""
-    m, lo, hi = row["median_diff"], row["ci_low"], row["ci_high"]
-    if not math.isfinite(m):
-        return "—"
-    half = (hi - lo) / 2 if math.isfinite(hi - lo) else math.nan
-    return f"{rounded(m, half)} [{rounded(lo, half)}, {rounded(hi, half)}]"
+    return interval_text(row["median_diff"], row["ci_low"], row["ci_high"])
 
 
 def _favoured_by_holm(row: dict[str, Any]) -> str:
@@ -170,9 +186,12 @@ def means_view(frame: pd.DataFrame) -> pd.DataFrame:
     return wide.fillna("—").rename_axis(index=["cell", "metric"], columns=None).reset_index()
 
 
+SAFETY_LABELS = {"min_ttc": "least TTC [s]", "max_drac": "max DRAC [m/s²]"}
+"""The run columns of the safety measures and their labels."""
+
 SAFETY_ROWS = (
-    ("least TTC [s] ↑", "least_ttc", "least_ttc_seed"),
-    ("max DRAC [m/s²] ↓", "max_drac", "max_drac_seed"),
+    (SAFETY_LABELS["min_ttc"] + " ↑", "least_ttc", "least_ttc_seed"),
+    (SAFETY_LABELS["max_drac"] + " ↓", "max_drac", "max_drac_seed"),
 )
 """The rows of :func:`safety_view` with a value and its seed: label, value, seed column."""
 

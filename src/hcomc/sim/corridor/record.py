@@ -94,6 +94,16 @@ class CorridorRecord:
     manifest: dict[str, Any]
     source: str = ""
 
+    def vehicle_classes(self) -> pd.Series:
+        """Each vehicle's class (:class:`~hcomc.corridor.VehicleClass`), by vehicle id;
+        ValueError naming a class the corridor does not define."""
+        names = self.trips["vclass"].astype(str)
+        unknown = sorted(set(names) - set(self.corridor.vehicles))
+        if unknown:
+            raise ValueError(f"corridor run '{self.source}': vehicles of class '{unknown[0]}', "
+                             "which its corridor does not define")  # fmt: skip
+        return names.map(self.corridor.vehicles)
+
     def require_trajectories(self) -> Trajectories:
         """The trajectories; ValueError (one line, with the fix) when the run has none."""
         if self.trajectories is None:

@@ -57,17 +57,12 @@ def _layout(samples: Trajectories, n_vehicles: int) -> tuple[Columns, np.ndarray
 def _fleet(record: CorridorRecord, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Kind, length and width [m] of vehicles 0 .. n - 1 (from their class)."""
     kind, length, width = np.zeros(n, dtype=np.int8), np.full(n, np.nan), np.full(n, np.nan)
-    classes = record.corridor.vehicles
     trips = record.trips
-    unknown = sorted(set(trips["vclass"].astype(str)) - set(classes))
-    if unknown:
-        raise ValueError(f"corridor run '{record.source}': vehicles of class '{unknown[0]}', "
-                         "which its corridor does not define")  # fmt: skip
+    classes = record.vehicle_classes()
     ids = trips.index.to_numpy(dtype=np.int64)
-    names = trips["vclass"].astype(str)
     kind[ids] = np.where(trips["cav"].to_numpy(dtype=bool), int(Kind.CAV), int(Kind.HDV))
-    length[ids] = names.map(lambda c: classes[c].length).to_numpy(dtype=np.float64)
-    width[ids] = names.map(lambda c: classes[c].width).to_numpy(dtype=np.float64)
+    length[ids] = classes.map(lambda c: c.length).to_numpy(dtype=np.float64)
+    width[ids] = classes.map(lambda c: c.width).to_numpy(dtype=np.float64)
     return kind, length, width
 
 
