@@ -20,7 +20,7 @@ from typer.testing import CliRunner
 
 import hcomc
 from hcomc.cli import app
-from hcomc.experiments.library import configuration_labels
+from hcomc.experiments.controller_arguments import configuration_labels
 
 ROOT = Path(__file__).resolve().parents[2]
 PYTHON_BLOCK = re.compile(r"^( *)```python\n(.*?)^\1```", re.S | re.M)

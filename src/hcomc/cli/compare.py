@@ -33,8 +33,8 @@ from hcomc.config import ConfigError
 
 def _labels(names: str | None) -> list[str]:
     """``--controllers``: configuration labels or controller names, each checked now
-    (:func:`hcomc.experiments.library.configuration_labels`)."""
-    from hcomc.experiments.library import configuration_labels
+    (:func:`hcomc.experiments.controller_arguments.configuration_labels`)."""
+    from hcomc.experiments.controller_arguments import configuration_labels
 
     if names is None:
         raise _fail("option '--controllers' is missing; allowed: two or more, e.g. fifo,game,hcomc")
@@ -46,7 +46,7 @@ def _labels(names: str | None) -> list[str]:
 
 def _baseline(value: str | None, labels: list[str]) -> str | None:
     """``--baseline``: one of the compared configurations, checked now."""
-    from hcomc.experiments.library import baseline_label
+    from hcomc.experiments.controller_arguments import baseline_label
 
     if value is None:
         return None

@@ -292,7 +292,7 @@ def engine_error(engine: str, config: ScenarioConfig | None = None) -> str | Non
     if engine not in ENGINES:
         return f"option '--engine' = '{engine}': allowed: {', '.join(ENGINES)}"
     if engine == "sumo":
-        from hcomc.sumo import sumo_problem
+        from hcomc.sumo.routes import sumo_problem
 
         problem = sumo_problem(config)
         if problem is not None:

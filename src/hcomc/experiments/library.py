@@ -33,34 +33,28 @@ from typing import Any
 import pandas as pd
 
 from hcomc.config import ConfigError, load_config, nest_overrides
-from hcomc.control.registry import canonical_name, class_spec
 from hcomc.corridor import is_corridor_source, load_corridor
 from hcomc.experiments.benchmark import Comparison
 from hcomc.experiments.comparison.analysis import comparison_tables
 from hcomc.experiments.comparison.effects import pairs
+from hcomc.experiments.controller_arguments import (
+    Controller,
+    baseline_label,
+    configuration_labels,
+    controller_name,
+)
 from hcomc.experiments.runner import (
     ENGINES,
-    configuration_label,
     configuration_of,
     grid,
     run_grid,
 )
 from hcomc.experiments.suite import LATEST, suite_named
 
-__all__ = [
-    "ComparisonResult",
-    "Progress",
-    "baseline_label",
-    "compare",
-    "configuration_labels",
-    "run",
-]
+__all__ = ["ComparisonResult", "Progress", "compare", "run"]
 
 Progress = Callable[[int, int], None]
 """A progress callback: ``progress(done, total)`` after each finished run."""
-
-Controller = str | type
-"""A controller's name (or configuration label), or its class."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,7 +145,7 @@ def run(
     settings = dict(overrides or {})
     if optimizer is not None:  # checked by the config, like a file's value
         settings["control.optimizer"] = optimizer.lower()
-    name = None if controller is None else _controller_name(controller)
+    name = None if controller is None else controller_name(controller)
     what = _run_corridor if is_corridor_source(source) else _run_scenario
     return what(source, name, optimizer, seeds, settings, engine, workers, progress)
 
@@ -188,16 +182,6 @@ def _run_corridor(
     with _as_arguments():
         check(specs[0])
     return run_rows(specs, workers=workers, progress=progress)
-
-
-def _controller_name(controller: Controller) -> str:
-    """The controller :func:`run` is given, as the config stores it; ConfigError naming it
-    when it names none."""
-    spec = _spec(controller, "controller")
-    try:
-        return canonical_name(spec)
-    except ConfigError as exc:
-        raise ConfigError(f"argument 'controller' ({exc})") from None
 
 
 def _run_label(
@@ -303,58 +287,12 @@ def _comparison(
                       nest_overrides(dict(overrides or {})), engine)  # fmt: skip
     plan.check()
     if engine == "sumo":
-        from hcomc.sumo import sumo_problem
+        from hcomc.sumo.routes import sumo_problem
 
         problem = sumo_problem(cells[0].config(**plan.overrides))
         if problem is not None:
             raise ConfigError(f"argument 'engine' = 'sumo': {problem}")
     return plan
-
-
-def configuration_labels(
-    controllers: str | Sequence[Controller], *, key: str = "argument 'controllers'"
-) -> list[str]:
-    """The configurations ``controllers`` stand for
-    (:func:`~hcomc.experiments.runner.configuration_label`): two or more, none empty or
-    given twice; ConfigError naming the one that is not, as ``key`` (the command line's
-    ``option '--controllers'``)."""
-    names = controllers.split(",") if isinstance(controllers, str) else list(controllers)
-    shown = ", ".join(map(str, names))
-    labels: list[str] = []
-    for name in names:
-        spec = _spec(name, "controllers").strip()
-        if not spec:
-            raise ConfigError(f"{key} = [{shown}]: an empty name")
-        try:
-            label = configuration_label(spec)
-        except ConfigError as exc:
-            raise ConfigError(f"{key} ({exc})") from None
-        if label in labels:
-            raise ConfigError(f"{key} = [{shown}]: '{spec}' is given twice")
-        labels.append(label)
-    if len(labels) < 2:
-        raise ConfigError(
-            f"{key} = [{shown}]: allowed: two or more to compare, e.g. fifo,game,hcomc"
-        )
-    return labels
-
-
-def baseline_label(
-    baseline: Controller, configurations: Sequence[str], *, key: str = "argument 'baseline'"
-) -> str:
-    """The configuration ``baseline`` stands for, one of those compared; ConfigError naming
-    it as ``key`` (the command line's ``option '--baseline'``) otherwise."""
-    spec = _spec(baseline, "baseline")
-    try:
-        label = configuration_label(spec)
-    except ConfigError as exc:
-        raise ConfigError(f"{key} ({exc})") from None
-    if label not in configurations:
-        raise ConfigError(
-            f"{key} = '{spec}' is not among the controllers compared; allowed: "
-            + ", ".join(configurations)
-        )
-    return label
 
 
 def _comparison_runs(plan: Comparison, workers: int, progress: Progress | None) -> pd.DataFrame:
@@ -368,23 +306,6 @@ def _comparison_runs(plan: Comparison, workers: int, progress: Progress | None) 
 
     run_grid([spec for _, spec in runs], workers=workers, progress=progress, on_result=keep)
     return pd.DataFrame(rows)
-
-
-def _spec(controller: object, argument: str) -> str:
-    """A controller's name as the registry reads it: a name as given, a class as its spec
-    (:func:`~hcomc.control.registry.class_spec`)."""
-    if isinstance(controller, str):
-        return controller
-    if not isinstance(controller, type):
-        raise ConfigError(
-            f"argument '{argument}' = {controller!r}: not a name or a class; allowed: a "
-            "controller name ('hcomc', 'package.module:Class', 'path/to/file.py:Class') or a "
-            "controller class (every run builds its own controller from its config)"
-        )
-    try:
-        return class_spec(controller)
-    except ConfigError as exc:
-        raise ConfigError(f"argument '{argument}' ({exc})") from None
 
 
 def _check_count(argument: str, value: object) -> None:

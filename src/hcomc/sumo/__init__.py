@@ -14,7 +14,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-__all__ = ["INSTALL_HINT", "SumoFormatError", "SumoMissingError", "sumo_binary", "sumo_problem"]
+__all__ = ["INSTALL_HINT", "SumoFormatError", "SumoMissingError", "sumo_binary"]
 
 INSTALL_HINT = 'pip install "hcomc[sumo]"'
 
@@ -64,19 +64,3 @@ def import_libsumo() -> Any:
             f"the SUMO Python binding 'libsumo' cannot be imported ({exc}); {INSTALL_HINT}"
         ) from None
     return libsumo
-
-
-def sumo_problem(config: Any = None) -> str | None:
-    """Why the SUMO co-simulation cannot run here, or cannot run ``config`` (a
-    :class:`~hcomc.config.ScenarioConfig`; one line), or None: libsumo and netconvert
-    installed, the scenario exportable."""
-    from hcomc.sumo.routes import check_exportable
-
-    try:
-        import_libsumo()
-        sumo_binary("netconvert")
-        if config is not None:
-            check_exportable(config)
-    except (SumoMissingError, ValueError) as exc:
-        return str(exc)
-    return None

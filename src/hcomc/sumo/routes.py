@@ -27,7 +27,15 @@ from hcomc.road import Kind
 from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sumo.network import edge_at, road_edges, sumo_lane_of
 
-__all__ = ["TYPE_IDS", "Departure", "departures", "routes_xml", "vehicle_id", "vtype_attributes"]
+__all__ = [
+    "TYPE_IDS",
+    "Departure",
+    "departures",
+    "routes_xml",
+    "sumo_problem",
+    "vehicle_id",
+    "vtype_attributes",
+]
 
 TYPE_IDS = {Kind.HDV: "hdv", Kind.CAV: "cav"}
 
@@ -144,3 +152,18 @@ def routes_xml(config: ScenarioConfig, seed: int) -> str:
         )
     lines.append("</routes>")
     return "\n".join(lines) + "\n"
+
+
+def sumo_problem(config: ScenarioConfig | None = None) -> str | None:
+    """Why the SUMO co-simulation cannot run here, or cannot run ``config`` (one line), or
+    None: libsumo and netconvert installed, the scenario exportable."""
+    from hcomc.sumo import SumoMissingError, import_libsumo, sumo_binary
+
+    try:
+        import_libsumo()
+        sumo_binary("netconvert")
+        if config is not None:
+            check_exportable(config)
+    except (SumoMissingError, ValueError) as exc:
+        return str(exc)
+    return None
