@@ -10,7 +10,6 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 from hcomc.cli._app import out
 from hcomc.viz.text_tables import (
-    WIDTH,
     TextTable,
     fit_width,
     print_fitted,
@@ -34,15 +33,11 @@ OUTPUTS = ("runs.parquet", "runs.csv", "effects.csv", "success.csv", "success_pa
 FORMATS = ("console", "markdown", "latex")
 """How a comparison prints its tables (``--format``)."""
 
-CONSOLE_WIDTH = WIDTH
-"""The width a comparison's console tables fit unless ``--wide`` (a wider terminal
-notwithstanding)."""
-
 
 @dataclass(frozen=True)
 class Presentation:
     """How a comparison shows its tables: ``format`` "console" (rich tables fitted to
-    :data:`CONSOLE_WIDTH` columns, or each on one line when ``wide``), "markdown" or
+    :data:`hcomc.viz.text_tables.WIDTH` columns, or each on one line when ``wide``), "markdown" or
     "latex" (the tables as one document, written to ``tables.md`` / ``tables.tex`` in the
     folder and printed to ``document``, the command's stdout, while its other lines go to
     stderr)."""
@@ -62,7 +57,8 @@ def _say(text: str) -> None:
 
 def _print(table: TextTable, keys: int, wide: bool) -> None:
     """``table`` on the console: on one line when ``wide``, else in blocks of columns (each
-    led by the ``keys`` columns) that fit :data:`CONSOLE_WIDTH` or a narrower terminal."""
+    led by the ``keys`` columns) that fit :data:`hcomc.viz.text_tables.WIDTH` or a narrower
+    terminal."""
     if wide:
         print_wide(out, table)
     else:

@@ -42,10 +42,10 @@ def mean_line(name: str, values: Any) -> str:
 
 
 def print_frame(frame: Any, title: str, caption: str = "", keys: int = 1) -> None:
-    """Print ``frame`` as a booktabs-style table fitted to 120 columns or a narrower
-    terminal (in blocks of columns
-    led by its first ``keys`` columns when wider; cells as :func:`_cell` writes them),
-    ``caption`` (its legend) under it."""
+    """Print ``frame`` as a booktabs-style table fitted to 120 columns or a narrower terminal
+    (:func:`~hcomc.viz.text_tables.print_fitted`: in blocks of columns led by its first
+    ``keys`` columns when wider), its cells as :func:`_cell` writes them and ``caption`` (its
+    legend) under it."""
     text = frame.map(_cell)
     numeric = tuple(c for c in frame.columns if c not in NAMES)
     print_fitted(out, TextTable(text, title, caption, numeric), keys)
