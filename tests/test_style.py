@@ -15,10 +15,13 @@ TREES = ["src", "tests", "benchmarks", "examples"]
 
 
 def _ruff(*args: str) -> subprocess.CompletedProcess[str]:
+    """Run ruff without its cache: a cached verdict outlives a change elsewhere in the tree
+    (a new directory under tests/ can make an import first-party), so only a fresh run sees
+    what a clean checkout sees."""
     exe = shutil.which("ruff")
     cmd = [exe] if exe else [sys.executable, "-m", "ruff"]
     return subprocess.run(
-        [*cmd, *args, *TREES], cwd=ROOT, capture_output=True, text=True, check=False
+        [*cmd, *args, "--no-cache", *TREES], cwd=ROOT, capture_output=True, text=True, check=False
     )
 
 
