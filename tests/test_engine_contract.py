@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from hcomc import Simulation, load_config
+from hcomc import Simulation, StepListener, load_config, run_ensemble
 from hcomc.interface import run_all
 from hcomc.sim.contract import check_engine
 
@@ -67,12 +67,31 @@ class _Mislabelled(Simulation):
         return log
 
 
-def _shifted(config, seed, ctl):
-    return Simulation(config, seed + 1, ctl)  # runs another seed than it says
+class _Unattached(Simulation):
+    """Keeps the listeners it is given without attaching them."""
+
+    def __init__(self, *args: Any, listeners: Any = (), **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.listeners = tuple(listeners)
 
 
-def _frozen(config, seed, ctl):
-    return Simulation(config, 3, ctl)  # every seed the same traffic
+class _Deaf(Simulation):
+    """Attaches its listeners but never calls them."""
+
+    def run(self, progress: Callable[[int, int], None] | None = None) -> Any:
+        listeners, self.listeners = self.listeners, ()
+        try:
+            return super().run(progress)
+        finally:
+            self.listeners = listeners
+
+
+def _shifted(config, seed, ctl, **listeners):
+    return Simulation(config, seed + 1, ctl, **listeners)  # runs another seed than it says
+
+
+def _frozen(config, seed, ctl, **listeners):
+    return Simulation(config, 3, ctl, **listeners)  # every seed the same traffic
 
 
 @pytest.mark.parametrize(
@@ -81,10 +100,12 @@ def _frozen(config, seed, ctl):
         (_Silent, "run reports its progress"),
         (_Forgetful, "run returns the engine's log"),
         (_shifted, "the engine's seed is 4, made with 3"),
-        (lambda config, seed, ctl: Simulation(config, seed), "keeps the controller"),
+        (lambda config, seed, ctl, **_: Simulation(config, seed), "keeps the controller"),
         (_frozen, "another seed gives the same traffic"),
         (_Unasked, "each decision has the request it answered"),
         (_Mislabelled, "the log records seed 103"),
+        (_Unattached, "each listener is attached once"),
+        (_Deaf, "before_step was called at steps"),
     ],
 )
 def test_an_engine_that_breaks_a_promise_fails_naming_it(make, broken):
@@ -126,3 +147,26 @@ def test_run_all_batches_a_class_that_defines_run_together_and_runs_others_alone
     alone = Simulation(config, 2)
     alone.run()
     assert np.array_equal(alone.log.x, batched[1].log.x, equal_nan=True)  # batched = alone
+
+
+class _Counting(StepListener):
+    """Counts the steps it was called before."""
+
+    def __init__(self) -> None:
+        self.steps = 0
+
+    def before_step(self, run: Any, t: float) -> None:
+        self.steps += 1
+
+
+def test_a_run_with_listeners_runs_alone_in_a_batch():
+    config = load_config("C1", duration=10.0)
+    counting = _Counting()
+    listened, plain = Simulation(config, 1, listeners=[counting]), Simulation(config, 1)
+    run_all([listened, plain])
+    assert listened.finished
+    assert plain.finished
+    assert counting.steps == listened.n_steps  # its listener acted before every step
+    assert np.array_equal(listened.log.x, plain.log.x, equal_nan=True)  # and only watched
+    with pytest.raises(ValueError, match="advances alone"):
+        run_ensemble([Simulation(config, 2, listeners=[StepListener()])])

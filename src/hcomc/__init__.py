@@ -19,7 +19,10 @@ light (the command line starts without numpy's or numba's import cost).
   :class:`ComparisonResult`
 * corridors: :func:`load_corridor`, :func:`simulate_corridor`, :func:`sections`,
   :func:`export_corridor` (a SUMO scenario; SUMO's netconvert, extra ``sumo``)
-* robustness: :class:`FaultedSimulation`, :data:`CHANNELS`, :data:`FAULTS`, :class:`ShieldParams`
+* robustness: :class:`Impairments` (a step listener: V2X channel, fault, shield; given to
+  either engine), :data:`CHANNELS`, :data:`FAULTS`, :class:`ChannelParams`,
+  :class:`FaultParams`, :class:`ShieldParams`; listeners of your own subclass
+  :class:`StepListener`
 * learning environments (extra ``envs``): :class:`MergeEnv`, :class:`MergeParallelEnv`,
   :class:`CorridorMergeEnv`, :class:`CorridorParallelEnv` (loading any of them registers
   ``hcomc/Merge-v0`` and ``hcomc/CorridorMerge-v0`` with Gymnasium), the merge controllers as
@@ -58,10 +61,11 @@ if TYPE_CHECKING:
     )
     from hcomc.experiments.library import ComparisonResult, compare, run
     from hcomc.interface import MergeController, MergeGroup, MergePlan, Mode, TrafficView
+    from hcomc.interface.listener import StepListener
     from hcomc.metrics import METRICS, compute_metrics
     from hcomc.road import Lane
-    from hcomc.robustness import CHANNELS, FAULTS, ShieldParams
-    from hcomc.robustness.engine import FaultedSimulation
+    from hcomc.robustness import CHANNELS, FAULTS, ChannelParams, FaultParams, ShieldParams
+    from hcomc.robustness.impairments import Impairments
     from hcomc.sim.corridor.run import simulate_corridor
     from hcomc.sim.engine import Simulation, simulate
     from hcomc.sim.ensemble import run_ensemble
@@ -97,10 +101,13 @@ _HOMES: dict[str, str] = {
     "METRICS": "hcomc.metrics",
     "load_corridor": "hcomc.corridor",
     "simulate_corridor": "hcomc.sim.corridor.run",
-    "FaultedSimulation": "hcomc.robustness.engine",
+    "Impairments": "hcomc.robustness.impairments",
     "CHANNELS": "hcomc.robustness",
     "FAULTS": "hcomc.robustness",
     "ShieldParams": "hcomc.robustness",
+    "ChannelParams": "hcomc.robustness",
+    "FaultParams": "hcomc.robustness",
+    "StepListener": "hcomc.interface.listener",
     "run": "hcomc.experiments.library",
     "compare": "hcomc.experiments.library",
     "ComparisonResult": "hcomc.experiments.library",
@@ -135,13 +142,15 @@ __all__ = [
     "CHANNELS",
     "FAULTS",
     "METRICS",
+    "ChannelParams",
     "ComparisonResult",
     "ConfigError",
     "ControllerFailed",
     "ControllerPolicy",
     "CorridorMergeEnv",
     "CorridorParallelEnv",
-    "FaultedSimulation",
+    "FaultParams",
+    "Impairments",
     "InvalidPlan",
     "Lane",
     "MergeController",
@@ -154,6 +163,7 @@ __all__ = [
     "ShieldParams",
     "Simulation",
     "SimulationLog",
+    "StepListener",
     "TrafficView",
     "__version__",
     "commonroad_contacts",

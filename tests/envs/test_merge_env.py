@@ -107,7 +107,7 @@ def test_observation_is_the_key_vehicles_relative_to_the_agent() -> None:
     env.reset(seed=2)
     obs, *_ = env.step(np.array([0.5, -1.0]))
     sim, ep = env.episode.sim, env.episode
-    group = find_key_vehicles(sim._view(sim.t), ep.vr).as_array()
+    group = find_key_vehicles(sim.view(sim.t), ep.vr).as_array()
     ego = ep.ego
     assert obs[0] == np.float32(sim.v[ego])
     assert obs[2] == np.float32(sim.config.road.accel_lane_end - sim.x[ego])

@@ -8,7 +8,8 @@ import pytest
 
 from hcomc.config import load_config
 from hcomc.experiments.runner import configuration_overrides
-from hcomc.robustness.engine import FaultedSimulation
+from hcomc.interface.listener import StepListener
+from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import rss_safe_distance
 from hcomc.sim.engine import Simulation
@@ -19,12 +20,19 @@ def _config(condition="C1", configuration="HCOMC"):
     return load_config(condition, **configuration_overrides(configuration, {}))
 
 
+def _faulted(config, seed, *others, **settings) -> tuple[Simulation, Impairments]:
+    """A run of our engine with the impairments of ``settings`` (channel, fault, shield),
+    after the listeners ``others``."""
+    impaired = Impairments(**settings)
+    return Simulation(config, seed, listeners=[*others, impaired]), impaired
+
+
 @pytest.mark.parametrize(("condition", "configuration", "seed"),
                          [("C1", "HCOMC", 0), ("C3", "FIFO", 1), ("C5", "Game", 2)])  # fmt: skip
 def test_nominal_settings_give_the_nominal_run_bit_for_bit(condition, configuration, seed):
     config = _config(condition, configuration)
     nominal = Simulation(config, seed).run()
-    faulted = FaultedSimulation(config, seed).run()
+    faulted = _faulted(config, seed)[0].run()
     for name in ("x", "v", "a", "lane", "active"):
         np.testing.assert_array_equal(getattr(faulted, name), getattr(nominal, name), name)
     for field in ("t", "kind", "vehicle", "other", "x", "value"):
@@ -32,8 +40,13 @@ def test_nominal_settings_give_the_nominal_run_bit_for_bit(condition, configurat
 
 
 def test_stale_view_is_the_state_one_latency_ago():
-    params = ChannelParams(latency=0.3)
-    sim = FaultedSimulation(_config(), 0, channel=params)
+    history: dict[int, np.ndarray] = {}
+
+    class Remember(StepListener):
+        def before_step(self, run, t):
+            history[run.step_index] = run.x.copy()
+
+    sim, _ = _faulted(_config(), 0, Remember(), channel=ChannelParams(latency=0.3))
     seen: list = []
     controller = sim.controller
 
@@ -45,14 +58,6 @@ def test_stale_view_is_the_state_one_latency_ago():
             return controller.plan(view, group, rng)
 
     sim.controller = Spy()
-    history: dict[int, np.ndarray] = {}
-    original = sim._between_steps
-
-    def remember():
-        history[sim.step_index] = sim.x.copy()
-        original()
-
-    sim._between_steps = remember
     sim.run()
     assert seen, "no decision"
     for view, on_road in seen:
@@ -68,68 +73,68 @@ def test_stale_view_is_the_state_one_latency_ago():
 
 
 def test_plans_arrive_one_latency_late_or_never():
-    late = FaultedSimulation(_config(), 0, channel=ChannelParams(latency=0.5))
+    late, late_channel = _faulted(_config(), 0, channel=ChannelParams(latency=0.5))
     late.run()
-    ideal = FaultedSimulation(_config(), 0)
+    ideal, _ = _faulted(_config(), 0)
     ideal.run()
     assert late.decisions
-    assert late.plans_lost == 0
+    assert late_channel.plans_lost == 0
     # the first plan is made at VR's entry in both runs, executed 0.5 s later in one
     assert late.decisions[0].t0 == ideal.decisions[0].t0
-    lossy = FaultedSimulation(_config(), 0, channel=ChannelParams(loss=0.9))
+    lossy, channel = _faulted(_config(), 0, channel=ChannelParams(loss=0.9))
     lossy.run()
-    assert lossy.plans_lost > 0
-    assert lossy.plans_lost < len(lossy.decisions)
+    assert channel.plans_lost > 0
+    assert channel.plans_lost < len(lossy.decisions)
 
 
 def test_emergency_braking_of_vmf_at_a_merg():
     fault = FaultParams(kind="emergency_brake", role="vmf", delay_min=2, delay_max=2,
                         duration_min=1.5, duration_max=1.5)  # fmt: skip
-    sim = FaultedSimulation(_config(), 0, fault=fault)
+    sim, impaired = _faulted(_config(), 0, fault=fault)
     log = sim.run()
     vmf = sim.key_group.vmf
-    assert sim.fault.vehicle == vmf >= 0
+    f = impaired.fault
+    assert f.vehicle == vmf >= 0
     t = log.t
-    during = (t > sim.fault.start + 0.05) & (t < sim.fault.end - 0.05) & (log.v[:, vmf] > 0)
+    during = (t > f.start + 0.05) & (t < f.end - 0.05) & (log.v[:, vmf] > 0)
     assert during.sum() >= 10
     a_merg = sim.config.control.safety_emergency_decel
     np.testing.assert_allclose(log.a[during, vmf], -a_merg, atol=1e-4)
-    after = (t > sim.fault.end + 0.5) & log.active[:, vmf]
+    after = (t > f.end + 0.5) & log.active[:, vmf]
     assert np.all(log.a[after, vmf] > -a_merg + 1e-3)
 
 
 def test_aggressive_hdvs_drive_short_headways_the_controller_does_not_know():
     fault = FaultParams(kind="aggressive_hdv")
     for seed in range(6):
-        sim = FaultedSimulation(_config("C3"), seed, fault=fault)
+        sim, impaired = _faulted(_config("C3"), seed, fault=fault)
         sim.run()
-        if sim.fault.vehicle >= 0:
+        if impaired.fault.vehicle >= 0:
             break
     else:
-        pytest.skip("no human-driven key vehicle in seeds 0-5")
-    i = sim.fault.vehicle
-    assert sim.arrays.matrix[1, i] == fault.time_headway
-    assert sim.nominal_fleet.T[i] == sim.config.hdv.time_headway
+        raise AssertionError("no human-driven key vehicle in seeds 0-5")
+    i = impaired.fault.vehicle
+    assert sim.driving.T[i] == sim.arrays.matrix[1, i] == fault.time_headway
+    assert sim.fleet.T[i] == sim.config.hdv.time_headway
     assert sim.requests[0][0].fleet.T[i] == sim.config.hdv.time_headway
 
 
 def test_a_cav_that_ignores_its_command_is_not_commanded():
     for seed in range(10):
-        sim = FaultedSimulation(_config(), seed, fault=FaultParams(kind="ignore_command"))
+        sim, impaired = _faulted(_config(), seed, fault=FaultParams(kind="ignore_command"))
         sim.run_to(sim.n_warmup)
-        while not sim.finished and not sim.decisions:
-            sim._between_steps()
-            sim.run_to(sim.step_index + 1)
+        while not sim.decisions and sim.step_index < sim.n_warmup + sim.n_steps:
+            sim.step()
         plan = sim.decisions[0] if sim.decisions else None
         if plan is not None and plan.cooperating >= 0:
             break
     else:
-        pytest.skip("no cooperating plan in seeds 0-9")
+        raise AssertionError("no cooperating plan in seeds 0-9")
     rows = sim.arrays.plan_int[: int(sim.arrays.counters[7])]
     mine = rows[rows[:, P_VMC] == plan.cooperating]
     assert mine.size
     assert np.all(mine[:, P_VMC_CMD] == 0)
-    assert sim.fault.vehicle == plan.cooperating
+    assert impaired.fault.vehicle == plan.cooperating
 
 
 def test_shield_keeps_commanded_vehicles_at_rss_distance_or_braking():
@@ -139,14 +144,14 @@ def test_shield_keeps_commanded_vehicles_at_rss_distance_or_braking():
     params = ShieldParams(enabled=True)
     total = 0
     for seed in range(4):
-        sim = FaultedSimulation(_config(), seed, fault=fault, shield=params)
-        sim.run()
-        brakes = [o for o in sim.shield.overrides if o.action == "brake"]
-        total += len(sim.shield.overrides)
-        for o in brakes:
-            assert o.vehicle in sim.commanded_at.get(round((o.t + sim.config.warmup) / sim.dt),
-                                                     frozenset())  # fmt: skip
-        assert sim.collisions_commanded() == 0
+        sim, impaired = _faulted(_config(), seed, fault=fault, shield=params)
+        log = sim.run()
+        brakes = [o for o in impaired.shield.overrides if o.action == "brake"]
+        total += len(impaired.shield.overrides)
+        step_of = {round((o.t + sim.config.warmup) / sim.dt): o.vehicle for o in brakes}
+        for step, vehicle in step_of.items():
+            assert vehicle in impaired.commanded_at.get(step, frozenset())
+        assert impaired.collisions_commanded(log) == 0
     assert total > 0
     # the defaults' distance at 90 km/h behind a vehicle as fast (docs/robustness.md):
     # 25 * 0.3 + 1.4 * 0.3^2 / 2 + (25 + 0.3 * 1.4)^2 / (2 * 4) - 25^2 / (2 * 7.5)
@@ -159,16 +164,17 @@ def test_sensor_dropout_holds_the_acceleration_of_its_start():
     fault = FaultParams(kind="sensor_dropout", role="vmc", delay_min=1, delay_max=1,
                         duration_min=2, duration_max=2)  # fmt: skip
     for seed in range(6):
-        sim = FaultedSimulation(_config(), seed, fault=fault)
+        sim, impaired = _faulted(_config(), seed, fault=fault)
         log = sim.run()
-        if sim.fault.vehicle >= 0:
+        if impaired.fault.vehicle >= 0:
             break
     else:
-        pytest.skip("no CAV VMC in seeds 0-5")
-    vmc = sim.fault.vehicle
+        raise AssertionError("no CAV VMC in seeds 0-5")
+    f = impaired.fault
+    vmc = f.vehicle
     assert vmc == sim.key_group.vmc
     t = log.t
-    during = (t > sim.fault.start + 0.05) & (t < sim.fault.end - 0.05) & (log.v[:, vmc] > 0)
+    during = (t > f.start + 0.05) & (t < f.end - 0.05) & (log.v[:, vmc] > 0)
     assert during.sum() >= 15
     held = log.a[during, vmc]
     np.testing.assert_allclose(held, held[0], atol=1e-5)

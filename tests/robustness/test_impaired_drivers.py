@@ -7,13 +7,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.equations.car_following import follow_accel
 from hcomc.experiments.runner import configuration_overrides
 from hcomc.road import Kind
-from hcomc.robustness.engine import FaultedSimulation
+from hcomc.robustness.faults import Fault
+from hcomc.robustness.impairments import Impairments
 from hcomc.robustness.settings import FaultParams
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
@@ -44,29 +44,35 @@ def _expected(log: SimulationLog, config: ScenarioConfig, i: int, row: int, seen
     return float(follow_accel(float(s), v, float(vl), float(al), *model, c, p.variant == "iidm"))
 
 
-def _window_rows(log: SimulationLog, sim: FaultedSimulation, i: int) -> np.ndarray:
+def _window_rows(log: SimulationLog, sim: Simulation, acting: Fault, i: int) -> np.ndarray:
     t = log.t
     a_merg = sim.config.control.safety_emergency_decel
-    rows = (t > sim.fault.start + 0.05) & (t < sim.fault.end - 0.05) & (log.v[:, i] > 0)
+    rows = (t > acting.start + 0.05) & (t < acting.end - 0.05) & (log.v[:, i] > 0)
     return np.flatnonzero(rows & (log.a[:, i] > -a_merg + 1e-3))
 
 
-def _first_faulted(condition: str, fault: FaultParams) -> tuple[FaultedSimulation, SimulationLog]:
+def _faulted_log(config: ScenarioConfig, seed: int, fault: FaultParams) -> SimulationLog:
+    return Simulation(config, seed, listeners=[Impairments(fault=fault)]).run()
+
+
+def _first_faulted(condition: str, fault: FaultParams) -> tuple[Simulation, Fault, SimulationLog]:
+    """The first run of seeds 0-5 whose fault found its vehicles, that fault and the log."""
     for seed in range(6):
-        sim = FaultedSimulation(_config(condition), seed, fault=fault)
+        impaired = Impairments(fault=fault)
+        sim = Simulation(_config(condition), seed, listeners=[impaired])
         log = sim.run()
-        if sim.fault.vehicles:
-            return sim, log
-    pytest.skip(f"no vehicle for {fault.kind} in seeds 0-5")
+        if impaired.fault.vehicles:
+            return sim, impaired.fault, log
+    raise AssertionError(f"no vehicle for {fault.kind} in seeds 0-5")
 
 
 def test_distracted_drivers_act_on_the_traffic_of_two_seconds_ago():
     fault = FaultParams(kind="distracted_hdv", distracted_gap_error=0.0, **WINDOW)
-    sim, log = _first_faulted("C5", fault)
+    sim, acting, log = _first_faulted("C5", fault)
     lag = round(fault.distracted_delay / sim.dt)
-    assert len(sim.fault.vehicles) >= 2
-    for i in sim.fault.vehicles:
-        rows = _window_rows(log, sim, i)
+    assert len(acting.vehicles) >= 2
+    for i in acting.vehicles:
+        rows = _window_rows(log, sim, acting, i)
         assert rows.size >= 20
         # a command computed before the step from row k - 1 is logged in row k
         got = log.a[rows, i]
@@ -79,15 +85,15 @@ def test_distracted_drivers_act_on_the_traffic_of_two_seconds_ago():
 def test_distracted_gap_errors_change_only_the_window():
     exact = FaultParams(kind="distracted_hdv", distracted_gap_error=0.0, **WINDOW)
     noisy = exact.model_copy(update={"distracted_gap_error": 0.2})
-    sim, log = _first_faulted("C5", noisy)
-    log0 = FaultedSimulation(sim.config, sim.seed, fault=exact).run()
-    before = log.t < sim.fault.start - 1e-9
+    sim, acting, log = _first_faulted("C5", noisy)
+    log0 = _faulted_log(sim.config, sim.seed, exact)
+    before = log.t < acting.start - 1e-9
     np.testing.assert_array_equal(log.x[before], log0.x[before])
     # a driver with a leader misjudges its gap (one on a free road has no gap to misjudge)
     changed = [
         np.max(np.abs(log.a[rows, i] - log0.a[rows, i]))
-        for i in sim.fault.vehicles
-        if (rows := _window_rows(log, sim, i)).size
+        for i in acting.vehicles
+        if (rows := _window_rows(log, sim, acting, i)).size
     ]
     assert max(changed) > 1e-3
 
@@ -95,10 +101,10 @@ def test_distracted_gap_errors_change_only_the_window():
 def test_a_cav_with_exact_sensors_drives_by_its_own_car_following():
     fault = FaultParams(kind="sensor_noise", role="vmc", gap_noise=0.0, speed_noise=0.0,
                         **WINDOW)  # fmt: skip
-    sim, log = _first_faulted("C1", fault)
-    (i,) = sim.fault.vehicles
+    sim, acting, log = _first_faulted("C1", fault)
+    (i,) = acting.vehicles
     assert i == sim.key_group.vmc
-    rows = _window_rows(log, sim, i)
+    rows = _window_rows(log, sim, acting, i)
     assert rows.size >= 20
     want = [_expected(log, sim.config, i, k - 1, k - 1) for k in rows]
     np.testing.assert_allclose(log.a[rows, i], want, atol=1e-5)
@@ -106,14 +112,14 @@ def test_a_cav_with_exact_sensors_drives_by_its_own_car_following():
 
 def test_sensor_noise_perturbs_the_window_and_nothing_before_it():
     fault = FaultParams(kind="sensor_noise", role="vmc", **WINDOW)
-    sim, log = _first_faulted("C1", fault)
+    sim, acting, log = _first_faulted("C1", fault)
     nominal = Simulation(sim.config, sim.seed).run()
-    before = log.t < sim.fault.start - 1e-9
+    before = log.t < acting.start - 1e-9
     np.testing.assert_array_equal(log.a[before], nominal.a[before])
-    (i,) = sim.fault.vehicles
-    rows = _window_rows(log, sim, i)
+    (i,) = acting.vehicles
+    rows = _window_rows(log, sim, acting, i)
     exact = np.array([_expected(log, sim.config, i, k - 1, k - 1) for k in rows])
     residual = log.a[rows, i] - exact
     assert np.mean(np.abs(residual) > 1e-5) > 0.9  # every step measures anew
-    same = FaultedSimulation(sim.config, sim.seed, fault=fault).run()
+    same = _faulted_log(sim.config, sim.seed, fault)
     np.testing.assert_array_equal(same.a, log.a)  # seeded

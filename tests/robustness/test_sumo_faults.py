@@ -29,57 +29,62 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
 
 
+def _faulted(config: ScenarioConfig, seed: int, **settings):
+    """A co-simulation with the impairments of ``settings`` (channel, fault, shield)."""
+    from hcomc.robustness.impairments import Impairments
+    from hcomc.sumo.cosim import SumoSimulation
+
+    impaired = Impairments(**settings)
+    return SumoSimulation(config, seed, listeners=[impaired]), impaired
+
+
 def test_nominal_settings_give_the_cosimulation_bit_for_bit():
     from hcomc.sumo.cosim import SumoSimulation
-    from hcomc.sumo.faulted import FaultedSumoSimulation
 
     config = _config()
     nominal = SumoSimulation(config, 0).run()
-    faulted = FaultedSumoSimulation(config, 0).run()
+    faulted = _faulted(config, 0)[0].run()
     for name in ("x", "v", "a", "lane", "active"):
         assert _same(getattr(faulted, name), getattr(nominal, name)), name
     assert len(faulted.meta["plans"]) == len(nominal.meta["plans"]) > 0
 
 
 def test_emergency_braking_in_sumo_at_a_merg_then_sumo_drives_again():
-    from hcomc.sumo.faulted import FaultedSumoSimulation
-
     fault = FaultParams(kind="emergency_brake", role="vmf", **WINDOW)
-    sim = FaultedSumoSimulation(_config(), 0, fault=fault)
+    sim, impaired = _faulted(_config(), 0, fault=fault)
     log = sim.run()
-    (vmf,) = sim.fault.vehicles
+    f = impaired.fault
+    (vmf,) = f.vehicles
     assert vmf == sim.key_group.vmf
     t = log.t
     # SUMO reports the acceleration of the step that ended at t: from the first step after
     # the start to the window's end
-    during = (t > sim.fault.start + 0.15) & (t < sim.fault.end - 0.05) & (log.v[:, vmf] > 0)
+    during = (t > f.start + 0.15) & (t < f.end - 0.05) & (log.v[:, vmf] > 0)
     assert during.sum() >= 15
     a_merg = sim.config.control.safety_emergency_decel
     np.testing.assert_allclose(log.a[during, vmf], -a_merg, atol=1e-6)
-    after = (t > sim.fault.end + 0.5) & log.active[:, vmf]
+    after = (t > f.end + 0.5) & log.active[:, vmf]
     assert after.any()
     assert np.all(log.a[after, vmf] > -a_merg + 1e-3)
 
 
 def test_a_lossy_channel_and_the_shield_act_in_sumo():
-    from hcomc.sumo.faulted import FaultedSumoSimulation
-
     lossy = ChannelParams(latency=0.3, loss=0.7, loss_model="gilbert_elliott")
-    sim = FaultedSumoSimulation(_config(), 1, channel=lossy, shield=ShieldParams(enabled=True))
+    sim, impaired = _faulted(_config(), 1, channel=lossy, shield=ShieldParams(enabled=True))
     log = sim.run()
-    assert sim.plans_lost > 0
-    assert len(sim.decisions) > sim.plans_lost  # a lost plan is made again
-    assert sim.channel.received < sim.channel.broadcasts
-    assert sim.shield.overrides
-    for o in sim.shield.overrides:
+    assert impaired.plans_lost > 0
+    assert len(sim.decisions) > impaired.plans_lost  # a lost plan is made again
+    assert impaired.channel.received < impaired.channel.broadcasts
+    assert impaired.shield.overrides
+    for o in impaired.shield.overrides:
         step = round((o.t + sim.config.warmup) / sim.dt)
         if o.action == "hold_change":  # a ramp vehicle's commanded merge waits
             assert o.vehicle in sim.key_groups
         else:  # a commanded vehicle brakes at least b_min in the next step
             assert o.action == "brake"
-            assert o.vehicle in sim.commanded_at[step]
+            assert o.vehicle in impaired.commanded_at[step]
             row = int(np.argmin(np.abs(log.t - (o.t + sim.dt))))
-            assert log.a[row, o.vehicle] <= -sim.shield.params.brake_min + 1e-6
+            assert log.a[row, o.vehicle] <= -impaired.shield.params.brake_min + 1e-6
 
 
 def test_campaign_in_sumo_through_the_cli(tmp_path):

@@ -266,8 +266,8 @@ def test_changing_vehicles_apply_the_eq14_blend():
             lo = _leader(sim, i, int(sim.origin[i]), active)
             ln = _leader(sim, i, int(sim.target[i]), active)
             ids = np.array([i])
-            a_ori = float(sim._follow(ids, np.array([lo]))[0])
-            a_new = float(sim._follow(ids, np.array([ln]))[0])
+            a_ori = float(sim.follow(ids, np.array([lo]))[0])
+            a_new = float(sim.follow(ids, np.array([ln]))[0])
             psi = float(transition_weight(t - sim.lc_t0[i], sim.lc_dur[i], tol))
             blend = psi * a_new + (1.0 - psi) * a_ori
             if _overlaps(sim, int(sim.origin[i]))[i]:

@@ -6,6 +6,10 @@ run on either; :func:`hcomc.sim.contract.check_engine` checks an implementation 
 suite runs it on both). ``LogT_co`` is the type of the run's log (both engines write a
 :class:`hcomc.sim.log.SimulationLog`; the protocol lives below the engine and does not name it).
 
+Step listeners (:mod:`hcomc.interface.listener`) are given to an engine when it is made
+(``listeners=[...]``) and act on its run between steps; the robustness layer's V2X channel,
+faults and shield are one.
+
 Batching is a capability, not a kind of engine: a class that can run many runs of its own
 as one batch defines the class method ``run_together(engines, threads=None)`` itself (not
 inherited: a subclass that changes how a run advances must not be batched by its parent's
@@ -22,6 +26,7 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.interface.controller import MergeController
 from hcomc.interface.fleet import Fleet
+from hcomc.interface.listener import StepListener
 from hcomc.interface.plan import MergeGroup, MergePlan
 from hcomc.interface.view import TrafficView
 
@@ -95,6 +100,11 @@ class Engine(Protocol[LogT_co]):
     def requests(self) -> list[tuple[TrafficView, MergeGroup]]:
         """What each decision was asked: the view and key vehicles, in the order of
         ``decisions``."""
+
+    @property
+    def listeners(self) -> Sequence[StepListener]:
+        """The step listeners the engine was made with
+        (:mod:`hcomc.interface.listener`)."""
 
     @property
     def log(self) -> LogT_co:

@@ -34,7 +34,7 @@ from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 __all__ = ["CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
 
 if TYPE_CHECKING:
-    from hcomc.sumo.faulted import FaultedSumoSimulation
+    from hcomc.sumo.cosim import SumoSimulation
 
 _SPAWN = multiprocessing.get_context("spawn")
 
@@ -65,41 +65,42 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
     from hcomc.metrics import key_window
     from hcomc.metrics.outcome import merge_outcome
     from hcomc.metrics.surrogate import closing_metrics, max_drac, min_ttc
-    from hcomc.robustness.engine import FaultedSimulation
+    from hcomc.robustness.impairments import Impairments
+    from hcomc.sim.engine import Simulation
 
     start = time.perf_counter()
     config = load_config(run.condition, **configuration_overrides(run.configuration, {}))
     shield = run.shield_params.model_copy(update={"enabled": run.shield})
-    engine: type[FaultedSimulation] | type[FaultedSumoSimulation] = FaultedSimulation
+    impaired = Impairments(channel=run.channel_params, fault=run.fault_params, shield=shield)
+    engine: type[Simulation] | type[SumoSimulation] = Simulation
     if run.engine == "sumo":
-        from hcomc.sumo.faulted import FaultedSumoSimulation
+        from hcomc.sumo.cosim import SumoSimulation
 
-        engine = FaultedSumoSimulation
-    sim = engine(config, run.seed, channel=run.channel_params, fault=run.fault_params,
-                 shield=shield)  # fmt: skip
+        engine = SumoSimulation
+    sim = engine(config, run.seed, listeners=[impaired])
     log = sim.run()
     window = key_window(log)
     closing = closing_metrics(log, window)
     outcome = merge_outcome(log, window)
     collisions = log.events_of(EventKind.COLLISION)
-    overrides = sim.shield.counts()
+    overrides = impaired.shield.counts()
     return {
         "condition": run.condition, "configuration": run.configuration, "fault": run.fault,
         "channel": run.channel, "shield": run.shield, "seed": run.seed,
         "merged": bool(outcome.merged), "merge_time": outcome.merge_time,
         "collisions": int(collisions.size),
-        "collisions_commanded": sim.collisions_commanded(),
+        "collisions_commanded": impaired.collisions_commanded(log),
         "min_ttc": closing[min_ttc], "max_drac": closing[max_drac],
         "shield_brakes": overrides["brake"], "shield_holds": overrides["hold_change"],
         "shield_releases": overrides["release"],
-        "plans": len(sim.decisions), "plans_lost": sim.plans_lost,
+        "plans": len(sim.decisions), "plans_lost": impaired.plans_lost,
         "fallbacks": sum(bool(p.fallback) for p in sim.decisions),
-        "fault_vehicle": sim.fault.vehicle,
-        "fault_start": sim.fault.start - window.t_start if math.isfinite(window.t_start)
+        "fault_vehicle": impaired.fault.vehicle,
+        "fault_start": impaired.fault.start - window.t_start if math.isfinite(window.t_start)
         else math.nan,
-        "degraded_steps": sim.degraded_steps,
+        "degraded_steps": impaired.degraded_steps,
         "collision_pair": _pair_roles(collisions, window.group),
-        "fault_involved": bool(set(sim.fault.vehicles)
+        "fault_involved": bool(set(impaired.fault.vehicles)
                                & (set(collisions["vehicle"]) | set(collisions["other"]))),
         "wall_s": time.perf_counter() - start,
     }  # fmt: skip
@@ -159,9 +160,9 @@ class CampaignSpec:
 
         sumo = {}
         if self.engine == "sumo":  # the co-simulation's SUMO, as its run logs record it
-            from hcomc.sumo.faulted import FaultedSumoSimulation
+            from hcomc.sumo.cosim import SumoSimulation
 
-            sumo = {"sumo_version": FaultedSumoSimulation._sumo_version()}
+            sumo = {"sumo_version": SumoSimulation._sumo_version()}
         return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},

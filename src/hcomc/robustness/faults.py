@@ -20,8 +20,9 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.equations.car_following import follow_accel
 from hcomc.interface import MergeGroup, MergePlan
+from hcomc.interface.listener import ListenedRun
 from hcomc.road import Kind
-from hcomc.robustness.run_state import ImpairedRun
+from hcomc.robustness.run_state import broadcast_state
 from hcomc.robustness.settings import FaultParams
 
 __all__ = ["FAULT_STREAM", "Fault", "History", "distracted_acceleration", "noisy_acceleration"]
@@ -45,7 +46,7 @@ class History:
         self.size = max(1, size)
         self.states: list[dict[str, np.ndarray]] = []
 
-    def push(self, sim: ImpairedRun) -> None:
+    def push(self, sim: ListenedRun) -> None:
         """Store the state before the next step."""
         self.states.append({"x": sim.x.copy(), "v": sim.v.copy(), "a": sim.a.copy(),
                             "lane": sim.lane.copy(), "active": sim.active.copy()})  # fmt: skip
@@ -65,7 +66,7 @@ def _leader_in(state: dict[str, np.ndarray], i: int, lane: int) -> int:
     return int(ahead[np.argmin(x[ahead])]) if ahead.size else -1
 
 
-def _follow(sim: ImpairedRun, i: int, s: float, v: float, vl: float, al: float) -> float:
+def _follow(sim: ListenedRun, i: int, s: float, v: float, vl: float, al: float) -> float:
     """Vehicle ``i``'s car-following acceleration (Eq. 1, or Eq. 3 for a CAV) with the
     parameters it drives with, on a perceived gap ``s`` and speeds ``v``, ``vl``."""
     d = sim.driving
@@ -74,13 +75,13 @@ def _follow(sim: ImpairedRun, i: int, s: float, v: float, vl: float, al: float) 
 
 
 def noisy_acceleration(
-    sim: ImpairedRun, i: int, gap_noise: float, speed_noise: float, rng: np.random.Generator
+    sim: ListenedRun, i: int, gap_noise: float, speed_noise: float, rng: np.random.Generator
 ) -> float:
     """Vehicle ``i``'s acceleration on its faulty sensors: its car following behind the true
     leader in its lane, with the gap and the leader's speed measured with Gaussian errors of
     standard deviations ``gap_noise`` [m] and ``speed_noise`` [m/s] (the measured gap at least
     :data:`MIN_SEEN_GAP`; the leader's acceleration exact, as broadcast)."""
-    j = _leader_in(sim._state(), i, int(sim.lane[i]))
+    j = _leader_in(broadcast_state(sim), i, int(sim.lane[i]))
     e_gap, e_speed = rng.standard_normal(2)
     if j < 0:
         return _follow(sim, i, math.inf, float(sim.v[i]), float(sim.v[i]), 0.0)
@@ -90,7 +91,7 @@ def noisy_acceleration(
 
 
 def distracted_acceleration(
-    sim: ImpairedRun, i: int, seen: dict[str, np.ndarray], gap_error: float
+    sim: ListenedRun, i: int, seen: dict[str, np.ndarray], gap_error: float
 ) -> float:
     """Vehicle ``i``'s acceleration when its driver acts on the older state ``seen``: the
     leader it saw in its lane then, gap and speeds as they were, the gap scaled by
@@ -133,7 +134,7 @@ class Fault:
         """The (first) vehicle the fault acts on, -1 while none."""
         return self.vehicles[0] if self.vehicles else -1
 
-    def on_entry(self, sim: ImpairedRun, group: MergeGroup, t: float) -> None:
+    def on_entry(self, sim: ListenedRun, group: MergeGroup, t: float) -> None:
         """The first ramp vehicle entered the control zone with key vehicles ``group``."""
         if self.vehicles or self.kind in ("none", "ignore_command"):
             return
@@ -156,7 +157,7 @@ class Fault:
         if self.kind == "distracted_hdv":  # w(0) ~ N(0, 1), as Eq. 2's errors
             self._w = {i: float(self.rng.standard_normal()) for i in self.vehicles}
 
-    def act(self, sim: ImpairedRun, t: float) -> None:
+    def act(self, sim: ListenedRun, t: float) -> None:
         """Drive the faulty vehicles for the step at ``t`` during the fault window, and hand
         them back to their model when it ends."""
         if self.kind == "distracted_hdv":
@@ -171,7 +172,7 @@ class Fault:
                 sim.command(i, math.nan)
         self._on = on
 
-    def _acceleration(self, sim: ImpairedRun, i: int) -> float:
+    def _acceleration(self, sim: ListenedRun, i: int) -> float:
         p = self.params
         if self.kind == "emergency_brake":
             return -self.decel

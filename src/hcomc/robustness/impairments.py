@@ -1,190 +1,160 @@
-"""What a run under faults adds to an engine, whichever engine moves the vehicles.
+"""A run's V2X channel, injected fault and safety shield, as one step listener.
 
-:class:`Impairments` is mixed into our engine (:class:`hcomc.robustness.engine.FaultedSimulation`)
-and into the SUMO co-simulation (:class:`hcomc.sumo.faulted.FaultedSumoSimulation`):
-the channel, the fault and the shield of one run; the controller's decision on the channel's
-view, its record, and its plan sent to the vehicles (at once, late or never, then made
-again); the degraded headway of CAVs whose leader went silent; and the count of collisions
-with a commanded vehicle. Each engine says how a plan is put into force (``_execute``) and
-whether its ramp vehicle can still act on one (``_may_execute``).
+:class:`Impairments` is a :class:`hcomc.interface.listener.StepListener`: given to either
+engine (``Simulation(config, seed, listeners=[Impairments(...)])``, or the SUMO
+co-simulation's ``SumoSimulation`` alike), it acts on the run between its steps and around
+the controller's decisions, through the engine's listener interface only:
+
+* **channel** (:mod:`hcomc.robustness.channel`): the vehicles broadcast their state every
+  update period; the controller plans on what was received (:meth:`view`), and its plan is
+  put into force when it arrives, or never (:meth:`send`): a ramp vehicle whose plan was
+  lost keeps the plan it had (none: it merges by gap acceptance) and is planned again a
+  replan period later (:meth:`decisions_due`); a CAV whose CAV leader's messages are older
+  than ``stale_after`` drives with the degraded time headway until they are fresh again;
+* **fault** (:mod:`hcomc.robustness.faults`), timed from the ramp vehicle's control-zone
+  entry (:meth:`on_key_vehicles`);
+* **shield** (:mod:`hcomc.robustness.shield`), on the commanded vehicles before each step.
+
+With the ideal channel, no fault and no shield the run is the engine's nominal run, bit for
+bit.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
-from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.config import ScenarioConfig
-from hcomc.control.key_group import find_key_vehicles
-from hcomc.control.validation import checked, name_of
-from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.interface import MergeGroup, MergePlan, TrafficView
+from hcomc.interface.listener import ListenedRun, StepListener
 from hcomc.road import Kind
 from hcomc.robustness.channel import Channel
 from hcomc.robustness.faults import Fault
+from hcomc.robustness.run_state import broadcast_state
 from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Shield
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
-from hcomc.sim.plan_execution import record_decision
 
 __all__ = ["Impairments"]
 
 
-class Impairments:
-    """The channel, fault and shield of a run, and what both engines do with them."""
+class Impairments(StepListener):
+    """The channel, fault and shield of one run (each nominal when not given)."""
 
-    # provided by the engine it is mixed into
-    config: ScenarioConfig
-    seed: int
-    dt: float
-    x: FloatArray
-    v: FloatArray
-    a: FloatArray
-    lane: IntArray
-    origin: IntArray
-    active: BoolArray
-    planned: BoolArray
-    fleet: Fleet
-    arrays: Any  # lane occupancy (x, lane, origin, target, active), and our engine's plans
-    step_index: int
-    n_warmup: int
-    decisions: list[MergePlan]
-    requests: list[tuple[TrafficView, MergeGroup]]
-    key_groups: dict[int, MergeGroup]
-    command: Callable[[int, float], None]  # drive a vehicle from outside (NaN: stop)
-    _follow: Callable[[IntArray, IntArray], FloatArray]  # car following behind leaders
-    _state: Callable[[], dict[str, np.ndarray]]  # the state a broadcast carries
-    _view: Callable[[float], TrafficView]  # the true state, as a controller reads it
-    _execute: Callable[[MergePlan, int], None]  # put decision k's plan into force
-    _may_execute: Callable[[int], bool]  # whether VR is still on the ramp, not changing
-    controller: MergeController | None
-    rng: np.random.Generator
-    log: SimulationLog
-
-    def _impair(
+    def __init__(
         self,
-        channel: ChannelParams | None,
-        fault: FaultParams | None,
-        shield: ShieldParams | None,
-        driving_matrix: FloatArray,
+        channel: ChannelParams | None = None,
+        fault: FaultParams | None = None,
+        shield: ShieldParams | None = None,
     ) -> None:
-        """Set up the run's impairments; the engine drives with the parameters of
-        ``driving_matrix`` (which faults and degraded headways change), the controllers
-        predict with the nominal ones."""
-        config = self.config
         self.channel_params = channel or ChannelParams()
-        self.channel = Channel(
-            self.channel_params, self.x.size, config.road.accel_lane_start, self.seed
-        )
-        self.fault = Fault(fault or FaultParams(), config, self.seed)
-        self.shield = Shield(shield or ShieldParams(), config)
-        self.nominal_fleet = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
-        self.driving = dataclasses.replace(self.fleet, matrix=driving_matrix)
+        self.fault_params = fault or FaultParams()
+        self.shield_params = shield or ShieldParams()
         self._next_plan: dict[int, float] = {}  # VR -> earliest next decision after a loss
         self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
-        self._broadcast_every = max(1, round(self.channel_params.period / self.dt))
         self.plans_lost = 0
         self.degraded_steps = 0
         self.commanded_at: dict[int, frozenset[int]] = {}  # step -> commanded vehicles
 
-    def _channel_step(self, t: float) -> None:
-        """Broadcast (every update period), deliver the messages and plans due at ``t``,
-        and degrade the CAVs whose leader went silent; nothing on the ideal channel."""
-        if self.channel_params.ideal:
-            return
-        if (self.step_index - self.n_warmup) % self._broadcast_every == 0:
-            self.channel.broadcast(t, self._state())
-        self.channel.deliver(t)
-        self._deliver_plans(t)
-        self._degrade(t)
+    def attach(self, run: ListenedRun) -> None:
+        """Set up the channel, fault and shield for ``run``."""
+        config = run.config
+        self.run = run
+        self.channel = Channel(
+            self.channel_params, run.x.size, config.road.accel_lane_start, run.seed
+        )
+        self.fault = Fault(self.fault_params, config, run.seed)
+        self.shield = Shield(self.shield_params, config, self.fault)
+        self._broadcast_every = max(1, round(self.channel_params.period / run.dt))
 
-    def _tell_fault_of_entry(self, groups_before: int, t: float) -> None:
-        """Start the fault's clock if a ramp vehicle entered the control zone (its key
-        vehicles were found) since there were ``groups_before`` key groups."""
-        if len(self.key_groups) > groups_before:
-            self.fault.on_entry(self, next(reversed(self.key_groups.values())), t)
+    # ----------------------------------------------------------------- steps
+    def before_step(self, run: ListenedRun, t: float) -> None:
+        """Channel (broadcast, deliveries, degraded headways), fault, then the shield on the
+        commanded vehicles."""
+        if not self.channel_params.ideal:
+            if (run.step_index - run.n_warmup) % self._broadcast_every == 0:
+                self.channel.broadcast(t, broadcast_state(run))
+            self.channel.deliver(t)
+            self._deliver_plans(run, t)
+            self._degrade(run, t)
+        self.fault.act(run, t)
+        commanded = run.commanded()
+        self.shield.act(run, t, commanded)
+        if commanded.size:
+            self.commanded_at[run.step_index] = frozenset(commanded.tolist())
 
-    def _waiting(self) -> set[int]:
-        """Ramp vehicles whose plan is on its way."""
-        return {p.group.vr for _, _, p in self._pending}
+    def on_key_vehicles(self, run: ListenedRun, group: MergeGroup, t: float) -> None:
+        """Start the fault's clock at the first ramp vehicle's control-zone entry."""
+        self.fault.on_entry(run, group, t)
 
-    def _decision(self, vr: int, t: float) -> tuple[TrafficView, MergeGroup, MergePlan]:
-        """Decide for ramp vehicle ``vr`` at ``t`` on the channel's view, record the decision
-        (as the engines do: :func:`hcomc.sim.plan_execution.record_decision`) and send the
-        plan; returns the view the controller saw, the key vehicles and the plan."""
-        assert self.controller is not None
-        self.planned[vr] = True
-        self._next_plan.pop(vr, None)
-        view = self._view(t)
-        group = find_key_vehicles(view, vr)
-        seen = view if self.channel_params.ideal else self.channel.view(view)
-        plan = checked(self._decide(seen, group), seen, group, name_of(self.controller))
-        record_decision(self, seen, group, plan, t)
-        self._send(plan, len(self.decisions) - 1, t)
-        return seen, group, plan
+    # ------------------------------------------------------------- decisions
+    def decisions_due(self, run: ListenedRun, t: float) -> Sequence[int]:
+        """Ramp vehicles whose last plan was lost and that are due for a new one."""
+        due = [vr for vr, when in self._next_plan.items() if when <= t + 1e-9]
+        return [vr for vr in due if run.may_execute(vr)]
 
-    def _send(self, plan: MergePlan, ident: int, t: float) -> None:
-        """Execute decision ``ident`` now (ideal channel), when it arrives, or never (lost:
-        its VR is planned again a replan period later)."""
+    def holds(self, vr: int) -> bool:
+        """Whether VR's last plan is on its way."""
+        return any(p.group.vr == vr for _, _, p in self._pending)
+
+    def view(self, run: ListenedRun, view: TrafficView) -> TrafficView:
+        """What the channel delivered (the true state on the ideal channel)."""
+        return view if self.channel_params.ideal else self.channel.view(view)
+
+    def send(self, run: ListenedRun, plan: MergePlan, ident: int, t: float) -> bool:
+        """Into force now (ideal channel), when it arrives, or never (lost: its VR is
+        planned again a replan period later)."""
+        self._next_plan.pop(plan.group.vr, None)
         delay = 0.0 if self.channel_params.ideal else self.channel.plan_delay()
         if math.isinf(delay):
             self.plans_lost += 1
-            self._next_plan[plan.group.vr] = t + self.config.control.replan_period
-        elif delay == 0.0:
-            self._execute(plan, ident)
-        else:
-            self._pending.append((t + delay, ident, plan))
+            self._next_plan[plan.group.vr] = t + run.config.control.replan_period
+            return False
+        if delay == 0.0:
+            return True
+        self._pending.append((t + delay, ident, plan))
+        return False
 
-    def _deliver_plans(self, t: float) -> None:
-        """Execute the plans that arrived by ``t`` whose VR can still act on them."""
+    def ignores(self, plan: MergePlan) -> frozenset[int]:
+        """The vehicles the fault makes ignore ``plan``."""
+        return frozenset(self.fault.ignores(plan))
+
+    def _deliver_plans(self, run: ListenedRun, t: float) -> None:
+        """Put into force the plans that arrived by ``t`` whose VR can still act on them."""
         arrived = [(ident, p) for when, ident, p in self._pending if when <= t + 1e-9]
         self._pending = [item for item in self._pending if item[0] > t + 1e-9]
         for ident, plan in arrived:
-            if self._may_execute(plan.group.vr):
-                self._execute(plan, ident)
+            if run.may_execute(plan.group.vr):
+                run.execute(plan, ident)
 
-    def _lost_due(self, t: float) -> list[int]:
-        """Ramp vehicles whose last plan was lost and that are due for a new one."""
-        due = [vr for vr, when in self._next_plan.items() if when <= t + 1e-9]
-        return [vr for vr in due if self._may_execute(vr)]
-
-    def _decide(self, view: Any, group: MergeGroup) -> MergePlan:
-        """The controller's plan, or the safe default when a key vehicle was never heard."""
-        assert self.controller is not None
-        missing = [int(i) for i in group.as_array() if i >= 0 and not view.active[i]]
-        if missing:
-            return MergePlan(group, Mode.NONE, view.t, fallback=True,
-                             reason=f"no V2X message from vehicles {missing}")  # fmt: skip
-        return self.controller.plan(view, group, self.rng.spawn(1)[0])
-
-    def _degrade(self, t: float) -> None:
+    def _degrade(self, run: ListenedRun, t: float) -> None:
         """CAVs behind a CAV whose newest message is stale drive with the degraded headway."""
-        T = self.driving.T
-        ids = np.flatnonzero(self.active & (self.fleet.kind == Kind.CAV))
-        T[ids] = self.nominal_fleet.T[ids]
+        kind = run.fleet.kind
+        T = run.driving.T
+        ids = np.flatnonzero(run.active & (kind == Kind.CAV))
+        T[ids] = run.fleet.T[ids]
         if ids.size == 0:
             return
-        on_road = np.flatnonzero(self.active)
-        index = build_lane_index(on_road, self.lane[on_road], self.x[on_road])
+        on_road = np.flatnonzero(run.active)
+        index = build_lane_index(on_road, run.lane[on_road], run.x[on_road])
         leaders = index.leader_of(np.searchsorted(on_road, ids))
         has = leaders >= 0
         stale = np.zeros(ids.size, dtype=bool)
-        stale[has] = (self.fleet.kind[leaders[has]] == Kind.CAV) & (
+        stale[has] = (kind[leaders[has]] == Kind.CAV) & (
             t - self.channel.heard[leaders[has]] > self.channel_params.stale_after
         )
         T[ids[stale]] = self.channel_params.degraded_time_headway
         self.degraded_steps += int(stale.sum())
 
-    def collisions_commanded(self) -> int:
-        """COLLISION events with a vehicle that a live plan commanded in that step."""
+    # --------------------------------------------------------------- results
+    def collisions_commanded(self, log: SimulationLog) -> int:
+        """COLLISION events of the run's ``log`` with a vehicle that a live plan commanded in
+        that step."""
         count = 0
-        for e in self.log.events_of(EventKind.COLLISION):
-            step = round((float(e["t"]) + self.config.warmup) / self.dt)
+        for e in log.events_of(EventKind.COLLISION):
+            step = round((float(e["t"]) + self.run.config.warmup) / self.run.dt)
             commanded = self.commanded_at.get(step, frozenset()) | self.commanded_at.get(
                 step - 1, frozenset()
             )

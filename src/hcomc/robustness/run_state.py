@@ -1,22 +1,19 @@
-"""What a fault and the shield read of the run they act on, and how they drive its vehicles.
+"""What the channel, a fault and the shield read of the run they act on.
 
-A fault (:mod:`hcomc.robustness.faults`) and the shield (:mod:`hcomc.robustness.shield`) act
-between two steps of a run of either engine with impairments
-(:class:`hcomc.robustness.impairments.Impairments`, mixed into our engine and into the SUMO
-co-simulation). They see it through :class:`ImpairedRun`, the part of it they use, so that
-they depend on this description rather than on the engines that carry them.
+They act between two steps of a run of either engine, as one step listener
+(:class:`hcomc.robustness.impairments.Impairments`), and see the run through
+:class:`hcomc.interface.listener.ListenedRun` only; this module holds what they share.
 """
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
-from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.interface import Fleet
+from hcomc.interface.listener import ListenedRun
 
-__all__ = ["DrivenVehicles", "ImpairedRun", "ScenarioRun"]
+__all__ = ["DrivenVehicles", "broadcast_state"]
 
 
 class DrivenVehicles(Protocol):
@@ -27,50 +24,8 @@ class DrivenVehicles(Protocol):
         ...
 
 
-class ImpairedRun(Protocol):
-    """A run with impairments, between two steps: the true state of every vehicle, the
-    fleet's nominal and driving parameters, and the ways to drive a vehicle from outside."""
-
-    dt: float
-    x: FloatArray
-    v: FloatArray
-    a: FloatArray
-    lane: IntArray
-    origin: IntArray
-    active: BoolArray
-    fleet: Fleet
-
-    @property
-    def arrays(self) -> Any:
-        """Lane occupancy (x, lane, origin, target, active), and our engine's plans."""
-        ...
-
-    def command(self, i: int, accel: float, /) -> None:
-        """Drive vehicle ``i`` from outside at ``accel`` for the next step (NaN: stop)."""
-        ...
-
-    def _follow(self, ids: IntArray, leader: IntArray, /) -> FloatArray:
-        """The car-following acceleration of vehicles ``ids`` behind ``leader``."""
-        ...
-
-    def _state(self) -> dict[str, np.ndarray]:
-        """The state a broadcast carries (x, v, a, lane, active of every vehicle)."""
-        ...
-
-    @property
-    def driving(self) -> Fleet:
-        """The parameters the engine drives with (which faults and degraded headways
-        change)."""
-        ...
-
-    @property
-    def fault(self) -> DrivenVehicles:
-        """The run's fault."""
-        ...
-
-
-class ScenarioRun(ImpairedRun, Protocol):
-    """A run of our engine with impairments: also each vehicle's target lane, which a lane
-    change in progress differs from its origin in."""
-
-    target: IntArray
+def broadcast_state(run: ListenedRun) -> dict[str, np.ndarray]:
+    """The state a vehicle's message carries (x, v, a, lane, on the road, changing lanes),
+    for every vehicle of ``run`` (the arrays themselves: a receiver copies what it keeps)."""
+    return {"x": run.x, "v": run.v, "a": run.a, "lane": run.lane, "active": run.active,
+            "changing": run.origin != run.target}  # fmt: skip

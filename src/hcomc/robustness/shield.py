@@ -7,34 +7,34 @@ brakes at up to ``b_max`` and the rear one accelerates at up to ``a_max`` during
 time ``rho`` and then brakes at least ``b_min``, they do not touch.
 
 The shield runs between two steps of a run on the true state. For every vehicle a live plan
-commands (:func:`commanded_vehicles`) and every lane its body occupies, it checks the distance
-to the nearest vehicle ahead; closer than :func:`rss_safe_distance`, the vehicle brakes for
-the next step at ``min(its car-following acceleration behind that vehicle, -b_min)`` (RSS's
-proper response), which replaces the plan's command. A commanded lane change of VR is
-gated the same way, before it starts: against the target lane's leader (VR behind) and
-follower (VR ahead); unsafe, the change waits a step, and if VR could no longer stop before
-the lane end it is released to gap acceptance (the engine's own fallback). Every override is
-recorded.
+commands (:meth:`hcomc.interface.listener.ListenedRun.commanded`) and every lane its body
+occupies, it checks the distance to the nearest vehicle ahead; closer than
+:func:`rss_safe_distance`, the vehicle brakes for the next step at ``min(its car-following
+acceleration behind that vehicle, -b_min)`` (RSS's proper response), which replaces the
+plan's command. A commanded lane change of VR is gated the same way, before it starts:
+against the target lane's leader (VR behind) and follower (VR ahead); unsafe, the change
+waits a step (:meth:`~hcomc.interface.listener.ListenedRun.hold_merge`), and if VR could no
+longer stop before the lane end it is released to gap acceptance
+(:meth:`~hcomc.interface.listener.ListenedRun.release_merge`). Every override is recorded.
+Both engines offer these levers, so the same shield runs on either.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.equations.safety import stopping_distance
+from hcomc.interface.listener import ListenedRun
 from hcomc.road import Lane
-from hcomc.robustness.run_state import ImpairedRun, ScenarioRun
+from hcomc.robustness.run_state import DrivenVehicles
 from hcomc.robustness.settings import ShieldParams
-from hcomc.sim.step import plans
-from hcomc.sim.step.state import N_PLANS
 
-__all__ = ["Override", "Shield", "commanded_vehicles", "rss_safe_distance"]
+__all__ = ["Override", "Shield", "rss_safe_distance"]
 
 
 def rss_safe_distance(
@@ -75,25 +75,14 @@ class Override:
     action: str
 
 
-def commanded_vehicles(c: Any) -> IntArray:
-    """Vehicles a live plan commands now: VR until its plan releases it (on the ramp and in
-    its commanded change), a commanded cooperating vehicle (VMC) and a commanded VNR."""
-    pi = c.plan_int[: int(c.counters[N_PLANS])]
-    vr = pi[(pi[:, plans.P_VR_CMD] != 0) & (pi[:, plans.P_RELEASED] == 0), plans.P_VR]
-    vmc = pi[pi[:, plans.P_VMC_CMD] != 0, plans.P_VMC]
-    vnr = pi[pi[:, plans.P_VNR_CMD] != 0, plans.P_VNR]
-    ids = np.concatenate([vr, vmc, vnr])
-    return np.unique(ids[ids >= 0])
-
-
-def lane_leaders(c: Any, i: int) -> list[int]:
+def lane_leaders(c: ListenedRun, i: int) -> list[int]:
     """The nearest active vehicle ahead of ``i`` in each lane its body occupies (its lane,
     and during a change its origin and target lanes)."""
     lanes = {int(c.lane[i]), int(c.origin[i]), int(c.target[i])}
     return [j for j in (lane_neighbours(c, i, lane)[0] for lane in lanes) if j >= 0]
 
 
-def lane_neighbours(c: Any, i: int, lane: int) -> tuple[int, int]:
+def lane_neighbours(c: ListenedRun, i: int, lane: int) -> tuple[int, int]:
     """``(leader, follower)`` of position ``x[i]`` in ``lane`` (-1: none), ``i`` excluded."""
     active = np.flatnonzero(c.active)
     occupies = (c.origin[active] == lane) | (c.target[active] == lane) | (c.lane[active] == lane)
@@ -108,30 +97,28 @@ class Shield:
     """The shield of one run (:class:`~hcomc.robustness.settings.ShieldParams`); with
     ``enabled`` false the engines do not call it."""
 
-    def __init__(self, params: ShieldParams, config: ScenarioConfig) -> None:
-        self.params, self.config = params, config
+    def __init__(self, params: ShieldParams, config: ScenarioConfig, fault: DrivenVehicles) -> None:
+        self.params, self.config, self.fault = params, config, fault
         self.overrides: list[Override] = []
         self._braking: set[int] = set()  # vehicles the shield drives this step
 
-    def act(self, sim: ScenarioRun, t: float, commanded: IntArray) -> None:
-        """Check the ``commanded`` vehicles (:func:`commanded_vehicles`) before the next step
-        (see the module docstring)."""
+    def act(self, sim: ListenedRun, t: float, commanded: IntArray) -> None:
+        """Check the ``commanded`` vehicles before the next step (see the module docstring)."""
         if not self.params.enabled:
             return
         self._gate_changes(sim, t)
         self.brake(sim, t, commanded)
 
-    def brake(self, sim: ImpairedRun, t: float, commanded: IntArray) -> None:
+    def brake(self, sim: ListenedRun, t: float, commanded: IntArray) -> None:
         """Brake each of the ``commanded`` vehicles closer than the RSS distance to the
         nearest vehicle ahead in a lane it occupies; hand back those that no longer are."""
         braking: dict[int, float] = {}
-        occupancy = sim.arrays
         for i in commanded.tolist():
-            if sim.fault.drives(i):
+            if self.fault.drives(i):
                 continue
-            unsafe = [j for j in lane_leaders(occupancy, i) if not self._safe(sim, i, j)]
+            unsafe = [j for j in lane_leaders(sim, i) if not self._safe(sim, i, j)]
             if unsafe:
-                follow = sim._follow(np.full(len(unsafe), i), np.array(unsafe))
+                follow = sim.follow(np.full(len(unsafe), i), np.array(unsafe))
                 braking[i] = min(float(follow.min()), -self.params.brake_min)
                 self.overrides.append(Override(t, i, unsafe[0], "brake"))
         for i in self._braking - braking.keys():
@@ -140,46 +127,37 @@ class Shield:
             sim.command(i, acc)
         self._braking = set(braking)
 
-    def unsafe_merge(self, sim: ImpairedRun, vr: int) -> list[int]:
+    def unsafe_merge(self, sim: ListenedRun, vr: int) -> list[int]:
         """The vehicles of lane 1 next to which VR's merge would start closer than the RSS
         distance: its leader there (VR behind it) and its follower there (VR ahead)."""
-        leader, follower = lane_neighbours(sim.arrays, vr, int(Lane.MAIN_1))
+        leader, follower = lane_neighbours(sim, vr, int(Lane.MAIN_1))
         pairs = ((leader, leader < 0 or self._safe(sim, vr, leader)),
                  (follower, follower < 0 or self._safe(sim, follower, vr)))  # fmt: skip
         return [j for j, ok in pairs if not ok]
 
-    def cannot_stop(self, sim: ImpairedRun, vr: int) -> bool:
+    def cannot_stop(self, sim: ListenedRun, vr: int) -> bool:
         """Whether VR could no longer stop before the lane end at the safe deceleration."""
         stop = stopping_distance(
             float(sim.v[vr]), self.config.lane_change.safe_decel, float(sim.fleet.s0[vr])
         )
         return bool(sim.x[vr] >= self.config.road.accel_lane_end - stop)
 
-    def _safe(self, sim: ImpairedRun, rear: int, front: int) -> bool:
+    def _safe(self, sim: ListenedRun, rear: int, front: int) -> bool:
         gap = float(sim.x[front] - sim.fleet.length[front] - sim.x[rear])
         return safe_behind(self.params, gap, float(sim.v[rear]), float(sim.v[front]))
 
-    def _gate_changes(self, sim: ScenarioRun, t: float) -> None:
+    def _gate_changes(self, sim: ListenedRun, t: float) -> None:
         """Hold a commanded merge about to start next to an unsafe gap; release VR to gap
         acceptance once it could no longer stop before the lane end."""
-        c = sim.arrays
-        n = int(c.counters[N_PLANS])
-        pi, pf = c.plan_int, c.plan_f
-        for k in range(n):
-            vr = int(pi[k, plans.P_VR])
-            waiting = (pi[k, plans.P_VR_CMD] and not pi[k, plans.P_VR_STARTED]
-                       and not pi[k, plans.P_RELEASED] and sim.origin[vr] == sim.target[vr]
-                       and sim.lane[vr] == Lane.RAMP)  # fmt: skip
-            if not waiting or sim.x[vr] < pf[k, plans.F_MERGE_X]:
-                continue
+        for vr in sim.merges_due().tolist():
             bad = self.unsafe_merge(sim, vr)
             if not bad:
                 continue
             if self.cannot_stop(sim, vr):
-                pi[k, plans.P_RELEASED] = 1
+                sim.release_merge(vr)
                 self.overrides.append(Override(t, vr, bad[0], "release"))
             else:
-                pf[k, plans.F_MERGE_X] = sim.x[vr] + sim.v[vr] * sim.dt + 1e-6
+                sim.hold_merge(vr)
                 self.overrides.append(Override(t, vr, bad[0], "hold_change"))
 
     def counts(self) -> dict[str, int]:

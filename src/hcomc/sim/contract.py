@@ -24,24 +24,60 @@ The promises:
    that entered the control zone, the first of them ``key_group``.
 5. **Reproducible**: the same scenario and seed give the same log, bit for bit, and the same
    decisions; another seed gives another traffic.
+6. **Listeners** (:class:`~hcomc.interface.listener.StepListener`): an engine made with
+   ``listeners`` keeps them, attaches each once before its first step, calls ``before_step``
+   once before every step from the end of the warm-up on (with the step's time) and
+   ``on_key_vehicles`` once per key group; listeners that only watch leave the run as it
+   is, bit for bit.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Sequence
+from typing import Any, Protocol
 
 import numpy as np
 
 from hcomc.config import ScenarioConfig
 from hcomc.interface import Engine, MergeController, MergeGroup, MergePlan, TrafficView
+from hcomc.interface.listener import ListenedRun, StepListener
 from hcomc.sim.log import SimulationLog
 
 __all__ = ["EngineMaker", "check_engine"]
 
-EngineMaker = Callable[[ScenarioConfig, int, MergeController | None], Engine[Any]]
-"""Makes an engine for a scenario, a seed and a controller (None: the config's)."""
+
+class EngineMaker(Protocol):
+    """Makes an engine for a scenario, a seed, a controller (None: the config's) and step
+    listeners (an engine class is one: ``Simulation``, ``SumoSimulation``)."""
+
+    def __call__(
+        self,
+        config: ScenarioConfig,
+        seed: int | None = None,
+        controller: MergeController | None = None,
+        *,
+        listeners: Sequence[StepListener] = (),
+    ) -> Engine[Any]: ...
+
+
+class _Watcher(StepListener):
+    """A listener that records when it is called and acts on nothing."""
+
+    def __init__(self) -> None:
+        self.attached: list[Any] = []
+        self.steps: list[tuple[int, float]] = []
+        self.groups: list[int] = []
+
+    def attach(self, run: ListenedRun) -> None:
+        self.attached.append(run)
+
+    def before_step(self, run: ListenedRun, t: float) -> None:
+        self.steps.append((run.step_index, t))
+
+    def on_key_vehicles(self, run: ListenedRun, group: MergeGroup, t: float) -> None:
+        self.groups.append(group.vr)
+
 
 _STATE = ("x", "v", "lane", "active")
 """The state arrays of the protocol, one entry per vehicle."""
@@ -50,7 +86,7 @@ _STATE = ("x", "v", "lane", "active")
 def check_engine(make: EngineMaker, config: ScenarioConfig, seed: int = 3) -> None:
     """Check the engine ``make`` builds against every promise of the module docstring, on
     ``config`` (a scenario that names a merge controller and in which a ramp vehicle enters
-    the control zone, so that the controller decides) and ``seed``. Runs the scenario three
+    the control zone, so that the controller decides) and ``seed``. Runs the scenario four
     times."""
     from hcomc.control.registry import make_controller
 
@@ -62,6 +98,7 @@ def check_engine(make: EngineMaker, config: ScenarioConfig, seed: int = 3) -> No
     _check_log(log, engine, seed)
     _check_decisions(engine)
     _check_reproducible(make, config, seed, engine)
+    _check_listeners(make, config, seed, engine)
 
 
 def _check_identity(
@@ -149,3 +186,32 @@ def _check_reproducible(
         np.asarray(first.log.x[:rows]), np.asarray(other.log.x[:rows]), equal_nan=True
     )
     assert differ, "another seed gives the same traffic"
+
+
+def _check_listeners(
+    make: EngineMaker, config: ScenarioConfig, seed: int, first: Engine[Any]
+) -> None:
+    from hcomc.control.registry import make_controller
+
+    watcher = _Watcher()
+    engine = make(config, seed, make_controller(config), listeners=[watcher])
+    assert tuple(engine.listeners) == (watcher,), "the engine keeps the listeners it was given"
+    assert watcher.attached == [engine], "each listener is attached once, to its engine"
+    engine.run()
+    steps = list(range(engine.n_warmup, engine.n_warmup + engine.n_steps))
+    called = [k for k, _ in watcher.steps]
+    assert called == steps, (
+        f"before_step was called at steps {called[:3]}...{called[-3:]} ({len(called)} calls), "
+        f"not once before each step from the warm-up's end ({len(steps)})"
+    )
+    times = np.array([t for _, t in watcher.steps])
+    assert np.allclose(times, (np.array(steps) - engine.n_warmup) * config.dt), (
+        "before_step is given the time of the step about to be taken"
+    )
+    assert watcher.groups == list(engine.key_groups), "on_key_vehicles once per key group"
+    for name in _STATE:
+        a, b = np.asarray(getattr(first.log, name)), np.asarray(getattr(engine.log, name))
+        assert np.array_equal(a, b, equal_nan=True), f"a watching listener changed the log ({name})"
+    assert [_decision(p) for p in engine.decisions] == [_decision(p) for p in first.decisions], (
+        "a watching listener changed the decisions"
+    )

@@ -39,21 +39,20 @@ import numpy as np
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.key_group import find_key_vehicles
-from hcomc.control.validation import checked, name_of, planned
-from hcomc.interface import MergeGroup, MergePlan, Mode, TrafficView
-from hcomc.road import Kind, Lane
-from hcomc.sim.engine_setup import EngineSetup
+from hcomc.interface import MergeGroup, MergePlan, TrafficView
+from hcomc.road import Lane
+from hcomc.sim.decision import decide, undecided
+from hcomc.sim.engine_plans import EnginePlans
 from hcomc.sim.log import SimulationLog
-from hcomc.sim.plan_execution import ActivePlan, game_confirms, plan_views, record_decision
+from hcomc.sim.plan_execution import game_confirms
 from hcomc.sim.step import loop as step_loop
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import adopt_log_columns, widen_log
-from hcomc.sim.step.plans import add_plan, encode_plan
 
 _NO_FLOAT = np.empty(0)
 
 
-class Simulation(EngineSetup):
+class Simulation(EnginePlans):
     """One run of a scenario with one seed.
 
     Parameters
@@ -71,15 +70,27 @@ class Simulation(EngineSetup):
     def run_together(cls, sims: Sequence[Simulation], *, threads: int | None = None) -> None:
         """Run ``sims`` to their ends as one ensemble (:func:`hcomc.sim.ensemble.run_ensemble`,
         on ``threads`` cores): the batching capability of :func:`hcomc.interface.run_all`.
-        Each run's log is bit-identical to running it alone."""
+        Each run's log is bit-identical to running it alone. A run with step listeners runs
+        alone (they act between its steps, in Python)."""
         from hcomc.sim.ensemble import run_ensemble
 
-        run_ensemble(sims, threads=threads)
+        for sim in sims:
+            if sim.listeners:
+                sim.run()
+        run_ensemble([sim for sim in sims if not sim.listeners], threads=threads)
 
     def run(self, progress: Callable[[int, int], None] | None = None) -> SimulationLog:
-        """Warm up, then simulate ``duration`` seconds, logging every ``log_interval``."""
+        """Warm up, then simulate ``duration`` seconds, logging every ``log_interval``
+        (with listeners, from the warm-up's end one step at a time: :meth:`_listened_step`)."""
         total = self.n_warmup + self.n_steps
+        if self.listeners:
+            self.run_to(self.n_warmup)
         while not self.finished:
+            if self.listeners and self.step_index >= self.n_warmup:
+                self._listened_step()
+                if progress is not None and self.step_index % 100 == 0:
+                    progress(self.step_index, total)
+                continue
             stop = self.stop_step
             if progress is not None:  # report every 100 steps
                 stop = min(stop, (self.step_index // 100 + 1) * 100)
@@ -201,11 +212,34 @@ class Simulation(EngineSetup):
                                    c.ev_other[:n], c.ev_x[:n], c.ev_value[:n])  # fmt: skip
         c.counters[layout.N_EVENTS] = 0
 
+    def _listened_step(self) -> None:
+        """One step of a run with listeners: they act before it (:meth:`StepListener.before_step
+        <hcomc.interface.listener.StepListener.before_step>`), then the step is taken compiled,
+        or in Python when a listener asks for a decision the compiled loop does not know of; a
+        stage that ended on a Python step is closed."""
+        if self.step_index >= self.stop_step:
+            self.resume(layout.DONE)
+            return
+        t = self.t
+        for listener in self.listeners:
+            listener.before_step(self, t)
+        if any(listener.decisions_due(self, t) for listener in self.listeners):
+            self.resume(layout.NEED_PYTHON)
+        else:
+            self.run_to(self.step_index + 1)
+
     # ----------------------------------------------------------------- step
     def step(self) -> None:
         """Advance the whole traffic state by one step ``dt`` (no log row), through the same
         driver as :meth:`run` (:func:`hcomc.sim.step.loop.run_steps`): compiled, with Python
-        only for a decision."""
+        only for a decision; listeners act before it from the warm-up's end on."""
+        if self.listeners and self.step_index >= self.n_warmup:
+            t = self.t
+            for listener in self.listeners:
+                listener.before_step(self, t)
+            if any(listener.decisions_due(self, t) for listener in self.listeners):
+                self._decision_step()
+                return
         target = self.step_index + 1
         while self.step_index < target:
             reason = step_loop.run_steps(self.core, target, False, self.rng)
@@ -267,20 +301,13 @@ class Simulation(EngineSetup):
         step_loop.release(self.core, t)
         self.flush_events()
 
-    def _follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
+    def follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
         """Car-following acceleration behind ``leader`` (-1: none), HDVs perceiving Eq. 2."""
         ids = np.ascontiguousarray(ids, dtype=np.int64)
         return step_loop.follow_many(self.core, ids, np.ascontiguousarray(leader, dtype=np.int64))
 
     # ---------------------------------------------------------------- plans
-    @property
-    def plans(self) -> list[ActivePlan]:
-        """The plans being executed, in the order they were made, with their progress (a
-        copy: the run executes them from the plan table of its compiled state)."""
-        c = self.arrays
-        return plan_views(c.plan_int, int(c.counters[layout.N_PLANS]), self.decisions)
-
-    def _view(self, t: float) -> TrafficView:
+    def view(self, t: float) -> TrafficView:
         """Read-only copy of the state for a controller."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.origin != self.target}  # fmt: skip
@@ -302,9 +329,11 @@ class Simulation(EngineSetup):
             self.arrays.identified[vr] = True
             if vr in self.key_groups:
                 continue
-            group = find_key_vehicles(self._view(t), vr)
+            group = find_key_vehicles(self.view(t), vr)
             self.key_groups[vr] = group
             self.log.meta.setdefault("key_groups", []).append({"t": float(t), **group.as_dict()})
+            for listener in self.listeners:
+                listener.on_key_vehicles(self, group, t)
 
     @property
     def key_group(self) -> MergeGroup | None:
@@ -314,38 +343,21 @@ class Simulation(EngineSetup):
     def _plan_new(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Ask the controller for a plan when a ramp vehicle enters the control zone, and again
         every ``control.replan_period`` seconds while its plan may still change (receding
-        horizon, key vehicles re-identified: :func:`hcomc.sim.step.plans.due_plans`). Each plan
-        is checked first (:func:`hcomc.control.validation.checked`: an invalid one raises
-        :class:`~hcomc.control.validation.InvalidPlan` or, with ``control.on_invalid_plan =
-        "fallback"``, becomes the safe default). A new plan replaces its VR's live plan in the
-        plan table."""
-        assert self.controller is not None
+        horizon, key vehicles re-identified: :func:`hcomc.sim.step.plans.due_plans`) or when a
+        listener asks; one decision each (:func:`hcomc.sim.decision.decide`: the plan is
+        checked, recorded and put into force by :meth:`execute`)."""
         new = ids[
             (self.lane[ids] == Lane.RAMP)
             & ~changing
             & ~self.planned[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
-        due = step_loop.due_plans(self.core, t)
-        c = self.arrays
-        for vr in [*new.tolist(), *due.tolist()]:
-            self.planned[vr] = True
-            view = self._view(t)
-            group = find_key_vehicles(view, vr)
-            where = f"{self.config.name}, seed {self.seed}"
-            plan = planned(self.controller, view, group, self.rng.spawn(1)[0], where)
-            plan = checked(plan, view, group, name_of(self.controller))
-            record_decision(self, view, group, plan, t)
-            cav_vr = bool(self.fleet.kind[vr] == Kind.CAV)
-            row = encode_plan(
-                plan,
-                vr_commanded=cav_vr and bool(np.isfinite(plan.merge_x)),
-                vmc_commanded=plan.mode != Mode.NONE,
-                vnr_commanded=plan.vv2 is not None,
-                ident=len(self.decisions) - 1,
-            )
-            n = int(c.counters[layout.N_PLANS])
-            c.counters[layout.N_PLANS] = add_plan(c.plan_int, c.plan_f, n, *row)
+        due = step_loop.due_plans(self.core, t).tolist()
+        for listener in self.listeners:
+            due += listener.decisions_due(self, t)
+        where = f"{self.config.name}, seed {self.seed}"
+        for vr in undecided(self, [*new.tolist(), *due]):  # type: ignore[arg-type]
+            decide(self, vr, t, where)  # type: ignore[arg-type]
 
 
 def simulate(

@@ -9,12 +9,15 @@ of :mod:`hcomc.sim.twin`). Advancing the run is :class:`~hcomc.sim.engine.Simula
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Sequence
 from typing import Any, Self
 
 import numpy as np
 
 from hcomc.config import ScenarioConfig
 from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, TrafficView
+from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.demand import Demand, generate_demand
@@ -37,6 +40,7 @@ class EngineSetup:
         controller: MergeController | None = None,
         *,
         counterfactual: bool = False,
+        listeners: Sequence[StepListener] = (),
     ) -> None:
         seed = config.seed if seed is None else seed
         rng = make_rng(seed)
@@ -47,12 +51,15 @@ class EngineSetup:
             controller = make_controller(config)
         fleet = Fleet.build(config, demand.kind, demand.scripted)
         self._build(config, seed, rng, demand, fleet, controller, counterfactual)
+        self.listeners: tuple[StepListener, ...] = tuple(listeners)
+        for listener in self.listeners:
+            listener.attach(self)  # type: ignore[arg-type]  # Simulation is a ListenedRun
 
     @classmethod
     def _sibling(cls, sim: Self, *, counterfactual: bool) -> Self:
         """The run of ``sim``'s scenario and seed at step 0, built on the demand, fleet and
         controller ``sim`` drew (shared, read-only) instead of drawing them again: its
-        generator resumes where ``sim``'s stood after the demand draw."""
+        generator resumes where ``sim``'s stood after the demand draw. It has no listeners."""
         rng = make_rng(sim.seed)
         rng.bit_generator.state = sim._after_demand
         new = cls.__new__(cls)
@@ -68,6 +75,7 @@ class EngineSetup:
         self._after_demand = rng.bit_generator.state  # for _sibling
         self.counterfactual = counterfactual
         self.demand, self.fleet, self.controller = demand, fleet, controller
+        self.listeners = ()
         self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
         self.python_steps = 0  # steps taken in Python (decision events)
         self.decisions: list[MergePlan] = []
@@ -79,8 +87,11 @@ class EngineSetup:
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
         self.log = allocate_log(config, seed, demand, fleet, self.n_steps // self._log_every + 1)
+        # the engine drives with its own copy of the parameters (``driving``, which a listener
+        # may change); ``fleet`` stays what the controllers know
+        self.driving = dataclasses.replace(fleet, matrix=fleet.matrix.copy())
         self.arrays = build_arrays(
-            config, demand, fleet, self.perception, self.log,
+            config, demand, self.driving, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip

@@ -49,6 +49,11 @@ class EnsembleRun(Protocol):
     log: SimulationLog
 
     @property
+    def listeners(self) -> Sequence[Any]:
+        """Its step listeners (:mod:`hcomc.interface.listener`): a batch takes none."""
+        ...
+
+    @property
     def finished(self) -> bool: ...
 
     @property
@@ -108,6 +113,9 @@ def advance_ensemble(
     """
     threads = thread_count(threads)
     runs = list(sims)
+    if any(run.listeners for run in runs):
+        raise ValueError("a run with step listeners advances alone (they act between its "
+                         "steps, in Python): run it with its own run()")  # fmt: skip
     n = len(runs)
     if n == 0:
         return

@@ -38,14 +38,14 @@ from pathlib import Path
 import numpy as np
 
 from hcomc.control.key_group import find_key_vehicles
-from hcomc.control.validation import checked, name_of, planned
 from hcomc.interface import Mode, TrafficView, follow
-from hcomc.road import Kind, Lane
+from hcomc.road import Lane
+from hcomc.sim import decision
 from hcomc.sim.lane_change_decisions import Snapshot, decide
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
-from hcomc.sim.plan_execution import ActivePlan, commanded, record_decision, virtual_leaders
-from hcomc.sumo.cosim_state import CosimState
+from hcomc.sim.plan_execution import virtual_leaders
+from hcomc.sumo.cosim_plans import CosimPlans
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
 from hcomc.sumo.network import edge_at, sumo_lane_of
@@ -53,13 +53,8 @@ from hcomc.sumo.routes import vehicle_id
 
 __all__ = ["SumoSimulation"]
 
-_DEFAULT_LC_MODE = 1621  # SUMO's default lane-change mode
-# no own lane changes; a commanded change (already passed by our MOBIL safety criterion, as in
-# our engine) only has to avoid immediate collisions, not SUMO's stricter comfort-gap check
-_COMMANDED_LC_MODE = 256
 
-
-class SumoSimulation(CosimState):
+class SumoSimulation(CosimPlans):
     """One run of a merge scenario in SUMO (libsumo), controlled by our merge controller."""
 
     # ------------------------------------------------------------------ run
@@ -81,6 +76,7 @@ class SumoSimulation(CosimState):
                         self._record()
                     if progress is not None and self.step_index % 100 == 0:
                         progress(self.step_index, total)
+                self._decide_and_execute()  # on the last state, as on every other
             finally:
                 self.sumo.close()
         self.log.finish(self._rows)
@@ -95,9 +91,21 @@ class SumoSimulation(CosimState):
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
-        """Command the key CAVs, advance SUMO by ``dt`` and read the new state back."""
+        """Between the last step and this one: the listeners act (from the warm-up's end on),
+        then the decisions and the plans' lane changes on the state SUMO last reported
+        (:meth:`_decide_and_execute`); then the key CAVs are commanded and the outside
+        commands imposed, SUMO advances by ``dt`` and the new state is read back."""
+        if self.listeners and self.step_index >= self.n_warmup:
+            t = self.t
+            for listener in self.listeners:
+                listener.before_step(self, t)
+            self._sync_parameters()
+        if self.step_index > 0:
+            self._decide_and_execute()
+        self._held.clear()
         if self.plans or self._speed_set:
             self._command_speeds()
+        self._drive_outside()  # replaces a plan's command of the same vehicle
         self.sumo.simulationStep()
         self.step_index += 1
         t = self.t
@@ -105,13 +113,20 @@ class SumoSimulation(CosimState):
         ids = np.flatnonzero(self.active)
         self.vehicle_steps += ids.size
         self.sumo_collisions += len(self.sumo.simulation.getCollisions())
+
+    def _decide_and_execute(self) -> None:
+        """Key vehicles and decisions (:meth:`_key_vehicles`), then the lane changes the live
+        plans command, on the state SUMO last reported; after the listeners, as in our engine,
+        so that a listener's hold of a merge applies to that merge's request."""
+        t = self.t
+        ids = np.flatnonzero(self.active)
         self._key_vehicles(ids, t)
         if self.plans:
             self._execute_plans(ids, t)
             self._finish_plans()
 
     # ---------------------------------------------------------------- plans
-    def _view(self, t: float) -> TrafficView:
+    def view(self, t: float) -> TrafficView:
         """Read-only copy of the state for a controller (as our engine builds it)."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.changing()}  # fmt: skip
@@ -126,47 +141,33 @@ class SumoSimulation(CosimState):
             & ~changing[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
         ]
+        where = f"{self.config.name}, seed {self.seed}, SUMO"
         for vr in new.tolist():
             if vr not in self.key_groups:
-                group = find_key_vehicles(self._view(t), vr)
+                group = find_key_vehicles(self.view(t), vr)
                 self.key_groups[vr] = group
                 self.log.meta.setdefault("key_groups", []).append({"t": float(t),
                                                                    **group.as_dict()})  # fmt: skip
+                for listener in self.listeners:
+                    listener.on_key_vehicles(self, group, t)
             if self.controller is not None and not self.planned[vr]:
-                self._plan(vr, t)
-        if self.controller is None or not self.plans:
+                for first in decision.undecided(self, [vr]):  # type: ignore[arg-type]
+                    decision.decide(self, first, t, where)  # type: ignore[arg-type]
+        if self.controller is None:
             return
-        # receding horizon, as in the engine: replan until VR starts its lane change
+        # receding horizon, as in the engine: replan until VR starts its lane change; and
+        # whenever a listener asks
         period = self.config.control.replan_period
         on_ramp = (self.lane == Lane.RAMP) & ~changing & self.active
-        for p in list(self.plans):
-            if on_ramp[p.vr] and p.may_replan(t, period, self.x[p.vr], self.v[p.vr]):
-                self._plan(p.vr, t)
-
-    def _plan(self, vr: int, t: float) -> None:
-        assert self.controller is not None
-        self.planned[vr] = True
-        view = self._view(t)
-        group = find_key_vehicles(view, vr)
-        where = f"{self.config.name}, seed {self.seed}, SUMO"
-        plan = planned(self.controller, view, group, self.rng.spawn(1)[0], where)
-        plan = checked(plan, view, group, name_of(self.controller))  # as the engine does
-        record_decision(self, view, group, plan, t)
-        cav = self.fleet.kind == Kind.CAV
-        active = ActivePlan(
-            plan,
-            vr_commanded=bool(cav[vr]) and bool(np.isfinite(plan.merge_x)),
-            vmc_commanded=plan.mode != Mode.NONE,
-            vnr_commanded=plan.vv2 is not None,
-        )
-        previous = [p for p in self.plans if p.vr == vr]  # a replan replaces the live plan
-        self.plans = [p for p in self.plans if p.vr != vr]
-        self.plans.append(active)
-        now = commanded(self.plans, self.x.size)
-        for i in np.flatnonzero(commanded(previous, self.x.size) & ~now).tolist():
-            self._release(i)  # no longer commanded: back to SUMO's own driving
-        for i in np.flatnonzero(commanded([active], self.x.size)).tolist():
-            self.sumo.vehicle.setLaneChangeMode(vehicle_id(i), _COMMANDED_LC_MODE)
+        due = [
+            p.vr
+            for p in self.plans
+            if on_ramp[p.vr] and p.may_replan(t, period, self.x[p.vr], self.v[p.vr])
+        ]
+        for listener in self.listeners:
+            due += listener.decisions_due(self, t)
+        for vr in decision.undecided(self, due):  # type: ignore[arg-type]
+            decision.decide(self, vr, t, where)  # type: ignore[arg-type]
 
     def _command_speeds(self) -> None:
         """Commanded CAVs follow min(real leader, virtual leader) with our model (Eq. 1-3)."""
@@ -244,20 +245,14 @@ class SumoSimulation(CosimState):
                 p.released = True
                 self._release(vr)
                 self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
-            elif self.x[vr] >= p.plan.merge_x and self._safe_change(vr, Lane.MAIN_1, ids):
+            elif (
+                self.x[vr] >= p.plan.merge_x
+                and vr not in self._held
+                and self._safe_change(vr, Lane.MAIN_1, ids)
+            ):
                 # requested again every step until SUMO, whose own safety check also
                 # applies, starts it
                 self._change_lane(vr, Lane.MAIN_1, float(p.plan.vr_duration))
-
-    def _release(self, i: int) -> None:
-        """Hand vehicle i back to SUMO: own lane changes, own speed, its type's lateral speed."""
-        if not self.active[i]:
-            return
-        name = vehicle_id(i)
-        self.sumo.vehicle.setLaneChangeMode(name, _DEFAULT_LC_MODE)
-        self.sumo.vehicle.setMaxSpeedLat(
-            name, self.config.road.lane_width / float(self.fleet.lc_duration[i])
-        )
 
     def _finish_plans(self) -> None:
         for p in self.plans:

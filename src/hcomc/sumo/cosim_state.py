@@ -11,10 +11,14 @@ commanding the key CAVs is :class:`~hcomc.sumo.cosim.SumoSimulation`'s.
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Sequence
+
 import numpy as np
 
 from hcomc.config import ScenarioConfig
 from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, TrafficView
+from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import generate_demand
@@ -40,6 +44,7 @@ class CosimState:
         controller: MergeController | None = None,
         *,
         counterfactual: bool = False,
+        listeners: Sequence[StepListener] = (),
     ) -> None:
         self.counterfactual = counterfactual  # the undisturbed run: ramp vehicles removed
         if config.scenario != "merge":
@@ -52,6 +57,10 @@ class CosimState:
         self.demand = generate_demand(config, self.rng)  # same draws as our engine
         n = self.demand.n
         self.fleet = Fleet.build(config, self.demand.kind, self.demand.scripted)
+        # the parameters SUMO's vehicles drive with (a listener may change them; ``fleet``
+        # stays what the controllers know), and those each SUMO vehicle was last given
+        self.driving = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
+        self._in_sumo = self.fleet.matrix.copy()
         if controller is None:
             from hcomc.control.registry import make_controller
 
@@ -76,6 +85,9 @@ class CosimState:
         self.sumo_teleports = 0
         self._speed_set: set[int] = set()  # vehicles whose speed we impose this step
         self._lc_start: dict[int, float] = {}  # vehicle -> start of its running lane change
+        self._outside: dict[int, float] = {}  # vehicle -> acceleration commanded from outside
+        self._driven: set[int] = set()  # vehicles under an outside command in SUMO now
+        self._held: set[int] = set()  # VRs whose commanded merge is not requested this step
         meta = build_manifest(
             seed=self.seed,
             config=config.model_dump(mode="json"),
@@ -87,6 +99,9 @@ class CosimState:
             kind=self.demand.kind, length=self.fleet.length, width=self.fleet.width, meta=meta,
         )  # fmt: skip
         self._rows = 0
+        self.listeners = tuple(listeners)
+        for listener in self.listeners:
+            listener.attach(self)  # type: ignore[arg-type]  # SumoSimulation is a ListenedRun
 
     @staticmethod
     def _sumo_version() -> str:
@@ -155,6 +170,16 @@ class CosimState:
                 self._lc_start.pop(i, None)
             elif s:
                 self._lc_start.pop(i, None)
+
+    @property
+    def target(self) -> np.ndarray:
+        """(N,) the lane a lane change in progress goes to (the side the vehicle's centre is
+        moving to, from its lateral offset), else ``origin``."""
+        width = self.config.road.lane_width
+        offset = np.sign(self.y - lane_centre(self.lane, width)).astype(np.int64)
+        changing = self.changing()
+        return np.where(changing, np.where(self.origin == self.lane, self.lane + offset,
+                                           self.lane), self.origin)  # fmt: skip
 
     def changing(self) -> np.ndarray:
         """Vehicles in a lane-change manoeuvre (off their lane centre)."""
