@@ -70,7 +70,7 @@ def test_emergency_braking_in_sumo_at_a_merg_then_sumo_drives_again():
 
 def test_a_lossy_channel_and_the_shield_act_in_sumo():
     lossy = ChannelParams(latency=0.3, loss=0.7, loss_model="gilbert_elliott")
-    sim, impaired = _faulted(_config(), 1, channel=lossy, shield=ShieldParams(enabled=True))
+    sim, impaired = _faulted(_config(), 2, channel=lossy, shield=ShieldParams(enabled=True))
     log = sim.run()
     assert impaired.plans_lost > 0
     assert len(sim.decisions) > impaired.plans_lost  # a lost plan is made again

@@ -6,13 +6,16 @@ co-simulation's ``SumoSimulation`` alike), it acts on the run between its steps 
 the controller's decisions, through the engine's listener interface only:
 
 * **channel** (:mod:`hcomc.robustness.channel`): the vehicles broadcast their state every
-  update period; the controller plans on what was received (:meth:`view`), and its plan is
-  put into force when it arrives, or never (:meth:`send`): a ramp vehicle whose plan was
-  lost keeps the plan it had (none: it merges by gap acceptance) and is planned again a
-  replan period later (:meth:`decisions_due`); a CAV whose CAV leader's messages are older
-  than ``stale_after`` drives with the degraded time headway until they are fresh again;
+  update period; the controller plans on what was received
+  (:meth:`~hcomc.robustness.impairments.Impairments.view`), and its plan is put into force
+  when it arrives, or never (:meth:`~hcomc.robustness.impairments.Impairments.send`): a ramp
+  vehicle whose plan was lost keeps the plan it had (none: it merges by gap acceptance) and
+  is planned again a replan period later
+  (:meth:`~hcomc.robustness.impairments.Impairments.decisions_due`); a CAV whose CAV
+  leader's messages are older than ``stale_after`` drives with the degraded time headway
+  until they are fresh again;
 * **fault** (:mod:`hcomc.robustness.faults`), timed from the ramp vehicle's control-zone
-  entry (:meth:`on_key_vehicles`);
+  entry (:meth:`~hcomc.robustness.impairments.Impairments.on_key_vehicles`);
 * **shield** (:mod:`hcomc.robustness.shield`), on the commanded vehicles before each step.
 
 With the ideal channel, no fault and no shield the run is the engine's nominal run, bit for

@@ -3,9 +3,9 @@
 :class:`EnginePlans` is the part of :class:`hcomc.sim.engine.Simulation` that reads and
 writes the plan table of the compiled state (:mod:`hcomc.sim.step.plans`, one row per live
 plan), so that nothing outside the engine does: putting a decision into force
-(:meth:`execute`), the commanded vehicles, and holding or releasing a commanded merge (the
-safety shield's levers). The SUMO co-simulation offers the same methods on its list of plans
-(:class:`hcomc.sumo.cosim.SumoSimulation`).
+(:meth:`~hcomc.sim.engine_plans.EnginePlans.execute`), the commanded vehicles, and holding
+or releasing a commanded merge (the safety shield's levers). The SUMO co-simulation offers
+the same methods on its list of plans (:class:`hcomc.sumo.cosim.SumoSimulation`).
 """
 
 from __future__ import annotations

@@ -3,14 +3,16 @@
 :class:`CosimPlans` is the part of :class:`hcomc.sumo.cosim.SumoSimulation` that puts a
 decision into force, names the commanded vehicles, holds or releases a commanded merge, and
 drives a vehicle from outside: the methods of :class:`hcomc.interface.listener.ListenedRun`
-that our engine offers on its plan table (:class:`hcomc.sim.engine_plans.EnginePlans`),
-here acted out through TraCI:
+that our engine offers on its plan table (:class:`hcomc.sim.engine_plans.EnginePlans`), here
+acted out through TraCI:
 
-* a vehicle driven from outside (:meth:`command`) gets ``setSpeed(v + a dt)`` under speed
-  mode 0 (no SUMO check: the acceleration is clipped to the emergency deceleration and the
-  speed to v >= 0, as our engine does) and lane-change mode 0 (no change of its own);
+* a vehicle driven from outside (:meth:`~hcomc.sumo.cosim_plans.CosimPlans.command`) gets
+  ``setSpeed(v + a dt)`` under speed mode 0 (no SUMO check: the acceleration is clipped to
+  the emergency deceleration and the speed to v >= 0, as our engine does) and lane-change
+  mode 0 (no change of its own);
 * the parameters the engine drives with (``driving``: time headway, jam gap, acceleration)
-  are given to SUMO's vehicles (``tau``, ``minGap``, ``accel``) when a listener changes them.
+  are given to SUMO's vehicles (``tau``, ``minGap``, ``accel``) when a listener changes
+  them.
 """
 
 from __future__ import annotations
