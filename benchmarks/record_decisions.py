@@ -50,6 +50,7 @@ from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails 
 from hcomc.interface import (  # noqa: E402
     Fleet,
     MergeGroup,
+    Ramp,
     TrafficView,
 )
 from hcomc.optim.base import Optimizer  # noqa: E402
@@ -102,7 +103,9 @@ def _rebuild(record: dict[str, Any]) -> tuple[ScenarioConfig, TrafficView, Merge
     config = validate_config(record["config"], record["name"])
     fleet = Fleet.build(config, record["kind"], record["scripted"])
     arrays = {k: record[k] for k in ("x", "v", "a", "lane", "active", "changing")}
-    view = TrafficView(t=record["t"], fleet=fleet, config=config, **arrays)
+    view = TrafficView(
+        t=record["t"], fleet=fleet, config=config, ramp=Ramp.of(config.road), **arrays
+    )
     return config, view, MergeGroup(**record["group"])
 
 

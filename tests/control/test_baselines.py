@@ -36,7 +36,7 @@ from hcomc.control.merge_game.payoffs import INFEASIBLE_SAFETY, safety_term
 from hcomc.control.prediction.population import VMC, VR
 from hcomc.control.registry import make_controller
 from hcomc.equations.virtual_vehicle import cubic_state
-from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, TrafficView
+from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, Ramp, TrafficView
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
@@ -160,7 +160,8 @@ def _view(vmc_x: float, vmc_v: float, kinds: list[int] | None = None) -> Traffic
     lane = np.array([Lane.RAMP, *[Lane.MAIN_1] * 4, Lane.MAIN_2, Lane.MAIN_2], dtype=np.int64)
     fleet = Fleet.build(config, kind, np.zeros(7, dtype=bool))
     return TrafficView(t=3.0, x=x, v=v, a=np.zeros(7), lane=lane, active=np.ones(7, dtype=bool),
-                       changing=np.zeros(7, dtype=bool), fleet=fleet, config=config)  # fmt: skip
+                       changing=np.zeros(7, dtype=bool), fleet=fleet, config=config,
+                       ramp=Ramp.of(config.road))  # fmt: skip
 
 
 def test_a_changing_vehicle_is_a_key_vehicle_of_one_lane_at_a_time():
@@ -184,7 +185,7 @@ def test_merge_position_is_fixed_and_ends_on_the_acceleration_lane():
     view = _view(330.0, 30.0)
     assert merge_position(view, 0) == (710.0, view.config.cav.lane_change_duration)
     short = _config("C1", "fifo", road={"accel_lane_start": 700.0, "accel_lane_end": 805.0})
-    view = replace(view, config=short)
+    view = replace(view, config=short, ramp=Ramp.of(short.road))  # the road is the ramp's
     merge_x, duration = merge_position(view, 0)
     assert merge_x == pytest.approx(805.0 - 25.0 * duration)  # clipped: change ends at 805 m
     assert merge_x >= 700.0

@@ -32,7 +32,7 @@ from hcomc.control.merge_game import payoffs
 from hcomc.control.merge_game.controller import GameController, GameDetails
 from hcomc.equations.safety import critical_acceleration
 from hcomc.experiments.results_row import lateral_cause
-from hcomc.interface import Fleet, Mode, TrafficView
+from hcomc.interface import Fleet, Mode, Ramp, TrafficView
 from hcomc.road import Kind, Lane
 
 A_MERG = 7.5  # control.safety_emergency_decel [m/s^2]
@@ -264,7 +264,8 @@ def _merge_view() -> TrafficView:
     lane = np.array([Lane.RAMP, *[Lane.MAIN_1] * 4, Lane.MAIN_2, Lane.MAIN_2], dtype=np.int64)
     fleet = Fleet.build(config, kind, np.zeros(7, dtype=bool))
     return TrafficView(t=3.0, x=x, v=v, a=np.zeros(7), lane=lane, active=np.ones(7, dtype=bool),
-                       changing=np.zeros(7, dtype=bool), fleet=fleet, config=config)  # fmt: skip
+                       changing=np.zeros(7, dtype=bool), fleet=fleet, config=config,
+                       ramp=Ramp.of(config.road))  # fmt: skip
 
 
 def _rng() -> np.random.Generator:

@@ -29,6 +29,7 @@ from hcomc.control.prediction.population import (
     VR,
 )
 from hcomc.equations.fuel import fuel_rate
+from hcomc.interface import Ramp
 from hcomc.road import Kind
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind
@@ -174,14 +175,14 @@ def test_every_safety_parameter_comes_from_the_config():
         safety_min_distance=3.0,
         safety_emergency_decel=6.0,
     )
-    consts = problem_constants(config)
+    consts = problem_constants(config, Ramp.of(config.road))
     assert (consts[C_DELAY_CAV], consts[C_DELAY_HDV], consts[C_D], consts[C_A_MERG]) == (
         0.3,
         1.4,
         3.0,
         6.0,
     )
-    game = game_params(config)
+    game = game_params(config, config.road.lane_width)
     assert (game.safety_threshold, game.delay_cav, game.delay_hdv) == (2.5, 0.3, 1.4)
     assert (game.min_distance, game.emergency_decel) == (3.0, 6.0)
     view, group = _instant(1)

@@ -395,8 +395,9 @@ def test_game_vehicle_validation(kwargs: dict[str, float], match: str) -> None:
 def test_the_game_defaults_are_the_config_defaults() -> None:
     """The Eq. 15 values, the threshold, the lane width and the transition tolerance have one
     home, the scenario config: the game's own defaults are read from it."""
-    assert game_params(ScenarioConfig()) == GAME_DEFAULT
+    assert game_params(ScenarioConfig(), ScenarioConfig().road.lane_width) == GAME_DEFAULT
     moved = ScenarioConfig().model_copy(
         update={"control": ScenarioConfig().control.model_copy(update={"safety_threshold": 3.0})}
     )
-    assert game_params(moved).safety_threshold == 3.0 != GAME_DEFAULT.safety_threshold
+    moved_game = game_params(moved, moved.road.lane_width)
+    assert moved_game.safety_threshold == 3.0 != GAME_DEFAULT.safety_threshold

@@ -29,7 +29,7 @@ from hcomc.control.prediction.scoring import created_pairs_safety
 from hcomc.control.prediction.step import follow_role, integrate, new_state
 from hcomc.equations.idm import equilibrium_gap
 from hcomc.equations.safety import critical_accel, critical_acceleration
-from hcomc.interface import Fleet, follow
+from hcomc.interface import Fleet, Ramp, follow
 from hcomc.road import Kind
 
 SRC = Path(__file__).resolve().parents[2] / "src" / "hcomc" / "control" / "hcomc"
@@ -139,7 +139,7 @@ def test_created_pair_safety_is_eq15_of_vr_behind_vmf():
     from hcomc.control.hierarchical.problem_setup import problem_constants
 
     config = load_config("C1")
-    consts = problem_constants(config)
+    consts = problem_constants(config, Ramp.of(config.road))
     params = np.tile(_params(FLEETS["idm"], 1), (N_ROLES, 1))
     x = np.array([500.0, 470.0, 540.0, 400.0, 560.0, 450.0])
     v = np.array([25.0, 27.0, 26.0, 25.0, 30.0, 30.0])

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from hcomc.control.key_vehicles import key_vehicle_indices, nearest_in_lane
 from hcomc.interface import MergeGroup, TrafficView
-from hcomc.road import Lane
 
 
 def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int, int]:
@@ -22,9 +21,11 @@ def _nearest(view: TrafficView, lane: int, x: float, exclude: int) -> tuple[int,
 
 
 def find_key_vehicles(view: TrafficView, vr: int) -> MergeGroup:
-    """The six key vehicles of Section II-A around ramp vehicle ``vr`` (rules in
-    :mod:`hcomc.control.key_vehicles`)."""
-    return MergeGroup(*key_vehicle_indices(view.x, view.lane, view.active, vr).tolist())
+    """The six key vehicles of Section II-A around ramp vehicle ``vr`` at the view's ramp
+    (rules in :mod:`hcomc.control.key_vehicles`)."""
+    ramp = view.ramp
+    indices = key_vehicle_indices(view.x, view.lane, view.active, vr, ramp.target, ramp.beyond)
+    return MergeGroup(*indices.tolist())
 
 
 def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
@@ -40,6 +41,8 @@ def behind_group(view: TrafficView, group: MergeGroup) -> MergeGroup:
     new_vmc = group.vmr
     if new_vmc < 0:
         return MergeGroup(vr=group.vr, vmf=group.vmc)
-    _, vmr = _nearest(view, Lane.MAIN_1, float(view.x[new_vmc]) - 1e-9, new_vmc)
-    vnf, vnr = _nearest(view, Lane.MAIN_2, float(view.x[new_vmc]), new_vmc)
+    _, vmr = _nearest(view, view.ramp.target, float(view.x[new_vmc]) - 1e-9, new_vmc)
+    vnf, vnr = -1, -1
+    if view.ramp.beyond >= 0:
+        vnf, vnr = _nearest(view, view.ramp.beyond, float(view.x[new_vmc]), new_vmc)
     return MergeGroup(vr=group.vr, vmc=new_vmc, vmf=group.vmc, vmr=vmr, vnf=vnf, vnr=vnr)

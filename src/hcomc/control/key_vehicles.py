@@ -27,9 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc.road import N_ROLES, VMC, VMF, VMR, VNF, VNR, VR, Lane
-
-_MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)
+from hcomc.road import N_ROLES, VMC, VMF, VMR, VNF, VNR, VR
 
 
 @kernel
@@ -56,16 +54,20 @@ def nearest_in_lane(
 
 
 @kernel
-def key_vehicle_indices(x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int) -> np.ndarray:
+def key_vehicle_indices(
+    x: np.ndarray, lane: np.ndarray, active: np.ndarray, vr: int, lane_1: int, lane_2: int
+) -> np.ndarray:
     """The six key vehicles of Section II-A around ramp vehicle ``vr``, in role order VR, VMC,
-    VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc)."""
+    VMF, VMR, VNF, VNR (-1 = missing; rules in the module doc); ``lane_1`` is the code of the
+    mainline lane VR merges into, ``lane_2`` of the lane beyond it (-1: none)."""
     out = np.full(N_ROLES, -1, dtype=np.int64)
     out[VR] = vr
-    vmf, vmc = nearest_in_lane(x, lane, active, _MAIN_1, x[vr], vr)
+    vmf, vmc = nearest_in_lane(x, lane, active, lane_1, x[vr], vr)
     out[VMF] = vmf
     if vmc < 0:
         return out
     out[VMC] = vmc
-    out[VMR] = nearest_in_lane(x, lane, active, _MAIN_1, x[vmc] - 1e-9, vmc)[1]
-    out[VNF], out[VNR] = nearest_in_lane(x, lane, active, _MAIN_2, x[vmc], vmc)
+    out[VMR] = nearest_in_lane(x, lane, active, lane_1, x[vmc] - 1e-9, vmc)[1]
+    if lane_2 >= 0:
+        out[VNF], out[VNR] = nearest_in_lane(x, lane, active, lane_2, x[vmc], vmc)
     return out

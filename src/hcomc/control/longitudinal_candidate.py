@@ -74,19 +74,18 @@ def merge_position(view: TrafficView, vr: int) -> tuple[float, float]:
         ``accel_lane_start`` [m].
     vr_duration : ``config.cav.lane_change_duration`` [s].
     """
-    road = view.config.road
-    merge_x = min(road.accel_lane_start + MERGE_OFFSET, last_merge_position(view, vr))
-    return max(merge_x, road.accel_lane_start), float(view.config.cav.lane_change_duration)
+    ramp = view.ramp
+    merge_x = min(ramp.accel_lane_start + MERGE_OFFSET, last_merge_position(view, vr))
+    return max(merge_x, ramp.accel_lane_start), float(view.config.cav.lane_change_duration)
 
 
 def last_merge_position(view: TrafficView, vr: int) -> float:
     """The last merge position whose change, predicted at VR's current speed with the CAV
     default duration, ends on the acceleration lane: ``accel_lane_end - max(v T, 3 L)`` [m]
     (the engine's rule, :func:`hcomc.sim.step.lane_change.start_lane_changes`)."""
-    cfg = view.config
-    duration = float(cfg.cav.lane_change_duration)
+    duration = float(view.config.cav.lane_change_duration)
     span = max(float(view.v[vr]) * duration, 3.0 * float(view.fleet.length[vr]))
-    return float(cfg.road.accel_lane_end - span)
+    return float(view.ramp.accel_lane_end - span)
 
 
 def reach_horizon(view: TrafficView, vr: int, merge_x: float) -> float:

@@ -146,7 +146,7 @@ class Interval:
 def merge_positions(view: TrafficView) -> Interval:
     """Where VR may start its lane change: the acceleration lane [m]. Past its end VR (not
     braking for the lane end while it follows its plan) would drive off the lane."""
-    return Interval(view.config.road.accel_lane_start, view.config.road.accel_lane_end)
+    return Interval(view.ramp.accel_lane_start, view.ramp.accel_lane_end)
 
 
 def lane_change_durations() -> Interval:

@@ -23,7 +23,7 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc.control.key_vehicles import key_vehicle_indices, nearest_in_lane
 from hcomc.equations.safety import critical_accel
-from hcomc.road import KEY_ROLES, N_ROLES
+from hcomc.road import KEY_ROLES, N_ROLES, Lane
 
 N_EGO = 5
 """Values describing the agent itself."""
@@ -39,6 +39,7 @@ OBS_NAMES: tuple[str, ...] = EGO_NAMES + tuple(
 )
 """Name of every observation value, in order."""
 
+_MAIN_1, _MAIN_2 = int(Lane.MAIN_1), int(Lane.MAIN_2)  # the paper's road
 _V_MAX = 70.0  # [m/s] bound of speeds in the observation space
 
 
@@ -84,7 +85,7 @@ def observe(out: np.ndarray, scene: Scene, ego: int, vr: int, accel_end: float) 
     end of the agent's acceleration lane [m]); returns the key vehicles (role order) around
     ``vr``."""
     x, v, lane, active, is_cav, _, origin, target, lc_x0, lc_xf = scene
-    group = key_vehicle_indices(x, lane, active, vr)
+    group = key_vehicle_indices(x, lane, active, vr, _MAIN_1, _MAIN_2)
     changing = origin[ego] != target[ego]
     out[0] = v[ego]
     out[1] = lane[ego]

@@ -10,6 +10,7 @@ import numpy as np
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.interface.fleet import Fleet
 from hcomc.interface.plan import MergePlan
+from hcomc.interface.ramp import Ramp
 from hcomc.road import Kind
 
 if TYPE_CHECKING:
@@ -33,7 +34,10 @@ class TrafficView:
         from origin lane; SUMO co-simulation: off its origin lane or a change in progress).
         Its ``lane`` switches to the target at the lateral midpoint. Information for
         controllers; the key-vehicle rules go by ``lane`` alone.
-    fleet : per-vehicle constants; config : the scenario.
+    fleet : per-vehicle constants; config : the models' parameters (vehicles, lane changes,
+        control).
+    ramp : the on-ramp the decision is for (:class:`~hcomc.interface.ramp.Ramp`): its
+        control zone, acceleration lane and lane codes, all a controller reads of the road.
     plans : the plans being executed.
     """
 
@@ -46,6 +50,7 @@ class TrafficView:
     changing: BoolArray
     fleet: Fleet
     config: ScenarioConfig
+    ramp: Ramp
     plans: tuple[MergePlan, ...] = ()
 
     @classmethod
@@ -56,9 +61,12 @@ class TrafficView:
         fleet: Fleet,
         config: ScenarioConfig,
         plans: tuple[MergePlan, ...] = (),
+        ramp: Ramp | None = None,
     ) -> TrafficView:
         """A read-only view of an engine's state: copies of the ``x, v, a, lane, active,
-        changing`` arrays, frozen, so a controller can never write the simulation state."""
+        changing`` arrays, frozen, so a controller can never write the simulation state;
+        ``ramp`` defaults to the paper's road of ``config`` (:meth:`Ramp.of
+        <hcomc.interface.ramp.Ramp.of>`)."""
 
         def frozen(name: str) -> np.ndarray:
             out = np.array(state[name], copy=True)
@@ -68,7 +76,7 @@ class TrafficView:
         return cls(
             t=t, x=frozen("x"), v=frozen("v"), a=frozen("a"), lane=frozen("lane"),
             active=frozen("active"), changing=frozen("changing"), fleet=fleet, config=config,
-            plans=plans,
+            ramp=Ramp.of(config.road) if ramp is None else ramp, plans=plans,
         )  # fmt: skip
 
     def is_cav(self, i: int) -> bool:

@@ -178,7 +178,8 @@ def game_confirms(
         assert sv is not None  # a chosen vehicle is on the road
         decision = lane_change_game(
             sv, vehicle(fol), vehicle(int(old_lead[k])), vehicle(int(new_lead[k])),
-            params=game_params(config), sv_idm=config.cav, fv_idm=fv_idm,
+            params=game_params(config, config.road.lane_width), sv_idm=config.cav,
+            fv_idm=fv_idm,
         )  # fmt: skip
         keep[k] = decision.change
     return keep

@@ -20,7 +20,7 @@ import numpy as np
 from hcomc.config import ScenarioConfig
 from hcomc.control.key_group import find_key_vehicles
 from hcomc.equations.collision import vehicles_collide
-from hcomc.interface import Fleet, MergeGroup, TrafficView
+from hcomc.interface import Fleet, MergeGroup, Ramp, TrafficView
 from hcomc.metrics import compute_metrics, merge_window
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.log import EventKind, SimulationLog
@@ -131,6 +131,7 @@ def key_group_at_entry(log: SimulationLog, config: ScenarioConfig, vr: int) -> M
         lane=log.lane[k].astype(np.int64), active=log.active[k].copy(),
         changing=np.zeros(log.n_vehicles, dtype=bool),
         fleet=Fleet.build(config, kind, np.zeros(kind.size, dtype=bool)), config=config,
+        ramp=Ramp.of(config.road),
     )  # fmt: skip
     return find_key_vehicles(view, vr)
 

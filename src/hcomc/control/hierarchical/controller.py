@@ -194,7 +194,8 @@ def merge_problem(
     (:class:`~hcomc.control.hierarchical.problem.MergeProblem`)."""
     groups = sequence_groups(view, group)
     states = tuple(key_state(view, g, continuation_starts(view, g)) for g in groups)
-    return MergeProblem((states[0], states[1]), view.config, lateral_allowed, replanning)
+    return MergeProblem((states[0], states[1]), view.config, lateral_allowed, replanning,
+                        ramp=view.ramp)  # fmt: skip
 
 
 class HCOMCController:
@@ -221,7 +222,7 @@ class HCOMCController:
             game_vehicle(view.x, view.v, view.fleet, group.vnr),
             game_vehicle(view.x, view.v, view.fleet, group.vmf),
             game_vehicle(view.x, view.v, view.fleet, group.vnf),
-            params=game_params(cfg),
+            params=game_params(cfg, view.ramp.lane_width),
             sv_idm=cfg.cav,
             fv_idm=cfg.cav if fv_cav else cfg.hdv,
         )

@@ -103,6 +103,7 @@ from hcomc.control.prediction.population import (
 )
 from hcomc.control.prediction.scoring import objective_rows, penalised_costs
 from hcomc.equations.fuel import fuel_rate
+from hcomc.interface import Ramp
 from hcomc.safety.critical import SafetyIndex
 
 
@@ -113,10 +114,12 @@ class MergeProblem:
     ----------
     states : key states of the "ahead" group and of the "behind" group (None when there is
         no vehicle to merge behind).
-    config : the scenario; every parameter is read from it.
+    config : the models' parameters; every parameter is read from it.
     lateral_allowed : per sequence, whether the lane-change game admits lateral cooperation.
     replanning : the problem of a replanning HCOMC (HCOMC-R): the constraints ``no_return``
         and ``execution`` apply (module docstring), with ``control.replan_period``.
+    ramp : the on-ramp (its acceleration lane and lane width); default: the paper's road of
+        ``config`` (:meth:`hcomc.interface.Ramp.of`).
     """
 
     n_var = 5
@@ -130,8 +133,10 @@ class MergeProblem:
         config: ScenarioConfig,
         lateral_allowed: tuple[bool, bool] = (False, False),
         replanning: bool = False,
+        ramp: Ramp | None = None,
     ) -> None:
         self.states = states
+        self.ramp = Ramp.of(config.road) if ramp is None else ramp
         self.state: KeyState = states[0]  # the "ahead" group always exists
         self.config = config
         self.lateral_allowed = lateral_allowed
@@ -139,8 +144,8 @@ class MergeProblem:
         self._variants_of: tuple[KeyState | None, ...] = ()
         self._variants_cache: tuple[KeyState | None, ...] = ()
         self.safety = SafetyIndex.from_config(config.control)
-        road, control = config.road, config.control
-        start, end = road.accel_lane_start, road.accel_lane_end
+        control = config.control
+        start, end = self.ramp.accel_lane_start, self.ramp.accel_lane_end
         s = self.state
         length = float(s.params[VR, P_LEN])
         self.xl = np.array([max(start, s.x[VR] + 1.0), 3.0, control.horizon_min, 0.0, 0.0])
@@ -152,7 +157,7 @@ class MergeProblem:
         """The replan period whose soundness rules apply (0: none, the problem of a plan made
         once): the constraints ``no_return`` and ``execution``, and the commitment's bound on
         the merge position (:mod:`~hcomc.control.hierarchical.commitment`)."""
-        self.consts = problem_constants(config, replanning)
+        self.consts = problem_constants(config, self.ramp, replanning)
         # window: VR reaches the lane end at its current speed, changes lane, then settles
         reach = (end - s.x[VR]) / max(s.v[VR], 5.0)
         self.dt = control.prediction_dt

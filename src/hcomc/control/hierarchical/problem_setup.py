@@ -58,6 +58,7 @@ from hcomc.control.prediction.population import (
 )
 from hcomc.equations.fuel import FuelCoefficients
 from hcomc.equations.transition import transition_gamma
+from hcomc.interface import Ramp
 from hcomc.safety.critical import SafetyIndex
 
 __all__ = ["FUEL_COEFFICIENTS", "load_prediction_kernels", "problem_constants", "row_constants"]
@@ -66,8 +67,9 @@ FUEL_COEFFICIENTS = FuelCoefficients.of(FUEL_DEFAULT)
 """The default fuel model's coefficients as the kernels take them."""
 
 
-def problem_constants(config: ScenarioConfig, replanning: bool = False) -> FloatArray:
-    """The rollout's constants vector, every value read from ``config``.
+def problem_constants(config: ScenarioConfig, ramp: Ramp, replanning: bool = False) -> FloatArray:
+    """The rollout's constants vector, every value read from ``config`` and the ``ramp``
+    (the acceleration lane's end and the lane width).
 
     ``replanning`` (HCOMC-R: ``control.replan_period > 0``) sets ``C_REPLAN`` to the replan
     period, which turns on the constraints of a replanning controller (the point of no
@@ -76,8 +78,8 @@ def problem_constants(config: ScenarioConfig, replanning: bool = False) -> Float
     safety = SafetyIndex.from_config(config.control)
     consts = np.zeros(N_CONSTS)
     consts[C_DT] = config.control.prediction_dt
-    consts[C_ACCEL_END] = config.road.accel_lane_end
-    consts[C_WIDTH] = config.road.lane_width
+    consts[C_ACCEL_END] = ramp.accel_lane_end
+    consts[C_WIDTH] = ramp.lane_width
     consts[C_VMC_DUR] = config.cav.lane_change_duration
     consts[C_GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[C_EMERGENCY] = config.lane_change.emergency_decel

@@ -222,8 +222,9 @@ GAME_DEFAULT: GameParams = GameParams()
 """Default game parameters (those of the default scenario config)."""
 
 
-def game_params(config: ScenarioConfig) -> GameParams:
-    """The default game with the Eq. 15 parameters and threshold of ``config.control``.
+def game_params(config: ScenarioConfig, lane_width: float) -> GameParams:
+    """The default game with the Eq. 15 parameters and threshold of ``config.control``, on
+    lanes ``lane_width`` [m] wide.
 
     Every consumer of the game (the HCOMC controller, the engine's CAV lane changes) builds its
     parameters here, so the Eq. 15 values have one home: the config.
@@ -236,7 +237,7 @@ def game_params(config: ScenarioConfig) -> GameParams:
             "delay_hdv": c.safety_delay_hdv,
             "min_distance": c.safety_min_distance,
             "emergency_decel": c.safety_emergency_decel,
-            "lane_width": config.road.lane_width,
+            "lane_width": lane_width,
             "transition_tolerance": config.lane_change.transition_tolerance,
         }
     )

@@ -6,10 +6,11 @@ ramp's geometry in corridor coordinates, the IDM of the corridor's mainline clas
 HDVs and CAVs (CAVs without the constant-acceleration heuristic, coolness 0, as the
 corridor engine drives them), the corridor's lane-change settings. The controller sees the
 ramp's local view (ramp lane, mainline lanes 0 and 1 as ``RAMP``, ``MAIN_1``, ``MAIN_2``:
-:func:`hcomc.sim.corridor.plans.fill_view`) through the same :class:`TrafficView` and
-:class:`~hcomc.interface.MergeGroup` as in the paper's scene, and its plans are executed by
-the compiled step (:mod:`hcomc.sim.corridor.plans`). Plans of different ramps, and of several
-VRs of one ramp, are live at the same time.
+:func:`hcomc.sim.corridor.plans.fill_view`), with the ramp's geometry in corridor coordinates
+as its :class:`~hcomc.interface.Ramp` (all a controller reads of the road), through the
+same :class:`TrafficView` and :class:`~hcomc.interface.MergeGroup` as in the paper's scene,
+and its plans are executed by the compiled step (:mod:`hcomc.sim.corridor.plans`). Plans of
+different ramps, and of several VRs of one ramp, are live at the same time.
 
 **One live plan per vehicle.** A plan may command a vehicle (its VMC, or VNR in lateral
 mode) only if no live plan of another VR commands it; otherwise the new plan keeps its
@@ -30,7 +31,7 @@ from hcomc.control.registry import make_controller
 from hcomc.control.validation import checked, name_of, planned
 from hcomc.corridor import Corridor, OnRamp
 from hcomc.corridor.engine import ramp_road
-from hcomc.interface import Fleet, MergeController, MergePlan, Mode, TrafficView
+from hcomc.interface import Fleet, MergeController, MergePlan, Mode, Ramp, TrafficView
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.corridor.fleet import CorridorFleet
@@ -141,7 +142,9 @@ class CorridorControl:
                  "changing": s.target != s.code}  # fmt: skip
         n = int(s.counters[C_PLANS])
         plans = tuple(self.decisions[int(k)].plan for k in s.plan_int[:n, P_ID])
-        return TrafficView.snapshot(t, state, self.fleet, self.controllers[ramp_code][1], plans)
+        config = self.controllers[ramp_code][1]
+        ramp = Ramp.of(config.road)  # the ramp in corridor coordinates, the local lane codes
+        return TrafficView.snapshot(t, state, self.fleet, config, plans, ramp)
 
     def decide(self, s: State, t: float) -> None:
         """Plan for every VR the step listed (``s.pending``), one after the other, each

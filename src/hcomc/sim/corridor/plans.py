@@ -140,7 +140,7 @@ def identify(s: State, t: float) -> None:
         if not math.isnan(s.ev_t[i]):
             continue
         fill_view(s, c, t)
-        group = key_vehicle_indices(s.x, s.view_lane, s.view_active, i)
+        group = key_vehicle_indices(s.x, s.view_lane, s.view_active, i, _MAIN_1, _MAIN_2)
         s.ev_t[i] = t
         s.ev_group[i, :] = group
         vmc = group[VMC]
