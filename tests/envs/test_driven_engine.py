@@ -127,5 +127,5 @@ def test_key_vehicle_kernel_matches_the_rules(cars: list[tuple[int, int, bool]])
     active = np.array([c[2] for c in cars])
     vr = 0
     active[vr], lane[vr] = True, 0
-    got = key_vehicle_indices(x, lane, active, vr).tolist()
+    got = key_vehicle_indices(x, lane, active, vr, 1, 2).tolist()  # lanes 1 and 2
     assert got == _key_oracle(x, lane, active, vr)

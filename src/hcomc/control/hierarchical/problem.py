@@ -118,8 +118,7 @@ class MergeProblem:
     lateral_allowed : per sequence, whether the lane-change game admits lateral cooperation.
     replanning : the problem of a replanning HCOMC (HCOMC-R): the constraints ``no_return``
         and ``execution`` apply (module docstring), with ``control.replan_period``.
-    ramp : the on-ramp (its acceleration lane and lane width); default: the paper's road of
-        ``config`` (:meth:`hcomc.interface.Ramp.of`).
+    ramp : the on-ramp (:class:`hcomc.interface.Ramp`); default: ``config``'s road.
     """
 
     n_var = 5
@@ -135,18 +134,16 @@ class MergeProblem:
         replanning: bool = False,
         ramp: Ramp | None = None,
     ) -> None:
-        self.states = states
+        self.states, self.config = states, config
         self.ramp = Ramp.of(config.road) if ramp is None else ramp
         self.state: KeyState = states[0]  # the "ahead" group always exists
-        self.config = config
         self.lateral_allowed = lateral_allowed
         self.no_cooperation = bool(config.control.no_cooperation)
         self._variants_of: tuple[KeyState | None, ...] = ()
         self._variants_cache: tuple[KeyState | None, ...] = ()
         self.safety = SafetyIndex.from_config(config.control)
-        control = config.control
+        control, s = config.control, self.state
         start, end = self.ramp.accel_lane_start, self.ramp.accel_lane_end
-        s = self.state
         length = float(s.params[VR, P_LEN])
         self.xl = np.array([max(start, s.x[VR] + 1.0), 3.0, control.horizon_min, 0.0, 0.0])
         mode_max = MODE_NONE + 0.5 if self.no_cooperation else 1.0
@@ -154,17 +151,15 @@ class MergeProblem:
             [max(end - 3.0 * length, self.xl[0] + 1.0), 6.0, control.horizon_max, mode_max, 1.0]
         )
         self.replan_period = float(control.replan_period) if replanning else 0.0
-        """The replan period whose soundness rules apply (0: none, the problem of a plan made
-        once): the constraints ``no_return`` and ``execution``, and the commitment's bound on
-        the merge position (:mod:`~hcomc.control.hierarchical.commitment`)."""
+        """The replan period whose soundness rules apply (0: a plan made once): ``no_return``,
+        ``execution``, the bound of :mod:`~hcomc.control.hierarchical.commitment`."""
         self.consts = problem_constants(config, self.ramp, replanning)
         # window: VR reaches the lane end at its current speed, changes lane, then settles
         reach = (end - s.x[VR]) / max(s.v[VR], 5.0)
         self.dt = control.prediction_dt
         self.n_steps = int(np.ceil((reach + self.xu[1] + control.post_merge) / self.dt))
         self._fuel_ref = float(fuel_rate(s.v[VR], 0.0) * self.n_steps * self.dt / 1000.0)
-        # the no-merge counterfactual of each sequence's key group: candidate-independent, so
-        # rolled out once per planning instant, not once per population
+        # each sequence's no-merge counterfactual: candidate-independent, once per instant
         self._no_merge = tuple(
             None
             if st is None
