@@ -115,3 +115,18 @@ def test_animate_gif_and_bad_extension(run_dir, tmp_path):
     assert bad.exit_code == 2
     assert ".avi" in bad.stderr
     assert not (tmp_path / "run.avi").exists()
+
+
+@pytest.mark.parametrize("command", ["plot", "animate"])
+def test_an_existing_figure_is_kept_unless_forced(run_dir, tmp_path, command):
+    target = tmp_path / ("fig.png" if command == "plot" else "run.gif")
+    target.write_bytes(b"mine")
+    argv = [command, str(run_dir if command == "plot" else run_dir / "log.npz")]
+    argv += ["--kind", "timespace"] if command == "plot" else ["--speedup", "20"]
+    refused = runner.invoke(app, [*argv, "--out", str(target)])
+    assert refused.exit_code == 2
+    assert f"option '--out' = '{target}': already exists" in refused.stderr
+    assert target.read_bytes() == b"mine"
+    forced = runner.invoke(app, [*argv, "--out", str(target), "--force"])
+    assert forced.exit_code == 0, forced.output
+    assert target.read_bytes() != b"mine"

@@ -277,6 +277,25 @@ def test_bad_input_is_a_one_line_error(
     assert not (tmp_path / "x.html").exists()
 
 
+def test_an_existing_page_is_kept_unless_forced(runs: dict[str, Path], tmp_path: Path) -> None:
+    out = tmp_path / "kept.html"
+    out.write_text("my notes")
+    shot = tmp_path / "kept.png"
+    for argv, option in ((["--out", str(out)], "--out"),
+                         (["--out", str(tmp_path / "new.html"), "--screenshot", str(out)],
+                          "--screenshot")):  # fmt: skip
+        result = runner.invoke(app, ["replay", str(runs["fifo"]), *argv])
+        assert result.exit_code == 2
+        assert f"option '{option}' = '{out}': already exists" in result.output
+        assert "--force" in result.output
+    assert out.read_text() == "my notes"
+    assert not shot.exists()
+    assert not (tmp_path / "new.html").exists()
+    result = runner.invoke(app, ["replay", str(runs["fifo"]), "--out", str(out), "--force"])
+    assert result.exit_code == 0, result.output
+    assert page_data(out)["runs"]
+
+
 # ----------------------------------------------------------------------------- in Chromium
 
 

@@ -297,6 +297,19 @@ def _control(base: ControlParams, controller: str | None, optimizer: str | None)
     return control
 
 
+def _refuse_existing_file(path: Path, option: str, force: bool) -> None:
+    """Stop before any work if the output file ``path`` that ``option`` names exists
+    (unless --force) or is a directory."""
+    if path.is_dir():
+        raise _fail(f"option '{option}' = '{path}': is a directory; allowed: a file path")
+    if path.exists() and not force:
+        raise _fail(f"option '{option}' = '{path}': already exists; "
+                    "allowed: a new file, or --force to overwrite it")  # fmt: skip
+
+
+Force = Annotated[bool, typer.Option(help="Overwrite an existing output file.")]
+
+
 def _refuse_overwrite(out_dir: Path | None, names: tuple[str, ...], force: bool) -> None:
     """Stop before a run if ``out_dir`` is a file or already holds a run (unless --force)."""
     if out_dir is None:

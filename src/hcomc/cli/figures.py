@@ -8,8 +8,10 @@ from typing import Annotated
 import typer
 
 from hcomc.cli._app import (
+    Force,
     _check_seed,
     _fail,
+    _refuse_existing_file,
     app,
     out,
 )
@@ -45,6 +47,7 @@ def plot(
         str | None, typer.Option(help="Metric of a sweep heatmap (default: lsrv).")
     ] = None,
     raw: Annotated[bool, typer.Option(help="contour: raw bins instead of smoothing.")] = False,
+    force: Force = False,
 ) -> None:
     """Draw a figure of a run, a decision, a results table, a sweep or a corridor run.
 
@@ -60,6 +63,7 @@ def plot(
     kind = kind.lower()
     target = out_file or Path(f"{kind}.png")
     _check_seed(seed)
+    _refuse_existing_file(target, "--out", force)
     # an option that does not apply to this figure is an error, not silently ignored
     if metric is not None and kind != "heatmap":
         raise _fail(f"option '--metric' = '{metric}' applies to --kind heatmap only")
@@ -104,11 +108,13 @@ def animate(
     out_file: Annotated[Path, typer.Option("--out", help="Output .gif or .mp4.")] = Path("run.gif"),
     fps: Annotated[int, typer.Option(help="Frames per second.")] = 10,
     speedup: Annotated[float, typer.Option(help="Simulated seconds per real second.")] = 5.0,
+    force: Force = False,
 ) -> None:
     """Top-down animation of a run: vehicles by kind, key vehicles, virtual vehicles, clock."""
     from hcomc.viz.animation import animate as render
     from hcomc.viz.inputs import load_log
 
+    _refuse_existing_file(out_file, "--out", force)
     try:
         written = render(load_log(log_path), out_file, fps=fps, speedup=speedup)
     except (ValueError, ConfigError, OSError) as exc:

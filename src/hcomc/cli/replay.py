@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from hcomc.cli._app import _compiled, _fail, app, out
+from hcomc.cli._app import Force, _compiled, _fail, _refuse_existing_file, app, out
 from hcomc.config import ConfigError
 
 if TYPE_CHECKING:
@@ -63,6 +63,7 @@ def replay(
         typer.Option(help="--screenshot: time shown [s] (default: middle of the earliest merge)."),
     ] = None,
     width: Annotated[int, typer.Option(help="--screenshot: page width [px].")] = 1280,
+    force: Force = False,
 ) -> None:
     """Write an interactive replay of runs: one HTML file that plays offline in a browser."""
     from hcomc.viz.replay import replay as build
@@ -79,6 +80,9 @@ def replay(
                     "(e.g. apt-get install chromium)")  # fmt: skip
     if not 320 <= width <= 4096:
         raise _fail(f"option '--width' = {width}: allowed: 320 to 4096 px")
+    _refuse_existing_file(out_file, "--out", force)
+    if screenshot is not None:
+        _refuse_existing_file(screenshot, "--screenshot", force)
     logs = [_load_run(path) for path in runs]
     try:
         check_together(logs, [str(path) for path in runs])
