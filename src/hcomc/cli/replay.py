@@ -18,10 +18,14 @@ def _load_run(path: Path) -> ReplayRun:
     """The run of a run directory (a scenario run's log, a corridor run's trajectories) or a
     saved log file; a one-line error without one."""
     from hcomc.sim.corridor.record import is_corridor_run
+    from hcomc.sim.log import LOG_FILES
     from hcomc.viz.replay.runs import load_run
 
-    logs = ("log.npz", "log.parquet")
-    if path.is_dir() and not is_corridor_run(path) and not any((path / n).is_file() for n in logs):
+    if (
+        path.is_dir()
+        and not is_corridor_run(path)
+        and not any((path / name).is_file() for name in LOG_FILES)
+    ):
         raise _fail(
             f"run directory '{path}' holds no log.npz or log.parquet and is no corridor run; "
             "allowed: the --out directory of 'hcomc simulate SCENARIO', or of 'hcomc simulate "

@@ -25,12 +25,10 @@ from hcomc.commonroad.tracks import Track, first_ramp_vehicle, log_tracks
 from hcomc.config import ConfigError, ScenarioConfig, validate_config
 from hcomc.road import Lane
 from hcomc.sim.corridor.record import is_corridor_run
-from hcomc.sim.log import SimulationLog
+from hcomc.sim.log import SimulationLog, log_file_of
 from hcomc.sim.manifest import git_revision
 
-__all__ = ["LOG_FILES", "ExportRun", "load_run", "run_of_corridor", "run_of_log"]
-
-LOG_FILES = ("log.npz", "log.parquet")
+__all__ = ["ExportRun", "load_run", "run_of_corridor", "run_of_log"]
 """What a scenario-engine run directory holds its log in (the first found)."""
 
 
@@ -75,7 +73,7 @@ def load_run(source: Path) -> ExportRun:
     ``ValueError`` with a one-line reason when it is neither."""
     if is_corridor_run(source):
         return run_of_corridor(corridor_tracks(source))
-    log = _load_log(source)
+    log = SimulationLog.load(log_file_of(source))
     try:
         config = validate_config(log.meta["config"], f"{source} (config in the log)")
     except KeyError:
@@ -83,23 +81,6 @@ def load_run(source: Path) -> ExportRun:
     except ConfigError as exc:
         raise ValueError(str(exc)) from None
     return run_of_log(log, config)
-
-
-def _load_log(source: Path) -> SimulationLog:
-    """The log of a scenario-engine ``--out`` directory (``log.npz`` or ``log.parquet``) or
-    a log file."""
-    if source.is_dir():
-        found = [source / n for n in LOG_FILES if (source / n).is_file()]
-        if not found:
-            raise ValueError(
-                f"directory holds no {' or '.join(LOG_FILES)} (scenario engine) and no "
-                "manifest.json of the corridor engine; allowed: a `hcomc simulate --out` "
-                "directory or a log file"
-            )
-        source = found[0]
-    if source.suffix.lower() not in {".npz", ".parquet"}:
-        raise ValueError(f"log file suffix '{source.suffix}'; allowed: .npz, .parquet")
-    return SimulationLog.load(source)
 
 
 def run_of_log(log: SimulationLog, config: ScenarioConfig) -> ExportRun:

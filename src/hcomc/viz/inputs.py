@@ -70,7 +70,6 @@ CONTOUR_CONFIGURATIONS: tuple[str, ...] = ("FIFO", "Game", "HCOMC")
 PARETO_OPTIMIZERS: tuple[str, ...] = ("nsga2", "pso", "sa")
 """Optimisers run when a Pareto figure is asked for a scenario."""
 
-_LOG_SUFFIXES = (".npz", ".parquet")
 _RUNS_NAMES = ("runs.parquet", "runs.csv")
 
 
@@ -84,21 +83,9 @@ def load_log(source: Source) -> SimulationLog:
         If the source does not exist, is a directory without ``log.npz``/``log.parquet``,
         or has another suffix.
     """
-    from hcomc.sim.log import SimulationLog
+    from hcomc.sim.log import SimulationLog, log_file_of
 
-    path = Path(source)
-    if path.is_dir():
-        for name in ("log.npz", "log.parquet"):
-            if (path / name).is_file():
-                return SimulationLog.load(path / name)
-        raise ValueError(f"directory '{path}' holds no log.npz or log.parquet")
-    if not path.is_file():
-        raise ValueError(f"log file '{path}' does not exist")
-    if path.suffix.lower() not in _LOG_SUFFIXES:
-        raise ValueError(
-            f"log file '{path}' has suffix '{path.suffix}'; allowed: {', '.join(_LOG_SUFFIXES)}"
-        )
-    return SimulationLog.load(path)
+    return SimulationLog.load(log_file_of(source))
 
 
 def load_runs(source: Source) -> pd.DataFrame:

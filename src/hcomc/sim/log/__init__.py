@@ -9,6 +9,7 @@ the typed records of the merge plans a run kept.
 """
 
 from hcomc.sim.log.events import EVENT_DTYPE, EventKind
+from hcomc.sim.log.files import LOG_FILES, log_file_of
 from hcomc.sim.log.simulation_log import SimulationLog
 
-__all__ = ["EVENT_DTYPE", "EventKind", "SimulationLog"]
+__all__ = ["EVENT_DTYPE", "LOG_FILES", "EventKind", "SimulationLog", "log_file_of"]

@@ -12,6 +12,8 @@ read and converted to that layout.
 The functions write and read the log's data (:class:`~hcomc.sim.log.data.LogData`, of which
 ``SimulationLog`` is the subclass that calls them): a log is read into the class
 :meth:`SimulationLog.load` is called on, and this module does not import the log class.
+:func:`log_file_of` finds the log of a run directory or checks a log file's path, for every
+reader of runs (figures, replay, the CommonRoad export).
 """
 
 from __future__ import annotations
@@ -144,6 +146,31 @@ def _write_parquet(log: LogData, path: Path) -> None:
     with atomic_paths(events_path(path), path) as (tmp_ev, tmp_main):
         pq.write_table(ev_table, tmp_ev)
         pq.write_table(table, tmp_main)
+
+
+LOG_FILES = ("log.npz", "log.parquet")
+"""The log's file names in a run directory (``hcomc simulate --out``), in the order looked for."""
+
+LOG_SUFFIXES = (".npz", ".parquet")
+"""The suffixes of a log file."""
+
+
+def log_file_of(source: str | os.PathLike[str]) -> Path:
+    """The log file of ``source``: a log file itself, or the first of :data:`LOG_FILES` in a
+    run directory; ValueError (one line) when ``source`` does not exist, is a directory
+    without a log, or a file of another suffix. The one place a run's log is found."""
+    path = Path(source)
+    if path.is_dir():
+        found = [path / name for name in LOG_FILES if (path / name).is_file()]
+        if not found:
+            raise ValueError(f"directory '{path}' holds no {' or '.join(LOG_FILES)}")
+        return found[0]
+    if not path.is_file():
+        raise ValueError(f"log file '{path}' does not exist")
+    if path.suffix.lower() not in LOG_SUFFIXES:
+        raise ValueError(f"log file '{path}' has suffix '{path.suffix}'; "
+                         f"allowed: {', '.join(LOG_SUFFIXES)}")  # fmt: skip
+    return path
 
 
 def read_log(path: str | os.PathLike[str], cls: type[LogT]) -> LogT:
