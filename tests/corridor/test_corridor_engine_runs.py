@@ -192,6 +192,7 @@ def test_simulate_runs_a_corridor_and_refuses_a_controller(tmp_path):
     manifest = json.loads((tmp_path / "run" / "manifest.json").read_text())
     assert manifest["seed"] == 0
     assert manifest["config"]["road"]["lanes"] == 3
+    assert manifest["trajectory_interval"] == 0.0  # none sampled: the replay says how to
     again = runner.invoke(app, ["simulate", "corridor", "--duration", "60",
                                 "--out", str(tmp_path / "run")])  # fmt: skip
     assert again.exit_code == 2

@@ -176,6 +176,7 @@ def test_the_road_has_one_shape_per_lane_stretch(page: Path, runs: dict[str, Pat
 def test_every_sample_of_trajectories_csv_is_packed(page: Path, runs: dict[str, Path]) -> None:
     for data, run in zip(page_data(page)["runs"], runs.values(), strict=True):
         corridor = corridor_of(run)
+        assert json.loads((run / "manifest.json").read_text())["trajectory_interval"] == 0.5
         width, angle = corridor.road.lane_width, math.atan(0.1)
         samples, arrays = samples_of(run), data["arrays"]
         trips = pd.read_csv(run / "trips.csv").set_index("id")

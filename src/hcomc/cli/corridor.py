@@ -76,7 +76,7 @@ def run_corridor(
         manifest = build_manifest(
             seed=run.seed, config=corridor.model_dump(mode="json"),
             extra={"engine": CORRIDOR_ENGINE, "duration": run.duration,
-                   "controller": run.controller},
+                   "controller": run.controller, "trajectory_interval": trajectory_interval},
         )  # fmt: skip
         write_json_atomic(out_dir / "manifest.json", manifest)
         (out_dir / "corridor.toml").write_text(corridor_to_toml(corridor), encoding="utf-8")
