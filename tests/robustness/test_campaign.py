@@ -106,6 +106,26 @@ def test_docs_page_is_generated_from_its_data(engine):
         assert len(spec["seeds"]) >= 100
 
 
+def test_the_sumo_collisions_are_told_as_the_data_has_them():
+    """The hand-written account of the SUMO collisions below the generated tables counts
+    them as its data does."""
+    runs = pd.read_csv(data_dir(DOCS, "sumo") / "runs.csv")
+    hit = runs[runs["collisions_commanded"] > 0]
+    assert not hit["shield"].any()  # none with the shield
+    pairs = hit["collision_pair"].value_counts()
+    others = hit[hit["collision_pair"] != "VMF-VMC"]
+    text = " ".join((DOCS / "robustness.md").read_text().split())
+    told = (f"Of the {len(hit)} runs with a collision without the shield, "
+            f"{pairs['VMF-VMC']} are of one kind: VMF brakes at a_merg and the cooperating "
+            f"vehicle VMC, commanded by a live plan, runs into it. In the other {len(others)} "
+            f"({'/'.join(sorted(set(others['configuration'])))}, seeds "
+            f"{' and '.join(str(s) for s in sorted(set(others['seed'])))}, on both channels) "
+            "VMR runs into the braking VMC.")  # fmt: skip
+    assert told in text
+    assert set(others["collision_pair"]) == {"VMC-VMR"}
+    assert others.groupby("seed")["channel"].nunique().eq(2).all()  # both channels
+
+
 @pytest.mark.slow
 def test_local_processes_and_a_dask_cluster_give_the_same_runs(tmp_path):
     distributed = pytest.importorskip("distributed")
