@@ -219,27 +219,27 @@ class Simulation(EnginePlans):
         stage that ended on a Python step is closed."""
         if self.step_index >= self.stop_step:
             self.resume(layout.DONE)
-            return
-        t = self.t
-        for listener in self.listeners:
-            listener.before_step(self, t)
-        if any(listener.decisions_due(self, t) for listener in self.listeners):
+        elif self._listeners_act():
             self.resume(layout.NEED_PYTHON)
         else:
             self.run_to(self.step_index + 1)
+
+    def _listeners_act(self) -> bool:
+        """The listeners act before the step about to be taken; whether one of them wants a
+        decision in it."""
+        t = self.t
+        for listener in self.listeners:
+            listener.before_step(self, t)
+        return any(listener.decisions_due(self, t) for listener in self.listeners)
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
         """Advance the whole traffic state by one step ``dt`` (no log row), through the same
         driver as :meth:`run` (:func:`hcomc.sim.step.loop.run_steps`): compiled, with Python
         only for a decision; listeners act before it from the warm-up's end on."""
-        if self.listeners and self.step_index >= self.n_warmup:
-            t = self.t
-            for listener in self.listeners:
-                listener.before_step(self, t)
-            if any(listener.decisions_due(self, t) for listener in self.listeners):
-                self._decision_step()
-                return
+        if self.listeners and self.step_index >= self.n_warmup and self._listeners_act():
+            self._decision_step()
+            return
         target = self.step_index + 1
         while self.step_index < target:
             reason = step_loop.run_steps(self.core, target, False, self.rng)
