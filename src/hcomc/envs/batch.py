@@ -19,15 +19,13 @@ from hcomc._jit import kernel
 from hcomc.envs.observation import SafetyParams, Scene, observe, pair_safety
 from hcomc.envs.reward import fuel_over_rows, gain_over_rows
 from hcomc.road import VMC, VMR, VNR
+from hcomc.sim.lane_table import KIND_MAIN, L_END, L_KIND, L_OPENS
 from hcomc.sim.log.slots import rows_of
-from hcomc.sim.step.lane_change import start_lane_changes
+from hcomc.sim.step.lane_change import free_target, start_lane_changes
 from hcomc.sim.step.ramp_reach import ramp_may_reach, ramp_untouched
 from hcomc.sim.step.state import (
     COLLISIONS,
     DT,
-    MAIN_1,
-    MAIN_2,
-    RAMP,
     ROWS,
     STEP,
     WARMUP,
@@ -54,11 +52,12 @@ def apply_one(c: CoreArrays, i: int, accel: float, change: float, p: np.ndarray)
     command(c, i, a * limit)
     if change <= 0 or c.origin[i] != c.target[i] or not c.active[i]:
         return
-    if c.lane[i] != RAMP:
-        target = MAIN_1 if c.lane[i] == MAIN_2 else MAIN_2
-    elif p[P_ACCEL_START] <= c.x[i] <= p[P_ACCEL_END]:
-        target = MAIN_1
-    else:
+    lane = c.lane[i]
+    ramp = c.road_int[L_KIND, lane] != KIND_MAIN
+    if ramp and not c.road_f[L_OPENS, lane] <= c.x[i] <= c.road_f[L_END, lane]:
+        return
+    target = free_target(c.road_int, lane)
+    if target < 0:
         return
     t = -c.consts[WARMUP] + c.counters[STEP] * c.consts[DT]
     start_lane_changes(c, np.array([i]), np.array([target]), t, np.array([math.nan]))
@@ -66,9 +65,13 @@ def apply_one(c: CoreArrays, i: int, accel: float, change: float, p: np.ndarray)
 
 @kernel
 def _is_ramp(c: CoreArrays, i: int) -> bool:
-    """Whether vehicle i came from the ramp (is in the ramp's release queue)."""
-    queue = c.queues[c.queue_start[RAMP] : c.queue_start[RAMP + 1]]
-    return bool(np.any(queue == i))
+    """Whether vehicle i came from a ramp (is in a ramp lane's release queue)."""
+    for lane in range(c.queue_pos.size):
+        if c.road_int[L_KIND, lane] != KIND_MAIN:
+            queue = c.queues[c.queue_start[lane] : c.queue_start[lane + 1]]
+            if np.any(queue == i):
+                return True
+    return False
 
 
 @kernel(inline="always")
@@ -115,8 +118,9 @@ def step_terms(
                 others += g
     terms[T_FUEL], terms[T_EFFICIENCY] = fuel, own + p[P_ETA] * others
     keeping = c.origin[vr] == c.target[vr]
-    terms[T_MERGED] = 1.0 if c.lane[vr] == MAIN_1 and keeping else 0.0
-    at_end = c.lane[vr] == RAMP and keeping and c.x[vr] >= p[P_ACCEL_END]
+    on_ramp = c.road_int[L_KIND, c.lane[vr]] != KIND_MAIN
+    terms[T_MERGED] = 1.0 if not on_ramp and keeping else 0.0
+    at_end = on_ramp and keeping and c.x[vr] >= c.road_f[L_END, c.lane[vr]]
     terms[T_LANE_END] = 1.0 if at_end else 0.0
     terms[T_COLLISIONS] = c.counters[COLLISIONS]
     terms[T_ROWS] = r1

@@ -40,9 +40,9 @@ from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.key_group import find_key_vehicles
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
-from hcomc.road import Lane
 from hcomc.sim.decision import decide, undecided
 from hcomc.sim.engine_plans import EnginePlans
+from hcomc.sim.lane_table import L_ZONE
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.plan_execution import game_confirms
 from hcomc.sim.step import loop as step_loop
@@ -314,18 +314,19 @@ class Simulation(EnginePlans):
         plans = tuple(p.plan for p in self.plans)
         return TrafficView.snapshot(t, state, self.fleet, self.config, plans)
 
+    def _in_control_zone(self, ids: IntArray, changing: np.ndarray) -> IntArray:
+        """The vehicles of ``ids`` in a ramp lane's control zone, keeping their lane
+        (``changing`` per vehicle of ``ids``)."""
+        zone = self.arrays.road_f[L_ZONE, self.lane[ids]]
+        return ids[~changing & (self.x[ids] >= zone)]
+
     def _identify_key_vehicles(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Record each ramp vehicle's key vehicles when it enters the control zone.
 
         This happens for every run, with or without a controller and before any control
         acts, so metrics compare the same physical vehicles across controllers.
         """
-        new = ids[
-            (self.lane[ids] == Lane.RAMP)
-            & ~changing
-            & (self.x[ids] >= self.config.road.control_zone_start)
-        ]
-        for vr in new.tolist():
+        for vr in self._in_control_zone(ids, changing).tolist():
             self.arrays.identified[vr] = True
             if vr in self.key_groups:
                 continue
@@ -346,12 +347,8 @@ class Simulation(EnginePlans):
         horizon, key vehicles re-identified: :func:`hcomc.sim.step.plans.due_plans`) or when a
         listener asks; one decision each (:func:`hcomc.sim.decision.decide`: the plan is
         checked, recorded and put into force by :meth:`execute`)."""
-        new = ids[
-            (self.lane[ids] == Lane.RAMP)
-            & ~changing
-            & ~self.planned[ids]
-            & (self.x[ids] >= self.config.road.control_zone_start)
-        ]
+        new = self._in_control_zone(ids, changing)
+        new = new[~self.planned[new]]
         due = step_loop.due_plans(self.core, t).tolist()
         for listener in self.listeners:
             due += listener.decisions_due(self, t)

@@ -14,8 +14,9 @@ import numpy as np
 
 from hcomc._typing import IntArray
 from hcomc.interface import MergePlan, Mode
-from hcomc.road import Kind, Lane
+from hcomc.road import Kind
 from hcomc.sim.engine_setup import EngineSetup
+from hcomc.sim.lane_table import KIND_MAIN, L_KIND
 from hcomc.sim.plan_execution import ActivePlan, plan_views
 from hcomc.sim.step import plans as table
 from hcomc.sim.step import state as layout
@@ -58,9 +59,10 @@ class EnginePlans(EngineSetup):
         c.counters[layout.N_PLANS] = add_plan(c.plan_int, c.plan_f, n, *row)
 
     def may_execute(self, vr: int) -> bool:
-        """Whether ramp vehicle ``vr`` is on the road, on the ramp and not changing lanes."""
-        return bool(self.active[vr] and self.lane[vr] == Lane.RAMP
-                    and self.origin[vr] == self.target[vr])  # fmt: skip
+        """Whether ramp vehicle ``vr`` is on the road, in its ramp lane and not changing
+        lanes."""
+        on_ramp = self.arrays.road_int[L_KIND, self.lane[vr]] != KIND_MAIN
+        return bool(self.active[vr] and on_ramp and self.origin[vr] == self.target[vr])
 
     def commanded(self) -> IntArray:
         """Vehicles a live plan commands now: VR until its plan releases it (on the ramp and in
@@ -79,7 +81,7 @@ class EnginePlans(EngineSetup):
         vr = pi[:, table.P_VR]
         waiting = ((pi[:, table.P_VR_CMD] != 0) & (pi[:, table.P_VR_STARTED] == 0)
                    & (pi[:, table.P_RELEASED] == 0) & (self.origin[vr] == self.target[vr])
-                   & (self.lane[vr] == Lane.RAMP)
+                   & (self.arrays.road_int[L_KIND, self.lane[vr]] != KIND_MAIN)
                    & (self.x[vr] >= pf[:, table.F_MERGE_X]))  # fmt: skip
         return vr[waiting]
 

@@ -16,7 +16,7 @@ import numpy as np
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
 from hcomc.interface import Fleet
-from hcomc.road import Lane
+from hcomc.sim.lane_table import LaneTable
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex
 
@@ -39,28 +39,28 @@ def decide(
     leader: IntArray,
     follower: IntArray,
     params: LaneChangeParams,
-    target: IntArray | None = None,
+    lanes: LaneTable,
+    target: IntArray,
     force: BoolArray | None = None,
 ) -> tuple[IntArray, IntArray]:
-    """Accepted lane changes among candidates ``cand``: ``(vehicles, target lanes)``.
+    """Accepted lane changes among candidates ``cand`` to ``target``: ``(vehicles, target
+    lanes)``.
 
-    ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours.
-    ``target`` defaults to the one possible target of each lane; ``force`` marks changes
-    commanded by a merge plan, which are checked for safety only (like the ramp's).
+    ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours,
+    ``lanes`` the road's lane table; ``force`` marks changes commanded by a merge plan,
+    which are checked for safety only (like a ramp vehicle's).
     """
     cand = np.ascontiguousarray(cand, dtype=np.int64).reshape(-1)
     if cand.size == 0:
         return cand, cand
     lane = np.ascontiguousarray(lane, dtype=np.int64)
-    if target is None:
-        target = np.where(lane == Lane.MAIN_1, Lane.MAIN_2, Lane.MAIN_1)
     force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
     ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
     m = mobil_decide_into(
         Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
         index,
         Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force),
-        lane_change_params(params), MobilWork(ints, flags, np.empty((2, snap.x.size))),
+        lane_change_params(params), lanes.ints, MobilWork(ints, flags, np.empty((2, snap.x.size))),
     )  # fmt: skip
     return ints[0, :m].copy(), ints[1, :m].copy()
 

@@ -1,8 +1,10 @@
 """Lane-change decisions without a merge controller: MOBIL and ramp gap acceptance.
 
-Every candidate has exactly one possible target lane: lane 1 -> lane 2 (to the left),
-lane 2 -> lane 1 (to the right) and ramp -> lane 1 on the acceleration lane. For candidate c,
-new follower n and old follower o (a tilde means after the change):
+Every candidate names its target lane (on the paper's road: lane 1 -> lane 2 to the left,
+lane 2 -> lane 1 to the right, and ramp -> lane 1 on the acceleration lane); what a lane is
+and which lane lies to its left the road's lane table says (:mod:`hcomc.sim.lane_table`).
+A change out of a ramp lane, or one commanded by a merge plan, is mandatory. For candidate
+c, new follower n and old follower o (a tilde means after the change):
 
 * safety: ``ã_n >= -b_safe`` and ``ã_c >= -b_safe``, bumper gaps to the new leader and new
   follower ``>= min_gap`` (MovSim), and a clear path: nobody starts a change towards a
@@ -30,10 +32,8 @@ import numpy as np
 from hcomc._jit import borrow, kernel
 from hcomc.equations.car_following import follow_accel_given, free_term
 from hcomc.equations.incentive import mobil_incentive
-from hcomc.road import Lane
+from hcomc.sim.lane_table import KIND_MAIN, L_KIND, L_LEFT
 from hcomc.sim.neighbours import LaneIndex, lookup_one
-
-_RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
 
 class Traffic(NamedTuple):
@@ -71,14 +71,15 @@ class MobilWork(NamedTuple):
 @kernel
 def mobil_decide_into(
     traffic: Traffic, index: LaneIndex, candidates: Candidates, params: np.ndarray,
-    work: MobilWork,
+    lanes: np.ndarray, work: MobilWork,
 ) -> int:  # fmt: skip
     """Accepted changes among the n ``candidates`` (see the module docstring), in the
     caller's ``work`` arrays. Returns the number m of accepted changes, whose vehicles and
     targets are ``work.ints[0, :m]`` and ``work.ints[1, :m]``.
 
-    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``index``
-    holds the sorted entries of the snapshot.
+    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``lanes``
+    is the road's lane table (:attr:`hcomc.sim.lane_table.LaneTable.ints`); ``index`` holds
+    the sorted entries of the snapshot.
     """
     key, lane_of, vehicle = index.key, index.lane, index.vehicle
     matrix, iidm, length, x, v, a = traffic
@@ -114,7 +115,7 @@ def mobil_decide_into(
     for k in range(n):
         ok[k] = False
         c, lo, ln, fn, fo = cand[k], leader[k], new_lead[k], new_fol[k], follower[k]
-        mandatory[k] = lane[k] == _RAMP or force[k]
+        mandatory[k] = lanes[L_KIND, lane[k]] != KIND_MAIN or force[k]
         # 1. the gap criteria, which need no model acceleration
         s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
         s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
@@ -133,7 +134,7 @@ def mobil_decide_into(
         # 3. the incentive of a discretionary change
         acc0, acc2, acc4, acc5 = accel(c, lo), accel(fn, ln), accel(fo, c), accel(fo, lo)
         gain = mobil_incentive(acc1 - acc0, (acc3 - acc2) + (acc5 - acc4), politeness)
-        side = bias if target[k] == _MAIN_2 else -bias
+        side = bias if target[k] == lanes[L_LEFT, lane[k]] else -bias
         ok[k] = gain > threshold + side
     ids, targets = ints[0], ints[1]
     m = 0

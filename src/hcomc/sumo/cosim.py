@@ -210,7 +210,7 @@ class SumoSimulation(CosimPlans):
         chosen, _ = decide(
             self.fleet, Snapshot(x=self.x, v=self.v, a=self.a), index, np.array([i]),
             self.lane[[i]], index.leader_of(pos), index.follower_of(pos),
-            self.config.lane_change, target=np.array([target]), force=np.array([True]),
+            self.config.lane_change, self.lanes, np.array([target]), np.array([True]),
         )  # fmt: skip
         return bool(chosen.size)
 

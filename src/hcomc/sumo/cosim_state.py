@@ -22,6 +22,7 @@ from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import generate_demand
+from hcomc.sim.lane_table import paper_lanes
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.plan_execution import ActivePlan
@@ -51,6 +52,7 @@ class CosimState:
             raise ValueError(f"scenario = '{config.scenario}': the SUMO engine runs 'merge' only")
         self.sumo = import_libsumo()
         self.config = config
+        self.lanes = paper_lanes(config.road)  # the road's lane table, as our engine's
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
         self.dt = config.dt

@@ -9,9 +9,9 @@ import numpy as np
 from hcomc.config import ConfigError, ScenarioConfig
 from hcomc.equations.transition import transition_gamma
 from hcomc.interface import Fleet
-from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import Demand
 from hcomc.sim.lane_change_decisions import lane_change_params
+from hcomc.sim.lane_table import KIND_ON, L_CENTRE, L_KIND, paper_lanes
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.perception_state import Perception
@@ -97,21 +97,19 @@ def build_arrays(
     """
     n = demand.n
     road, hdv = config.road, config.hdv
+    lanes = paper_lanes(road)
+    on_ramp = lanes.ints[L_KIND] == KIND_ON
     queues = [
-        np.flatnonzero(demand.lane == lane)
-        if not (counterfactual and lane == Lane.RAMP)
+        np.flatnonzero(demand.lane == code)
+        if not (counterfactual and on_ramp[code])
         else np.empty(0, dtype=np.int64)
-        for lane in Lane
+        for code in range(lanes.n_lanes)
     ]
     perceive = per.errors or max(per.taus) > 0
     f8, i8, b1 = np.float64, np.int64, np.bool_
     consts = np.zeros(layout.N_CONSTS)
-    consts[[layout.DT, layout.WARMUP, layout.WIDTH, layout.ACCEL_START, layout.ACCEL_END]] = (
-        config.dt, config.warmup, road.lane_width, road.accel_lane_start, road.accel_lane_end
-    )  # fmt: skip
-    consts[[layout.CZ_START, layout.ROAD_LENGTH, layout.EMERGENCY]] = (
-        road.control_zone_start, road.length, config.lane_change.emergency_decel
-    )  # fmt: skip
+    consts[[layout.DT, layout.WARMUP, layout.WIDTH]] = config.dt, config.warmup, road.lane_width
+    consts[[layout.ROAD_LENGTH, layout.EMERGENCY]] = road.length, config.lane_change.emergency_decel
     consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
     consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
@@ -127,13 +125,13 @@ def build_arrays(
     innov_steps = INNOVATION_STEPS if per.errors else 0
     counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
     n_events = max(4096, 16 * n)
-    plan_rows = max(1, int(np.count_nonzero(demand.lane == Lane.RAMP)))  # one plan per VR
+    plan_rows = max(1, int(np.count_nonzero(on_ramp[demand.lane])))  # one plan per VR
     work = max(4 * n + 1, 3 * plan_rows)  # entries, collision pairs, virtual rows
     return CoreArrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
         scripted=fleet.scripted.astype(b1), is_hdv=per.is_hdv.astype(b1),
-        x=np.zeros(n), y=lane_centre(demand.lane, road.lane_width), v=np.zeros(n),
+        x=np.zeros(n), y=lanes.floats[L_CENTRE, demand.lane], v=np.zeros(n),
         a=np.zeros(n), heading=np.zeros(n), lane=demand.lane.astype(i8),
         origin=demand.lane.astype(i8), target=demand.lane.astype(i8),
         lc_t0=np.zeros(n), lc_x0=np.zeros(n), lc_xf=np.ones(n),
@@ -145,12 +143,13 @@ def build_arrays(
         taus=per.taus, d_t=demand.t.astype(f8), d_x=demand.x.astype(f8),
         d_v=demand.v.astype(f8), queues=np.concatenate(queues).astype(i8),
         queue_start=np.cumsum([0, *(q.size for q in queues)]).astype(i8),
-        queue_pos=np.zeros(3, dtype=i8), colliding=np.zeros(8 * n + 8, dtype=i8),
+        queue_pos=np.zeros(lanes.n_lanes, dtype=i8), colliding=np.zeros(8 * n + 8, dtype=i8),
         ev_t=np.zeros(n_events), ev_kind=np.zeros(n_events, dtype=i8),
         ev_vehicle=np.zeros(n_events, dtype=i8), ev_other=np.zeros(n_events, dtype=i8),
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
         consts=consts, flags=flags, plan_int=np.zeros((plan_rows, N_INT), dtype=i8),
-        plan_f=np.zeros((plan_rows, N_FLOAT)), lc_params=lane_change_params(config.lane_change),
+        plan_f=np.zeros((plan_rows, N_FLOAT)), road_int=lanes.ints, road_f=lanes.floats,
+        lc_params=lane_change_params(config.lane_change),
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
         innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
         log_slot=log.slot, log_span=log.span,

@@ -10,16 +10,12 @@ import numpy as np
 
 from hcomc._jit import borrow, kernel
 from hcomc.sim.arrays import nonzero_into, search_left
+from hcomc.sim.lane_table import KIND_MAIN, L_END, L_KIND, L_LEFT, L_OPENS, L_RIGHT
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex, neighbour
 from hcomc.sim.step.state import (
-    ACCEL_END,
-    ACCEL_START,
     EV_FALLBACK,
     EV_LC_START,
-    MAIN_1,
-    MAIN_2,
-    RAMP,
     S_CAND,
     S_CAND_FOLLOWER,
     S_CAND_LANE,
@@ -58,7 +54,7 @@ def _mobil(
     work = si[S_MOBIL : S_MOBIL + 4]
     m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a), index,
                           Candidates(cand, lanes, leader, follower, target, force), c.lc_params,
-                          MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
+                          c.road_int, MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
                                     c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2]))  # fmt: skip
     return work[0, :m], work[1, :m]
 
@@ -91,24 +87,41 @@ def commanded_changes(
     return out
 
 
+@kernel(inline="always")
+def free_target(road_int: np.ndarray, lane: int) -> int:
+    """The lane a vehicle in ``lane`` would change to of its own accord (-1: none): from a
+    ramp lane the lane to its left; from the mainline the mainline lane to its left, else
+    the one to its right (on the paper's road: lane 1 -> lane 2, lane 2 -> lane 1)."""
+    left = road_int[L_LEFT, lane]
+    if road_int[L_KIND, lane] != KIND_MAIN:
+        return left
+    if left >= 0 and road_int[L_KIND, left] == KIND_MAIN:
+        return left
+    right = road_int[L_RIGHT, lane]
+    return right if right >= 0 and road_int[L_KIND, right] == KIND_MAIN else -1
+
+
 @kernel
 def discretionary_changes(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
     index: LaneIndex,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
-    holding its lane for a plan; ramp vehicles on the acceleration lane only)."""
+    holding its lane for a plan, with a lane to change to; a ramp vehicle only where its
+    lane lets it leave: on the acceleration lane)."""
     sel = c.scratch_b[S_SELECTED, : ids.size]
     for k in range(ids.size):
         i = ids[k]
-        ramp = c.lane[i] == RAMP
-        on_accel = ramp and c.consts[ACCEL_START] <= c.x[i] <= c.consts[ACCEL_END]
-        sel[k] = not changing[k] and not c.scripted[i] and (not ramp or on_accel) and not holding[i]
+        lane = c.lane[i]
+        ramp = c.road_int[L_KIND, lane] != KIND_MAIN
+        may_leave = not ramp or c.road_f[L_OPENS, lane] <= c.x[i] <= c.road_f[L_END, lane]
+        free = not changing[k] and not c.scripted[i] and not holding[i]
+        sel[k] = free and may_leave and free_target(c.road_int, lane) >= 0
     pos = c.scratch_int[S_POS]
     pos = pos[: nonzero_into(sel, pos)]
     target = c.scratch_int[S_CAND_TARGET, : pos.size]
     for k in range(pos.size):
-        target[k] = MAIN_2 if c.lane[ids[pos[k]]] == MAIN_1 else MAIN_1
+        target[k] = free_target(c.road_int, c.lane[ids[pos[k]]])
     force = c.scratch_b[S_FORCE, : pos.size]
     force[:] = False
     return _mobil(c, ids, pos, lead, index, target, force)

@@ -25,6 +25,7 @@ import numpy as np
 
 from hcomc._jit import kernel
 from hcomc.sim.arrays import nonzero_into
+from hcomc.sim.lane_table import L_ZONE
 from hcomc.sim.log.slots import claim_slots
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import advance_errors_of
@@ -54,7 +55,6 @@ from hcomc.sim.step.plans import (
 from hcomc.sim.step.state import (
     CAV_GAME,
     CONTROLLER,
-    CZ_START,
     DECAY,
     DECIDE_EVERY,
     DONE,
@@ -70,7 +70,6 @@ from hcomc.sim.step.state import (
     N_WARMUP,
     NEED_PYTHON,
     PLATOON,
-    RAMP,
     ROWS,
     S_FOLLOWING,
     S_HOLDING,
@@ -196,16 +195,16 @@ def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
 @kernel
 def needs_python(c: CoreArrays, t: float) -> bool:
     """Whether the step at t needs the engine's Python side: a controller decision (a ramp
-    vehicle entering the control zone: key vehicles and a first plan; a live plan due for a
-    replan) or game-confirmed lane changes."""
+    vehicle entering its lane's control zone: key vehicles and a first plan; a live plan
+    due for a replan) or game-confirmed lane changes."""
     if c.flags[CAV_GAME] > 0:
         return True
+    zone = c.road_f[L_ZONE]
     for i in range(c.x.size):
         if (
             c.active[i]
-            and c.lane[i] == RAMP
             and c.origin[i] == c.target[i]
-            and c.x[i] >= c.consts[CZ_START]
+            and c.x[i] >= zone[c.lane[i]]
             and (not c.identified[i] or (c.flags[CONTROLLER] > 0 and not c.planned[i]))
         ):
             return True  # fmt: skip

@@ -16,10 +16,10 @@ from hcomc.equations.lane_change import lateral_state
 from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
+from hcomc.sim.lane_table import KIND_MAIN, L_CENTRE, L_END, L_KIND
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.state import (
-    ACCEL_END,
     DT,
     EMERGENCY,
     ERRORS,
@@ -31,7 +31,6 @@ from hcomc.sim.step.state import (
     GAMMA,
     GAP_ERROR,
     PERCEIVE,
-    RAMP,
     ROAD_LENGTH,
     S_ACC,
     S_BUFFER,
@@ -62,7 +61,6 @@ from hcomc.sim.step.state import (
     WARMUP,
     WIDTH,
     CoreArrays,
-    _centre,
     add_event,
 )  # fmt: skip
 
@@ -112,7 +110,7 @@ def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
 def release(c: CoreArrays, t: float) -> None:
     """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue).
     Releasing twice at the same t is a no-op."""
-    for lane in range(3):
+    for lane in range(c.queue_pos.size):
         start, end = c.queue_start[lane], c.queue_start[lane + 1]
         pos = c.queue_pos[lane]
         while start + pos < end and c.d_t[c.queues[start + pos]] <= t + 1e-9:
@@ -193,8 +191,8 @@ def lane_index(
         if not changing[k]:
             continue
         reach = 0.5 * (width + c.width[i])
-        in_ori[k] = abs(c.y[i] - _centre(c.origin[i], width)) < reach
-        in_tgt[k] = abs(c.y[i] - _centre(c.target[i], width)) < reach
+        in_ori[k] = abs(c.y[i] - c.road_f[L_CENTRE, c.origin[i]]) < reach
+        in_tgt[k] = abs(c.y[i] - c.road_f[L_CENTRE, c.target[i]]) < reach
         crossed = c.lane[i] == c.target[i]
         if crossed and not in_ori[k]:
             continue
@@ -283,11 +281,11 @@ def _limits(
     """The lane end, virtual leaders, commanded accelerations, the emergency limit and
     scripted profiles."""
     n = ids.size
-    accel_end = c.consts[ACCEL_END]
-    for k in range(n):  # the acceleration-lane end, a static obstacle seen exactly
+    for k in range(n):  # the end of the lane (an acceleration lane's), a static obstacle
         i = ids[k]
-        if c.lane[i] == RAMP and not changing[k] and not following[i]:
-            a_stop = _follow_exact(c.matrix, c.iidm, i, accel_end - c.x[i], c.v[i], 0.0, 0.0)
+        end = c.road_f[L_END, c.lane[i]]
+        if end < math.inf and not changing[k] and not following[i]:
+            a_stop = _follow_exact(c.matrix, c.iidm, i, end - c.x[i], c.v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
     if vv_fol.size:
         before = acc.copy()
@@ -323,37 +321,38 @@ def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
 
 @kernel
 def lateral(c: CoreArrays, t: float) -> None:
-    """Move changing vehicles along their quintic path; switch lane at the lane line."""
-    width = c.consts[WIDTH]
+    """Move changing vehicles along their quintic path; switch lane at the lane line; a
+    change from a ramp lane to the mainline is a merge."""
+    centre, kind = c.road_f[L_CENTRE], c.road_int[L_KIND]
     for i in range(c.x.size):
         if not c.active[i] or c.origin[i] == c.target[i]:
             continue
         x0, xf = c.lc_x0[i], c.lc_xf[i]
-        y, dy_dx, _ = lateral_state(c.x[i], x0, xf, _centre(c.origin[i], width),
-                                    _centre(c.target[i], width))  # fmt: skip
+        y, dy_dx, _ = lateral_state(c.x[i], x0, xf, centre[c.origin[i]], centre[c.target[i]])
         c.y[i] = y
         c.heading[i] = math.atan(dy_dx)
         xi = (c.x[i] - x0) / (xf - x0)
         c.lane[i] = c.target[i] if xi >= 0.5 else c.origin[i]
         if xi >= 1.0:
             add_event(c, t, EV_LC_END, i, -1, c.x[i], c.target[i])
-            if c.origin[i] == RAMP:
+            if kind[c.origin[i]] != KIND_MAIN and kind[c.target[i]] == KIND_MAIN:
                 add_event(c, t, EV_MERGE, i, -1, c.x[i], math.nan)
             c.lc_dur[i] = c.lc_duration[i]
             c.origin[i] = c.target[i]
-            c.y[i] = _centre(c.target[i], width)
+            c.y[i] = centre[c.target[i]]
             c.heading[i] = 0.0
 
 
 @kernel
 def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
-    """Exits past the road end; ramp vehicles waiting at the acceleration-lane end."""
+    """Exits past the road end; vehicles waiting at the end of their lane (a ramp vehicle
+    at the acceleration lane's)."""
     for i in ids:
         if c.x[i] - c.length[i] > c.consts[ROAD_LENGTH]:
             c.active[i] = False
             add_event(c, t, EV_EXIT, i, -1, c.x[i], math.nan)
     for i in ids:
-        if (c.lane[i] == RAMP and c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED
-                and c.x[i] > c.consts[ACCEL_END] - _WAIT_ZONE and not c.waited[i]):  # fmt: skip
+        if (c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED and not c.waited[i]
+                and c.x[i] > c.road_f[L_END, c.lane[i]] - _WAIT_ZONE):  # fmt: skip
             c.waited[i] = True
             add_event(c, t, EV_WAIT, i, -1, c.x[i], math.nan)

@@ -26,18 +26,10 @@ import numpy as np
 from hcomc._jit import kernel
 from hcomc.equations.safety import stopping_distance
 from hcomc.equations.virtual_vehicle import cubic_point
+from hcomc.sim.lane_table import KIND_MAIN, L_END, L_KIND, L_LEFT
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import commanded_changes
-from hcomc.sim.step.state import (
-    ACCEL_END,
-    CONTROLLER,
-    MAIN_1,
-    MAIN_2,
-    N_PLANS,
-    RAMP,
-    REPLAN_PERIOD,
-    CoreArrays,
-)
+from hcomc.sim.step.state import CONTROLLER, N_PLANS, REPLAN_PERIOD, CoreArrays
 
 if TYPE_CHECKING:
     from hcomc.interface.plan import MergePlan
@@ -235,8 +227,8 @@ def replan_due(
 
 @kernel
 def due_plans(c: CoreArrays, t: float) -> np.ndarray:
-    """VRs (in table order) whose live plan is due for a replan at t: VR still on the ramp,
-    keeping its lane, and :func:`replan_due`."""
+    """VRs (in table order) whose live plan is due for a replan at t: VR still in its ramp
+    lane, keeping it, and :func:`replan_due`."""
     pi, pf = c.plan_int, c.plan_f
     n_plans = c.counters[N_PLANS]
     out = np.empty(n_plans, dtype=np.int64)
@@ -246,7 +238,8 @@ def due_plans(c: CoreArrays, t: float) -> np.ndarray:
     period = c.consts[REPLAN_PERIOD]
     for k in range(n_plans):
         vr = pi[k, P_VR]
-        on_ramp = c.lane[vr] == RAMP and c.origin[vr] == c.target[vr] and c.active[vr]
+        ramp = c.road_int[L_KIND, c.lane[vr]] != KIND_MAIN
+        on_ramp = ramp and c.origin[vr] == c.target[vr] and c.active[vr]
         if on_ramp and replan_due(
             pi[k, P_VR_CMD] != 0, pi[k, P_VR_STARTED] != 0, pi[k, P_VMC_STARTED] != 0,
             pi[k, P_RELEASED] != 0, pf[k, F_T0], pf[k, F_MERGE_X], t, period, c.x[vr], c.v[vr],
@@ -275,15 +268,21 @@ def execute_plans(
     c: CoreArrays, ids: np.ndarray, t: float, lead: np.ndarray, index: LaneIndex
 ) -> None:
     """Start the lane changes the live plans command, each when the MOBIL safety criterion
-    holds: a lateral VMC's change to lane 2 at once (failing, the plan falls back to VR's gap
-    acceptance: FALLBACK), VR's change from its merge position on (until it could no longer
-    stop before the lane end at the safe deceleration: then released, FALLBACK)."""
+    holds: a lateral VMC's change at once to the lane beyond VR's target lane (lane 2;
+    failing, the plan falls back to VR's gap acceptance: FALLBACK), VR's change from its
+    merge position on to the lane left of its ramp lane (lane 1; until it could no longer
+    stop before its lane's end at the safe deceleration: then released, FALLBACK)."""
     pi, pf = c.plan_int, c.plan_f
-    accel_end = c.consts[ACCEL_END]
+    left, end = c.road_int[L_LEFT], c.road_f[L_END]
     for k in range(c.counters[N_PLANS]):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
         if pi[k, P_MODE] == LATERAL and pi[k, P_VMC_CMD] and not pi[k, P_VMC_STARTED]:
-            started = _command(c, ids, t, lead, index, vmc, MAIN_2, math.nan, -math.inf, vr, vmc)
+            merge_lane = left[c.lane[vr]]  # VR keeps its ramp lane until VMC has started
+            escape = left[merge_lane] if merge_lane >= 0 else -1
+            started = 0
+            if escape >= 0:
+                started = _command(c, ids, t, lead, index, vmc, escape, math.nan, -math.inf, vr,
+                                   vmc)  # fmt: skip
             if started > 0:
                 pi[k, P_VMC_STARTED] = 1
             else:
@@ -297,11 +296,11 @@ def execute_plans(
             or c.x[vr] < pf[k, F_MERGE_X]
         ):
             continue
-        release_x = accel_end - stopping_distance(
+        release_x = end[c.lane[vr]] - stopping_distance(
             c.v[vr], c.lc_params[_MOBIL_SAFE_DECEL], c.matrix[2, vr]
         )  # s0, row 2 of the matrix
-        started = _command(c, ids, t, lead, index, vr, MAIN_1, pf[k, F_VR_DURATION], release_x,
-                           vr, vmc)  # fmt: skip
+        started = _command(c, ids, t, lead, index, vr, left[c.lane[vr]], pf[k, F_VR_DURATION],
+                           release_x, vr, vmc)  # fmt: skip
         pi[k, P_VR_STARTED] = started > 0
         pi[k, P_RELEASED] = started < 0
 
@@ -323,12 +322,12 @@ def compact_plans(plan_int: np.ndarray, plan_f: np.ndarray, n: int) -> int:
 
 @kernel
 def finish_plans(c: CoreArrays) -> None:
-    """Drop the plans whose merge is complete (VR on lane 1, keeping it) or whose VR or VMC
-    left the road; the others keep their order."""
+    """Drop the plans whose merge is complete (VR on the mainline, keeping its lane) or
+    whose VR or VMC left the road; the others keep their order."""
     pi, n = c.plan_int, c.counters[N_PLANS]
     for k in range(n):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
-        merged = c.lane[vr] == MAIN_1 and c.origin[vr] == c.target[vr]
+        merged = c.road_int[L_KIND, c.lane[vr]] == KIND_MAIN and c.origin[vr] == c.target[vr]
         gone = not c.active[vr] or (vmc >= 0 and not c.active[vmc])
         if merged or gone:
             pi[k, P_VR] = -1

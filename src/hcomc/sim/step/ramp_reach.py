@@ -11,6 +11,7 @@ step, so they are compiled.
 from __future__ import annotations
 
 from hcomc._jit import kernel
+from hcomc.sim.lane_table import KIND_ON, L_KIND, L_OPENS
 from hcomc.sim.step import state as layout
 
 __all__ = ["ramp_may_reach", "ramp_untouched"]
@@ -18,15 +19,18 @@ __all__ = ["ramp_may_reach", "ramp_untouched"]
 
 @kernel
 def ramp_untouched(c: layout.CoreArrays) -> bool:
-    """Whether every ramp vehicle released so far in run ``c`` is still on the ramp before
-    the acceleration lane and keeping its lane: the state part of
+    """Whether every ramp vehicle released so far in run ``c`` is still in its ramp lane
+    before the acceleration lane and keeping its lane: the state part of
     :func:`hcomc.sim.twin.can_twin`."""
-    start, first = c.consts[layout.ACCEL_START], c.queue_start[layout.RAMP]
-    for q in range(first, first + c.queue_pos[layout.RAMP]):
-        i = c.queues[q]
-        on_ramp = c.active[i] and c.lane[i] == layout.RAMP and c.origin[i] == c.target[i]
-        if not (on_ramp and c.x[i] < start):
-            return False
+    for lane in range(c.queue_pos.size):
+        if c.road_int[L_KIND, lane] != KIND_ON:
+            continue
+        start, first = c.road_f[L_OPENS, lane], c.queue_start[lane]
+        for q in range(first, first + c.queue_pos[lane]):
+            i = c.queues[q]
+            on_ramp = c.active[i] and c.lane[i] == lane and c.origin[i] == c.target[i]
+            if not (on_ramp and c.x[i] < start):
+                return False
     return True
 
 
@@ -40,20 +44,23 @@ def ramp_may_reach(c: layout.CoreArrays, horizon: float) -> bool:
     and no vehicle reverses, so False means none will unless driven harder from outside; a
     caller that relies on it checks afterwards with :func:`ramp_untouched`.
     """
-    start = c.consts[layout.ACCEL_START]
     t = -c.consts[layout.WARMUP] + c.counters[layout.STEP] * c.consts[layout.DT]
-    first, end = c.queue_start[layout.RAMP], c.queue_start[layout.RAMP + 1]
-    released = first + c.queue_pos[layout.RAMP]
-    for q in range(first, end):
-        i = c.queues[q]
-        if q < released:
-            if not c.active[i]:
-                continue
-            x, v = c.x[i], c.v[i]
-        elif c.d_t[i] <= t + horizon + 1e-9:
-            x, v = c.d_x[i], c.d_v[i]
-        else:
+    for lane in range(c.queue_pos.size):
+        if c.road_int[L_KIND, lane] != KIND_ON:
             continue
-        if x + v * horizon + 0.5 * c.matrix[3, i] * horizon * horizon >= start:
-            return True
+        start = c.road_f[L_OPENS, lane]
+        first, end = c.queue_start[lane], c.queue_start[lane + 1]
+        released = first + c.queue_pos[lane]
+        for q in range(first, end):
+            i = c.queues[q]
+            if q < released:
+                if not c.active[i]:
+                    continue
+                x, v = c.x[i], c.v[i]
+            elif c.d_t[i] <= t + horizon + 1e-9:
+                x, v = c.d_x[i], c.d_v[i]
+            else:
+                continue
+            if x + v * horizon + 0.5 * c.matrix[3, i] * horizon * horizon >= start:
+                return True
     return False

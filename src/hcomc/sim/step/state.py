@@ -20,17 +20,16 @@ from numba.experimental import structref
 
 from hcomc._jit import borrow_all, kernel
 
-# lanes and event kinds (IntEnums of hcomc.road and hcomc.sim.log, as plain ints)
-RAMP, MAIN_1, MAIN_2 = 0, 1, 2
+# event kinds (the IntEnum of hcomc.sim.log, as plain ints)
 EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
 EV_FALLBACK = 8
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
 # consts
-(DT, WARMUP, WIDTH, ACCEL_START, ACCEL_END, CZ_START, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY,
- KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD) = range(14)  # fmt: skip
-N_CONSTS = 14
+(DT, WARMUP, WIDTH, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR,
+ REPLAN_PERIOD) = range(11)  # fmt: skip
+N_CONSTS = 11
 # flags
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
  CAV_GAME) = range(8)  # fmt: skip
@@ -57,9 +56,6 @@ N_SCRATCH_F = 17
 S_CHANGING, S_IN_ORI, S_IN_TGT, S_FOLLOWING, S_HOLDING = range(5)
 S_SELECTED, S_FORCE, S_MOBIL_B = range(5, 8)  # S_MOBIL_B .. S_MOBIL_B + 1: MOBIL's flags
 N_SCRATCH_B = 9
-
-_WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
-_WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
 class CoreArrays(NamedTuple):
@@ -99,8 +95,8 @@ class CoreArrays(NamedTuple):
     d_x: np.ndarray
     d_v: np.ndarray
     queues: np.ndarray  # vehicles by lane, concatenated
-    queue_start: np.ndarray  # (4,) start of each lane's queue in ``queues``
-    queue_pos: np.ndarray  # (3,) next vehicle of each queue
+    queue_start: np.ndarray  # (L + 1,) start of each lane's queue in ``queues``
+    queue_pos: np.ndarray  # (L,) next vehicle of each queue
     colliding: np.ndarray  # pair codes i * N + j of the pairs in contact last step
     ev_t: np.ndarray  # event buffer
     ev_kind: np.ndarray
@@ -113,6 +109,8 @@ class CoreArrays(NamedTuple):
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
+    road_int: np.ndarray  # (3, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
+    road_f: np.ndarray  # (4, L) their centres, openings, ends, control zones [m] (L_CENTRE ...)
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.lane_change_decisions.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
@@ -208,11 +206,6 @@ def command(c: CoreArrays, i: int, accel: float) -> None:
     (it then makes no lane change of its own); NaN hands it back to its model."""
     c.a_cmd[i] = accel
     c.held[i] = not np.isnan(accel)
-
-
-@kernel(inline="always")
-def _centre(lane: int, width: float) -> float:
-    return (lane - 1.0) * width
 
 
 @kernel
