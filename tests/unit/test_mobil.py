@@ -22,8 +22,10 @@ from hcomc.road import Kind, Lane
 from hcomc.sim.lane_change_decisions import Snapshot, decide
 from hcomc.sim.mobil import _resolve
 from hcomc.sim.neighbours import LaneIndex, build_lane_index
+from hcomc.sim.roads import paper_lanes
 
 CFG = load_config("C1")
+LANES = paper_lanes(CFG.road)
 LC: LaneChangeParams = CFG.lane_change
 LENGTH = CFG.road.vehicle_length
 
@@ -55,7 +57,15 @@ class Scene:
         """Accepted changes {vehicle: target lane} among ``cand``."""
         c = np.asarray(cand, dtype=np.int64)
         chosen, target = decide(
-            self.fleet, self.snap, self.index, c, self.lane[c], self.lead[c], self.fol[c], params
+            self.fleet,
+            self.snap,
+            self.index,
+            c,
+            self.lane[c],
+            self.lead[c],
+            self.fol[c],
+            params,
+            LANES,
         )
         return dict(zip(chosen.tolist(), target.tolist(), strict=True))
 

@@ -91,6 +91,12 @@ class LaneChangeParams(FrozenModel):
     emergency_decel: float = Field(
         9.0, gt=0, le=15, description="physical braking limit applied to every vehicle [m/s^2]"
     )
+    exit_lookahead: float = Field(
+        1000.0, gt=0, le=5000,
+        description="a vehicle bound for an off-ramp, or in a lane that ends, starts moving "
+        "right when its exit (or the lane's end) is within this distance per lane change "
+        "still needed [m]; no lane of the paper's road ends nor leads off it",
+    )  # fmt: skip
     cav_game: bool = Field(
         False,
         description="CAV discretionary changes accepted by MOBIL must also be the SV's "

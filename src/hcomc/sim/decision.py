@@ -35,8 +35,9 @@ class DecidingRun(ListenedRun, DecisionRecorder, Protocol):
     rng: np.random.Generator
     planned: BoolArray
 
-    def view(self, t: float, /) -> TrafficView:
-        """The true state at ``t`` as a controller reads it."""
+    def view(self, t: float, vr: int, /) -> TrafficView:
+        """The true state at ``t`` as a controller deciding for ramp vehicle ``vr`` reads
+        it."""
         ...
 
 
@@ -51,7 +52,7 @@ def decide(run: DecidingRun, vr: int, t: float, where: str) -> MergePlan:
     controller that fails), record the decision and send its plan; returns the plan."""
     assert run.controller is not None
     run.planned[vr] = True
-    view = run.view(t)
+    view = run.view(t, vr)
     group = find_key_vehicles(view, vr)
     for listener in run.listeners:
         view = listener.view(run, view)

@@ -69,9 +69,12 @@ class Demand:
     t : release time [s]; vehicles of the initial fill have ``t = -warmup``.
     x : release position of the front bumper [m].
     v : release speed [m/s].
-    lane : release lane (:class:`~hcomc.road.Lane`).
+    lane : release lane (its code in the road's lane table, :mod:`hcomc.sim.lane_table`;
+        on the paper's road a :class:`~hcomc.road.Lane`).
     kind : :class:`~hcomc.road.Kind` per vehicle.
     scripted : True for a platoon leader that follows the configured speed profile.
+    route : the code of the off-ramp lane the vehicle leaves the road by; -1: the
+        mainline's end (every vehicle of the paper's road).
     """
 
     t: FloatArray
@@ -80,6 +83,7 @@ class Demand:
     lane: IntArray
     kind: IntArray
     scripted: BoolArray
+    route: IntArray
 
     @property
     def n(self) -> int:
@@ -259,6 +263,7 @@ def _merge_demand(config: ScenarioConfig, rng: np.random.Generator) -> Demand:
         lane=lanes[order],
         kind=kind[order],
         scripted=np.zeros(t.size, dtype=bool),
+        route=np.full(t.size, -1, dtype=np.int64),
     )
 
 
@@ -287,6 +292,7 @@ def _platoon_demand(config: ScenarioConfig) -> Demand:
         lane=np.full(n, Lane.MAIN_1, dtype=np.int64),
         kind=kind,
         scripted=scripted,
+        route=np.full(n, -1, dtype=np.int64),
     )
 
 

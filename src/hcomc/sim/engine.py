@@ -42,9 +42,10 @@ from hcomc.control.key_group import find_key_vehicles
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
 from hcomc.sim.decision import decide, undecided
 from hcomc.sim.engine_plans import EnginePlans
-from hcomc.sim.lane_table import L_ZONE
+from hcomc.sim.lane_table import KIND_ON, L_ZONE
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.plan_execution import game_confirms
+from hcomc.sim.roads import ramp_of
 from hcomc.sim.step import loop as step_loop
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import adopt_log_columns, widen_log
@@ -63,6 +64,10 @@ class Simulation(EnginePlans):
     controller : merge controller; defaults to the one ``config.control`` names.
     counterfactual : the undisturbed run: the same demand and random streams, but ramp
         vehicles are never released (nothing merges).
+    listeners : step listeners (:class:`hcomc.interface.listener.StepListener`).
+    scene : draws the road, demand and fleet of the run
+        (:data:`hcomc.sim.scene.SceneMaker`); by default the paper's road with the
+        scenario's demand and fleet (:func:`hcomc.sim.scene.paper_scene`).
     """
 
     # ------------------------------------------------------------------ run
@@ -307,12 +312,17 @@ class Simulation(EnginePlans):
         return step_loop.follow_many(self.core, ids, np.ascontiguousarray(leader, dtype=np.int64))
 
     # ---------------------------------------------------------------- plans
-    def view(self, t: float) -> TrafficView:
-        """Read-only copy of the state for a controller."""
+    def view(self, t: float, vr: int = -1) -> TrafficView:
+        """Read-only copy of the state for a controller deciding for ramp vehicle ``vr``,
+        with the on-ramp of its lane (:func:`hcomc.sim.roads.ramp_of`; the road's first
+        on-ramp when ``vr`` is -1 or has left its ramp lane)."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.origin != self.target}  # fmt: skip
         plans = tuple(p.plan for p in self.plans)
-        return TrafficView.snapshot(t, state, self.fleet, self.config, plans)
+        on_ramp = self.lanes.codes_of_kind(KIND_ON)
+        code = int(self.lane[vr]) if vr >= 0 and int(self.lane[vr]) in on_ramp else on_ramp[0]
+        ramp = ramp_of(self.lanes, int(code))
+        return TrafficView.snapshot(t, state, self.fleet, self.config, plans, ramp)
 
     def _in_control_zone(self, ids: IntArray, changing: np.ndarray) -> IntArray:
         """The vehicles of ``ids`` in a ramp lane's control zone, keeping their lane
@@ -330,7 +340,7 @@ class Simulation(EnginePlans):
             self.arrays.identified[vr] = True
             if vr in self.key_groups:
                 continue
-            group = find_key_vehicles(self.view(t), vr)
+            group = find_key_vehicles(self.view(t, vr), vr)
             self.key_groups[vr] = group
             self.log.meta.setdefault("key_groups", []).append({"t": float(t), **group.as_dict()})
             for listener in self.listeners:

@@ -16,12 +16,12 @@ from typing import Any, Self
 import numpy as np
 
 from hcomc.config import ScenarioConfig
-from hcomc.interface import Fleet, MergeController, MergeGroup, MergePlan, TrafficView
+from hcomc.interface import MergeController, MergeGroup, MergePlan, TrafficView
 from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Kind
-from hcomc.sim.demand import Demand, generate_demand
 from hcomc.sim.perception_state import Perception
+from hcomc.sim.scene import Scene, SceneMaker, paper_scene
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import allocate_log, build_arrays
 from hcomc.sim.step.state import Core
@@ -41,16 +41,16 @@ class EngineSetup:
         *,
         counterfactual: bool = False,
         listeners: Sequence[StepListener] = (),
+        scene: SceneMaker = paper_scene,
     ) -> None:
         seed = config.seed if seed is None else seed
         rng = make_rng(seed)
-        demand = generate_demand(config, rng)
+        drawn = scene(config, rng)
         if controller is None:
             from hcomc.control.registry import make_controller
 
             controller = make_controller(config)
-        fleet = Fleet.build(config, demand.kind, demand.scripted)
-        self._build(config, seed, rng, demand, fleet, controller, counterfactual)
+        self._build(config, seed, rng, drawn, controller, counterfactual)
         self.listeners: tuple[StepListener, ...] = tuple(listeners)
         for listener in self.listeners:
             listener.attach(self)  # type: ignore[arg-type]  # Simulation is a ListenedRun
@@ -63,15 +63,16 @@ class EngineSetup:
         rng = make_rng(sim.seed)
         rng.bit_generator.state = sim._after_demand
         new = cls.__new__(cls)
-        new._build(sim.config, sim.seed, rng, sim.demand, sim.fleet, sim.controller,
-                   counterfactual)  # fmt: skip
+        new._build(sim.config, sim.seed, rng, sim.scene, sim.controller, counterfactual)
         return new
 
     def _build(
-        self, config: ScenarioConfig, seed: int, rng: np.random.Generator, demand: Demand,
-        fleet: Fleet, controller: MergeController | None, counterfactual: bool,
+        self, config: ScenarioConfig, seed: int, rng: np.random.Generator, scene: Scene,
+        controller: MergeController | None, counterfactual: bool,
     ) -> None:  # fmt: skip
         self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
+        self.scene, self.lanes = scene, scene.lanes
+        demand, fleet = scene.demand, scene.fleet
         self._after_demand = rng.bit_generator.state  # for _sibling
         self.counterfactual = counterfactual
         self.demand, self.fleet, self.controller = demand, fleet, controller
@@ -91,7 +92,7 @@ class EngineSetup:
         # may change); ``fleet`` stays what the controllers know
         self.driving = dataclasses.replace(fleet, matrix=fleet.matrix.copy())
         self.arrays = build_arrays(
-            config, demand, self.driving, self.perception, self.log,
+            config, self.lanes, demand, self.driving, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip

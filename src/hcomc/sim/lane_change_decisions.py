@@ -19,6 +19,7 @@ from hcomc.interface import Fleet
 from hcomc.sim.lane_table import LaneTable
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex
+from hcomc.sim.step.lane_change import free_target
 
 
 @dataclass(frozen=True, slots=True)
@@ -40,27 +41,31 @@ def decide(
     follower: IntArray,
     params: LaneChangeParams,
     lanes: LaneTable,
-    target: IntArray,
+    target: IntArray | None = None,
     force: BoolArray | None = None,
 ) -> tuple[IntArray, IntArray]:
-    """Accepted lane changes among candidates ``cand`` to ``target``: ``(vehicles, target
-    lanes)``.
+    """Accepted lane changes among candidates ``cand``: ``(vehicles, target lanes)``.
 
     ``lane``, ``leader`` and ``follower`` are the candidates' current lane and neighbours,
-    ``lanes`` the road's lane table; ``force`` marks changes commanded by a merge plan,
+    ``lanes`` the road's lane table. ``target`` defaults to the lane each candidate's would
+    change to of its own accord (:func:`hcomc.sim.step.lane_change.free_target`; on the
+    paper's road the one other lane); ``force`` marks changes commanded by a merge plan,
     which are checked for safety only (like a ramp vehicle's).
     """
     cand = np.ascontiguousarray(cand, dtype=np.int64).reshape(-1)
     if cand.size == 0:
         return cand, cand
     lane = np.ascontiguousarray(lane, dtype=np.int64)
+    if target is None:
+        target = np.array([free_target(lanes.ints, int(code)) for code in lane], dtype=np.int64)
     force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
     ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
     m = mobil_decide_into(
         Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
         index,
         Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force),
-        lane_change_params(params), lanes.ints, MobilWork(ints, flags, np.empty((2, snap.x.size))),
+        lane_change_params(params), lanes.ints,
+        MobilWork(ints, flags, np.empty((2, snap.x.size)), np.empty(cand.size)),
     )  # fmt: skip
     return ints[0, :m].copy(), ints[1, :m].copy()
 

@@ -1,16 +1,24 @@
-"""The road as the compiled step reads it: a table of lanes, one column per lane code.
+"""The road as the compiled step reads it: a table of lanes, one column per lane code, and
+the road's sections.
 
 The step knows no road of its own. Whatever it needs to know of a lane it reads from this
 table, by the lane's *code* (the integer in the state's ``lane``, ``origin`` and ``target``
 columns and in the log): what kind of lane it is, the lanes to its left and right, where its
-centre line lies, from where its vehicles may leave it for the mainline, where it ends, and
-where the cooperative control zone of a ramp lane begins.
+centre line lies, where it begins, from where its vehicles may leave it for the mainline,
+where it ends, where the cooperative control zone of a ramp lane begins, where its vehicles
+leave the road, and the speed limit of a ramp's own road. Along the mainline the road is cut
+into *sections* of constant layout (:func:`hcomc.corridor.sections`): each has a number of
+mainline lanes and a speed limit.
 
-Codes number the ramp lanes first, in the order of the ramps and, within a ramp, from the
-mainline outwards, then the mainline lanes from the right. The paper's road (Section II-A,
-Fig. 1: two mainline lanes and one single-lane on-ramp, :func:`paper_lanes`) therefore has
-the codes of :class:`hcomc.road.Lane`: the ramp and its acceleration lane 0, lane 1 code 1,
-lane 2 code 2; its lane centres lie at ``(code - 1) W``, lane 1's on y = 0.
+Codes number the ramp lanes first (the on-ramps, then the off-ramps, each by position and,
+within a ramp, from the mainline outwards), then the mainline lanes from the right. Mainline
+lane k is centred at ``y = k W`` and lane j of a ramp at ``-(j + 1) W``. The paper's road
+(Section II-A, Fig. 1: two mainline lanes and one single-lane on-ramp)
+therefore has the codes of :class:`hcomc.road.Lane`: the ramp and its acceleration lane 0,
+lane 1 code 1, lane 2 code 2, centred at ``(code - 1) W``. :mod:`hcomc.sim.roads` makes
+the table of the paper's road and of a corridor's (:class:`hcomc.corridor.Road`: any number
+of mainline lanes, on- and off-ramps, lane drops, speed zones). The module needs numpy
+only, so that the compiled step may import it.
 """
 
 from __future__ import annotations
@@ -18,43 +26,65 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from hcomc.config import RoadParams
-
 __all__ = [
-    "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_CENTRE", "L_END", "L_KIND", "L_LEFT", "L_OPENS",
-    "L_RIGHT", "L_ZONE", "LaneTable", "OnRampLanes", "lane_table", "paper_lanes",
+    "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END", "L_EXIT", "L_KIND",
+    "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_ZONE", "LaneTable", "RampLanes", "lane_table",
 ]  # fmt: skip
 
 KIND_MAIN, KIND_ON, KIND_OFF = 0, 1, 2
-"""Kinds of lane: mainline, on-ramp (its road and acceleration lane), off-ramp."""
+"""Kinds of lane: mainline, on-ramp (its road and acceleration lane), off-ramp (its
+deceleration lane and road)."""
 
 L_KIND, L_LEFT, L_RIGHT = range(3)
 """Rows of :attr:`LaneTable.ints`: the kind, the code of the lane to the left and to the
-right (-1: none a vehicle may change to)."""
-L_CENTRE, L_OPENS, L_END, L_ZONE = range(4)
-"""Rows of :attr:`LaneTable.floats` [m]: the centre line's y; the x from which a vehicle may
-leave the lane for the one to its left (an acceleration lane's start; -inf on the
-mainline); the x where the lane ends (an acceleration lane's end; inf on the mainline);
-the x where the cooperative control zone of a ramp lane begins (inf: none)."""
+right (-1: none). Mainline lane 0 has no lane to its right: a ramp's lanes join it over a
+stretch only, and nobody changes into them of their own accord."""
+L_CENTRE, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(7)
+"""Rows of :attr:`LaneTable.floats`: the centre line's y [m]; where the lane begins (a ramp
+road's start, a deceleration lane's; -inf on the mainline, whose lanes the sections give)
+[m]; from where a vehicle may leave the lane for the one to its left (an acceleration
+lane's start; -inf elsewhere) [m]; where a vehicle must have left it (an acceleration lane's
+end; where an off-ramp's deceleration lane ends, for vehicles that want to take it; inf on
+the mainline, whose lane ends the sections give) [m]; where a ramp lane's cooperative
+control zone begins (inf: none) [m]; where a vehicle in the lane leaves the road, its rear
+past it (the mainline's end, an off-ramp road's end; inf on an on-ramp) [m]; the speed limit
+of a ramp's road, before an acceleration lane and after a deceleration lane (inf: none)
+[m/s]."""
 
 
 class LaneTable(NamedTuple):
-    """A road's lanes by code (module docstring): ``ints`` (3, L) with rows ``L_KIND``,
-    ``L_LEFT``, ``L_RIGHT``; ``floats`` (4, L) with rows ``L_CENTRE``, ``L_OPENS``, ``L_END``,
-    ``L_ZONE``. Arrays only, so that the compiled state holds them as they are."""
+    """A road's lanes by code and its sections (module docstring). Arrays only, so that the
+    compiled state holds them as they are.
+
+    Attributes
+    ----------
+    ints : (3, L) rows ``L_KIND``, ``L_LEFT``, ``L_RIGHT``.
+    floats : (7, L) rows ``L_CENTRE`` ... ``L_SPEED``.
+    sec_x0 : (S,) where each section begins [m] (the first at 0).
+    sec_speed : (S,) its speed limit [m/s] (inf: none).
+    main_end : (M, S) where mainline lane k ends at or after section s [m] (inf: never);
+        lane k exists in section s when ``main_end[k, s] > sec_x0[s]``.
+    """
 
     ints: np.ndarray
     floats: np.ndarray
+    sec_x0: np.ndarray
+    sec_speed: np.ndarray
+    main_end: np.ndarray
 
     @property
     def n_lanes(self) -> int:
         """Number of lane codes."""
         return int(self.ints.shape[1])
+
+    @property
+    def n_main(self) -> int:
+        """M, the largest number of mainline lanes; their codes are the last M."""
+        return int(self.main_end.shape[0])
 
     def codes_of_kind(self, kind: int) -> np.ndarray:
         """The codes of the lanes of ``kind`` (``KIND_*``), ascending."""
@@ -62,48 +92,54 @@ class LaneTable(NamedTuple):
 
 
 @dataclass(frozen=True, slots=True)
-class OnRampLanes:
-    """An on-ramp as the lane table needs it [m]: its acceleration lane ``[start, end]``
-    along the mainline, where its control zone begins, and its number of lanes."""
+class RampLanes:
+    """A ramp as the lane table needs it: ``kind`` (``KIND_ON``, ``KIND_OFF``), its lanes
+    and the rows ``L_BEGIN`` ... ``L_SPEED`` they share [m, m/s] (see the module
+    docstring)."""
 
-    start: float
+    kind: int
+    lanes: int
+    begin: float
+    opens: float
     end: float
     zone: float
-    lanes: int = 1
+    exit: float
+    speed: float
 
 
-def lane_table(main_lanes: int, lane_width: float, on_ramps: Sequence[OnRampLanes]) -> LaneTable:
-    """The table of a road with ``main_lanes`` mainline lanes of ``lane_width`` [m] and the
-    given on-ramps (codes as in the module docstring). Mainline lane k is centred at
-    ``k W``, lane j of a ramp at ``-(j + 1) W``; a ramp's lane j = 0 has mainline lane 0 to
-    its left, lane j = 1 has lane j = 0."""
-    if main_lanes < 1:
-        raise ValueError(f"main_lanes = {main_lanes}: allowed: 1 or more")
-    n_ramp = sum(r.lanes for r in on_ramps)
-    n = n_ramp + main_lanes
+def lane_table(
+    width: float, length: float, sections: Sequence[tuple[float, int, float]],
+    ramps: Sequence[RampLanes],
+) -> LaneTable:  # fmt: skip
+    """The table of a road with lanes ``width`` [m] wide (module docstring): mainline
+    ``sections`` ``(start [m], lanes, speed limit [m/s])`` in order from x = 0 to ``length``
+    [m], where the mainline's vehicles leave the road, and ``ramps`` in code order."""
+    sec_x0 = np.array([x0 for x0, _, _ in sections], dtype=np.float64)
+    sec_lanes = np.array([lanes for _, lanes, _ in sections], dtype=np.int64)
+    n_main = int(sec_lanes.max())
+    n_ramp = sum(r.lanes for r in ramps)
+    n = n_ramp + n_main
     ints = np.full((3, n), -1, dtype=np.int64)
-    floats = np.empty((4, n))
-    first_main = n_ramp
+    floats = np.empty((7, n))
     code = 0
-    for ramp in on_ramps:
+    for ramp in ramps:
         for j in range(ramp.lanes):
-            ints[L_KIND, code] = KIND_ON
-            ints[L_LEFT, code] = first_main if j == 0 else code - 1
-            ints[L_RIGHT, code] = code + 1 if j + 1 < ramp.lanes else -1
-            floats[:, code] = -(j + 1) * lane_width, ramp.start, ramp.end, ramp.zone
+            ints[:, code] = ramp.kind, n_ramp if j == 0 else code - 1, -1
+            if j + 1 < ramp.lanes:
+                ints[L_RIGHT, code] = code + 1
+            floats[:, code] = (-(j + 1) * width, ramp.begin, ramp.opens, ramp.end, ramp.zone,
+                               ramp.exit, ramp.speed)  # fmt: skip
             code += 1
-    for k in range(main_lanes):
-        code = first_main + k
-        ints[L_KIND, code] = KIND_MAIN
-        ints[L_LEFT, code] = code + 1 if k + 1 < main_lanes else -1
-        ints[L_RIGHT, code] = code - 1 if k > 0 else -1
-        floats[:, code] = k * lane_width, -math.inf, math.inf, math.inf
-    return LaneTable(ints, floats)
-
-
-def paper_lanes(road: RoadParams) -> LaneTable:
-    """The paper's road (Section II-A, a scenario's ``[road]`` table): two mainline lanes
-    and one single-lane on-ramp whose acceleration lane runs from ``accel_lane_start`` to
-    ``accel_lane_end``, its control zone from ``control_zone_start``."""
-    ramp = OnRampLanes(road.accel_lane_start, road.accel_lane_end, road.control_zone_start)
-    return lane_table(2, road.lane_width, [ramp])
+    for k in range(n_main):
+        code = n_ramp + k
+        ints[:, code] = KIND_MAIN, code + 1 if k + 1 < n_main else -1, code - 1 if k else -1
+        floats[:, code] = k * width, -math.inf, -math.inf, math.inf, math.inf, length, math.inf
+    main_end = np.full((n_main, sec_x0.size), math.inf)
+    for k in range(n_main):
+        end = math.inf
+        for s in range(sec_x0.size - 1, -1, -1):  # from downstream: the next section without k
+            if sec_lanes[s] <= k:
+                end = float(sec_x0[s])
+            main_end[k, s] = end
+    speed = np.array([limit for _, _, limit in sections], dtype=np.float64)
+    return LaneTable(ints, floats, sec_x0, speed, main_end)

@@ -66,6 +66,7 @@ class MobilWork(NamedTuple):
     ints: np.ndarray  # (4, >= n) int64: accepted vehicles, their targets, new leaders, followers
     flags: np.ndarray  # (2, >= n) bool: mandatory change, accepted
     floats: np.ndarray  # (2, >= N) float64: each vehicle's free-road term, its priority
+    margin: np.ndarray  # (>= n,) float64: each candidate's incentive above its threshold
 
 
 @kernel
@@ -84,7 +85,7 @@ def mobil_decide_into(
     key, lane_of, vehicle = index.key, index.lane, index.vehicle
     matrix, iidm, length, x, v, a = traffic
     cand, lane, leader, follower, target, force = candidates
-    ints, flags, floats = work
+    ints, flags, floats, margin = work
     min_gap, b_safe, politeness = params[0], params[1], params[2]
     threshold, bias = params[3], params[4]
     n = cand.size
@@ -116,26 +117,22 @@ def mobil_decide_into(
         ok[k] = False
         c, lo, ln, fn, fo = cand[k], leader[k], new_lead[k], new_fol[k], follower[k]
         mandatory[k] = lanes[L_KIND, lane[k]] != KIND_MAIN or force[k]
-        # 1. the gap criteria, which need no model acceleration
-        s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
-        s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
-        s_n = _gap(x[fn], x[c], length[c], fn >= 0)
-        standing = lo >= 0 and v[lo] < 1.0
-        clear = not standing or s_o >= 3.0 * length[c] + min_gap
-        if not (clear and s_c >= min_gap and s_n >= min_gap):
+        if not _gaps_clear(x, v, length, c, lo, ln, fn, min_gap):  # 1. needing no model
             continue
         # 2. the deceleration criteria: candidate and new follower after the change
         acc1, acc3 = accel(c, ln), accel(fn, c)
         if not (acc1 >= -b_safe and acc3 >= -b_safe):
             continue
         if mandatory[k]:
-            ok[k] = True
+            ok[k], margin[k] = True, math.inf
             continue
         # 3. the incentive of a discretionary change
         acc0, acc2, acc4, acc5 = accel(c, lo), accel(fn, ln), accel(fo, c), accel(fo, lo)
         gain = mobil_incentive(acc1 - acc0, (acc3 - acc2) + (acc5 - acc4), politeness)
         side = bias if target[k] == lanes[L_LEFT, lane[k]] else -bias
-        ok[k] = gain > threshold + side
+        margin[k] = gain - (threshold + side)
+        ok[k] = margin[k] > 0.0
+    _better_of_two(cand[:n], ok, margin[:n])
     ids, targets = ints[0], ints[1]
     m = 0
     for k in range(n):  # the accepted, in order (m <= k: the rows are compacted in place)
@@ -145,6 +142,34 @@ def mobil_decide_into(
             m += 1
     return _resolve_into(ids[:m], targets[:m], new_lead[:m], new_fol[:m], mandatory[:m], x,
                          floats[1, : x.size], ok[:m])  # fmt: skip
+
+
+@kernel(inline="always")
+def _gaps_clear(
+    x: np.ndarray, v: np.ndarray, length: np.ndarray, c: int, lo: int, ln: int, fn: int,
+    min_gap: float,
+) -> bool:  # fmt: skip
+    """The gap criteria of candidate c's change (module docstring): bumper gaps of at least
+    ``min_gap`` to its new leader ``ln`` and new follower ``fn``, and a clear path past its
+    leader ``lo`` if that is standing (-1: none)."""
+    s_o = _gap(x[c], x[lo], length[lo], lo >= 0)
+    s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
+    s_n = _gap(x[fn], x[c], length[c], fn >= 0)
+    standing = lo >= 0 and v[lo] < 1.0
+    clear = not standing or s_o >= 3.0 * length[c] + min_gap
+    return clear and s_c >= min_gap and s_n >= min_gap
+
+
+@kernel(inline="always")
+def _better_of_two(cand: np.ndarray, ok: np.ndarray, margin: np.ndarray) -> None:
+    """Of two accepted candidates of one vehicle (adjacent rows: its changes to the left
+    and to the right), keep the one with the larger incentive margin (the first on a tie)."""
+    for k in range(1, cand.size):
+        if ok[k] and ok[k - 1] and cand[k] == cand[k - 1]:
+            if margin[k] > margin[k - 1]:
+                ok[k - 1] = False
+            else:
+                ok[k] = False
 
 
 @kernel(inline="always")

@@ -34,12 +34,13 @@ from hcomc.sim.step.ramp_reach import ramp_untouched
 # the state arrays a step changes (everything else is built from config and demand alike)
 _STATE = (
     "x", "y", "v", "a", "heading", "lane", "origin", "target", "lc_t0", "lc_x0", "lc_xf",
-    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "x_hist",
+    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "route", "x_hist",
     "v_hist", "w_gap", "w_ttc", "queue_pos", "colliding", "counters", "innov",
 )  # fmt: skip
 _PER_VEHICLE = (
     "x", "y", "v", "a", "heading", "lane", "origin", "target", "lc_t0", "lc_x0", "lc_xf",
-    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "w_gap", "w_ttc",
+    "lc_dur", "active", "waited", "identified", "planned", "a_cmd", "held", "route", "w_gap",
+    "w_ttc",
 )  # fmt: skip
 
 

@@ -126,8 +126,9 @@ class SumoSimulation(CosimPlans):
             self._finish_plans()
 
     # ---------------------------------------------------------------- plans
-    def view(self, t: float) -> TrafficView:
-        """Read-only copy of the state for a controller (as our engine builds it)."""
+    def view(self, t: float, vr: int = -1) -> TrafficView:
+        """Read-only copy of the state for a controller (as our engine builds it; the
+        paper's road has one on-ramp, whoever ``vr`` is)."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.changing()}  # fmt: skip
         plans = tuple(p.plan for p in self.plans)

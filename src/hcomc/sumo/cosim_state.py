@@ -22,10 +22,10 @@ from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import generate_demand
-from hcomc.sim.lane_table import paper_lanes
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.plan_execution import ActivePlan
+from hcomc.sim.roads import paper_lanes
 from hcomc.sumo import import_libsumo
 from hcomc.sumo.routes import vehicle_id
 

@@ -37,6 +37,9 @@ class EventKind(enum.IntEnum):
     """A merge controller issued a plan for a ramp vehicle."""
     FALLBACK = 8
     """A controller fell back to a safe plan (e.g. all candidates infeasible)."""
+    MISSED_EXIT = 9
+    """A vehicle bound for an off-ramp passed its deceleration lane on the mainline and
+    drives on to the mainline's end; ``value`` = the off-ramp lane's code."""
 
 
 EVENT_DTYPE = np.dtype(

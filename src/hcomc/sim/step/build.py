@@ -11,7 +11,7 @@ from hcomc.equations.transition import transition_gamma
 from hcomc.interface import Fleet
 from hcomc.sim.demand import Demand
 from hcomc.sim.lane_change_decisions import lane_change_params
-from hcomc.sim.lane_table import KIND_ON, L_CENTRE, L_KIND, paper_lanes
+from hcomc.sim.lane_table import KIND_ON, L_CENTRE, L_KIND, L_SPEED, LaneTable
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.perception_state import Perception
@@ -78,6 +78,7 @@ def adopt_log_columns(arrays: CoreArrays, core: Core, log: SimulationLog) -> Cor
 
 def build_arrays(
     config: ScenarioConfig,
+    lanes: LaneTable,
     demand: Demand,
     fleet: Fleet,
     per: Perception,
@@ -89,15 +90,14 @@ def build_arrays(
     decide_every: int,
     log_every: int,
 ) -> CoreArrays:
-    """The state of a run before its first step (no vehicle released yet), writing into
-    ``log``.
+    """The state of a run on the road ``lanes`` before its first step (no vehicle released
+    yet), writing into ``log``.
 
-    ``counterfactual`` leaves the ramp queue empty (the undisturbed run); ``controlled``
+    ``counterfactual`` leaves the ramp queues empty (the undisturbed run); ``controlled``
     says whether a merge controller plans for ramp vehicles entering the control zone.
     """
     n = demand.n
     road, hdv = config.road, config.hdv
-    lanes = paper_lanes(road)
     on_ramp = lanes.ints[L_KIND] == KIND_ON
     queues = [
         np.flatnonzero(demand.lane == code)
@@ -109,7 +109,8 @@ def build_arrays(
     f8, i8, b1 = np.float64, np.int64, np.bool_
     consts = np.zeros(layout.N_CONSTS)
     consts[[layout.DT, layout.WARMUP, layout.WIDTH]] = config.dt, config.warmup, road.lane_width
-    consts[[layout.ROAD_LENGTH, layout.EMERGENCY]] = road.length, config.lane_change.emergency_decel
+    consts[layout.EMERGENCY] = config.lane_change.emergency_decel
+    consts[layout.LOOKAHEAD] = config.lane_change.exit_lookahead
     consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
     consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
@@ -121,6 +122,8 @@ def build_arrays(
     flags[layout.N_WARMUP] = n_warmup
     flags[layout.CONTROLLER] = controlled
     flags[layout.CAV_GAME] = config.lane_change.cav_game
+    limits = np.concatenate([lanes.sec_speed, lanes.floats[L_SPEED]])
+    flags[layout.SPEED_LIMITS] = bool(np.isfinite(limits).any())
     counters = np.zeros(layout.N_COUNTERS, dtype=i8)
     innov_steps = INNOVATION_STEPS if per.errors else 0
     counters[layout.INNOV_CURSOR] = innov_steps  # empty: drawn when first needed
@@ -131,6 +134,7 @@ def build_arrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
         scripted=fleet.scripted.astype(b1), is_hdv=per.is_hdv.astype(b1),
+        desired=fleet.matrix[0].copy(), route=demand.route.astype(i8),
         x=np.zeros(n), y=lanes.floats[L_CENTRE, demand.lane], v=np.zeros(n),
         a=np.zeros(n), heading=np.zeros(n), lane=demand.lane.astype(i8),
         origin=demand.lane.astype(i8), target=demand.lane.astype(i8),
@@ -149,13 +153,14 @@ def build_arrays(
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,
         consts=consts, flags=flags, plan_int=np.zeros((plan_rows, N_INT), dtype=i8),
         plan_f=np.zeros((plan_rows, N_FLOAT)), road_int=lanes.ints, road_f=lanes.floats,
+        sec_x0=lanes.sec_x0, sec_speed=lanes.sec_speed, main_end=lanes.main_end,
         lc_params=lane_change_params(config.lane_change),
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
         innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
         log_slot=log.slot, log_span=log.span,
         scratch_int=np.zeros((layout.N_SCRATCH_INT, work), dtype=i8),
         scratch_f=np.zeros((layout.N_SCRATCH_F, work)),
-        scratch_b=np.zeros((layout.N_SCRATCH_B, n), dtype=b1),
+        scratch_b=np.zeros((layout.N_SCRATCH_B, 2 * n), dtype=b1),
     )  # fmt: skip
 
 

@@ -9,10 +9,11 @@ import math
 import numpy as np
 
 from hcomc._jit import borrow, kernel
-from hcomc.sim.arrays import nonzero_into, search_left
-from hcomc.sim.lane_table import KIND_MAIN, L_END, L_KIND, L_LEFT, L_OPENS, L_RIGHT
+from hcomc.sim.arrays import search_left
+from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_END, L_KIND, L_LEFT, L_OPENS, L_RIGHT
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex, neighbour
+from hcomc.sim.step.road import discretionary_target, needed_change
 from hcomc.sim.step.state import (
     EV_FALLBACK,
     EV_LC_START,
@@ -22,11 +23,11 @@ from hcomc.sim.step.state import (
     S_CAND_LEADER,
     S_CAND_TARGET,
     S_FORCE,
+    S_MARGIN,
     S_MOBIL,
     S_MOBIL_B,
     S_MOBIL_F,
     S_POS,
-    S_SELECTED,
     CoreArrays,
     add_event,
 )  # fmt: skip
@@ -55,7 +56,8 @@ def _mobil(
     m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a), index,
                           Candidates(cand, lanes, leader, follower, target, force), c.lc_params,
                           c.road_int, MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
-                                    c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2]))  # fmt: skip
+                                    c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2],
+                                    c.scratch_f[S_MARGIN]))  # fmt: skip
     return work[0, :m], work[1, :m]
 
 
@@ -106,25 +108,41 @@ def discretionary_changes(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
     index: LaneIndex,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """MOBIL decisions of every vehicle free to change now (not changing, not scripted, not
-    holding its lane for a plan, with a lane to change to; a ramp vehicle only where its
-    lane lets it leave: on the acceleration lane)."""
-    sel = c.scratch_b[S_SELECTED, : ids.size]
+    """The lane changes vehicles free to change now (not changing, not scripted, not holding
+    their lane for a plan) take of their own accord, decided by MOBIL
+    (:func:`hcomc.sim.mobil.mobil_decide_into`): a ramp vehicle's merge where its lane lets
+    it leave (on the acceleration lane, by gap acceptance); on the mainline the change its
+    lane or route needs (:func:`hcomc.sim.step.road.needed_change`, by gap acceptance), else
+    a change to the lane on either side (:func:`hcomc.sim.step.road.discretionary_target`),
+    the better of the two when both qualify."""
+    pos = c.scratch_int[S_POS]
+    target = c.scratch_int[S_CAND_TARGET]
+    force = c.scratch_b[S_FORCE]
+    m = 0
     for k in range(ids.size):
         i = ids[k]
-        lane = c.lane[i]
-        ramp = c.road_int[L_KIND, lane] != KIND_MAIN
-        may_leave = not ramp or c.road_f[L_OPENS, lane] <= c.x[i] <= c.road_f[L_END, lane]
-        free = not changing[k] and not c.scripted[i] and not holding[i]
-        sel[k] = free and may_leave and free_target(c.road_int, lane) >= 0
-    pos = c.scratch_int[S_POS]
-    pos = pos[: nonzero_into(sel, pos)]
-    target = c.scratch_int[S_CAND_TARGET, : pos.size]
-    for k in range(pos.size):
-        target[k] = free_target(c.road_int, c.lane[ids[pos[k]]])
-    force = c.scratch_b[S_FORCE, : pos.size]
-    force[:] = False
-    return _mobil(c, ids, pos, lead, index, target, force)
+        if changing[k] or c.scripted[i] or holding[i]:
+            continue
+        lane, x = c.lane[i], c.x[i]
+        kind = c.road_int[L_KIND, lane]
+        if kind != KIND_MAIN:
+            left = c.road_int[L_LEFT, lane]
+            opens, end = c.road_f[L_OPENS, lane], c.road_f[L_END, lane]
+            if kind == KIND_ON and left >= 0 and opens <= x <= end:
+                pos[m], target[m], force[m] = k, left, False  # mandatory: a ramp lane's
+                m += 1
+            continue
+        needed = needed_change(c, i)
+        if needed >= 0:
+            pos[m], target[m], force[m] = k, needed, True
+            m += 1
+            continue
+        for side in (1, -1):
+            tgt = discretionary_target(c, i, side)
+            if tgt >= 0:
+                pos[m], target[m], force[m] = k, tgt, False
+                m += 1
+    return _mobil(c, ids, pos[:m], lead, index, target[:m], force[:m])
 
 
 @kernel

@@ -148,7 +148,7 @@ def step_front(c: CoreArrays, ids: np.ndarray, t: float) -> StepAccelerations:
     ``(acc, changing, index, lead)``, views of the step's work rows (valid
     until the next step)."""
     n_plans = c.counters[N_PLANS]
-    following = following_into(c.plan_int, n_plans, c.scratch_b[S_FOLLOWING])
+    following = following_into(c.plan_int, n_plans, c.scratch_b[S_FOLLOWING, : c.x.size])
     fol, rows = c.scratch_int[S_VV_FOL], c.scratch_f[S_VV : S_VV + 4]
     m = virtual_rows_into(c.plan_int, c.plan_f, n_plans, t, c.x, c.v, c.a, c.length, fol, rows)
     acc, changing, index, lead = step_accelerations(
@@ -165,7 +165,7 @@ def holding(c: CoreArrays) -> np.ndarray:
     (:func:`hcomc.sim.step.plans.holding_mask`) or driven from outside. A vehicle that is
     not an HDV is a CAV (:class:`hcomc.road.Kind` has these two). A view of the step's
     work row."""
-    out = c.scratch_b[S_HOLDING]
+    out = c.scratch_b[S_HOLDING, : c.x.size]
     out[:] = c.held
     n_plans = c.counters[N_PLANS]
     if n_plans > 0:

@@ -16,9 +16,10 @@ from hcomc.equations.lane_change import lateral_state
 from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
-from hcomc.sim.lane_table import KIND_MAIN, L_CENTRE, L_END, L_KIND
+from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
+from hcomc.sim.step.road import speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -27,11 +28,11 @@ from hcomc.sim.step.state import (
     EV_INSERTION,
     EV_LC_END,
     EV_MERGE,
+    EV_MISSED_EXIT,
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
     PERCEIVE,
-    ROAD_LENGTH,
     S_ACC,
     S_BUFFER,
     S_CHANGER_IDS,
@@ -56,6 +57,7 @@ from hcomc.sim.step.state import (
     S_VEH,
     S_VS,
     S_X,
+    SPEED_LIMITS,
     STEP,
     TTC_ERROR,
     WARMUP,
@@ -223,6 +225,10 @@ def step_accelerations(
     rows.
     """
     n = ids.size
+    if c.flags[SPEED_LIMITS] > 0:
+        for k in range(n):  # the desired speed within the limit where the vehicle is
+            i = ids[k]
+            c.matrix[0, i] = min(c.desired[i], speed_limit(c, c.lane[i], c.x[i]))
     changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]
@@ -281,9 +287,9 @@ def _limits(
     """The lane end, virtual leaders, commanded accelerations, the emergency limit and
     scripted profiles."""
     n = ids.size
-    for k in range(n):  # the end of the lane (an acceleration lane's), a static obstacle
+    for k in range(n):  # where it must have left its lane, a static obstacle seen exactly
         i = ids[k]
-        end = c.road_f[L_END, c.lane[i]]
+        end = stop_point(c, i)
         if end < math.inf and not changing[k] and not following[i]:
             a_stop = _follow_exact(c.matrix, c.iidm, i, end - c.x[i], c.v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
@@ -345,14 +351,22 @@ def lateral(c: CoreArrays, t: float) -> None:
 
 @kernel
 def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
-    """Exits past the road end; vehicles waiting at the end of their lane (a ramp vehicle
-    at the acceleration lane's)."""
+    """Exits (the rear past where the vehicle's lane leaves the road: the mainline's end,
+    an off-ramp road's); off-ramps missed (a vehicle bound for one still on the mainline past
+    the end of its deceleration lane drives on to the mainline's end); ramp vehicles waiting
+    at the end of their acceleration lane."""
     for i in ids:
-        if c.x[i] - c.length[i] > c.consts[ROAD_LENGTH]:
+        if c.x[i] - c.length[i] > c.road_f[L_EXIT, c.lane[i]]:
             c.active[i] = False
             add_event(c, t, EV_EXIT, i, -1, c.x[i], math.nan)
+        exit_code = c.route[i]
+        on_main = c.road_int[L_KIND, c.lane[i]] == KIND_MAIN and c.target[i] != exit_code
+        if exit_code >= 0 and on_main and c.x[i] > c.road_f[L_END, exit_code]:
+            c.route[i] = -1
+            add_event(c, t, EV_MISSED_EXIT, i, -1, c.x[i], exit_code)
     for i in ids:
-        if (c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED and not c.waited[i]
+        on_ramp = c.road_int[L_KIND, c.lane[i]] == KIND_ON
+        if (on_ramp and c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED and not c.waited[i]
                 and c.x[i] > c.road_f[L_END, c.lane[i]] - _WAIT_ZONE):  # fmt: skip
             c.waited[i] = True
             add_event(c, t, EV_WAIT, i, -1, c.x[i], math.nan)

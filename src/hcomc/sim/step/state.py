@@ -22,21 +22,21 @@ from hcomc._jit import borrow_all, kernel
 
 # event kinds (the IntEnum of hcomc.sim.log, as plain ints)
 EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
-EV_FALLBACK = 8
+EV_FALLBACK, EV_MISSED_EXIT = 8, 9
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
 # consts
-(DT, WARMUP, WIDTH, ROAD_LENGTH, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR,
- REPLAN_PERIOD) = range(11)  # fmt: skip
+(DT, WARMUP, WIDTH, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
+ LOOKAHEAD) = range(11)  # fmt: skip
 N_CONSTS = 11
 # flags
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
- CAV_GAME) = range(8)  # fmt: skip
-N_FLAGS = 8
+ CAV_GAME, SPEED_LIMITS) = range(9)  # fmt: skip
+N_FLAGS = 9
 # reasons run_steps returns
 DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
-# rows of the step's work arrays (scratch_int, scratch_f: width >= 4N + 1; scratch_b: N).
+# rows of the step's work arrays (scratch_int, scratch_f: width >= 4N + 1; scratch_b: 2N).
 # A step writes its per-vehicle and per-entry arrays into these rows instead of allocating
 # them; the arrays a kernel returns from them are valid until the same row is next written
 # (the next step)
@@ -52,10 +52,11 @@ S_X, S_KEY, S_KS, S_ACC, S_VV = range(5)  # S_VV .. S_VV + 3: x, v, a, length of
 S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # car following
 S_MOBIL_F = 14  # .. S_MOBIL_F + 1: MOBIL's work rows over the vehicles
 S_NEW_ACC = 16  # the changers' accelerations behind their target-lane leaders
-N_SCRATCH_F = 17
+S_MARGIN = 17  # MOBIL's incentive margin of each candidate change
+N_SCRATCH_F = 18
 S_CHANGING, S_IN_ORI, S_IN_TGT, S_FOLLOWING, S_HOLDING = range(5)
-S_SELECTED, S_FORCE, S_MOBIL_B = range(5, 8)  # S_MOBIL_B .. S_MOBIL_B + 1: MOBIL's flags
-N_SCRATCH_B = 9
+S_FORCE, S_MOBIL_B = 5, 6  # S_MOBIL_B .. S_MOBIL_B + 1: MOBIL's flags per candidate
+N_SCRATCH_B = 8
 
 
 class CoreArrays(NamedTuple):
@@ -68,6 +69,8 @@ class CoreArrays(NamedTuple):
     lc_duration: np.ndarray
     scripted: np.ndarray
     is_hdv: np.ndarray
+    desired: np.ndarray  # desired speed v0 before any speed limit [m/s]
+    route: np.ndarray  # the off-ramp lane a vehicle leaves by (its code; -1: the mainline's end)
     x: np.ndarray
     y: np.ndarray
     v: np.ndarray
@@ -110,7 +113,10 @@ class CoreArrays(NamedTuple):
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
     road_int: np.ndarray  # (3, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
-    road_f: np.ndarray  # (4, L) their centres, openings, ends, control zones [m] (L_CENTRE ...)
+    road_f: np.ndarray  # (7, L) their centres, begins, ends ... [m] (L_CENTRE ...)
+    sec_x0: np.ndarray  # (S,) the road's sections (hcomc.sim.lane_table.LaneTable): starts [m]
+    sec_speed: np.ndarray  # (S,) speed limits [m/s]
+    main_end: np.ndarray  # (M, S) where mainline lane k ends at or after section s [m]
     lc_params: np.ndarray  # MOBIL parameters (hcomc.sim.lane_change_decisions.lane_change_params)
     profile: np.ndarray  # (k, 2) scripted leader speed profile (t, v)
     innov: np.ndarray  # (m, 2, N) pre-drawn innovations of the estimation errors
@@ -127,7 +133,7 @@ class CoreArrays(NamedTuple):
     log_owner: np.ndarray
     scratch_int: np.ndarray  # (N_SCRATCH_INT, >= 4N + 1) the step's work arrays
     scratch_f: np.ndarray  # (N_SCRATCH_F, >= 4N + 1)
-    scratch_b: np.ndarray  # (N_SCRATCH_B, N) (S_CHANGING ...)
+    scratch_b: np.ndarray  # (N_SCRATCH_B, 2N) (S_CHANGING ...; up to two candidates each)
 
 
 @structref.register
