@@ -193,6 +193,7 @@ def test_event_kind_values() -> None:
         ("EXIT", 6),
         ("PLAN", 7),
         ("FALLBACK", 8),
+        ("MISSED_EXIT", 9),
     ]
 
 

@@ -97,6 +97,12 @@ class LaneChangeParams(FrozenModel):
         "right when its exit (or the lane's end) is within this distance per lane change "
         "still needed [m]; no lane of the paper's road ends nor leads off it",
     )  # fmt: skip
+    urgent_distance: float = Field(
+        100.0, ge=0, le=2000,
+        description="within this distance of the last point of a change a vehicle's route "
+        "or ending lane needs, the deceleration it may impose rises linearly from safe_decel "
+        "to emergency_decel [m] (a ramp vehicle's merge keeps safe_decel)",
+    )  # fmt: skip
     cav_game: bool = Field(
         False,
         description="CAV discretionary changes accepted by MOBIL must also be the SV's "

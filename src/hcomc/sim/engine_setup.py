@@ -92,7 +92,7 @@ class EngineSetup:
         # may change); ``fleet`` stays what the controllers know
         self.driving = dataclasses.replace(fleet, matrix=fleet.matrix.copy())
         self.arrays = build_arrays(
-            config, self.lanes, demand, self.driving, self.perception, self.log,
+            config, self.lanes, demand, scene.release_last, self.driving, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip

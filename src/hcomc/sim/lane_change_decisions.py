@@ -63,7 +63,8 @@ def decide(
     m = mobil_decide_into(
         Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
         index,
-        Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force),
+        Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force,
+                   np.zeros(cand.size)),
         lane_change_params(params), lanes.ints,
         MobilWork(ints, flags, np.empty((2, snap.x.size)), np.empty(cand.size)),
     )  # fmt: skip
@@ -74,7 +75,7 @@ def lane_change_params(params: LaneChangeParams) -> FloatArray:
     """The MOBIL parameters as the kernel reads them."""
     return np.array(
         [params.min_gap, params.safe_decel, params.politeness, params.threshold,
-         params.keep_right_bias], dtype=np.float64,
+         params.keep_right_bias, params.emergency_decel], dtype=np.float64,
     )  # fmt: skip
 
 

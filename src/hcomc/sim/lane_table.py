@@ -32,7 +32,8 @@ import numpy as np
 
 __all__ = [
     "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END", "L_EXIT", "L_KIND",
-    "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_ZONE", "LaneTable", "RampLanes", "lane_table",
+    "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_WIDTH", "L_ZONE", "LaneTable", "RampLanes",
+    "lane_table",
 ]  # fmt: skip
 
 KIND_MAIN, KIND_ON, KIND_OFF = 0, 1, 2
@@ -43,8 +44,9 @@ L_KIND, L_LEFT, L_RIGHT = range(3)
 """Rows of :attr:`LaneTable.ints`: the kind, the code of the lane to the left and to the
 right (-1: none). Mainline lane 0 has no lane to its right: a ramp's lanes join it over a
 stretch only, and nobody changes into them of their own accord."""
-L_CENTRE, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(7)
-"""Rows of :attr:`LaneTable.floats`: the centre line's y [m]; where the lane begins (a ramp
+L_CENTRE, L_WIDTH, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(8)
+"""Rows of :attr:`LaneTable.floats`: the centre line's y [m]; the lane's width [m]; where
+the lane begins (a ramp
 road's start, a deceleration lane's; -inf on the mainline, whose lanes the sections give)
 [m]; from where a vehicle may leave the lane for the one to its left (an acceleration
 lane's start; -inf elsewhere) [m]; where a vehicle must have left it (an acceleration lane's
@@ -63,7 +65,7 @@ class LaneTable(NamedTuple):
     Attributes
     ----------
     ints : (3, L) rows ``L_KIND``, ``L_LEFT``, ``L_RIGHT``.
-    floats : (7, L) rows ``L_CENTRE`` ... ``L_SPEED``.
+    floats : (8, L) rows ``L_CENTRE`` ... ``L_SPEED``.
     sec_x0 : (S,) where each section begins [m] (the first at 0).
     sec_speed : (S,) its speed limit [m/s] (inf: none).
     main_end : (M, S) where mainline lane k ends at or after section s [m] (inf: never);
@@ -120,20 +122,21 @@ def lane_table(
     n_ramp = sum(r.lanes for r in ramps)
     n = n_ramp + n_main
     ints = np.full((3, n), -1, dtype=np.int64)
-    floats = np.empty((7, n))
+    floats = np.empty((8, n))
     code = 0
     for ramp in ramps:
         for j in range(ramp.lanes):
             ints[:, code] = ramp.kind, n_ramp if j == 0 else code - 1, -1
             if j + 1 < ramp.lanes:
                 ints[L_RIGHT, code] = code + 1
-            floats[:, code] = (-(j + 1) * width, ramp.begin, ramp.opens, ramp.end, ramp.zone,
-                               ramp.exit, ramp.speed)  # fmt: skip
+            floats[:, code] = (-(j + 1) * width, width, ramp.begin, ramp.opens, ramp.end,
+                               ramp.zone, ramp.exit, ramp.speed)  # fmt: skip
             code += 1
     for k in range(n_main):
         code = n_ramp + k
         ints[:, code] = KIND_MAIN, code + 1 if k + 1 < n_main else -1, code - 1 if k else -1
-        floats[:, code] = k * width, -math.inf, -math.inf, math.inf, math.inf, length, math.inf
+        floats[:, code] = (k * width, width, -math.inf, -math.inf, math.inf, math.inf, length,
+                           math.inf)  # fmt: skip
     main_end = np.full((n_main, sec_x0.size), math.inf)
     for k in range(n_main):
         end = math.inf

@@ -56,7 +56,8 @@ class Candidates(NamedTuple):
     leader: np.ndarray  # int64: its leader in that lane (-1: none)
     follower: np.ndarray  # int64: its follower in that lane (-1: none)
     target: np.ndarray  # int64: the lane it would change to
-    force: np.ndarray  # bool: commanded by a merge plan (safety criteria only)
+    force: np.ndarray  # bool: commanded by a plan or needed by the route (safety only)
+    urgency: np.ndarray  # float64 in [0, 1]: how far a needed change accepts harder braking
 
 
 class MobilWork(NamedTuple):
@@ -78,16 +79,18 @@ def mobil_decide_into(
     caller's ``work`` arrays. Returns the number m of accepted changes, whose vehicles and
     targets are ``work.ints[0, :m]`` and ``work.ints[1, :m]``.
 
-    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias); ``lanes``
+    ``params`` = (min_gap, safe_decel, politeness, threshold, keep_right_bias,
+    emergency_decel); a candidate's ``urgency`` u lets the change impose up to
+    ``safe_decel + u (emergency_decel - safe_decel)``; ``lanes``
     is the road's lane table (:attr:`hcomc.sim.lane_table.LaneTable.ints`); ``index`` holds
     the sorted entries of the snapshot.
     """
     key, lane_of, vehicle = index.key, index.lane, index.vehicle
     matrix, iidm, length, x, v, a = traffic
-    cand, lane, leader, follower, target, force = candidates
+    cand, lane, leader, follower, target, force, urgency = candidates
     ints, flags, floats, margin = work
     min_gap, b_safe, politeness = params[0], params[1], params[2]
-    threshold, bias = params[3], params[4]
+    threshold, bias, b_max = params[3], params[4], params[5]
     n = cand.size
     new_lead, new_fol = ints[2, :n], ints[3, :n]
     mandatory, ok = flags[0, :n], flags[1, :n]
@@ -121,7 +124,8 @@ def mobil_decide_into(
             continue
         # 2. the deceleration criteria: candidate and new follower after the change
         acc1, acc3 = accel(c, ln), accel(fn, c)
-        if not (acc1 >= -b_safe and acc3 >= -b_safe):
+        b_ok = b_safe + (b_max - b_safe) * urgency[k]
+        if not (acc1 >= -b_ok and acc3 >= -b_ok):
             continue
         if mandatory[k]:
             ok[k], margin[k] = True, math.inf

@@ -12,11 +12,11 @@ from hcomc.interface.ramp import Ramp
 from hcomc.sim.lane_table import (
     KIND_OFF,
     KIND_ON,
-    L_CENTRE,
     L_END,
     L_KIND,
     L_LEFT,
     L_OPENS,
+    L_WIDTH,
     L_ZONE,
     LaneTable,
     RampLanes,
@@ -75,6 +75,6 @@ def ramp_of(lanes: LaneTable, code: int) -> Ramp:
     return Ramp(
         control_zone_start=float(f[L_ZONE, code]), accel_lane_start=float(f[L_OPENS, code]),
         accel_lane_end=float(f[L_END, code]),
-        lane_width=float(f[L_CENTRE, target] - f[L_CENTRE, code]),
+        lane_width=float(f[L_WIDTH, code]),
         lane=int(code), target=target, beyond=beyond,
     )  # fmt: skip

@@ -11,7 +11,7 @@ tables. Another road is another scene maker: the same engine drives any lane tab
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -27,14 +27,25 @@ __all__ = ["Scene", "SceneMaker", "paper_scene"]
 @dataclass(frozen=True, slots=True)
 class Scene:
     """One run's road (its lane table), every vehicle it releases (sorted by release
-    time; their lanes and routes are codes of ``lanes``) and their parameters."""
+    time; their lanes and routes are codes of ``lanes``) and their parameters.
+
+    A vehicle waits in the release queue of its demand lane; ``release_last`` (L,) gives,
+    for each lane's queue, the last lane code its vehicles may enter by (the one with the
+    most free road ahead, as SUMO's ``departLane="best"``; a corridor's mainline origin
+    spans its lanes); by default each queue releases into its own lane only."""
 
     lanes: LaneTable
     demand: Demand
     fleet: Fleet
+    release_last: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
 
     def __post_init__(self) -> None:
         n_lanes = self.lanes.n_lanes
+        if self.release_last.size == 0:
+            object.__setattr__(self, "release_last", np.arange(n_lanes, dtype=np.int64))
+        if self.release_last.shape != (n_lanes,) or (self.release_last < np.arange(n_lanes)).any():
+            raise ValueError(f"release_last {self.release_last.tolist()}: one code per lane, "
+                             "at least the lane's own")  # fmt: skip
         lane, route = self.demand.lane, self.demand.route
         if lane.size and (lane.min() < 0 or lane.max() >= n_lanes):
             raise ValueError(f"demand lanes {sorted(set(lane.tolist()))}: the road's lane "

@@ -80,6 +80,7 @@ def build_arrays(
     config: ScenarioConfig,
     lanes: LaneTable,
     demand: Demand,
+    release_last: np.ndarray,
     fleet: Fleet,
     per: Perception,
     log: SimulationLog,
@@ -91,13 +92,14 @@ def build_arrays(
     log_every: int,
 ) -> CoreArrays:
     """The state of a run on the road ``lanes`` before its first step (no vehicle released
-    yet), writing into ``log``.
+    yet), writing into ``log``; ``release_last`` is the last lane code each lane's release
+    queue may release into (:attr:`hcomc.sim.scene.Scene.release_last`).
 
     ``counterfactual`` leaves the ramp queues empty (the undisturbed run); ``controlled``
     says whether a merge controller plans for ramp vehicles entering the control zone.
     """
     n = demand.n
-    road, hdv = config.road, config.hdv
+    hdv = config.hdv
     on_ramp = lanes.ints[L_KIND] == KIND_ON
     queues = [
         np.flatnonzero(demand.lane == code)
@@ -108,9 +110,11 @@ def build_arrays(
     perceive = per.errors or max(per.taus) > 0
     f8, i8, b1 = np.float64, np.int64, np.bool_
     consts = np.zeros(layout.N_CONSTS)
-    consts[[layout.DT, layout.WARMUP, layout.WIDTH]] = config.dt, config.warmup, road.lane_width
+    consts[[layout.DT, layout.WARMUP]] = config.dt, config.warmup
     consts[layout.EMERGENCY] = config.lane_change.emergency_decel
-    consts[layout.LOOKAHEAD] = config.lane_change.exit_lookahead
+    consts[[layout.LOOKAHEAD, layout.URGENT]] = (
+        config.lane_change.exit_lookahead, config.lane_change.urgent_distance
+    )  # fmt: skip
     consts[layout.GAMMA] = transition_gamma(config.lane_change.transition_tolerance)
     consts[[layout.DECAY, layout.KICK]] = per.decay, per.kick
     consts[[layout.GAP_ERROR, layout.TTC_ERROR]] = hdv.gap_error, hdv.inverse_ttc_error
@@ -147,7 +151,8 @@ def build_arrays(
         taus=per.taus, d_t=demand.t.astype(f8), d_x=demand.x.astype(f8),
         d_v=demand.v.astype(f8), queues=np.concatenate(queues).astype(i8),
         queue_start=np.cumsum([0, *(q.size for q in queues)]).astype(i8),
-        queue_pos=np.zeros(lanes.n_lanes, dtype=i8), colliding=np.zeros(8 * n + 8, dtype=i8),
+        queue_pos=np.zeros(lanes.n_lanes, dtype=i8), queue_last=release_last.astype(i8),
+        colliding=np.zeros(8 * n + 8, dtype=i8),
         ev_t=np.zeros(n_events), ev_kind=np.zeros(n_events, dtype=i8),
         ev_vehicle=np.zeros(n_events, dtype=i8), ev_other=np.zeros(n_events, dtype=i8),
         ev_x=np.zeros(n_events), ev_value=np.zeros(n_events), counters=counters,

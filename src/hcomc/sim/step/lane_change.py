@@ -28,6 +28,8 @@ from hcomc.sim.step.state import (
     S_MOBIL_B,
     S_MOBIL_F,
     S_POS,
+    S_URGENCY,
+    URGENT,
     CoreArrays,
     add_event,
 )  # fmt: skip
@@ -37,7 +39,7 @@ from hcomc.sim.step.state import (
 @kernel
 def _mobil(
     c: CoreArrays, ids: np.ndarray, cand_pos: np.ndarray, lead: np.ndarray, index: LaneIndex,
-    target: np.ndarray, force: np.ndarray,
+    target: np.ndarray, force: np.ndarray, urgency: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """MOBIL / gap acceptance (:func:`hcomc.sim.mobil.mobil_decide_into`) for the vehicles at
     positions ``cand_pos`` of ``ids``: ``(vehicles, targets)`` accepted, views of the step's
@@ -54,7 +56,8 @@ def _mobil(
         follower[k] = neighbour(vb, lb, rank[p] - 1, lb[rank[p]])
     work = si[S_MOBIL : S_MOBIL + 4]
     m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a), index,
-                          Candidates(cand, lanes, leader, follower, target, force), c.lc_params,
+                          Candidates(cand, lanes, leader, follower, target, force, urgency),
+                          c.lc_params,
                           c.road_int, MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],
                                     c.scratch_f[S_MOBIL_F : S_MOBIL_F + 2],
                                     c.scratch_f[S_MARGIN]))  # fmt: skip
@@ -79,7 +82,8 @@ def commanded_changes(
         i = req_vehicle[r]
         pos = np.array([search_left(ids, i)])
         tgt = np.array([req_target[r]])
-        chosen, _ = _mobil(c, ids, pos, lead, index, tgt, np.ones(1, dtype=np.bool_))
+        chosen, _ = _mobil(c, ids, pos, lead, index, tgt, np.ones(1, dtype=np.bool_),
+                           np.zeros(1))  # fmt: skip
         if chosen.size:
             start_lane_changes(c, chosen, tgt, t, req_duration[r : r + 1])
             out[r] = 1
@@ -117,7 +121,8 @@ def discretionary_changes(
     the better of the two when both qualify."""
     pos = c.scratch_int[S_POS]
     target = c.scratch_int[S_CAND_TARGET]
-    force = c.scratch_b[S_FORCE]
+    force, urgency = c.scratch_b[S_FORCE], c.scratch_f[S_URGENCY]
+    urgent = c.consts[URGENT]
     m = 0
     for k in range(ids.size):
         i = ids[k]
@@ -129,20 +134,21 @@ def discretionary_changes(
             left = c.road_int[L_LEFT, lane]
             opens, end = c.road_f[L_OPENS, lane], c.road_f[L_END, lane]
             if kind == KIND_ON and left >= 0 and opens <= x <= end:
-                pos[m], target[m], force[m] = k, left, False  # mandatory: a ramp lane's
+                pos[m], target[m], force[m], urgency[m] = k, left, False, 0.0  # a ramp lane's
                 m += 1
             continue
-        needed = needed_change(c, i)
+        needed, room = needed_change(c, i)
         if needed >= 0:
             pos[m], target[m], force[m] = k, needed, True
+            urgency[m] = max(0.0, 1.0 - room / urgent) if urgent > 0 else 0.0
             m += 1
             continue
         for side in (1, -1):
             tgt = discretionary_target(c, i, side)
             if tgt >= 0:
-                pos[m], target[m], force[m] = k, tgt, False
+                pos[m], target[m], force[m], urgency[m] = k, tgt, False, 0.0
                 m += 1
-    return _mobil(c, ids, pos[:m], lead, index, target[:m], force[:m])
+    return _mobil(c, ids, pos[:m], lead, index, target[:m], force[:m], urgency[:m])
 
 
 @kernel

@@ -16,10 +16,10 @@ from hcomc.equations.lane_change import lateral_state
 from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
-from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND
+from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND, L_WIDTH
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import speed_limit, stop_point
+from hcomc.sim.step.road import lane_end_at, speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -32,6 +32,7 @@ from hcomc.sim.step.state import (
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
+    LOOKAHEAD,
     PERCEIVE,
     S_ACC,
     S_BUFFER,
@@ -61,7 +62,6 @@ from hcomc.sim.step.state import (
     STEP,
     TTC_ERROR,
     WARMUP,
-    WIDTH,
     CoreArrays,
     add_event,
 )  # fmt: skip
@@ -80,20 +80,26 @@ vehicle's leader, views of the step's work rows."""
 
 
 @kernel
-def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
-    """Place vehicle i at its release point if the gap to the vehicle ahead allows it.
+def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
+    """Place vehicle i of the release queue of lane ``queue`` at its release point if the
+    lane has room for it.
 
-    The release speed is kept if the gap exceeds ``s0 + v T``; otherwise the vehicle is
-    released at the speed of the vehicle ahead if that gap suffices, else it waits. The
-    initial fill (released at ``-warmup``) does not check gaps.
+    The lane is the queue's own or, for a queue that may release into the lanes up to
+    ``queue_last`` (a corridor's mainline, SUMO's ``departLane="best"``), the one of them
+    with the most free road ahead (the rightmost for a vehicle whose off-ramp is within
+    the look-ahead per lane). A lane has no room while a vehicle's front lies within the
+    new vehicle's body or its jam distance ``s0`` behind it (vehicles of other lengths
+    released at the same point). The release speed is kept if the gap ahead exceeds
+    ``s0 + v T``; otherwise the vehicle is released at the speed of the vehicle ahead if
+    that gap suffices, else it waits. The initial fill (released at
+    ``-warmup``) does not check gaps.
     """
     x, v = c.d_x[i], c.d_v[i]
-    if c.d_t[i] > -c.consts[WARMUP] + 1e-9:
-        j, best = -1, math.inf
-        for k in range(c.x.size):
-            in_lane = c.active[k] and (c.lane[k] == lane or c.target[k] == lane)
-            if in_lane and x <= c.x[k] < best:
-                j, best = k, c.x[k]
+    fill = c.d_t[i] <= -c.consts[WARMUP] + 1e-9
+    lane, j = _best_lane(c, i, queue, x)
+    if not fill:
+        if lane < 0:
+            return False
         if j >= 0:
             gap = c.x[j] - c.length[j] - x
             s0, T = c.matrix[2, i], c.matrix[1, i]
@@ -101,6 +107,10 @@ def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
                 v = min(v, c.v[j])
                 if gap < s0 + v * T:
                     return False
+    lane = queue if lane < 0 else lane
+    if lane != c.lane[i]:
+        c.lane[i] = c.origin[i] = c.target[i] = lane
+        c.y[i] = c.road_f[L_CENTRE, lane]
     c.x[i], c.v[i], c.active[i] = x, v, True
     c.x_hist[:, i] = x
     c.v_hist[:, i] = v
@@ -108,10 +118,49 @@ def _insert(c: CoreArrays, i: int, lane: int, t: float) -> bool:
     return True
 
 
+@kernel(inline="always")
+def _ahead(c: CoreArrays, lane: int, x: float, clear: float) -> int:
+    """The nearest vehicle at or ahead of x with its body in ``lane`` (in it, or changing
+    from or to it) (-1: none; -2: the lane is taken, a vehicle's front lying in
+    ``[x - clear, x)``)."""
+    j, best = -1, math.inf
+    for k in range(c.x.size):
+        overlaps = c.lane[k] == lane or c.target[k] == lane or c.origin[k] == lane
+        if not (c.active[k] and overlaps):
+            continue
+        if x <= c.x[k] < best:
+            j, best = k, c.x[k]
+        elif x - clear <= c.x[k] < x:
+            return -2
+    return j
+
+
+@kernel(inline="always")
+def _best_lane(c: CoreArrays, i: int, queue: int, x: float) -> tuple[int, int]:
+    """The lane vehicle i enters by from ``queue`` at x and the vehicle ahead of it there
+    (-1: none), or ``(-1, -1)`` when no lane has room (:func:`_insert`)."""
+    last, exit_code = c.queue_last[queue], c.route[i]
+    reach = (last - queue + 1) * c.consts[LOOKAHEAD]
+    if exit_code >= 0 and c.road_f[L_END, exit_code] - x < reach:
+        last = queue  # its off-ramp is near: the rightmost lane, which leads to it
+    clear = c.length[i] + c.matrix[2, i]
+    lane, lead, room = -1, -1, -math.inf
+    for code in range(queue, last + 1):
+        if lane_end_at(c, code, x) <= x:
+            continue  # no such lane here
+        j = _ahead(c, code, x, clear)
+        if j == -2:
+            continue
+        free = math.inf if j < 0 else c.x[j] - c.length[j] - x
+        if free > room:
+            lane, lead, room = code, j, free
+    return lane, lead
+
+
 @kernel
 def release(c: CoreArrays, t: float) -> None:
-    """Insert due vehicles lane by lane; a blocked entry waits (and blocks its queue).
-    Releasing twice at the same t is a no-op."""
+    """Insert due vehicles queue by queue (a queue per lane, the lane they enter by); a
+    blocked entry waits (and blocks its queue). Releasing twice at the same t is a no-op."""
     for lane in range(c.queue_pos.size):
         start, end = c.queue_start[lane], c.queue_start[lane + 1]
         pos = c.queue_pos[lane]
@@ -178,7 +227,7 @@ def lane_index(
     other lane its body overlaps (the target lane from its start, the origin lane while its
     body still overlaps it). Returns ``(index, in_ori, in_tgt)``, views of the step's work
     rows."""
-    width = c.consts[WIDTH]
+    centre, width = c.road_f[L_CENTRE], c.road_f[L_WIDTH]
     n = ids.size
     si, sf, sb = c.scratch_int, c.scratch_f, c.scratch_b
     veh, lanes, xs = si[S_VEH], si[S_LANE], sf[S_X]
@@ -192,9 +241,9 @@ def lane_index(
         i = ids[k]
         if not changing[k]:
             continue
-        reach = 0.5 * (width + c.width[i])
-        in_ori[k] = abs(c.y[i] - c.road_f[L_CENTRE, c.origin[i]]) < reach
-        in_tgt[k] = abs(c.y[i] - c.road_f[L_CENTRE, c.target[i]]) < reach
+        o, g = c.origin[i], c.target[i]
+        in_ori[k] = abs(c.y[i] - centre[o]) < 0.5 * (width[o] + c.width[i])
+        in_tgt[k] = abs(c.y[i] - centre[g]) < 0.5 * (width[g] + c.width[i])
         crossed = c.lane[i] == c.target[i]
         if crossed and not in_ori[k]:
             continue

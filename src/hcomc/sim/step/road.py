@@ -90,29 +90,36 @@ def speed_limit(c: CoreArrays, code: int, x: float) -> float:
 
 
 @kernel(inline="always")
-def needed_change(c: CoreArrays, i: int) -> int:
-    """The change vehicle i's mainline lane or route needs now (its target code; -1: none),
-    taken as soon as it is safe:
+def needed_change(c: CoreArrays, i: int) -> tuple[int, float]:
+    """The change vehicle i's mainline lane or route needs now and the distance left for it
+    [m] (``(-1, inf)``: none), taken as soon as it is safe:
 
     * bound for an off-ramp, in the lane beside the ramp's deceleration lane: into it;
     * bound for an off-ramp k lanes further left: one lane right once the end of the
       ramp's deceleration lane is within ``(k + 1)`` times the look-ahead;
     * in a mainline lane that ends within the look-ahead: one lane right.
+
+    The distance left is that to the lane's end, or the off-ramp's last point shared by the
+    changes still needed.
     """
     code, x = c.lane[i], c.x[i]
     if c.road_int[L_KIND, code] != KIND_MAIN:
-        return -1
+        return -1, math.inf
     lookahead, right = c.consts[LOOKAHEAD], c.road_int[L_RIGHT, code]
+    target, left = -1, math.inf
+    end = lane_end_at(c, code, x)
+    if right >= 0 and end - x < lookahead:
+        target, left = right, end - x
     exit_code = c.route[i]
     if exit_code >= 0:
         begin, last = c.road_f[L_BEGIN, exit_code], c.road_f[L_END, exit_code]
+        k = main_index(c, code)
         if code == c.road_int[L_LEFT, exit_code]:
-            return exit_code if begin <= x < last else -1
-        if right >= 0 and last - x < (main_index(c, code) + 1) * lookahead:
-            return right
-    if right >= 0 and lane_end_at(c, code, x) - x < lookahead:
-        return right
-    return -1
+            if begin <= x < last:
+                target, left = exit_code, last - x
+        elif right >= 0 and last - x < (k + 1) * lookahead:
+            target, left = right, min(left, (last - x) / (k + 1))
+    return target, left
 
 
 @kernel(inline="always")

@@ -27,8 +27,8 @@ EV_FALLBACK, EV_MISSED_EXIT = 8, 9
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
 # consts
-(DT, WARMUP, WIDTH, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
- LOOKAHEAD) = range(11)  # fmt: skip
+(DT, WARMUP, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
+ LOOKAHEAD, URGENT) = range(11)  # fmt: skip
 N_CONSTS = 11
 # flags
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
@@ -53,7 +53,8 @@ S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # 
 S_MOBIL_F = 14  # .. S_MOBIL_F + 1: MOBIL's work rows over the vehicles
 S_NEW_ACC = 16  # the changers' accelerations behind their target-lane leaders
 S_MARGIN = 17  # MOBIL's incentive margin of each candidate change
-N_SCRATCH_F = 18
+S_URGENCY = 18  # how far each candidate change accepts harder braking (a needed one's)
+N_SCRATCH_F = 19
 S_CHANGING, S_IN_ORI, S_IN_TGT, S_FOLLOWING, S_HOLDING = range(5)
 S_FORCE, S_MOBIL_B = 5, 6  # S_MOBIL_B .. S_MOBIL_B + 1: MOBIL's flags per candidate
 N_SCRATCH_B = 8
@@ -100,6 +101,7 @@ class CoreArrays(NamedTuple):
     queues: np.ndarray  # vehicles by lane, concatenated
     queue_start: np.ndarray  # (L + 1,) start of each lane's queue in ``queues``
     queue_pos: np.ndarray  # (L,) next vehicle of each queue
+    queue_last: np.ndarray  # (L,) the last lane a queue's vehicles may enter by (its own: one)
     colliding: np.ndarray  # pair codes i * N + j of the pairs in contact last step
     ev_t: np.ndarray  # event buffer
     ev_kind: np.ndarray
@@ -113,7 +115,7 @@ class CoreArrays(NamedTuple):
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
     road_int: np.ndarray  # (3, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
-    road_f: np.ndarray  # (7, L) their centres, begins, ends ... [m] (L_CENTRE ...)
+    road_f: np.ndarray  # (8, L) their centres, widths, begins, ends ... [m] (L_CENTRE ...)
     sec_x0: np.ndarray  # (S,) the road's sections (hcomc.sim.lane_table.LaneTable): starts [m]
     sec_speed: np.ndarray  # (S,) speed limits [m/s]
     main_end: np.ndarray  # (M, S) where mainline lane k ends at or after section s [m]
