@@ -20,6 +20,7 @@ from hcomc.sim.lane_table import KIND_MAIN, L_EXIT
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.roads import paper_lanes, road_lanes
 from hcomc.sim.scene import Scene, SceneMaker
+from hcomc.sim.step import loop as step_loop
 
 Release = tuple[float, float, float, int, int]
 """A vehicle of a hand-made demand: release time [s], position [m], speed [m/s], lane code,
@@ -182,3 +183,27 @@ def test_each_on_ramp_is_controlled_with_its_own_geometry(controller: str) -> No
         group = sim.key_groups[int(vr)]
         assert group.vmc < 0 or sim.demand.lane[group.vmc] in (2, 3)
     assert sim.collisions == 0
+
+
+def test_a_change_that_stands_still_before_the_lane_line_is_given_up() -> None:
+    """A vehicle told to change lanes 10 m behind a standing one stops behind it before
+    its body reaches the lane line (Eq. 4-6 move it sideways only as it moves along x); once
+    its change's duration is over it gives the change up, back on its own lane's centre
+    line, instead of blocking both lanes for good."""
+    road = _road(lanes=2, length=3000.0)
+    releases = [(0.0, 300.0, 0.0, 0, -1), (0.0, 290.0, 5.0, 0, -1)]
+    config = load_config("C1", duration=20.0, warmup=0.0, control={"controller": "none"})
+    sim = Simulation(config, seed=0, scene=_scene(road, releases))
+    sim.command(0, 0.0)  # vehicle 0 stands at 300 m, held in its lane
+    sim.run_to(10)
+    changer = 1  # released at 290 m
+    step_loop.start_lane_changes(sim.core, np.array([changer]), np.array([1]), sim.t,
+                                 np.array([np.nan]))  # fmt: skip
+    sim.run()
+    aborts = _events(sim.log, EventKind.LANE_CHANGE_ABORT)
+    assert aborts["vehicle"].tolist() == [changer]
+    start = float(_events(sim.log, EventKind.LANE_CHANGE_START)["t"][0])
+    assert aborts["t"][0] - start > config.hdv.lane_change_duration
+    assert sim.lane[changer] == 0
+    assert sim.y[changer] == 0.0
+    assert sim.v[changer] < 0.1

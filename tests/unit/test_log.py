@@ -194,6 +194,7 @@ def test_event_kind_values() -> None:
         ("PLAN", 7),
         ("FALLBACK", 8),
         ("MISSED_EXIT", 9),
+        ("LANE_CHANGE_ABORT", 10),
     ]
 
 

@@ -3,12 +3,13 @@ on the road, a body over two lanes counting in both.
 
 A vehicle is **in a lane change** in the logged rows with ``t_s <= t <= t_e`` between its
 LANE_CHANGE_START event (time ``t_s``, ``value`` = target lane) and the next
-LANE_CHANGE_END event (time ``t_e``; none: to the end of the log). The row logged at
-``t_e`` is included because the engine logs a step's events at its start time and its state
-at its end: that row still shows the body part-way. Its **body overlaps** lane ``L`` if
-``abs(y - y_L) < (W + w) / 2``, with ``y`` its logged lateral position [m], ``y_L = (L - 1) W``
-the lane's centre line, ``W`` the lane width (``road.lane_width``) and ``w`` its width [m]:
-the engine's own test of which lanes a changer occupies (:mod:`hcomc.sim.step.motion`).
+LANE_CHANGE_END or LANE_CHANGE_ABORT event (time ``t_e``; none: to the end of the log). The
+row logged at ``t_e`` is included because the engine logs a step's events at its start time
+and its state at its end: that row still shows the body part-way. Its **body overlaps** lane
+``L`` if ``abs(y - y_L) < (W + w) / 2``, with ``y`` its logged lateral position [m],
+``y_L = (L - 1) W`` the lane's centre line, ``W`` the lane width (``road.lane_width``) and
+``w`` its width [m]: the engine's own test of which lanes a changer occupies
+(:mod:`hcomc.sim.step.motion`).
 
 A vehicle occupies its logged lane and, while in a lane change, the lane next to it on the
 side of its lateral offset from the logged lane's centre if its body overlaps that lane (the
@@ -40,7 +41,8 @@ def change_targets(log: SimulationLog, vehicles: IntArray, t: FloatArray) -> Int
     starts = starts[np.isin(starts["vehicle"], vehicles)]
     if not starts.size:
         return out
-    ends = log.events_of(EventKind.LANE_CHANGE_END)
+    done = (log.events_of(EventKind.LANE_CHANGE_END), log.events_of(EventKind.LANE_CHANGE_ABORT))
+    ends = np.sort(np.concatenate(done), order="t")
     for c, i in enumerate(vehicles.tolist()):
         s = starts[starts["vehicle"] == i]
         if not s.size:

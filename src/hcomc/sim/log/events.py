@@ -40,6 +40,9 @@ class EventKind(enum.IntEnum):
     MISSED_EXIT = 9
     """A vehicle bound for an off-ramp passed its deceleration lane on the mainline and
     drives on to the mainline's end; ``value`` = the off-ramp lane's code."""
+    LANE_CHANGE_ABORT = 10
+    """A vehicle gave up a lane change it stood still in before the lane line when its
+    duration was over; ``value`` = the lane it had aimed for."""
 
 
 EVENT_DTYPE = np.dtype(

@@ -26,6 +26,7 @@ from hcomc.sim.step.state import (
     ERRORS,
     EV_EXIT,
     EV_INSERTION,
+    EV_LC_ABORT,
     EV_LC_END,
     EV_MERGE,
     EV_MISSED_EXIT,
@@ -377,16 +378,25 @@ def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
 @kernel
 def lateral(c: CoreArrays, t: float) -> None:
     """Move changing vehicles along their quintic path; switch lane at the lane line; a
-    change from a ramp lane to the mainline is a merge."""
+    change from a ramp lane to the mainline is a merge. A change that stands still before
+    the lane line when its duration is over is given up: the vehicle is back on its own
+    lane's centre line (Eq. 4-6 move it only as it moves along x, and a vehicle that stopped
+    across two lanes would block both for good)."""
     centre, kind = c.road_f[L_CENTRE], c.road_int[L_KIND]
     for i in range(c.x.size):
         if not c.active[i] or c.origin[i] == c.target[i]:
             continue
         x0, xf = c.lc_x0[i], c.lc_xf[i]
+        xi = (c.x[i] - x0) / (xf - x0)
+        if xi < 0.5 and c.v[i] < _WAIT_SPEED and t - c.lc_t0[i] > c.lc_dur[i]:
+            add_event(c, t, EV_LC_ABORT, i, -1, c.x[i], c.target[i])
+            c.target[i] = c.lane[i] = c.origin[i]
+            c.y[i], c.heading[i] = centre[c.origin[i]], 0.0
+            c.lc_dur[i] = c.lc_duration[i]
+            continue
         y, dy_dx, _ = lateral_state(c.x[i], x0, xf, centre[c.origin[i]], centre[c.target[i]])
         c.y[i] = y
         c.heading[i] = math.atan(dy_dx)
-        xi = (c.x[i] - x0) / (xf - x0)
         c.lane[i] = c.target[i] if xi >= 0.5 else c.origin[i]
         if xi >= 1.0:
             add_event(c, t, EV_LC_END, i, -1, c.x[i], c.target[i])

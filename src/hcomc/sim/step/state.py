@@ -22,7 +22,7 @@ from hcomc._jit import borrow_all, kernel
 
 # event kinds (the IntEnum of hcomc.sim.log, as plain ints)
 EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT = range(7)
-EV_FALLBACK, EV_MISSED_EXIT = 8, 9
+EV_FALLBACK, EV_MISSED_EXIT, EV_LC_ABORT = 8, 9, 10
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_COUNTERS = 8
