@@ -104,18 +104,8 @@ class RouteRules(Frozen):
     off-ramp missed it (the changes came too late in dense traffic), with 700 m 25, with
     1000 m 5."""
 
-    exit_lookahead: float = Field(
-        1000.0, gt=0, le=5000,
-        description="a vehicle bound for an off-ramp, or in a lane that ends, starts moving "
-        "right when its exit (or the lane's end) is within this distance per lane change "
-        "still needed [m]",
-    )  # fmt: skip
-    urgent_distance: float = Field(
-        100.0, ge=0, le=2000,
-        description="within this distance of the last point of a needed change, the "
-        "deceleration it may impose on the new follower rises linearly from safe_decel to "
-        "emergency_decel [m]",
-    )  # fmt: skip
+    exit_lookahead: Annotated[float, _MOBIL["exit_lookahead"]]
+    urgent_distance: Annotated[float, _MOBIL["urgent_distance"]]
 
 
 class MergeEvents(Frozen):
@@ -141,7 +131,7 @@ class Corridor(Frozen):
     vehicles: dict[str, VehicleClass] = Field(default_factory=dict)
     detectors: DetectorSettings = Field(default_factory=DetectorSettings)
     lane_change: LaneChanges = Field(default_factory=lambda: LaneChanges.model_validate({}))
-    routes: RouteRules = Field(default_factory=RouteRules)
+    routes: RouteRules = Field(default_factory=lambda: RouteRules.model_validate({}))
     control: ControlParams = Field(
         default_factory=lambda: ControlParams.model_validate({}),
         description="the merge controller at every on-ramp and its settings (as a "
