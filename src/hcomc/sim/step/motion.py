@@ -91,8 +91,9 @@ def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
     the look-ahead per lane). A lane has no room while a vehicle's front lies within the
     new vehicle's body or its jam distance ``s0`` behind it (vehicles of other lengths
     released at the same point). The release speed is kept if the gap ahead exceeds
-    ``s0 + v T``; otherwise the vehicle is released at the speed of the vehicle ahead if
-    that gap suffices, else it waits. The initial fill (released at
+    ``s0 + v T`` and Eq. 1 behind the vehicle ahead brakes no harder than the comfortable
+    deceleration ``b``; otherwise the vehicle is released at the speed of the vehicle ahead
+    if that gap suffices, else it waits. The initial fill (released at
     ``-warmup``) does not check gaps.
     """
     x, v = c.d_x[i], c.d_v[i]
@@ -103,7 +104,9 @@ def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
             return False
         if j >= 0:
             gap = c.x[j] - c.length[j] - x
-            s0, T = c.matrix[2, i], c.matrix[1, i]
+            s0, T, b = c.matrix[2, i], c.matrix[1, i], c.matrix[4, i]
+            if v > c.v[j] and _follow_exact(c.matrix, c.iidm, i, gap, v, c.v[j], c.a[j]) < -b:
+                v = c.v[j]  # it would close in faster than it can comfortably brake for
             if gap < s0 + v * T:
                 v = min(v, c.v[j])
                 if gap < s0 + v * T:
