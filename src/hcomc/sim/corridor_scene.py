@@ -14,7 +14,7 @@ run's generator. A mainline vehicle waits at the road's start, its front one len
 (SUMO's ``departPos="base"``), and enters by the mainline lane with the most free road ahead
 (``departLane="best"``); a ramp vehicle likewise at its ramp road's start. It enters at its
 desired speed within the speed limit there, slower when the gap ahead asks for it
-(:func:`hcomc.sim.step.motion.release`). A vehicle of class ``c`` drives the IDM of the
+(:func:`hcomc.sim.step.release.release`). A vehicle of class ``c`` drives the IDM of the
 class (its CAV values for a CAV), its desired speed within the class's top speed.
 """
 

@@ -1,17 +1,17 @@
 """The compiled simulation step over the struct-of-arrays state of one run
 (:class:`hcomc.sim.step.state.Core`, fields as in :class:`~hcomc.sim.step.state.CoreArrays`).
 The step is split into kernels (here, :mod:`hcomc.sim.step.motion`,
-:mod:`hcomc.sim.step.lane_change`, :mod:`hcomc.sim.step.collisions` and
-:mod:`hcomc.sim.step.plans`), and every step of a run is driven by one driver,
-:func:`run_steps`: :func:`begin_step` (event room, error innovations, release), the
-decisions, :func:`step_alone` (:func:`step_body`: :func:`step_front`, the discretionary lane
-changes, :func:`step_back`) and :func:`record_due_row`. It advances many steps in one
-compiled call, live merge plans included (executed from the plan table of the compiled
-state), and hands a step to Python only for its decisions (:func:`needs_python`): a ramp
-vehicle entering the control zone (key vehicles, a first plan), a live plan due for a replan
-(:func:`hcomc.sim.step.plans.due_plans`), or every step of a run whose CAVs confirm their
-lane changes by the game (Section III-B, in Python). The engine then finishes that step with
-the same kernels (:meth:`hcomc.sim.engine.Simulation.resume`).
+:mod:`hcomc.sim.step.lane_change`, :mod:`hcomc.sim.step.collisions`,
+:mod:`hcomc.sim.step.plans` and :mod:`hcomc.sim.step.release`), and every step of a run is
+driven by one driver, :func:`run_steps`: :func:`begin_step` (event room, error innovations,
+release), the decisions, :func:`step_alone` (:func:`step_body`: :func:`step_front`, the
+discretionary lane changes, :func:`step_back`) and :func:`record_due_row`. It advances many
+steps in one compiled call, live merge plans included (executed from the plan table of the
+compiled state), and hands a step to Python only for its decisions (:func:`needs_python`): a
+ramp vehicle entering the control zone (key vehicles, a first plan), a live plan due for a
+replan (:func:`hcomc.sim.step.plans.due_plans`), or every step of a run whose CAVs confirm
+their lane changes by the game (Section III-B, in Python). The engine then finishes that
+step with the same kernels (:meth:`hcomc.sim.engine.Simulation.resume`).
 
 Each equation is called from its one home (:mod:`hcomc.equations`, :mod:`hcomc.safety`,
 :mod:`hcomc.sim.perception`, :mod:`hcomc.sim.mobil`, :mod:`hcomc.sim.neighbours`). Semantics
@@ -41,7 +41,6 @@ from hcomc.sim.step.motion import (
     follow_many,
     integrate,
     lateral,
-    release,
     step_accelerations,
 )
 from hcomc.sim.step.plans import (
@@ -52,6 +51,7 @@ from hcomc.sim.step.plans import (
     holding_mask,
     virtual_rows_into,
 )
+from hcomc.sim.step.release import release
 from hcomc.sim.step.state import (
     CAV_GAME,
     CONTROLLER,

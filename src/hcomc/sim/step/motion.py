@@ -1,4 +1,4 @@
-"""Kernels of the compiled step that move vehicles: release, car following with HDV
+"""Kernels of the compiled step that move vehicles: car following with HDV
 perception (Eq. 1-3), the Eq. 14 blend, lane-end and virtual leaders, integration, quintic
 lateral motion (Eq. 4-6) and exits (the collision check is
 :mod:`hcomc.sim.step.collisions`)."""
@@ -19,13 +19,12 @@ from hcomc.sim.arrays import nonzero_into, search_left
 from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND, L_WIDTH
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import lane_end_at, speed_limit, stop_point
+from hcomc.sim.step.road import speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
     ERRORS,
     EV_EXIT,
-    EV_INSERTION,
     EV_LC_ABORT,
     EV_LC_END,
     EV_MERGE,
@@ -33,7 +32,6 @@ from hcomc.sim.step.state import (
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
-    LOOKAHEAD,
     PERCEIVE,
     S_ACC,
     S_BUFFER,
@@ -62,7 +60,6 @@ from hcomc.sim.step.state import (
     SPEED_LIMITS,
     STEP,
     TTC_ERROR,
-    WARMUP,
     CoreArrays,
     add_event,
 )  # fmt: skip
@@ -75,104 +72,6 @@ StepAccelerations = tuple[np.ndarray, np.ndarray, LaneIndex, np.ndarray]
 """What :func:`step_accelerations` returns: ``(acc, changing, index, lead)``: the
 accelerations, whether each vehicle is changing lanes, the step's sorted entries and each
 vehicle's leader, views of the step's work rows."""
-
-
-# ---------------------------------------------------------------------------- release
-
-
-@kernel
-def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
-    """Place vehicle i of the release queue of lane ``queue`` at its release point if the
-    lane has room for it.
-
-    The lane is the queue's own or, for a queue that may release into the lanes up to
-    ``queue_last`` (a corridor's mainline, SUMO's ``departLane="best"``), the one of them
-    with the most free road ahead (the rightmost for a vehicle whose off-ramp is within
-    the look-ahead per lane). A lane has no room while a vehicle's front lies within the
-    new vehicle's body or its jam distance ``s0`` behind it (vehicles of other lengths
-    released at the same point). The release speed is kept if the gap ahead exceeds
-    ``s0 + v T`` and Eq. 1 behind the vehicle ahead brakes no harder than the comfortable
-    deceleration ``b``; otherwise the vehicle is released at the speed of the vehicle ahead
-    if that gap suffices, else it waits. The initial fill (released at
-    ``-warmup``) does not check gaps.
-    """
-    x, v = c.d_x[i], c.d_v[i]
-    fill = c.d_t[i] <= -c.consts[WARMUP] + 1e-9
-    lane, j = _best_lane(c, i, queue, x)
-    if not fill:
-        if lane < 0:
-            return False
-        if j >= 0:
-            gap = c.x[j] - c.length[j] - x
-            s0, T, b = c.matrix[2, i], c.matrix[1, i], c.matrix[4, i]
-            if v > c.v[j] and _follow_exact(c.matrix, c.iidm, i, gap, v, c.v[j], c.a[j]) < -b:
-                v = c.v[j]  # it would close in faster than it can comfortably brake for
-            if gap < s0 + v * T:
-                v = min(v, c.v[j])
-                if gap < s0 + v * T:
-                    return False
-    lane = queue if lane < 0 else lane
-    if lane != c.lane[i]:
-        c.lane[i] = c.origin[i] = c.target[i] = lane
-        c.y[i] = c.road_f[L_CENTRE, lane]
-    c.x[i], c.v[i], c.active[i] = x, v, True
-    c.x_hist[:, i] = x
-    c.v_hist[:, i] = v
-    add_event(c, t, EV_INSERTION, i, -1, x, t - c.d_t[i])
-    return True
-
-
-@kernel(inline="always")
-def _ahead(c: CoreArrays, lane: int, x: float, clear: float) -> int:
-    """The nearest vehicle at or ahead of x with its body in ``lane`` (in it, or changing
-    from or to it) (-1: none; -2: the lane is taken, a vehicle's front lying in
-    ``[x - clear, x)``)."""
-    j, best = -1, math.inf
-    for k in range(c.x.size):
-        overlaps = c.lane[k] == lane or c.target[k] == lane or c.origin[k] == lane
-        if not (c.active[k] and overlaps):
-            continue
-        if x <= c.x[k] < best:
-            j, best = k, c.x[k]
-        elif x - clear <= c.x[k] < x:
-            return -2
-    return j
-
-
-@kernel(inline="always")
-def _best_lane(c: CoreArrays, i: int, queue: int, x: float) -> tuple[int, int]:
-    """The lane vehicle i enters by from ``queue`` at x and the vehicle ahead of it there
-    (-1: none), or ``(-1, -1)`` when no lane has room (:func:`_insert`)."""
-    last, exit_code = c.queue_last[queue], c.route[i]
-    reach = (last - queue + 1) * c.consts[LOOKAHEAD]
-    if exit_code >= 0 and c.road_f[L_END, exit_code] - x < reach:
-        last = queue  # its off-ramp is near: the rightmost lane, which leads to it
-    clear = c.length[i] + c.matrix[2, i]
-    lane, lead, room = -1, -1, -math.inf
-    for code in range(queue, last + 1):
-        if lane_end_at(c, code, x) <= x:
-            continue  # no such lane here
-        j = _ahead(c, code, x, clear)
-        if j == -2:
-            continue
-        free = math.inf if j < 0 else c.x[j] - c.length[j] - x
-        if free > room:
-            lane, lead, room = code, j, free
-    return lane, lead
-
-
-@kernel
-def release(c: CoreArrays, t: float) -> None:
-    """Insert due vehicles queue by queue (a queue per lane, the lane they enter by); a
-    blocked entry waits (and blocks its queue). Releasing twice at the same t is a no-op."""
-    for lane in range(c.queue_pos.size):
-        start, end = c.queue_start[lane], c.queue_start[lane + 1]
-        pos = c.queue_pos[lane]
-        while start + pos < end and c.d_t[c.queues[start + pos]] <= t + 1e-9:
-            if not _insert(c, c.queues[start + pos], lane, t):
-                break
-            pos += 1
-        c.queue_pos[lane] = pos
 
 
 # ------------------------------------------------------------------------- perceive
@@ -215,7 +114,7 @@ def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.nda
 
 
 @kernel(inline="always")
-def _follow_exact(
+def follow_exact(
     matrix: np.ndarray, iidm: np.ndarray, i: int, s: float, v: float, vl: float, al: float
 ) -> float:
     """Eq. 1/3 of vehicle i with exact inputs (lane end, virtual leaders)."""
@@ -344,7 +243,7 @@ def _limits(
         i = ids[k]
         end = stop_point(c, i)
         if end < math.inf and not changing[k] and not following[i]:
-            a_stop = _follow_exact(c.matrix, c.iidm, i, end - c.x[i], c.v[i], 0.0, 0.0)
+            a_stop = follow_exact(c.matrix, c.iidm, i, end - c.x[i], c.v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
     if vv_fol.size:
         before = acc.copy()
@@ -353,7 +252,7 @@ def _limits(
             if vv_x[r] > c.x[i]:
                 k = search_left(ids, i)
                 gap = vv_x[r] - vv_len[r] - c.x[i]
-                a_v = _follow_exact(c.matrix, c.iidm, i, gap, c.v[i], vv_v[r], vv_a[r])
+                a_v = follow_exact(c.matrix, c.iidm, i, gap, c.v[i], vv_v[r], vv_a[r])
                 acc[k] = min(before[k], a_v)
     dt = c.consts[DT]
     for k in range(n):
