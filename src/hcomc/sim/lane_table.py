@@ -13,12 +13,12 @@ mainline lanes and a speed limit.
 Codes number the ramp lanes first (the on-ramps, then the off-ramps, each by position and,
 within a ramp, from the mainline outwards), then the mainline lanes from the right. Mainline
 lane k is centred at ``y = k W`` and lane j of a ramp at ``-(j + 1) W``. The paper's road
-(Section II-A, Fig. 1: two mainline lanes and one single-lane on-ramp)
-therefore has the codes of :class:`hcomc.road.Lane`: the ramp and its acceleration lane 0,
-lane 1 code 1, lane 2 code 2, centred at ``(code - 1) W``. :mod:`hcomc.sim.roads` makes
-the table of the paper's road and of a corridor's (:class:`hcomc.corridor.Road`: any number
-of mainline lanes, on- and off-ramps, lane drops, speed zones). The module needs numpy
-only, so that the compiled step may import it.
+(Section II-A, Fig. 1: two mainline lanes and one single-lane on-ramp) therefore has the
+codes of :class:`hcomc.road.Lane`: the ramp and its acceleration lane 0, lane 1 code 1, lane
+2 code 2, centred at ``(code - 1) W``. :mod:`hcomc.sim.roads` makes the table of the paper's
+road and of a corridor's (:class:`hcomc.corridor.Road`: any number of mainline lanes, on-
+and off-ramps, lane drops, speed zones). The module needs numpy only, so that the compiled
+step may import it.
 """
 
 from __future__ import annotations
@@ -45,17 +45,22 @@ L_KIND, L_LEFT, L_RIGHT = range(3)
 right (-1: none). Mainline lane 0 has no lane to its right: a ramp's lanes join it over a
 stretch only, and nobody changes into them of their own accord."""
 L_CENTRE, L_WIDTH, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(8)
-"""Rows of :attr:`LaneTable.floats`: the centre line's y [m]; the lane's width [m]; where
-the lane begins (a ramp
-road's start, a deceleration lane's; -inf on the mainline, whose lanes the sections give)
-[m]; from where a vehicle may leave the lane for the one to its left (an acceleration
-lane's start; -inf elsewhere) [m]; where a vehicle must have left it (an acceleration lane's
-end; where an off-ramp's deceleration lane ends, for vehicles that want to take it; inf on
-the mainline, whose lane ends the sections give) [m]; where a ramp lane's cooperative
-control zone begins (inf: none) [m]; where a vehicle in the lane leaves the road, its rear
-past it (the mainline's end, an off-ramp road's end; inf on an on-ramp) [m]; the speed limit
-of a ramp's road, before an acceleration lane and after a deceleration lane (inf: none)
-[m/s]."""
+"""Rows of :attr:`LaneTable.floats`, in this order:
+
+- the centre line's y [m];
+- the lane's width [m];
+- where the lane begins [m]: a ramp road's start, a deceleration lane's; -inf on the
+  mainline, whose lanes the sections give;
+- from where a vehicle may leave the lane for the one to its left [m]: an acceleration
+  lane's start; -inf elsewhere;
+- where a vehicle must have left it [m]: an acceleration lane's end; where an off-ramp's
+  deceleration lane ends, for the vehicles that want to take it; inf on the mainline, whose
+  lane ends the sections give;
+- where a ramp lane's cooperative control zone begins [m] (inf: none);
+- where a vehicle in the lane leaves the road, its rear past it [m]: the mainline's end, an
+  off-ramp road's end; inf on an on-ramp;
+- the speed limit of a ramp's road, before an acceleration lane and after a deceleration
+  lane [m/s] (inf: none)."""
 
 
 class LaneTable(NamedTuple):

@@ -8,25 +8,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from hcomc._jit import kernel
 from hcomc.sim.corridor.layout import KIND_MAIN, KIND_OFF, KIND_ON, Layout
+from hcomc.sim.step.road import section_at
 
 __all__ = ["mandatory_target", "section_at", "speed_limit", "stop_point"]
-
-
-@kernel(inline="always")
-def section_at(sec_x0: np.ndarray, x: float) -> int:
-    """Index of the section containing mainline position x (clipped to the road)."""
-    lo, hi = 0, sec_x0.size
-    while lo < hi:  # the last section with x0 <= x
-        mid = (lo + hi) // 2
-        if sec_x0[mid] <= x:
-            lo = mid + 1
-        else:
-            hi = mid
-    return max(lo - 1, 0)
 
 
 @kernel(inline="always")

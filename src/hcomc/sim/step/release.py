@@ -29,8 +29,8 @@ def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
     released at the same point). The release speed is kept if the gap ahead exceeds
     ``s0 + v T`` and Eq. 1 behind the vehicle ahead brakes no harder than the comfortable
     deceleration ``b``; otherwise the vehicle is released at the speed of the vehicle ahead
-    if that gap suffices, else it waits. The initial fill (released at
-    ``-warmup``) does not check gaps.
+    if that gap suffices, else it waits. The initial fill (released at ``-warmup``) does not
+    check gaps.
     """
     x, v = c.d_x[i], c.d_v[i]
     fill = c.d_t[i] <= -c.consts[WARMUP] + 1e-9

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from hcomc._jit import kernel
 from hcomc.sim.lane_table import (
     KIND_MAIN,
@@ -30,9 +32,9 @@ __all__ = [
 
 
 @kernel(inline="always")
-def section_at(c: CoreArrays, x: float) -> int:
-    """The section containing mainline position x [m] (clipped to the road)."""
-    sec_x0 = c.sec_x0
+def section_at(sec_x0: np.ndarray, x: float) -> int:
+    """Index of the section (starts ``sec_x0``, ascending) containing mainline position x
+    [m] (clipped to the road)."""
     lo, hi = 0, sec_x0.size
     while lo < hi:  # the last section with x0 <= x
         mid = (lo + hi) // 2
@@ -56,7 +58,7 @@ def lane_end_at(c: CoreArrays, code: int, x: float) -> float:
     road."""
     kind = c.road_int[L_KIND, code]
     if kind == KIND_MAIN:
-        return c.main_end[main_index(c, code), section_at(c, x)]
+        return c.main_end[main_index(c, code), section_at(c.sec_x0, x)]
     if kind == KIND_ON:
         return c.road_f[L_END, code]
     return math.inf
@@ -86,7 +88,7 @@ def speed_limit(c: CoreArrays, code: int, x: float) -> float:
         kind == KIND_OFF and x >= c.road_f[L_END, code]
     ):
         return c.road_f[L_SPEED, code]
-    return c.sec_speed[section_at(c, x)]
+    return c.sec_speed[section_at(c.sec_x0, x)]
 
 
 @kernel(inline="always")
