@@ -95,9 +95,12 @@ def commanded_changes(
 
 @kernel(inline="always")
 def free_target(road_int: np.ndarray, lane: int) -> int:
-    """The lane a vehicle in ``lane`` would change to of its own accord (-1: none): from a
-    ramp lane the lane to its left; from the mainline the mainline lane to its left, else
-    the one to its right (on the paper's road: lane 1 -> lane 2, lane 2 -> lane 1)."""
+    """The one lane a change out of ``lane`` goes to when nobody names it (-1: none): from a
+    ramp lane the lane to its left; from the mainline the mainline lane to its left, else the
+    one to its right (on the paper's road: lane 1 -> lane 2, lane 2 -> lane 1). A learning
+    agent's "change lane" action and :func:`hcomc.sim.lane_change_decisions.decide` without
+    targets mean it; the step's own decisions weigh both sides
+    (:func:`discretionary_changes`)."""
     left = road_int[L_LEFT, lane]
     if road_int[L_KIND, lane] != KIND_MAIN:
         return left
