@@ -319,9 +319,11 @@ class Simulation(EnginePlans):
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.origin != self.target}  # fmt: skip
         plans = tuple(p.plan for p in self.plans)
-        on_ramp = self.lanes.codes_of_kind(KIND_ON)
+        on_ramp = self.lanes.codes_of_kind(KIND_ON).tolist()
+        if not on_ramp:
+            raise ValueError("the road has no on-ramp: a controller's view is of one")
         code = int(self.lane[vr]) if vr >= 0 and int(self.lane[vr]) in on_ramp else on_ramp[0]
-        ramp = ramp_of(self.lanes, int(code))
+        ramp = ramp_of(self.lanes, code)
         return TrafficView.snapshot(t, state, self.fleet, self.config, plans, ramp)
 
     def _in_control_zone(self, ids: IntArray, changing: np.ndarray) -> IntArray:
