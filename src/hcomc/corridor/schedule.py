@@ -23,7 +23,7 @@ import numpy as np
 
 from hcomc.corridor.model import Corridor
 
-__all__ = ["PROFILE_STEP", "Flow", "departure_times", "flows"]
+__all__ = ["PROFILE_STEP", "Flow", "departure_times", "draw_classes", "flows"]
 
 PROFILE_STEP = 60.0
 """Longest interval [s] a linear demand profile is cut into."""
@@ -108,3 +108,22 @@ def departure_times(c: Corridor, duration: float | None = None) -> Departures:
     t_all, o_all, d_all = np.concatenate(times), np.concatenate(origin), np.concatenate(dest)
     order = np.lexsort((d_all, o_all, t_all))
     return Departures(t_all[order], o_all[order], d_all[order], origins, destinations)
+
+
+def draw_classes(
+    c: Corridor, d: Departures, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each departure's vehicle class (an index into ``tuple(c.vehicles)``) and whether it
+    is a CAV, drawn origin by origin from the origin's class and CAV shares with ``rng`` (as
+    SUMO draws a flow's vehicle type from its ``vTypeDistribution``)."""
+    classes = tuple(c.vehicles)
+    vclass = np.zeros(d.time.size, dtype=np.int64)
+    cav = np.zeros(d.time.size, dtype=np.bool_)
+    for o, name in enumerate(d.origins):
+        mine = np.flatnonzero(d.origin == o)
+        demand = c.demand[name]
+        names = list(demand.classes)
+        p = np.array([demand.classes[k] for k in names])
+        vclass[mine] = [classes.index(names[k]) for k in rng.choice(len(names), mine.size, p=p)]
+        cav[mine] = rng.random(mine.size) < demand.cav_share
+    return vclass, cav

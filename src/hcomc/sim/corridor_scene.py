@@ -26,7 +26,7 @@ import numpy as np
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.corridor import Corridor
-from hcomc.corridor.schedule import departure_times
+from hcomc.corridor.schedule import departure_times, draw_classes
 from hcomc.interface import Fleet
 from hcomc.road import Kind
 from hcomc.sim.demand import Demand
@@ -65,7 +65,7 @@ def corridor_scene(c: Corridor) -> SceneMaker:
         d = departure_times(c, config.warmup + config.duration)
         n = d.time.size
         classes = tuple(c.vehicles)
-        vclass, cav = _draw_classes(c, d.origin, d.origins, classes, rng)
+        vclass, cav = draw_classes(c, d, rng)
         bodies = np.array([[c.vehicles[k].length, c.vehicles[k].width] for k in classes])
         length, width = bodies[vclass, 0].reshape(n), bodies[vclass, 1].reshape(n)
         queue = np.array([first[o] for o in d.origins], dtype=np.int64)[d.origin]
@@ -102,24 +102,6 @@ def _release_last(c: Corridor, lanes: LaneTable, first: dict[str, int]) -> np.nd
         out[first[ramp.id]] = first[ramp.id] + ramp.lanes - 1
     out[first["main"]] = first["main"] + c.road.lanes - 1
     return out
-
-
-def _draw_classes(
-    c: Corridor, origin: np.ndarray, origins: tuple[str, ...], classes: tuple[str, ...],
-    rng: np.random.Generator,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Each vehicle's class (index into ``classes``) and whether it is a CAV, drawn from its
-    origin's shares."""
-    vclass = np.zeros(origin.size, dtype=np.int64)
-    cav = np.zeros(origin.size, dtype=bool)
-    for o, name in enumerate(origins):
-        mine = np.flatnonzero(origin == o)
-        demand = c.demand[name]
-        names = list(demand.classes)
-        p = np.array([demand.classes[k] for k in names])
-        vclass[mine] = [classes.index(names[k]) for k in rng.choice(len(names), mine.size, p=p)]
-        cav[mine] = rng.random(mine.size) < demand.cav_share
-    return vclass, cav
 
 
 def _fleet(

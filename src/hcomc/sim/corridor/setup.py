@@ -16,7 +16,7 @@ import numpy as np
 
 from hcomc.corridor import Corridor, OnRamp, detector_positions, sections
 from hcomc.corridor.layout import main_lane_count, ramp_codes
-from hcomc.corridor.schedule import departure_times
+from hcomc.corridor.schedule import departure_times, draw_classes
 from hcomc.rng import make_rng
 from hcomc.road import N_ROLES
 from hcomc.sim.corridor.fleet import IDM_COLUMNS, CorridorFleet
@@ -110,16 +110,7 @@ def build_fleet(c: Corridor, layout: Layout, seed: int, duration: float) -> Corr
     d = departure_times(c, duration)
     n = d.time.size
     classes = tuple(c.vehicles)
-    rng = make_rng(seed)
-    vclass = np.zeros(n, dtype=np.int64)
-    cav = np.zeros(n, dtype=np.bool_)
-    for o, origin in enumerate(d.origins):
-        mine = np.flatnonzero(d.origin == o)
-        demand = c.demand[origin]
-        names = list(demand.classes)
-        p = np.array([demand.classes[k] for k in names])
-        vclass[mine] = [classes.index(names[k]) for k in rng.choice(len(names), mine.size, p=p)]
-        cav[mine] = rng.random(mine.size) < demand.cav_share
+    vclass, cav = draw_classes(c, d, make_rng(seed))
     idm = np.zeros((n, len(IDM_COLUMNS)))
     for k, name in enumerate(classes):
         for flag in (False, True):
