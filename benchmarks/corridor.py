@@ -5,7 +5,7 @@ on-ramps, 4 off-ramps, one hour of demand with a peak), loaded with
 :func:`hcomc.corridor.load_corridor` and simulated for ``--duration`` seconds (default: the
 corridor's own duration) from its start, at its step length (0.1 s), with no ramp control:
 
-* hcomc: :func:`hcomc.sim.corridor.simulate_corridor` (seed: the corridor's), the call timed
+* hcomc: :func:`hcomc.metrics.corridor.simulate_corridor` (seed: the corridor's), the call timed
   as a whole. Its first call compiles the kernels, or loads them from numba's cache: one
   untimed 10-second call comes first, and its wall time is reported as ``first_call_s``.
   ``compile_s`` is that first call's wall time in a fresh child process with an empty cache
@@ -100,9 +100,9 @@ ENGINES = ("hcomc", "sumo")
 
 
 def _simulate_corridor() -> Any:
-    """:func:`hcomc.sim.corridor.simulate_corridor`, imported only when hcomc runs."""
+    """:func:`hcomc.metrics.corridor.simulate_corridor`, imported only when hcomc runs."""
     try:
-        from hcomc.sim.corridor import simulate_corridor
+        from hcomc.metrics.corridor import simulate_corridor
     except ImportError as exc:
         raise RuntimeError(f"hcomc's corridor simulator cannot be imported ({exc})") from None
     return simulate_corridor
@@ -189,7 +189,7 @@ def time_controlled(c: Corridor, duration: float, controller: str) -> dict[str, 
     summary = run.summary()
     ramps = {
         ramp: {k: row["merge_events"][k] for k in ("events", "merged_share", "min_ttc_p05",
-                                                    "fallbacks", "released", "conflicts")}
+                                                    "fallbacks")}
         for ramp, row in summary["on_ramps"].items()
     }  # fmt: skip
     return {

@@ -1,8 +1,8 @@
-"""Cross-validation of hcomc's corridor engine against SUMO on one corridor, no ramp control.
+"""Cross-validation of hcomc against SUMO on one corridor, no ramp control.
 
 Both engines run the same corridor (``--corridor``, default the ``corridor`` preset) for
 ``--duration`` seconds from its start, with the same vehicles departing at the same times
-(:mod:`hcomc.corridor.schedule`): hcomc with :func:`hcomc.sim.corridor.simulate_corridor`,
+(:mod:`hcomc.corridor.schedule`): hcomc with :func:`hcomc.metrics.corridor.simulate_corridor`,
 SUMO with the exported scenario (:func:`hcomc.sumo.corridor.export_corridor`, run as the
 ``sumo`` program with ``--tripinfo-output``). Printed beside each other, with the relative
 difference hcomc / SUMO − 1:
@@ -49,7 +49,7 @@ import pandas as pd
 
 from hcomc import __version__
 from hcomc.corridor import load_corridor
-from hcomc.sim.corridor import simulate_corridor
+from hcomc.metrics.corridor import simulate_corridor
 from hcomc.sim.manifest import git_revision
 from hcomc.sumo import sumo_binary
 from hcomc.sumo.corridor import export_corridor

@@ -63,10 +63,10 @@ if TYPE_CHECKING:
     from hcomc.interface import MergeController, MergeGroup, MergePlan, Mode, TrafficView
     from hcomc.interface.listener import StepListener
     from hcomc.metrics import METRICS, compute_metrics
+    from hcomc.metrics.corridor.run import simulate_corridor
     from hcomc.road import Lane
     from hcomc.robustness import CHANNELS, FAULTS, ChannelParams, FaultParams, ShieldParams
     from hcomc.robustness.impairments import Impairments
-    from hcomc.sim.corridor.run import simulate_corridor
     from hcomc.sim.engine import Simulation, simulate
     from hcomc.sim.ensemble import run_ensemble
     from hcomc.sim.log import SimulationLog
@@ -100,7 +100,7 @@ _HOMES: dict[str, str] = {
     "compute_metrics": "hcomc.metrics",
     "METRICS": "hcomc.metrics",
     "load_corridor": "hcomc.corridor",
-    "simulate_corridor": "hcomc.sim.corridor.run",
+    "simulate_corridor": "hcomc.metrics.corridor.run",
     "Impairments": "hcomc.robustness.impairments",
     "CHANNELS": "hcomc.robustness",
     "FAULTS": "hcomc.robustness",

@@ -1,7 +1,7 @@
-"""Merge control on a corridor (hcomc.sim.corridor.plans / .control): merge events whose key
-vehicles and surrogate safety agree with an independent computation on the full
-trajectories, the one-live-plan rule, commanded merges that keep to their plan, determinism,
-and the command line."""
+"""Merge control on a corridor (the engine's plans at every on-ramp, measured by
+hcomc.metrics.corridor.events): merge events whose key vehicles and surrogate safety agree with
+an independent computation on the full trajectories, commanded merges that keep to their
+plan, determinism, and the command line."""
 
 from __future__ import annotations
 
@@ -16,9 +16,8 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.control.longitudinal_candidate import MERGE_OFFSET
 from hcomc.corridor import Corridor, corridor_to_toml
+from hcomc.metrics.corridor import simulate_corridor
 from hcomc.safety.surrogate import CLOSING_SPEED
-from hcomc.sim.corridor import simulate_corridor
-from hcomc.sim.corridor.control import CorridorControl
 
 CAR = {"length": 5.0, "desired_speed": 30.0, "max_speed": 50.0, "cav": {}}
 
@@ -42,17 +41,11 @@ def busy_ramp(
 
 @pytest.fixture(scope="module")
 def uncontrolled() -> Any:
-    """The busy ramp without a controller, instantaneous lane changes, every vehicle sampled
-    at every step; ``lane_then`` / ``code_then``: the lane at the sample's time before the
-    step's own decisions (a change decided in a step already shows in that step's sample),
-    i.e. the lane of the vehicle's previous sample (its first: its own)."""
-    c = busy_ramp(lane_change_duration=0.0)
+    """The busy ramp without a controller, every vehicle sampled at every step (its logged
+    lane: the one it drives in, the target of a lane change once it has crossed the line)."""
+    c = busy_ramp()
     run = simulate_corridor(c, trajectory_interval=c.corridor.step_length)
-    traj = run.trajectories.sort_values(["id", "t"], kind="stable")
-    for column in ("lane", "code"):
-        previous = traj.groupby("id")[column].shift(1)
-        traj[f"{column}_then"] = previous.fillna(traj[column]).astype(int)
-    return run, traj.sort_index()
+    return run, run.trajectories
 
 
 def _at(traj: pd.DataFrame, t: float) -> pd.DataFrame:
@@ -75,9 +68,9 @@ def test_every_vr_entering_the_zone_is_an_event_with_the_key_vehicles_of_section
         me = now[now.id == ev.vr].iloc[0]
         before = _at(traj, ev.zone_time - 0.1)
         assert me.x >= zone
-        assert me.lane_then == -1
+        assert me.lane == -1
         assert before[before.id == ev.vr].x.iloc[0] < zone  # it had just entered it
-        lane0, lane1 = now[now.lane_then == 0], now[now.lane_then == 1]
+        lane0, lane1 = now[now.lane == 0], now[now.lane == 1]
         ahead, behind = lane0[lane0.x > me.x], lane0[lane0.x <= me.x]
         vmf = ahead.loc[ahead.x.idxmin(), "id"] if len(ahead) else -1
         vmc = behind.loc[behind.x.idxmax(), "id"] if len(behind) else -1
@@ -102,7 +95,7 @@ def _least_ttc(traj: pd.DataFrame, ids: list[int], t0: float, t1: float) -> tupl
             if me.empty:
                 continue
             me = me.iloc[0]
-            ahead = now[(now.code_then == me.code_then) & (now.x > me.x)]
+            ahead = now[(now.code == me.code) & (now.x > me.x)]
             if ahead.empty:
                 continue
             lead = ahead.loc[ahead.x.idxmin()]
@@ -125,8 +118,8 @@ def test_surrogate_safety_of_an_event_is_that_of_its_key_vehicles_over_its_windo
     for ev in merges[merges.merged].head(6).itertuples():
         ids = [int(i) for i in (ev.vr, ev.vmc, ev.vmr, ev.vnr) if i >= 0]
         ttc, drac = _least_ttc(traj, ids, ev.zone_time, ev.merge_time + window)
-        assert ev.min_ttc == pytest.approx(ttc, rel=1e-9, abs=1e-9)
-        assert ev.max_drac == pytest.approx(drac, rel=1e-9, abs=1e-9)
+        assert ev.min_ttc == pytest.approx(ttc, rel=1e-5)  # the log's float32 speeds
+        assert ev.max_drac == pytest.approx(drac, rel=1e-5, abs=1e-9)
         checked += np.isfinite(ttc)
     assert checked >= 3  # some events had a closing vehicle: the comparison was not vacuous
 
@@ -143,38 +136,16 @@ def test_without_a_controller_nothing_is_planned_and_merged_matches_the_trips(un
 
 
 @pytest.fixture(scope="module")
-def with_fifo(monkeypatch_module: pytest.MonkeyPatch) -> tuple[Any, list[list[int]]]:
-    """The busy ramp with FIFO replanning every second (FIFO-R, so that plans compete for
-    vehicles); after every decision, the vehicles two live plans command."""
-    twice: list[list[int]] = []
-    decide = CorridorControl.decide
-
-    def checked(self: CorridorControl, s: Any, t: float) -> None:
-        decide(self, s, t)
-        twice.append(self.commanded_twice(s))
-
-    monkeypatch_module.setattr(CorridorControl, "decide", checked)
-    return simulate_corridor(busy_ramp("fifo", replan_period=1.0)), twice
+def with_fifo() -> Any:
+    """The busy ramp with FIFO replanning every second (FIFO-R)."""
+    return simulate_corridor(busy_ramp("fifo", replan_period=1.0))
 
 
-@pytest.fixture(scope="module")
-def monkeypatch_module():
-    with pytest.MonkeyPatch.context() as mp:
-        yield mp
-
-
-def test_a_vehicle_is_commanded_by_at_most_one_live_plan(with_fifo: tuple[Any, list]):
-    run, twice = with_fifo
-    assert len(twice) > 0
-    assert all(not both for both in twice)
-    assert run.merges.conflicts.sum() > 0  # plans did want a vehicle another plan commanded
-
-
-def test_commanded_vrs_merge_from_their_plans_merge_position(with_fifo: tuple[Any, list]):
-    run, _ = with_fifo
+def test_commanded_vrs_merge_from_their_plans_merge_position(with_fifo: Any):
+    run = with_fifo
     assert run.collision_count == 0
     m = run.merges
-    commanded = m[m.cav & m.merged & ~m.released & (m.plans > 0) & ~m.fallback]
+    commanded = m[m.cav & m.merged & (m.plans > 0) & ~m.fallback]
     assert len(commanded) > 3
     # FIFO starts a CAV VR's change MERGE_OFFSET into the acceleration lane; it ends further on
     assert (commanded.merge_position >= MERGE_OFFSET).all()

@@ -15,7 +15,7 @@ from hcomc.cli import app
 from hcomc.config import ConfigError, load_config
 from hcomc.corridor import corridor_to_toml, load_corridor
 from hcomc.corridor.engine import scenario_of, scenario_only
-from hcomc.sim.corridor import simulate_corridor
+from hcomc.metrics.corridor import simulate_corridor
 from hcomc.sim.engine import Simulation
 
 CONDITIONS = ("C1", "C2", "C3", "C4", "C5")
@@ -66,7 +66,9 @@ def test_the_scenario_only_keys_are_named_and_refused_by_the_corridor_engine() -
     assert scenario_only(c3) == ("corridor.warmup", 30.0)
     no_warmup = load_corridor("paper-C3", {"corridor.warmup": 0.0})
     assert scenario_only(no_warmup) == ("demand.main.lane_flows", [720.0, 1200.0])
-    with pytest.raises(ValueError, match=r"key 'corridor.warmup' = 30.0: the corridor engine"):
+    with pytest.raises(
+        ValueError, match=r"key 'corridor.warmup' = 30.0: a corridor run does not take it"
+    ):
         simulate_corridor(c3)
 
 

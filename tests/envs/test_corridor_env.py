@@ -1,12 +1,11 @@
 """hcomc/CorridorMerge-v0 and the corridor's PettingZoo environment: agents drive ramp CAVs
-of a corridor on the corridor engine. API checks, the engine's run up to the episode against
+of a corridor on the engine. API checks, the engine's run up to the episode against
 simulate_corridor, the commanded acceleration against the ballistic closed form, the
 episode's outcomes, the observation's key vehicles against the engine's merge events, the
 safety term against an independent Eq. 15 computation, determinism, and the errors."""
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import gymnasium as gym
@@ -17,12 +16,14 @@ from pettingzoo.test import parallel_api_test
 
 import hcomc.envs  # noqa: F401 (registers hcomc/CorridorMerge-v0)
 from hcomc.config import ConfigError
+from hcomc.corridor.layout import ramp_codes
 from hcomc.envs.corridor.env import CorridorMergeEnv
 from hcomc.envs.corridor.multi_agent import CorridorParallelEnv
 from hcomc.envs.observation import N_EGO, N_ROLE
 from hcomc.equations.safety import critical_acceleration
-from hcomc.sim.corridor import simulate_corridor
-from hcomc.sim.corridor.state import C_AGENTS
+from hcomc.metrics.corridor import simulate_corridor
+from hcomc.sim.lane_table import KIND_ON, L_END, L_KIND
+from hcomc.sim.log import EventKind
 
 FAST: dict[str, Any] = {"start_after": 60.0, "max_episode_time": 30.0}
 """Episodes early in the corridor preset's hour: a short run to the agent's entry."""
@@ -62,15 +63,19 @@ def test_the_run_before_the_episode_is_the_corridor_engines_own() -> None:
     ref = simulate_corridor(env.corridor, seed=3, trajectory_interval=0.1)
     assert ref.trajectories is not None
     at = ref.trajectories[np.isclose(ref.trajectories["t"], t0)].set_index("id")
-    on_road = np.flatnonzero(e.run.s.status == 1)  # (the samples at t0 also hold vehicles
-    assert set(on_road.tolist()) <= set(at.index)  # inserted in the step from t0)
+    sim = e.run.sim
+    on_road = np.flatnonzero(sim.active)
+    assert set(on_road.tolist()) <= set(at.index)
     assert len(on_road) > 100
-    np.testing.assert_array_equal(at.loc[on_road, "x"].to_numpy(), e.run.s.x[on_road])
-    np.testing.assert_array_equal(at.loc[on_road, "v"].to_numpy(), e.run.s.v[on_road])
-    assert e.run.s.ev_t[e.ego] == pytest.approx(t0)
-    assert e.run.fleet.origins[e.run.fleet.origin[e.ego]] == "on2"
-    assert e.run.fleet.cav[e.ego]
-    assert e.run.fleet.depart[e.ego] >= 60.0
+    as_logged = sim.x[on_road].astype(np.float32), sim.v[on_road].astype(np.float32)
+    np.testing.assert_array_equal(at.loc[on_road, "x"].to_numpy(), as_logged[0])
+    np.testing.assert_array_equal(at.loc[on_road, "v"].to_numpy(), as_logged[1])
+    assert e.ego in sim.key_groups  # it entered its control zone in the last step
+    entered = {g["VR"]: g["t"] for g in sim.log.meta["key_groups"]}
+    assert entered[e.ego] == pytest.approx(t0 - 0.1)
+    assert int(sim.demand.lane[e.ego]) == ramp_codes(env.corridor.road)["on2"]
+    assert e.run.is_cav[e.ego]
+    assert e.run.depart(e.ego) >= 60.0
 
 
 def test_the_commanded_acceleration_follows_the_ballistic_closed_form() -> None:
@@ -79,15 +84,16 @@ def test_the_commanded_acceleration_follows_the_ballistic_closed_form() -> None:
     e = env.episode
     assert e is not None
     i = e.ego
-    x0, v0, a_max = float(e.run.s.x[i]), float(e.run.s.v[i]), float(e.run.veh.a[i])
+    sim = e.run.sim
+    x0, v0, a_max = float(sim.x[i]), float(sim.v[i]), float(sim.fleet.matrix[3, i])
     env.step(np.array([0.5, -1.0], dtype=np.float32))
     acc, period = 0.5 * a_max, env.settings.action_period
-    assert e.run.s.v[i] == pytest.approx(v0 + acc * period, abs=1e-9)
-    assert e.run.s.x[i] == pytest.approx(x0 + v0 * period + 0.5 * acc * period**2, abs=1e-9)
-    v1 = float(e.run.s.v[i])
+    assert sim.v[i] == pytest.approx(v0 + acc * period, abs=1e-9)
+    assert sim.x[i] == pytest.approx(x0 + v0 * period + 0.5 * acc * period**2, abs=1e-9)
+    v1 = float(sim.v[i])
     env.step(np.array([-1.0, -1.0], dtype=np.float32))  # the emergency deceleration
     b = env.corridor.lane_change.emergency_decel
-    assert e.run.s.v[i] == pytest.approx(max(v1 - b * period, 0.0), abs=1e-9)
+    assert sim.v[i] == pytest.approx(max(v1 - b * period, 0.0), abs=1e-9)
 
 
 def test_a_merge_ends_the_episode_with_the_engines_merge() -> None:
@@ -100,9 +106,13 @@ def test_a_merge_ends_the_episode_with_the_engines_merge() -> None:
     assert not trunc
     assert info["outcome"] == "merged"
     assert info["merged"]
-    assert math.isfinite(e.run.s.merge_t[e.ego])
-    assert e.run.s.code[e.ego] == 0
-    assert e.run.s.merge_x[e.ego] <= e.run.layout.code_x1[e.code]
+    sim = e.run.sim
+    merge = sim.log.events_of(EventKind.MERGE)
+    merge = merge[merge["vehicle"] == e.ego]
+    assert merge.size == 1
+    code = int(sim.demand.lane[e.ego])
+    assert sim.lane[e.ego] == sim.lanes.n_lanes - sim.lanes.n_main  # mainline lane 0
+    assert merge["x"][0] <= sim.lanes.floats[L_END, code] + 1e-9
     with pytest.raises(RuntimeError, match="call reset"):
         env.step(np.zeros(2, dtype=np.float32))
 
@@ -133,7 +143,8 @@ def test_observation_names_the_engines_key_vehicles() -> None:
     obs, _info = env.reset(seed=4)
     e = env.episode
     assert e is not None
-    group = e.run.s.ev_group[e.ego]
+    sim = e.run.sim
+    group = sim.key_groups[e.ego].as_array()
     np.testing.assert_array_equal(e.group, group)
     for r, j in enumerate(group):
         k = N_EGO + N_ROLE * r
@@ -142,11 +153,11 @@ def test_observation_names_the_engines_key_vehicles() -> None:
             assert obs[k + 3] == -1
             continue
         assert obs[k] == 1
-        assert obs[k + 1] == pytest.approx(e.run.s.x[j] - e.run.s.x[e.ego], abs=1e-3)
-        assert obs[k + 2] == pytest.approx(e.run.s.v[j] - e.run.s.v[e.ego], abs=1e-4)
-        assert obs[k + 4] == float(e.run.veh.cav[j])
-    assert obs[0] == pytest.approx(e.run.s.v[e.ego], abs=1e-5)
-    assert obs[2] == pytest.approx(e.run.layout.code_x1[e.code] - e.run.s.x[e.ego], abs=1e-3)
+        assert obs[k + 1] == pytest.approx(sim.x[j] - sim.x[e.ego], abs=1e-3)
+        assert obs[k + 2] == pytest.approx(sim.v[j] - sim.v[e.ego], abs=1e-4)
+        assert obs[k + 4] == float(e.run.is_cav[j])
+    assert obs[0] == pytest.approx(sim.v[e.ego], abs=1e-5)
+    assert obs[2] == pytest.approx(e.run.lane_end(e.ego) - sim.x[e.ego], abs=1e-3)
     assert env.observation_space.contains(obs)
 
 
@@ -167,18 +178,20 @@ def test_safety_term_is_eq15_of_the_egos_pairs() -> None:
     e = env.episode
     assert e is not None
     _, _, _, _, info = env.step(np.array([0.3, -1.0], dtype=np.float32))
-    s, i, ctl = e.run.s, e.ego, env.corridor.control
-    same = np.flatnonzero((s.status == 1) & (s.code == s.code[i]) & (np.arange(s.x.size) != i))
+    s, i, ctl = e.run.sim, e.ego, env.corridor.control
+    assert s.origin[i] == s.target[i]  # keeping its lane: its pairs are in that lane only
+    length = s.fleet.length
+    same = np.flatnonzero(s.active & (s.lane == s.lane[i]) & (np.arange(s.x.size) != i))
     ahead, behind = same[s.x[same] > s.x[i]], same[s.x[same] <= s.x[i]]
     worst = 0.0
     if ahead.size:
         lead = ahead[np.argmin(s.x[ahead])]
-        d = s.x[lead] - e.run.veh.length[lead] - s.x[i]
+        d = s.x[lead] - length[lead] - s.x[i]
         worst = max(worst, eq15(d, s.v[i], s.v[lead], ctl.safety_delay_cav, ctl))
     if behind.size:
         fol = behind[np.argmax(s.x[behind])]
-        delay = ctl.safety_delay_cav if e.run.veh.cav[fol] else ctl.safety_delay_hdv
-        d = s.x[i] - e.run.veh.length[i] - s.x[fol]
+        delay = ctl.safety_delay_cav if e.run.is_cav[fol] else ctl.safety_delay_hdv
+        d = s.x[i] - length[i] - s.x[fol]
         worst = max(worst, eq15(d, s.v[fol], s.v[i], delay, ctl))
     expected = env.settings.action_period * min(worst / ctl.safety_emergency_decel, 1.0)
     assert info["safety"] == pytest.approx(expected, rel=1e-12, abs=1e-15)
@@ -201,7 +214,7 @@ def test_episodes_are_deterministic_and_work_on_a_four_lane_corridor() -> None:
     ("kwargs", "message"),
     [
         ({"ramp": "nope"}, "key 'ramp' = 'nope': allowed: on1, on2, on3, on4, on5"),
-        ({"corridor": "paper-C3"}, "key 'corridor.warmup' = 30.0: the corridor engine"),
+        ({"corridor": "paper-C3"}, "key 'corridor.warmup' = 30.0: a corridor episode does not"),
         ({"start_after": 1e9}, "key 'start_after' = 1000000000.0: allowed: 0 <= start_after"),
         ({"action_period": 0.15}, "key 'action_period' = 0.15: allowed: a multiple of the step"),
         ({"max_episode_time": 0}, "key 'max_episode_time' = 0: allowed: a number > 0"),
@@ -243,22 +256,23 @@ def test_every_ramp_cav_in_a_zone_is_an_agent_until_its_merge() -> None:
     seen, steps = play(env, 1)
     run = env.run
     assert run is not None
-    s = run.s
-    assert len({run.fleet.origins[run.fleet.origin[i]] for i in seen}) >= 3  # several ramps
+    sim = run.sim
+    assert len({int(sim.demand.lane[i]) for i in seen}) >= 3  # several ramps
+    merged_at = set(sim.log.events_of(EventKind.MERGE)["vehicle"].tolist())
     for i in seen:
-        assert run.fleet.cav[i]
-        assert run.fleet.start_code[i] >= 0  # a ramp vehicle
-        assert math.isfinite(s.ev_t[i])  # that entered its control zone
+        assert run.is_cav[i]
+        assert sim.lanes.ints[L_KIND, sim.demand.lane[i]] == KIND_ON  # a ramp vehicle
+        assert i in sim.key_groups  # that entered its control zone
     merged = 0
     for *_, term, _, info in steps:
         for name, done in term.items():
             i = int(name[4:])
             if done and info[name]["outcome"] == "merged":
-                assert math.isfinite(s.merge_t[i])
-                assert np.isnan(s.agent_acc[i])  # handed back to its model
+                assert i in merged_at
+                assert np.isnan(sim.arrays.a_cmd[i])  # handed back to its model
                 merged += 1
     assert merged > 0
-    assert int(s.counters[C_AGENTS]) == 0
+    assert not run.agents
 
 
 def test_a_joining_agent_sees_the_key_vehicles_of_its_merge_event() -> None:
@@ -273,8 +287,9 @@ def test_a_joining_agent_sees_the_key_vehicles_of_its_merge_event() -> None:
         for data in info.values():
             i = data["vehicle"]
             if data.get("joined"):
-                assert run.s.ev_t[i] == pytest.approx(run.t)
-                np.testing.assert_array_equal(env._groups[i], run.s.ev_group[i])
+                entered = {g["VR"]: g["t"] for g in run.sim.log.meta["key_groups"]}
+                assert entered[i] == pytest.approx(run.t - 0.1)  # in the step just taken
+                np.testing.assert_array_equal(env._groups[i], run.sim.key_groups[i].as_array())
                 checked += 1
     assert checked > 0
 

@@ -28,7 +28,7 @@ from hcomc.experiments.comparison.effects import PREFERS, RUN_LEVEL, effects
 from hcomc.experiments.comparison.success import merge_success
 from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS, corridor_metrics
 from hcomc.experiments.paper import PAPER_METRICS
-from hcomc.sim.corridor import simulate_corridor
+from hcomc.metrics.corridor import simulate_corridor
 
 SHORT = """
 [corridor]
@@ -67,8 +67,8 @@ cav_share = 0.5
 flow = 600.0
 cav_share = 0.5
 """
-"""A 2.5 km three-lane corridor with two on-ramps (not the paper's layout: it runs in the
-corridor engine); in 120 s about 40 trips complete and about 40 ramp vehicles reach a zone."""
+"""A 2.5 km three-lane corridor with two on-ramps (not the paper's layout: it runs as a
+corridor); in 120 s about 40 trips complete and about 40 ramp vehicles reach a zone."""
 
 DURATION = 120.0
 SEEDS = 3
@@ -289,8 +289,7 @@ def test_corridor_metrics_of_known_tables():
         "time_to_merge": [10.0, 12.0, 20.0, np.nan], "min_ttc": [2.0, 1.0, np.inf, 6.0],
         "max_drac": [0.5, 1.5, 0.0, 0.1], "max_decel": [1.0] * 4,
         "vmc_speed_drop": [0.0] * 4, "plans": [1, 2, 0, 1],
-        "fallback": [False, True, False, False], "released": [0, 0, 0, 1],
-        "conflicts": [0, 1, 0, 0],
+        "fallback": [False, True, False, False],
     })  # fmt: skip
     got = corridor_metrics(trips, merges, collisions=2)
     assert got["travel_time"] == pytest.approx(100.0)
@@ -399,7 +398,7 @@ def test_a_paper_layout_corridor_runs_in_the_scenario_engine(tmp_path):
     ("args", "fragment"),
     [
         (["compare", "--controllers", "none,fifo", "--conditions", "SHORT", "--engine", "sumo"],
-         "corridor engine"),
+         "runs in the engine as a corridor"),
         (["compare", "--controllers", "none,fifo", "--conditions", "SHORT",
           "--set", "corridor.duratoin=60"], "unknown key 'corridor.duratoin'"),
         (["compare", "--controllers", "none,fifo", "--conditions", "C1,SHORT"],
@@ -414,7 +413,8 @@ def test_a_paper_layout_corridor_runs_in_the_scenario_engine(tmp_path):
           "control.options.gain=1"], "control.options.gain"),
         (["compare", "--controllers", "none,fifo", "--conditions", "SHORT", "--set",
           "corridor.warmup=10"], "key 'corridor.warmup' = 10.0 runs only in hcomc's scenario"),
-        (["run", "SHORT", "--controller", "fifo", "--engine", "sumo"], "corridor engine"),
+        (["run", "SHORT", "--controller", "fifo", "--engine", "sumo"],
+         "runs in the engine as a corridor"),
         (["run", "SHORT", "--controller", "fifo", "--set", "corridor.duration=-5"],
          "corridor.duration"),
         (["run", "SHORT"], "no merge controller"),

@@ -119,7 +119,7 @@ def test_plot_writes_svg_and_pdf(run_dir: Path, tmp_path: Path) -> None:
 
 def test_plot_of_a_corridor_simulates_it_with_the_seed(tmp_path: Path) -> None:
     from hcomc.corridor import load_corridor
-    from hcomc.sim.corridor import simulate_corridor
+    from hcomc.metrics.corridor import simulate_corridor
     from hcomc.viz.common import save_figure
 
     source = short_corridor(tmp_path, "corridor", 30.0)
@@ -161,7 +161,7 @@ def test_bad_corridor_input_is_a_one_line_error(
     cases = [
         ([run_dir, "--kind", "contour"], "'--kind' = 'contour' does not apply to corridor run"),
         ([run_dir, "--kind", "heatmap"], "'--kind' = 'heatmap' does not apply to corridor run"),
-        (["corridor", "--kind", "timespace"], "'corridor', which runs in the corridor engine"),
+        (["corridor", "--kind", "timespace"], "'corridor', which runs as a corridor"),
         (["paper", "--kind", "speed_heatmap"], "'paper': it has the paper's layout"),
         ([scenario_dir, "--kind", "speed_heatmap"], "is not a corridor run (it has no corr"),
         ([scenario_dir / "log.npz", "--kind", "flow_density"], "is a file, not a corridor run"),

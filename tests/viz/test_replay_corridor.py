@@ -21,8 +21,8 @@ from typer.testing import CliRunner
 import hcomc
 from hcomc.cli import app
 from hcomc.corridor import Corridor, load_corridor
+from hcomc.metrics.corridor import simulate_corridor
 from hcomc.road import KEY_ROLES
-from hcomc.sim.corridor import simulate_corridor
 from hcomc.sim.log import EventKind
 from hcomc.viz.replay.browser import Chromium, find_chromium
 from hcomc.viz.replay.pack import STEPS

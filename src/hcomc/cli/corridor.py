@@ -1,6 +1,6 @@
-"""``hcomc simulate CORRIDOR`` for a corridor hcomc's scenario engine does not run: the
-corridor engine (:mod:`hcomc.sim.corridor`), with the merge controller of the corridor's
-``[control]`` table (or ``--controller``) at every on-ramp."""
+"""``hcomc simulate CORRIDOR`` for a corridor that is not one of the paper's conditions: the
+engine on the corridor's road (:mod:`hcomc.metrics.corridor`), with the merge controller of the
+corridor's ``[control]`` table (or ``--controller``) at every on-ramp."""
 
 from __future__ import annotations
 
@@ -25,12 +25,12 @@ CORRIDOR_FILES = (
 
 
 def refuse_options(corridor: Corridor, why: str, options: dict[str, Any]) -> None:
-    """A one-line error (exit 2) if an option the corridor engine does not take is given."""
+    """A one-line error (exit 2) if an option the engine does not take is given."""
     for name, (value, allowed) in options.items():
         if value is not None and value != allowed:
             raise _fail(
                 f"option '{name}' = {value!r}: allowed: {allowed!r} for corridor "
-                f"'{corridor.name}' ({why}; it runs in the corridor engine)"
+                f"'{corridor.name}' ({why}; it runs as a corridor)"
             )
 
 
@@ -48,8 +48,8 @@ def run_corridor(
     force: bool, as_json: bool, trajectory_interval: float,
 ) -> None:  # fmt: skip
     """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
-    from hcomc.sim.corridor import simulate_corridor
-    from hcomc.sim.corridor.record import CORRIDOR_ENGINE
+    from hcomc.metrics.corridor import simulate_corridor
+    from hcomc.metrics.corridor.record import CORRIDOR_ENGINE
     from hcomc.sim.manifest import build_manifest, write_json_atomic
     from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 

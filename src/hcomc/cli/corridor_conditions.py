@@ -70,7 +70,7 @@ def corridor_conditions(text: str | None, suite: str | None) -> list[str]:
 
 def analysis_of(runs: Any) -> tuple[tuple[str, ...], dict[str, Any]]:
     """The notes and :func:`hcomc.cli.compare_output._analyse` options for a runs table: for runs
-    of the corridor engine (``kind`` "corridor" in every row) the corridor metrics with their
+    of a corridor run (``kind`` "corridor" in every row) the corridor metrics with their
     wording; none otherwise (the paper's metrics)."""
     from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS
 
@@ -136,7 +136,7 @@ def compare_corridors(
         "out": str(target), "set": list(settings),
     })  # fmt: skip
     filled = fill_folder(target, comparison, command, workers, (status, record, run_comparison))
-    engine_name = "corridor engine" if kind == "corridor" else f"engine {comparison.engine}"
+    engine_name = "engine, as corridors" if kind == "corridor" else f"engine {comparison.engine}"
     _say(f"corridors {', '.join(corridors)} · {comparison.seeds} seeds · {', '.join(labels)} "
          f"· {engine_name}")  # fmt: skip
     notes, options = analysis_of(filled.runs)
@@ -188,7 +188,7 @@ def run_corridor_condition(
 
 
 def print_corridor_runs(frame: Any, title: str) -> None:
-    """Print runs of the corridor engine: per seed the merge events and the corridor
+    """Print corridor runs: per seed the merge events and the corridor
     metrics, then each metric's mean with its 95 % CI over the seeds."""
     from hcomc.cli.run_output import mean_line, print_frame
     from hcomc.experiments.corridor.metrics import CORRIDOR_METRICS

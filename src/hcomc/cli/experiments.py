@@ -76,7 +76,7 @@ def run(
     """Run one scenario with one merge controller over seeds and print the paper's metrics.
 
     A corridor (preset or file) runs too: one of the paper's layout in the scenario engine
-    (the paper's metrics), any other in the corridor engine with the controller at every
+    (the paper's metrics), any other as a corridor run with the controller at every
     on-ramp (the corridor metrics); --set takes its dotted keys (corridor.duration=600)."""
     from hcomc.config import nest_overrides
     from hcomc.corridor import is_corridor_source

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 def _load_run(path: Path) -> ReplayRun:
     """The run of a run directory (a scenario run's log, a corridor run's trajectories) or a
     saved log file; a one-line error without one."""
-    from hcomc.sim.corridor.record import is_corridor_run
+    from hcomc.metrics.corridor.record import is_corridor_run
     from hcomc.sim.log import LOG_FILES
     from hcomc.viz.replay.runs import load_run
 

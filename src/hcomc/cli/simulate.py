@@ -144,8 +144,9 @@ def simulate(
 ) -> None:
     """Simulate a scenario (merge controller from the config or --controller) and summarise.
 
-    A corridor other than the paper's layout (e.g. the preset 'corridor') runs in the
-    corridor engine: detectors, travel times and merges from its own [detectors] table;
+    A corridor other than the paper's layout (e.g. the preset 'corridor') runs as a corridor
+    (the same engine on its road): detectors, travel times and merges from its own
+    [detectors] table;
     --set takes its dotted keys (corridor.duration=600).
     """
     from hcomc.cli.corridor import refuse_options, run_corridor, with_control
@@ -164,7 +165,7 @@ def simulate(
     if trajectory_interval:
         raise _fail(
             f"option '--trajectory-interval' = {trajectory_interval:g}: allowed: 0 for "
-            f"'{config}' (the corridor engine's option; the scenario engine logs every step)"
+            f"'{config}' (an option of corridor runs; a condition's run logs every step)"
         )
     from hcomc.experiments.runner import make_simulation
     from hcomc.metrics.detectors import detector_table

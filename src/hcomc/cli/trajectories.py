@@ -15,12 +15,12 @@ from hcomc.config import ScenarioConfig
 def _run_log(run_dir: Path) -> tuple[Any, ScenarioConfig]:
     """The log of a `hcomc simulate --out` directory (or a log file) and its config."""
     from hcomc.config import ConfigError, validate_config
-    from hcomc.sim.corridor.record import is_corridor_run
+    from hcomc.metrics.corridor.record import is_corridor_run
     from hcomc.viz.inputs import load_log
 
     if is_corridor_run(run_dir):
         raise fail(
-            f"RUN_DIR = '{run_dir}' is a run of the corridor engine, whose sampled trajectories "
+            f"RUN_DIR = '{run_dir}' is a corridor run, whose sampled trajectories "
             "are its trajectories.csv; allowed for it: --format commonroad"
         )
     try:
@@ -47,7 +47,7 @@ def export_trajectories(
         typer.Option(
             "--planning-problem",
             help="commonroad: add VR's planning problem (VR is then no obstacle, and time "
-            "step 0 is its first state); a corridor-engine run: the first vehicle of its "
+            "step 0 is its first state); a corridor run: the first vehicle of its "
             "most upstream on-ramp.",
         ),
     ] = False,

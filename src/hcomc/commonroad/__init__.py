@@ -2,8 +2,8 @@
 
 Why: CommonRoad's tools (its collision and drivability checker, criticality measures,
 motion planners and their benchmarks) then read hcomc's merges as they are. What: a run of
-hcomc's scenario engine (conditions C1-C5, corridors of the paper's layout) or of its
-corridor engine becomes one XML file (``hcomc export trajectories RUN --format commonroad``,
+the paper's conditions (C1-C5, corridors of the paper's layout) or of any other corridor
+becomes one XML file (``hcomc export trajectories RUN --format commonroad``,
 :func:`~hcomc.commonroad.export.export_commonroad`):
 
 * **lanelets** from the road: one per lane and stretch between the points where a lane
@@ -17,7 +17,7 @@ corridor engine becomes one XML file (``hcomc export trajectories RUN --format c
 
 Units are SI (m, s, rad, m/s, m/s^2); x runs along the road in driving direction, y to the
 left, angles counter-clockwise from +x; CommonRoad's time step k is the run's logging row k
-(the corridor engine's sample k), ``dt`` its logging interval. hcomc's reference point is
+(sample k of a corridor run), ``dt`` its logging interval. hcomc's reference point is
 the front bumper's centre, CommonRoad's the body centre: ``centre = front - L/2 (cos h,
 sin h)``; hcomc's speed is longitudinal, CommonRoad's along the heading: ``v / cos h``.
 

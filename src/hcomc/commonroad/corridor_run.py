@@ -1,9 +1,9 @@
-"""Tracks of a corridor-engine run (``hcomc simulate CORRIDOR --trajectory-interval S --out``).
+"""Tracks of a corridor run (``hcomc simulate CORRIDOR --trajectory-interval S --out``).
 
-The corridor engine writes sampled trajectories (``trajectories.csv``: time, vehicle, front
+A corridor run writes sampled trajectories (``trajectories.csv``: time, vehicle, front
 position ``x`` along the mainline, lane, lane code, speed, acceleration), the vehicles' classes
 (``trips.csv``) and the corridor (``manifest.json``), read by
-:mod:`hcomc.sim.corridor.record`. It has no lateral motion: a vehicle drives on its lane's
+:mod:`hcomc.metrics.corridor.record`. It has no lateral motion: a vehicle drives on its lane's
 centre line and switches lane half-way through a lane change. So its tracks here are drawn on
 the centre lines of :func:`hcomc.commonroad.lanes.corridor_strips`, placed by
 :func:`hcomc.corridor.layout.code_poses` with the lanes' headings (0 on the mainline, the
@@ -24,7 +24,7 @@ import pandas as pd
 from hcomc.commonroad.tracks import Track, body_centre
 from hcomc.corridor import Corridor, VehicleClass
 from hcomc.corridor.layout import code_poses
-from hcomc.sim.corridor.record import read_corridor_run
+from hcomc.metrics.corridor.record import read_corridor_run
 
 __all__ = ["CorridorTracks", "corridor_tracks"]
 
@@ -35,7 +35,7 @@ _VEHICLE_TYPES = {"truck": "truck", "trailer": "truck", "delivery": "truck", "bu
 
 @dataclass(frozen=True, slots=True)
 class CorridorTracks:
-    """What a corridor-engine directory holds for the export: the corridor, the sampling
+    """What a corridor-run directory holds for the export: the corridor, the sampling
     interval [s], the tracks, the trips (one row per vehicle, index: id) and the manifest."""
 
     corridor: Corridor
@@ -46,8 +46,8 @@ class CorridorTracks:
 
 
 def corridor_tracks(run_dir: Path) -> CorridorTracks:
-    """The tracks of a corridor-engine run (read by
-    :func:`hcomc.sim.corridor.record.read_corridor_run`); ``ValueError`` naming what is
+    """The tracks of a corridor run (read by
+    :func:`hcomc.metrics.corridor.record.read_corridor_run`); ``ValueError`` naming what is
     missing."""
     record = read_corridor_run(run_dir)
     samples = record.require_trajectories()

@@ -13,9 +13,9 @@ requires.
   the ramp runs parallel to lane 1 from ``ramp_start`` (a solid line: no change) and becomes
   the acceleration lane (a broad dashed line: merging allowed), which ends at
   ``accel_lane_end``.
-* **A corridor** (:func:`corridor_strips`, a run of the corridor engine) is cut into the
+* **A corridor** (:func:`corridor_strips`, a corridor run) is cut into the
   lane stretches of :func:`hcomc.corridor.layout.lane_stretches` (its sections, the
-  description its SUMO export and the corridor engine read, and its ramp roads sloping away
+  description its SUMO export and the engine read, and its ramp roads sloping away
   from the mainline), the layout the browser replay draws too.
 """
 
@@ -60,7 +60,7 @@ class Strip:
     """One lanelet: bounds (n, 2) [m] in driving direction, kind, hcomc lane and links.
 
     ``lane`` is the hcomc lane: a :class:`hcomc.road.Lane` on the paper's road; on a corridor
-    the corridor engine's lane (k >= 0 mainline lane k from the right, ``-1 - j`` ramp lane
+    the lane number of a corridor run (k >= 0 mainline lane k from the right, ``-1 - j`` ramp lane
     j), with ``ramp`` the ramp's id. Links are strip ids; 0 means none."""
 
     id: int

@@ -6,7 +6,7 @@ Two kinds of runs are read (:func:`load_run`):
   file): the log (:class:`~hcomc.sim.log.SimulationLog`) with every logged row, on the paper's
   road of the config stored in the log; VR is the first vehicle logged on the ramp lane (the
   paper's single merging vehicle; in a run with a ramp flow, the first of them);
-* the **corridor engine** (``hcomc simulate CORRIDOR --trajectory-interval S --out DIR``):
+* a **corridor run** (``hcomc simulate CORRIDOR --trajectory-interval S --out DIR``):
   its sampled trajectories (:mod:`hcomc.commonroad.corridor_run`) on the corridor's road; VR
   is the first vehicle released from the most upstream on-ramp that is sampled twice or
   more, its merge target the rightmost mainline lane beside that ramp's acceleration lane.
@@ -23,8 +23,8 @@ from hcomc.commonroad.corridor_run import CorridorTracks, corridor_tracks
 from hcomc.commonroad.lanes import Strip, StripKind, corridor_strips, paper_road_strips
 from hcomc.commonroad.tracks import Track, first_ramp_vehicle, log_tracks
 from hcomc.config import ConfigError, ScenarioConfig, validate_config
+from hcomc.metrics.corridor.record import is_corridor_run
 from hcomc.road import Lane
-from hcomc.sim.corridor.record import is_corridor_run
 from hcomc.sim.log import SimulationLog, log_file_of
 from hcomc.sim.manifest import git_revision
 
@@ -100,7 +100,7 @@ def run_of_log(log: SimulationLog, config: ScenarioConfig) -> ExportRun:
 
 
 def run_of_corridor(run: CorridorTracks) -> ExportRun:
-    """A corridor-engine run on its corridor's road."""
+    """A corridor run on its corridor's road."""
     trips = run.trips
     sampled = {t.vehicle for t in run.tracks}
     ramps = run.corridor.road.on_ramps

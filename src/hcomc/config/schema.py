@@ -22,7 +22,7 @@ from hcomc.config.vehicle_tables import CAVParams, HDVParams, LaneChangeParams
 __all__ = ["MIN_STEP", "ConfigError", "ScenarioConfig"]
 
 MIN_STEP = 1e-3
-"""Shortest simulation step [s] of the scenario and corridor engines."""
+"""Shortest simulation step [s] of the engine."""
 
 
 class ScenarioConfig(FrozenModel):

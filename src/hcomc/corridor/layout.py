@@ -18,10 +18,12 @@ module, so that they draw the same road and put a vehicle at the same place:
   from these ends), so that the ramps of neighbouring junctions lie
   apart (an off-ramp road that reaches past the start of the next on-ramp's road crosses
   it, as a flyover would).
-* Lane codes are the corridor engine's numbering of the lanes
-  (:mod:`hcomc.sim.corridor.layout`, defined here so that it exists once): mainline lane k
-  is code k; lane j of ramp r (in the order of :attr:`hcomc.corridor.Road.ramps`) is code
-  ``M + 2 r + j``, with M the largest mainline lane count (:func:`main_lane_count`).
+* Lane codes are the engine's numbering of the lanes (its lane table,
+  :func:`hcomc.sim.roads.road_lanes`): the ramps' lanes first, in the order of
+  :attr:`hcomc.corridor.Road.ramps` (lane j of a ramp is its first code plus j,
+  :func:`ramp_codes`), then mainline lane k as code ``R + k``, with R the number of ramp
+  lanes (:func:`ramp_lane_count`); :func:`lane_numbers` turns codes into the lane numbers
+  of the trajectories (k >= 0 mainline lane k, ``-1 - j`` ramp lane j).
   :func:`code_poses` places a sample ``(x, code)`` on its lane's centre line; the engine
   continues ``x`` along ramp roads, so a sample ``d`` metres upstream of an on-ramp's
   junction lies ``d`` metres along the slanted road (downstream for an off-ramp).
@@ -43,9 +45,11 @@ __all__ = [
     "LaneStretch",
     "StretchKind",
     "code_poses",
+    "lane_numbers",
     "lane_stretches",
     "main_lane_count",
     "ramp_codes",
+    "ramp_lane_count",
     "ramp_road_pose",
     "ramp_road_span",
     "side_by_side",
@@ -69,8 +73,8 @@ class LaneStretch:
     ``key`` names the lane (the same on every stretch of it: ``("main", k)`` or ``("ramp",
     id, j)``); ``y_right`` and ``y_left`` are its bounds [m] where the stretch meets the
     mainline, and ``drop`` the lateral shift of its upstream and downstream ends [m]
-    (non-zero on a sloping ramp road only). ``lane`` is the lane's number: on a corridor the
-    corridor engine's (k >= 0 mainline lane k, ``-1 - j`` lane j of ramp ``ramp``), on the
+    (non-zero on a sloping ramp road only). ``lane`` is the lane's number: on a corridor a
+    corridor run's (k >= 0 mainline lane k, ``-1 - j`` lane j of ramp ``ramp``), on the
     paper's road (:mod:`hcomc.commonroad.lanes`) a :class:`hcomc.road.Lane`."""
 
     key: tuple[object, ...]
@@ -150,14 +154,33 @@ def ramp_road_pose(ramp: OnRamp | OffRamp, distance: np.ndarray) -> tuple[np.nda
 
 
 def main_lane_count(road: Road) -> int:
-    """M, the largest mainline lane count: the first ramp lane's code."""
+    """M, the largest mainline lane count."""
     return max(s.lanes for s in sections(road))
+
+
+def ramp_lane_count(road: Road) -> int:
+    """R, the number of ramp lanes: the code of mainline lane 0."""
+    return sum(ramp.lanes for ramp in road.ramps)
 
 
 def ramp_codes(road: Road) -> dict[str, int]:
     """The code of lane j = 0 of each ramp (lane j is that plus j), by ramp id."""
-    first = main_lane_count(road)
-    return {ramp.id: first + 2 * r for r, ramp in enumerate(road.ramps)}
+    out, code = {}, 0
+    for ramp in road.ramps:
+        out[ramp.id] = code
+        code += ramp.lanes
+    return out
+
+
+def lane_numbers(road: Road) -> np.ndarray:
+    """Per lane code, the lane's number: k for mainline lane k, ``-1 - j`` for lane j of a
+    ramp (module docstring)."""
+    first = ramp_lane_count(road)
+    out = np.arange(first + main_lane_count(road), dtype=np.int64) - first
+    starts = ramp_codes(road)
+    for ramp in road.ramps:
+        out[starts[ramp.id] : starts[ramp.id] + ramp.lanes] = -1 - np.arange(ramp.lanes)
+    return out
 
 
 def code_poses(road: Road, x: np.ndarray, code: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -166,12 +189,14 @@ def code_poses(road: Road, x: np.ndarray, code: np.ndarray) -> tuple[np.ndarray,
     along it (module docstring)."""
     x = np.asarray(x, dtype=np.float64)
     code = np.asarray(code, dtype=np.int64)
-    width, n_main, ramps = road.lane_width, main_lane_count(road), road.ramps
+    width, first = road.lane_width, ramp_lane_count(road)
+    starts = ramp_codes(road)
+    owner = {starts[r.id] + j: (r, j) for r in road.ramps for j in range(r.lanes)}
     px, py, heading = x.copy(), np.zeros(x.size), np.zeros(x.size)
-    main = code < n_main
-    py[main] = (code[main] + 0.5) * width
+    main = code >= first
+    py[main] = (code[main] - first + 0.5) * width
     for index in np.unique(code[~main]).tolist():
-        ramp, j = ramps[(index - n_main) // 2], (index - n_main) % 2
+        ramp, j = owner[index]
         on = code == index
         py[on] = -(j + 0.5) * width
         junction = ramp.x if isinstance(ramp, OnRamp) else ramp.end

@@ -1,7 +1,7 @@
 """When each vehicle of a corridor's demand wants to enter: the departure schedule.
 
 Both simulators read it, so they get the same vehicles at the same times: SUMO as one
-``<flow>`` per :class:`Flow` (:mod:`hcomc.sumo.corridor`), hcomc's corridor engine as the
+``<flow>`` per :class:`Flow` (:mod:`hcomc.sumo.corridor`), hcomc as the
 departure times of :func:`departure_times`.
 
 Each origin's profile is cut into the piecewise-constant intervals of

@@ -11,7 +11,7 @@
   environment, and :func:`~hcomc.envs.policies.evaluate_policies`;
 * ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor.env.CorridorMergeEnv`): the agent
   drives a ramp CAV through its merge at one on-ramp of any corridor (N lanes, several
-  ramps, continuous demand), on the corridor engine.
+  ramps, continuous demand), on the engine.
 
 Importing this package registers ``hcomc/Merge-v0`` and ``hcomc/CorridorMerge-v0`` with
 gymnasium.

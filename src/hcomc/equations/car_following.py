@@ -8,7 +8,7 @@ given), which :mod:`hcomc.sim.perception` forms. Either kind may use the improve
 (:mod:`hcomc.equations.iidm`) as its base model.
 
 The public function is :func:`follow_acceleration`; its compiled one-vehicle kernel
-``follow_accel`` is what the simulation step, the corridor engine and the HCOMC prediction
+``follow_accel`` is what the simulation step and the HCOMC prediction
 call. ``follow_accel`` is split in two kernels so that a vehicle evaluated behind several
 candidate leaders at one speed (MOBIL, the prediction) takes the power of its speed once:
 ``free_term`` (the part of Eq. 1 that depends on the own speed alone) and

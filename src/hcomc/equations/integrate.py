@@ -5,7 +5,7 @@ The paper integrates the car-following acceleration twice to obtain the longitud
 SUMO's ballistic scheme (Treiber & Kanagaraj 2015): over a step of length :math:`\Delta t` with
 a constant acceleration :math:`a` the vehicle travels :math:`v\,\Delta t + a\,\Delta t^2/2` and
 ends at :math:`v + a\,\Delta t`. The engine's step, the controllers' prediction, the lane-change
-game's forward simulation and the corridor engine all call :func:`ballistic_step`, so that a
+game's forward simulation all call :func:`ballistic_step`, so that a
 plan is predicted with the motion that then executes it.
 
 References

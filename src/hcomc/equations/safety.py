@@ -156,7 +156,7 @@ def stopping_distance(v: float, decel: float, s0: float) -> float:
     Notes
     -----
     The one stopping distance of hcomc: the engine's release of a ramp vehicle from its plan
-    (``hcomc.sim.step.plans``), the corridor engine's (``hcomc.sim.corridor.plans``), the
-    robustness shield's and the planners' cap on the merge position all take it from here.
+    (``hcomc.sim.step.plans``), the robustness shield's and the planners' cap on the merge
+    position all take it from here.
     """
     return v * v / (2.0 * decel) + s0

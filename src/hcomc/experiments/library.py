@@ -136,7 +136,7 @@ def run(
     -------
     pandas.DataFrame
         One row per seed: the configuration, the plan, the paper's metrics and the outcome
-        (for a corridor in the corridor engine, the corridor metrics).
+        (for a corridor as a corridor run, the corridor metrics).
     """
     _check_count("seeds", seeds)
     _check_count("workers", workers)

@@ -1,7 +1,7 @@
 """Running lists of runs: in batches, on local processes or a Dask cluster.
 
 Runs of scenario conditions that share an undisturbed run are simulated together as one
-ensemble (a batch of up to :data:`BATCH_SIZE`); a corridor run in the corridor engine is a
+ensemble (a batch of up to :data:`BATCH_SIZE`); a corridor corridor run is a
 batch of its own. Local processes run the batches in a pool that, if a worker dies, is
 rebuilt and given the unfinished batches again; a Dask cluster retries a dead worker's
 tasks itself. Each finished run is handed to a ``store(i, (row, manifest))`` callback.
@@ -58,7 +58,7 @@ killed sweep loses at most the batches that were running; small batches keep tha
 
 def _chunks(runs: Sequence[AnySpec], todo: list[int]) -> list[list[int]]:
     """The runs still to do in batches of one kind, runs of one undisturbed run together; a
-    run in the corridor engine is a batch of its own (it shares nothing with others)."""
+    corridor run is a batch of its own (it shares nothing with others)."""
     ours = {i: run for i in todo if isinstance(run := runs[i], RunSpec)}
     chunks = batches_by_reference(list(ours.values()), BATCH_SIZE)
     found = [[list(ours)[k] for k in chunk] for chunk in chunks]

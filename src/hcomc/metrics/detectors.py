@@ -29,7 +29,7 @@ count, so a vehicle that enters or leaves the road at x_d is not counted twice o
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from itertools import pairwise
 
@@ -39,7 +39,10 @@ import pandas as pd
 from hcomc._typing import FloatArray
 from hcomc.sim.log import SimulationLog
 
-__all__ = ["DETECTOR_COLUMNS", "Crossings", "crossings", "detector_table"]
+__all__ = [
+    "DETECTOR_COLUMNS", "Crossings", "VehicleRows", "all_crossings", "crossings",
+    "detector_table", "holders", "vehicle_rows",
+]  # fmt: skip
 
 DETECTOR_COLUMNS = (
     "x", "lane", "begin", "end", "count", "flow", "speed", "harmonic_speed", "occupancy",
@@ -60,51 +63,124 @@ class Crossings:
     length: FloatArray  # (K,) [m]
 
 
-def _vehicle_rows(log: SimulationLog) -> pd.DataFrame:
-    """Active cells ordered by vehicle then time: vehicle, t, x, v, lane, length."""
-    cells = log.long_columns()
-    frame = pd.DataFrame({k: cells[k] for k in ("vehicle", "t", "x", "v", "lane", "length")})
-    return frame.sort_values(["vehicle", "t"], kind="stable", ignore_index=True)
+@dataclass(frozen=True)
+class VehicleRows:
+    """A log's active cells grouped by vehicle, each vehicle's in time order (K,): its
+    ``vehicle``, logged ``row`` and stored ``column``, ``t`` [s], ``x`` [m], ``v`` [m/s],
+    ``lane`` and ``length`` [m]. The groups come in the order of the log's stored columns,
+    so reading them needs no sort however long the run (:mod:`hcomc.sim.log.slots`)."""
+
+    vehicle: np.ndarray
+    row: np.ndarray
+    column: np.ndarray
+    t: FloatArray
+    x: FloatArray
+    v: FloatArray
+    lane: np.ndarray
+    length: FloatArray
+
+    def next_is_same(self) -> np.ndarray:
+        """(K - 1,) whether entry k + 1 is the same vehicle's next logged row."""
+        return (self.vehicle[1:] == self.vehicle[:-1]) & (self.row[1:] == self.row[:-1] + 1)
+
+    def last_of_vehicle(self, entries: np.ndarray) -> np.ndarray:
+        """The last entry of the vehicle of each of ``entries``."""
+        ends = np.append(
+            np.flatnonzero(self.vehicle[1:] != self.vehicle[:-1]), self.vehicle.size - 1
+        )
+        return ends[np.searchsorted(ends, entries)]
 
 
-def _first_reach(
-    vehicle: np.ndarray, t: FloatArray, x: FloatArray, target: FloatArray, start: np.ndarray
-) -> FloatArray:
-    """Per entry k, the interpolated time at which vehicle ``vehicle[start[k]]`` first has
-    x ≥ ``target[k]`` at or after row ``start[k]`` (its last row's time if never)."""
-    out = np.empty(start.size)
-    for k, r in enumerate(start.tolist()):
-        row = r
-        while row + 1 < x.size and vehicle[row + 1] == vehicle[r] and x[row + 1] < target[k]:
-            row += 1
-        if row + 1 < x.size and vehicle[row + 1] == vehicle[r]:
-            share = (target[k] - x[row]) / (x[row + 1] - x[row])
-            out[k] = t[row] + share * (t[row + 1] - t[row])
-        else:
-            out[k] = t[row]
+def holders(log: SimulationLog, row: np.ndarray, column: np.ndarray) -> np.ndarray:
+    """The vehicle holding stored column ``column[k]`` at row ``row[k]`` of a slot-column
+    log (:mod:`hcomc.sim.log.slots`): the last vehicle to take that column at or before that
+    row, found without the (T, S) grid of the log's owners."""
+    held = np.flatnonzero(log.slot >= 0)
+    keys = log.slot[held] * log.n_steps + log.span[held, 0]
+    order = np.argsort(keys, kind="stable")
+    at = np.searchsorted(keys[order], column * log.n_steps + row, side="right") - 1
+    return held[order][at]
+
+
+def vehicle_rows(log: SimulationLog) -> VehicleRows:
+    """The active cells of ``log`` by vehicle (:class:`VehicleRows`)."""
+    cells = log.cells
+    column, row = np.nonzero(cells["active"].T)  # by stored column, then row
+    vehicle = column.astype(np.int64)
+    if not log.one_column_per_vehicle:
+        vehicle = holders(log, row, column)
+    return VehicleRows(
+        vehicle=vehicle, row=row.astype(np.int64), column=column.astype(np.int64),
+        t=log.t[row].astype(np.float64), x=cells["x"][row, column].astype(np.float64),
+        v=cells["v"][row, column].astype(np.float64),
+        lane=cells["lane"][row, column].astype(np.int64),
+        length=np.asarray(log.length, dtype=np.float64)[vehicle],
+    )  # fmt: skip
+
+
+def _passes(
+    x: FloatArray, follows: np.ndarray, positions: FloatArray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Entries k and position indices j with x[k] < positions[j] <= x[k + 1] for the
+    consecutive entries ``follows`` marks (positions sorted)."""
+    lo = np.searchsorted(positions, x[:-1], side="right")
+    hi = np.searchsorted(positions, x[1:], side="right")
+    moved = np.flatnonzero(follows & (hi > lo))
+    n = (hi - lo)[moved]
+    entry = np.repeat(moved, n)
+    first = np.repeat(lo[moved], n)
+    offset = np.arange(entry.size) - np.repeat(np.cumsum(n) - n, n)
+    return entry, first + offset
+
+
+def _rear_times(
+    rows: VehicleRows, k: np.ndarray, j: np.ndarray, t_front: FloatArray, rear_key: np.ndarray,
+    rear_t: FloatArray, n_pos: int,
+) -> FloatArray:  # fmt: skip
+    """When the rear of the vehicle of each front crossing (entry ``k``, position ``j``)
+    crossed the same position: its rear crossing (key vehicle * n_pos + position) at or
+    after the front's, else the vehicle's last logged time."""
+    last = rows.t[rows.last_of_vehicle(k)]
+    if rear_key.size == 0:
+        return last
+    order = np.argsort(rear_key, kind="stable")
+    key, when = rear_key[order], rear_t[order]
+    front_key = rows.vehicle[k] * n_pos + j
+    at = np.minimum(np.searchsorted(key, front_key), key.size - 1)
+    matched = (key[at] == front_key) & (when[at] >= t_front)
+    return np.where(matched, when[at], last)
+
+
+def all_crossings(rows: VehicleRows, positions: Iterable[float]) -> dict[float, Crossings]:
+    """The front crossings of each position [m] (module docstring), by position."""
+    where = np.unique(np.asarray(list(positions), dtype=np.float64))
+    follows = rows.next_is_same()
+    k, j = _passes(rows.x, follows, where)
+    share = (where[j] - rows.x[k]) / (rows.x[k + 1] - rows.x[k])
+    t_front = rows.t[k] + share * (rows.t[k + 1] - rows.t[k])
+    rear_k, rear_j = _passes(rows.x - rows.length, follows, where)
+    rear_share = (where[rear_j] - rows.x[rear_k] + rows.length[rear_k]) / (
+        rows.x[rear_k + 1] - rows.x[rear_k]
+    )
+    rear_t = rows.t[rear_k] + rear_share * (rows.t[rear_k + 1] - rows.t[rear_k])
+    t_rear = _rear_times(rows, k, j, t_front, rows.vehicle[rear_k] * where.size + rear_j, rear_t,
+                         where.size)  # fmt: skip
+    out = {}
+    for index, x_d in enumerate(where.tolist()):
+        mine = np.flatnonzero(j == index)
+        mine = mine[np.lexsort((t_front[mine], rows.vehicle[k[mine]]))]
+        e = k[mine]
+        out[x_d] = Crossings(
+            vehicle=rows.vehicle[e], lane=rows.lane[e], t_front=t_front[mine],
+            speed=rows.v[e] + share[mine] * (rows.v[e + 1] - rows.v[e]), t_rear=t_rear[mine],
+            length=rows.length[e],
+        )  # fmt: skip
     return out
 
 
 def crossings(log: SimulationLog, x_d: float) -> Crossings:
     """The front crossings of position ``x_d`` [m] in ``log`` (module docstring)."""
-    rows = _vehicle_rows(log)
-    vehicle = rows["vehicle"].to_numpy(np.int64)
-    t = rows["t"].to_numpy(np.float64)
-    x = rows["x"].to_numpy(np.float64)
-    same = vehicle[1:] == vehicle[:-1]
-    consecutive = same & np.isclose(t[1:] - t[:-1], log.dt, rtol=1e-6)
-    hit = np.flatnonzero(consecutive & (x[:-1] < x_d) & (x[1:] >= x_d))
-    share = (x_d - x[hit]) / (x[hit + 1] - x[hit])
-    v = rows["v"].to_numpy(np.float64)
-    length = rows["length"].to_numpy(np.float64)[hit]
-    return Crossings(
-        vehicle=vehicle[hit],
-        lane=rows["lane"].to_numpy(np.int64)[hit],
-        t_front=t[hit] + share * (t[hit + 1] - t[hit]),
-        speed=v[hit] + share * (v[hit + 1] - v[hit]),
-        t_rear=_first_reach(vehicle, t, x, x_d + length, hit),
-        length=length,
-    )
+    return all_crossings(vehicle_rows(log), [x_d])[float(x_d)]
 
 
 def _interval_row(c: Crossings, begin: float, end: float) -> dict[str, float]:
@@ -126,21 +202,24 @@ def detector_table(
     log: SimulationLog,
     positions: Iterable[float],
     interval: float = 60.0,
-    lanes: Iterable[int] | None = None,
+    lanes: Iterable[int] | Mapping[float, Iterable[int]] | None = None,
+    rows: VehicleRows | None = None,
 ) -> pd.DataFrame:
     """E1 measurements at every position [m] and lane, per interval [s] from the log's first
-    time to one step past its last (a shorter last interval is dropped); ``lanes`` defaults,
-    per position, to every lane a vehicle was counted in there. Columns
+    time to one step past its last (a shorter last interval is dropped); ``lanes`` (the same
+    for every position, or per position) defaults, per position, to every lane a vehicle was
+    counted in there; ``rows``: the log's :func:`vehicle_rows` when already read. Columns
     :data:`DETECTOR_COLUMNS`."""
     if not interval > 0:
         raise ValueError(f"interval must be > 0 [s], got {interval}")
     times = log.t[np.isfinite(log.t)]
     t0, t1 = float(times[0]), float(times[-1]) + log.dt  # the last row stands for [t, t + dt)
     edges = t0 + interval * np.arange(int(np.floor((t1 - t0) / interval + 1e-9)) + 1)
-    found = {float(p): crossings(log, float(p)) for p in positions}
+    found = all_crossings(vehicle_rows(log) if rows is None else rows, positions)
     out = []
     for x_d, c in found.items():
-        for lane in sorted(set(lanes) if lanes is not None else set(c.lane.tolist())):
+        here_lanes = lanes.get(x_d, ()) if isinstance(lanes, Mapping) else lanes
+        for lane in sorted(set(here_lanes) if here_lanes is not None else set(c.lane.tolist())):
             here = c.lane == lane
             mine = Crossings(*(getattr(c, f.name)[here] for f in fields(Crossings)))
             for begin, end in pairwise(edges.tolist()):

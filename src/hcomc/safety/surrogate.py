@@ -1,6 +1,6 @@
 """Thresholds of the surrogate safety measures (time to collision, DRAC), shared by the
-measures of a logged run (:mod:`hcomc.metrics.surrogate`) and those the corridor engine
-takes during a run (:mod:`hcomc.sim.corridor.plans`)."""
+measures of a logged run (:mod:`hcomc.metrics.surrogate`) and those of a corridor run's merge
+events (:mod:`hcomc.metrics.corridor.events`)."""
 
 from __future__ import annotations
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.corridor import Corridor
+from hcomc.corridor.layout import ramp_codes
 from hcomc.corridor.schedule import departure_times, draw_classes
 from hcomc.interface import Fleet
 from hcomc.road import Kind
@@ -78,7 +79,7 @@ def corridor_scene(c: Corridor) -> SceneMaker:
             t=d.time - config.warmup, x=x, v=np.minimum(fleet.matrix[0], limit),
             lane=queue, kind=fleet.kind, scripted=fleet.scripted, route=exits[d.destination],
         )  # fmt: skip
-        return Scene(lanes, demand, fleet, _release_last(c, lanes, first))
+        return Scene(lanes, demand, fleet, _release_last(c, lanes, first), classes, vclass)
 
     return make
 
@@ -86,12 +87,7 @@ def corridor_scene(c: Corridor) -> SceneMaker:
 def _first_codes(c: Corridor, lanes: LaneTable) -> dict[str, int]:
     """The lane code each origin releases into first, and each off-ramp's first lane, by
     name (``main``: the rightmost mainline lane)."""
-    out, code = {}, 0
-    for ramp in c.road.ramps:
-        out[ramp.id] = code
-        code += ramp.lanes
-    out["main"] = lanes.n_lanes - lanes.n_main
-    return out
+    return {**ramp_codes(c.road), "main": lanes.n_lanes - lanes.n_main}
 
 
 def _release_last(c: Corridor, lanes: LaneTable, first: dict[str, int]) -> np.ndarray:

@@ -42,7 +42,7 @@ from hcomc.control.key_group import find_key_vehicles
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
 from hcomc.sim.decision import decide, undecided
 from hcomc.sim.engine_plans import EnginePlans
-from hcomc.sim.lane_table import KIND_ON, L_ZONE
+from hcomc.sim.lane_table import KIND_ON, L_LEFT, L_RIGHT, L_ZONE
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.plan_execution import game_confirms
 from hcomc.sim.roads import ramp_of
@@ -183,7 +183,8 @@ class Simulation(EnginePlans):
         and a collision it causes is logged like any other."""
         if self.origin[i] != self.target[i] or not self.active[i]:
             raise ValueError(f"vehicle {i} is not on the road or already changing lanes")
-        if abs(int(target) - int(self.lane[i])) != 1:
+        beside = self.lanes.ints[[L_LEFT, L_RIGHT], int(self.lane[i])]
+        if int(target) < 0 or int(target) not in beside.tolist():
             raise ValueError(f"lane change of vehicle {i}: target lane {target} is not adjacent "
                              f"to its lane {int(self.lane[i])}")  # fmt: skip
         step_loop.start_lane_changes(

@@ -32,12 +32,17 @@ class Scene:
     A vehicle waits in the release queue of its demand lane; ``release_last`` (L,) gives,
     for each lane's queue, the last lane code its vehicles may enter by (the one with the
     most free road ahead, as SUMO's ``departLane="best"``; a corridor's mainline origin
-    spans its lanes); by default each queue releases into its own lane only."""
+    spans its lanes); by default each queue releases into its own lane only. ``classes``
+    names the vehicle classes of a road with several (a corridor's cars and trucks) and
+    ``vclass`` (N,) each vehicle's index into it; the engine does not read them (the fleet
+    holds every vehicle's parameters), the measurements of a run do."""
 
     lanes: LaneTable
     demand: Demand
     fleet: Fleet
     release_last: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    classes: tuple[str, ...] = ()
+    vclass: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
 
     def __post_init__(self) -> None:
         n_lanes = self.lanes.n_lanes
@@ -50,6 +55,9 @@ class Scene:
         if lane.size and (lane.min() < 0 or lane.max() >= n_lanes):
             raise ValueError(f"demand lanes {sorted(set(lane.tolist()))}: the road's lane "
                              f"codes are 0 to {n_lanes - 1}")  # fmt: skip
+        if self.classes and (self.vclass.shape != lane.shape or self.vclass.max(initial=0)
+                             >= len(self.classes)):  # fmt: skip
+            raise ValueError(f"vclass: one index into classes {list(self.classes)} per vehicle")
         exits = set(self.lanes.codes_of_kind(KIND_OFF).tolist()) | {-1}
         if not set(route.tolist()) <= exits:
             wrong = sorted(set(route.tolist()) - exits)

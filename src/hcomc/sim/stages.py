@@ -37,11 +37,13 @@ def lane_change_drawing() -> None:
 def corridor_runs() -> None:
     """A short run of the corridor preset, uncontrolled and with HCOMC at every ramp."""
     from hcomc.corridor.loading import load_corridor
-    from hcomc.sim.corridor import simulate_corridor
+    from hcomc.sim.corridor_scene import corridor_config, corridor_scene
+    from hcomc.sim.engine import Simulation
 
+    corridor = load_corridor("corridor", {"corridor.duration": 30.0})
     for controller in ("none", "hcomc"):
-        corridor = load_corridor("corridor", {"control.controller": controller})
-        simulate_corridor(corridor, seed=0, duration=30.0)
+        config = corridor_config(corridor, control={"controller": controller})
+        Simulation(config, 0, scene=corridor_scene(corridor)).run()
 
 
 STAGES: dict[str, Stage] = {
@@ -54,7 +56,7 @@ STAGES: dict[str, Stage] = {
     "nsga2": Stage("NSGA-II", partial(scenario_runs, ("hcomc", "nsga2")), 14.0),
     "pso-sa": Stage("PSO, SA", partial(scenario_runs, ("hcomc", "pso"), ("hcomc", "sa")), 5.0),
     "replay": Stage("replay", lane_change_drawing, 1.0),
-    "corridor": Stage("corridor engine", corridor_runs, 60.0),
+    "corridor": Stage("corridor runs", corridor_runs, 60.0),
 }
 """The engines' stages by key (the scenario engine's four, the replay's, the corridor's)."""
 

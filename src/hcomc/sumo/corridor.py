@@ -19,7 +19,7 @@ probabilities class share x (CAV share or 1 - CAV share).
 **Flows.** One ``<flow>`` per flow of the departure schedule
 (:func:`hcomc.corridor.schedule.flows`: per origin, destination and profile interval, evenly
 spaced departures), with ``departLane="best"``, ``departSpeed="max"`` and SUMO's default
-``departPos``; hcomc's corridor engine departs the same vehicles at the same times.
+``departPos``; hcomc departs the same vehicles at the same times.
 """
 
 from __future__ import annotations

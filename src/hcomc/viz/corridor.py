@@ -251,17 +251,16 @@ _MERGE_HEADERS = {
     "events": "events", "merged_share": "merged share", "mean_time_to_merge":
     "zone to merge [s]", "min_ttc_p05": "least TTC, 5th pct. [s]", "ttc_below_1_5s_share":
     "share with TTC < 1.5 s", "max_drac": "max DRAC [m/s²]", "max_decel":
-    "hardest braking [m/s²]", "plans": "plans", "fallbacks": "fallbacks", "released":
-    "released merges", "conflicts": "one-plan conflicts",
+    "hardest braking [m/s²]", "plans": "plans", "fallbacks": "fallbacks",
 }  # fmt: skip
-"""Columns of :func:`merge_table` (keys of :func:`hcomc.sim.corridor.events.merge_summary`)
+"""Columns of :func:`merge_table` (keys of :func:`hcomc.metrics.corridor.events.merge_summary`)
 and their headers in the report."""
 
 
 def merge_table(merges: pd.DataFrame) -> pd.DataFrame:
-    """Merge events per on-ramp (:func:`hcomc.sim.corridor.events.merge_summary` of each
+    """Merge events per on-ramp (:func:`hcomc.metrics.corridor.events.merge_summary` of each
     ramp in ``merges``), one row per ramp, columns as :data:`_MERGE_HEADERS` says."""
-    from hcomc.sim.corridor.events import merge_summary
+    from hcomc.metrics.corridor.events import merge_summary
 
     rows = []
     for ramp in sorted(merges["ramp"].astype(str).unique()):

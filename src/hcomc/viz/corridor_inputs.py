@@ -5,8 +5,8 @@
 kind            inputs (``sources``: exactly one)
 ==============  ===============================================================================
 speed_heatmap   a corridor run (the ``--out`` directory of ``hcomc simulate CORRIDOR``; its
-                ``grid.csv``), or a corridor (preset name or TOML file), simulated in the
-                corridor engine (:func:`hcomc.sim.corridor.simulate_corridor`)
+                ``grid.csv``), or a corridor (preset name or TOML file), simulated
+                (:func:`hcomc.metrics.corridor.simulate_corridor`)
 flow_density    the same; ``detectors.csv``
 travel_times    the same; ``trips.csv``
 ==============  ===============================================================================
@@ -105,7 +105,7 @@ def runs_in_scenario_engine(source: Source) -> bool:
 
 def refuse_corridor_input(kind: str, sources: Sequence[Source]) -> None:
     """A ValueError if a figure kind that is not a corridor kind gets a corridor run or a
-    corridor the corridor engine runs: those are drawn by :data:`CORRIDOR_KINDS` only."""
+    corridor run as a corridor: those are drawn by :data:`CORRIDOR_KINDS` only."""
     allowed = f"allowed: {', '.join(CORRIDOR_KINDS)}"
     for source in sources:
         if is_corridor_run(source):
@@ -115,7 +115,7 @@ def refuse_corridor_input(kind: str, sources: Sequence[Source]) -> None:
         if is_corridor(source) and not runs_in_scenario_engine(source):
             raise ValueError(
                 f"option '--kind' = '{kind}' does not apply to corridor '{source}', which runs "
-                f"in the corridor engine; {allowed}"
+                f"as a corridor, not as one of the paper's conditions; {allowed}"
             )
 
 
@@ -166,9 +166,9 @@ def load_run_table(directory: Source, table: str) -> pd.DataFrame:
 
 
 def _simulated_table(kind: str, source: Source, seed: int | None) -> pd.DataFrame:
-    """The table of *kind* of corridor *source* simulated in the corridor engine."""
+    """The table of *kind* of corridor *source* simulated as a corridor run."""
     from hcomc.corridor import load_corridor
-    from hcomc.sim.corridor import simulate_corridor
+    from hcomc.metrics.corridor import simulate_corridor
 
     corridor = load_corridor(source, {})
     if _scenario_engine(corridor):
@@ -196,7 +196,7 @@ def make_corridor_figure(
     ------
     ValueError
         On an unknown kind, not exactly one input, an input that is not a corridor run or a
-        corridor of the corridor engine, a missing or unreadable table, or a seed for a
+        corridor of a corridor run, a missing or unreadable table, or a seed for a
         saved run.
     hcomc.config.ConfigError
         On a corridor that does not load.

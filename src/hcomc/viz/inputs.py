@@ -19,7 +19,7 @@ metrics         one runs table (``runs.parquet`` / ``runs.csv`` or a results dir
 
 A scenario may be a corridor of the paper's layout: it is simulated in the scenario engine,
 as ``hcomc simulate`` runs it (:func:`hcomc.corridor.engine.scenario_config`). Corridor runs
-and the corridors the corridor engine runs are drawn by the corridor kinds of
+and the corridors run as corridors are drawn by the corridor kinds of
 :mod:`hcomc.viz.corridor_inputs` (``speed_heatmap``, ``flow_density``, ``travel_times``);
 these kinds refuse them.
 
@@ -301,7 +301,7 @@ def make_figure(
     ------
     ValueError
         On an unknown kind, a wrong number of sources or unusable input (among it a
-        corridor run or a corridor of the corridor engine:
+        corridor run or a corridor of a corridor run:
         :func:`hcomc.viz.corridor_inputs.refuse_corridor_input`).
     hcomc.config.ConfigError
         On a bad scenario.

@@ -1,6 +1,6 @@
 """``hcomc/CorridorMerge-v0``: the Gymnasium environment of one merge at an on-ramp of any
 corridor (N mainline lanes, several on- and off-ramps, continuous time-varying demand), on
-the corridor engine.
+the engine that runs every road.
 
 The agent drives a ramp CAV from its entry into the ramp's cooperative control zone until
 its merge is complete (:mod:`hcomc.envs.corridor.episode`); the spaces are those of
@@ -30,15 +30,15 @@ __all__ = ["CorridorEnvSettings", "CorridorMergeEnv", "load_env_corridor"]
 
 
 def load_env_corridor(source: str, overrides: dict[str, Any] | None = None) -> Corridor:
-    """The corridor ``source`` (a preset or a TOML file) with dotted-key ``overrides``, as the
-    corridor engine runs it; a corridor only the scenario engine runs (the paper's
-    conditions as presets) is refused by the key that makes it so."""
+    """The corridor ``source`` (a preset or a TOML file) with dotted-key ``overrides``; one of
+    the paper's conditions as a preset (a warm-up, lane flows, a single release: an episode
+    of ``hcomc/Merge-v0``) is refused by the key that makes it so."""
     c = load_corridor(source, overrides)
     found = scenario_only(c)
     if found is not None:
         key, value = found
         raise ConfigError(
-            f"key '{key}' = {value!r}: the corridor engine does not run it; allowed: it unset "
+            f"key '{key}' = {value!r}: a corridor episode does not take it; allowed: it unset "
             f"(for {source!r} use hcomc/Merge-v0 with scenario={source!r})"
         )
     return c

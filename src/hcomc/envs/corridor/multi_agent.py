@@ -1,5 +1,5 @@
 """Cooperative multi-agent merging on a corridor: every ramp CAV in its on-ramp's control zone
-is an agent, at every on-ramp at once (a PettingZoo ``ParallelEnv`` on the corridor engine).
+is an agent, at every on-ramp at once (a PettingZoo ``ParallelEnv`` on the engine).
 
 An agent ``"cav_<i>"`` is ramp CAV i from its control-zone entry until its merge onto the
 mainline (or a crash: a collision it is in, or past the end of its acceleration lane); it is
@@ -146,7 +146,7 @@ class CorridorParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         for i in sorted(run.agents):
             action = actions.get(agent_name(i))
             if action is None:
-                run.s.agent_acc[i], run.s.agent_lane[i] = np.nan, -1
+                run.own_model(i)
             else:
                 run.apply(i, np.asarray(action, dtype=np.float64))
         terms = run.run_period(self._groups)

@@ -47,7 +47,7 @@ SAFETY_COLUMNS = tuple(f.name for f in fields(SafetyExtremes))
 
 def safety_extremes(runs: pd.DataFrame, configurations: Sequence[str] | None) -> pd.DataFrame:
     """:class:`SafetyExtremes` per cell and configuration of ``runs``; an empty table when the
-    runs do not record the safety measures (runs of the corridor engine: their metrics hold
+    runs do not record the safety measures (corridor runs: their metrics hold
     their own, :data:`~hcomc.experiments.corridor.metrics.CORRIDOR_METRICS`)."""
     check_runs(runs)
     if any(c not in runs for c in NEEDS):

@@ -10,7 +10,7 @@ the comparison), ``corridor`` (its name), ``kind`` and ``engine``.
 
 The corridors of one comparison are of one kind
 (:attr:`~hcomc.experiments.corridor.runs.Resolved.kind`): all of the paper's layout (the
-scenario engine: the paper's metrics) or none (the corridor engine: the corridor metrics),
+scenario engine: the paper's metrics) or none (a corridor run: the corridor metrics),
 since the two kinds have different metrics and a different meaning of ``merged``; a mixture
 is refused with a message naming which is which.
 """
@@ -67,7 +67,7 @@ class CorridorComparison:
             raise ConfigError(
                 f"option '--conditions': corridors of the paper's layout ({', '.join(paper)}) "
                 "run in hcomc's scenario engine (the paper's metrics), the others "
-                f"({', '.join(other)}) in the corridor engine (corridor metrics); allowed: "
+                f"({', '.join(other)}) as a corridor run (corridor metrics); allowed: "
                 "corridors of one kind in one comparison (run the two kinds as two)"
             )
         return next(iter(kinds.values()))

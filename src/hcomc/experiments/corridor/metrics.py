@@ -1,6 +1,6 @@
-"""Corridor metrics: what a comparison measures on a run of the corridor engine.
+"""Corridor metrics: what a comparison measures on a corridor run.
 
-A corridor run (:class:`hcomc.sim.corridor.CorridorRun`) has many vehicles and many merges,
+A corridor run (:class:`hcomc.metrics.corridor.CorridorRun`) has many vehicles and many merges,
 so its metrics are run-level figures computed from its tables: one row per vehicle
 (``trips``) and one per merge event (``merges``: every ramp vehicle that reached its on-ramp's
 control zone, merged or not). :data:`CORRIDOR_METRICS` is their registry: name, label with
@@ -9,7 +9,7 @@ unit, the better direction (what a paired comparison's ``favours`` reads) and de
 Failures are outcomes, never holes: a ramp vehicle that never merged stays an event and
 lowers ``merged_share``; a vehicle still on the road when the run ends has no travel time but
 is missing from ``completed_trips``. The merge-event figures are those of
-:func:`hcomc.sim.corridor.events.merge_summary` (what ``hcomc simulate CORRIDOR`` prints per
+:func:`hcomc.metrics.corridor.events.merge_summary` (what ``hcomc simulate CORRIDOR`` prints per
 on-ramp) taken over every on-ramp's events together, so the two never disagree.
 """
 
@@ -22,7 +22,7 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 
-from hcomc.sim.corridor.events import merge_summary
+from hcomc.metrics.corridor.events import merge_summary
 
 
 @dataclass(frozen=True)
@@ -70,8 +70,7 @@ CORRIDOR_METRICS: dict[str, CorridorMetric] = {
 }  # fmt: skip
 """Registry of the corridor metrics, keyed by runs-table column, in display order."""
 
-COUNTS = ("events", "merged_events", "vehicles", "on_road", "not_inserted", "plans",
-          "conflicts", "released")  # fmt: skip
+COUNTS = ("events", "merged_events", "vehicles", "on_road", "not_inserted", "plans")
 """Further columns of a corridor run's row (counts that explain the metrics)."""
 
 _ALL = "*"
@@ -85,7 +84,7 @@ def _value(x: Any) -> float:
 
 def finite_quantile(values: pd.Series, q: float) -> float:
     """The ``q`` quantile (linear interpolation) of the finite values; NaN if there are none
-    (as :func:`~hcomc.sim.corridor.events.merge_summary` takes its TTC percentile)."""
+    (as :func:`~hcomc.metrics.corridor.events.merge_summary` takes its TTC percentile)."""
     x = pd.to_numeric(values, errors="coerce").to_numpy(np.float64)
     x = x[np.isfinite(x)]
     return float(np.quantile(x, q)) if x.size else math.nan
@@ -119,8 +118,6 @@ def corridor_metrics(trips: pd.DataFrame, merges: pd.DataFrame, collisions: int)
         "on_road": int((trips["outcome"] == "on_road").sum()),
         "not_inserted": int((trips["outcome"] == "not_inserted").sum()),
         "plans": int(events["plans"]),
-        "conflicts": int(events["conflicts"]),
-        "released": int(events["released"]),
     }
     return {"merged": run_merged(len(merges), merged_events), **values, **counts}
 

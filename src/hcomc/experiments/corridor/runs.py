@@ -18,12 +18,12 @@ Where a run goes depends on the corridor (:func:`resolve`):
   delay, its ramp demand being a flow). The runner loads conditions by file, so the scenario
   is written once as TOML, named by the hash of its text, in a cache folder
   (:func:`scenario_file`);
-* any other corridor runs in the corridor engine
-  (:func:`hcomc.sim.corridor.simulate_corridor`), measured with the corridor metrics
+* any other corridor runs as a corridor
+  (:func:`hcomc.metrics.corridor.simulate_corridor`), measured with the corridor metrics
   (:mod:`hcomc.experiments.corridor.metrics`).
 
 Each run returns ``(row, manifest)`` as the runner's do; the manifest records the seed, the
-resolved corridor (``corridor``; for the corridor engine also ``config``), the version and git
+resolved corridor (``corridor``; for a corridor run also ``config``), the version and git
 revision, and the controller's source.
 """
 
@@ -48,7 +48,7 @@ from hcomc.experiments.runner import (
     configuration_overrides,
     run_batch,
 )
-from hcomc.sim.corridor.record import CORRIDOR_ENGINE
+from hcomc.metrics.corridor.record import CORRIDOR_ENGINE
 
 Result = tuple[dict[str, Any], dict[str, Any]]
 """A run's results row and manifest."""
@@ -82,7 +82,7 @@ class Resolved:
     @property
     def kind(self) -> str:
         """Where the run goes: "scenario" (hcomc's scenario engine, the paper's metrics) or
-        "corridor" (the corridor engine, corridor metrics)."""
+        "corridor" (a corridor run, corridor metrics)."""
         return "corridor" if self.scenario is None else "scenario"
 
 
@@ -125,7 +125,7 @@ def check(spec: CorridorSpec) -> Resolved:
     """Resolve ``spec`` and check that it can run: its engine, its controller and the
     controller's options; ConfigError otherwise, before anything runs."""
     from hcomc.control.registry import check_controller
-    from hcomc.sim.corridor.control import ramp_config
+    from hcomc.sim.corridor_scene import corridor_config
 
     resolved = resolve(spec)
     corridor = resolved.corridor
@@ -134,13 +134,12 @@ def check(spec: CorridorSpec) -> Resolved:
     elif spec.engine != "hcomc":
         raise ConfigError(
             f"option '--engine' = '{spec.engine}': corridor '{spec.condition}' runs in the "
-            "corridor engine (it is not of the paper's layout); allowed: hcomc (to run it in "
-            "SUMO: hcomc export sumo)"
+            "engine as a corridor (it is not of the paper's layout); allowed: hcomc (to run "
+            "it in SUMO: hcomc export sumo)"
         )
     else:
         _refuse_scenario_keys(spec, corridor)
-        if corridor.road.on_ramps:
-            check_controller(ramp_config(corridor, corridor.road.on_ramps[0]))
+        check_controller(corridor_config(corridor))
     return resolved
 
 
@@ -203,7 +202,7 @@ def runner_spec(spec: CorridorSpec) -> RunSpec:
 
 def key_material(spec: CorridorSpec) -> list[Any]:
     """What a stored run's key hashes besides its identity and the code: the resolved corridor
-    with the configuration's control, the scenario it becomes (None for the corridor engine)
+    with the configuration's control, the scenario it becomes (None for a corridor run)
     and the controller's name."""
     resolved = resolve(spec)
     scenario = None
@@ -216,7 +215,7 @@ def key_material(spec: CorridorSpec) -> list[Any]:
 
 def reference_group(spec: CorridorSpec) -> tuple[str, str, int, str]:
     """Runs that share work when batched together: those of one paper-layout corridor and
-    seed (one undisturbed run); a corridor-engine run shares nothing."""
+    seed (one undisturbed run); a corridor run shares nothing."""
     kind = resolve(spec).kind
     extra = "" if kind == "scenario" else spec.configuration
     return kind, spec.condition + spec.overrides_json(), spec.seed, extra
@@ -228,7 +227,7 @@ def run_corridor_batch(
     """Simulate runs on corridors and measure them: ``(row, manifest)`` per spec, in order.
     Paper-layout corridors go to the runner together
     (:func:`~hcomc.experiments.runner.run_batch`, one ensemble on ``threads`` cores); the
-    others run one after the other in the corridor engine. The corridors are read afresh:
+    others run one after the other as a corridor run. The corridors are read afresh:
     a long-lived worker (a Dask cluster's) never runs a corridor file as it was before an
     edit."""
     forget()
@@ -258,16 +257,16 @@ def _scenario_result(spec: CorridorSpec, row: dict[str, Any], manifest: dict[str
 
 
 def run_on_corridor(spec: CorridorSpec) -> Result:
-    """Simulate one run in the corridor engine and measure it: ``(row, manifest)``."""
+    """Simulate one corridor run and measure it: ``(row, manifest)``."""
     from hcomc.control.registry import controller_source
-    from hcomc.sim.corridor import simulate_corridor
+    from hcomc.metrics.corridor import simulate_corridor
     from hcomc.sim.manifest import build_manifest
 
     corridor = resolve(spec).corridor
     start = time.perf_counter()
     try:
         run = simulate_corridor(corridor, seed=spec.seed)
-    except ValueError as exc:  # a key the corridor engine does not run
+    except ValueError as exc:  # a key a corridor run does not take
         raise ConfigError(f"corridor '{spec.condition}': {exc}") from None
     controller, optimizer = configuration_controller(spec.configuration)
     row: dict[str, Any] = {

@@ -7,7 +7,7 @@ the live plan's virtual vehicles as ghosts with its predicted path, a timeline o
 events and plans, a panel and a speed/acceleration chart of the vehicle under the pointer or
 selected. Its controls are described in docs/replay.md.
 
-Runs of the corridor engine play too (``hcomc simulate CORRIDOR --trajectory-interval S
+Corridor runs play too (``hcomc simulate CORRIDOR --trajectory-interval S
 --out DIR``): the corridor's road with every lane, ramp and lane drop, the sampled vehicles
 on it, and the merge events of ``merges.csv`` on the timeline
 (:mod:`hcomc.viz.replay.corridor_run`). One page plays runs of one engine, and corridor runs
@@ -31,8 +31,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Union
 
 if TYPE_CHECKING:
-    from hcomc.sim.corridor import CorridorRun
-    from hcomc.sim.corridor.record import CorridorRecord
+    from hcomc.metrics.corridor import CorridorRun
+    from hcomc.metrics.corridor.record import CorridorRecord
     from hcomc.sim.log import SimulationLog
     from hcomc.viz.replay.runs import ReplayRun
 
@@ -40,7 +40,7 @@ __all__ = ["ReplayPage", "replay", "write_replay"]
 
 Source = Union["SimulationLog", "CorridorRun", "CorridorRecord", str, os.PathLike[str]]
 """A log, a saved log file (.npz/.parquet) or a ``hcomc simulate --out`` directory; a
-corridor-engine run (in memory, or its ``--out`` directory with ``trajectories.csv``)."""
+corridor run (in memory, or its ``--out`` directory with ``trajectories.csv``)."""
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ def replay(
     ----------
     logs : SimulationLog, CorridorRun, path, or a sequence of them
         The runs: logs, saved log files or ``hcomc simulate --out`` directories, of the
-        scenario engine or (all of them) of the corridor engine on one corridor.
+        scenario engine or (all of them) of a corridor run on one corridor.
     titles : sequence of str, optional
         One title per run; default: controller, scenario or corridor, and seed.
     title : str

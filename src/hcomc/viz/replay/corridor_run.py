@@ -1,9 +1,9 @@
-"""A corridor-engine run as the replay page plays it: its sampled trajectories in the page's
+"""A corridor run as the replay page plays it: its sampled trajectories in the page's
 arrays, its road, and its merge events on the timeline and in a table.
 
-The run is a :class:`~hcomc.sim.corridor.record.CorridorRecord` (its ``--out`` directory
-read back, or a run in memory). The corridor engine has no lateral position: a vehicle
-drives on its lane's centre line and changes lane in one jump (half-way through the change),
+The run is a :class:`~hcomc.metrics.corridor.record.CorridorRecord` (its ``--out`` directory
+read back, or a run in memory). Its samples carry no lateral position: a vehicle is drawn
+on its logged lane's centre line and changes lane in one jump (where it crosses the line),
 so each sample is placed by :func:`hcomc.corridor.layout.code_poses` (heading 0 on the
 mainline, the ramp's slope on a ramp road) and the page moves a vehicle along its lane
 between samples but never across lanes (``lane_jumps``): interpolating there would invent a
@@ -30,8 +30,8 @@ import numpy as np
 import pandas as pd
 
 from hcomc.corridor.layout import code_poses
+from hcomc.metrics.corridor.record import CorridorRecord, Trajectories
 from hcomc.road import KEY_ROLES, Kind
-from hcomc.sim.corridor.record import CorridorRecord, Trajectories
 from hcomc.sim.log import EventKind
 from hcomc.viz.replay.corridor_road import corridor_road_shapes
 from hcomc.viz.replay.decisions import json_ready
@@ -115,9 +115,9 @@ def _timeline(record: CorridorRecord, merges: list[dict[str, Any]], last_seen: n
             if vehicle >= 0:
                 roles.append((e["zone_time"], vehicle, k, max(end, e["zone_time"]), vr))
     for c in record.collisions.to_dict("records"):
-        follower, leader = int(c["follower"]), int(c["leader"])
-        text = f"COLLISION · vehicle {follower} into vehicle {leader} at x = {c['x']:.1f} m"
-        marks.append((float(c["t"]), int(EventKind.COLLISION), follower, leader, text))
+        one, other = int(c["vehicle"]), int(c["other"])
+        text = f"COLLISION · vehicles {one} and {other} at x = {c['x']:.1f} m"
+        marks.append((float(c["t"]), int(EventKind.COLLISION), one, other, text))
     marks.sort(key=lambda m: m[0])
     roles.sort(key=lambda r: r[0])
     events: dict[str, Any] = {
@@ -165,8 +165,8 @@ def corridor_run_json(record: CorridorRecord, title: str) -> dict[str, Any]:
     last_seen[samples.ids] = samples.t[samples.stop - 1]
     merges = merge_table(record)
     events, roles = _timeline(record, merges, last_seen, float(t[-1]))
-    note = (f"corridor engine, sampled every {samples.interval:g} s: vehicles drive on lane "
-            "centre lines, a lane change is a jump")  # fmt: skip
+    note = (f"corridor run, sampled every {samples.interval:g} s: vehicles drawn on lane "
+            "centre lines, a lane change as a jump")  # fmt: skip
     return json_ready({
         "title": title, "seed": record.seed, "dt": samples.interval, "rows": n_rows,
         "columns": max(layout.n_columns, 1), "vehicles": n, "road": shapes, "arrays": arrays,

@@ -3,7 +3,7 @@
 The page template, its stylesheet and scripts are package data (``assets/``); the runs go
 into a ``<script type="application/json">`` block (the per-cell arrays as base64 typed
 arrays, :mod:`hcomc.viz.replay.pack`; the plans, roles and events as JSON,
-:mod:`hcomc.viz.replay.decisions`; a corridor-engine run's from
+:mod:`hcomc.viz.replay.decisions`; a corridor run's from
 :mod:`hcomc.viz.replay.corridor_run`). Nothing is loaded from anywhere else, so the file opens
 offline from disk.
 """
@@ -72,7 +72,7 @@ def _json_for_script(data: Any) -> str:
 
 
 def page_html(logs: Sequence[ReplayRun], titles: Sequence[str], page_title: str) -> str:
-    """The page playing ``logs`` (scenario-engine logs or corridor-engine records,
+    """The page playing ``logs`` (scenario-engine logs or corridor records,
     :mod:`hcomc.viz.replay.runs`) side by side (time-synced), each under its title."""
     if not logs:
         raise ValueError("no runs to replay; allowed: one log or more")

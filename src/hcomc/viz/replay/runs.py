@@ -3,9 +3,9 @@ one page, titled, and the moment to show first.
 
 A run is either a :class:`~hcomc.sim.log.SimulationLog` of the scenario engine (a log, a
 saved ``.npz``/``.parquet`` log or a ``hcomc simulate --out`` directory holding one) or a
-:class:`~hcomc.sim.corridor.record.CorridorRecord` of the corridor engine (its ``--out``
+:class:`~hcomc.metrics.corridor.record.CorridorRecord` of a corridor run (its ``--out``
 directory, which must hold ``trajectories.csv``, or a
-:class:`~hcomc.sim.corridor.CorridorRun` in memory). The panels of a page share one clock,
+:class:`~hcomc.metrics.corridor.CorridorRun` in memory). The panels of a page share one clock,
 one view of the road and the vehicle ids, so a page plays runs of one engine, and corridor
 runs of one corridor road (:func:`check_together`).
 """
@@ -17,7 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from hcomc.sim.corridor.record import (
+from hcomc.metrics.corridor.record import (
     CorridorRecord,
     is_corridor_run,
     read_corridor_run,
@@ -30,7 +30,7 @@ from hcomc.viz.replay.decisions import moment_of_interest
 __all__ = ["ReplayRun", "check_together", "controller_label", "load_run", "moment", "title_of"]
 
 ReplayRun = SimulationLog | CorridorRecord
-"""A run the page plays: a scenario-engine log or a corridor-engine record."""
+"""A run the page plays: a scenario-engine log or a corridor-run record."""
 
 
 def load_run(source: Any) -> ReplayRun:
@@ -47,7 +47,7 @@ def load_run(source: Any) -> ReplayRun:
             record.require_trajectories()
             return record
         return load_log(path)
-    from hcomc.sim.corridor import CorridorRun
+    from hcomc.metrics.corridor import CorridorRun
 
     if isinstance(source, CorridorRun):
         return record_of(source)
@@ -57,7 +57,7 @@ def load_run(source: Any) -> ReplayRun:
 
 def check_together(runs: Sequence[ReplayRun], names: Sequence[str]) -> None:
     """ValueError (one line, naming the runs by ``names``) unless ``runs`` are all
-    scenario-engine runs or all corridor-engine runs of one corridor road."""
+    scenario-engine runs or all corridor runs of one corridor road."""
     first = runs[0]
     for run, name in zip(runs[1:], names[1:], strict=True):
         if isinstance(run, CorridorRecord) != isinstance(first, CorridorRecord):

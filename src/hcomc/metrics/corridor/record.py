@@ -4,7 +4,7 @@
 one row per vehicle (``trips.csv``), per merge event (``merges.csv``), per collision
 (``collisions.csv``) and, with ``--trajectory-interval S``, every vehicle's state every S
 seconds (``trajectories.csv``). :func:`read_corridor_run` reads such a directory and
-:func:`record_of` takes the same from a :class:`~hcomc.sim.corridor.CorridorRun` in memory;
+:func:`record_of` takes the same from a :class:`~hcomc.metrics.corridor.CorridorRun` in memory;
 the views of a run (the CommonRoad export, the browser replay) read the record, so that a
 run directory is read in one place and every view sees the same vehicles.
 
@@ -25,11 +25,11 @@ import pandas as pd
 from pydantic import ValidationError
 
 from hcomc.corridor import Corridor
-from hcomc.sim.corridor.events import EVENT_COLUMNS
-from hcomc.sim.corridor.state import COLLISION_COLUMNS, TRAJECTORY_COLUMNS
+from hcomc.metrics.corridor.events import EVENT_COLUMNS
+from hcomc.metrics.corridor.measure import COLLISION_COLUMNS, TRAJECTORY_COLUMNS
 
 if TYPE_CHECKING:
-    from hcomc.sim.corridor.run import CorridorRun
+    from hcomc.metrics.corridor.run import CorridorRun
 
 __all__ = [
     "CORRIDOR_ENGINE",
@@ -42,10 +42,10 @@ __all__ = [
 ]
 
 CORRIDOR_ENGINE = "hcomc-corridor"
-"""The ``engine`` a corridor-engine run's manifest names."""
+"""The ``engine`` a corridor run's manifest names."""
 
 NO_TRAJECTORIES = (
-    "no trajectories.csv (the corridor engine samples trajectories only when asked); "
+    "no trajectories.csv (a corridor run writes them only when asked); "
     "allowed: a run of 'hcomc simulate CORRIDOR --trajectory-interval S --out DIR' with S > 0 "
     "(e.g. 0.5 s): rerun it with --trajectory-interval"
 )
@@ -113,7 +113,7 @@ class CorridorRecord:
 
 
 def is_corridor_run(run_dir: str | Path) -> bool:
-    """Whether ``run_dir`` is the ``--out`` directory of a corridor-engine run (its manifest
+    """Whether ``run_dir`` is the ``--out`` directory of a corridor run (its manifest
     names :data:`CORRIDOR_ENGINE`)."""
     manifest = Path(run_dir) / "manifest.json"
     if not (Path(run_dir).is_dir() and manifest.is_file()):
@@ -125,7 +125,7 @@ def is_corridor_run(run_dir: str | Path) -> bool:
 
 
 def read_corridor_run(run_dir: str | Path) -> CorridorRecord:
-    """The record of a corridor-engine ``--out`` directory; ValueError naming what is
+    """The record of a corridor-run ``--out`` directory; ValueError naming what is
     missing or malformed. Trajectories may be absent
     (:meth:`CorridorRecord.require_trajectories` says how to get them)."""
     run_dir = Path(run_dir)
@@ -153,7 +153,7 @@ def read_corridor_run(run_dir: str | Path) -> CorridorRecord:
 
 
 def record_of(run: CorridorRun) -> CorridorRecord:
-    """The record of a run in memory (:func:`hcomc.sim.corridor.simulate_corridor`)."""
+    """The record of a run in memory (:func:`hcomc.metrics.corridor.simulate_corridor`)."""
     samples = run.trajectories
     return CorridorRecord(
         corridor=run.corridor, seed=run.seed, controller=run.controller,
