@@ -100,8 +100,8 @@ class LaneChangeParams(FrozenModel):
     urgent_distance: float = Field(
         100.0, ge=0, le=2000,
         description="within this distance of the last point of a change a vehicle's route "
-        "or ending lane needs, the deceleration it may impose rises linearly from safe_decel "
-        "to emergency_decel [m] (a ramp vehicle's merge keeps safe_decel)",
+        "or ending lane needs (an acceleration lane's end too), the deceleration it may "
+        "impose on its new follower rises linearly from safe_decel to emergency_decel [m]",
     )  # fmt: skip
     cav_game: bool = Field(
         False,

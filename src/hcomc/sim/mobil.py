@@ -9,7 +9,10 @@ c, new follower n and old follower o (a tilde means after the change):
 * safety: ``ã_n >= -b_safe`` and ``ã_c >= -b_safe``, bumper gaps to the new leader and new
   follower ``>= min_gap`` (MovSim), and a clear path: nobody starts a change towards a
   vehicle standing (< 1 m/s) less than ``3 L + min_gap`` ahead in its own lane, since the
-  change takes at least 3 L of road; the ramp's gap acceptance is this criterion alone;
+  change takes at least 3 L of road; the ramp's gap acceptance is this criterion alone.
+  A change a lane's end or a route needs (urgency u > 0, within ``urgent_distance`` of its
+  last point, or past it) may impose ``ã_n >= -(b_safe + u (b_max - b_safe))`` on its new
+  follower; the candidate's own ``ã_c >= -b_safe`` stays;
 * incentive (discretionary changes only):
   ``ã_c - a_c + p [(ã_n - a_n) + (ã_o - a_o)] > Delta a_th + bias`` to the left and
   ``> Delta a_th - bias`` to the right (keep-right rule).
@@ -124,8 +127,8 @@ def mobil_decide_into(
             continue
         # 2. the deceleration criteria: candidate and new follower after the change
         acc1, acc3 = accel(c, ln), accel(fn, c)
-        b_ok = b_safe + (b_max - b_safe) * urgency[k]
-        if not (acc1 >= -b_ok and acc3 >= -b_ok):
+        b_ok = b_safe + (b_max - b_safe) * urgency[k]  # what it may impose on its follower
+        if not (acc1 >= -b_safe and acc3 >= -b_ok):
             continue
         if mandatory[k]:
             ok[k], margin[k] = True, math.inf

@@ -136,8 +136,9 @@ def discretionary_changes(
         if kind != KIND_MAIN:
             left = c.road_int[L_LEFT, lane]
             opens, end = c.road_f[L_OPENS, lane], c.road_f[L_END, lane]
-            if kind == KIND_ON and left >= 0 and opens <= x <= end:
-                pos[m], target[m], force[m], urgency[m] = k, left, False, 0.0  # a ramp lane's
+            if kind == KIND_ON and left >= 0 and opens <= x:  # past its end too
+                pos[m], target[m], force[m] = k, left, False  # a ramp lane's
+                urgency[m] = min(max(0.0, 1.0 - (end - x) / urgent), 1.0) if urgent > 0 else 0.0
                 m += 1
             continue
         needed, room = needed_change(c, i)
