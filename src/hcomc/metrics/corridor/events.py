@@ -30,7 +30,7 @@ from hcomc.road import KEY_ROLES, VMC, VMR, VNR, VR
 from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.log import EventKind, SimulationLog
 
-__all__ = ["EVENT_COLUMNS", "merge_events", "merge_summary"]
+__all__ = ["EVENT_COLUMNS", "closing_in", "merge_events", "merge_summary"]
 
 EVENT_COLUMNS = (
     "vr", "ramp", "cav", "zone_time", *[r.lower() for r in KEY_ROLES[1:]], "vmc_cav", "merged",
