@@ -52,21 +52,25 @@ class Change:
     x_start: float
     target: int
     t_end: float | None  # None: not completed (run ended or the vehicle left)
+    aborted: bool = False  # given up standing before the lane line (t_end: then)
+
+
+_ENDS = (EventKind.LANE_CHANGE_END, EventKind.LANE_CHANGE_ABORT)
 
 
 def _changes(log: SimulationLog) -> list[Change]:
-    """Pair every LANE_CHANGE_START with the next LANE_CHANGE_END of the same vehicle."""
+    """Pair every LANE_CHANGE_START with the next LANE_CHANGE_END or LANE_CHANGE_ABORT of
+    the same vehicle."""
     ev = log.events
     out = []
     for i in np.unique(ev["vehicle"][ev["kind"] == EventKind.LANE_CHANGE_START]).tolist():
         mine = ev[
-            (ev["vehicle"] == i)
-            & np.isin(ev["kind"], [EventKind.LANE_CHANGE_START, EventKind.LANE_CHANGE_END])
+            (ev["vehicle"] == i) & np.isin(ev["kind"], [EventKind.LANE_CHANGE_START, *_ENDS])
         ]
         kinds = mine["kind"].tolist()
         # starts and ends alternate, beginning with a start
         assert kinds[::2] == [EventKind.LANE_CHANGE_START] * len(kinds[::2]), i
-        assert kinds[1::2] == [EventKind.LANE_CHANGE_END] * len(kinds[1::2]), i
+        assert all(k in _ENDS for k in kinds[1::2]), i
         for k in range(0, len(mine), 2):
             start = mine[k]
             end = mine[k + 1] if k + 1 < len(mine) else None
@@ -79,6 +83,7 @@ def _changes(log: SimulationLog) -> list[Change]:
                     x_start=float(start["x"]),
                     target=int(start["value"]),
                     t_end=None if end is None else float(end["t"]),
+                    aborted=end is not None and end["kind"] == EventKind.LANE_CHANGE_ABORT,
                 )
             )
     return out
@@ -92,7 +97,7 @@ def _logged_changes(log: SimulationLog) -> list[tuple[Change, int, int]]:
     """Completed changes entirely inside the log, with their first and last row."""
     out = []
     for ch in _changes(log):
-        if ch.t_end is None or ch.t_start < log.t[0]:
+        if ch.t_end is None or ch.aborted or ch.t_start < log.t[0]:
             continue
         k0, k1 = _row(log, ch.t_start), _row(log, ch.t_end) + 1
         if k1 < log.n_recorded:

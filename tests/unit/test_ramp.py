@@ -49,7 +49,7 @@ def test_a_hand_made_ramp_gives_the_closed_forms():
 
 
 def test_a_congested_ramp_flow_counts_what_the_log_shows():
-    config = load_config("C2", duration=300.0, demand={"ramp": "flow", "ramp_mean_headway": 4.0})
+    config = load_config("C4", duration=300.0, demand={"ramp": "flow", "ramp_mean_headway": 2.5})
     log = Simulation(config, 0).run()
     table = ramp_vehicles(log)
     merges = log.events_of(EventKind.MERGE)
