@@ -64,9 +64,7 @@ def _changes(log: SimulationLog) -> list[Change]:
     ev = log.events
     out = []
     for i in np.unique(ev["vehicle"][ev["kind"] == EventKind.LANE_CHANGE_START]).tolist():
-        mine = ev[
-            (ev["vehicle"] == i) & np.isin(ev["kind"], [EventKind.LANE_CHANGE_START, *_ENDS])
-        ]
+        mine = ev[(ev["vehicle"] == i) & np.isin(ev["kind"], [EventKind.LANE_CHANGE_START, *_ENDS])]
         kinds = mine["kind"].tolist()
         # starts and ends alternate, beginning with a start
         assert kinds[::2] == [EventKind.LANE_CHANGE_START] * len(kinds[::2]), i
