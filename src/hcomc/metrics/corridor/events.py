@@ -25,6 +25,7 @@ import pandas as pd
 
 from hcomc.corridor import Corridor
 from hcomc.interface import MergePlan
+from hcomc.metrics.corridor.trips import first_event
 from hcomc.metrics.detectors import VehicleRows
 from hcomc.road import KEY_ROLES, VMC, VMR, VNR, VR
 from hcomc.safety.surrogate import CLOSING_SPEED
@@ -142,10 +143,7 @@ def merge_events(
     origin, ``cav`` says whether it is a CAV."""
     groups = log.meta.get("key_groups") or []
     ramp_x = {r.id: r.x for r in c.road.on_ramps}
-    merged_t = np.full(cav.size, np.nan)
-    merged_x = np.full(cav.size, np.nan)
-    found = log.events_of(EventKind.MERGE)[::-1]
-    merged_t[found["vehicle"]], merged_x[found["vehicle"]] = found["t"], found["x"]
+    merged_t, merged_x = first_event(log, EventKind.MERGE, cav.size)
     decided = _decided(decisions)
     closing = closing_in(log, rows) if groups else (np.empty((0, 0)), np.empty((0, 0)))
     out = []

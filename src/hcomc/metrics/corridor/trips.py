@@ -21,7 +21,7 @@ import pandas as pd
 from hcomc.corridor import Corridor, OffRamp, OnRamp, sections
 from hcomc.sim.log import EventKind, SimulationLog
 
-__all__ = ["OUTCOMES", "Released", "free_flow_times", "trip_table"]
+__all__ = ["OUTCOMES", "Released", "first_event", "free_flow_times", "trip_table"]
 
 OUTCOMES = ("arrived", "missed_exit", "on_road", "not_inserted")
 """A vehicle's outcome: arrived at its destination; arrived at the mainline's end after
@@ -89,7 +89,7 @@ def free_flow_times(
     return free, length
 
 
-def _first_time(log: SimulationLog, kind: EventKind, n: int) -> tuple[np.ndarray, np.ndarray]:
+def first_event(log: SimulationLog, kind: EventKind, n: int) -> tuple[np.ndarray, np.ndarray]:
     """Per vehicle, the time and position of its first event of ``kind`` (NaN: none)."""
     found = log.events_of(kind)[::-1]  # the first event of a vehicle written last
     t, x = np.full(n, np.nan), np.full(n, np.nan)
@@ -100,10 +100,10 @@ def _first_time(log: SimulationLog, kind: EventKind, n: int) -> tuple[np.ndarray
 def trip_table(c: Corridor, who: Released, log: SimulationLog) -> pd.DataFrame:
     """The trips of a finished run (module docstring), a row per vehicle in release order."""
     n = who.depart.size
-    insert, _ = _first_time(log, EventKind.INSERTION, n)
-    arrive, _ = _first_time(log, EventKind.EXIT, n)
-    merge_t, merge_x = _first_time(log, EventKind.MERGE, n)
-    missed = ~np.isnan(_first_time(log, EventKind.MISSED_EXIT, n)[0])
+    insert, _ = first_event(log, EventKind.INSERTION, n)
+    arrive, _ = first_event(log, EventKind.EXIT, n)
+    merge_t, merge_x = first_event(log, EventKind.MERGE, n)
+    missed = ~np.isnan(first_event(log, EventKind.MISSED_EXIT, n)[0])
     outcome = np.where(
         ~np.isnan(arrive),
         np.where(missed, "missed_exit", "arrived"),
