@@ -4,6 +4,7 @@ on-ramps run with the paper's physics (Eq. 1-7, Eq. 14) and controllers."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -12,11 +13,11 @@ import pytest
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.corridor import load_corridor
 from hcomc.corridor.road import LaneDrop, OffRamp, OnRamp, Road, SpeedLimit
-from hcomc.interface import Fleet
+from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode
 from hcomc.road import Kind
 from hcomc.sim.demand import Demand
 from hcomc.sim.engine import Simulation
-from hcomc.sim.lane_table import KIND_MAIN, L_EXIT
+from hcomc.sim.lane_table import KIND_MAIN, L_CENTRE, L_EXIT
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.roads import paper_lanes, road_lanes
 from hcomc.sim.scene import Scene, SceneMaker
@@ -207,3 +208,75 @@ def test_a_change_that_stands_still_before_the_lane_line_is_given_up() -> None:
     assert sim.lane[changer] == 0
     assert sim.y[changer] == 0.0
     assert sim.v[changer] < 0.1
+
+
+def test_a_change_that_stands_still_past_the_lane_line_is_completed() -> None:
+    """A changer brought to a stop past the lane line, its body still across both lanes,
+    completes the change once its duration is over: on the target lane's centre line, with
+    the change's end logged, instead of blocking both lanes for good."""
+    road = _road(lanes=2, length=3000.0)
+    config = load_config("C1", duration=20.0, warmup=0.0, control={"controller": "none"})
+    sim = Simulation(config, seed=0, scene=_scene(road, [(0.0, 290.0, 5.0, 0, -1)]))
+    sim.run_to(10)
+    changer = 0
+    step_loop.start_lane_changes(sim.core, np.array([changer]), np.array([1]), sim.t,
+                                 np.array([np.nan]))  # fmt: skip
+    x0, xf = float(sim.lc_x0[changer]), float(sim.lc_xf[changer])
+    stop = x0 + 0.55 * (xf - x0)  # its centre past the line, its body across it
+    sim.command(changer, -float(sim.v[changer]) ** 2 / (2.0 * (stop - sim.x[changer])))
+    sim.run()
+    ends = _events(sim.log, EventKind.LANE_CHANGE_END)
+    assert ends["vehicle"].tolist() == [changer]
+    start = float(_events(sim.log, EventKind.LANE_CHANGE_START)["t"][0])
+    assert ends["t"][0] - start > config.hdv.lane_change_duration
+    assert float(ends["x"][0]) == pytest.approx(stop, abs=0.1)
+    assert sim.lane[changer] == sim.origin[changer] == sim.target[changer] == 1
+    assert sim.y[changer] == sim.lanes.floats[L_CENTRE, 1]
+    assert _events(sim.log, EventKind.LANE_CHANGE_ABORT).size == 0
+
+
+def test_a_plan_fails_when_its_ramp_vehicle_waits_at_the_lane_end() -> None:
+    """A plan whose VR stands at its acceleration lane's end (a vehicle stands beside the
+    end) fails: FALLBACK, and its VMC leaves VV1, which ends on VR's state and would hold VMC
+    right behind VR's projection, in the gap VR needs. Once the way is free, VR merges by gap
+    acceptance."""
+    road = _road(lanes=2, length=3000.0, on_ramps=[OnRamp(id="a", x=700.0, accel_length=250.0)])
+    wall, vr, vmc = 0, 1, 2  # released in this order: by time, then downstream first
+    releases = [(0.0, 953.0, 0.0, 1, -1), (0.0, 949.0, 0.0, 0, -1), (0.0, 850.0, 5.0, 1, -1)]
+    config = load_config("C1", duration=60.0, warmup=0.0, control={"controller": "none"})
+    sim = Simulation(config, seed=0, scene=_scene(road, releases))
+    sim.command(wall, 0.0)
+    sim.run_to(1)
+    assert _events(sim.log, EventKind.RAMP_WAIT)["vehicle"].tolist() == [vr]
+    plan = MergePlan(MergeGroup(vr=vr, vmc=vmc), Mode.LONGITUDINAL, sim.t, horizon=1.0,
+                     vv1=np.array([sim.x[vr], 0.0, 0.0, 0.0]))  # fmt: skip
+    sim.execute(plan, 0)
+    assert sim.commanded().tolist() == [vmc]
+    sim.step()
+    fallback = _events(sim.log, EventKind.FALLBACK)
+    assert fallback[["vehicle", "other"]].tolist() == [(vr, vmc)]
+    assert sim.commanded().size == 0
+    sim.command(wall, math.nan)
+    sim.run()
+    assert _events(sim.log, EventKind.MERGE)["vehicle"].tolist() == [vr]
+    assert sim.collisions == 0
+
+
+def test_a_changer_brakes_from_the_start_for_a_target_leader_that_asks_it_to() -> None:
+    """Eq. 14's blend starts at Ψ = 0.01: a changer whose target-lane leader asks for more
+    than the safe deceleration brakes for it from its first step (the blend alone would keep
+    it accelerating behind its free origin lane until its body reached the target lane)."""
+    road = _road(lanes=2, length=3000.0)
+    releases = [(0.0, 330.0, 10.0, 1, -1), (0.0, 305.0, 25.0, 0, -1)]
+    config = load_config("C1", duration=20.0, warmup=0.0, control={"controller": "none"})
+    sim = Simulation(config, seed=0, scene=_scene(road, releases, kind=Kind.CAV))
+    slow, changer = 0, 1
+    sim.command(slow, 0.0)
+    sim.run_to(1)
+    step_loop.start_lane_changes(sim.core, np.array([changer]), np.array([1]), sim.t,
+                                 np.array([np.nan]))  # fmt: skip
+    sim.step()
+    assert sim.origin[changer] == 0  # still in its change, its body mostly in lane 0
+    assert sim.a[changer] < -config.lane_change.safe_decel
+    sim.run()
+    assert sim.collisions == 0

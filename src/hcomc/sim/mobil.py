@@ -38,6 +38,10 @@ from hcomc.equations.incentive import mobil_incentive
 from hcomc.sim.lane_table import KIND_MAIN, L_KIND, L_LEFT
 from hcomc.sim.neighbours import LaneIndex, lookup_one
 
+LC_MIN_GAP, LC_SAFE_DECEL, LC_POLITENESS, LC_THRESHOLD, LC_BIAS, LC_EMERGENCY_DECEL = range(6)
+"""Indices of the lane-change parameters in the array the kernels read
+(:func:`hcomc.sim.lane_change_decisions.lane_change_params`)."""
+
 
 class Traffic(NamedTuple):
     """The vehicles MOBIL judges: their car-following models and kinematic state, each (N,)
@@ -92,8 +96,8 @@ def mobil_decide_into(
     matrix, iidm, length, x, v, a = traffic
     cand, lane, leader, follower, target, force, urgency = candidates
     ints, flags, floats, margin = work
-    min_gap, b_safe, politeness = params[0], params[1], params[2]
-    threshold, bias, b_max = params[3], params[4], params[5]
+    min_gap, b_safe, politeness = params[LC_MIN_GAP], params[LC_SAFE_DECEL], params[LC_POLITENESS]
+    threshold, bias, b_max = params[LC_THRESHOLD], params[LC_BIAS], params[LC_EMERGENCY_DECEL]
     n = cand.size
     new_lead, new_fol = ints[2, :n], ints[3, :n]
     mandatory, ok = flags[0, :n], flags[1, :n]

@@ -14,7 +14,9 @@ The engine owns all state; this module only reads it and tells the engine what t
   plan falls back to VR's gap acceptance, logged); a CAV VNR follows the nearer of its real
   leader and VV2 (Eq. 11-13) for t - t0 <= H.
 
-A plan ends when VR's merge completes or a key vehicle leaves the road, and is replaced by a
+A plan fails when VR falls back (above) or waits at its lane's end, commanded or not: VR
+merges by gap acceptance and VMC and VNR leave their virtual leaders (logged). A plan ends
+when VR's merge completes or a key vehicle leaves the road, and is replaced by a
 new plan when the engine replans (every ``control.replan_period`` seconds until VR starts its
 lane change or a lateral cooperation has begun). While it is active, commanded vehicles and
 the connected (CAV) key vehicles make no discretionary (MOBIL) lane changes of their own.

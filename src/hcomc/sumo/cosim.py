@@ -44,7 +44,8 @@ from hcomc.sim import decision
 from hcomc.sim.lane_change_decisions import Snapshot, decide
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
-from hcomc.sim.plan_execution import virtual_leaders
+from hcomc.sim.plan_execution import ActivePlan, virtual_leaders
+from hcomc.sim.step.motion import WAIT_SPEED, WAIT_ZONE
 from hcomc.sumo.cosim_plans import CosimPlans
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
@@ -232,10 +233,11 @@ class SumoSimulation(CosimPlans):
                     self._change_lane(g.vmc, Lane.MAIN_2, float(self.fleet.lc_duration[g.vmc]))
                     p.vmc_started = True
                 else:
-                    p.vmc_commanded = p.vnr_commanded = False
-                    p.released = True
-                    self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
+                    self._fail(p, t)
             vr = g.vr
+            if not p.released and not p.vr_started and self._waiting(vr, changing):
+                self._fail(p, t)  # VR waits at the lane end, as our engine's plans fail
+                continue
             if not p.vr_commanded or p.vr_started or p.released:
                 continue
             if changing[vr]:  # SUMO is executing the commanded change
@@ -243,9 +245,8 @@ class SumoSimulation(CosimPlans):
             elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
                 # not begun 3 lengths before the lane end (our safety criterion or SUMO's
                 # refused it): VR falls back to SUMO's own merging, as to gap acceptance
-                p.released = True
+                self._fail(p, t)
                 self._release(vr)
-                self.log.add_event(t, EventKind.FALLBACK, vr, other=g.vmc, x=self.x[vr])
             elif (
                 self.x[vr] >= p.plan.merge_x
                 and vr not in self._held
@@ -254,6 +255,19 @@ class SumoSimulation(CosimPlans):
                 # requested again every step until SUMO, whose own safety check also
                 # applies, starts it
                 self._change_lane(vr, Lane.MAIN_1, float(p.plan.vr_duration))
+
+    def _fail(self, p: ActivePlan, t: float) -> None:
+        """A failed plan (FALLBACK): VR on gap acceptance, VMC and VNR no longer commanded
+        (:func:`hcomc.sim.step.plans.execute_plans`)."""
+        g = p.plan.group
+        p.released, p.vmc_commanded, p.vnr_commanded = True, False, False
+        self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
+
+    def _waiting(self, vr: int, changing: np.ndarray) -> bool:
+        """Whether ramp vehicle ``vr`` waits at its lane's end (our engine's RAMP_WAIT)."""
+        end = self.config.road.accel_lane_end
+        return bool(self.lane[vr] == Lane.RAMP and not changing[vr]
+                    and self.v[vr] < WAIT_SPEED and self.x[vr] > end - WAIT_ZONE)  # fmt: skip
 
     def _finish_plans(self) -> None:
         for p in self.plans:

@@ -17,6 +17,7 @@ from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
 from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND, L_WIDTH
+from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.road import speed_limit, stop_point
@@ -64,8 +65,8 @@ from hcomc.sim.step.state import (
     add_event,
 )  # fmt: skip
 
-_WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
-_WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
+WAIT_SPEED = 0.1  # [m/s] below this a ramp vehicle near the lane end counts as waiting
+WAIT_ZONE = 20.0  # [m] distance to the lane end within which waiting is logged
 
 
 StepAccelerations = tuple[np.ndarray, np.ndarray, LaneIndex, np.ndarray]
@@ -206,7 +207,9 @@ def _blend_changers(
 ) -> None:  # fmt: skip
     """Eq. 14 for every changer: the blend of the accelerations behind its origin-lane
     (``acc`` on entry) and target-lane leaders, capped by the leader of each lane its body
-    overlaps."""
+    overlaps, and by the target-lane leader from the start when that leader asks for more
+    than the safe deceleration (Ψ is 0.01 at the start: a pure blend would keep a changer
+    that accepted a short gap accelerating into it until its body reached the lane)."""
     vs, ls, ks = index.vehicle, index.lane, index.key
     if not changing.any():
         return
@@ -227,7 +230,8 @@ def _blend_changers(
         b = blend(a_ori, a_new[m], psi)
         if in_ori[k]:
             b = min(b, a_ori)
-        acc[k] = min(b, a_new[m]) if in_tgt[k] else b
+        urgent = a_new[m] < -c.lc_params[LC_SAFE_DECEL]
+        acc[k] = min(b, a_new[m]) if in_tgt[k] or urgent else b
 
 
 @kernel
@@ -280,17 +284,19 @@ def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
 @kernel
 def lateral(c: CoreArrays, t: float) -> None:
     """Move changing vehicles along their quintic path; switch lane at the lane line; a
-    change from a ramp lane to the mainline is a merge. A change that stands still before
-    the lane line when its duration is over is given up: the vehicle is back on its own
-    lane's centre line (Eq. 4-6 move it only as it moves along x, and a vehicle that stopped
-    across two lanes would block both for good)."""
+    change from a ramp lane to the mainline is a merge. A change that stands still when its
+    duration is over ends where the vehicle stands: given up before the lane line (back on
+    its own lane's centre line), completed past it (on the target lane's centre line).
+    Eq. 4-6 move a vehicle sideways only as it moves along x, and one that stopped across
+    two lanes would block both for good."""
     centre, kind = c.road_f[L_CENTRE], c.road_int[L_KIND]
     for i in range(c.x.size):
         if not c.active[i] or c.origin[i] == c.target[i]:
             continue
         x0, xf = c.lc_x0[i], c.lc_xf[i]
         xi = (c.x[i] - x0) / (xf - x0)
-        if xi < 0.5 and c.v[i] < _WAIT_SPEED and t - c.lc_t0[i] > c.lc_dur[i]:
+        stalled = c.v[i] < WAIT_SPEED and t - c.lc_t0[i] > c.lc_dur[i]
+        if xi < 0.5 and stalled:
             add_event(c, t, EV_LC_ABORT, i, -1, c.x[i], c.target[i])
             c.target[i] = c.lane[i] = c.origin[i]
             c.y[i], c.heading[i] = centre[c.origin[i]], 0.0
@@ -300,7 +306,7 @@ def lateral(c: CoreArrays, t: float) -> None:
         c.y[i] = y
         c.heading[i] = math.atan(dy_dx)
         c.lane[i] = c.target[i] if xi >= 0.5 else c.origin[i]
-        if xi >= 1.0:
+        if xi >= 1.0 or stalled:
             add_event(c, t, EV_LC_END, i, -1, c.x[i], c.target[i])
             if kind[c.origin[i]] != KIND_MAIN and kind[c.target[i]] == KIND_MAIN:
                 add_event(c, t, EV_MERGE, i, -1, c.x[i], math.nan)
@@ -327,7 +333,7 @@ def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
             add_event(c, t, EV_MISSED_EXIT, i, -1, c.x[i], exit_code)
     for i in ids:
         on_ramp = c.road_int[L_KIND, c.lane[i]] == KIND_ON
-        if (on_ramp and c.origin[i] == c.target[i] and c.v[i] < _WAIT_SPEED and not c.waited[i]
-                and c.x[i] > c.road_f[L_END, c.lane[i]] - _WAIT_ZONE):  # fmt: skip
+        if (on_ramp and c.origin[i] == c.target[i] and c.v[i] < WAIT_SPEED and not c.waited[i]
+                and c.x[i] > c.road_f[L_END, c.lane[i]] - WAIT_ZONE):  # fmt: skip
             c.waited[i] = True
             add_event(c, t, EV_WAIT, i, -1, c.x[i], math.nan)

@@ -27,9 +27,17 @@ from hcomc._jit import kernel
 from hcomc.equations.safety import stopping_distance
 from hcomc.equations.virtual_vehicle import cubic_point
 from hcomc.sim.lane_table import KIND_MAIN, L_END, L_KIND, L_LEFT
+from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import commanded_changes
-from hcomc.sim.step.state import CONTROLLER, N_PLANS, REPLAN_PERIOD, CoreArrays
+from hcomc.sim.step.state import (
+    CONTROLLER,
+    EV_FALLBACK,
+    N_PLANS,
+    REPLAN_PERIOD,
+    CoreArrays,
+    add_event,
+)
 
 if TYPE_CHECKING:
     from hcomc.interface.plan import MergePlan
@@ -46,7 +54,6 @@ F_VV0, F_VV1, F_VV2 = 4, 8, 12  # four cubic coefficients each
 N_FLOAT = 16
 
 LONGITUDINAL, LATERAL = 1, 2  # hcomc.interface.Mode, as plain ints
-_MOBIL_SAFE_DECEL = 1  # index of the safe deceleration in lc_params
 
 
 def encode_plan(
@@ -271,11 +278,19 @@ def execute_plans(
     holds: a lateral VMC's change at once to the lane beyond VR's target lane (lane 2;
     failing, the plan falls back to VR's gap acceptance: FALLBACK), VR's change from its
     merge position on to the lane left of its ramp lane (lane 1; until it could no longer
-    stop before its lane's end at the safe deceleration: then released, FALLBACK)."""
+    stop before its lane's end at the safe deceleration: then the plan fails). A plan also
+    fails when its VR, commanded or not, waits at its lane's end (FALLBACK). A failed plan
+    releases every key vehicle to its own model: VR to gap acceptance, VMC and VNR from
+    their virtual leaders (VV1 ends on VR's state, and a VMC behind a VR standing at the
+    lane's end would keep closed the very gap VR needs)."""
     pi, pf = c.plan_int, c.plan_f
     left, end = c.road_int[L_LEFT], c.road_f[L_END]
     for k in range(c.counters[N_PLANS]):
         vr, vmc = pi[k, P_VR], pi[k, P_VMC]
+        if c.waited[vr] and not pi[k, P_RELEASED] and not pi[k, P_VR_STARTED]:
+            add_event(c, t, EV_FALLBACK, vr, vmc, c.x[vr], math.nan)
+            _fail(pi, k)
+            continue
         if pi[k, P_MODE] == LATERAL and pi[k, P_VMC_CMD] and not pi[k, P_VMC_STARTED]:
             merge_lane = left[c.lane[vr]]  # VR keeps its ramp lane until VMC has started
             escape = left[merge_lane] if merge_lane >= 0 else -1
@@ -297,12 +312,20 @@ def execute_plans(
         ):
             continue
         release_x = end[c.lane[vr]] - stopping_distance(
-            c.v[vr], c.lc_params[_MOBIL_SAFE_DECEL], c.matrix[2, vr]
+            c.v[vr], c.lc_params[LC_SAFE_DECEL], c.matrix[2, vr]
         )  # s0, row 2 of the matrix
         started = _command(c, ids, t, lead, index, vr, left[c.lane[vr]], pf[k, F_VR_DURATION],
                            release_x, vr, vmc)  # fmt: skip
         pi[k, P_VR_STARTED] = started > 0
-        pi[k, P_RELEASED] = started < 0
+        if started < 0:  # FALLBACK logged by commanded_changes
+            _fail(pi, k)
+
+
+@kernel(inline="always")
+def _fail(pi: np.ndarray, k: int) -> None:
+    """Plan k failed: VR released to gap acceptance, VMC and VNR no longer commanded."""
+    pi[k, P_RELEASED] = 1
+    pi[k, P_VMC_CMD] = pi[k, P_VNR_CMD] = 0
 
 
 @kernel(inline="always")
