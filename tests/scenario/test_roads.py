@@ -223,7 +223,7 @@ def test_a_change_that_stands_still_past_the_lane_line_is_completed() -> None:
                                  np.array([np.nan]))  # fmt: skip
     x0, xf = float(sim.lc_x0[changer]), float(sim.lc_xf[changer])
     stop = x0 + 0.55 * (xf - x0)  # its centre past the line, its body across it
-    sim.command(changer, -float(sim.v[changer]) ** 2 / (2.0 * (stop - sim.x[changer])))
+    sim.command(changer, -(float(sim.v[changer]) ** 2) / (2.0 * (stop - sim.x[changer])))
     sim.run()
     ends = _events(sim.log, EventKind.LANE_CHANGE_END)
     assert ends["vehicle"].tolist() == [changer]
