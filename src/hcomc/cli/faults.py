@@ -26,10 +26,42 @@ def _names(option: str, value: str | None, allowed: list[str]) -> tuple[str, ...
     return names
 
 
+def _conditions(value: str | None, presets: list[str]) -> tuple[str, ...] | None:
+    """``--conditions``: the paper's conditions and corridors (presets or files that a
+    corridor run takes), or None (the paper's conditions)."""
+    from hcomc.corridor import is_corridor_source, load_corridor
+    from hcomc.corridor.engine import scenario_only
+
+    if value is None:
+        return None
+    names = tuple(v.strip() for v in value.split(",") if v.strip())
+    for name in names:
+        if name in presets:
+            continue
+        if not is_corridor_source(name):
+            raise _fail(f"option '--conditions' = '{value}': '{name}' is neither a condition "
+                        f"({', '.join(presets)}) nor a corridor preset or file")  # fmt: skip
+        found = scenario_only(load_corridor(name))
+        if found is not None:
+            raise _fail(f"option '--conditions': corridor '{name}' has key '{found[0]}' = "
+                        f"{found[1]!r}, which only the paper's conditions take; allowed: it "
+                        "unset, or the condition itself (C1 ... C5)")  # fmt: skip
+    if not names:
+        raise _fail(f"option '--conditions' = '{value}'; allowed: a comma-separated list of "
+                    f"{', '.join(presets)} or corridors")  # fmt: skip
+    return names
+
+
 @app.command()
 def faults(
     seeds: Annotated[int, typer.Option(help="Seeds 0 .. N-1 of every cell.")] = 10,
-    conditions: Annotated[str | None, typer.Option(help="Conditions (default: C1,...,C5).")] = None,
+    conditions: Annotated[
+        str | None,
+        typer.Option(
+            help="Conditions (default: C1,...,C5), or corridors: presets or corridor "
+            "files, e.g. corridor or my_road.toml (the controller at every on-ramp)."
+        ),
+    ] = None,
     configurations: Annotated[
         str | None, typer.Option(help="Configurations (default: FIFO,Game,HCOMC).")
     ] = None,
@@ -70,7 +102,7 @@ def faults(
     scenario_presets = [p for p in preset_names() if p != "platoon"]
     axes: dict[str, Any] = {
         k: v for k, v in {
-            "conditions": _names("--conditions", conditions, scenario_presets),
+            "conditions": _conditions(conditions, scenario_presets),
             "configurations": _names("--configurations", configurations,
                                      list(ALL_CONFIGURATIONS)),
             "faults": _names("--faults", fault, list(FAULTS)),

@@ -25,6 +25,7 @@ from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.interface.fleet import Fleet
 from hcomc.interface.plan import MergeGroup, MergePlan
+from hcomc.interface.ramp import Ramp
 from hcomc.interface.view import TrafficView
 
 __all__ = ["ListenedRun", "StepListener"]
@@ -42,6 +43,7 @@ class ListenedRun(Protocol):
     fleet: Fleet  # the nominal parameters (what controllers predict with)
     decisions: list[MergePlan]
     key_groups: dict[int, MergeGroup]
+    ramps: tuple[Ramp, ...]  # the road's on-ramps (lane-code order), as controllers see them
 
     @property
     def t(self) -> float:

@@ -13,6 +13,7 @@ unchanged at one ramp or at every ramp of a corridor.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -21,7 +22,7 @@ from hcomc.road import Lane
 if TYPE_CHECKING:
     from hcomc.config import RoadParams
 
-__all__ = ["Ramp"]
+__all__ = ["Ramp", "ramp_in"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,3 +56,11 @@ class Ramp:
             accel_lane_end=float(road.accel_lane_end),
             lane_width=float(road.lane_width),
         )
+
+
+def ramp_in(ramps: Sequence[Ramp], lane: int) -> Ramp:
+    """The ramp of ``ramps`` whose own lane is ``lane``; the first when none is (a vehicle
+    that has left its ramp lane, or none given). A ValueError on a road without on-ramps."""
+    if not ramps:
+        raise ValueError("the road has no on-ramp: a merge decision is made at one")
+    return next((r for r in ramps if r.lane == lane), ramps[0])

@@ -23,17 +23,19 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 import pandas as pd
 
 import hcomc
 from hcomc.config import ConfigError, load_config
 from hcomc.robustness.settings import CHANNELS, FAULTS, ChannelParams, FaultParams, ShieldParams
-from hcomc.sim.log import EventKind
+from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 
 __all__ = ["CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
 
 if TYPE_CHECKING:
+    from hcomc.robustness.impairments import Impairments
     from hcomc.sumo.cosim import SumoSimulation
 
 _SPAWN = multiprocessing.get_context("spawn")
@@ -60,18 +62,66 @@ class FaultRun:
 def run_faulted(run: FaultRun) -> dict[str, Any]:
     """Simulate one run and measure it: merge outcome, collisions (all, and those with a
     vehicle a live plan commanded in that step), the key vehicles' min TTC and max DRAC,
-    shield overrides, plans (lost, fallbacks) and the fault's timing."""
+    shield overrides, plans (lost, fallbacks) and the fault's timing.
+
+    On a corridor (a corridor preset or file as the condition) the controller acts at every
+    on-ramp, the fault is timed from the first ramp vehicle's control-zone entry anywhere,
+    and the merge figures are over every merge event of the run (merged: none failed,
+    :func:`_corridor_run`)."""
+    from hcomc.corridor import is_corridor_source
+    from hcomc.robustness.impairments import Impairments
+
+    start = time.perf_counter()
+    shield = run.shield_params.model_copy(update={"enabled": run.shield})
+    impaired = Impairments(channel=run.channel_params, fault=run.fault_params, shield=shield)
+    measured = (_corridor_run if is_corridor_source(run.condition) else _scenario_run)(
+        run, impaired
+    )
+    overrides = impaired.shield.counts()
+    log, groups, entry = measured.log, measured.groups, measured.entry
+    collisions = log.events_of(EventKind.COLLISION)
+    return {
+        "condition": run.condition, "configuration": run.configuration, "fault": run.fault,
+        "channel": run.channel, "shield": run.shield, "seed": run.seed,
+        **measured.merge, "collisions": int(collisions.size),
+        "collisions_commanded": impaired.collisions_commanded(log),
+        "shield_brakes": overrides["brake"], "shield_holds": overrides["hold_change"],
+        "shield_releases": overrides["release"],
+        "plans": measured.plans, "plans_lost": impaired.plans_lost,
+        "fallbacks": measured.fallbacks,
+        "fault_vehicle": impaired.fault.vehicle,
+        "fault_start": impaired.fault.start - entry if math.isfinite(entry) else math.nan,
+        "degraded_steps": impaired.degraded_steps,
+        "collision_pair": _pair_roles(collisions, groups),
+        "fault_involved": bool(set(impaired.fault.vehicles)
+                               & (set(collisions["vehicle"]) | set(collisions["other"]))),
+        "wall_s": time.perf_counter() - start,
+    }  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Measured:
+    """What a faulted run measured besides the listener's own counts: its log, the merge
+    figures (merged, merge_time, min_ttc, max_drac), plans and fallbacks, the key groups
+    (latest last) and when the first ramp vehicle entered a control zone [s]."""
+
+    log: SimulationLog
+    merge: dict[str, Any]
+    plans: int
+    fallbacks: int
+    groups: list[dict[str, int]]
+    entry: float
+
+
+def _scenario_run(run: FaultRun, impaired: Impairments) -> _Measured:
+    """One of the paper's conditions on either engine, measured on its key window."""
     from hcomc.experiments.runner import configuration_overrides
     from hcomc.metrics import key_window
     from hcomc.metrics.outcome import merge_outcome
     from hcomc.metrics.surrogate import closing_metrics, max_drac, min_ttc
-    from hcomc.robustness.impairments import Impairments
     from hcomc.sim.engine import Simulation
 
-    start = time.perf_counter()
     config = load_config(run.condition, **configuration_overrides(run.configuration, {}))
-    shield = run.shield_params.model_copy(update={"enabled": run.shield})
-    impaired = Impairments(channel=run.channel_params, fault=run.fault_params, shield=shield)
     engine: type[Simulation] | type[SumoSimulation] = Simulation
     if run.engine == "sumo":
         from hcomc.sumo.cosim import SumoSimulation
@@ -82,38 +132,55 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
     window = key_window(log)
     closing = closing_metrics(log, window)
     outcome = merge_outcome(log, window)
-    collisions = log.events_of(EventKind.COLLISION)
-    overrides = impaired.shield.counts()
-    return {
-        "condition": run.condition, "configuration": run.configuration, "fault": run.fault,
-        "channel": run.channel, "shield": run.shield, "seed": run.seed,
-        "merged": bool(outcome.merged), "merge_time": outcome.merge_time,
-        "collisions": int(collisions.size),
-        "collisions_commanded": impaired.collisions_commanded(log),
-        "min_ttc": closing[min_ttc], "max_drac": closing[max_drac],
-        "shield_brakes": overrides["brake"], "shield_holds": overrides["hold_change"],
-        "shield_releases": overrides["release"],
-        "plans": len(sim.decisions), "plans_lost": impaired.plans_lost,
-        "fallbacks": sum(bool(p.fallback) for p in sim.decisions),
-        "fault_vehicle": impaired.fault.vehicle,
-        "fault_start": impaired.fault.start - window.t_start if math.isfinite(window.t_start)
-        else math.nan,
-        "degraded_steps": impaired.degraded_steps,
-        "collision_pair": _pair_roles(collisions, window.group),
-        "fault_involved": bool(set(impaired.fault.vehicles)
-                               & (set(collisions["vehicle"]) | set(collisions["other"]))),
-        "wall_s": time.perf_counter() - start,
-    }  # fmt: skip
+    merge = {"merged": bool(outcome.merged), "merge_time": outcome.merge_time,
+             "min_ttc": closing[min_ttc], "max_drac": closing[max_drac]}  # fmt: skip
+    return _Measured(log, merge, len(sim.decisions), sum(bool(p.fallback) for p in sim.decisions),
+                     [window.group], window.t_start)  # fmt: skip
 
 
-def _pair_roles(collisions: Any, group: dict[str, int]) -> str:
+def _corridor_run(run: FaultRun, impaired: Impairments) -> _Measured:
+    """A corridor with the configuration's controller at every on-ramp, measured over all
+    of its merge events (:mod:`hcomc.metrics.corridor.events`). Merged: no event failed,
+    where a ramp vehicle that has not merged fails if it waited at its lane's end or left
+    the road; one still driving on its ramp when the run ends is in progress."""
+    from hcomc.corridor import load_corridor
+    from hcomc.experiments.corridor.runs import with_configuration
+    from hcomc.metrics.corridor import simulate_corridor
+
+    corridor = with_configuration(load_corridor(run.condition), run.configuration)
+    measured = simulate_corridor(corridor, seed=run.seed, listeners=[impaired])
+    events = measured.merges
+    merged = events.merged.astype(bool).to_numpy()
+    done = events[merged]
+    waited = measured.log.events_of(EventKind.RAMP_WAIT)["vehicle"]
+    on_road = measured.trips.set_index("id").outcome.reindex(events.vr) == "on_road"
+    in_progress = on_road.to_numpy() & ~np.isin(events.vr, waited)
+    merge = {
+        "merged": bool((merged | in_progress).all()),
+        "merge_time": float(done.time_to_merge.mean()) if len(done) else math.nan,
+        "min_ttc": float(events.min_ttc.min()) if len(events) else math.nan,
+        "max_drac": float(events.max_drac.max()) if len(events) else math.nan,
+    }
+    groups = [
+        {k: int(v) for k, v in g.items() if k != "t"}
+        for g in measured.log.meta.get("key_groups", [])
+    ]
+    entry = float(measured.log.meta["key_groups"][0]["t"]) if groups else math.nan
+    fallbacks = int(events.fallback.astype(bool).sum()) if len(events) else 0
+    return _Measured(measured.log, merge, measured.decisions, fallbacks, groups[::-1], entry)
+
+
+def _pair_roles(collisions: Any, groups: list[dict[str, int]]) -> str:
     """The key-vehicle roles of the first collision's pair ("VR-VMF"; "other" for a vehicle
-    that is not a key vehicle); "" without a collision."""
+    that is not a key vehicle) in the latest of ``groups`` that holds either vehicle;
+    "" without a collision."""
     if not len(collisions):
         return ""
-    roles = {int(i): role for role, i in group.items() if i >= 0}
     first = collisions[0]
-    return "-".join(roles.get(int(first[k]), "other") for k in ("vehicle", "other"))
+    pair = (int(first["vehicle"]), int(first["other"]))
+    group = next((g for g in groups if set(pair) & set(g.values())), {})
+    roles = {int(i): role for role, i in group.items() if i >= 0}
+    return "-".join(roles.get(i, "other") for i in pair)
 
 
 @dataclass(frozen=True)
@@ -140,6 +207,18 @@ class CampaignSpec:
                     raise ConfigError(f"{key} '{name}'; allowed: {', '.join(known)}")
         if not self.seeds:
             raise ConfigError("seeds: at least one seed is needed")
+        corridors = self.corridors()
+        if corridors and self.engine != "hcomc":
+            raise ConfigError(
+                f"condition '{corridors[0]}' with engine '{self.engine}'; allowed: "
+                "the paper's conditions (the co-simulation runs the paper's road)"
+            )
+
+    def corridors(self) -> tuple[str, ...]:
+        """The conditions that are corridors (presets or files)."""
+        from hcomc.corridor import is_corridor_source
+
+        return tuple(c for c in self.conditions if is_corridor_source(c))
 
     def cells(self) -> list[tuple[str, str, str, str, bool]]:
         """(condition, configuration, fault, channel, shield) of every cell, in order."""
@@ -163,7 +242,11 @@ class CampaignSpec:
             from hcomc.sumo.cosim import SumoSimulation
 
             sumo = {"sumo_version": SumoSimulation._sumo_version()}
+        from hcomc.corridor import load_corridor
+
+        corridors = {c: load_corridor(c).model_dump(mode="json") for c in self.corridors()}
         return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
+                **({"corridors": corridors} if corridors else {}),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
                 "shield": ShieldParams().model_dump(), **sumo}  # fmt: skip

@@ -2,8 +2,9 @@
 
 Every vehicle broadcasts its state every ``1 / update_rate`` seconds (from the end of the
 warm-up). A broadcast is lost (independently, or in Gilbert-Elliott bursts per sender),
-otherwise it arrives after ``latency + U(0, jitter)`` seconds; the roadside unit (the
-controller, at the acceleration-lane start) hears only vehicles within ``range``, a
+otherwise it arrives after ``latency + U(0, jitter)`` seconds; the roadside units (one at
+each on-ramp's acceleration-lane start, networked with the controller) hear only vehicles
+within ``range`` of one of them, a
 following vehicle hears its leader at any distance. What arrived is all the controller
 sees: for each vehicle its newest received state and that state's age (a vehicle not heard
 for ``max_age`` seconds, or never, is absent). A plan is one downlink message: it arrives
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -72,8 +74,8 @@ class _Broadcast:
 class Channel:
     """Broadcasts, arrivals and the controller's knowledge for one run of ``n`` vehicles."""
 
-    def __init__(self, params: ChannelParams, n: int, rsu_x: float, seed: int) -> None:
-        self.params, self.rsu_x = params, rsu_x
+    def __init__(self, params: ChannelParams, n: int, rsu_x: Sequence[float], seed: int) -> None:
+        self.params, self.rsu_x = params, np.asarray(rsu_x, dtype=np.float64)
         self.rng = np.random.default_rng(np.random.SeedSequence([seed, CHANNEL_STREAM]))
         burst = params.mean_burst if params.loss_model == "gilbert_elliott" else None
         indep = 1.0 / (1.0 - params.loss)
@@ -94,7 +96,7 @@ class Channel:
         active = state["active"]
         lost = self.loss.lost()
         arrive_v2v = np.where(active & ~lost, t + self.delay(active.size), math.inf)
-        near = np.abs(state["x"] - self.rsu_x) <= self.params.range
+        near = np.abs(state["x"][:, None] - self.rsu_x).min(axis=1) <= self.params.range
         arrive = np.where(near, arrive_v2v, math.inf)
         self.broadcasts += int(active.sum())
         self._pending.append(
@@ -132,7 +134,9 @@ class Channel:
             state = {"x": true_view.x, "v": true_view.v, "a": true_view.a,
                      "lane": true_view.lane, "active": np.zeros_like(true_view.active),
                      "changing": true_view.changing}  # fmt: skip
-        base = TrafficView.snapshot(t, state, true_view.fleet, true_view.config, true_view.plans)
+        base = TrafficView.snapshot(
+            t, state, true_view.fleet, true_view.config, true_view.plans, true_view.ramp
+        )
         age = np.where(heard, t - self.sent, math.inf)
         age.flags.writeable = False
         fields = {f.name: getattr(base, f.name) for f in dataclasses.fields(TrafficView)}

@@ -65,9 +65,8 @@ class Impairments(StepListener):
         """Set up the channel, fault and shield for ``run``."""
         config = run.config
         self.run = run
-        self.channel = Channel(
-            self.channel_params, run.x.size, config.road.accel_lane_start, run.seed
-        )
+        rsu = [ramp.accel_lane_start for ramp in run.ramps]
+        self.channel = Channel(self.channel_params, run.x.size, rsu, run.seed)
         self.fault = Fault(self.fault_params, config, run.seed)
         self.shield = Shield(self.shield_params, config, self.fault)
         self._broadcast_every = max(1, round(self.channel_params.period / run.dt))

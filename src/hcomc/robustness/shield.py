@@ -30,7 +30,7 @@ from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.equations.safety import stopping_distance
 from hcomc.interface.listener import ListenedRun
-from hcomc.road import Lane
+from hcomc.interface.ramp import ramp_in
 from hcomc.robustness.run_state import DrivenVehicles
 from hcomc.robustness.settings import ShieldParams
 
@@ -128,19 +128,23 @@ class Shield:
         self._braking = set(braking)
 
     def unsafe_merge(self, sim: ListenedRun, vr: int) -> list[int]:
-        """The vehicles of lane 1 next to which VR's merge would start closer than the RSS
-        distance: its leader there (VR behind it) and its follower there (VR ahead)."""
-        leader, follower = lane_neighbours(sim, vr, int(Lane.MAIN_1))
+        """The vehicles of the lane VR merges into (lane 1 of its ramp) next to which its merge
+        would start closer than the RSS distance: its leader there (VR behind it) and its
+        follower there (VR ahead)."""
+        target = ramp_in(sim.ramps, int(sim.lane[vr])).target
+        leader, follower = lane_neighbours(sim, vr, target)
         pairs = ((leader, leader < 0 or self._safe(sim, vr, leader)),
                  (follower, follower < 0 or self._safe(sim, follower, vr)))  # fmt: skip
         return [j for j, ok in pairs if not ok]
 
     def cannot_stop(self, sim: ListenedRun, vr: int) -> bool:
-        """Whether VR could no longer stop before the lane end at the safe deceleration."""
+        """Whether VR could no longer stop before its acceleration lane's end at the safe
+        deceleration."""
         stop = stopping_distance(
             float(sim.v[vr]), self.config.lane_change.safe_decel, float(sim.fleet.s0[vr])
         )
-        return bool(sim.x[vr] >= self.config.road.accel_lane_end - stop)
+        end = ramp_in(sim.ramps, int(sim.lane[vr])).accel_lane_end
+        return bool(sim.x[vr] >= end - stop)
 
     def _safe(self, sim: ListenedRun, rear: int, front: int) -> bool:
         gap = float(sim.x[front] - sim.fleet.length[front] - sim.x[rear])

@@ -40,12 +40,12 @@ from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.control.key_group import find_key_vehicles
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
+from hcomc.interface.ramp import ramp_in
 from hcomc.sim.decision import decide, undecided
 from hcomc.sim.engine_plans import EnginePlans
-from hcomc.sim.lane_table import KIND_ON, L_LEFT, L_RIGHT, L_ZONE
+from hcomc.sim.lane_table import L_LEFT, L_RIGHT, L_ZONE
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.plan_execution import game_confirms
-from hcomc.sim.roads import ramp_of
 from hcomc.sim.step import loop as step_loop
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import adopt_log_columns, widen_log
@@ -315,16 +315,12 @@ class Simulation(EnginePlans):
     # ---------------------------------------------------------------- plans
     def view(self, t: float, vr: int = -1) -> TrafficView:
         """Read-only copy of the state for a controller deciding for ramp vehicle ``vr``,
-        with the on-ramp of its lane (:func:`hcomc.sim.roads.ramp_of`; the road's first
+        with the on-ramp of its lane (:func:`hcomc.interface.ramp.ramp_in`: the road's first
         on-ramp when ``vr`` is -1 or has left its ramp lane)."""
         state = {"x": self.x, "v": self.v, "a": self.a, "lane": self.lane,
                  "active": self.active, "changing": self.origin != self.target}  # fmt: skip
         plans = tuple(p.plan for p in self.plans)
-        on_ramp = self.lanes.codes_of_kind(KIND_ON).tolist()
-        if not on_ramp:
-            raise ValueError("the road has no on-ramp: a controller's view is of one")
-        code = int(self.lane[vr]) if vr >= 0 and int(self.lane[vr]) in on_ramp else on_ramp[0]
-        ramp = ramp_of(self.lanes, code)
+        ramp = ramp_in(self.ramps, int(self.lane[vr]) if vr >= 0 else -1)
         return TrafficView.snapshot(t, state, self.fleet, self.config, plans, ramp)
 
     def _in_control_zone(self, ids: IntArray, changing: np.ndarray) -> IntArray:

@@ -21,6 +21,7 @@ from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Kind
 from hcomc.sim.perception_state import Perception
+from hcomc.sim.roads import ramps_of
 from hcomc.sim.scene import Scene, SceneMaker, paper_scene
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import allocate_log, build_arrays
@@ -72,6 +73,7 @@ class EngineSetup:
     ) -> None:  # fmt: skip
         self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
         self.scene, self.lanes = scene, scene.lanes
+        self.ramps = ramps_of(scene.lanes)
         demand, fleet = scene.demand, scene.fleet
         self._after_demand = rng.bit_generator.state  # for _sibling
         self.counterfactual = counterfactual

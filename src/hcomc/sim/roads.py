@@ -62,6 +62,12 @@ def road_lanes(road: Road) -> LaneTable:
     return lane_table(road.lane_width, road.length, cuts, ramps)
 
 
+def ramps_of(lanes: LaneTable) -> tuple[Ramp, ...]:
+    """Every on-ramp of the road, as a controller sees it (:func:`ramp_of`), in lane-code
+    order."""
+    return tuple(ramp_of(lanes, int(code)) for code in lanes.codes_of_kind(KIND_ON))
+
+
 def ramp_of(lanes: LaneTable, code: int) -> Ramp:
     """The on-ramp of lane ``code`` (an on-ramp lane) as a controller sees it
     (:class:`hcomc.interface.Ramp`): its control zone and acceleration lane, the lane width,

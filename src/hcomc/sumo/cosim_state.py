@@ -25,7 +25,7 @@ from hcomc.sim.demand import generate_demand
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.plan_execution import ActivePlan
-from hcomc.sim.roads import paper_lanes
+from hcomc.sim.roads import paper_lanes, ramps_of
 from hcomc.sumo import import_libsumo
 from hcomc.sumo.routes import vehicle_id
 
@@ -53,6 +53,7 @@ class CosimState:
         self.sumo = import_libsumo()
         self.config = config
         self.lanes = paper_lanes(config.road)  # the road's lane table, as our engine's
+        self.ramps = ramps_of(self.lanes)
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
         self.dt = config.dt

@@ -14,7 +14,7 @@ merge event, and the sampled trajectories.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -40,6 +40,7 @@ from hcomc.sim.corridor_scene import corridor_config, corridor_scene
 from hcomc.sim.log import EventKind, SimulationLog
 
 if TYPE_CHECKING:
+    from hcomc.interface.listener import StepListener
     from hcomc.sim.engine import Simulation
 
 __all__ = ["OUTCOMES", "CorridorRun", "simulate_corridor"]
@@ -141,13 +142,16 @@ def simulate_corridor(
     duration: float | None = None,
     trajectory_interval: float = 0.0,
     progress: Callable[[float, float], None] | None = None,
+    listeners: Sequence[StepListener] = (),
 ) -> CorridorRun:
     """Run ``corridor``, with the merge controller its ``[control]`` table names at every
     on-ramp ("none": without).
 
     ``seed`` and ``duration`` [s] default to the corridor's; ``trajectory_interval`` [s]
     samples every vehicle's state that often (0: no trajectories; a multiple of the step);
-    ``progress(t, duration)`` is called as the run advances.
+    ``progress(t, duration)`` is called as the run advances; ``listeners`` act on the run
+    between its steps (:class:`hcomc.interface.listener.StepListener`, e.g. the V2X channel,
+    faults and shield of :class:`hcomc.robustness.impairments.Impairments`).
     """
     from hcomc.sim.engine import Simulation
 
@@ -165,7 +169,7 @@ def simulate_corridor(
     _refuse_scenario_keys(corridor)
     started = time.perf_counter()
     config = corridor_config(corridor, duration=duration, seed=seed, log_interval=dt)
-    sim = Simulation(config, seed=seed, scene=corridor_scene(corridor))
+    sim = Simulation(config, seed=seed, scene=corridor_scene(corridor), listeners=listeners)
     report = None
     if progress is not None:
 
