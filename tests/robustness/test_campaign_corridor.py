@@ -3,7 +3,9 @@ with five on-ramps and the controller at every one, through the CLI."""
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -18,6 +20,8 @@ from hcomc.robustness.settings import FAULTS
 from hcomc.sim.corridor_scene import corridor_config
 
 runner = CliRunner()
+EXAMPLE = (Path(__file__).resolve().parents[2] / "examples" / "my_controller" / "src"
+           / "hcomc_ctg" / "controller.py")  # fmt: skip
 
 SHORT = 'base = "corridor"\n[corridor]\nduration = 150.0\n'
 """The corridor preset's first 150 s: merges at its first ramps, some still on the way."""
@@ -126,3 +130,33 @@ def test_a_corridor_edited_between_two_runs_of_a_campaign_is_refused(tmp_path) -
     edited = runner.invoke(app, args)
     assert edited.exit_code == 2
     assert "another spec" in edited.stderr
+
+
+def test_any_controller_enters_the_campaign_on_either_road(tmp_path) -> None:
+    """``--controllers`` takes what ``hcomc compare`` takes: the example package's
+    controller, by file path, runs beside FIFO on a paper condition and on a corridor (at
+    every ramp), and its source is part of the campaign's identity."""
+    from hcomc.experiments.runner import configuration_label
+
+    spec = f"{EXAMPLE}:ConstantTimeGap"
+    road = tmp_path / "short.toml"
+    road.write_text(SHORT, encoding="utf-8")
+    out = tmp_path / "out"
+    result = runner.invoke(app, [
+        "faults", "--seeds", "1", "--conditions", f"C2,{road}", "--controllers", f"fifo,{spec}",
+        "--faults", "brake-vmf", "--channels", "ideal", "--workers", "1", "--out", str(out),
+    ])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    runs = pd.read_csv(out / "runs.csv")
+    label = configuration_label(spec)
+    assert set(runs.configuration) == {"FIFO", label}
+    mine = runs[runs.configuration == label]
+    assert len(mine) == 2 * 2  # two roads, shield off and on
+    assert (mine.plans > 0).all()
+    assert (mine.fault_vehicle >= 0).all()
+    identity = json.loads((out / "campaign.json").read_text())
+    assert identity["controllers"][label]["class"].endswith(":ConstantTimeGap")
+    bad = runner.invoke(app, ["faults", "--controllers", "fifo,nobody.py:X",
+                              "--out", str(tmp_path / "x")])  # fmt: skip
+    assert bad.exit_code == 2
+    assert "--configurations" in bad.stderr

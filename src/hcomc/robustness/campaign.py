@@ -242,11 +242,15 @@ class CampaignSpec:
             from hcomc.sumo.cosim import SumoSimulation
 
             sumo = {"sumo_version": SumoSimulation._sumo_version()}
+        from hcomc.control.registry import controller_source
         from hcomc.corridor import load_corridor
+        from hcomc.experiments.runner import configuration_controller
 
         corridors = {c: load_corridor(c).model_dump(mode="json") for c in self.corridors()}
+        controllers = {k: controller_source(configuration_controller(k)[0])
+                       for k in self.configurations}  # fmt: skip
         return {"spec": asdict(self), "version": hcomc.__version__, "code": code_stamp(),
-                **({"corridors": corridors} if corridors else {}),
+                "controllers": controllers, **({"corridors": corridors} if corridors else {}),
                 "faults": {f: FAULTS[f].model_dump() for f in self.faults},
                 "channels": {c: CHANNELS[c].model_dump(mode="json") for c in self.channels},
                 "shield": ShieldParams().model_dump(), **sumo}  # fmt: skip

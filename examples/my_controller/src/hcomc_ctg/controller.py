@@ -73,13 +73,13 @@ class ConstantTimeGap:
         vr, vmc = group.vr, group.vmc
         if not view.is_cav(vr):  # an HDV is never commanded
             return MergePlan(group, Mode.NONE, view.t, reason="CTG: HDV VR, gap acceptance")
-        road, fleet = view.config.road, view.fleet
+        ramp, fleet = view.ramp, view.fleet  # the ramp VR is on, on any road
         x_r, v_r = float(view.x[vr]), float(view.v[vr])
 
         # 1. Merge position: the change (length v * duration) must end on the acceleration lane.
         change_length = max(v_r * self.duration, 3.0 * float(fleet.length[vr]))
-        last = road.accel_lane_end - change_length
-        merge_x = max(min(road.accel_lane_start + MERGE_OFFSET, last), road.accel_lane_start)
+        last = ramp.accel_lane_end - change_length
+        merge_x = max(min(ramp.accel_lane_start + MERGE_OFFSET, last), ramp.accel_lane_start)
         horizon = reach_horizon(view, vr, merge_x)  # VR's time to merge_x, within [4 s, H_max]
 
         def alone(why: str) -> MergePlan:  # nobody cooperates; VR changes at merge_x if safe
