@@ -103,7 +103,7 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
 class _Measured:
     """What a faulted run measured besides the listener's own counts: its log, the merge
     figures (merged, merge_time, min_ttc, max_drac), plans and fallbacks, the key groups
-    (latest last) and when the first ramp vehicle entered a control zone [s]."""
+    (latest first) and when the first ramp vehicle entered a control zone [s]."""
 
     log: SimulationLog
     merge: dict[str, Any]
