@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.corridor import load_corridor
 from hcomc.experiments.corridor.runs import with_configuration
-from hcomc.metrics.corridor import simulate_corridor
+from hcomc.metrics.corridor import CorridorRun, simulate_corridor
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.settings import FAULTS
 from hcomc.sim.corridor_scene import corridor_config
@@ -41,19 +41,26 @@ def campaign(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, pd.DataFram
     return str(road), pd.read_csv(folder / "out" / "runs.csv")
 
 
+@pytest.fixture(scope="module")
+def plain(campaign: tuple[str, pd.DataFrame]) -> CorridorRun:
+    """The campaign's corridor with HCOMC, seed 0, run without listeners."""
+    return simulate_corridor(with_configuration(load_corridor(campaign[0]), "HCOMC"), seed=0)
+
+
 def _cell(runs: pd.DataFrame, fault: str, channel: str, shield: bool) -> pd.Series:
     rows = runs[(runs.fault == fault) & (runs.channel == channel) & (runs.shield == shield)]
     assert len(rows) == 1
     return rows.iloc[0]
 
 
-def test_the_nominal_corridor_run_is_the_run_without_listeners(campaign) -> None:
+def test_the_nominal_corridor_run_is_the_run_without_listeners(
+    campaign: tuple[str, pd.DataFrame], plain: CorridorRun
+) -> None:
     """Ideal channel, no fault, no shield: the corridor's own run, figure for figure."""
     road, runs = campaign
     assert len(runs) == 2 * 2 * 2
     assert set(runs.condition) == {road}
     nominal = _cell(runs, "none", "ideal", False)
-    plain = simulate_corridor(with_configuration(load_corridor(road), "HCOMC"), seed=0)
     assert nominal.collisions == plain.collision_count == 0
     assert nominal.plans == plain.decisions > 10  # plans at several ramps
     assert nominal.min_ttc == pytest.approx(float(plain.merges.min_ttc.min()), rel=1e-12)
@@ -63,12 +70,13 @@ def test_the_nominal_corridor_run_is_the_run_without_listeners(campaign) -> None
     assert set(plain.merges.ramp) >= {"on1", "on2"}
 
 
-def test_the_fault_is_timed_from_the_first_control_zone_entry(campaign) -> None:
+def test_the_fault_is_timed_from_the_first_control_zone_entry(
+    campaign: tuple[str, pd.DataFrame], plain: CorridorRun
+) -> None:
     """brake-vmf brakes the VMF of the first ramp vehicle to enter a control zone that has
     one, after a delay drawn from the run's seed as on the paper's road; its start is
     reported from the first entry."""
     road, runs = campaign
-    plain = simulate_corridor(with_configuration(load_corridor(road), "HCOMC"), seed=0)
     groups = plain.log.meta["key_groups"]
     target = next(g for g in groups if g["VMF"] >= 0)
     config = corridor_config(load_corridor(road), duration=150.0, seed=0, log_interval=0.1)
@@ -82,7 +90,7 @@ def test_the_fault_is_timed_from_the_first_control_zone_entry(campaign) -> None:
         assert math.isnan(row.fault_start)
 
 
-def test_the_channel_and_the_shield_act_at_the_ramps(campaign) -> None:
+def test_the_channel_and_the_shield_act_at_the_ramps(campaign: tuple[str, pd.DataFrame]) -> None:
     """The lossy channel loses plans and leaves CAVs with stale leaders; the shield
     overrides commands; on the ideal channel nothing is lost."""
     _, runs = campaign
@@ -98,7 +106,7 @@ def test_the_channel_and_the_shield_act_at_the_ramps(campaign) -> None:
         assert ideal.shield_brakes == ideal.shield_holds == ideal.shield_releases == 0
 
 
-def test_corridor_conditions_are_checked(tmp_path) -> None:
+def test_corridor_conditions_are_checked(tmp_path: Path) -> None:
     """A corridor in SUMO, or one with keys only the paper's conditions take, is a
     one-line error."""
     road = tmp_path / "short.toml"
@@ -116,7 +124,7 @@ def test_corridor_conditions_are_checked(tmp_path) -> None:
         assert result.stderr.strip().count("\n") == 0
 
 
-def test_a_corridor_edited_between_two_runs_of_a_campaign_is_refused(tmp_path) -> None:
+def test_a_corridor_edited_between_two_runs_of_a_campaign_is_refused(tmp_path: Path) -> None:
     """The campaign's identity holds each corridor's resolved content: a rerun after the
     corridor file changed would mix two roads' runs, and is refused."""
     road = tmp_path / "short.toml"
@@ -132,7 +140,7 @@ def test_a_corridor_edited_between_two_runs_of_a_campaign_is_refused(tmp_path) -
     assert "another spec" in edited.stderr
 
 
-def test_any_controller_enters_the_campaign_on_either_road(tmp_path) -> None:
+def test_any_controller_enters_the_campaign_on_either_road(tmp_path: Path) -> None:
     """``--controllers`` takes what ``hcomc compare`` takes: the example package's
     controller, by file path, runs beside FIFO on a paper condition and on a corridor (at
     every ramp), and its source is part of the campaign's identity."""
