@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from hcomc.config import ConfigError
 from hcomc.robustness.campaign import CampaignSpec
-from hcomc.robustness.channel import GilbertElliott
+from hcomc.robustness.channel import Channel, GilbertElliott
 from hcomc.robustness.settings import CHANNELS, FaultParams
 from hcomc.robustness.shield import rss_safe_distance
 
@@ -101,3 +101,19 @@ def test_channel_presets_and_fault_rules():
     with pytest.raises(ConfigError, match="fault 'fire'"):
         CampaignSpec(faults=("fire",))
     assert math.isinf(CHANNELS["ideal"].range)
+
+
+def test_the_roadside_units_hear_within_range_of_any_ramp():
+    """A broadcast reaches the controller when its sender is within ``range`` of one of the
+    roadside units (one per on-ramp); on a road without on-ramps, of none, while the
+    vehicles still hear each other."""
+    params = CHANNELS["lat100-loss10"].model_copy(update={"loss": 0.0, "range": 100.0})
+    x = np.array([0.0, 950.0, 1500.0, 2900.0, 5000.0])
+    state = {"x": x, "active": np.ones(x.size, dtype=bool)}
+    for rsu, heard in (([1000.0, 3000.0], [False, True, False, True, False]),
+                       ([], [False] * x.size)):  # fmt: skip
+        channel = Channel(params, x.size, rsu, seed=0)
+        channel.broadcast(0.0, state)
+        message = channel._pending[0]
+        assert np.isfinite(message.arrive).tolist() == heard
+        assert np.isfinite(message.arrive_v2v).all()

@@ -96,7 +96,8 @@ class Channel:
         active = state["active"]
         lost = self.loss.lost()
         arrive_v2v = np.where(active & ~lost, t + self.delay(active.size), math.inf)
-        near = np.abs(state["x"][:, None] - self.rsu_x).min(axis=1) <= self.params.range
+        gap = np.abs(state["x"][:, None] - self.rsu_x).min(axis=1, initial=math.inf)
+        near = gap <= self.params.range  # a road without on-ramps has no roadside unit
         arrive = np.where(near, arrive_v2v, math.inf)
         self.broadcasts += int(active.sum())
         self._pending.append(
