@@ -52,27 +52,6 @@ def _conditions(value: str | None, presets: list[str]) -> tuple[str, ...] | None
     return names
 
 
-def _configurations(value: str | None) -> tuple[str, ...] | None:
-    """``--configurations``: configuration labels or controller names (each once), or None
-    (FIFO, Game, HCOMC)."""
-    from hcomc.config import ConfigError
-    from hcomc.experiments.runner import configuration_label
-
-    if value is None:
-        return None
-    labels: list[str] = []
-    for name in (v.strip() for v in value.split(",")):
-        try:
-            label = configuration_label(name) if name else ""
-        except ConfigError as exc:
-            raise _fail(f"option '--configurations' ({exc})") from None
-        if not label or label in labels:
-            raise _fail(f"option '--configurations' = '{value}': '{name}' is empty or given "
-                        "twice; allowed: each configuration or controller once")  # fmt: skip
-        labels.append(label)
-    return tuple(labels)
-
-
 @app.command()
 def faults(
     seeds: Annotated[int, typer.Option(help="Seeds 0 .. N-1 of every cell.")] = 10,
@@ -117,6 +96,7 @@ def faults(
     shield off/on x seeds, in our engine or in SUMO; rerun to resume. Writes runs.csv and
     summary.csv (one row per cell) under --out."""
     from hcomc.config import preset_names
+    from hcomc.experiments.controller_arguments import configuration_labels
     from hcomc.robustness.campaign import CampaignSpec, run_campaign
 
     if not 1 <= seeds <= _MAX_SEEDS:
@@ -130,7 +110,8 @@ def faults(
     axes: dict[str, Any] = {
         k: v for k, v in {
             "conditions": _conditions(conditions, scenario_presets),
-            "configurations": _configurations(configurations),
+            "configurations": None if configurations is None else tuple(configuration_labels(
+                configurations, key="option '--configurations'", least=1)),
             "faults": _names("--faults", fault, list(FAULTS)),
             "channels": _names("--channels", channel, list(CHANNELS)),
         }.items() if v is not None

@@ -52,12 +52,15 @@ def controller_name(controller: Controller) -> str:
 
 
 def configuration_labels(
-    controllers: str | Sequence[Controller], *, key: str = "argument 'controllers'"
+    controllers: str | Sequence[Controller],
+    *,
+    key: str = "argument 'controllers'",
+    least: int = 2,
 ) -> list[str]:
     """The configurations ``controllers`` stand for
-    (:func:`~hcomc.experiments.runner.configuration_label`): two or more, none empty or
-    given twice; ConfigError naming the one that is not, as ``key`` (the command line's
-    ``option '--controllers'``)."""
+    (:func:`~hcomc.experiments.runner.configuration_label`): ``least`` or more (two to
+    compare), none empty or given twice; ConfigError naming the one that is not, as ``key``
+    (the command line's ``option '--controllers'``)."""
     names = controllers.split(",") if isinstance(controllers, str) else list(controllers)
     shown = ", ".join(map(str, names))
     labels: list[str] = []
@@ -72,10 +75,9 @@ def configuration_labels(
         if label in labels:
             raise ConfigError(f"{key} = [{shown}]: '{spec}' is given twice")
         labels.append(label)
-    if len(labels) < 2:
-        raise ConfigError(
-            f"{key} = [{shown}]: allowed: two or more to compare, e.g. fifo,game,hcomc"
-        )
+    if len(labels) < least:
+        wanted = "two or more to compare" if least == 2 else f"{least} or more"
+        raise ConfigError(f"{key} = [{shown}]: allowed: {wanted}, e.g. fifo,game,hcomc")
     return labels
 
 
