@@ -17,7 +17,7 @@ from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode
 from hcomc.road import Kind
 from hcomc.sim.demand import Demand
 from hcomc.sim.engine import Simulation
-from hcomc.sim.lane_table import KIND_MAIN, L_CENTRE, L_EXIT
+from hcomc.sim.lane_table import KIND_MAIN, L_CENTRE, L_ENDS, L_EXIT
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.roads import paper_lanes, road_lanes
 from hcomc.sim.scene import Scene, SceneMaker
@@ -90,6 +90,20 @@ def test_the_paper_road_is_a_preset_of_the_lane_table() -> None:
     assert np.isinf(ours.main_end).all()
     assert np.isinf(theirs.main_end).all()
     assert list(ours.ints[0]) == [1, KIND_MAIN, KIND_MAIN]  # hcomc.road.Lane's codes
+
+
+def test_the_lane_table_says_which_lanes_end() -> None:
+    """``L_ENDS`` (the step looks for a lane's end only where it is 1): an acceleration lane
+    and a mainline lane that a section drops end; an off-ramp's lane and the mainline lanes
+    that run to the road's end do not."""
+    road = _road(
+        lanes=3, length=4000.0, lane_drops=[LaneDrop(x=2500.0, lanes=2)],
+        on_ramps=[OnRamp(id="on", x=800.0)], off_ramps=[OffRamp(id="off", x=1800.0)],
+    )  # fmt: skip
+    table = road_lanes(road)
+    assert list(table.ints[L_ENDS]) == [1, 0, 0, 0, 1]  # on, off, then mainline lanes 0-2
+    assert list(np.isfinite(table.main_end).any(axis=1)) == [False, False, True]
+    assert list(paper_lanes(load_config("C1").road).ints[L_ENDS]) == [1, 0, 0]
 
 
 def test_a_middle_lane_vehicle_overtakes_on_either_side() -> None:

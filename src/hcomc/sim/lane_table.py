@@ -31,19 +31,21 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = [
-    "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END", "L_EXIT", "L_KIND",
-    "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_WIDTH", "L_ZONE", "LaneTable", "RampLanes",
-    "lane_table",
+    "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END", "L_ENDS", "L_EXIT",
+    "L_KIND", "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_WIDTH", "L_ZONE", "LaneTable",
+    "RampLanes", "lane_table",
 ]  # fmt: skip
 
 KIND_MAIN, KIND_ON, KIND_OFF = 0, 1, 2
 """Kinds of lane: mainline, on-ramp (its road and acceleration lane), off-ramp (its
 deceleration lane and road)."""
 
-L_KIND, L_LEFT, L_RIGHT = range(3)
+L_KIND, L_LEFT, L_RIGHT, L_ENDS = range(4)
 """Rows of :attr:`LaneTable.ints`: the kind, the code of the lane to the left and to the
-right (-1: none). Mainline lane 0 has no lane to its right: a ramp's lanes join it over a
-stretch only, and nobody changes into them of their own accord."""
+right (-1: none), and whether the lane ends somewhere along the road (1: an acceleration
+lane, a mainline lane that a section drops; 0: its vehicles never have to leave it, so the
+step need not look for its end). Mainline lane 0 has no lane to its right: a ramp's lanes
+join it over a stretch only, and nobody changes into them of their own accord."""
 L_CENTRE, L_WIDTH, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(8)
 """Rows of :attr:`LaneTable.floats`, in this order:
 
@@ -69,7 +71,7 @@ class LaneTable(NamedTuple):
 
     Attributes
     ----------
-    ints : (3, L) rows ``L_KIND``, ``L_LEFT``, ``L_RIGHT``.
+    ints : (4, L) rows ``L_KIND``, ``L_LEFT``, ``L_RIGHT``, ``L_ENDS``.
     floats : (8, L) rows ``L_CENTRE`` ... ``L_SPEED``.
     sec_x0 : (S,) where each section begins [m] (the first at 0).
     sec_speed : (S,) its speed limit [m/s] (inf: none).
@@ -126,12 +128,12 @@ def lane_table(
     n_main = int(sec_lanes.max())
     n_ramp = sum(r.lanes for r in ramps)
     n = n_ramp + n_main
-    ints = np.full((3, n), -1, dtype=np.int64)
+    ints = np.full((4, n), -1, dtype=np.int64)
     floats = np.empty((8, n))
     code = 0
     for ramp in ramps:
         for j in range(ramp.lanes):
-            ints[:, code] = ramp.kind, n_ramp if j == 0 else code - 1, -1
+            ints[:, code] = ramp.kind, n_ramp if j == 0 else code - 1, -1, ramp.kind == KIND_ON
             if j + 1 < ramp.lanes:
                 ints[L_RIGHT, code] = code + 1
             floats[:, code] = (-(j + 1) * width, width, ramp.begin, ramp.opens, ramp.end,
@@ -139,7 +141,7 @@ def lane_table(
             code += 1
     for k in range(n_main):
         code = n_ramp + k
-        ints[:, code] = KIND_MAIN, code + 1 if k + 1 < n_main else -1, code - 1 if k else -1
+        ints[:3, code] = KIND_MAIN, code + 1 if k + 1 < n_main else -1, code - 1 if k else -1
         floats[:, code] = (k * width, width, -math.inf, -math.inf, math.inf, math.inf, length,
                            math.inf)  # fmt: skip
     main_end = np.full((n_main, sec_x0.size), math.inf)
@@ -149,5 +151,6 @@ def lane_table(
             if sec_lanes[s] <= k:
                 end = float(sec_x0[s])
             main_end[k, s] = end
+        ints[L_ENDS, n_ramp + k] = bool(np.isfinite(main_end[k]).any())
     speed = np.array([limit for _, _, limit in sections], dtype=np.float64)
     return LaneTable(ints, floats, sec_x0, speed, main_end)

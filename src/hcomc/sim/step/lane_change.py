@@ -10,13 +10,23 @@ import numpy as np
 
 from hcomc._jit import borrow, kernel
 from hcomc.sim.arrays import search_left
-from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_END, L_KIND, L_LEFT, L_OPENS, L_RIGHT
+from hcomc.sim.lane_table import (
+    KIND_MAIN,
+    KIND_ON,
+    L_END,
+    L_ENDS,
+    L_KIND,
+    L_LEFT,
+    L_OPENS,
+    L_RIGHT,
+)
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex, neighbour
-from hcomc.sim.step.road import discretionary_target, needed_change
+from hcomc.sim.step.road import discretionary_target, needed_change, road_of
 from hcomc.sim.step.state import (
     EV_FALLBACK,
     EV_LC_START,
+    LOOKAHEAD,
     S_CAND,
     S_CAND_FOLLOWER,
     S_CAND_LANE,
@@ -125,30 +135,42 @@ def discretionary_changes(
     pos = c.scratch_int[S_POS]
     target = c.scratch_int[S_CAND_TARGET]
     force, urgency = c.scratch_b[S_FORCE], c.scratch_f[S_URGENCY]
-    urgent = c.consts[URGENT]
+    urgent, lookahead, road = c.consts[URGENT], c.consts[LOOKAHEAD], road_of(c)
+    ints, floats, route, scripted = road.ints, road.floats, c.route, c.scripted
+    lanes, xs = c.lane, c.x
     m = 0
     for k in range(ids.size):
         i = ids[k]
-        if changing[k] or c.scripted[i] or holding[i]:
+        if changing[k] or scripted[i] or holding[i]:
             continue
-        lane, x = c.lane[i], c.x[i]
-        kind = c.road_int[L_KIND, lane]
+        lane, x, exit_code = lanes[i], xs[i], route[i]
+        kind = ints[L_KIND, lane]
         if kind != KIND_MAIN:
-            left = c.road_int[L_LEFT, lane]
-            opens, end = c.road_f[L_OPENS, lane], c.road_f[L_END, lane]
+            left = ints[L_LEFT, lane]
+            opens, end = floats[L_OPENS, lane], floats[L_END, lane]
             if kind == KIND_ON and left >= 0 and opens <= x:  # past its end too
                 pos[m], target[m], force[m] = k, left, False  # a ramp lane's
                 urgency[m] = min(max(0.0, 1.0 - (end - x) / urgent), 1.0) if urgent > 0 else 0.0
                 m += 1
             continue
-        needed, room = needed_change(c, i)
-        if needed >= 0:
-            pos[m], target[m], force[m] = k, needed, True
-            urgency[m] = max(0.0, 1.0 - room / urgent) if urgent > 0 else 0.0
-            m += 1
-            continue
+        # the road's rules matter only to a vehicle bound for an off-ramp or beside a lane
+        # that ends (L_ENDS); for the others the calls below would return "none" and a side's
+        # mainline lane
+        if exit_code >= 0 or ints[L_ENDS, lane]:
+            needed, room = needed_change(road, lane, x, exit_code, lookahead)
+            if needed >= 0:
+                pos[m], target[m], force[m] = k, needed, True
+                urgency[m] = max(0.0, 1.0 - room / urgent) if urgent > 0 else 0.0
+                m += 1
+                continue
         for side in (1, -1):
-            tgt = discretionary_target(c, i, side)
+            tgt = ints[L_LEFT if side > 0 else L_RIGHT, lane]
+            if tgt < 0:
+                continue
+            if exit_code >= 0 or ints[L_ENDS, tgt]:
+                tgt = discretionary_target(road, lane, x, exit_code, lookahead, side)
+            elif ints[L_KIND, tgt] != KIND_MAIN:
+                tgt = -1
             if tgt >= 0:
                 pos[m], target[m], force[m], urgency[m] = k, tgt, False, 0.0
                 m += 1

@@ -16,11 +16,20 @@ from hcomc.equations.lane_change import lateral_state
 from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
-from hcomc.sim.lane_table import KIND_MAIN, KIND_ON, L_CENTRE, L_END, L_EXIT, L_KIND, L_WIDTH
+from hcomc.sim.lane_table import (
+    KIND_MAIN,
+    KIND_ON,
+    L_CENTRE,
+    L_END,
+    L_ENDS,
+    L_EXIT,
+    L_KIND,
+    L_WIDTH,
+)
 from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import speed_limit, stop_point
+from hcomc.sim.step.road import road_of, speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -179,9 +188,10 @@ def step_accelerations(
     """
     n = ids.size
     if c.flags[SPEED_LIMITS] > 0:
+        road, matrix, desired, lane, x = road_of(c), c.matrix, c.desired, c.lane, c.x
         for k in range(n):  # the desired speed within the limit where the vehicle is
             i = ids[k]
-            c.matrix[0, i] = min(c.desired[i], speed_limit(c, c.lane[i], c.x[i]))
+            matrix[0, i] = min(desired[i], speed_limit(road, lane[i], x[i]))
     changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]
@@ -243,11 +253,15 @@ def _limits(
     """The lane end, virtual leaders, commanded accelerations, the emergency limit and
     scripted profiles."""
     n = ids.size
+    road, matrix, iidm, x, v, lane, route = road_of(c), c.matrix, c.iidm, c.x, c.v, c.lane, c.route
+    ends = road.ints[L_ENDS]
     for k in range(n):  # where it must have left its lane, a static obstacle seen exactly
         i = ids[k]
-        end = stop_point(c, i)
+        if route[i] < 0 and not ends[lane[i]]:
+            continue  # its lane never ends and it leaves by none: nowhere (skips the call)
+        end = stop_point(road, lane[i], x[i], route[i])
         if end < math.inf and not changing[k] and not following[i]:
-            a_stop = follow_exact(c.matrix, c.iidm, i, end - c.x[i], c.v[i], 0.0, 0.0)
+            a_stop = follow_exact(matrix, iidm, i, end - x[i], v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
     if vv_fol.size:
         before = acc.copy()
@@ -258,15 +272,15 @@ def _limits(
                 gap = vv_x[r] - vv_len[r] - c.x[i]
                 a_v = follow_exact(c.matrix, c.iidm, i, gap, c.v[i], vv_v[r], vv_a[r])
                 acc[k] = min(before[k], a_v)
-    dt = c.consts[DT]
+    dt, emergency, a_cmd, scripted = c.consts[DT], c.consts[EMERGENCY], c.a_cmd, c.scripted
     for k in range(n):
         i = ids[k]
-        if not math.isnan(c.a_cmd[i]):  # driven from outside: the command replaces the model
-            acc[k] = c.a_cmd[i]
-        acc[k] = max(acc[k], -c.consts[EMERGENCY])
-        if c.scripted[i]:  # a scripted profile is followed exactly
+        if not math.isnan(a_cmd[i]):  # driven from outside: the command replaces the model
+            acc[k] = a_cmd[i]
+        acc[k] = max(acc[k], -emergency)
+        if scripted[i]:  # a scripted profile is followed exactly
             target = np.interp(t + dt, c.profile[:, 0], c.profile[:, 1])
-            acc[k] = (target - c.v[i]) / dt
+            acc[k] = (target - v[i]) / dt
 
 
 # ------------------------------------------------------------------------ integrate
@@ -322,18 +336,20 @@ def bookkeeping(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     an off-ramp road's); off-ramps missed (a vehicle bound for one still on the mainline past
     the end of its deceleration lane drives on to the mainline's end); ramp vehicles waiting
     at the end of their acceleration lane."""
+    x, lane, route, kinds, road_f = c.x, c.lane, c.route, c.road_int[L_KIND], c.road_f
     for i in ids:
-        if c.x[i] - c.length[i] > c.road_f[L_EXIT, c.lane[i]]:
+        if x[i] - c.length[i] > road_f[L_EXIT, lane[i]]:
             c.active[i] = False
-            add_event(c, t, EV_EXIT, i, -1, c.x[i], math.nan)
-        exit_code = c.route[i]
-        on_main = c.road_int[L_KIND, c.lane[i]] == KIND_MAIN and c.target[i] != exit_code
-        if exit_code >= 0 and on_main and c.x[i] > c.road_f[L_END, exit_code]:
-            c.route[i] = -1
-            add_event(c, t, EV_MISSED_EXIT, i, -1, c.x[i], exit_code)
+            add_event(c, t, EV_EXIT, i, -1, x[i], math.nan)
+        exit_code = route[i]
+        if exit_code < 0:
+            continue
+        on_main = kinds[lane[i]] == KIND_MAIN and c.target[i] != exit_code
+        if on_main and x[i] > road_f[L_END, exit_code]:
+            route[i] = -1
+            add_event(c, t, EV_MISSED_EXIT, i, -1, x[i], exit_code)
     for i in ids:
-        on_ramp = c.road_int[L_KIND, c.lane[i]] == KIND_ON
-        if (on_ramp and c.origin[i] == c.target[i] and c.v[i] < WAIT_SPEED and not c.waited[i]
-                and c.x[i] > c.road_f[L_END, c.lane[i]] - WAIT_ZONE):  # fmt: skip
+        if (kinds[lane[i]] == KIND_ON and c.origin[i] == c.target[i] and c.v[i] < WAIT_SPEED
+                and not c.waited[i] and x[i] > road_f[L_END, lane[i]] - WAIT_ZONE):  # fmt: skip
             c.waited[i] = True
             add_event(c, t, EV_WAIT, i, -1, c.x[i], math.nan)

@@ -10,7 +10,7 @@ import math
 from hcomc._jit import kernel
 from hcomc.sim.lane_table import L_CENTRE, L_END
 from hcomc.sim.step.motion import follow_exact
-from hcomc.sim.step.road import lane_end_at
+from hcomc.sim.step.road import lane_end_at, road_of
 from hcomc.sim.step.state import EV_INSERTION, LOOKAHEAD, WARMUP, CoreArrays, add_event
 
 __all__ = ["release"]
@@ -85,8 +85,9 @@ def _best_lane(c: CoreArrays, i: int, queue: int, x: float) -> tuple[int, int]:
         last = queue  # its off-ramp is near: the rightmost lane, which leads to it
     clear = c.length[i] + c.matrix[2, i]
     lane, lead, room = -1, -1, -math.inf
+    road = road_of(c)
     for code in range(queue, last + 1):
-        if lane_end_at(c, code, x) <= x:
+        if lane_end_at(road, code, x) <= x:
             continue  # no such lane here
         j = _ahead(c, code, x, clear)
         if j == -2:

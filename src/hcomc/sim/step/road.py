@@ -7,6 +7,7 @@ route needs. Inlined into the step's kernels, so that reading the table costs no
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,12 +24,30 @@ from hcomc.sim.lane_table import (
     L_RIGHT,
     L_SPEED,
 )
-from hcomc.sim.step.state import LOOKAHEAD, CoreArrays
+from hcomc.sim.step.state import CoreArrays
 
 __all__ = [
-    "discretionary_target", "lane_end_at", "main_index", "needed_change", "section_at",
-    "speed_limit", "stop_point",
+    "RoadArrays", "discretionary_target", "lane_end_at", "main_index", "needed_change",
+    "road_of", "section_at", "speed_limit", "stop_point",
 ]  # fmt: skip
+
+
+class RoadArrays(NamedTuple):
+    """The lane table as the step's loops read it (:func:`road_of`): local views of the
+    compiled state's arrays, so that a loop over the vehicles reads them from registers
+    instead of from the state record after every store (which might have changed them)."""
+
+    ints: np.ndarray  # (4, L) L_KIND, L_LEFT, L_RIGHT, L_ENDS
+    floats: np.ndarray  # (7, L) L_CENTRE ... L_SPEED
+    sec_x0: np.ndarray  # (S,) where each section begins [m]
+    sec_speed: np.ndarray  # (S,) its speed limit [m/s]
+    main_end: np.ndarray  # (M, S) where mainline lane k ends at or after section s [m]
+
+
+@kernel(inline="always")
+def road_of(c: CoreArrays) -> RoadArrays:
+    """The road of the compiled state ``c``."""
+    return RoadArrays(c.road_int, c.road_f, c.sec_x0, c.sec_speed, c.main_end)
 
 
 @kernel(inline="always")
@@ -46,55 +65,56 @@ def section_at(sec_x0: np.ndarray, x: float) -> int:
 
 
 @kernel(inline="always")
-def main_index(c: CoreArrays, code: int) -> int:
+def main_index(road: RoadArrays, code: int) -> int:
     """k of mainline lane ``code`` (0 = rightmost; the mainline's codes are the last)."""
-    return code - (c.road_int.shape[1] - c.main_end.shape[0])
+    return code - (road.ints.shape[1] - road.main_end.shape[0])
 
 
 @kernel(inline="always")
-def lane_end_at(c: CoreArrays, code: int, x: float) -> float:
+def lane_end_at(road: RoadArrays, code: int, x: float) -> float:
     """Where lane ``code`` ends at or after x [m] (inf: never): a mainline lane where the
     sections drop it, an acceleration lane at its end; an off-ramp's lane leads off the
     road."""
-    kind = c.road_int[L_KIND, code]
+    kind = road.ints[L_KIND, code]
     if kind == KIND_MAIN:
-        return c.main_end[main_index(c, code), section_at(c.sec_x0, x)]
+        return road.main_end[main_index(road, code), section_at(road.sec_x0, x)]
     if kind == KIND_ON:
-        return c.road_f[L_END, code]
+        return road.floats[L_END, code]
     return math.inf
 
 
 @kernel(inline="always")
-def stop_point(c: CoreArrays, i: int) -> float:
-    """Where vehicle i must have left its lane [m] (inf: nowhere): its lane's end and, bound
-    for an off-ramp and still on the mainline before it, the end of that ramp's
-    deceleration lane."""
-    code, x = c.lane[i], c.x[i]
-    end = lane_end_at(c, code, x)
-    exit_code = c.route[i]
-    if exit_code >= 0 and c.road_int[L_KIND, code] == KIND_MAIN:
-        last = c.road_f[L_END, exit_code]
+def stop_point(road: RoadArrays, code: int, x: float, exit_code: int) -> float:
+    """Where a vehicle at x [m] in lane ``code``, bound for off-ramp lane ``exit_code`` (-1:
+    none), must have left its lane [m] (inf: nowhere): its lane's end and, bound for an
+    off-ramp and still on the mainline before it, the end of that ramp's deceleration lane."""
+    end = lane_end_at(road, code, x)
+    if exit_code >= 0 and road.ints[L_KIND, code] == KIND_MAIN:
+        last = road.floats[L_END, exit_code]
         if x < last:
             end = min(end, last)
     return end
 
 
 @kernel(inline="always")
-def speed_limit(c: CoreArrays, code: int, x: float) -> float:
+def speed_limit(road: RoadArrays, code: int, x: float) -> float:
     """The speed limit [m/s] at x in lane ``code`` (inf: none): a ramp road's own before its
     acceleration lane or after its deceleration lane, elsewhere the section's."""
-    kind = c.road_int[L_KIND, code]
-    if (kind == KIND_ON and x < c.road_f[L_OPENS, code]) or (
-        kind == KIND_OFF and x >= c.road_f[L_END, code]
+    kind = road.ints[L_KIND, code]
+    if (kind == KIND_ON and x < road.floats[L_OPENS, code]) or (
+        kind == KIND_OFF and x >= road.floats[L_END, code]
     ):
-        return c.road_f[L_SPEED, code]
-    return c.sec_speed[section_at(c.sec_x0, x)]
+        return road.floats[L_SPEED, code]
+    return road.sec_speed[section_at(road.sec_x0, x)]
 
 
 @kernel(inline="always")
-def needed_change(c: CoreArrays, i: int) -> tuple[int, float]:
-    """The change vehicle i's mainline lane or route needs now and the distance left for it
-    [m] (``(-1, inf)``: none), taken as soon as it is safe:
+def needed_change(
+    road: RoadArrays, code: int, x: float, exit_code: int, lookahead: float
+) -> tuple[int, float]:
+    """The change a vehicle at x [m] in lane ``code``, bound for off-ramp lane ``exit_code``
+    (-1: none), needs now and the distance left for it [m] (``(-1, inf)``: none), taken as
+    soon as it is safe (``lookahead``: :attr:`~hcomc.config.LaneChangeParams.exit_lookahead`):
 
     * bound for an off-ramp, in the lane beside the ramp's deceleration lane: into it;
     * bound for an off-ramp k lanes further left: one lane right once the end of the
@@ -104,19 +124,17 @@ def needed_change(c: CoreArrays, i: int) -> tuple[int, float]:
     The distance left is that to the lane's end, or the off-ramp's last point shared by the
     changes still needed.
     """
-    code, x = c.lane[i], c.x[i]
-    if c.road_int[L_KIND, code] != KIND_MAIN:
+    if road.ints[L_KIND, code] != KIND_MAIN:
         return -1, math.inf
-    lookahead, right = c.consts[LOOKAHEAD], c.road_int[L_RIGHT, code]
+    right = road.ints[L_RIGHT, code]
     target, left = -1, math.inf
-    end = lane_end_at(c, code, x)
+    end = lane_end_at(road, code, x)
     if right >= 0 and end - x < lookahead:
         target, left = right, end - x
-    exit_code = c.route[i]
     if exit_code >= 0:
-        begin, last = c.road_f[L_BEGIN, exit_code], c.road_f[L_END, exit_code]
-        k = main_index(c, code)
-        if code == c.road_int[L_LEFT, exit_code]:
+        begin, last = road.floats[L_BEGIN, exit_code], road.floats[L_END, exit_code]
+        k = main_index(road, code)
+        if code == road.ints[L_LEFT, exit_code]:
             if begin <= x < last:
                 target, left = exit_code, last - x
         elif right >= 0 and last - x < (k + 1) * lookahead:
@@ -125,18 +143,18 @@ def needed_change(c: CoreArrays, i: int) -> tuple[int, float]:
 
 
 @kernel(inline="always")
-def discretionary_target(c: CoreArrays, i: int, side: int) -> int:
-    """The mainline lane to the left (``side`` = 1) or right (-1) that vehicle i may change
-    to of its own accord (-1: none): one that exists here and does not end within the
-    look-ahead; not away from its off-ramp once that is within reach of the changes it
-    would then need."""
-    code, x = c.lane[i], c.x[i]
-    target = c.road_int[L_LEFT if side > 0 else L_RIGHT, code]
-    if target < 0 or c.road_int[L_KIND, target] != KIND_MAIN:
+def discretionary_target(
+    road: RoadArrays, code: int, x: float, exit_code: int, lookahead: float, side: int
+) -> int:
+    """The mainline lane to the left (``side`` = 1) or right (-1) that a vehicle at x [m] in
+    lane ``code``, bound for off-ramp lane ``exit_code`` (-1: none), may change to of its own
+    accord (-1: none): one that exists here and does not end within ``lookahead``; not away
+    from its off-ramp once that is within reach of the changes it would then need."""
+    target = road.ints[L_LEFT if side > 0 else L_RIGHT, code]
+    if target < 0 or road.ints[L_KIND, target] != KIND_MAIN:
         return -1
-    lookahead = c.consts[LOOKAHEAD]
-    if lane_end_at(c, target, x) - x < lookahead:  # also where the lane does not exist
+    if lane_end_at(road, target, x) - x < lookahead:  # also where the lane does not exist
         return -1
-    exit_code = c.route[i]
-    near = exit_code >= 0 and c.road_f[L_END, exit_code] - x < (main_index(c, code) + 2) * lookahead
+    reach = (main_index(road, code) + 2) * lookahead
+    near = exit_code >= 0 and road.floats[L_END, exit_code] - x < reach
     return -1 if side > 0 and near else target

@@ -114,7 +114,7 @@ class CoreArrays(NamedTuple):
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
-    road_int: np.ndarray  # (3, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
+    road_int: np.ndarray  # (4, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
     road_f: np.ndarray  # (8, L) their centres, widths, begins, ends ... [m] (L_CENTRE ...)
     sec_x0: np.ndarray  # (S,) the road's sections (hcomc.sim.lane_table.LaneTable): starts [m]
     sec_speed: np.ndarray  # (S,) speed limits [m/s]
