@@ -199,13 +199,14 @@ def needs_python(c: CoreArrays, t: float) -> bool:
     due for a replan) or game-confirmed lane changes."""
     if c.flags[CAV_GAME] > 0:
         return True
-    zone = c.road_f[L_ZONE]
-    for i in range(c.x.size):
+    zone, controlled = c.road_f[L_ZONE], c.flags[CONTROLLER] > 0
+    active, x, lane, origin, target = c.active, c.x, c.lane, c.origin, c.target
+    for i in range(x.size):
         if (
-            c.active[i]
-            and c.origin[i] == c.target[i]
-            and c.x[i] >= zone[c.lane[i]]
-            and (not c.identified[i] or (c.flags[CONTROLLER] > 0 and not c.planned[i]))
+            active[i]
+            and x[i] >= zone[lane[i]]  # first: false at once on a lane without a zone (inf)
+            and origin[i] == target[i]
+            and (not c.identified[i] or (controlled and not c.planned[i]))
         ):
             return True  # fmt: skip
     return c.counters[N_PLANS] > 0 and due_plans(c, t).size > 0
