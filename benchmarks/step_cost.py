@@ -46,7 +46,9 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from llvmlite import ir
@@ -59,6 +61,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from vs_sumo import SEED, line_config, scene_config
 
 from hcomc.sim.engine import Simulation
+from hcomc.sim.lane_table import L_END, L_KIND, L_OPENS, L_SPEED
 from hcomc.sim.neighbours import lookup_one, neighbours_into
 from hcomc.sim.perception import advance_errors_of
 from hcomc.sim.step import loop
@@ -80,7 +83,7 @@ from hcomc.sim.step.plans import (
     following_into,
     virtual_rows_into,
 )
-from hcomc.sim.step.road import road_of, speed_limit
+from hcomc.sim.step.road import section_at, speed_limit
 
 PHASES = (
     "release", "decide?", "on road", "plans in", "speed zones", "neighbours", "follow", "blend",
@@ -114,10 +117,13 @@ def _front(c, ids, t, spent):  # type: ignore[no-untyped-def]
     spent[3] += t1 - t0
     n = ids.size
     if c.flags[S.SPEED_LIMITS] > 0:
-        road, matrix, desired, lane, x = road_of(c), c.matrix, c.desired, c.lane, c.x
+        kinds, rows, sec_x0, sec_speed = c.road_int[L_KIND], c.road_f, c.sec_x0, c.sec_speed
+        matrix, desired, lane, x = c.matrix, c.desired, c.lane, c.x
         for k in range(n):
-            i = ids[k]
-            matrix[0, i] = min(desired[i], speed_limit(road, lane[i], x[i]))
+            i, g = ids[k], lane[ids[k]]
+            limit = speed_limit(kinds[g], rows[L_OPENS, g], rows[L_END, g], rows[L_SPEED, g],
+                                sec_speed[section_at(sec_x0, x[i])], x[i])  # fmt: skip
+            matrix[0, i] = min(desired[i], limit)
     t2 = cycles()
     spent[4] += t2 - t1
     changing = c.scratch_b[S.S_CHANGING, :n]
@@ -265,22 +271,40 @@ def _same_state(a: Simulation, b: Simulation) -> bool:
     return all(np.array_equal(getattr(a.arrays, f), getattr(b.arrays, f)) for f in fields)
 
 
+def _scene(scene: str, n: int, duration: float) -> tuple[Any, Callable[[Any], Simulation]]:
+    """The config of ``scene`` and what makes its run: ``line`` and ``onramp`` of
+    ``vs_sumo.py`` at about ``n`` vehicles; ``corridor``, the preset's first ``duration``
+    seconds without a controller (its own seed, every vehicle logged every step, as
+    ``corridor.py`` and ``hcomc simulate corridor`` run it; ``n`` is ignored)."""
+    if scene != "corridor":
+        config = line_config(n, duration) if scene == "line" else scene_config(n, duration)
+        return config, lambda cfg: Simulation(cfg, SEED)
+    from hcomc.corridor import load_corridor
+    from hcomc.sim.corridor_scene import corridor_config, corridor_scene
+
+    corridor = load_corridor("corridor", {})
+    seed, dt = corridor.corridor.seed, corridor.corridor.step_length
+    config = corridor_config(corridor, duration=duration, seed=seed,
+                             control={"controller": "none"}, log_interval=dt)  # fmt: skip
+    return config, lambda cfg: Simulation(cfg, seed, scene=corridor_scene(corridor))
+
+
 def measure(scene: str, n: int, duration: float, repeats: int) -> dict[str, object]:
     """The phases of ``scene`` at ``n`` vehicles: ns per vehicle-step each (of the fastest
     timed run), the step's vehicle-steps/s untimed and timed (the best of ``repeats`` each)."""
-    config = line_config(n, duration) if scene == "line" else scene_config(n, duration)
-    plain, split = Simulation(config, SEED), Simulation(config, SEED)
+    config, make = _scene(scene, n, duration)
+    plain, split = make(config), make(config)
     plain.run()
     run_timed(split, np.zeros(N_PHASES, dtype=np.int64))
     if not _same_state(plain, split):
         raise SystemExit(f"{scene} {n}: the timed driver does not step as the engine does")
     rate, timed_rate, phases = 0.0, 0.0, {}
     for _ in range(repeats):  # the best untimed run and, apart, the best timed one
-        untimed = Simulation(config, SEED)
+        untimed = make(config)
         start = time.perf_counter()
         untimed.run()
         rate = max(rate, untimed.vehicle_steps / (time.perf_counter() - start))
-        sim, spent = Simulation(config, SEED), np.zeros(N_PHASES, dtype=np.int64)
+        sim, spent = make(config), np.zeros(N_PHASES, dtype=np.int64)
         start = time.perf_counter()
         run_timed(sim, spent)
         wall = time.perf_counter() - start
@@ -288,20 +312,27 @@ def measure(scene: str, n: int, duration: float, repeats: int) -> dict[str, obje
             timed_rate = sim.vehicle_steps / wall
             ns = wall / max(int(spent.sum()), 1) * 1e9  # per cycle
             phases = {p: float(spent[k] * ns / sim.vehicle_steps) for k, p in enumerate(PHASES)}
-    return {"scene": scene, "vehicles": n, "vehicle_steps": plain.vehicle_steps, "rate": rate,
-            "timed_rate": timed_rate, "ns_per_vehicle_step": phases}  # fmt: skip
+    steps = plain.n_warmup + plain.n_steps
+    vehicles = n if scene != "corridor" else round(plain.vehicle_steps / steps)  # on the road
+    return {"scene": scene, "vehicles": vehicles, "vehicle_steps": plain.vehicle_steps,
+            "rate": rate, "timed_rate": timed_rate, "ns_per_vehicle_step": phases}  # fmt: skip
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 2000])
-    parser.add_argument("--scenes", nargs="+", default=["line", "onramp"])
+    parser.add_argument("--scenes", nargs="+", default=["line", "onramp"],
+                        choices=["line", "onramp", "corridor"])  # fmt: skip
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    rows = [measure(s, n, args.duration, args.repeats) for n in args.sizes for s in args.scenes]
-    idm = {n: plain_idm_rate(n, round(args.duration / 0.1), args.repeats) for n in args.sizes}
+    sized = [s for s in args.scenes if s != "corridor"]
+    rows = [measure(s, n, args.duration, args.repeats) for n in args.sizes for s in sized]
+    if "corridor" in args.scenes:
+        rows.append(measure("corridor", 0, args.duration, args.repeats))
+    sizes = {int(row["vehicles"]) for row in rows}  # type: ignore[call-overload]
+    idm = {n: plain_idm_rate(n, round(args.duration / 0.1), args.repeats) for n in sorted(sizes)}
     if args.json:
         print(json.dumps({"phases": rows, "plain_idm": idm}, indent=1))
         return

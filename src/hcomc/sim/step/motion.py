@@ -24,12 +24,14 @@ from hcomc.sim.lane_table import (
     L_ENDS,
     L_EXIT,
     L_KIND,
+    L_OPENS,
+    L_SPEED,
     L_WIDTH,
 )
 from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import road_of, speed_limit, stop_point
+from hcomc.sim.step.road import road_of, section_at, speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -188,10 +190,13 @@ def step_accelerations(
     """
     n = ids.size
     if c.flags[SPEED_LIMITS] > 0:
-        road, matrix, desired, lane, x = road_of(c), c.matrix, c.desired, c.lane, c.x
+        kinds, rows, sec_x0, sec_speed = c.road_int[L_KIND], c.road_f, c.sec_x0, c.sec_speed
+        matrix, desired, lane, x = c.matrix, c.desired, c.lane, c.x
         for k in range(n):  # the desired speed within the limit where the vehicle is
-            i = ids[k]
-            matrix[0, i] = min(desired[i], speed_limit(road, lane[i], x[i]))
+            i, g = ids[k], lane[ids[k]]
+            limit = speed_limit(kinds[g], rows[L_OPENS, g], rows[L_END, g], rows[L_SPEED, g],
+                                sec_speed[section_at(sec_x0, x[i])], x[i])  # fmt: skip
+            matrix[0, i] = min(desired[i], limit)
     changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):
         changing[k] = c.origin[ids[k]] != c.target[ids[k]]

@@ -20,9 +20,7 @@ from hcomc.sim.lane_table import (
     L_END,
     L_KIND,
     L_LEFT,
-    L_OPENS,
     L_RIGHT,
-    L_SPEED,
 )
 from hcomc.sim.step.state import CoreArrays
 
@@ -97,15 +95,17 @@ def stop_point(road: RoadArrays, code: int, x: float, exit_code: int) -> float:
 
 
 @kernel(inline="always")
-def speed_limit(road: RoadArrays, code: int, x: float) -> float:
-    """The speed limit [m/s] at x in lane ``code`` (inf: none): a ramp road's own before its
-    acceleration lane or after its deceleration lane, elsewhere the section's."""
-    kind = road.ints[L_KIND, code]
-    if (kind == KIND_ON and x < road.floats[L_OPENS, code]) or (
-        kind == KIND_OFF and x >= road.floats[L_END, code]
-    ):
-        return road.floats[L_SPEED, code]
-    return road.sec_speed[section_at(road.sec_x0, x)]
+def speed_limit(
+    kind: int, opens: float, end: float, ramp_speed: float, section_speed: float, x: float
+) -> float:
+    """The speed limit [m/s] at x in a lane of ``kind`` (``KIND_*``) whose rows ``L_OPENS``,
+    ``L_END`` and ``L_SPEED`` are ``opens``, ``end`` and ``ramp_speed``, in a section whose
+    limit is ``section_speed`` (inf: none): a ramp road's own before its acceleration lane or
+    after its deceleration lane, elsewhere the section's. Numbers, not arrays: it is called
+    for every vehicle at every step of a road with speed limits."""
+    if (kind == KIND_ON and x < opens) or (kind == KIND_OFF and x >= end):
+        return ramp_speed
+    return section_speed
 
 
 @kernel(inline="always")
