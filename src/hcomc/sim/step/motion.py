@@ -31,7 +31,7 @@ from hcomc.sim.lane_table import (
 from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import road_of, section_at, speed_limit, stop_point
+from hcomc.sim.step.road import lane_end_at, road_of, section_at, speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -259,12 +259,14 @@ def _limits(
     scripted profiles."""
     n = ids.size
     road, matrix, iidm, x, v, lane, route = road_of(c), c.matrix, c.iidm, c.x, c.v, c.lane, c.route
-    ends = road.ints[L_ENDS]
+    ends, kinds, lane_ends = road.ints[L_ENDS], road.ints[L_KIND], road.floats[L_END]
     for k in range(n):  # where it must have left its lane, a static obstacle seen exactly
-        i = ids[k]
-        if route[i] < 0 and not ends[lane[i]]:
-            continue  # its lane never ends and it leaves by none: nowhere (skips the call)
-        end = stop_point(road, lane[i], x[i], route[i])
+        i, g, exit_code = ids[k], lane[ids[k]], route[ids[k]]
+        if exit_code < 0 and not ends[g]:
+            continue  # its lane never ends and it leaves by none: nowhere
+        lane_end = lane_end_at(road, g, x[i]) if ends[g] else math.inf  # (a call with arrays)
+        exit_end = lane_ends[exit_code] if exit_code >= 0 else math.inf
+        end = stop_point(lane_end, kinds[g] == KIND_MAIN, exit_end, x[i])
         if end < math.inf and not changing[k] and not following[i]:
             a_stop = follow_exact(matrix, iidm, i, end - x[i], v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)

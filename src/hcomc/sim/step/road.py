@@ -82,16 +82,15 @@ def lane_end_at(road: RoadArrays, code: int, x: float) -> float:
 
 
 @kernel(inline="always")
-def stop_point(road: RoadArrays, code: int, x: float, exit_code: int) -> float:
-    """Where a vehicle at x [m] in lane ``code``, bound for off-ramp lane ``exit_code`` (-1:
-    none), must have left its lane [m] (inf: nowhere): its lane's end and, bound for an
-    off-ramp and still on the mainline before it, the end of that ramp's deceleration lane."""
-    end = lane_end_at(road, code, x)
-    if exit_code >= 0 and road.ints[L_KIND, code] == KIND_MAIN:
-        last = road.floats[L_END, exit_code]
-        if x < last:
-            end = min(end, last)
-    return end
+def stop_point(lane_end: float, on_main: bool, exit_end: float, x: float) -> float:
+    """Where a vehicle at x [m] must have left its lane [m] (inf: nowhere): its lane's end
+    ``lane_end`` (:func:`lane_end_at`) and, bound for an off-ramp whose deceleration lane
+    ends at ``exit_end`` (inf: none) and still on the mainline (``on_main``) before it, that
+    end. Numbers, not arrays: it is called for every vehicle bound for an off-ramp at every
+    step."""
+    if on_main and x < exit_end:
+        return min(lane_end, exit_end)
+    return lane_end
 
 
 @kernel(inline="always")
