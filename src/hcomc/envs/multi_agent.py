@@ -41,7 +41,25 @@ def agent_name(i: int) -> str:
     return f"cav_{i}"
 
 
-class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
+class AgentSpaces:
+    """Every agent's spaces are those of ``hcomc/Merge-v0``, one object each as PettingZoo
+    asks (the multi-agent environments of the paper's road and of a corridor)."""
+
+    _obs_space: gym.spaces.Box
+    _act_space: gym.spaces.Box
+
+    @functools.cache  # noqa: B019 (one space object per agent, as required)
+    def observation_space(self, agent: str) -> gym.spaces.Box:
+        """The observation space of every agent (that of ``hcomc/Merge-v0``)."""
+        return self._obs_space
+
+    @functools.cache  # noqa: B019
+    def action_space(self, agent: str) -> gym.spaces.Box:
+        """``[acceleration, lane change]`` in [-1, 1], as in ``hcomc/Merge-v0``."""
+        return self._act_space
+
+
+class MergeParallelEnv(AgentSpaces, ParallelEnv[str, np.ndarray, np.ndarray]):
     """Every CAV in the control zone is an agent. Options as ``hcomc/Merge-v0``
     (:class:`~hcomc.envs.merge_env.MergeEnv`) except ``agent`` and ``controller``."""
 
@@ -72,16 +90,6 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         self._rng = np.random.default_rng()
         self._members: set[int] = set()
         self._left: set[int] = set()
-
-    @functools.cache  # noqa: B019 (one space object per agent, as required)
-    def observation_space(self, agent: str) -> gym.spaces.Box:
-        """The observation space of every agent (that of ``hcomc/Merge-v0``)."""
-        return self._obs_space
-
-    @functools.cache  # noqa: B019
-    def action_space(self, agent: str) -> gym.spaces.Box:
-        """``[acceleration, lane change]`` in [-1, 1], as in ``hcomc/Merge-v0``."""
-        return self._act_space
 
     # -------------------------------------------------------------------- reset
     def reset(
@@ -211,4 +219,4 @@ class MergeParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         return self.episode.finish()
 
 
-__all__ = ["MergeParallelEnv", "agent_name"]
+__all__ = ["AgentSpaces", "MergeParallelEnv", "agent_name"]

@@ -39,7 +39,7 @@ from hcomc.sumo.corridor_network import (
     corridor_edges,
     route_edges,
 )
-from hcomc.sumo.export import SUMO_PROCESSING, sumocfg_xml
+from hcomc.sumo.export import SUMO_PROCESSING, SumoScenario, sumocfg_xml
 
 __all__ = [
     "CFG_FILE",
@@ -59,13 +59,9 @@ STATISTICS_FILE = "statistics.xml"
 
 
 @dataclass(frozen=True, slots=True)
-class CorridorScenario:
-    """Files of an exported corridor."""
+class CorridorScenario(SumoScenario):
+    """Files of an exported corridor: those of any exported scenario and its loops."""
 
-    directory: Path
-    sumocfg: Path
-    net: Path
-    routes: Path
     detectors: Path
 
 

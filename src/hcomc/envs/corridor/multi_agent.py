@@ -18,10 +18,8 @@ agent without an action in a step drives its own model for that period.
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from pettingzoo import ParallelEnv
 
@@ -29,7 +27,7 @@ from hcomc.config import ConfigError
 from hcomc.envs.corridor.env import CorridorEnvSettings
 from hcomc.envs.corridor.episode import CorridorAgents, PeriodTerms
 from hcomc.envs.merge_env import action_space
-from hcomc.envs.multi_agent import agent_name
+from hcomc.envs.multi_agent import AgentSpaces, agent_name
 from hcomc.envs.options import RewardWeights
 from hcomc.rng import draw_seed
 
@@ -41,7 +39,7 @@ Returns = tuple[
 ]  # fmt: skip
 
 
-class CorridorParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
+class CorridorParallelEnv(AgentSpaces, ParallelEnv[str, np.ndarray, np.ndarray]):
     """Every ramp CAV in a control zone of the corridor is an agent (module docstring).
     Options as ``hcomc/CorridorMerge-v0`` (:class:`~hcomc.envs.corridor.env.
     CorridorMergeEnv`) except ``ramp``: every on-ramp has agents."""
@@ -72,16 +70,6 @@ class CorridorParallelEnv(ParallelEnv[str, np.ndarray, np.ndarray]):
         self._left: set[int] = set()
         self._ramp_cavs = np.zeros(0, dtype=np.int64)
         self.t_end = 0.0
-
-    @functools.cache  # noqa: B019 (one space object per agent, as required)
-    def observation_space(self, agent: str) -> gym.spaces.Box:
-        """The observation space of every agent (that of ``hcomc/Merge-v0``)."""
-        return self._obs_space
-
-    @functools.cache  # noqa: B019
-    def action_space(self, agent: str) -> gym.spaces.Box:
-        """``[acceleration, lane change]`` in [-1, 1], as in ``hcomc/Merge-v0``."""
-        return self._act_space
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
