@@ -22,7 +22,7 @@ from hcomc.sim.lane_table import (
 )
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex, neighbour
-from hcomc.sim.step.road import discretionary_target, needed_change, road_of
+from hcomc.sim.step.road import needed_change, road_of, side_allowed
 from hcomc.sim.step.state import (
     EV_FALLBACK,
     EV_LC_START,
@@ -130,7 +130,7 @@ def discretionary_changes(
     (:func:`hcomc.sim.mobil.mobil_decide_into`): a ramp vehicle's merge where its lane lets
     it leave (on the acceleration lane, by gap acceptance); on the mainline the change its
     lane or route needs (:func:`hcomc.sim.step.road.needed_change`, by gap acceptance), else
-    a change to the lane on either side (:func:`hcomc.sim.step.road.discretionary_target`),
+    a change to the lane on either side (:func:`hcomc.sim.step.road.side_allowed`),
     the better of the two when both qualify."""
     pos = c.scratch_int[S_POS]
     target = c.scratch_int[S_CAND_TARGET]
@@ -153,9 +153,9 @@ def discretionary_changes(
                 urgency[m] = min(max(0.0, 1.0 - (end - x) / urgent), 1.0) if urgent > 0 else 0.0
                 m += 1
             continue
-        # the road's rules matter only to a vehicle bound for an off-ramp or beside a lane
-        # that ends (L_ENDS); for the others the calls below would return "none" and a side's
-        # mainline lane
+        # the road's rules matter only to a vehicle bound for an off-ramp or in (beside) a
+        # lane that ends (L_ENDS): for the others needed_change finds none and side_allowed
+        # allows, so neither is called
         if exit_code >= 0 or ints[L_ENDS, lane]:
             needed, room = needed_change(road, lane, x, exit_code, lookahead)
             if needed >= 0:
@@ -163,17 +163,16 @@ def discretionary_changes(
                 urgency[m] = max(0.0, 1.0 - room / urgent) if urgent > 0 else 0.0
                 m += 1
                 continue
-        for side in (1, -1):
-            tgt = ints[L_LEFT if side > 0 else L_RIGHT, lane]
-            if tgt < 0:
+        for side in (L_LEFT, L_RIGHT):  # the mainline lane on either side, where the road allows
+            tgt = ints[side, lane]
+            if tgt < 0 or ints[L_KIND, tgt] != KIND_MAIN:
                 continue
-            if exit_code >= 0 or ints[L_ENDS, tgt]:
-                tgt = discretionary_target(road, lane, x, exit_code, lookahead, side)
-            elif ints[L_KIND, tgt] != KIND_MAIN:
-                tgt = -1
-            if tgt >= 0:
-                pos[m], target[m], force[m], urgency[m] = k, tgt, False, 0.0
-                m += 1
+            if (exit_code >= 0 or ints[L_ENDS, tgt]) and not side_allowed(
+                road, lane, tgt, x, exit_code, lookahead
+            ):
+                continue
+            pos[m], target[m], force[m], urgency[m] = k, tgt, False, 0.0
+            m += 1
     return _mobil(c, ids, pos[:m], lead, index, target[:m], force[:m], urgency[:m])
 
 

@@ -7,7 +7,7 @@ A compiled call with arrays as arguments inside a per-vehicle loop pays numba's 
 counting on every array, inlined or not (``NRT_incref``/``NRT_decref`` stay calls): about 5 ns
 an array a vehicle, against the few nanoseconds of the lookup itself. The helpers called for
 every vehicle (:func:`stop_point`, :func:`speed_limit`) therefore take numbers; those that
-need the table (:func:`lane_end_at`, :func:`needed_change`, :func:`discretionary_target`) are
+need the table (:func:`lane_end_at`, :func:`needed_change`, :func:`side_allowed`) are
 called only for vehicles whose lane ends somewhere (the table's ``L_ENDS``) or that leave by
 an off-ramp.
 """
@@ -33,8 +33,8 @@ from hcomc.sim.lane_table import (
 from hcomc.sim.step.state import CoreArrays
 
 __all__ = [
-    "RoadArrays", "discretionary_target", "lane_end_at", "main_index", "needed_change",
-    "road_of", "section_at", "speed_limit", "stop_point",
+    "RoadArrays", "lane_end_at", "main_index", "needed_change", "road_of", "section_at",
+    "side_allowed", "speed_limit", "stop_point",
 ]  # fmt: skip
 
 
@@ -149,18 +149,17 @@ def needed_change(
 
 
 @kernel(inline="always")
-def discretionary_target(
-    road: RoadArrays, code: int, x: float, exit_code: int, lookahead: float, side: int
-) -> int:
-    """The mainline lane to the left (``side`` = 1) or right (-1) that a vehicle at x [m] in
-    lane ``code``, bound for off-ramp lane ``exit_code`` (-1: none), may change to of its own
-    accord (-1: none): one that exists here and does not end within ``lookahead``; not away
-    from its off-ramp once that is within reach of the changes it would then need."""
-    target = road.ints[L_LEFT if side > 0 else L_RIGHT, code]
-    if target < 0 or road.ints[L_KIND, target] != KIND_MAIN:
-        return -1
+def side_allowed(
+    road: RoadArrays, code: int, target: int, x: float, exit_code: int, lookahead: float
+) -> bool:
+    """Whether a vehicle at x [m] in mainline lane ``code``, bound for off-ramp lane
+    ``exit_code`` (-1: none), may change of its own accord to ``target``, the mainline lane
+    beside it: one that exists here and does not end within ``lookahead``; not to the left
+    once its off-ramp is within reach of the changes it would then need. Always true for a
+    lane that never ends (``L_ENDS`` 0) and a vehicle bound for no off-ramp, for which the
+    step does not call it."""
     if lane_end_at(road, target, x) - x < lookahead:  # also where the lane does not exist
-        return -1
+        return False
     reach = (main_index(road, code) + 2) * lookahead
     near = exit_code >= 0 and road.floats[L_END, exit_code] - x < reach
-    return -1 if side > 0 and near else target
+    return not (target == road.ints[L_LEFT, code] and near)
