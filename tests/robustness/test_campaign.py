@@ -11,9 +11,9 @@ import pytest
 from typer.testing import CliRunner
 
 from hcomc.cli import app
+from hcomc.config.impairment_tables import CHANNELS, FAULTS
 from hcomc.robustness.campaign import CampaignSpec, FaultRun, run_campaign, run_faulted
 from hcomc.robustness.publish import data_dir, generated_part, markers
-from hcomc.robustness.settings import CHANNELS, FAULTS
 from hcomc.robustness.tables import CELL, summarise
 
 runner = CliRunner()

@@ -12,11 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from hcomc.cli import app
+from hcomc.config.impairment_tables import FAULTS
 from hcomc.corridor import load_corridor
 from hcomc.experiments.corridor.runs import with_configuration
 from hcomc.metrics.corridor import CorridorRun, simulate_corridor
 from hcomc.robustness.faults import Fault
-from hcomc.robustness.settings import FAULTS
 from hcomc.sim.corridor_scene import corridor_config
 
 runner = CliRunner()

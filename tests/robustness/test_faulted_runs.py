@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from hcomc.config import load_config
+from hcomc.config.impairment_tables import ChannelParams, FaultParams, ShieldParams
 from hcomc.experiments.runner import configuration_overrides
 from hcomc.interface.listener import StepListener
 from hcomc.robustness.impairments import Impairments
-from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import rss_safe_distance
 from hcomc.sim.engine import Simulation
 from hcomc.sim.step.plans import P_VMC, P_VMC_CMD
@@ -90,7 +90,7 @@ def test_plans_arrive_one_latency_late_or_never():
 def test_emergency_braking_of_vmf_at_a_merg():
     fault = FaultParams(kind="emergency_brake", role="vmf", delay_min=2, delay_max=2,
                         duration_min=1.5, duration_max=1.5)  # fmt: skip
-    sim, impaired = _faulted(_config(), 0, fault=fault)
+    sim, impaired = _faulted(_config(), 0, faults=[fault])
     log = sim.run()
     vmf = sim.key_group.vmf
     f = impaired.fault
@@ -107,7 +107,7 @@ def test_emergency_braking_of_vmf_at_a_merg():
 def test_aggressive_hdvs_drive_short_headways_the_controller_does_not_know():
     fault = FaultParams(kind="aggressive_hdv")
     for seed in range(6):
-        sim, impaired = _faulted(_config("C3"), seed, fault=fault)
+        sim, impaired = _faulted(_config("C3"), seed, faults=[fault])
         sim.run()
         if impaired.fault.vehicle >= 0:
             break
@@ -121,7 +121,7 @@ def test_aggressive_hdvs_drive_short_headways_the_controller_does_not_know():
 
 def test_a_cav_that_ignores_its_command_is_not_commanded():
     for seed in range(10):
-        sim, impaired = _faulted(_config(), seed, fault=FaultParams(kind="ignore_command"))
+        sim, impaired = _faulted(_config(), seed, faults=[FaultParams(kind="ignore_command")])
         sim.run_to(sim.n_warmup)
         while not sim.decisions and sim.step_index < sim.n_warmup + sim.n_steps:
             sim.step()
@@ -144,7 +144,7 @@ def test_shield_keeps_commanded_vehicles_at_rss_distance_or_braking():
     params = ShieldParams(enabled=True)
     total = 0
     for seed in range(4):
-        sim, impaired = _faulted(_config(), seed, fault=fault, shield=params)
+        sim, impaired = _faulted(_config(), seed, faults=[fault], shield=params)
         log = sim.run()
         brakes = [o for o in impaired.shield.overrides if o.action == "brake"]
         total += len(impaired.shield.overrides)
@@ -164,7 +164,7 @@ def test_sensor_dropout_holds_the_acceleration_of_its_start():
     fault = FaultParams(kind="sensor_dropout", role="vmc", delay_min=1, delay_max=1,
                         duration_min=2, duration_max=2)  # fmt: skip
     for seed in range(6):
-        sim, impaired = _faulted(_config(), seed, fault=fault)
+        sim, impaired = _faulted(_config(), seed, faults=[fault])
         log = sim.run()
         if impaired.fault.vehicle >= 0:
             break

@@ -9,12 +9,12 @@ import math
 import numpy as np
 
 from hcomc.config import ScenarioConfig, load_config
+from hcomc.config.impairment_tables import FaultParams
 from hcomc.equations.car_following import follow_accel
 from hcomc.experiments.runner import configuration_overrides
 from hcomc.road import Kind
 from hcomc.robustness.faults import Fault
 from hcomc.robustness.impairments import Impairments
-from hcomc.robustness.settings import FaultParams
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 
@@ -52,13 +52,13 @@ def _window_rows(log: SimulationLog, sim: Simulation, acting: Fault, i: int) -> 
 
 
 def _faulted_log(config: ScenarioConfig, seed: int, fault: FaultParams) -> SimulationLog:
-    return Simulation(config, seed, listeners=[Impairments(fault=fault)]).run()
+    return Simulation(config, seed, listeners=[Impairments(faults=[fault])]).run()
 
 
 def _first_faulted(condition: str, fault: FaultParams) -> tuple[Simulation, Fault, SimulationLog]:
     """The first run of seeds 0-5 whose fault found its vehicles, that fault and the log."""
     for seed in range(6):
-        impaired = Impairments(fault=fault)
+        impaired = Impairments(faults=[fault])
         sim = Simulation(_config(condition), seed, listeners=[impaired])
         log = sim.run()
         if impaired.fault.vehicles:

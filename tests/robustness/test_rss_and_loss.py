@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import ConfigError
+from hcomc.config.impairment_tables import CHANNELS, FaultParams
 from hcomc.robustness.campaign import CampaignSpec
 from hcomc.robustness.channel import Channel, GilbertElliott
-from hcomc.robustness.settings import CHANNELS, FaultParams
 from hcomc.robustness.shield import rss_safe_distance
 
 

@@ -12,8 +12,9 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.config import ScenarioConfig, load_config
+from hcomc.config.impairment_tables import ChannelParams, FaultParams, ShieldParams
 from hcomc.experiments.runner import configuration_overrides
-from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
+from hcomc.sim.log import EventKind
 
 pytest.importorskip("libsumo")
 
@@ -51,7 +52,7 @@ def test_nominal_settings_give_the_cosimulation_bit_for_bit():
 
 def test_emergency_braking_in_sumo_at_a_merg_then_sumo_drives_again():
     fault = FaultParams(kind="emergency_brake", role="vmf", **WINDOW)
-    sim, impaired = _faulted(_config(), 0, fault=fault)
+    sim, impaired = _faulted(_config(), 0, faults=[fault])
     log = sim.run()
     f = impaired.fault
     (vmf,) = f.vehicles
@@ -113,3 +114,26 @@ def test_campaign_in_sumo_through_the_cli(tmp_path):
         assert nominal.iloc[0]["merge_time"] == pytest.approx(outcome.merge_time, nan_ok=True)
         merged += int(outcome.merge_time == outcome.merge_time)
     assert merged >= 1
+
+
+def test_the_config_tables_run_in_sumo_as_the_python_listener():
+    """``--engine sumo`` with [v2x], [[faults]] and [shield] in the config: the co-simulation
+    made by the experiments' factory carries them, the same run as the listener by hand."""
+    from hcomc.experiments.runner import make_simulation
+    from hcomc.robustness.impairments import Impairments
+
+    tables = {"faults": [{"kind": "emergency_brake", **WINDOW}],
+              "v2x": {"latency": 0.1, "loss": 0.1}, "shield": {"enabled": True}}  # fmt: skip
+    by_config = make_simulation(load_config("C1", **configuration_overrides("HCOMC", {}),
+                                            duration=50.0, **tables), 0, "sumo")  # fmt: skip
+    (listener,) = by_config.listeners
+    assert isinstance(listener, Impairments)
+    log = by_config.run()
+    sim, by_hand = _faulted(_config(), 0, channel=ChannelParams(latency=0.1, loss=0.1),
+                            faults=[FaultParams(kind="emergency_brake", **WINDOW)],
+                            shield=ShieldParams(enabled=True))  # fmt: skip
+    plain = sim.run()
+    for name in ("x", "v", "a", "lane", "active"):
+        assert _same(getattr(log, name), getattr(plain, name)), name
+    assert listener.summary() == by_hand.summary()
+    assert log.events_of(EventKind.FAULT)["vehicle"].tolist() == [sim.key_group.vmf]

@@ -50,6 +50,7 @@ def run_corridor(
     """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
     from hcomc.metrics.corridor import simulate_corridor
     from hcomc.metrics.corridor.record import CORRIDOR_ENGINE
+    from hcomc.robustness.impairments import impairments_in, listeners_of
     from hcomc.sim.manifest import build_manifest, write_json_atomic
     from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 
@@ -57,6 +58,7 @@ def run_corridor(
     _compiled("corridor")
     total = duration if duration is not None else corridor.corridor.duration
     steps = round(total / corridor.corridor.step_length)
+    listeners = listeners_of(corridor)
     with _progress(f"{corridor.name}", steps) as update:
         tick = None if (as_json or update is None) else (
             lambda t, d: update(round(t / corridor.corridor.step_length), steps)
@@ -64,13 +66,16 @@ def run_corridor(
         try:
             run = simulate_corridor(
                 corridor, seed=seed, duration=duration,
-                trajectory_interval=trajectory_interval, progress=tick,
+                trajectory_interval=trajectory_interval, progress=tick, listeners=listeners,
             )  # fmt: skip
         except ValueError as exc:
             raise _fail(str(exc)) from None
     summary = run.summary()
     summary["vehicle_steps_per_s"] = round(run.vehicle_steps / max(run.wall_seconds, 1e-9))
     summary["detectors"] = _detector_summary(run.detectors)
+    impaired = impairments_in(listeners)
+    if impaired is not None:
+        summary["impairments"] = impaired.summary()
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
         manifest = build_manifest(

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 import typer
 
 from hcomc.cli._app import Engine, _compiled, _engine, _fail, _progress, app, out
-from hcomc.robustness.settings import CHANNELS, FAULTS
+from hcomc.config.impairment_tables import CHANNELS, FAULTS
 
 _MAX_SEEDS = 100_000
 

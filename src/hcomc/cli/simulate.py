@@ -33,6 +33,7 @@ from hcomc.cli._app import (
     out,
 )
 from hcomc.config import ConfigError, ScenarioConfig, config_to_toml
+from hcomc.interface.engine import Engine as RunEngine
 
 
 @config_app.command("show")
@@ -196,6 +197,7 @@ def simulate(
         "travel_times": travel_summary(log),
         "ramp": ramp_summary(log),
     }
+    summary.update(_impairments(sim))
     summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
     table = detector_table(log, positions, detector_interval) if positions else None
@@ -215,6 +217,30 @@ def simulate(
         _print_summary(summary)
         if table is not None:
             out.print(_detectors_view(table))
+
+
+def _impairments(sim: RunEngine[Any]) -> dict[str, Any]:
+    """``{"impairments": ...}``: what the run's channel, faults and shield did, if it had
+    them (:meth:`hcomc.robustness.impairments.Impairments.summary`)."""
+    from hcomc.robustness.impairments import impairments_in
+
+    impaired = impairments_in(sim.listeners)
+    return {} if impaired is None else {"impairments": impaired.summary()}
+
+
+def _impairment_rows(done: dict[str, Any]) -> list[tuple[str, str]]:
+    """What the ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables did, as summary rows."""
+    rows = [
+        ("V2X: plans lost, CAV steps with the degraded headway",
+         f"{done['plans_lost']}, {done['degraded_steps']}"),
+        ("shield: brakes, held lane changes, releases [steps]",
+         f"{done['shield_brake']}, {done['shield_hold_change']}, {done['shield_release']}"),
+    ]  # fmt: skip
+    for k, fault in enumerate(done["faults"]):
+        start = "never began" if fault["start"] is None else f"from {fault['start']:.2f} s"
+        who = ", ".join(map(str, fault["vehicles"])) or "no vehicle"
+        rows.append((f"fault {k}: {fault['kind']}", f"{who}, {start}"))
+    return rows
 
 
 def _print_summary(summary: dict[str, Any]) -> None:
@@ -251,6 +277,8 @@ def _print_summary(summary: dict[str, Any]) -> None:
             f"{ramp['vehicles']}, {ramp['merged']}, {ramp['max_queue']}, "
             f"{ramp['mean_standing_s']:.1f}",
         ))  # fmt: skip
+    if "impairments" in summary:
+        rows += _impairment_rows(summary["impairments"])
     rows += [
         ("fuel, all vehicles [L]", f"{summary['fuel_l']:.3f}"),
         ("vehicle-steps [count]", f"{summary['vehicle_steps']:,}"),

@@ -47,7 +47,10 @@ def preset_names() -> list[str]:
 
 # --------------------------------------------------------------------------- key index
 def _sub_model(annotation: Any) -> type[BaseModel] | None:
-    """The pydantic model class of a field annotation (``X`` or ``X | None``), if any."""
+    """The pydantic model class of a field annotation (``X`` or ``X | None``), if any; a
+    list of tables (``tuple[X, ...]``, TOML's ``[[x]]``) is a key of its own."""
+    if get_origin(annotation) in (tuple, list):
+        return None
     for candidate in (annotation, *get_args(annotation)):
         if isinstance(candidate, type) and issubclass(candidate, BaseModel):
             return candidate
@@ -317,12 +320,24 @@ def config_to_toml(config: ScenarioConfig, *, annotate: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _table_list(annotation: Any) -> type[BaseModel] | None:
+    """The model of a list-of-tables annotation (``tuple[X, ...]``), if it is one."""
+    if get_origin(annotation) not in (tuple, list):
+        return None
+    model = get_args(annotation)[0]
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
 def _annotated(lines: list[str], model: type[BaseModel], data: dict[str, Any], prefix: str) -> None:
-    tables = []
+    tables, arrays = [], []
     for name, info in model.model_fields.items():
         sub = _sub_model(info.annotation)
         if sub is not None:
             tables.append((name, sub))
+            continue
+        entry_model = _table_list(info.annotation)
+        if entry_model is not None and data[name]:
+            arrays.append((name, entry_model))
             continue
         value = tomli_w.dumps({name: data[name]}).strip()
         if isinstance(data[name], dict):  # a free-form table, written inline
@@ -335,3 +350,8 @@ def _annotated(lines: list[str], model: type[BaseModel], data: dict[str, Any], p
         summary = (sub.__doc__ or "").strip().splitlines()[0]
         lines += ["", f"[{prefix}{name}]  # {summary}"]
         _annotated(lines, sub, data[name], prefix=f"{prefix}{name}.")
+    for name, sub in arrays:  # TOML's [[name]]: after the tables
+        summary = (sub.__doc__ or "").strip().splitlines()[0]
+        for entry in data[name]:
+            lines += ["", f"[[{prefix}{name}]]  # {summary}"]
+            _annotated(lines, sub, entry, prefix=f"{prefix}{name}.")

@@ -12,10 +12,18 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from hcomc.config.control_table import ControlParams
 from hcomc.config.frozen_model import FrozenModel
+from hcomc.config.impairment_tables import (
+    MAX_FAULTS,
+    ChannelParams,
+    FaultParams,
+    ShieldParams,
+    fault_entries,
+    nominal,
+)
 from hcomc.config.traffic_tables import DemandParams, PlatoonParams, RoadParams
 from hcomc.config.vehicle_tables import CAVParams, HDVParams, LaneChangeParams
 
@@ -53,6 +61,20 @@ class ScenarioConfig(FrozenModel):
     lane_change: LaneChangeParams = Field(default_factory=LaneChangeParams)
     platoon: PlatoonParams = Field(default_factory=PlatoonParams)
     control: ControlParams = Field(default_factory=ControlParams)
+    v2x: ChannelParams = Field(default_factory=ChannelParams)
+    faults: tuple[FaultParams, ...] = Field(
+        (), max_length=MAX_FAULTS,
+        description="faults injected into the run ([[faults]] tables, or preset names such "
+        "as 'brake-vmf'); none = the nominal run",
+    )  # fmt: skip
+    shield: ShieldParams = Field(default_factory=ShieldParams)
+
+    _fault_entries = field_validator("faults", mode="before")(fault_entries)
+
+    @property
+    def nominal(self) -> bool:
+        """Whether the run is nominal: an ideal V2X channel, no fault and no shield."""
+        return nominal(self.v2x, self.faults, self.shield)
 
     @model_validator(mode="after")
     def _steps(self) -> ScenarioConfig:

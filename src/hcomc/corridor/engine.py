@@ -166,6 +166,7 @@ def scenario_of(c: Corridor, **overrides: Any) -> ScenarioConfig:
         },
         "hdv": {**_idm(vehicle), **lane_change},
         "cav": {**cav, **lane_change},
+        **c.impairment_tables(),
     }  # fmt: skip
     return load_config("C1", **merge_tables(settings, overrides))
 

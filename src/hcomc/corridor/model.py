@@ -12,9 +12,16 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from hcomc.config import MIN_STEP, ControlParams, LaneChangeParams, merge_tables
+from hcomc.config.impairment_tables import (
+    MAX_FAULTS,
+    ChannelParams,
+    FaultParams,
+    ShieldParams,
+    fault_entries,
+)
 from hcomc.corridor._base import NO_VALUE, Frozen, RuleError
 from hcomc.corridor.demand import DEFAULT_CLASSES, OriginDemand, VehicleClass
 from hcomc.corridor.road import Road, sections
@@ -138,6 +145,21 @@ class Corridor(Frozen):
         "scenario's [control] table)",
     )
     merges: MergeEvents = Field(default_factory=MergeEvents)
+    v2x: ChannelParams = Field(default_factory=ChannelParams)
+    faults: tuple[FaultParams, ...] = Field(
+        (), max_length=MAX_FAULTS,
+        description="faults injected into the run (as a scenario's [[faults]])",
+    )  # fmt: skip
+    shield: ShieldParams = Field(default_factory=ShieldParams)
+
+    _fault_entries = field_validator("faults", mode="before")(fault_entries)
+
+    def impairment_tables(self) -> dict[str, Any]:
+        """The ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables, as a scenario takes them."""
+        return {
+            "v2x": self.v2x.model_dump(), "faults": [f.model_dump() for f in self.faults],
+            "shield": self.shield.model_dump(),
+        }  # fmt: skip
 
     @model_validator(mode="before")
     @classmethod

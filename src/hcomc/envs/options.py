@@ -9,7 +9,9 @@ from dataclasses import dataclass, field, fields
 from typing import Any, Literal
 
 from hcomc.config import ConfigError, ScenarioConfig
+from hcomc.config.impairment_tables import impairing_key
 from hcomc.control.registry import canonical_name
+from hcomc.corridor import Corridor
 from hcomc.corridor.engine import scenario_config
 
 AGENTS = ("vr", "vmc")
@@ -122,9 +124,23 @@ class EnvOptions:
                 f"key 'action_period' = {self.action_period}: allowed: a multiple of "
                 f"dt = {config.dt} s"
             )
+        refuse_impairments(config)
         if config.scenario != "merge":
             raise ConfigError(
                 f"key 'scenario' = {config.scenario!r} ({self.scenario}): allowed: a merge "
                 "scenario (an on-ramp with a ramp vehicle)"
             )
         return config
+
+
+def refuse_impairments(config: ScenarioConfig | Corridor) -> None:
+    """A :class:`ConfigError` naming the ``[v2x]``, ``[[faults]]`` or ``[shield]`` table set
+    in ``config``: an episode runs the nominal traffic (the commands and ``hcomc faults`` run
+    them)."""
+    key = impairing_key(config.v2x, config.faults, config.shield)
+    if key is not None:
+        raise ConfigError(
+            f"key '{key}': a learning environment runs the nominal traffic; allowed: the "
+            "defaults of [v2x], [[faults]] and [shield] (hcomc simulate, run, compare and "
+            "faults run them)"
+        )

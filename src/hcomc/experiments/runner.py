@@ -154,9 +154,15 @@ class RunSpec:
         return configuration_overrides(self.configuration, self.overrides)
 
     def reference_key(self) -> tuple[str, int, str]:
-        """What the undisturbed run depends on: condition, seed, non-control overrides."""
-        rest = {k: v for k, v in self.overrides.items() if k != "control"}
+        """What the undisturbed run depends on: condition, seed, the overrides of neither the
+        controller nor the impairments (the undisturbed run has no ramp vehicle to control or
+        to time a fault from, and no listeners)."""
+        rest = {k: v for k, v in self.overrides.items() if k not in _NOT_UNDISTURBED}
         return self.condition, self.seed, json.dumps(rest, sort_keys=True, default=str)
+
+
+_NOT_UNDISTURBED = frozenset({"control", "v2x", "faults", "shield"})
+"""Override tables an undisturbed run does not depend on."""
 
 
 def grid(
@@ -182,17 +188,22 @@ def make_simulation(
     *,
     counterfactual: bool = False,
 ) -> Engine[SimulationLog]:
-    """A run of ``config`` on the named engine (SUMO is imported only when asked for);
-    ``counterfactual``: the undisturbed run, the ramp vehicle never released."""
+    """A run of ``config`` on the named engine (SUMO is imported only when asked for), with
+    the listeners of its ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables
+    (:func:`hcomc.robustness.impairments.listeners_of`); ``counterfactual``: the undisturbed
+    run, the ramp vehicle never released, without them."""
+    from hcomc.robustness.impairments import listeners_of
+
+    listeners = [] if counterfactual else listeners_of(config)
     if engine == "sumo":
         from hcomc.sumo.cosim import SumoSimulation
 
-        return SumoSimulation(config, seed, counterfactual=counterfactual)
+        return SumoSimulation(config, seed, counterfactual=counterfactual, listeners=listeners)
     if engine != "hcomc":
         raise ValueError(f"engine '{engine}'; allowed: {', '.join(ENGINES)}")
     from hcomc.sim.engine import Simulation
 
-    return Simulation(config, seed, counterfactual=counterfactual)
+    return Simulation(config, seed, counterfactual=counterfactual, listeners=listeners)
 
 
 _REFERENCES: dict[tuple[str, int, str, str], SimulationLog] = {}
@@ -266,6 +277,7 @@ def _measure(
     """The results row (:func:`~hcomc.experiments.results_row.run_columns`, the metrics against
     the undisturbed run, the time taken) and manifest of a finished run."""
     from hcomc.metrics import compute_metrics, key_window
+    from hcomc.robustness.impairments import impairment_columns, impairments_in
 
     log = sim.log
     start = time.perf_counter()
@@ -277,6 +289,7 @@ def _measure(
     window = key_window(log)
     row["key_vehicles"] = " ".join(str(i) for i in window.key_vehicles.tolist())
     row.update(compute_metrics(log, window, reference=undisturbed_log(spec)))
+    row.update(impairment_columns(impairments_in(sim.listeners)))
     if config.demand.ramp == "flow":
         from hcomc.metrics.flow import ramp_delay, throughput
 

@@ -130,6 +130,11 @@ class ListenedRun(Protocol):
         """Hand VR back to merging by gap acceptance (its plan no longer commands it)."""
         ...
 
+    def note(self, kind: int, vehicle: int, other: int = -1, value: float = 0.0, /) -> None:
+        """Record an event of ``kind`` (:class:`hcomc.sim.log.EventKind`) at the current time
+        in the run's log (what a listener did, for the metrics and the replay)."""
+        ...
+
 
 class StepListener:
     """A listener whose every hook does nothing; subclass it and override the hooks you

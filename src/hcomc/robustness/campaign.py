@@ -28,7 +28,13 @@ import pandas as pd
 
 import hcomc
 from hcomc.config import ConfigError, load_config
-from hcomc.robustness.settings import CHANNELS, FAULTS, ChannelParams, FaultParams, ShieldParams
+from hcomc.config.impairment_tables import (
+    CHANNELS,
+    FAULTS,
+    ChannelParams,
+    FaultParams,
+    ShieldParams,
+)
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 
@@ -73,7 +79,7 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
 
     start = time.perf_counter()
     shield = run.shield_params.model_copy(update={"enabled": run.shield})
-    impaired = Impairments(channel=run.channel_params, fault=run.fault_params, shield=shield)
+    impaired = Impairments(channel=run.channel_params, faults=(run.fault_params,), shield=shield)
     measured = (_corridor_run if is_corridor_source(run.condition) else _scenario_run)(
         run, impaired
     )

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray
+from hcomc.config.impairment_tables import ChannelParams
 from hcomc.interface import TrafficView
-from hcomc.robustness.settings import ChannelParams
 
 __all__ = ["Channel", "ChannelView", "GilbertElliott"]
 

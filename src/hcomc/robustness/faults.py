@@ -1,4 +1,4 @@
-"""Injected faults (:class:`hcomc.robustness.settings.FaultParams`), acted out between steps.
+"""Injected faults (:class:`hcomc.config.impairment_tables.FaultParams`), acted out between steps.
 
 A fault is timed from the moment the run's ramp vehicle enters the control zone (its key
 vehicles are identified, before any control acts), with draws from the fault's own
@@ -14,21 +14,30 @@ what its faulty sensors (:func:`noisy_acceleration`) or its distracted driver
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from hcomc.config import ScenarioConfig
+from hcomc.config.impairment_tables import FaultParams
 from hcomc.equations.car_following import follow_accel
 from hcomc.interface import MergeGroup, MergePlan
 from hcomc.interface.listener import ListenedRun
 from hcomc.road import Kind
 from hcomc.robustness.run_state import broadcast_state
-from hcomc.robustness.settings import FaultParams
 
-__all__ = ["FAULT_STREAM", "Fault", "History", "distracted_acceleration", "noisy_acceleration"]
+__all__ = [
+    "FAULT_STREAM",
+    "Fault",
+    "Faults",
+    "History",
+    "distracted_acceleration",
+    "noisy_acceleration",
+]
 
 FAULT_STREAM = 0xFA17
-"""Spawn key of a fault's generator: ``SeedSequence([seed, FAULT_STREAM])``."""
+"""Spawn key of a fault's generator: ``SeedSequence([seed, FAULT_STREAM])`` for the first
+fault of a run, ``SeedSequence([seed, FAULT_STREAM, k])`` for its k-th (k >= 1)."""
 
 
 MIN_SEEN_GAP = 0.1
@@ -107,9 +116,12 @@ def distracted_acceleration(
 class Fault:
     """The fault of one run: what it does, to whom, and when."""
 
-    def __init__(self, params: FaultParams, config: ScenarioConfig, seed: int) -> None:
+    def __init__(
+        self, params: FaultParams, config: ScenarioConfig, seed: int, index: int = 0
+    ) -> None:
         self.params = params
-        self.rng = np.random.default_rng(np.random.SeedSequence([seed, FAULT_STREAM]))
+        key = [seed, FAULT_STREAM] + ([index] if index else [])
+        self.rng = np.random.default_rng(np.random.SeedSequence(key))
         self.delay = float(self.rng.uniform(params.delay_min, params.delay_max))
         self.duration = float(self.rng.uniform(params.duration_min, params.duration_max))
         self.decel = params.decel or config.control.safety_emergency_decel
@@ -199,3 +211,35 @@ class Fault:
             self._ignoring.add(int(who))
             self.vehicles, self.start = [int(who)], plan.t0
         return self._ignoring
+
+
+class Faults:
+    """The faults of one run (a config's ``[[faults]]``), each with its own seeded timing,
+    acted out in their listed order (where two drive one vehicle in the same step, the
+    later one's command stands). No fault: one nominal entry."""
+
+    def __init__(self, params: Sequence[FaultParams], config: ScenarioConfig, seed: int) -> None:
+        self.each = [Fault(p, config, seed, k) for k, p in enumerate(params or [FaultParams()])]
+
+    @property
+    def first(self) -> Fault:
+        """The first fault (the nominal one when the run has none)."""
+        return self.each[0]
+
+    def on_entry(self, sim: ListenedRun, group: MergeGroup, t: float) -> None:
+        """The first ramp vehicle entered the control zone with key vehicles ``group``."""
+        for fault in self.each:
+            fault.on_entry(sim, group, t)
+
+    def act(self, sim: ListenedRun, t: float) -> None:
+        """Every fault's step at ``t``."""
+        for fault in self.each:
+            fault.act(sim, t)
+
+    def drives(self, i: int) -> bool:
+        """Whether a fault drives vehicle ``i`` now (the shield leaves it alone)."""
+        return any(fault.drives(i) for fault in self.each)
+
+    def ignores(self, plan: MergePlan) -> set[int]:
+        """Vehicles that ignore ``plan`` by any fault."""
+        return set().union(*(fault.ignores(plan) for fault in self.each))

@@ -1,4 +1,9 @@
-"""A run's V2X channel, injected fault and safety shield, as one step listener.
+"""A run's V2X channel, injected faults and safety shield, as one step listener.
+
+A config's ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables
+(:mod:`hcomc.config.impairment_tables`) become one :class:`Impairments` by
+:func:`listeners_of`, which every command that runs a config calls; a nominal config gets
+none.
 
 :class:`Impairments` is a :class:`hcomc.interface.listener.StepListener`: given to either
 engine (``Simulation(config, seed, listeners=[Impairments(...)])``, or the SUMO
@@ -26,40 +31,53 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
+from hcomc.config import ScenarioConfig
+from hcomc.config.impairment_tables import ChannelParams, FaultParams, ShieldParams, nominal
+from hcomc.corridor import Corridor
 from hcomc.interface import MergeGroup, MergePlan, TrafficView
 from hcomc.interface.listener import ListenedRun, StepListener
 from hcomc.road import Kind
 from hcomc.robustness.channel import Channel
-from hcomc.robustness.faults import Fault
+from hcomc.robustness.faults import Fault, Faults
 from hcomc.robustness.run_state import broadcast_state
-from hcomc.robustness.settings import ChannelParams, FaultParams, ShieldParams
 from hcomc.robustness.shield import Shield
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
 
-__all__ = ["Impairments"]
+__all__ = [
+    "SHIELD_ACTIONS",
+    "Impairments",
+    "impairment_columns",
+    "impairments_in",
+    "listeners_of",
+]
+
+SHIELD_ACTIONS = ("brake", "hold_change", "release")
+"""The shield's overrides, by the ``value`` of their SHIELD events."""
 
 
 class Impairments(StepListener):
-    """The channel, fault and shield of one run (each nominal when not given)."""
+    """The channel, faults and shield of one run (each nominal when not given)."""
 
     def __init__(
         self,
         channel: ChannelParams | None = None,
-        fault: FaultParams | None = None,
+        faults: Sequence[FaultParams] = (),
         shield: ShieldParams | None = None,
     ) -> None:
         self.channel_params = channel or ChannelParams()
-        self.fault_params = fault or FaultParams()
+        self.fault_params = tuple(faults)
         self.shield_params = shield or ShieldParams()
         self._next_plan: dict[int, float] = {}  # VR -> earliest next decision after a loss
         self._pending: list[tuple[float, int, MergePlan]] = []  # (arrival, decision, plan)
         self.plans_lost = 0
         self.degraded_steps = 0
         self.commanded_at: dict[int, frozenset[int]] = {}  # step -> commanded vehicles
+        self._faults_noted: set[int] = set()  # faults whose FAULT events are in the log
 
     def attach(self, run: ListenedRun) -> None:
         """Set up the channel, fault and shield for ``run``."""
@@ -67,9 +85,14 @@ class Impairments(StepListener):
         self.run = run
         rsu = [ramp.accel_lane_start for ramp in run.ramps]
         self.channel = Channel(self.channel_params, run.x.size, rsu, run.seed)
-        self.fault = Fault(self.fault_params, config, run.seed)
-        self.shield = Shield(self.shield_params, config, self.fault)
+        self.faults = Faults(self.fault_params, config, run.seed)
+        self.shield = Shield(self.shield_params, config, self.faults)
         self._broadcast_every = max(1, round(self.channel_params.period / run.dt))
+
+    @property
+    def fault(self) -> Fault:
+        """The run's first fault (what the campaign's one-fault cells report)."""
+        return self.faults.first
 
     # ----------------------------------------------------------------- steps
     def before_step(self, run: ListenedRun, t: float) -> None:
@@ -81,15 +104,27 @@ class Impairments(StepListener):
             self.channel.deliver(t)
             self._deliver_plans(run, t)
             self._degrade(run, t)
-        self.fault.act(run, t)
+        self.faults.act(run, t)
+        self._note_faults(run, t)
         commanded = run.commanded()
+        overridden = len(self.shield.overrides)
         self.shield.act(run, t, commanded)
+        for o in self.shield.overrides[overridden:]:
+            run.note(EventKind.SHIELD, o.vehicle, o.other, SHIELD_ACTIONS.index(o.action))
         if commanded.size:
             self.commanded_at[run.step_index] = frozenset(commanded.tolist())
 
+    def _note_faults(self, run: ListenedRun, t: float) -> None:
+        """A FAULT event per vehicle of each fault that began to act by ``t``."""
+        for k, fault in enumerate(self.faults.each):
+            if k not in self._faults_noted and fault.vehicles and fault.start <= t + 1e-9:
+                self._faults_noted.add(k)
+                for i in fault.vehicles:
+                    run.note(EventKind.FAULT, i, -1, k)
+
     def on_key_vehicles(self, run: ListenedRun, group: MergeGroup, t: float) -> None:
-        """Start the fault's clock at the first ramp vehicle's control-zone entry."""
-        self.fault.on_entry(run, group, t)
+        """Start the faults' clocks at the first ramp vehicle's control-zone entry."""
+        self.faults.on_entry(run, group, t)
 
     # ------------------------------------------------------------- decisions
     def decisions_due(self, run: ListenedRun, t: float) -> Sequence[int]:
@@ -112,6 +147,7 @@ class Impairments(StepListener):
         delay = 0.0 if self.channel_params.ideal else self.channel.plan_delay()
         if math.isinf(delay):
             self.plans_lost += 1
+            run.note(EventKind.PLAN_LOST, plan.group.vr)
             self._next_plan[plan.group.vr] = t + run.config.control.replan_period
             return False
         if delay == 0.0:
@@ -120,8 +156,8 @@ class Impairments(StepListener):
         return False
 
     def ignores(self, plan: MergePlan) -> frozenset[int]:
-        """The vehicles the fault makes ignore ``plan``."""
-        return frozenset(self.fault.ignores(plan))
+        """The vehicles the faults make ignore ``plan``."""
+        return frozenset(self.faults.ignores(plan))
 
     def _deliver_plans(self, run: ListenedRun, t: float) -> None:
         """Put into force the plans that arrived by ``t`` whose VR can still act on them."""
@@ -151,6 +187,20 @@ class Impairments(StepListener):
         self.degraded_steps += int(stale.sum())
 
     # --------------------------------------------------------------- results
+    def summary(self) -> dict[str, Any]:
+        """What the channel, the faults and the shield did in the run: plans lost, steps a
+        CAV drove with the degraded headway, the shield's overrides by action, and each
+        fault's kind, vehicles and start [s] (None: it found no vehicle or never began);
+        JSON-ready."""
+        counts = self.shield.counts()
+        return {
+            "plans_lost": self.plans_lost, "degraded_steps": self.degraded_steps,
+            **{f"shield_{action}": counts[action] for action in SHIELD_ACTIONS},
+            "faults": [{"kind": f.kind, "vehicles": [int(i) for i in f.vehicles],
+                        "start": f.start if f.vehicles and math.isfinite(f.start) else None}
+                       for f in self.faults.each if f.kind != "none"],
+        }  # fmt: skip
+
     def collisions_commanded(self, log: SimulationLog) -> int:
         """COLLISION events of the run's ``log`` with a vehicle that a live plan commanded in
         that step."""
@@ -162,3 +212,35 @@ class Impairments(StepListener):
             )
             count += int(int(e["vehicle"]) in commanded or int(e["other"]) in commanded)
         return count
+
+
+def listeners_of(config: ScenarioConfig | Corridor) -> list[StepListener]:
+    """The listeners a run of ``config`` (a scenario or a corridor) needs: one
+    :class:`Impairments` of its ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables, none for a
+    nominal config (whose run is then the engine's own, bit for bit)."""
+    if nominal(config.v2x, config.faults, config.shield):
+        return []
+    return [Impairments(config.v2x, config.faults, config.shield)]
+
+
+def impairments_in(listeners: Sequence[StepListener]) -> Impairments | None:
+    """The :class:`Impairments` among a run's ``listeners``, if any."""
+    return next((x for x in listeners if isinstance(x, Impairments)), None)
+
+
+def impairment_columns(impaired: Impairments | None) -> dict[str, Any]:
+    """A results row's columns of what ``impaired`` did (:meth:`Impairments.summary`, the
+    faults as space-separated ``fault_kinds``, ``fault_vehicles`` and ``fault_starts``), or
+    none for a run without impairments."""
+    if impaired is None:
+        return {}
+    summary = impaired.summary()
+    faults = summary.pop("faults")
+    return {
+        **summary,
+        "fault_kinds": " ".join(f["kind"] for f in faults),
+        "fault_vehicles": " ".join(",".join(map(str, f["vehicles"])) or "-" for f in faults),
+        "fault_starts": " ".join(
+            "-" if f["start"] is None else f"{f['start']:.2f}" for f in faults
+        ),
+    }

@@ -28,11 +28,11 @@ import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
+from hcomc.config.impairment_tables import ShieldParams
 from hcomc.equations.safety import stopping_distance
 from hcomc.interface.listener import ListenedRun
 from hcomc.interface.ramp import ramp_in
 from hcomc.robustness.run_state import DrivenVehicles
-from hcomc.robustness.settings import ShieldParams
 
 __all__ = ["Override", "Shield", "rss_safe_distance"]
 
@@ -94,7 +94,7 @@ def lane_neighbours(c: ListenedRun, i: int, lane: int) -> tuple[int, int]:
 
 
 class Shield:
-    """The shield of one run (:class:`~hcomc.robustness.settings.ShieldParams`); with
+    """The shield of one run (:class:`~hcomc.config.impairment_tables.ShieldParams`); with
     ``enabled`` false the engines do not call it."""
 
     def __init__(self, params: ShieldParams, config: ScenarioConfig, fault: DrivenVehicles) -> None:

@@ -53,6 +53,7 @@ def corridor_config(c: Corridor, **overrides: Any) -> ScenarioConfig:
         "hdv": duration, "cav": duration,
         "lane_change": {**c.lane_change.model_dump(), **c.routes.model_dump()},
         "control": c.control.model_dump(),
+        **c.impairment_tables(),
     }  # fmt: skip
     return load_config("C1", **merge_tables(settings, overrides))
 

@@ -85,6 +85,10 @@ class EnginePlans(EngineSetup):
                    & (self.x[vr] >= pf[:, table.F_MERGE_X]))  # fmt: skip
         return vr[waiting]
 
+    def note(self, kind: int, vehicle: int, other: int = -1, value: float = 0.0) -> None:
+        """Record a listener's event of ``kind`` now, at the vehicle's position."""
+        self.log.add_event(self.t, kind, vehicle, other=other, x=self.x[vehicle], value=value)
+
     def hold_merge(self, vr: int) -> None:
         """Move VR's merge position just past where it will be after the next step."""
         pi, pf = self._live()

@@ -85,6 +85,10 @@ class CosimPlans(CosimState):
                and self.x[p.vr] >= p.plan.merge_x]  # fmt: skip
         return np.array(due, dtype=np.int64)
 
+    def note(self, kind: int, vehicle: int, other: int = -1, value: float = 0.0) -> None:
+        """Record a listener's event of ``kind`` now, at the vehicle's position."""
+        self.log.add_event(self.t, kind, vehicle, other=other, x=self.x[vehicle], value=value)
+
     def hold_merge(self, vr: int) -> None:
         """Do not request VR's commanded merge in the next step."""
         self._held.add(vr)

@@ -169,6 +169,7 @@ def _simulated_table(kind: str, source: Source, seed: int | None) -> pd.DataFram
     """The table of *kind* of corridor *source* simulated as a corridor run."""
     from hcomc.corridor import load_corridor
     from hcomc.metrics.corridor import simulate_corridor
+    from hcomc.robustness.impairments import listeners_of
 
     corridor = load_corridor(source, {})
     if _scenario_engine(corridor):
@@ -177,7 +178,7 @@ def _simulated_table(kind: str, source: Source, seed: int | None) -> pd.DataFram
             "paper's layout and runs in the scenario engine, as 'hcomc simulate' runs it; "
             f"allowed: {', '.join(SCENARIO_KINDS)}"
         )
-    run = simulate_corridor(corridor, seed=seed)
+    run = simulate_corridor(corridor, seed=seed, listeners=listeners_of(corridor))
     table: pd.DataFrame = getattr(run, KIND_TABLES[kind])
     return table
 

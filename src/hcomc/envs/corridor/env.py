@@ -22,7 +22,7 @@ from hcomc.corridor.engine import scenario_only
 from hcomc.envs.corridor.episode import CorridorEpisode
 from hcomc.envs.merge_env import action_space
 from hcomc.envs.observation import observation_bounds
-from hcomc.envs.options import RewardWeights
+from hcomc.envs.options import RewardWeights, refuse_impairments
 from hcomc.rng import draw_seed
 from hcomc.sim.stages import ensure_kernels
 
@@ -34,6 +34,7 @@ def load_env_corridor(source: str, overrides: dict[str, Any] | None = None) -> C
     the paper's conditions as a preset (a warm-up, lane flows, a single release: an episode
     of ``hcomc/Merge-v0``) is refused by the key that makes it so."""
     c = load_corridor(source, overrides)
+    refuse_impairments(c)
     found = scenario_only(c)
     if found is not None:
         key, value = found

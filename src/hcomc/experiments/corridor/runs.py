@@ -260,12 +260,14 @@ def run_on_corridor(spec: CorridorSpec) -> Result:
     """Simulate one corridor run and measure it: ``(row, manifest)``."""
     from hcomc.control.registry import controller_source
     from hcomc.metrics.corridor import simulate_corridor
+    from hcomc.robustness.impairments import impairment_columns, impairments_in, listeners_of
     from hcomc.sim.manifest import build_manifest
 
     corridor = resolve(spec).corridor
     start = time.perf_counter()
     try:
-        run = simulate_corridor(corridor, seed=spec.seed)
+        listeners = listeners_of(corridor)
+        run = simulate_corridor(corridor, seed=spec.seed, listeners=listeners)
     except ValueError as exc:  # a key a corridor run does not take
         raise ConfigError(f"corridor '{spec.condition}': {exc}") from None
     controller, optimizer = configuration_controller(spec.configuration)
@@ -278,6 +280,7 @@ def run_on_corridor(spec: CorridorSpec) -> Result:
         **corridor_metrics(run.trips, run.merges, run.collision_count),
         "duration": run.duration,
         "decisions": run.decisions,
+        **impairment_columns(impairments_in(listeners)),
         "decision_ms": 1000.0 * run.decision_seconds / run.decisions if run.decisions else 0.0,
         "wall_s": time.perf_counter() - start,
     }

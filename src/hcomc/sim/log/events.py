@@ -43,6 +43,14 @@ class EventKind(enum.IntEnum):
     LANE_CHANGE_ABORT = 10
     """A vehicle gave up a lane change it stood still in before the lane line when its
     duration was over; ``value`` = the lane it had aimed for."""
+    PLAN_LOST = 11
+    """The V2X channel lost a plan on its way to the vehicles (``[v2x]``); ``vehicle`` = VR."""
+    SHIELD = 12
+    """The safety shield overrode a command (``[shield]``); ``other`` = the vehicle it was
+    unsafe to, ``value`` = 0 braked, 1 held a lane change, 2 released VR from its plan."""
+    FAULT = 13
+    """An injected fault began to act on ``vehicle`` (``[[faults]]``); ``value`` = the
+    fault's index in the list."""
 
 
 EVENT_DTYPE = np.dtype(

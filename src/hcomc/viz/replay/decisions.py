@@ -185,6 +185,7 @@ def timeline_events(log: SimulationLog) -> dict[str, Any]:
         "kind": ev["kind"].astype(int).tolist(),
         "vehicle": ev["vehicle"].astype(int).tolist(),
         "other": ev["other"].astype(int).tolist(),
+        "value": [v if math.isfinite(v) else None for v in ev["value"].tolist()],
         "zone_t": [float(g["t"]) for g in entries],
         "zone_vr": [int(g["VR"]) for g in entries],
     }

@@ -45,6 +45,12 @@ HC.Timeline = class {
         const p = run.plans.find((q) => Math.abs(q.t0 - E.t[k]) < 1e-6 && q.group.VR === E.vehicle[k]);
         if (p) text = "PLAN " + (p.index + 1) + " · VR " + p.group.VR + " · " + p.mode + " · " + p.sequence;
       }
+      if (name === "SHIELD") {
+        const action = ["brakes", "holds the lane change of", "releases from its plan"][E.value[k]];
+        text = "SHIELD " + action + " vehicle " + E.vehicle[k] + " · unsafe to " + E.other[k];
+      }
+      if (name === "FAULT") text = "FAULT " + E.value[k] + " begins · vehicle " + E.vehicle[k];
+      if (name === "PLAN_LOST") text = "PLAN LOST on the V2X channel · VR " + E.vehicle[k];
       if (E.text && E.text[k]) text = E.text[k];  // a corridor run's own wording
       this.marks.push({ t: E.t[k], run: run.index, colour: HC.EVENT_COLOURS[name] || "#333", text });
     }

@@ -1,27 +1,41 @@
-"""Settings of a run under faults: the V2X channel, the injected fault and the safety shield.
+"""The ``[v2x]``, ``[[faults]]`` and ``[shield]`` tables of a scenario or corridor config.
 
-Three frozen pydantic tables (unknown keys rejected, like the scenario config), each with its
-units and allowed range in the field descriptions. Their defaults are the nominal run: an
-ideal channel, no fault, no shield; a run with all three defaults is bit for bit the run of
-the scenario alone. Named presets (:data:`CHANNELS`, :data:`FAULTS`) are the settings the
-robustness campaign uses; a campaign spec may add its own.
+A run's V2X channel, the faults injected into it and its safety shield, as frozen pydantic
+tables (unknown keys rejected; units and allowed ranges in the field descriptions). Their
+defaults are the nominal run: an ideal channel, no fault, no shield; a run with all three at
+their defaults is bit for bit the run without them. The robustness layer
+(:mod:`hcomc.robustness`) acts them out through the engine's listener interface. Named
+presets (:data:`CHANNELS`, :data:`FAULTS`) are the settings the robustness campaign uses; a
+``[[faults]]`` entry may name a preset of :data:`FAULTS` instead of giving its keys
+(``faults = ["brake-vmf"]``).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
-__all__ = ["CHANNELS", "FAULTS", "ChannelParams", "FaultParams", "ShieldParams"]
+from hcomc.config.frozen_model import FrozenModel
+
+__all__ = [
+    "CHANNELS",
+    "FAULTS",
+    "MAX_FAULTS",
+    "ChannelParams",
+    "FaultParams",
+    "ShieldParams",
+    "fault_entries",
+    "impairing_key",
+    "nominal",
+]
+
+MAX_FAULTS = 16
+"""Most faults one run may inject."""
 
 
-class _Frozen(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-
-class ChannelParams(_Frozen):
+class ChannelParams(FrozenModel):
     """The V2X channel between the vehicles and the merge controller (a roadside unit).
 
     Every vehicle's state (x, v, a, lane) is broadcast ``update_rate`` times a second and
@@ -71,13 +85,13 @@ class ChannelParams(_Frozen):
         return 1.0 / self.update_rate
 
 
-class FaultParams(_Frozen):
+class FaultParams(FrozenModel):
     """One injected fault, with its seeded timing (drawn from the run's seed, never from the
     traffic's random stream, so the traffic before the fault is the nominal one).
 
     * ``none``: the nominal run.
-    * ``emergency_brake``: the key vehicle ``role`` brakes at ``decel`` (default: the Eq. 15
-      emergency deceleration a_merg of the scenario's control table) from ``U(delay_min,
+    * ``emergency_brake``: the key vehicle ``role`` brakes at ``decel`` (0, the default: the
+      Eq. 15 emergency deceleration a_merg of the scenario's control table) from ``U(delay_min,
       delay_max)`` seconds after the ramp vehicle entered the control zone, for ``U(duration_min,
       duration_max)`` seconds (or until it stands), then drives on by its model.
     * ``aggressive_hdv``: every human-driven key vehicle drives with ``time_headway``,
@@ -101,15 +115,22 @@ class FaultParams(_Frozen):
     """
 
     kind: Literal[
-        "none", "emergency_brake", "aggressive_hdv", "ignore_command", "sensor_dropout",
-        "sensor_noise", "distracted_hdv",
-    ] = "none"  # fmt: skip
+        "none",
+        "emergency_brake",
+        "aggressive_hdv",
+        "ignore_command",
+        "sensor_dropout",
+        "sensor_noise",
+        "distracted_hdv",
+    ] = Field("none", description="what the fault does (class docstring); 'none' = nothing")
     role: Literal["vmf", "vmc", "vmr", "vnf", "vnr"] = Field(
         "vmf", description="emergency_brake, sensor_dropout, sensor_noise: the key vehicle"
     )
-    decel: float | None = Field(
-        None, gt=0, le=15, description="emergency_brake: deceleration [m/s^2]; None = a_merg"
-    )
+    decel: float = Field(
+        0.0, ge=0, le=15,
+        description="emergency_brake: deceleration [m/s^2]; 0 = the scenario's a_merg "
+        "(control.safety_emergency_decel)",
+    )  # fmt: skip
     delay_min: float = Field(0.0, ge=0, le=600, description="earliest start after VR's entry [s]")
     delay_max: float = Field(6.0, ge=0, le=600, description="latest start after VR's entry [s]")
     duration_min: float = Field(1.0, gt=0, le=600, description="shortest braking [s]")
@@ -139,8 +160,13 @@ class FaultParams(_Frozen):
             )
         return self
 
+    @property
+    def nominal(self) -> bool:
+        """Whether this entry injects nothing (kind 'none')."""
+        return self.kind == "none"
 
-class ShieldParams(_Frozen):
+
+class ShieldParams(FrozenModel):
     """The safety shield: an RSS safe-distance rule (Shalev-Shwartz, Shammah & Shashua 2017,
     Definition 1) checked on the true state before a commanded vehicle's acceleration or a
     commanded lane change acts (:mod:`hcomc.robustness.shield`)."""
@@ -177,3 +203,35 @@ FAULTS: dict[str, FaultParams] = {
     "distracted-hdv": FaultParams(kind="distracted_hdv"),
 }
 """The campaign's fault catalogue."""
+
+
+def fault_entries(value: Any) -> Any:
+    """A ``faults`` list as validation takes it: an entry that is a string names a preset of
+    :data:`FAULTS` (``"brake-vmf"``); tables pass through. Anything else is left to the
+    validator, which names what is wrong."""
+    if not isinstance(value, list | tuple):
+        return value
+    for entry in value:
+        if isinstance(entry, str) and entry not in FAULTS:
+            raise ValueError(
+                f"fault '{entry}' is not a preset; allowed: {', '.join(FAULTS)}, or a table "
+                "with 'kind' and its parameters"
+            )
+    return [FAULTS[e].model_dump() if isinstance(e, str) else e for e in value]
+
+
+def nominal(v2x: ChannelParams, faults: tuple[FaultParams, ...], shield: ShieldParams) -> bool:
+    """Whether a run with these tables is the nominal run: ideal channel, no fault, no shield."""
+    return impairing_key(v2x, faults, shield) is None
+
+
+def impairing_key(
+    v2x: ChannelParams, faults: tuple[FaultParams, ...], shield: ShieldParams
+) -> str | None:
+    """The first table that makes a run other than nominal (``v2x``, ``faults`` or
+    ``shield.enabled``), or None."""
+    if not v2x.ideal:
+        return "v2x"
+    if not all(f.nominal for f in faults):
+        return "faults"
+    return "shield.enabled" if shield.enabled else None
