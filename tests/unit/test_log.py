@@ -195,6 +195,9 @@ def test_event_kind_values() -> None:
         ("FALLBACK", 8),
         ("MISSED_EXIT", 9),
         ("LANE_CHANGE_ABORT", 10),
+        ("PLAN_LOST", 11),
+        ("SHIELD", 12),
+        ("FAULT", 13),
     ]
 
 

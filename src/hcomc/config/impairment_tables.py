@@ -49,7 +49,9 @@ class ChannelParams(FrozenModel):
 
     update_rate: float = Field(10.0, gt=0, le=100, description="broadcasts per second [Hz]")
     latency: float = Field(0.0, ge=0, le=5, description="fixed delay of every message [s]")
-    jitter: float = Field(0.0, ge=0, le=5, description="extra delay, uniform in [0, jitter] [s]")
+    jitter: float = Field(
+        0.0, ge=0, le=5, description="extra delay, uniform between 0 and jitter [s]"
+    )
     loss: float = Field(0.0, ge=0, lt=1, description="stationary share of lost messages [-]")
     loss_model: Literal["independent", "gilbert_elliott"] = Field(
         "independent", description="'independent' losses, or bursts of a Gilbert-Elliott chain"
