@@ -4,13 +4,18 @@ The page keeps its written text (what the campaign does, how to rerun it) and re
 part between the campaign engine's :func:`markers` with :func:`hcomc.robustness.tables.page`
 of the campaign's runs, headed by the command that made them; the runs, the per-cell summary
 and the campaign's stamp go to :func:`data_dir`, so a test can check the page against the
-data it came from.
+data it came from. ``hcomc faults --docs`` publishes a campaign it finished;
+``python -m hcomc.robustness.publish DIR --docs docs`` publishes a finished campaign
+directory again (or renders the tables anew from the published data, ``DIR`` being
+:func:`data_dir`), without running anything.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +23,7 @@ import pandas as pd
 
 from hcomc.config import ConfigError
 from hcomc.robustness.campaign import CampaignSpec
-from hcomc.robustness.tables import page
+from hcomc.robustness.tables import page, summarise
 from hcomc.sim.manifest import atomic_paths
 
 __all__ = ["data_dir", "generated_part", "markers", "publish"]
@@ -71,8 +76,28 @@ def publish(campaign: Path, docs: Path) -> Path:
     tail = rest.split(end, 1)[1]
     data = data_dir(docs, engine)
     data.mkdir(parents=True, exist_ok=True)
-    for name in ("runs.csv", "summary.csv", "campaign.json"):
-        shutil.copyfile(campaign / name, data / name)
+    for name in ("runs.csv", "campaign.json"):
+        if (campaign / name).resolve() != (data / name).resolve():
+            shutil.copyfile(campaign / name, data / name)
+    with atomic_paths(data / "summary.csv") as (tmp,):
+        summarise(runs).to_csv(tmp, index=False)
     with atomic_paths(target) as (tmp,):
         tmp.write_text(head + generated_part(runs, meta) + tail)
     return target
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m hcomc.robustness.publish CAMPAIGN [--docs DOCS]``."""
+    parser = argparse.ArgumentParser(description=publish.__doc__)
+    parser.add_argument("campaign", type=Path, help="a finished campaign directory")
+    parser.add_argument("--docs", type=Path, default=Path("docs"), help="the docs directory")
+    args = parser.parse_args(argv)
+    try:
+        print(f"wrote {publish(args.campaign, args.docs)}")
+    except (ConfigError, FileNotFoundError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(2) from None
+
+
+if __name__ == "__main__":
+    main()

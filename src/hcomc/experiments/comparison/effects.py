@@ -55,11 +55,12 @@ from hcomc.experiments.tables import TIE_TOLERANCE, median_ci
 from hcomc.metrics import METRICS
 
 PREFERS: dict[str, str] = {
-    **{m: METRICS[m].better for m in PAPER_METRICS},
+    **{m: spec.better for m, spec in METRICS.items()},
     **{m: spec.better for m, spec in CORRIDOR_METRICS.items()},
 }
-"""Metric -> the direction that is better ("larger" or "smaller"): the metric registry's, as
-the claims use it, and the corridor metrics' registry's."""
+"""Metric -> the direction that is better ("larger" or "smaller"): the metric registry's (the
+paper's metrics as the claims use them, the surrogate safety measures), and the corridor
+metrics' registry's."""
 
 RUN_LEVEL = frozenset(CORRIDOR_METRICS)
 """Metrics defined for every run, failed merges included: paired without regard to

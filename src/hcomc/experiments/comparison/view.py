@@ -84,6 +84,8 @@ def interval_text(median: float, low: float, high: float) -> str:
     if math.isnan(median):
         return "—"
     half = (high - low) / 2 if math.isfinite(high - low) else math.nan
+    if half <= 1e-9 * max(1.0, abs(median)):  # a point interval, up to round-off
+        half = 0.0
 
     def bound(b: float) -> str:
         text = rounded(b, half)
