@@ -159,9 +159,11 @@ def test_any_controller_enters_the_campaign_on_either_road(tmp_path: Path) -> No
     label = configuration_label(spec)
     assert set(runs.configuration) == {"FIFO", label}
     mine = runs[runs.configuration == label]
-    assert len(mine) == 2 * 2  # two roads, shield off and on
+    assert len(mine) == 2 * 3  # two roads: shield off and on, and the nominal run
     assert (mine.plans > 0).all()
-    assert (mine.fault_vehicle >= 0).all()
+    faulted = mine[mine.fault == "brake-vmf"]
+    assert (faulted.fault_vehicle >= 0).all()
+    assert (mine[mine.fault == "none"].fault_vehicle < 0).all()
     identity = json.loads((out / "campaign.json").read_text())
     assert identity["controllers"][label]["class"].endswith(":ConstantTimeGap")
     bad = runner.invoke(app, ["faults", "--controllers", "fifo,nobody.py:X",

@@ -93,8 +93,9 @@ def faults(
     engine: Engine = "hcomc",
 ) -> None:
     """Run the robustness campaign: conditions x configurations x faults x V2X channels x
-    shield off/on x seeds, in our engine or in SUMO; rerun to resume. Writes runs.csv and
-    summary.csv (one row per cell) under --out."""
+    shield off/on x seeds, in our engine or in SUMO, with the nominal cell each is paired
+    with; rerun to resume. Writes runs.csv and summary.csv (one row per cell, with its
+    paired effects against the nominal runs) under --out."""
     from hcomc.config import preset_names
     from hcomc.experiments.controller_arguments import configuration_labels
     from hcomc.robustness.campaign import CampaignSpec, run_campaign
@@ -122,9 +123,11 @@ def faults(
     with _progress("cells", len(spec.cells())) as update:
         runs = run_campaign(spec, out_dir, workers=n_workers, scheduler=scheduler, force=force,
                             progress=update)  # fmt: skip
-    from hcomc.robustness.tables import OVERVIEW, summarise
+    from hcomc.robustness.tables import OVERVIEW, overview_view, summarise, verdicts
 
-    out.print(summarise(runs, OVERVIEW).to_string(index=False))
+    overview = summarise(runs, OVERVIEW)
+    out.print(overview_view(overview).to_string(index=False))
+    out.print(verdicts(overview))
     out.print(f"{len(runs)} runs; tables in {out_dir}")
     if docs is not None:
         from hcomc.robustness.publish import publish

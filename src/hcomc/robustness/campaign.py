@@ -38,7 +38,7 @@ from hcomc.config.impairment_tables import (
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 
-__all__ = ["CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
+__all__ = ["LARGE_CAMPAIGN", "CampaignSpec", "FaultRun", "run_campaign", "run_faulted"]
 
 if TYPE_CHECKING:
     from hcomc.robustness.impairments import Impairments
@@ -189,6 +189,10 @@ def _pair_roles(collisions: Any, groups: list[dict[str, int]]) -> str:
     return "-".join(roles.get(i, "other") for i in pair)
 
 
+LARGE_CAMPAIGN = 1000
+"""Seeds from which a campaign is published in a section of its own."""
+
+
 @dataclass(frozen=True)
 class CampaignSpec:
     """The grid: every combination of the axes, each over ``seeds``."""
@@ -227,9 +231,22 @@ class CampaignSpec:
         return tuple(c for c in self.conditions if is_corridor_source(c))
 
     def cells(self) -> list[tuple[str, str, str, str, bool]]:
-        """(condition, configuration, fault, channel, shield) of every cell, in order."""
-        return [(c, k, f, ch, s) for c in self.conditions for k in self.configurations
+        """(condition, configuration, fault, channel, shield) of every cell, in order, then
+        the nominal cell (no fault, ideal channel, no shield) of each condition and
+        configuration that the grid leaves out: the runs every cell is paired with."""
+        grid = [(c, k, f, ch, s) for c in self.conditions for k in self.configurations
                 for f in self.faults for ch in self.channels for s in self.shields]  # fmt: skip
+        nominal = [(c, k, "none", "ideal", False) for c in self.conditions
+                   for k in self.configurations]  # fmt: skip
+        return grid + [cell for cell in nominal if cell not in grid]
+
+    @property
+    def section(self) -> str:
+        """Where the campaign is published (:func:`hcomc.robustness.publish.data_dir`): the
+        engine's name, with the number of seeds for a campaign of at least
+        :data:`LARGE_CAMPAIGN` seeds (kept beside the smaller one)."""
+        many = len(self.seeds) >= LARGE_CAMPAIGN
+        return f"{self.engine}-{len(self.seeds)}-seeds" if many else self.engine
 
     def runs(self, cell: tuple[str, str, str, str, bool]) -> list[FaultRun]:
         """The runs of one cell, one per seed."""

@@ -69,6 +69,10 @@ class _Broadcast:
     arrive: FloatArray  # (N,) arrival at the roadside unit, inf if lost or out of range
     arrive_v2v: FloatArray  # (N,) arrival at other vehicles, inf if lost
     state: dict[str, np.ndarray]
+    first: float = 0.0  # the earliest arrival still to come (inf: none)
+
+    def __post_init__(self) -> None:
+        self.first = min(self.arrive.min(initial=math.inf), self.arrive_v2v.min(initial=math.inf))
 
 
 class Channel:
@@ -111,17 +115,22 @@ class Channel:
         """Apply every message that has arrived by ``t`` (a newer state replaces an older)."""
         keep = []
         for msg in self._pending:
-            got = (msg.arrive <= t + _EPS_T) & (msg.sent > self.sent)
+            if msg.first > t + _EPS_T:  # nothing of it arrives yet
+                keep.append(msg)
+                continue
+            arrived = msg.arrive <= t + _EPS_T  # a state older than one received is dropped
+            got = arrived & (msg.sent > self.sent)
             if got.any():
                 for name, values in msg.state.items():
                     self.known[name][got] = values[got]
                 self.sent[got] = msg.sent
                 self.received += int(got.sum())
-                msg.arrive[got] = math.inf
-            heard = (msg.arrive_v2v <= t + _EPS_T) & (msg.sent > self.heard)
-            self.heard[heard] = msg.sent
-            msg.arrive_v2v[heard] = math.inf
-            if np.isfinite(msg.arrive).any() or np.isfinite(msg.arrive_v2v).any():
+            msg.arrive[arrived] = math.inf
+            arrived = msg.arrive_v2v <= t + _EPS_T
+            self.heard[arrived & (msg.sent > self.heard)] = msg.sent
+            msg.arrive_v2v[arrived] = math.inf
+            msg.__post_init__()
+            if math.isfinite(msg.first):
                 keep.append(msg)
         self._pending = keep
 

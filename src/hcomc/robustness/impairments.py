@@ -78,6 +78,7 @@ class Impairments(StepListener):
         self.degraded_steps = 0
         self.commanded_at: dict[int, frozenset[int]] = {}  # step -> commanded vehicles
         self._faults_noted: set[int] = set()  # faults whose FAULT events are in the log
+        self._degraded = np.empty(0, dtype=np.int64)  # CAVs on the degraded headway
 
     def attach(self, run: ListenedRun) -> None:
         """Set up the channel, fault and shield for ``run``."""
@@ -168,13 +169,16 @@ class Impairments(StepListener):
                 run.execute(plan, ident)
 
     def _degrade(self, run: ListenedRun, t: float) -> None:
-        """CAVs behind a CAV whose newest message is stale drive with the degraded headway."""
-        kind = run.fleet.kind
-        T = run.driving.T
-        ids = np.flatnonzero(run.active & (kind == Kind.CAV))
-        T[ids] = run.fleet.T[ids]
-        if ids.size == 0:
+        """CAVs behind a CAV whose newest message is stale drive with the degraded headway
+        (those of the last step drive with their own again first); the leaders are looked
+        up only when some CAV has been silent that long."""
+        kind, T = run.fleet.kind, run.driving.T
+        T[self._degraded] = run.fleet.T[self._degraded]
+        self._degraded = self._degraded[:0]
+        cav = run.active & (kind == Kind.CAV)
+        if not (cav & (t - self.channel.heard > self.channel_params.stale_after)).any():
             return
+        ids = np.flatnonzero(cav)
         on_road = np.flatnonzero(run.active)
         index = build_lane_index(on_road, run.lane[on_road], run.x[on_road])
         leaders = index.leader_of(np.searchsorted(on_road, ids))
@@ -183,7 +187,8 @@ class Impairments(StepListener):
         stale[has] = (kind[leaders[has]] == Kind.CAV) & (
             t - self.channel.heard[leaders[has]] > self.channel_params.stale_after
         )
-        T[ids[stale]] = self.channel_params.degraded_time_headway
+        self._degraded = ids[stale]
+        T[self._degraded] = self.channel_params.degraded_time_headway
         self.degraded_steps += int(stale.sum())
 
     # --------------------------------------------------------------- results

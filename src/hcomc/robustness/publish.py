@@ -29,16 +29,18 @@ from hcomc.sim.manifest import atomic_paths
 __all__ = ["data_dir", "generated_part", "markers", "publish"]
 
 
-def markers(engine: str) -> tuple[str, str]:
-    """The comments around the generated part of a campaign in ``engine``."""
-    where = "" if engine == "hcomc" else f" in {engine.upper()}"
+def markers(section: str) -> tuple[str, str]:
+    """The comments around the generated part of a campaign's ``section``
+    (:attr:`~hcomc.robustness.campaign.CampaignSpec.section`: ``hcomc``, ``sumo``,
+    ``hcomc-1000-seeds`` ...)."""
+    where = {"hcomc": "", "sumo": " in SUMO"}.get(section, f" ({section})")
     return f"<!-- robustness tables{where}: begin -->", f"<!-- robustness tables{where}: end -->"
 
 
-def data_dir(docs: Path, engine: str) -> Path:
+def data_dir(docs: Path, section: str) -> Path:
     """Where a campaign's runs, summary and stamp are kept under ``docs``."""
     base = docs / "data" / "robustness"
-    return base if engine == "hcomc" else base / engine
+    return base if section == "hcomc" else base / section
 
 
 def _spec(meta: dict[str, Any]) -> CampaignSpec:
@@ -55,7 +57,7 @@ def _stamp(meta: dict[str, Any]) -> str:
 def generated_part(runs: pd.DataFrame, meta: dict[str, Any]) -> str:
     """The page's generated part for ``runs`` of the campaign stamped ``meta``."""
     spec = _spec(meta)
-    begin, end = markers(spec.engine)
+    begin, end = markers(spec.section)
     return f"{begin}\n{page(runs, _stamp(meta), spec.command())}\n{end}"
 
 
@@ -66,15 +68,15 @@ def publish(campaign: Path, docs: Path) -> Path:
     if not target.exists():
         raise ConfigError(f"option '--docs' = '{docs}': no robustness.md there to update")
     meta = json.loads((campaign / "campaign.json").read_text())
-    engine = _spec(meta).engine
-    begin, end = markers(engine)
+    section = _spec(meta).section
+    begin, end = markers(section)
     text = target.read_text()
     if begin not in text or end not in text:
         raise ConfigError(f"{target} has no '{begin}' ... '{end}' section to replace")
     runs = pd.read_csv(campaign / "runs.csv")
     head, rest = text.split(begin, 1)
     tail = rest.split(end, 1)[1]
-    data = data_dir(docs, engine)
+    data = data_dir(docs, section)
     data.mkdir(parents=True, exist_ok=True)
     for name in ("runs.csv", "campaign.json"):
         if (campaign / name).resolve() != (data / name).resolve():

@@ -31,8 +31,10 @@ __all__ = [
     "EFFECT_METRICS",
     "collision_bound",
     "fault_effects",
+    "overview_view",
     "page",
     "summarise",
+    "verdicts",
 ]
 
 CELL = ["condition", "configuration", "fault", "channel", "shield"]
@@ -209,6 +211,8 @@ def verdicts(table: pd.DataFrame) -> str:
     n = len(shown)
     if n == 0:
         return "No setting other than the nominal one was run."
+    if shown[list(EFFECT_COLUMNS)].isna().all().all():
+        return "No nominal runs (no fault, ideal channel, no shield) to pair the settings with."
     lower_ttc = int((shown.min_ttc_verdict == "lower").sum())
     higher_drac = int((shown.max_drac_verdict == "higher").sum())
     better = int(((shown.min_ttc_verdict == "higher") | (shown.max_drac_verdict == "lower")).sum())
