@@ -14,6 +14,7 @@ from hcomc.cli import compare  # noqa: F401
 from hcomc.cli import figures  # noqa: F401
 from hcomc.cli import replay  # noqa: F401
 from hcomc.cli import faults  # noqa: F401
+from hcomc.cli import falsify  # noqa: F401
 
 # isort: on
 from hcomc.cli._app import app

@@ -28,6 +28,7 @@ __all__ = [
     "key_collisions",
     "max_drac",
     "min_ttc",
+    "pairs_min_ttc",
     "pet_at_merge",
 ]
 
@@ -79,10 +80,10 @@ def min_ttc(
     float
         Minimum TTC [s]; ``inf`` if no pair ever closes.
     """
-    return _min_ttc(*_key_pairs(log, window), closing_speed)
+    return pairs_min_ttc(*_key_pairs(log, window), closing_speed)
 
 
-def _min_ttc(gap: FloatArray, closing: FloatArray, closing_speed: float) -> float:
+def pairs_min_ttc(gap: FloatArray, closing: FloatArray, closing_speed: float) -> float:
     """:func:`min_ttc` of the pairs of :func:`hcomc.metrics.bodies.body_pairs` [s]."""
     sel = closing > closing_speed
     if not sel.any():
@@ -130,7 +131,10 @@ def closing_metrics(log: SimulationLog, window: MetricWindow) -> dict[Callable[.
     """:func:`min_ttc` and :func:`max_drac` (default closing speed), keyed by function: the
     values they return, from one table of pairs."""
     pairs = _key_pairs(log, window)
-    return {min_ttc: _min_ttc(*pairs, CLOSING_SPEED), max_drac: _max_drac(*pairs, CLOSING_SPEED)}
+    return {
+        min_ttc: pairs_min_ttc(*pairs, CLOSING_SPEED),
+        max_drac: _max_drac(*pairs, CLOSING_SPEED),
+    }
 
 
 def pet_at_merge(log: SimulationLog, window: MetricWindow) -> float:
