@@ -64,6 +64,14 @@ class FaultRun:
     shield_params: ShieldParams = field(default_factory=ShieldParams)
     engine: str = "hcomc"
 
+    def tables(self) -> dict[str, Any]:
+        """The run's fault, channel and shield as a config's ``[[faults]]``, ``[v2x]`` and
+        ``[shield]`` tables (:mod:`hcomc.config.impairment_tables`): a config loaded with
+        them runs this run."""
+        faults = [] if self.fault_params.nominal else [self.fault_params.model_dump()]
+        shield = {**self.shield_params.model_dump(), "enabled": self.shield}
+        return {"faults": faults, "v2x": self.channel_params.model_dump(), "shield": shield}
+
 
 def run_faulted(run: FaultRun) -> dict[str, Any]:
     """Simulate one run and measure it: merge outcome, collisions (all, and those with a
@@ -75,14 +83,10 @@ def run_faulted(run: FaultRun) -> dict[str, Any]:
     and the merge figures are over every merge event of the run (merged: none failed,
     :func:`_corridor_run`)."""
     from hcomc.corridor import is_corridor_source
-    from hcomc.robustness.impairments import Impairments
 
     start = time.perf_counter()
-    shield = run.shield_params.model_copy(update={"enabled": run.shield})
-    impaired = Impairments(channel=run.channel_params, faults=(run.fault_params,), shield=shield)
-    measured = (_corridor_run if is_corridor_source(run.condition) else _scenario_run)(
-        run, impaired
-    )
+    measured = (_corridor_run if is_corridor_source(run.condition) else _scenario_run)(run)
+    impaired = measured.impaired
     overrides = impaired.shield.counts()
     log, groups, entry = measured.log, measured.groups, measured.entry
     collisions = log.events_of(EventKind.COLLISION)
@@ -117,17 +121,21 @@ class _Measured:
     fallbacks: int
     groups: list[dict[str, int]]
     entry: float
+    impaired: Impairments  # the listener of the run's fault, channel and shield
 
 
-def _scenario_run(run: FaultRun, impaired: Impairments) -> _Measured:
+def _scenario_run(run: FaultRun) -> _Measured:
     """One of the paper's conditions on either engine, measured on its key window."""
     from hcomc.experiments.runner import configuration_overrides
     from hcomc.metrics import key_window
     from hcomc.metrics.outcome import merge_outcome
     from hcomc.metrics.surrogate import closing_metrics, max_drac, min_ttc
+    from hcomc.robustness.impairments import Impairments
     from hcomc.sim.engine import Simulation
 
-    config = load_config(run.condition, **configuration_overrides(run.configuration, {}))
+    config = load_config(run.condition, **configuration_overrides(run.configuration, {}),
+                         **run.tables())  # fmt: skip
+    impaired = Impairments(config.v2x, config.faults, config.shield)
     engine: type[Simulation] | type[SumoSimulation] = Simulation
     if run.engine == "sumo":
         from hcomc.sumo.cosim import SumoSimulation
@@ -141,10 +149,10 @@ def _scenario_run(run: FaultRun, impaired: Impairments) -> _Measured:
     merge = {"merged": bool(outcome.merged), "merge_time": outcome.merge_time,
              "min_ttc": closing[min_ttc], "max_drac": closing[max_drac]}  # fmt: skip
     return _Measured(log, merge, len(sim.decisions), sum(bool(p.fallback) for p in sim.decisions),
-                     [window.group], window.t_start)  # fmt: skip
+                     [window.group], window.t_start, impaired)  # fmt: skip
 
 
-def _corridor_run(run: FaultRun, impaired: Impairments) -> _Measured:
+def _corridor_run(run: FaultRun) -> _Measured:
     """A corridor with the configuration's controller at every on-ramp, measured over all
     of its merge events (:mod:`hcomc.metrics.corridor.events`). Merged: no event failed,
     where a ramp vehicle that has not merged fails if it waited at its lane's end or left
@@ -152,8 +160,10 @@ def _corridor_run(run: FaultRun, impaired: Impairments) -> _Measured:
     from hcomc.corridor import load_corridor
     from hcomc.experiments.corridor.runs import with_configuration
     from hcomc.metrics.corridor import simulate_corridor
+    from hcomc.robustness.impairments import Impairments
 
-    corridor = with_configuration(load_corridor(run.condition), run.configuration)
+    corridor = with_configuration(load_corridor(run.condition, run.tables()), run.configuration)
+    impaired = Impairments(corridor.v2x, corridor.faults, corridor.shield)
     measured = simulate_corridor(corridor, seed=run.seed, listeners=[impaired])
     events = measured.merges
     merged = events.merged.astype(bool).to_numpy()
@@ -173,7 +183,9 @@ def _corridor_run(run: FaultRun, impaired: Impairments) -> _Measured:
     ]
     entry = float(measured.log.meta["key_groups"][0]["t"]) if groups else math.nan
     fallbacks = int(events.fallback.astype(bool).sum()) if len(events) else 0
-    return _Measured(measured.log, merge, measured.decisions, fallbacks, groups[::-1], entry)
+    return _Measured(
+        measured.log, merge, measured.decisions, fallbacks, groups[::-1], entry, impaired
+    )
 
 
 def _pair_roles(collisions: Any, groups: list[dict[str, int]]) -> str:

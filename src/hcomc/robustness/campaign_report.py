@@ -18,6 +18,7 @@ import pandas as pd
 
 from hcomc.config import ScenarioConfig, config_to_toml, load_config
 from hcomc.config.impairment_tables import CHANNELS, FAULTS
+from hcomc.robustness.campaign import FaultRun
 from hcomc.robustness.tables import OVERVIEW, overview_view, summarise, verdicts
 from hcomc.sim.manifest import atomic_paths
 
@@ -29,15 +30,14 @@ MAX_SHOWN = 20
 
 def run_config(condition: str, configuration: str, fault: str, channel: str, shield: bool,
                seed: int) -> ScenarioConfig:  # fmt: skip
-    """The config of one campaign run (a paper condition), its seed inside."""
+    """The config of one campaign run (a paper condition), its seed inside: the cell's
+    settings as the config's tables (:meth:`hcomc.robustness.campaign.FaultRun.tables`)."""
     from hcomc.experiments.runner import configuration_overrides
 
-    tables = {
-        "faults": [] if fault == "none" else [FAULTS[fault].model_dump()],
-        "v2x": CHANNELS[channel].model_dump(), "shield": {"enabled": bool(shield)},
-        "seed": int(seed),
-    }  # fmt: skip
-    return load_config(condition, **configuration_overrides(configuration, {}), **tables)
+    run = FaultRun(condition, configuration, fault, channel, shield, seed, FAULTS[fault],
+                   CHANNELS[channel])  # fmt: skip
+    overrides = configuration_overrides(configuration, {})
+    return load_config(condition, **overrides, **run.tables(), seed=int(seed))
 
 
 def worst_runs(runs: pd.DataFrame) -> pd.DataFrame:
