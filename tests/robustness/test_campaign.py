@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from hcomc.cli import app
 from hcomc.config.impairment_tables import CHANNELS, FAULTS
 from hcomc.robustness.campaign import CampaignSpec, FaultRun, run_campaign, run_faulted
-from hcomc.robustness.publish import data_dir, generated_part, markers
+from hcomc.robustness.publish import data_dir, generated_part, markers, published_runs
 from hcomc.robustness.tables import CELL, summarise
 
 runner = CliRunner()
@@ -83,27 +83,36 @@ def test_bad_campaign_options_are_one_line_errors(tmp_path):
         assert result.stderr.strip().count("\n") == 0
 
 
-@pytest.mark.parametrize("engine", ["hcomc", "sumo"])
-def test_docs_page_is_generated_from_its_data(engine):
-    data = data_dir(DOCS, engine)  # the sections of these engines' campaigns
-    runs = pd.read_csv(data / "runs.csv")
+@pytest.mark.parametrize("section", ["hcomc", "sumo", "hcomc-1000-seeds"])
+def test_docs_page_is_generated_from_its_data(section):
+    data = data_dir(DOCS, section)  # each published campaign's data
+    runs = published_runs(data)
     meta = json.loads((data / "campaign.json").read_text())
     text = (DOCS / "robustness.md").read_text()
-    begin, end = markers(engine)
+    begin, end = markers(section)
     part = text[text.index(begin) : text.index(end) + len(end)]
     assert part == generated_part(runs, meta)
     summary = pd.read_csv(data / "summary.csv")
     pd.testing.assert_frame_equal(summary, summarise(runs), check_dtype=False)
     spec = meta["spec"]
-    assert set(runs["fault"]) == set(spec["faults"])
+    assert set(runs["fault"]) == set(spec["faults"]) | {"none"}  # the nominal cells too
     assert set(runs["channel"]) == set(spec["channels"])
     assert len(runs) == len(runs.drop_duplicates([*CELL, "seed"]))
-    if engine == "hcomc":  # the whole catalogue, every channel
+    assert CampaignSpec(**{k: tuple(v) if isinstance(v, list) else v
+                           for k, v in spec.items()}).section == section  # fmt: skip
+    if section == "hcomc":  # the whole catalogue, every channel
         assert set(spec["faults"]) == set(FAULTS)
         assert set(spec["channels"]) == set(CHANNELS)
-    else:
+    elif section == "sumo":
         assert spec["engine"] == "sumo"
         assert len(spec["seeds"]) >= 100
+    else:  # brake-vmf at 1000 seeds: every condition, controller, channel, shield setting
+        assert spec["faults"] == ["brake-vmf"]
+        assert set(spec["channels"]) == set(CHANNELS)
+        assert spec["conditions"] == ["C1", "C2", "C3", "C4", "C5"]
+        assert spec["configurations"] == ["FIFO", "Game", "HCOMC"]
+        assert len(spec["seeds"]) == 1000
+        assert len(runs) == (5 * 3 * 3 * 2 + 5 * 3) * 1000
 
 
 def test_the_sumo_collisions_are_told_as_the_data_has_them():

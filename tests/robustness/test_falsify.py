@@ -169,3 +169,25 @@ def test_bad_search_files_are_refused_by_key(tmp_path: Path, text: str, named: s
     result = runner.invoke(app, ["falsify", "--space", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2
     assert named in result.output
+
+
+def test_the_published_search_is_generated_from_its_data() -> None:
+    """docs/robustness.md's falsification table is the one its data gives, for FIFO, Game and
+    HCOMC with and without the shield, each worst case a config that loads with its seed."""
+    from hcomc.robustness.falsify_report import MARKERS, generated_part
+
+    docs = Path(__file__).resolve().parents[2] / "docs"
+    data = docs / "data" / "falsify"
+    summary = pd.read_csv(data / "summary.csv")
+    record = json.loads((data / "falsify.json").read_text(encoding="utf-8"))
+    text = (docs / "robustness.md").read_text(encoding="utf-8")
+    part = text[text.index(MARKERS[0]) : text.index(MARKERS[1]) + len(MARKERS[1])]
+    assert part == generated_part(summary, record)
+    assert sorted(zip(summary.controller, summary.shield, strict=True)) == [
+        (c, s) for c in ("fifo", "game", "hcomc") for s in (False, True)
+    ]
+    assert (summary.runs == record["budget"]).all()
+    for row in summary.to_dict("records"):
+        config = load_config(data / row["config"])
+        assert config.seed == row["seed"]
+        assert config.shield.enabled == row["shield"]

@@ -26,7 +26,7 @@ from hcomc.robustness.campaign import CampaignSpec
 from hcomc.robustness.tables import page, summarise
 from hcomc.sim.manifest import atomic_paths
 
-__all__ = ["data_dir", "generated_part", "markers", "publish"]
+__all__ = ["data_dir", "generated_part", "markers", "publish", "published_runs"]
 
 
 def markers(section: str) -> tuple[str, str]:
@@ -41,6 +41,27 @@ def data_dir(docs: Path, section: str) -> Path:
     """Where a campaign's runs, summary and stamp are kept under ``docs``."""
     base = docs / "data" / "robustness"
     return base if section == "hcomc" else base / section
+
+
+LARGE_RUNS = 20_000
+"""Runs from which the published runs table is kept gzip-compressed (``runs.csv.gz``)."""
+
+
+def published_runs(folder: Path) -> pd.DataFrame:
+    """The runs table of a campaign directory or its published data: ``runs.csv``, or
+    ``runs.csv.gz`` for a large campaign."""
+    plain = folder / "runs.csv"
+    return pd.read_csv(plain if plain.exists() else folder / "runs.csv.gz")
+
+
+def _keep_runs(runs: pd.DataFrame, data: Path) -> None:
+    """Write ``runs`` under ``data`` (compressed when large), removing the other form."""
+    name = "runs.csv.gz" if len(runs) > LARGE_RUNS else "runs.csv"
+    with atomic_paths(data / name) as (tmp,):
+        gzip = {"method": "gzip", "mtime": 0}  # the same bytes for the same runs
+        runs.to_csv(tmp, index=False, compression=gzip if name.endswith(".gz") else None)
+    other = data / ("runs.csv" if name.endswith(".gz") else "runs.csv.gz")
+    other.unlink(missing_ok=True)
 
 
 def _spec(meta: dict[str, Any]) -> CampaignSpec:
@@ -73,14 +94,14 @@ def publish(campaign: Path, docs: Path) -> Path:
     text = target.read_text()
     if begin not in text or end not in text:
         raise ConfigError(f"{target} has no '{begin}' ... '{end}' section to replace")
-    runs = pd.read_csv(campaign / "runs.csv")
+    runs = published_runs(campaign)
     head, rest = text.split(begin, 1)
     tail = rest.split(end, 1)[1]
     data = data_dir(docs, section)
     data.mkdir(parents=True, exist_ok=True)
-    for name in ("runs.csv", "campaign.json"):
-        if (campaign / name).resolve() != (data / name).resolve():
-            shutil.copyfile(campaign / name, data / name)
+    if (campaign / "campaign.json").resolve() != (data / "campaign.json").resolve():
+        shutil.copyfile(campaign / "campaign.json", data / "campaign.json")
+    _keep_runs(runs, data)
     with atomic_paths(data / "summary.csv") as (tmp,):
         summarise(runs).to_csv(tmp, index=False)
     with atomic_paths(target) as (tmp,):
