@@ -191,3 +191,19 @@ def test_the_published_search_is_generated_from_its_data() -> None:
         config = load_config(data / row["config"])
         assert config.seed == row["seed"]
         assert config.shield.enabled == row["shield"]
+
+
+def test_the_generated_sentences_follow_the_data() -> None:
+    from hcomc.robustness.falsify_report import generated_part
+
+    summary = pd.DataFrame({
+        "controller": ["a", "a", "b", "b"], "shield": [False, True, False, True],
+        "runs": [10] * 4, "runs_with_collision": [2, 0, 0, 0],
+        "least_ttc": [0.0, 1.5, 2.0, 1.0], "seed": [1, 2, 3, 4],
+        "config": ["a-off/worst-1.toml", "a-on/worst-1.toml", "b-off/worst-1.toml",
+                   "b-on/worst-1.toml"],
+    })  # fmt: skip
+    text = generated_part(summary, {"version": "v", "revision": "r", "command": "c"})
+    assert "found a collision of a commanded vehicle for a (shield off)." in text
+    assert "With the shield the least TTC found is larger for a, not for b." in text
+    assert "| a | off | 10 | 2 | collision | 1 |" in text

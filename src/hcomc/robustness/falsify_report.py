@@ -95,6 +95,18 @@ def write_search(out: Path, searches: Sequence[Searched], search_seed: int, comm
     write_json_atomic(out / "falsify.json", json.loads(json.dumps(record, default=str)))
 
 
+def _shield_sentence(summary: pd.DataFrame) -> str:
+    """What the shield did to the worst case found, per controller searched both ways."""
+    by = summary.pivot_table(index="controller", columns="shield", values="least_ttc",
+                             sort=False)  # fmt: skip
+    if not {False, True} <= set(by.columns):
+        return ""
+    larger = [c for c in by.index if by.loc[c, True] > by.loc[c, False]]
+    other = [c for c in by.index if c not in larger]
+    text = f" With the shield the least TTC found is larger for {', '.join(larger) or 'none'}"
+    return text + (f", not for {', '.join(other)}." if other else ".")
+
+
 def _on(shield: object) -> str:
     return "on" if bool(shield) else "off"
 
@@ -124,7 +136,7 @@ def generated_part(summary: pd.DataFrame, record: dict[str, Any]) -> str:
     else:
         said = (f"No search found a collision of a commanded vehicle in "
                 f"{summary.runs.iloc[0]} runs per setting.")  # fmt: skip
-    lines += ["", said, MARKERS[1]]
+    lines += ["", said + _shield_sentence(summary), MARKERS[1]]
     return "\n".join(lines)
 
 
