@@ -46,7 +46,7 @@ from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.neighbours import build_lane_index
 from hcomc.sim.plan_execution import ActivePlan, virtual_leaders
 from hcomc.sim.step.motion import WAIT_SPEED, WAIT_ZONE
-from hcomc.sumo.cosim_plans import CosimPlans
+from hcomc.sumo.cosim_plans import COMMANDED_SPEED_MODE, DEFAULT_SPEED_MODE, CosimPlans
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
 from hcomc.sumo.network import edge_at, sumo_lane_of
@@ -186,10 +186,13 @@ class SumoSimulation(CosimPlans):
                              -self.config.lane_change.emergency_decel)  # fmt: skip
             for i, a in zip(fol.tolist(), acc.tolist(), strict=True):
                 target = max(0.0, float(self.v[i]) + a * self.dt)
+                if i not in self._speed_set:  # braking beyond its type's decel, as ours
+                    self.sumo.vehicle.setSpeedMode(vehicle_id(i), COMMANDED_SPEED_MODE)
                 self.sumo.vehicle.setSpeed(vehicle_id(i), target)
                 constrained.add(i)
         for i in self._speed_set - constrained:  # hand back to SUMO's IDM
             if self.active[i]:
+                self.sumo.vehicle.setSpeedMode(vehicle_id(i), DEFAULT_SPEED_MODE)
                 self.sumo.vehicle.setSpeed(vehicle_id(i), -1.0)
         self._speed_set = constrained
 

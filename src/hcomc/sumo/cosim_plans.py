@@ -28,14 +28,17 @@ from hcomc.sim.plan_execution import ActivePlan, commanded
 from hcomc.sumo.cosim_state import CosimState
 from hcomc.sumo.routes import vehicle_id
 
-__all__ = ["CosimPlans"]
+__all__ = ["COMMANDED_SPEED_MODE", "DEFAULT_SPEED_MODE", "CosimPlans"]
 
 DEFAULT_LC_MODE = 1621  # SUMO's default lane-change mode
 # no own lane changes; a commanded change (already passed by our MOBIL safety criterion, as in
 # our engine) only has to avoid immediate collisions, not SUMO's stricter comfort-gap check
 COMMANDED_LC_MODE = 256
 _FREE_SPEED_MODE = 0  # a vehicle driven from outside: SUMO checks nothing
-_DEFAULT_SPEED_MODE = 31
+DEFAULT_SPEED_MODE = 31  # SUMO's: safe speed, maximum acceleration and deceleration, ...
+COMMANDED_SPEED_MODE = 27  # a plan's commanded speed: SUMO's default without bit 2, so it
+# brakes beyond its type's comfortable `decel`, down to what the plan asks (at most the
+# emergency deceleration, as our engine lets it)
 _NO_LANE_CHANGES = 0
 
 
@@ -133,7 +136,8 @@ class CosimPlans(CosimState):
         by_plan = commanded(self.plans, self.x.size) if ended else np.zeros(0, dtype=bool)
         for i in ended:
             name = vehicle_id(i)
-            veh.setSpeedMode(name, _DEFAULT_SPEED_MODE)
+            mode = COMMANDED_SPEED_MODE if i in self._speed_set else DEFAULT_SPEED_MODE
+            veh.setSpeedMode(name, mode)
             planned = i in self._speed_set or by_plan[i]
             veh.setLaneChangeMode(name, COMMANDED_LC_MODE if planned else DEFAULT_LC_MODE)
             if i not in self._speed_set:
