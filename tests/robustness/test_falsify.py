@@ -207,3 +207,16 @@ def test_the_generated_sentences_follow_the_data() -> None:
     assert "found a collision of a commanded vehicle for a (shield off)." in text
     assert "With the shield the least TTC found is larger for a, not for b." in text
     assert "| a | off | 10 | 2 | collision | 1 |" in text
+
+
+def test_the_box_and_the_overrides_merge_key_by_key() -> None:
+    spec = FalsifySpec(condition="C2", controller="fifo", faults=("brake-vmf",),
+                       overrides={"hdv": {"time_headway": 1.2}, "duration": 40.0},
+                       space={"hdv.reaction_time_gap": (0.3, 1.0),
+                              "faults.0.delay": (0.0, 6.0)})  # fmt: skip
+    config = spec.config({"hdv.reaction_time_gap": 0.9, "faults.0.delay": 2.5})
+    assert (config.hdv.time_headway, config.hdv.reaction_time_gap) == (1.2, 0.9)
+    assert config.duration == 40.0
+    assert (config.faults[0].delay_min, config.faults[0].delay_max) == (2.5, 2.5)
+    assert config.faults[0].kind == "emergency_brake"
+    assert config.control.controller == "fifo"

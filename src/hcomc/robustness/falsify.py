@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from hcomc.config import ConfigError, ScenarioConfig, load_config, nest_overrides
+from hcomc.config import ConfigError, ScenarioConfig, load_config, merge_tables, nest_overrides
 from hcomc.config.impairment_tables import FaultParams
 from hcomc.metrics.bodies import body_pairs
 from hcomc.metrics.surrogate import CLOSING_SPEED, pairs_min_ttc
@@ -112,8 +112,9 @@ class FalsifySpec:
                 faults[int(part[1])][name] = value
         control = {**dict(self.overrides.get("control", {})), "controller": self.controller}
         tables = {"faults": faults, "shield": {"enabled": self.shield}, "control": control}
-        merged = {**{k: v for k, v in self.overrides.items() if k != "control"}, **tables}
-        return load_config(self.condition, **{**merged, **nest_overrides(rest)})
+        given = nest_overrides({k: v for k, v in self.overrides.items() if k != "control"})
+        return load_config(self.condition, **merge_tables(merge_tables(given, tables),
+                                                          nest_overrides(rest)))  # fmt: skip
 
 
 def _table(fault: str | Mapping[str, Any]) -> dict[str, Any]:
