@@ -13,9 +13,9 @@ from hcomc.cli import app
 from hcomc.config import load_config
 from hcomc.metrics import key_window
 from hcomc.metrics.surrogate import closing_metrics, max_drac, min_ttc
-from hcomc.robustness.campaign_report import worst_runs
 from hcomc.robustness.impairments import listeners_of
 from hcomc.sim.engine import Simulation
+from hcomc.viz.campaign_report import worst_runs
 
 runner = CliRunner()
 

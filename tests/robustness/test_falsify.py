@@ -174,7 +174,7 @@ def test_bad_search_files_are_refused_by_key(tmp_path: Path, text: str, named: s
 def test_the_published_search_is_generated_from_its_data() -> None:
     """docs/robustness.md's falsification table is the one its data gives, for FIFO, Game and
     HCOMC with and without the shield, each worst case a config that loads with its seed."""
-    from hcomc.robustness.falsify_report import MARKERS, generated_part
+    from hcomc.viz.falsify_report import MARKERS, generated_part
 
     docs = Path(__file__).resolve().parents[2] / "docs"
     data = docs / "data" / "falsify"
@@ -194,7 +194,7 @@ def test_the_published_search_is_generated_from_its_data() -> None:
 
 
 def test_the_generated_sentences_follow_the_data() -> None:
-    from hcomc.robustness.falsify_report import generated_part
+    from hcomc.viz.falsify_report import generated_part
 
     summary = pd.DataFrame({
         "controller": ["a", "a", "b", "b"], "shield": [False, True, False, True],

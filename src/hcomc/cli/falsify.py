@@ -67,7 +67,7 @@ def falsify(
 
     from hcomc.robustness.falsify import falsify as search
     from hcomc.robustness.falsify import load_spec
-    from hcomc.robustness.falsify_report import Searched, publish, write_search
+    from hcomc.viz.falsify_report import Searched, publish, write_search
 
     if not 1 <= budget <= _MAX_BUDGET:
         raise _fail(f"option '--budget' = {budget}: allowed 1 .. {_MAX_BUDGET}")
@@ -106,7 +106,7 @@ def _print(out_dir: Path, searches: list[Any]) -> None:
     """The worst case of each setting, with the command that runs it again."""
     from rich.table import Table
 
-    from hcomc.robustness.falsify_report import setting_dir
+    from hcomc.viz.falsify_report import setting_dir
 
     table = Table(title=f"worst cases in {len(searches[0].found)} runs per setting")
     for column in ("controller", "shield", "commanded collisions", "least TTC [s]", "reproduce"):

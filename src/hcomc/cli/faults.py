@@ -128,7 +128,7 @@ def faults(
     overview = summarise(runs, OVERVIEW)
     out.print(overview_view(overview).to_string(index=False))
     out.print(verdicts(overview))
-    from hcomc.robustness.campaign_report import write_report
+    from hcomc.viz.campaign_report import write_report
 
     if spec.engine == "hcomc":
         out.print(f"report: {write_report(out_dir, runs, spec.corridors())}")
