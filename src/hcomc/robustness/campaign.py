@@ -302,7 +302,8 @@ class CampaignSpec:
                              ("faults", "--faults"), ("channels", "--channels")):  # fmt: skip
             if getattr(self, axis) != getattr(default, axis):
                 words.append(f"{option} {','.join(getattr(self, axis))}")
-        out = "results/faults" if self.engine == "hcomc" else f"results/faults-{self.engine}"
+        suffix = self.section.removeprefix("hcomc").lstrip("-")
+        out = f"results/faults-{suffix}" if suffix else "results/faults"
         return " ".join([*words, f"--out {out} --docs docs"])
 
 
