@@ -220,3 +220,13 @@ def test_the_box_and_the_overrides_merge_key_by_key() -> None:
     assert (config.faults[0].delay_min, config.faults[0].delay_max) == (2.5, 2.5)
     assert config.faults[0].kind == "emergency_brake"
     assert config.control.controller == "fifo"
+
+
+def test_a_docs_directory_without_the_section_is_refused_before_the_search(
+    tmp_path: Path,
+) -> None:
+    result = runner.invoke(app, ["falsify", "--budget", "2", "--top", "1", "--out",
+                                 str(tmp_path / "o"), "--docs", str(tmp_path)])  # fmt: skip
+    assert result.exit_code == 2
+    assert "falsification: begin" in result.output
+    assert not (tmp_path / "o").exists()

@@ -67,7 +67,7 @@ def falsify(
 
     from hcomc.robustness.falsify import falsify as search
     from hcomc.robustness.falsify import load_spec
-    from hcomc.viz.falsify_report import Searched, publish, write_search
+    from hcomc.viz.falsify_report import MARKERS, Searched, publish, write_search
 
     if not 1 <= budget <= _MAX_BUDGET:
         raise _fail(f"option '--budget' = {budget}: allowed 1 .. {_MAX_BUDGET}")
@@ -86,6 +86,11 @@ def falsify(
                  for name in names for on in shields[shield]]  # fmt: skip
     except ConfigError as exc:
         raise _fail(str(exc)) from None
+    page = None if docs is None else docs / "robustness.md"
+    if page is not None and MARKERS[0] not in (page.read_text(encoding="utf-8")
+                                               if page.is_file() else ""):  # fmt: skip
+        raise _fail(f"option '--docs' = '{docs}': no robustness.md with a '{MARKERS[0]}' "
+                    "section there")  # fmt: skip
     _compiled()
     searches = []
     for spec in specs:
