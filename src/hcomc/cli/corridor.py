@@ -50,7 +50,7 @@ def run_corridor(
     """Simulate ``corridor``, print its summary and write its tables to ``out_dir``."""
     from hcomc.metrics.corridor import simulate_corridor
     from hcomc.metrics.corridor.record import CORRIDOR_ENGINE
-    from hcomc.robustness.impairments import impairments_in, listeners_of
+    from hcomc.robustness.impairments import impairment_summary, listeners_of
     from hcomc.sim.manifest import build_manifest, write_json_atomic
     from hcomc.viz.corridor import corridor_report_html, write_corridor_figures
 
@@ -73,9 +73,7 @@ def run_corridor(
     summary = run.summary()
     summary["vehicle_steps_per_s"] = round(run.vehicle_steps / max(run.wall_seconds, 1e-9))
     summary["detectors"] = _detector_summary(run.detectors)
-    impaired = impairments_in(listeners)
-    if impaired is not None:
-        summary["impairments"] = impaired.summary()
+    summary.update(impairment_summary(listeners))
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
         manifest = build_manifest(

@@ -33,7 +33,6 @@ from hcomc.cli._app import (
     out,
 )
 from hcomc.config import ConfigError, ScenarioConfig, config_to_toml
-from hcomc.interface.engine import Engine as RunEngine
 
 
 @config_app.command("show")
@@ -172,6 +171,7 @@ def simulate(
     from hcomc.metrics.detectors import detector_table
     from hcomc.metrics.ramp import ramp_summary
     from hcomc.metrics.travel import travel_summary
+    from hcomc.robustness.impairments import impairment_summary
     from hcomc.sim.manifest import write_json_atomic
     from hcomc.sim.summary import summarise
 
@@ -196,9 +196,9 @@ def simulate(
         **summarise(log),
         "travel_times": travel_summary(log),
         "ramp": ramp_summary(log),
+        **impairment_summary(sim.listeners),  # what the [v2x], [[faults]], [shield] did
+        "wall_s": round(wall, 4),
     }
-    summary.update(_impairments(sim))
-    summary["wall_s"] = round(wall, 4)
     summary["vehicle_steps_per_s"] = round(summary["vehicle_steps"] / max(wall, 1e-9))
     table = detector_table(log, positions, detector_interval) if positions else None
     if table is not None:
@@ -217,15 +217,6 @@ def simulate(
         _print_summary(summary)
         if table is not None:
             out.print(_detectors_view(table))
-
-
-def _impairments(sim: RunEngine[Any]) -> dict[str, Any]:
-    """``{"impairments": ...}``: what the run's channel, faults and shield did, if it had
-    them (:meth:`hcomc.robustness.impairments.Impairments.summary`)."""
-    from hcomc.robustness.impairments import impairments_in
-
-    impaired = impairments_in(sim.listeners)
-    return {} if impaired is None else {"impairments": impaired.summary()}
 
 
 def _impairment_rows(done: dict[str, Any]) -> list[tuple[str, str]]:

@@ -72,6 +72,10 @@ class _Broadcast:
     first: float = 0.0  # the earliest arrival still to come (inf: none)
 
     def __post_init__(self) -> None:
+        self.update_first()
+
+    def update_first(self) -> None:
+        """Set :attr:`first` from the arrivals still to come."""
         self.first = min(self.arrive.min(initial=math.inf), self.arrive_v2v.min(initial=math.inf))
 
 
@@ -129,7 +133,7 @@ class Channel:
             arrived = msg.arrive_v2v <= t + _EPS_T
             self.heard[arrived & (msg.sent > self.heard)] = msg.sent
             msg.arrive_v2v[arrived] = math.inf
-            msg.__post_init__()
+            msg.update_first()
             if math.isfinite(msg.first):
                 keep.append(msg)
         self._pending = keep

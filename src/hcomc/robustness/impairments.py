@@ -52,6 +52,7 @@ __all__ = [
     "SHIELD_ACTIONS",
     "Impairments",
     "impairment_columns",
+    "impairment_summary",
     "impairments_in",
     "listeners_of",
 ]
@@ -231,6 +232,13 @@ def listeners_of(config: ScenarioConfig | Corridor) -> list[StepListener]:
 def impairments_in(listeners: Sequence[StepListener]) -> Impairments | None:
     """The :class:`Impairments` among a run's ``listeners``, if any."""
     return next((x for x in listeners if isinstance(x, Impairments)), None)
+
+
+def impairment_summary(listeners: Sequence[StepListener]) -> dict[str, Any]:
+    """``{"impairments": ...}`` (:meth:`Impairments.summary`) for a run with impairments
+    among its ``listeners``, ``{}`` for one without: what a command's summary adds."""
+    impaired = impairments_in(listeners)
+    return {} if impaired is None else {"impairments": impaired.summary()}
 
 
 def impairment_columns(impaired: Impairments | None) -> dict[str, Any]:
