@@ -114,6 +114,13 @@ class FaultParams(FrozenModel):
       is not yet seen — with a relative gap error ``distracted_gap_error`` (Eq. 2's
       ``s exp(V_s w)``, ``w`` an Ornstein-Uhlenbeck process of the scenario's correlation
       time); it makes no lane change of its own in the window.
+    * ``stalled_vehicle``: a broken-down car stands on the acceleration lane of on-ramp
+      ``ramp`` (0: the road's first, counted downstream), its front ``position`` metres past
+      the lane's start, for the whole run (the timing keys do not apply). It is no ramp
+      vehicle: no controller plans for it and it never merges. The engine's vehicles see it
+      as they see any vehicle; for the ramp vehicles behind it the acceleration lane ends at
+      its rear (they merge before it, or stop behind it and wait for a gap), while the
+      road the controllers are given is the road as built (:mod:`hcomc.sim.stalled`).
     """
 
     kind: Literal[
@@ -124,6 +131,7 @@ class FaultParams(FrozenModel):
         "sensor_dropout",
         "sensor_noise",
         "distracted_hdv",
+        "stalled_vehicle",
     ] = Field("none", description="what the fault does (class docstring); 'none' = nothing")
     role: Literal["vmf", "vmc", "vmr", "vnf", "vnr"] = Field(
         "vmf", description="emergency_brake, sensor_dropout, sensor_noise: the key vehicle"
@@ -151,6 +159,14 @@ class FaultParams(FrozenModel):
     )
     distracted_gap_error: float = Field(
         0.2, ge=0, le=1, description="distracted_hdv: V_s, relative gap-estimation error [-]"
+    )
+    position: float = Field(
+        100.0, gt=0, le=10_000,
+        description="stalled_vehicle: its front bumper's distance past the acceleration "
+        "lane's start [m]; at least a vehicle length, at most the lane's length",
+    )  # fmt: skip
+    ramp: int = Field(
+        0, ge=0, le=63, description="stalled_vehicle: which on-ramp (0: the first) [-]"
     )
 
     @model_validator(mode="after")
@@ -203,6 +219,7 @@ FAULTS: dict[str, FaultParams] = {
     "dropout-vmc": FaultParams(kind="sensor_dropout", role="vmc"),
     "noise-vmc": FaultParams(kind="sensor_noise", role="vmc"),
     "distracted-hdv": FaultParams(kind="distracted_hdv"),
+    "stalled": FaultParams(kind="stalled_vehicle"),
 }
 """The campaign's fault catalogue."""
 

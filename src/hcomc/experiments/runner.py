@@ -33,6 +33,7 @@ from typing import Any
 import pandas as pd
 
 from hcomc.config import ScenarioConfig, load_config
+from hcomc.config.impairment_tables import fault_entries
 from hcomc.control.registry import canonical_name, controller_source
 from hcomc.experiments.results_row import run_columns
 from hcomc.interface import Engine
@@ -156,8 +157,14 @@ class RunSpec:
     def reference_key(self) -> tuple[str, int, str]:
         """What the undisturbed run depends on: condition, seed, the overrides of neither the
         controller nor the impairments (the undisturbed run has no ramp vehicle to control or
-        to time a fault from, and no listeners)."""
+        to time a fault from, and no listeners), except the stalled vehicles among the faults:
+        they are vehicles of the run (:mod:`hcomc.sim.stalled`), which its undisturbed run has
+        too, so that both logs have the same vehicle columns."""
         rest = {k: v for k, v in self.overrides.items() if k not in _NOT_UNDISTURBED}
+        stalled = [f for f in fault_entries(list(self.overrides.get("faults", ())))
+                   if dict(f).get("kind") == "stalled_vehicle"]  # fmt: skip
+        if stalled:
+            rest["faults"] = stalled
         return self.condition, self.seed, json.dumps(rest, sort_keys=True, default=str)
 
 

@@ -44,6 +44,7 @@ class ListenedRun(Protocol):
     decisions: list[MergePlan]
     key_groups: dict[int, MergeGroup]
     ramps: tuple[Ramp, ...]  # the road's on-ramps (lane-code order), as controllers see them
+    stalled: IntArray  # the stalled vehicles of its [[faults]], in their order
 
     @property
     def t(self) -> float:

@@ -4,8 +4,9 @@ how long the queue grew.
 A *ramp vehicle* is one inserted at the ramp's start (``road.ramp_start``). It *merged* when
 the log has its MERGE event. It *stands* while it is on the ramp or acceleration lane (lane
 0) slower than :data:`STOPPED` m/s; the *queue* at a logged row is the number of ramp
-vehicles standing then. Times are over the logged (measured) rows only; a vehicle that
-entered in the warm-up counts with its measured part.
+vehicles standing then (a stalled vehicle, :mod:`hcomc.sim.stalled`, is none). Times are
+over the logged (measured) rows only; a vehicle that entered in the warm-up counts with its
+measured part.
 """
 
 from __future__ import annotations
@@ -39,7 +40,9 @@ def _standing(log: SimulationLog) -> tuple[pd.Series, np.ndarray]:
     """Seconds each vehicle stood on lane 0, and the number standing per logged row."""
     cells = log.long_columns()
     frame = pd.DataFrame({k: cells[k] for k in ("step", "vehicle", "v", "lane")})
-    standing = frame[(frame["lane"] == Lane.RAMP) & (frame["v"] < STOPPED)]
+    stalled = np.asarray(log.meta.get("stalled", []), dtype=np.int64)  # no ramp vehicles
+    standing = frame[(frame["lane"] == Lane.RAMP) & (frame["v"] < STOPPED)
+                     & ~frame["vehicle"].isin(stalled)]  # fmt: skip
     per_vehicle = standing.groupby("vehicle").size() * log.dt
     rows = np.zeros(log.t.size, dtype=np.int64)
     np.add.at(rows, standing["step"].to_numpy(np.int64), 1)

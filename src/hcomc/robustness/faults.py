@@ -148,7 +148,7 @@ class Fault:
 
     def on_entry(self, sim: ListenedRun, group: MergeGroup, t: float) -> None:
         """The first ramp vehicle entered the control zone with key vehicles ``group``."""
-        if self.vehicles or self.kind in ("none", "ignore_command"):
+        if self.vehicles or self.kind in ("none", "ignore_command", "stalled_vehicle"):
             return
         keys = [int(i) for i in group.as_array() if i >= 0]
         if self.kind in ("aggressive_hdv", "distracted_hdv"):
@@ -225,6 +225,13 @@ class Faults:
     def first(self) -> Fault:
         """The first fault (the nominal one when the run has none)."""
         return self.each[0]
+
+    def stand(self, stalled: Sequence[int], t: float) -> None:
+        """The ``stalled_vehicle`` faults, in their order, are the run's stalled vehicles
+        ``stalled`` (:mod:`hcomc.sim.stalled`), standing from ``t``."""
+        mine = [fault for fault in self.each if fault.kind == "stalled_vehicle"]
+        for fault, i in zip(mine, stalled, strict=True):
+            fault.vehicles, fault.start = [int(i)], t
 
     def on_entry(self, sim: ListenedRun, group: MergeGroup, t: float) -> None:
         """The first ramp vehicle entered the control zone with key vehicles ``group``."""

@@ -88,6 +88,7 @@ class Impairments(StepListener):
         rsu = [ramp.accel_lane_start for ramp in run.ramps]
         self.channel = Channel(self.channel_params, run.x.size, rsu, run.seed)
         self.faults = Faults(self.fault_params, config, run.seed)
+        self.faults.stand(run.stalled.tolist(), run.t)
         self.shield = Shield(self.shield_params, config, self.faults)
         self._broadcast_every = max(1, round(self.channel_params.period / run.dt))
 

@@ -325,9 +325,10 @@ class Simulation(EnginePlans):
 
     def _in_control_zone(self, ids: IntArray, changing: np.ndarray) -> IntArray:
         """The vehicles of ``ids`` in a ramp lane's control zone, keeping their lane
-        (``changing`` per vehicle of ``ids``)."""
+        (``changing`` per vehicle of ``ids``), stalled vehicles aside."""
         zone = self.arrays.road_f[L_ZONE, self.lane[ids]]
-        return ids[~changing & (self.x[ids] >= zone)]
+        inside = ids[~changing & (self.x[ids] >= zone)]
+        return inside[~np.isin(inside, self.stalled)] if self.stalled.size else inside
 
     def _identify_key_vehicles(self, ids: IntArray, changing: np.ndarray, t: float) -> None:
         """Record each ramp vehicle's key vehicles when it enters the control zone.

@@ -15,6 +15,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from hcomc._typing import IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.interface import MergeController, MergeGroup, MergePlan, TrafficView
 from hcomc.interface.listener import StepListener
@@ -23,6 +24,7 @@ from hcomc.road import Kind
 from hcomc.sim.perception_state import Perception
 from hcomc.sim.roads import ramps_of
 from hcomc.sim.scene import Scene, SceneMaker, paper_scene
+from hcomc.sim.stalled import blocked_lanes, place_stalled, with_stalled
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.build import allocate_log, build_arrays
 from hcomc.sim.step.state import Core
@@ -46,12 +48,12 @@ class EngineSetup:
     ) -> None:
         seed = config.seed if seed is None else seed
         rng = make_rng(seed)
-        drawn = scene(config, rng)
+        drawn, stalled = with_stalled(scene(config, rng), config)
         if controller is None:
             from hcomc.control.registry import make_controller
 
             controller = make_controller(config)
-        self._build(config, seed, rng, drawn, controller, counterfactual)
+        self._build(config, seed, rng, drawn, stalled, controller, counterfactual)
         self.listeners: tuple[StepListener, ...] = tuple(listeners)
         for listener in self.listeners:
             listener.attach(self)  # type: ignore[arg-type]  # Simulation is a ListenedRun
@@ -64,16 +66,18 @@ class EngineSetup:
         rng = make_rng(sim.seed)
         rng.bit_generator.state = sim._after_demand
         new = cls.__new__(cls)
-        new._build(sim.config, sim.seed, rng, sim.scene, sim.controller, counterfactual)
+        new._build(sim.config, sim.seed, rng, sim.scene, sim.stalled, sim.controller,
+                   counterfactual)  # fmt: skip
         return new
 
     def _build(
         self, config: ScenarioConfig, seed: int, rng: np.random.Generator, scene: Scene,
-        controller: MergeController | None, counterfactual: bool,
+        stalled: IntArray, controller: MergeController | None, counterfactual: bool,
     ) -> None:  # fmt: skip
         self.config, self.seed, self.rng, self.dt = config, seed, rng, config.dt
         self.scene, self.lanes = scene, scene.lanes
-        self.ramps = ramps_of(scene.lanes)
+        self.ramps = ramps_of(scene.lanes)  # the road as built, which the controllers see
+        self.stalled = stalled  # stalled vehicles (hcomc.sim.stalled), the last indices
         demand, fleet = scene.demand, scene.fleet
         self._after_demand = rng.bit_generator.state  # for _sibling
         self.counterfactual = counterfactual
@@ -84,20 +88,26 @@ class EngineSetup:
         self.decisions: list[MergePlan] = []
         self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
         self.is_hdv = demand.kind == Kind.HDV
+        self.is_hdv[stalled] = False  # it perceives nothing: it stands
         self.perception = Perception(config.hdv, self.is_hdv, self.dt, rng)
         self.n_warmup = round(config.warmup / self.dt)
         self.n_steps = round(config.duration / self.dt)
         self._log_every = round(config.log_interval / self.dt)
         self._decide_every = max(1, round(config.lane_change.decision_interval / self.dt))
         self.log = allocate_log(config, seed, demand, fleet, self.n_steps // self._log_every + 1)
+        if stalled.size:
+            self.log.meta["stalled"] = stalled.tolist()
         # the engine drives with its own copy of the parameters (``driving``, which a listener
         # may change); ``fleet`` stays what the controllers know
         self.driving = dataclasses.replace(fleet, matrix=fleet.matrix.copy())
         self.arrays = build_arrays(
-            config, self.lanes, demand, scene.release_last, self.driving, self.perception, self.log,
+            config, blocked_lanes(self.lanes, demand, fleet, stalled, config.lane_change.min_gap),
+            demand,
+            scene.release_last, self.driving, self.perception, self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip
+        place_stalled(self.arrays, stalled, counterfactual=counterfactual)
         # the kernels see the same arrays through one compiled reference, typed as its fields
         self.core: Any = Core(self.arrays)
         c = self.arrays  # the state arrays, by name

@@ -31,9 +31,9 @@ from typing import NamedTuple
 import numpy as np
 
 __all__ = [
-    "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END", "L_ENDS", "L_EXIT",
-    "L_KIND", "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_WIDTH", "L_ZONE", "LaneTable",
-    "RampLanes", "lane_table",
+    "ENDS_BLOCKED", "KIND_MAIN", "KIND_OFF", "KIND_ON", "L_BEGIN", "L_CENTRE", "L_END",
+    "L_ENDS", "L_EXIT", "L_KIND", "L_LEFT", "L_OPENS", "L_RIGHT", "L_SPEED", "L_WIDTH", "L_ZONE",
+    "MIN_CHANGE_LENGTHS", "LaneTable", "RampLanes", "lane_table",
 ]  # fmt: skip
 
 KIND_MAIN, KIND_ON, KIND_OFF = 0, 1, 2
@@ -43,9 +43,21 @@ deceleration lane and road)."""
 L_KIND, L_LEFT, L_RIGHT, L_ENDS = range(4)
 """Rows of :attr:`LaneTable.ints`: the kind, the code of the lane to the left and to the
 right (-1: none), and whether the lane ends somewhere along the road (1: an acceleration
-lane, a mainline lane that a section drops; 0: its vehicles never have to leave it, so the
-step need not look for its end). Mainline lane 0 has no lane to its right: a ramp's lanes
-join it over a stretch only, and nobody changes into them of their own accord."""
+lane, a mainline lane that a section drops; :data:`ENDS_BLOCKED`: an acceleration lane that
+a stalled vehicle ends; 0: its vehicles never have to leave it, so the step need not look
+for its end). Mainline lane 0 has no lane to its right: a ramp's lanes join it over a
+stretch only, and nobody changes into them of their own accord."""
+
+MIN_CHANGE_LENGTHS = 3.0
+"""A lane change takes at least this many of the vehicle's lengths of road: the engine
+starts one as ``x_f = x_0 + max(v T_lc, 3 L)`` (Eq. 4-6 need room along x to move sideways,
+even from a standstill)."""
+
+ENDS_BLOCKED = 2
+"""``L_ENDS`` of an acceleration lane that ends before a stalled vehicle
+(:mod:`hcomc.sim.stalled`): every vehicle whose centre is in it stops at its end, a merge
+plan under way or not, and so does a changer whose change would not be over
+``MIN_CHANGE_LENGTHS`` of its lengths past it, since beyond it stands a vehicle."""
 L_CENTRE, L_WIDTH, L_BEGIN, L_OPENS, L_END, L_ZONE, L_EXIT, L_SPEED = range(8)
 """Rows of :attr:`LaneTable.floats`, in this order:
 

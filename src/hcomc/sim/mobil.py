@@ -35,7 +35,7 @@ import numpy as np
 from hcomc._jit import borrow, kernel
 from hcomc.equations.car_following import follow_accel_given, free_term
 from hcomc.equations.incentive import mobil_incentive
-from hcomc.sim.lane_table import KIND_MAIN, L_KIND, L_LEFT
+from hcomc.sim.lane_table import KIND_MAIN, L_KIND, L_LEFT, MIN_CHANGE_LENGTHS
 from hcomc.sim.neighbours import LaneIndex, lookup_one
 
 LC_MIN_GAP, LC_SAFE_DECEL, LC_POLITENESS, LC_THRESHOLD, LC_BIAS, LC_EMERGENCY_DECEL = range(6)
@@ -167,7 +167,7 @@ def _gaps_clear(
     s_c = _gap(x[c], x[ln], length[ln], ln >= 0)
     s_n = _gap(x[fn], x[c], length[c], fn >= 0)
     standing = lo >= 0 and v[lo] < 1.0
-    clear = not standing or s_o >= 3.0 * length[c] + min_gap
+    clear = not standing or s_o >= MIN_CHANGE_LENGTHS * length[c] + min_gap
     return clear and s_c >= min_gap and s_n >= min_gap
 
 

@@ -26,6 +26,7 @@ from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.plan_execution import ActivePlan
 from hcomc.sim.roads import paper_lanes, ramps_of
+from hcomc.sim.stalled import refuse_stalled
 from hcomc.sumo import import_libsumo
 from hcomc.sumo.routes import vehicle_id
 
@@ -50,10 +51,12 @@ class CosimState:
         self.counterfactual = counterfactual  # the undisturbed run: ramp vehicles removed
         if config.scenario != "merge":
             raise ValueError(f"scenario = '{config.scenario}': the SUMO engine runs 'merge' only")
+        refuse_stalled(config)
         self.sumo = import_libsumo()
         self.config = config
         self.lanes = paper_lanes(config.road)  # the road's lane table, as our engine's
         self.ramps = ramps_of(self.lanes)
+        self.stalled = np.empty(0, dtype=np.int64)  # refused above
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
         self.dt = config.dt

@@ -19,6 +19,7 @@ from hcomc.sim.lane_table import (
     L_LEFT,
     L_OPENS,
     L_RIGHT,
+    MIN_CHANGE_LENGTHS,
 )
 from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex, neighbour
@@ -190,6 +191,6 @@ def start_lane_changes(
         c.target[i] = target[k]
         c.lc_t0[i] = t
         c.lc_x0[i] = c.x[i]
-        c.lc_xf[i] = c.x[i] + max(c.v[i] * c.lc_dur[i], 3.0 * c.length[i])
+        c.lc_xf[i] = c.x[i] + max(c.v[i] * c.lc_dur[i], MIN_CHANGE_LENGTHS * c.length[i])
     for k in range(chosen.size):
         add_event(c, t, EV_LC_START, chosen[k], -1, c.x[chosen[k]], target[k])

@@ -17,6 +17,7 @@ from hcomc.equations.perception import ErrorScales
 from hcomc.equations.transition import blend, transition_psi
 from hcomc.sim.arrays import nonzero_into, search_left
 from hcomc.sim.lane_table import (
+    ENDS_BLOCKED,
     KIND_MAIN,
     KIND_ON,
     L_CENTRE,
@@ -27,6 +28,7 @@ from hcomc.sim.lane_table import (
     L_OPENS,
     L_SPEED,
     L_WIDTH,
+    MIN_CHANGE_LENGTHS,
 )
 from hcomc.sim.mobil import LC_SAFE_DECEL
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
@@ -255,8 +257,8 @@ def _limits(
     following: np.ndarray, vv_fol: np.ndarray, vv_x: np.ndarray, vv_v: np.ndarray,
     vv_a: np.ndarray, vv_len: np.ndarray,
 ) -> None:  # fmt: skip
-    """The lane end, virtual leaders, commanded accelerations, the emergency limit and
-    scripted profiles."""
+    """The lane end (where a stalled vehicle ends it, for every vehicle in it), virtual
+    leaders, commanded accelerations, the emergency limit and scripted profiles."""
     n = ids.size
     road, matrix, iidm, x, v, lane, route = road_of(c), c.matrix, c.iidm, c.x, c.v, c.lane, c.route
     ends, kinds, lane_ends = road.ints[L_ENDS], road.ints[L_KIND], road.floats[L_END]
@@ -267,7 +269,12 @@ def _limits(
         lane_end = lane_end_at(road, g, x[i]) if ends[g] else math.inf  # (a call with arrays)
         exit_end = lane_ends[exit_code] if exit_code >= 0 else math.inf
         end = stop_point(lane_end, kinds[g] == KIND_MAIN, exit_end, x[i])
-        if end < math.inf and not changing[k] and not following[i]:
+        blocked = ends[g] == ENDS_BLOCKED  # a stalled vehicle stands beyond the end
+        if changing[k]:  # a changer drives on unless its change would end at the obstacle
+            stops = blocked and c.lc_xf[i] > end + MIN_CHANGE_LENGTHS * c.length[i]
+        else:
+            stops = blocked or not following[i]
+        if end < math.inf and stops:
             a_stop = follow_exact(matrix, iidm, i, end - x[i], v[i], 0.0, 0.0)
             acc[k] = min(acc[k], a_stop)
     if vv_fol.size:
