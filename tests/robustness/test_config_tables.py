@@ -165,6 +165,25 @@ def test_the_log_records_each_lost_plan() -> None:
     assert set(lost["vehicle"].tolist()) <= vrs
 
 
+def test_the_log_records_each_long_silence_of_a_key_vehicle() -> None:
+    """A bursty channel losing 30 % of the messages: a V2X_SILENT event whenever a key
+    vehicle's next state reached the controller more than ``stale_after`` after the one
+    before it (measured between broadcasts: whole update periods), none for any other
+    vehicle; the ideal channel logs none."""
+    v2x = {"latency": 0.3, "loss": 0.3, "loss_model": "gilbert_elliott"}
+    sim = make_simulation(_config(v2x=v2x), 2)
+    log = sim.run()
+    silent = log.events_of(EventKind.V2X_SILENT)
+    assert silent.size > 0
+    keys = {int(i) for g in log.meta["key_groups"] for r, i in g.items() if r != "t" and i >= 0}
+    assert set(silent["vehicle"].tolist()) <= keys
+    assert np.all(silent["value"] > 0.5)
+    periods = silent["value"] / 0.1
+    np.testing.assert_allclose(periods, np.round(periods), atol=1e-6)
+    nominal = make_simulation(_config(), 2)
+    assert nominal.run().events_of(EventKind.V2X_SILENT).size == 0
+
+
 @pytest.fixture(scope="module")
 def faulted_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("faulted")

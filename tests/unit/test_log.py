@@ -198,6 +198,7 @@ def test_event_kind_values() -> None:
         ("PLAN_LOST", 11),
         ("SHIELD", 12),
         ("FAULT", 13),
+        ("V2X_SILENT", 14),
     ]
 
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hcomc._typing import BoolArray, FloatArray
+from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config.impairment_tables import ChannelParams
 from hcomc.interface import TrafficView
 
@@ -115,9 +115,12 @@ class Channel:
             self.known = {k: np.zeros_like(v) for k, v in state.items()}
             self.heard[:] = t
 
-    def deliver(self, t: float) -> None:
-        """Apply every message that has arrived by ``t`` (a newer state replaces an older)."""
-        keep = []
+    def deliver(self, t: float) -> tuple[IntArray, FloatArray]:
+        """Apply every message that has arrived by ``t`` (a newer state replaces an older);
+        returns the vehicles whose newest state arrived after a silence longer than
+        ``stale_after`` and the time between the broadcasts of their last two received
+        states [s]."""
+        keep, silent, silent_for = [], [], []
         for msg in self._pending:
             if msg.first > t + _EPS_T:  # nothing of it arrives yet
                 keep.append(msg)
@@ -125,6 +128,10 @@ class Channel:
             arrived = msg.arrive <= t + _EPS_T  # a state older than one received is dropped
             got = arrived & (msg.sent > self.sent)
             if got.any():
+                gap = msg.sent - self.sent
+                long = got & (gap > self.params.stale_after) & np.isfinite(gap)
+                silent.append(np.flatnonzero(long))
+                silent_for.append(gap[long])
                 for name, values in msg.state.items():
                     self.known[name][got] = values[got]
                 self.sent[got] = msg.sent
@@ -137,6 +144,9 @@ class Channel:
             if math.isfinite(msg.first):
                 keep.append(msg)
         self._pending = keep
+        if not silent:
+            return np.empty(0, dtype=np.int64), np.empty(0)
+        return np.concatenate(silent), np.concatenate(silent_for)
 
     def view(self, true_view: TrafficView) -> ChannelView:
         """What the controller knows at ``true_view.t``: the newest received states."""

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from hcomc._typing import FloatArray, IntArray
 from hcomc.config import ScenarioConfig
 from hcomc.config.impairment_tables import ChannelParams, FaultParams, ShieldParams, nominal
 from hcomc.corridor import Corridor
@@ -104,7 +105,7 @@ class Impairments(StepListener):
         if not self.channel_params.ideal:
             if (run.step_index - run.n_warmup) % self._broadcast_every == 0:
                 self.channel.broadcast(t, broadcast_state(run))
-            self.channel.deliver(t)
+            self._note_silences(run, *self.channel.deliver(t))
             self._deliver_plans(run, t)
             self._degrade(run, t)
         self.faults.act(run, t)
@@ -116,6 +117,17 @@ class Impairments(StepListener):
             run.note(EventKind.SHIELD, o.vehicle, o.other, SHIELD_ACTIONS.index(o.action))
         if commanded.size:
             self.commanded_at[run.step_index] = frozenset(commanded.tolist())
+
+    def _note_silences(self, run: ListenedRun, vehicles: IntArray, silent_for: FloatArray) -> None:
+        """A V2X_SILENT event for each key vehicle (of any merge so far) among ``vehicles``,
+        heard again after ``silent_for`` seconds (the other vehicles' silences would swamp
+        the log: a lossy channel loses thousands of messages a run)."""
+        if not vehicles.size or not run.key_groups:
+            return
+        keys = np.concatenate([g.as_array() for g in run.key_groups.values()])
+        for i, gap in zip(vehicles.tolist(), silent_for.tolist(), strict=True):
+            if i in keys:
+                run.note(EventKind.V2X_SILENT, i, -1, gap)
 
     def _note_faults(self, run: ListenedRun, t: float) -> None:
         """A FAULT event per vehicle of each fault that began to act by ``t``."""

@@ -51,6 +51,10 @@ class EventKind(enum.IntEnum):
     FAULT = 13
     """An injected fault began to act on ``vehicle`` (``[[faults]]``); ``value`` = the
     fault's index in the list."""
+    V2X_SILENT = 14
+    """The controller heard nothing new of key vehicle ``vehicle`` on the V2X channel for
+    longer than ``[v2x].stale_after`` (messages lost or late); logged when its next message
+    arrives, ``value`` = the time between the two messages' broadcasts [s]."""
 
 
 EVENT_DTYPE = np.dtype(

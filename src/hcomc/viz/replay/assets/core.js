@@ -187,7 +187,8 @@ HC.COLOURS = {
 HC.EVENT_COLOURS = {
   LANE_CHANGE_START: "#6b6b6b", LANE_CHANGE_END: "#a8a8a8", MERGE: "#1b9e77",
   COLLISION: "#e00000", RAMP_WAIT: "#e6820e", PLAN: "#7570b3", FALLBACK: "#c51b8a",
-  ZONE: "#c9a800", PLAN_LOST: "#9e9ac8", SHIELD: "#08519c", FAULT: "#a50f15",
+  ZONE: "#c9a800", PLAN_LOST: "#9e9ac8", V2X_SILENT: "#bcbddc", SHIELD: "#08519c",
+  FAULT: "#a50f15",
 };
 
 HC.fmt = function (value, digits) {

@@ -51,6 +51,9 @@ HC.Timeline = class {
       }
       if (name === "FAULT") text = "FAULT " + E.value[k] + " begins · vehicle " + E.vehicle[k];
       if (name === "PLAN_LOST") text = "PLAN LOST on the V2X channel · VR " + E.vehicle[k];
+      if (name === "V2X_SILENT") {
+        text = "V2X SILENT · nothing new of vehicle " + E.vehicle[k] + " for " + E.value[k].toFixed(1) + " s";
+      }
       if (E.text && E.text[k]) text = E.text[k];  // a corridor run's own wording
       this.marks.push({ t: E.t[k], run: run.index, colour: HC.EVENT_COLOURS[name] || "#333", text });
     }
