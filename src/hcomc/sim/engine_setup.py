@@ -100,10 +100,11 @@ class EngineSetup:
         # the engine drives with its own copy of the parameters (``driving``, which a listener
         # may change); ``fleet`` stays what the controllers know
         self.driving = dataclasses.replace(fleet, matrix=fleet.matrix.copy())
+        engine_lanes = blocked_lanes(self.lanes, demand, fleet, stalled,
+                                     config.lane_change.min_gap)  # fmt: skip
         self.arrays = build_arrays(
-            config, blocked_lanes(self.lanes, demand, fleet, stalled, config.lane_change.min_gap),
-            demand,
-            scene.release_last, self.driving, self.perception, self.log,
+            config, engine_lanes, demand, scene.release_last, self.driving, self.perception,
+            self.log,
             counterfactual=counterfactual, controlled=controller is not None,
             n_warmup=self.n_warmup, decide_every=self._decide_every, log_every=self._log_every,
         )  # fmt: skip
