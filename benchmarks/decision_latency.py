@@ -7,7 +7,13 @@ optimisation (360 candidate evaluations by default) and Eq. 19 selection. One wa
 decision per optimiser loads the compiled kernels first. The optimisers take turns on each
 planning instant (same process), so their figures are comparable under the same load.
 
-    python benchmarks/decision_latency.py [--json] [--seeds 8] [--repeats 5]
+    python benchmarks/decision_latency.py [--json] [--seeds 8] [--repeats 5] [--split]
+
+``--split`` also says where the default optimiser's decisions spend their time: the same
+decisions again under cProfile, the share of the compiled scoring of candidate rows
+(``score_rows``: rollout, objectives, constraints) and of the lane-change game, and the rest
+(the optimiser's own steps, problem set-up and selection in Python). cProfile's own cost
+inflates the Python part a little; the shares, not the times, are the figures.
 """
 
 from __future__ import annotations
@@ -77,16 +83,46 @@ def measure(optimizers: tuple[str, ...], instants: list, repeats: int) -> list[d
     return rows
 
 
+def split(instants: list, repeats: int) -> dict[str, float]:
+    """Shares [%] of NSGA-II decisions' time under cProfile: the compiled row scoring, the
+    lane-change game, and everything else."""
+    import cProfile
+    import pstats
+
+    profile = cProfile.Profile()
+    for config, view, group in instants:
+        controller = HCOMCController(config)
+        controller.plan(view, group, np.random.default_rng(0))  # warm, unprofiled
+        profile.enable()
+        for r in range(repeats):
+            controller.plan(view, group, np.random.default_rng(r))
+        profile.disable()
+    stats = pstats.Stats(profile).stats  # type: ignore[attr-defined]
+    total = sum(tt for _, _, tt, _, _ in stats.values())
+
+    def own(name: str, cumulative: bool) -> float:
+        return sum((ct if cumulative else tt) for (_, _, fn), (_, _, tt, ct, _) in stats.items()
+                   if fn == name)  # fmt: skip
+
+    scoring = own("score_rows", False) + own("score_row", False)
+    game = own("lane_change_game", True)
+    return {"row_scoring_pct": round(100 * scoring / total, 1),
+            "game_pct": round(100 * game / total, 1),
+            "rest_pct": round(100 * (total - scoring - game) / total, 1)}  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--split", action="store_true", help="where NSGA-II's time goes")
     args = parser.parse_args()
     instants = planning_instants(args.seeds)
     rows = measure(OPTIMIZERS, instants, args.repeats)
+    shares = split(instants, args.repeats) if args.split else None
     if args.json:
-        print(json.dumps({"machine": machine(), "results": rows}))
+        print(json.dumps({"machine": machine(), "results": rows, "split": shares}))
         return
     print("machine:", ", ".join(f"{k} {v}" for k, v in machine().items()))
     print(
@@ -98,6 +134,8 @@ def main() -> None:
             f"{r['optimizer']:>11} {r['decisions']:>9} {r['budget']:>6} {r['median_ms']:>10}"
             f" {r['p95_ms']:>8} {r['max_ms']:>8}"
         )
+    if shares:
+        print("nsga2 decisions:", ", ".join(f"{k} {v}" for k, v in shares.items()))
 
 
 if __name__ == "__main__":
