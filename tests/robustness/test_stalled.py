@@ -195,3 +195,24 @@ def test_a_corridor_stalls_a_vehicle_on_the_ramp_it_names(tmp_path: Path) -> Non
     others = (log.lane == lane) & log.active & (np.arange(log.x.shape[1]) != i)
     assert others.any()  # ramp vehicles came along that lane ...
     assert np.all(log.x[others] < 4800.0 + 120.0 - 5.0)  # ... and none passed it in it
+
+
+def test_falsify_moves_the_stalled_car_along_the_lane() -> None:
+    """A search from the stalled car with ``faults.0.position`` in its box: every evaluated
+    run has the car where the search put it, and the worst case's config runs again to the
+    same least TTC."""
+    from hcomc.robustness.falsify import FalsifySpec, evaluate, falsify
+
+    spec = FalsifySpec(condition="C2", controller="fifo", faults=("stalled",),
+                       space={"faults.0.position": (20.0, 240.0), "seed": (0, 50)},
+                       overrides={"duration": 60.0})  # fmt: skip
+    found = falsify(spec, 6, search_seed=1)
+    assert len(found) == 6
+    for case in found:
+        (fault,) = case.config.faults
+        assert fault.kind == "stalled_vehicle"
+        assert fault.position == pytest.approx(case.values["faults.0.position"])
+        assert 20.0 <= fault.position <= 240.0
+    worst = min(found, key=lambda c: c.least_ttc)
+    again = evaluate(spec, {**worst.values, "seed": float(worst.seed)})
+    assert again.least_ttc == worst.least_ttc
