@@ -135,10 +135,10 @@ def blocked_lanes(
     road (Eq. 4-6 as the engine starts them), so MOBIL starts none towards a standing vehicle
     nearer than that (:mod:`hcomc.sim.mobil`): a vehicle that stopped at its rear would
     wait for good. The lane is marked :data:`~hcomc.sim.lane_table.ENDS_BLOCKED`: its end
-    stops every vehicle in it, one following a merge plan or changing lanes too (Eq. 4-6
-    move a changer sideways only as it moves along, and one whose centre is still in the
-    lane would run into the stalled vehicle). ``lanes`` itself without stalled
-    vehicles."""
+    stops every vehicle in it, one following a merge plan too, and a changer whose change
+    would not be over ``3 L`` past it (Eq. 4-6 move a changer sideways only as it moves
+    along: one whose change ends later would still be in the lane at the stalled vehicle).
+    ``lanes`` itself without stalled vehicles."""
     if ids.size == 0:
         return lanes
     ints, floats = lanes.ints.copy(), lanes.floats.copy()
