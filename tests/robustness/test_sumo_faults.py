@@ -137,3 +137,39 @@ def test_the_config_tables_run_in_sumo_as_the_python_listener():
         assert _same(getattr(log, name), getattr(plain, name)), name
     assert listener.summary() == by_hand.summary()
     assert log.events_of(EventKind.FAULT)["vehicle"].tolist() == [sim.key_group.vmf]
+
+
+def test_a_stalled_vehicle_stands_in_sumo_where_our_engine_puts_it():
+    """The stalled car is added to SUMO before its first step at x = 800 m on the
+    acceleration lane: it stands there all run at speed 0, is nobody's VR, logs no
+    insertion, and no ramp vehicle passes it in its lane or runs into it."""
+    from hcomc.robustness.impairments import listeners_of
+    from hcomc.sumo.cosim import SumoSimulation
+
+    config = load_config("C2", **configuration_overrides("FIFO", {}), duration=60.0,
+                         faults=["stalled"])  # fmt: skip
+    sim = SumoSimulation(config, 1, listeners=listeners_of(config))
+    log = sim.run()
+    (i,) = sim.stalled.tolist()
+    assert log.meta["stalled"] == [i]
+    np.testing.assert_array_equal(log.x[:, i], 800.0)
+    np.testing.assert_array_equal(log.v[:, i], 0.0)
+    assert i not in sim.key_groups
+    assert i not in log.events_of(EventKind.INSERTION)["vehicle"].tolist()
+    assert log.events_of(EventKind.FAULT)["vehicle"].tolist() == [i]
+    assert log.events_of(EventKind.COLLISION).size == 0
+    others = (log.lane == 0) & log.active & (np.arange(log.x.shape[1]) != i)
+    assert others.any()
+    assert np.all(log.x[others] < 800.0 - config.road.vehicle_length)
+
+
+def test_hcomc_run_measures_a_stalled_run_in_sumo():
+    """``hcomc run --engine sumo`` with the stalled car: the paper's metrics against its
+    own undisturbed SUMO run (the same vehicle columns), the fault in the row."""
+    result = runner.invoke(app, [
+        "run", "C2", "--controller", "fifo", "--seeds", "1", "--engine", "sumo", "--workers",
+        "1", "--set", 'faults=["stalled"]', "--set", "duration=60", "--json",
+    ])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    (row,) = json.loads(result.output.strip().splitlines()[-1])
+    assert row["fault_kinds"] == "stalled_vehicle"

@@ -48,23 +48,13 @@ from hcomc.sim.lane_table import (
 from hcomc.sim.scene import Scene
 from hcomc.sim.step.state import CoreArrays
 
-__all__ = ["acceleration_lanes", "blocked_lanes", "place_stalled", "refuse_stalled",
-           "stalled_faults", "with_stalled"]  # fmt: skip
+__all__ = ["acceleration_lanes", "blocked_lanes", "place_stalled", "stalled_faults",
+           "with_stalled"]  # fmt: skip
 
 
 def stalled_faults(config: ScenarioConfig) -> list[tuple[int, FaultParams]]:
     """The ``stalled_vehicle`` entries of ``config``'s ``[[faults]]``, with their indices."""
     return [(k, f) for k, f in enumerate(config.faults) if f.kind == "stalled_vehicle"]
-
-
-def refuse_stalled(config: ScenarioConfig) -> None:
-    """A clear error for an engine without stalled vehicles (the SUMO co-simulation) given a
-    config with one."""
-    for k, _ in stalled_faults(config)[:1]:
-        raise ConfigError(
-            f"key 'faults[{k}].kind' = 'stalled_vehicle': not available on the SUMO engine; "
-            "allowed there: every other kind (run stalled vehicles on engine 'hcomc')"
-        )
 
 
 def acceleration_lanes(lanes: LaneTable) -> IntArray:

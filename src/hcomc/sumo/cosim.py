@@ -39,7 +39,7 @@ import numpy as np
 
 from hcomc.control.key_group import find_key_vehicles
 from hcomc.interface import Mode, TrafficView, follow
-from hcomc.road import Lane
+from hcomc.road import Kind, Lane
 from hcomc.sim import decision
 from hcomc.sim.lane_change_decisions import Snapshot, decide
 from hcomc.sim.log import EventKind, SimulationLog
@@ -50,7 +50,7 @@ from hcomc.sumo.cosim_plans import COMMANDED_SPEED_MODE, DEFAULT_SPEED_MODE, Cos
 from hcomc.sumo.export import export_scenario
 from hcomc.sumo.external import collision_events
 from hcomc.sumo.network import edge_at, sumo_lane_of
-from hcomc.sumo.routes import vehicle_id
+from hcomc.sumo.routes import TYPE_IDS, route_id, vehicle_id
 
 __all__ = ["SumoSimulation"]
 
@@ -68,6 +68,7 @@ class SumoSimulation(CosimPlans):
                      "--duration-log.disable", "true"]  # fmt: skip
             self.sumo.start(["sumo", "-c", str(scenario.sumocfg), *quiet])
             try:
+                self._add_stalled()
                 for _ in range(self.n_warmup):
                     self.step()
                 self._record()
@@ -89,6 +90,23 @@ class SumoSimulation(CosimPlans):
         if progress is not None:
             progress(total, total)
         return self.log
+
+    def _add_stalled(self) -> None:
+        """The run's stalled vehicles (:mod:`hcomc.sim.stalled`) into SUMO before its first
+        step, standing where our engine puts them: added on the acceleration lane at speed 0,
+        kept at 0 and making no lane change. The undisturbed run has none."""
+        if self.counterfactual:
+            return
+        veh, length = self.sumo.vehicle, self.config.road.vehicle_length
+        for i in self.stalled.tolist():
+            x, lane = float(self.demand.x[i]), int(self.demand.lane[i])
+            edge = edge_at(self.config, x, lane)
+            name = vehicle_id(i)
+            veh.add(name, route_id(edge.id), typeID=TYPE_IDS[Kind.HDV], depart="now",
+                    departLane=str(sumo_lane_of(edge, lane)),
+                    departPos=f"{max(x - edge.x0, length):.6g}", departSpeed="0")  # fmt: skip
+            veh.setLaneChangeMode(name, 0)
+            veh.setSpeed(name, 0.0)
 
     # ----------------------------------------------------------------- step
     def step(self) -> None:
@@ -142,6 +160,7 @@ class SumoSimulation(CosimPlans):
             (self.lane[ids] == Lane.RAMP)
             & ~changing[ids]
             & (self.x[ids] >= self.config.road.control_zone_start)
+            & ~np.isin(ids, self.stalled)  # no ramp vehicle: nobody plans for it
         ]
         where = f"{self.config.name}, seed {self.seed}, SUMO"
         for vr in new.tolist():
@@ -227,7 +246,6 @@ class SumoSimulation(CosimPlans):
 
     def _execute_plans(self, ids: np.ndarray, t: float) -> None:
         """Start the lane changes the live plans command (as :mod:`hcomc.sim.plan_execution`)."""
-        road = self.config.road
         changing = self.changing()
         for p in self.plans:
             g = p.plan.group
@@ -245,7 +263,7 @@ class SumoSimulation(CosimPlans):
                 continue
             if changing[vr]:  # SUMO is executing the commanded change
                 p.vr_started = True
-            elif self.x[vr] >= road.accel_lane_end - 3.0 * self.fleet.length[vr]:
+            elif self.x[vr] >= self.accel_end - 3.0 * self.fleet.length[vr]:
                 # not begun 3 lengths before the lane end (our safety criterion or SUMO's
                 # refused it): VR falls back to SUMO's own merging, as to gap acceptance
                 self._fail(p, t)
@@ -267,8 +285,9 @@ class SumoSimulation(CosimPlans):
         self.log.add_event(t, EventKind.FALLBACK, g.vr, other=g.vmc, x=self.x[g.vr])
 
     def _waiting(self, vr: int, changing: np.ndarray) -> bool:
-        """Whether ramp vehicle ``vr`` waits at its lane's end (our engine's RAMP_WAIT)."""
-        end = self.config.road.accel_lane_end
+        """Whether ramp vehicle ``vr`` waits at its lane's end (our engine's RAMP_WAIT; the
+        end before a stalled vehicle where there is one)."""
+        end = self.accel_end
         return bool(self.lane[vr] == Lane.RAMP and not changing[vr]
                     and self.v[vr] < WAIT_SPEED and self.x[vr] > end - WAIT_ZONE)  # fmt: skip
 

@@ -22,11 +22,13 @@ from hcomc.interface.listener import StepListener
 from hcomc.rng import make_rng
 from hcomc.road import Lane, lane_centre
 from hcomc.sim.demand import generate_demand
+from hcomc.sim.lane_table import L_END
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import build_manifest
 from hcomc.sim.plan_execution import ActivePlan
 from hcomc.sim.roads import paper_lanes, ramps_of
-from hcomc.sim.stalled import refuse_stalled
+from hcomc.sim.scene import Scene
+from hcomc.sim.stalled import blocked_lanes, with_stalled
 from hcomc.sumo import import_libsumo
 from hcomc.sumo.routes import vehicle_id
 
@@ -51,18 +53,15 @@ class CosimState:
         self.counterfactual = counterfactual  # the undisturbed run: ramp vehicles removed
         if config.scenario != "merge":
             raise ValueError(f"scenario = '{config.scenario}': the SUMO engine runs 'merge' only")
-        refuse_stalled(config)
         self.sumo = import_libsumo()
         self.config = config
         self.lanes = paper_lanes(config.road)  # the road's lane table, as our engine's
-        self.ramps = ramps_of(self.lanes)
-        self.stalled = np.empty(0, dtype=np.int64)  # refused above
+        self.ramps = ramps_of(self.lanes)  # the road as built, which the controllers see
         self.seed = config.seed if seed is None else seed
         self.rng = make_rng(self.seed)
         self.dt = config.dt
-        self.demand = generate_demand(config, self.rng)  # same draws as our engine
+        self._draw_traffic()
         n = self.demand.n
-        self.fleet = Fleet.build(config, self.demand.kind, self.demand.scripted)
         # the parameters SUMO's vehicles drive with (a listener may change them; ``fleet``
         # stays what the controllers know), and those each SUMO vehicle was last given
         self.driving = dataclasses.replace(self.fleet, matrix=self.fleet.matrix.copy())
@@ -104,10 +103,25 @@ class CosimState:
             self.n_steps // self._log_every + 1, n, dt=config.log_interval,
             kind=self.demand.kind, length=self.fleet.length, width=self.fleet.width, meta=meta,
         )  # fmt: skip
+        if self.stalled.size:
+            self.log.meta["stalled"] = self.stalled.tolist()
         self._rows = 0
         self.listeners = tuple(listeners)
         for listener in self.listeners:
             listener.attach(self)  # type: ignore[arg-type]  # SumoSimulation is a ListenedRun
+
+    def _draw_traffic(self) -> None:
+        """The demand and fleet, the same draws as our engine's, with the stalled vehicles
+        (:mod:`hcomc.sim.stalled`) as its last columns; where the acceleration lane ends
+        for the vehicles on it (before a stalled vehicle, where one stands)."""
+        config = self.config
+        demand = generate_demand(config, self.rng)
+        fleet = Fleet.build(config, demand.kind, demand.scripted)
+        scene, self.stalled = with_stalled(Scene(self.lanes, demand, fleet), config)
+        self.demand, self.fleet = scene.demand, scene.fleet
+        lanes = blocked_lanes(self.lanes, self.demand, self.fleet, self.stalled,
+                              config.lane_change.min_gap)  # fmt: skip
+        self.accel_end = float(lanes.floats[L_END, Lane.RAMP])
 
     @staticmethod
     def _sumo_version() -> str:
@@ -142,6 +156,8 @@ class CosimState:
             if self.counterfactual and ramp[i]:
                 veh.remove(name)  # the undisturbed run: nothing merges
                 continue
+            if i in self.stalled:
+                continue  # it stands from the start, released by no demand (as in our engine)
             self.log.add_event(t, EventKind.INSERTION, i, x=float(self.demand.x[i]),
                                value=t - float(self.demand.t[i]))  # fmt: skip
         for name in sim.getArrivedIDList():
