@@ -97,14 +97,14 @@ class SumoSimulation(CosimPlans):
         kept at 0 and making no lane change. The undisturbed run has none."""
         if self.counterfactual:
             return
-        veh, length = self.sumo.vehicle, self.config.road.vehicle_length
+        veh = self.sumo.vehicle
         for i in self.stalled.tolist():
             x, lane = float(self.demand.x[i]), int(self.demand.lane[i])
-            edge = edge_at(self.config, x, lane)
+            edge = edge_at(self.config, x, lane)  # its front at least a length into the edge
             name = vehicle_id(i)
             veh.add(name, route_id(edge.id), typeID=TYPE_IDS[Kind.HDV], depart="now",
-                    departLane=str(sumo_lane_of(edge, lane)),
-                    departPos=f"{max(x - edge.x0, length):.6g}", departSpeed="0")  # fmt: skip
+                    departLane=str(sumo_lane_of(edge, lane)), departPos=f"{x - edge.x0:.6g}",
+                    departSpeed="0")  # fmt: skip
             veh.setLaneChangeMode(name, 0)
             veh.setSpeed(name, 0.0)
 
