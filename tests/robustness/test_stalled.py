@@ -157,7 +157,8 @@ def test_hcomc_run_measures_a_stalled_run_through_the_cli(tmp_path: Path) -> Non
 @pytest.mark.parametrize(
     ("text", "named"),
     [
-        ("position = 300.0", "key 'faults[0].position' = 300.0: allowed: 5 (a vehicle length)"),
+        ("position = 300.0", "key 'faults[0].position' = 300.0: allowed: 24 to 250 m past"),
+        ("position = 20.0", "key 'faults[0].position' = 20.0: allowed: 24 to 250 m past"),
         ("ramp = 1", "key 'faults[0].ramp' = 1: the road has 1 on-ramp(s); allowed: 0 to 0"),
     ],
 )
@@ -204,7 +205,7 @@ def test_falsify_moves_the_stalled_car_along_the_lane() -> None:
     from hcomc.robustness.falsify import FalsifySpec, evaluate, falsify
 
     spec = FalsifySpec(condition="C2", controller="fifo", faults=("stalled",),
-                       space={"faults.0.position": (20.0, 240.0), "seed": (0, 50)},
+                       space={"faults.0.position": (30.0, 240.0), "seed": (0, 50)},
                        overrides={"duration": 60.0})  # fmt: skip
     found = falsify(spec, 6, search_seed=1)
     assert len(found) == 6
@@ -212,7 +213,20 @@ def test_falsify_moves_the_stalled_car_along_the_lane() -> None:
         (fault,) = case.config.faults
         assert fault.kind == "stalled_vehicle"
         assert fault.position == pytest.approx(case.values["faults.0.position"])
-        assert 20.0 <= fault.position <= 240.0
+        assert 30.0 <= fault.position <= 240.0
     worst = min(found, key=lambda c: c.least_ttc)
     again = evaluate(spec, {**worst.values, "seed": float(worst.seed)})
     assert again.least_ttc == worst.least_ttc
+
+
+@pytest.mark.parametrize("controller", ["fifo", "hcomc"])
+def test_at_the_least_position_the_ramp_vehicles_still_merge(controller: str) -> None:
+    """The least position allowed (24 m among 5 m cars: its length 5, 3 x 5 to steer around
+    it, MOBIL's min_gap 2, the jam distance s0 2) leaves a place to merge before the car:
+    VR merges, nobody collides."""
+    config = load_config("C2", control={"controller": controller},
+                         faults=[{"kind": "stalled_vehicle", "position": 24.0}])  # fmt: skip
+    sim = _run(config)
+    assert sim.key_group is not None
+    assert sim.key_group.vr in sim.log.events_of(EventKind.MERGE)["vehicle"].tolist()
+    assert sim.log.events_of(EventKind.COLLISION).size == 0

@@ -163,7 +163,8 @@ class FaultParams(FrozenModel):
     position: float = Field(
         100.0, gt=0, le=10_000,
         description="stalled_vehicle: its front bumper's distance past the acceleration "
-        "lane's start [m]; at least a vehicle length, at most the lane's length",
+        "lane's start [m]; at most the lane's length, at least its length plus the room a "
+        "vehicle stopped before it needs to steer around it (24 m among 5 m cars)",
     )  # fmt: skip
     ramp: int = Field(
         0, ge=0, le=63, description="stalled_vehicle: which on-ramp (0: the first) [-]"

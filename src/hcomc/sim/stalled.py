@@ -48,8 +48,8 @@ from hcomc.sim.lane_table import (
 from hcomc.sim.scene import Scene
 from hcomc.sim.step.state import CoreArrays
 
-__all__ = ["acceleration_lanes", "blocked_lanes", "place_stalled", "stalled_faults",
-           "with_stalled"]  # fmt: skip
+__all__ = ["acceleration_lanes", "blocked_lanes", "least_position", "place_stalled",
+           "room_to_steer", "stalled_faults", "with_stalled"]  # fmt: skip
 
 
 def stalled_faults(config: ScenarioConfig) -> list[tuple[int, FaultParams]]:
@@ -66,11 +66,10 @@ def acceleration_lanes(lanes: LaneTable) -> IntArray:
                     dtype=np.int64)  # fmt: skip
 
 
-def _placement(
-    config: ScenarioConfig, lanes: LaneTable, k: int, f: FaultParams
-) -> tuple[int, float]:
+def _placement(lanes: LaneTable, k: int, f: FaultParams, least: float) -> tuple[int, float]:
     """(lane code, front position [m]) of stalled vehicle entry ``k``, checked against the
-    road: a clear error naming the key when the ramp or the position does not exist."""
+    road: a clear error naming the key when the ramp does not exist or the position is not
+    on its acceleration lane at least ``least`` past its start (:func:`least_position`)."""
     codes = acceleration_lanes(lanes)
     if f.ramp >= codes.size:
         raise ConfigError(
@@ -79,13 +78,30 @@ def _placement(
         )
     code = int(codes[f.ramp])
     start, end = float(lanes.floats[L_OPENS, code]), float(lanes.floats[L_END, code])
-    length = config.road.vehicle_length
-    if not length <= f.position <= end - start:
+    if not least <= f.position <= end - start:
         raise ConfigError(
-            f"key 'faults[{k}].position' = {f.position}: allowed: {length:g} (a vehicle "
-            f"length) to {end - start:g} m past the acceleration lane's start (its length)"
+            f"key 'faults[{k}].position' = {f.position}: allowed: {least:g} to "
+            f"{end - start:g} m past the acceleration lane's start (nearer its start a ramp "
+            "vehicle stopped before the stalled car could not steer around it; the lane "
+            "ends at the upper bound)"
         )
     return code, start + f.position
+
+
+def room_to_steer(fleet: Fleet, min_gap: float) -> float:
+    """[m] How far before a stalled vehicle's rear a vehicle must stop to steer around it:
+    ``3 L + min_gap``, L the longest vehicle (:data:`~hcomc.sim.lane_table.MIN_CHANGE_LENGTHS`
+    of road for a lane change from a standstill, MOBIL's ``min_gap`` to the vehicle ahead)."""
+    return MIN_CHANGE_LENGTHS * float(fleet.length.max()) + min_gap
+
+
+def least_position(fleet: Fleet, config: ScenarioConfig) -> float:
+    """[m] The least ``position`` of a stalled vehicle past its acceleration lane's start
+    that lets the ramp vehicles merge before it: its length, the room to steer around it
+    (:func:`room_to_steer`) and the jam distance s0 at which a vehicle stops before the lane's
+    end, so that it stops where it may leave the lane."""
+    return (config.road.vehicle_length + room_to_steer(fleet, config.lane_change.min_gap)
+            + float(fleet.s0.max()))  # fmt: skip
 
 
 def with_stalled(scene: Scene, config: ScenarioConfig) -> tuple[Scene, IntArray]:
@@ -95,7 +111,12 @@ def with_stalled(scene: Scene, config: ScenarioConfig) -> tuple[Scene, IntArray]
     entries = stalled_faults(config)
     if not entries:
         return scene, np.empty(0, dtype=np.int64)
-    placed = [_placement(config, scene.lanes, k, f) for k, f in entries]
+    extra = Fleet.build(config, np.full(len(entries), Kind.HDV), np.zeros(len(entries), bool))
+    fleet = Fleet(**{f.name: np.concatenate([getattr(scene.fleet, f.name),
+                                             getattr(extra, f.name)], axis=-1)
+                     for f in dataclasses.fields(Fleet)})  # fmt: skip
+    least = least_position(fleet, config)
+    placed = [_placement(scene.lanes, k, f, least) for k, f in entries]
     m, d = len(placed), scene.demand
     ids = np.arange(d.n, d.n + m, dtype=np.int64)
     lane = np.array([code for code, _ in placed], dtype=d.lane.dtype)
@@ -106,10 +127,6 @@ def with_stalled(scene: Scene, config: ScenarioConfig) -> tuple[Scene, IntArray]
         scripted=np.append(d.scripted, np.zeros(m, dtype=bool)),
         route=np.append(d.route, np.full(m, -1, dtype=d.route.dtype)),
     )  # fmt: skip
-    extra = Fleet.build(config, demand.kind[ids], demand.scripted[ids])
-    fleet = Fleet(**{f.name: np.concatenate([getattr(scene.fleet, f.name),
-                                             getattr(extra, f.name)], axis=-1)
-                     for f in dataclasses.fields(Fleet)})  # fmt: skip
     vclass = np.append(scene.vclass, np.zeros(m, dtype=np.int64)) if scene.classes else (
         scene.vclass)  # fmt: skip
     return dataclasses.replace(scene, demand=demand, fleet=fleet, vclass=vclass), ids
@@ -132,11 +149,10 @@ def blocked_lanes(
     if ids.size == 0:
         return lanes
     ints, floats = lanes.ints.copy(), lanes.floats.copy()
-    room = MIN_CHANGE_LENGTHS * float(fleet.length.max()) + min_gap
+    room = room_to_steer(fleet, min_gap)
     for i in ids.tolist():
         code = int(demand.lane[i])
-        end = demand.x[i] - fleet.length[i] - room
-        floats[L_END, code] = max(min(floats[L_END, code], end), floats[L_OPENS, code])
+        floats[L_END, code] = min(floats[L_END, code], demand.x[i] - fleet.length[i] - room)
         ints[L_ENDS, code] = ENDS_BLOCKED
     return lanes._replace(ints=ints, floats=floats)
 
