@@ -23,6 +23,7 @@ from hcomc.sim.engine import Simulation
 from hcomc.sim.lane_table import ENDS_BLOCKED, L_END, L_ENDS, L_OPENS, MIN_CHANGE_LENGTHS
 from hcomc.sim.log import EventKind
 from hcomc.sim.stalled import acceleration_lanes
+from hcomc.viz.replay.browser import Chromium, find_chromium
 
 runner = CliRunner()
 
@@ -230,3 +231,42 @@ def test_at_the_least_position_the_ramp_vehicles_still_merge(controller: str) ->
     assert sim.key_group is not None
     assert sim.key_group.vr in sim.log.events_of(EventKind.MERGE)["vehicle"].tolist()
     assert sim.log.events_of(EventKind.COLLISION).size == 0
+
+
+def _stalled_page(tmp_path: Path) -> tuple[Path, Simulation]:
+    from hcomc.viz.replay import write_replay
+
+    sim = _run(_config("fifo", duration=40.0))
+    return write_replay(tmp_path / "stalled.html", [sim.log], titles=["stalled"]), sim
+
+
+def test_the_replay_labels_the_stalled_car(tmp_path: Path) -> None:
+    """The replay's roles give the stalled car the role STALLED over the whole run, beside
+    the key roles."""
+    from hcomc.viz.replay.decisions import ROLE_NAMES, decisions_json
+
+    page, sim = _stalled_page(tmp_path)
+    (i,) = sim.stalled.tolist()
+    roles = decisions_json(sim.log, sim.config.road.lane_width)["roles"]
+    assert roles["names"] == list(ROLE_NAMES)
+    mine = [k for k, v in enumerate(roles["vehicle"]) if v == i]
+    assert [roles["names"][roles["role"][k]] for k in mine] == ["STALLED"]
+    (k,) = mine
+    assert roles["t0"][k] == float(sim.log.t[0])
+    assert roles["t1"][k] == float(sim.log.t[sim.log.n_recorded - 1])
+    assert '"STALLED"' in page.read_text(encoding="utf-8")
+
+
+@pytest.mark.skipif(find_chromium() is None, reason="chromium is not installed (CI installs "
+                    "Debian's package in .ci/run)")  # fmt: skip
+def test_the_replay_panel_says_what_the_stalled_car_is(tmp_path: Path) -> None:
+    """In Chromium: hovering the stalled car names it, mid-run."""
+    page, sim = _stalled_page(tmp_path)
+    (i,) = sim.stalled.tolist()
+    with Chromium(1280, 900) as chrome:
+        chrome.open(page.resolve().as_uri())
+        assert chrome.evaluate("window.hcomcReplay && hcomcReplay.ready") is True
+        chrome.evaluate(f"hcomcReplay.seek({float(sim.log.t[200])!r})")
+        text = chrome.evaluate(f"hcomcReplay.hover({i}, 0)")
+        assert "role STALLED (a broken-down car no controller plans for)" in text
+        assert chrome.console_errors == []

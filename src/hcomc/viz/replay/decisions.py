@@ -29,9 +29,12 @@ from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.log.plans import PlanRecord, plan_records
 
 __all__ = [
-    "PlanSpan", "decisions_json", "json_ready", "moment_of_interest", "plan_spans",
-    "timeline_events",
+    "ROLE_NAMES", "PlanSpan", "decisions_json", "json_ready", "moment_of_interest",
+    "plan_spans", "timeline_events",
 ]  # fmt: skip
+
+ROLE_NAMES = (*KEY_ROLES, "STALLED")
+"""The roles the replay labels: the key roles of Section II-A, then a stalled vehicle."""
 
 MERGE_PATH_POINTS = 25
 """Points of a plan's drawn merge path (the quintic of Eqs. 4-6)."""
@@ -151,7 +154,9 @@ def _roles(log: SimulationLog, spans: list[PlanSpan]) -> list[tuple[int, int, fl
     """(vehicle, role index, from, to, plan) of the key roles, in order of their start (a
     later entry overrides an earlier one for the same vehicle): each key group from the VR's
     entry into the control zone (plan -1), each plan's group from its decision (its index),
-    until the VR is planned anew or leaves the road."""
+    until the VR is planned anew or leaves the road; before them a stalled vehicle
+    (:mod:`hcomc.sim.stalled`) as the role after the key roles (:data:`ROLE_NAMES`), all
+    run."""
     t_last = float(log.t[log.n_recorded - 1]) if log.n_recorded else 0.0
     events = log.events
     groups = [(float(g["t"]), -1, {r: int(g.get(r, -1)) for r in KEY_ROLES})
@@ -170,7 +175,9 @@ def _roles(log: SimulationLog, spans: list[PlanSpan]) -> list[tuple[int, int, fl
             k = group.get(role, -1)
             if k >= 0:
                 out.append((k, role_index, t0, end, plan))
-    return out
+    t_first = float(log.t[0]) if log.n_recorded else 0.0
+    stalled = [(int(i), len(KEY_ROLES), t_first, t_last, -1) for i in log.meta.get("stalled", [])]
+    return stalled + out
 
 
 def timeline_events(log: SimulationLog) -> dict[str, Any]:
@@ -220,7 +227,7 @@ def decisions_json(log: SimulationLog, lane_width: float) -> dict[str, Any]:
         "plans": plans,
         "roles": {"vehicle": [r[0] for r in roles], "role": [r[1] for r in roles],
                   "t0": [r[2] for r in roles], "t1": [r[3] for r in roles],
-                  "plan": [r[4] for r in roles], "names": list(KEY_ROLES)},
+                  "plan": [r[4] for r in roles], "names": list(ROLE_NAMES)},
         "commanded": {"vehicle": [c[0] for c in commanded], "role": [c[1] for c in commanded],
                       "t0": [c[2] for c in commanded], "t1": [c[3] for c in commanded],
                       "what": [c[4] for c in commanded]},

@@ -177,7 +177,7 @@ HC.isLive = function (p, t) {
   return p.start <= t && (t < p.end || (p.ended === "end of run" && t <= p.end));
 };
 
-HC.ROLE_NAMES = ["VR", "VMC", "VMF", "VMR", "VNF", "VNR"];
+HC.ROLE_NAMES = ["VR", "VMC", "VMF", "VMR", "VNF", "VNR", "STALLED"];
 HC.KIND_NAMES = ["HDV", "CAV"];
 HC.COLOURS = {
   kind: ["#d95f02", "#1b9e77"], ghost: "#7570b3", verge: "#eef3e8", asphalt: "#d9d9d9",

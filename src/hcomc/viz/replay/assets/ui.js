@@ -249,7 +249,9 @@ HC.App = class {
     if (idx < 0) return head + "\nnot on the road at t = " + this.t.toFixed(2) + " s";
     const k = r.cmdOf[id], plan = r.rolePlan[id];
     const vr = r.roleVR[id], of = r.roleOf[id] > 0 && vr >= 0 ? " of VR " + vr : "";
-    const role = r.roleOf[id] < 0 ? "–" : HC.ROLE_NAMES[r.roleOf[id]] + of +
+    const name = HC.ROLE_NAMES[r.roleOf[id]];
+    const role = r.roleOf[id] < 0 ? "–" : name === "STALLED" ?
+      "STALLED (a broken-down car no controller plans for)" : name + of +
       (plan >= 0 ? " of plan " + (plan + 1) : " at VR's control-zone entry");
     return [head,
       "t " + this.t.toFixed(2) + " s · x " + r.x[idx].toFixed(2) + " m · lane " + r.lane[idx],
