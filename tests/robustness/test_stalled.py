@@ -18,6 +18,7 @@ from hcomc.corridor import load_corridor
 from hcomc.experiments.runner import RunSpec, make_simulation
 from hcomc.metrics.corridor import simulate_corridor
 from hcomc.metrics.ramp import ramp_summary
+from hcomc.road import Kind
 from hcomc.robustness.impairments import listeners_of
 from hcomc.sim.engine import Simulation
 from hcomc.sim.lane_table import ENDS_BLOCKED, L_END, L_ENDS, L_OPENS, MIN_CHANGE_LENGTHS
@@ -197,6 +198,30 @@ def test_a_corridor_stalls_a_vehicle_on_the_ramp_it_names(tmp_path: Path) -> Non
     others = (log.lane == lane) & log.active & (np.arange(log.x.shape[1]) != i)
     assert others.any()  # ramp vehicles came along that lane ...
     assert np.all(log.x[others] < 4800.0 + 120.0 - 5.0)  # ... and none passed it in it
+    assert i not in measured.trips["id"].tolist()  # nobody's trip, nobody waiting to enter
+
+
+def test_a_corridor_replay_draws_and_labels_the_stalled_car(tmp_path: Path) -> None:
+    """``hcomc simulate`` of a corridor with trajectories, then its replay: the stalled car
+    has a size (it is drawn) and the role STALLED over the whole run."""
+    from hcomc.metrics.corridor.record import read_corridor_run
+    from hcomc.viz.replay.corridor_run import _fleet, corridor_run_json
+
+    road = tmp_path / "short.toml"
+    road.write_text('base = "corridor"\n[corridor]\nduration = 60.0\n[[faults]]\n'
+                    'kind = "stalled_vehicle"\nposition = 120.0\n', encoding="utf-8")  # fmt: skip
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["simulate", str(road), "--trajectory-interval", "1",
+                                 "--out", str(out)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    record = read_corridor_run(out)
+    i = len(record.trips)  # after every trip
+    page = corridor_run_json(record, "stalled")
+    roles = page["roles"]
+    (k,) = [k for k, v in enumerate(roles["vehicle"]) if v == i]
+    assert roles["names"][roles["role"][k]] == "STALLED"
+    kind, length, width = _fleet(record, page["vehicles"])
+    assert (kind[i], length[i], width[i]) == (Kind.HDV, 5.0, 1.8)  # the engine's car
 
 
 def test_falsify_moves_the_stalled_car_along_the_lane() -> None:

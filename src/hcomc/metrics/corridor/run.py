@@ -183,19 +183,22 @@ def simulate_corridor(
 
 def _released(c: Corridor, sim: Simulation) -> Released:
     """Who the run of corridor ``c`` released: its scene's demand and vehicle classes, with
-    origins and destinations named by the lanes they release into and leave by."""
+    origins and destinations named by the lanes they release into and leave by. A stalled
+    vehicle (:mod:`hcomc.sim.stalled`, the scene's last indices) is nobody's trip."""
     scene = sim.scene
+    n = scene.demand.n - sim.stalled.size
     named = {code: ramp for ramp, code in ramp_codes(c.road).items()}
     origins = tuple(c.demand)
     destinations = ("exit", *(r.id for r in c.road.off_ramps))
-    origin = [origins.index(named.get(code, "main")) for code in scene.demand.lane.tolist()]
-    leave = [destinations.index(named.get(code, "exit")) for code in scene.demand.route.tolist()]
+    origin = [origins.index(named.get(code, "main")) for code in scene.demand.lane[:n].tolist()]
+    leave = [destinations.index(named.get(code, "exit"))
+             for code in scene.demand.route[:n].tolist()]  # fmt: skip
     return Released(
         origins=origins, destinations=destinations, classes=scene.classes,
         origin=np.array(origin, dtype=np.int64), destination=np.array(leave, dtype=np.int64),
-        vclass=scene.vclass, cav=scene.fleet.kind == int(Kind.CAV),
-        depart=scene.demand.t + sim.config.warmup, desired=scene.fleet.matrix[0],
-        length=scene.fleet.length,
+        vclass=scene.vclass[:n], cav=scene.fleet.kind[:n] == int(Kind.CAV),
+        depart=scene.demand.t[:n] + sim.config.warmup, desired=scene.fleet.matrix[0, :n],
+        length=scene.fleet.length[:n],
     )  # fmt: skip
 
 

@@ -34,7 +34,7 @@ from hcomc.metrics.corridor.record import CorridorRecord, Trajectories
 from hcomc.road import KEY_ROLES, Kind
 from hcomc.sim.log import EventKind
 from hcomc.viz.replay.corridor_road import corridor_road_shapes
-from hcomc.viz.replay.decisions import json_ready
+from hcomc.viz.replay.decisions import ROLE_NAMES, json_ready
 from hcomc.viz.replay.pack import STEPS, Columns, pack_fleet, pack_samples, partition
 
 __all__ = ["SHIFT_STEP", "corridor_moment", "corridor_run_json", "merge_table"]
@@ -54,8 +54,18 @@ def _layout(samples: Trajectories, n_vehicles: int) -> tuple[Columns, np.ndarray
     return partition(first, last), samples.step - s0, s0
 
 
+def _stalled(record: CorridorRecord) -> np.ndarray:
+    """The ids of the run's stalled vehicles (:mod:`hcomc.sim.stalled`): after every trip,
+    one per ``stalled_vehicle`` entry of its ``[[faults]]``."""
+    count = sum(f.kind == "stalled_vehicle" for f in record.corridor.faults)
+    return len(record.trips) + np.arange(count, dtype=np.int64)
+
+
 def _fleet(record: CorridorRecord, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Kind, length and width [m] of vehicles 0 .. n - 1 (from their class)."""
+    """Kind, length and width [m] of vehicles 0 .. n - 1 (from their class; a stalled
+    vehicle an HDV of the engine's size)."""
+    from hcomc.sim.corridor_scene import corridor_config
+
     kind, length, width = np.zeros(n, dtype=np.int8), np.full(n, np.nan), np.full(n, np.nan)
     trips = record.trips
     classes = record.vehicle_classes()
@@ -63,6 +73,12 @@ def _fleet(record: CorridorRecord, n: int) -> tuple[np.ndarray, np.ndarray, np.n
     kind[ids] = np.where(trips["cav"].to_numpy(dtype=bool), int(Kind.CAV), int(Kind.HDV))
     length[ids] = classes.map(lambda c: c.length).to_numpy(dtype=np.float64)
     width[ids] = classes.map(lambda c: c.width).to_numpy(dtype=np.float64)
+    stalled = _stalled(record)
+    stalled = stalled[stalled < n]
+    if stalled.size:
+        road = corridor_config(record.corridor).road
+        kind[stalled], length[stalled], width[stalled] = Kind.HDV, road.vehicle_length, (
+            road.vehicle_width)  # fmt: skip
     return kind, length, width
 
 
@@ -120,6 +136,8 @@ def _timeline(record: CorridorRecord, merges: list[dict[str, Any]], last_seen: n
         marks.append((float(c["t"]), int(EventKind.COLLISION), one, other, text))
     marks.sort(key=lambda m: m[0])
     roles.sort(key=lambda r: r[0])
+    stalled = _stalled(record)  # labelled all run, before the key roles
+    roles = [(0.0, int(i), len(KEY_ROLES), t_end, -1) for i in stalled.tolist()] + roles
     events: dict[str, Any] = {
         "names": {int(k): k.name for k in EventKind},
         "t": [m[0] for m in marks], "kind": [m[1] for m in marks],
@@ -131,7 +149,7 @@ def _timeline(record: CorridorRecord, merges: list[dict[str, Any]], last_seen: n
     table: dict[str, Any] = {
         "vehicle": [r[1] for r in roles], "role": [r[2] for r in roles],
         "t0": [r[0] for r in roles], "t1": [r[3] for r in roles], "plan": [-1] * len(roles),
-        "vr": [r[4] for r in roles], "names": list(KEY_ROLES),
+        "vr": [r[4] for r in roles], "names": list(ROLE_NAMES),
     }  # fmt: skip
     return events, table
 
