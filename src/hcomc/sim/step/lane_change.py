@@ -126,8 +126,9 @@ def discretionary_changes(
     c: CoreArrays, ids: np.ndarray, changing: np.ndarray, holding: np.ndarray, lead: np.ndarray,
     index: LaneIndex,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The lane changes vehicles free to change now (not changing, not scripted, not holding
-    their lane for a plan) take of their own accord, decided by MOBIL
+    """The lane changes vehicles free to change now (not changing, a change a plan started
+    in this step included; not scripted, not holding their lane for a plan) take of their own
+    accord, decided by MOBIL
     (:func:`hcomc.sim.mobil.mobil_decide_into`): a ramp vehicle's merge where its lane lets
     it leave (on the acceleration lane, by gap acceptance); on the mainline the change its
     lane or route needs (:func:`hcomc.sim.step.road.needed_change`, by gap acceptance), else
@@ -140,9 +141,11 @@ def discretionary_changes(
     ints, floats, route, scripted = road.ints, road.floats, c.route, c.scripted
     lanes, xs = c.lane, c.x
     m = 0
+    origin, target_of = c.origin, c.target
     for k in range(ids.size):
         i = ids[k]
-        if changing[k] or scripted[i] or holding[i]:
+        # changing: since the step began, or since a plan started its change in this step
+        if changing[k] or origin[i] != target_of[i] or scripted[i] or holding[i]:
             continue
         lane, x, exit_code = lanes[i], xs[i], route[i]
         kind = ints[L_KIND, lane]
