@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -52,9 +53,9 @@ __all__ = ["acceleration_lanes", "blocked_lanes", "least_position", "place_stall
            "room_to_steer", "stalled_faults", "with_stalled"]  # fmt: skip
 
 
-def stalled_faults(config: ScenarioConfig) -> list[tuple[int, FaultParams]]:
-    """The ``stalled_vehicle`` entries of ``config``'s ``[[faults]]``, with their indices."""
-    return [(k, f) for k, f in enumerate(config.faults) if f.kind == "stalled_vehicle"]
+def stalled_faults(faults: Sequence[FaultParams]) -> list[tuple[int, FaultParams]]:
+    """The ``stalled_vehicle`` entries of a ``[[faults]]`` list, with their indices."""
+    return [(k, f) for k, f in enumerate(faults) if f.kind == "stalled_vehicle"]
 
 
 def acceleration_lanes(lanes: LaneTable) -> IntArray:
@@ -108,7 +109,7 @@ def with_stalled(scene: Scene, config: ScenarioConfig) -> tuple[Scene, IntArray]
     """``scene`` with ``config``'s stalled vehicles appended to its demand and fleet (an
     HDV each, parameters of the scenario's HDVs, released never: :func:`place_stalled` puts
     them on the road), and their indices; ``scene`` itself when there are none."""
-    entries = stalled_faults(config)
+    entries = stalled_faults(config.faults)
     if not entries:
         return scene, np.empty(0, dtype=np.int64)
     extra = Fleet.build(config, np.full(len(entries), Kind.HDV), np.zeros(len(entries), bool))

@@ -33,6 +33,7 @@ from hcomc.corridor.layout import code_poses
 from hcomc.metrics.corridor.record import CorridorRecord, Trajectories
 from hcomc.road import KEY_ROLES, Kind
 from hcomc.sim.log import EventKind
+from hcomc.sim.stalled import stalled_faults
 from hcomc.viz.replay.corridor_road import corridor_road_shapes
 from hcomc.viz.replay.decisions import ROLE_NAMES, json_ready
 from hcomc.viz.replay.pack import STEPS, Columns, pack_fleet, pack_samples, partition
@@ -57,7 +58,7 @@ def _layout(samples: Trajectories, n_vehicles: int) -> tuple[Columns, np.ndarray
 def _stalled(record: CorridorRecord) -> np.ndarray:
     """The ids of the run's stalled vehicles (:mod:`hcomc.sim.stalled`): after every trip,
     one per ``stalled_vehicle`` entry of its ``[[faults]]``."""
-    count = sum(f.kind == "stalled_vehicle" for f in record.corridor.faults)
+    count = len(stalled_faults(record.corridor.faults))
     return len(record.trips) + np.arange(count, dtype=np.int64)
 
 
