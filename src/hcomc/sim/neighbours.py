@@ -25,7 +25,6 @@ from hcomc.sim.arrays import search_right, sort_runs, stable_argsort_into
 OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
-_BY_LANE_FROM = 24  # entries; up to this many, one insertion sort is faster than by lane
 
 
 @kernel
@@ -54,7 +53,7 @@ def sort_entries_into(
     key = key[:n]
     for p in range(n):
         key[p] = lane[p] * OFFSET + x[p]
-    if n <= _BY_LANE_FROM or not _order_by_lane(lane, key, order, buffer):
+    if not _order_by_lane(lane, key, order, buffer):
         order = stable_argsort_into(key, order, buffer)
     rank, vehicle_out, lane_out, key_out = rank[:n], vehicle_out[:n], lane_out[:n], key_out[:n]
     for p in range(n):
