@@ -17,7 +17,7 @@ from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import LaneChangeParams
 from hcomc.interface import Fleet
 from hcomc.sim.lane_table import LaneTable
-from hcomc.sim.mobil import Candidates, MobilWork, Traffic, mobil_decide_into
+from hcomc.sim.mobil import NOT_KNOWN, Candidates, MobilWork, Traffic, mobil_decide_into
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.step.lane_change import free_target
 
@@ -61,7 +61,8 @@ def decide(
     force = np.zeros(cand.size, dtype=bool) if force is None else np.asarray(force, dtype=bool)
     ints, flags = np.empty((4, cand.size), dtype=np.int64), np.empty((2, cand.size), dtype=bool)
     m = mobil_decide_into(
-        Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a),
+        Traffic(fleet.matrix, fleet.iidm, fleet.length, snap.x, snap.v, snap.a,
+                np.empty(snap.x.size), np.full(snap.x.size, NOT_KNOWN)),
         index,
         Candidates(cand, lane, _ints(leader), _ints(follower), _ints(target), force,
                    np.zeros(cand.size)),

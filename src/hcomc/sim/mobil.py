@@ -17,7 +17,9 @@ c, new follower n and old follower o (a tilde means after the change):
   ``ã_c - a_c + p [(ã_n - a_n) + (ã_o - a_o)] > Delta a_th + bias`` to the left and
   ``> Delta a_th - bias`` to the right (keep-right rule).
 
-Accelerations are model accelerations with exact perception (the decision, not the control).
+Accelerations are model accelerations with exact perception (the decision, not the control);
+one the simulation step's car following has already taken from the same inputs (a vehicle
+behind the same leader, not perceiving Eq. 2: ``Traffic.known``) is reused, the same value.
 Simultaneous changes that would meet are resolved so at most one enters each gap: a change is
 dropped if its new leader or new follower changes lane in the same round with a higher
 priority (ramp vehicles first, then downstream first), or another change with higher priority
@@ -53,6 +55,13 @@ class Traffic(NamedTuple):
     x: np.ndarray  # front-bumper position [m]
     v: np.ndarray  # speed [m/s]
     a: np.ndarray  # acceleration [m/s^2]
+    known: np.ndarray  # the model acceleration already taken from these exact inputs ...
+    known_leader: np.ndarray  # int64: ... behind this leader (-1: free road; NOT_KNOWN: none)
+
+
+NOT_KNOWN = -2
+"""``Traffic.known_leader`` of a vehicle whose model acceleration from exact inputs was not
+taken (an HDV that perceives Eq. 2, or a caller that keeps none)."""
 
 
 class Candidates(NamedTuple):
@@ -93,7 +102,7 @@ def mobil_decide_into(
     the sorted entries of the snapshot.
     """
     key, lane_of, vehicle = index.key, index.lane, index.vehicle
-    matrix, iidm, length, x, v, a = traffic
+    matrix, iidm, length, x, v, a, known, known_leader = traffic
     cand, lane, leader, follower, target, force, urgency = candidates
     ints, flags, floats, margin = work
     min_gap, b_safe, politeness = params[LC_MIN_GAP], params[LC_SAFE_DECEL], params[LC_POLITENESS]
@@ -111,6 +120,8 @@ def mobil_decide_into(
         """Model acceleration of i behind j (free road for j = -1; 0 for i = -1)."""
         if i < 0:
             return 0.0
+        if known_leader[i] == j:  # taken this step behind j from these inputs
+            return known[i]
         if j >= 0:
             s, vl, al = x[j] - length[j] - x[i], v[j], a[j]
         else:

@@ -14,6 +14,7 @@ from hcomc.sim.lane_change_decisions import lane_change_params
 from hcomc.sim.lane_table import KIND_ON, L_CENTRE, L_KIND, L_SPEED, LaneTable
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.manifest import build_manifest
+from hcomc.sim.mobil import NOT_KNOWN
 from hcomc.sim.perception_state import Perception
 from hcomc.sim.step import state as layout
 from hcomc.sim.step.plans import N_FLOAT, N_INT
@@ -134,6 +135,8 @@ def build_arrays(
     n_events = max(4096, 16 * n)
     plan_rows = max(1, int(np.count_nonzero(on_ramp[demand.lane])))  # one plan per VR
     work = max(4 * n + 1, 3 * plan_rows)  # entries, collision pairs, virtual rows
+    scratch_int = np.zeros((layout.N_SCRATCH_INT, work), dtype=i8)
+    scratch_int[layout.S_KNOWN_LEADER] = NOT_KNOWN  # no acceleration taken yet
     return CoreArrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,
@@ -163,7 +166,7 @@ def build_arrays(
         profile=np.asarray(config.platoon.profile, dtype=f8).reshape(-1, 2),
         innov=np.zeros((innov_steps, 2, n)), log_t=log.t, **log_columns(log),
         log_slot=log.slot, log_span=log.span,
-        scratch_int=np.zeros((layout.N_SCRATCH_INT, work), dtype=i8),
+        scratch_int=scratch_int,
         scratch_f=np.zeros((layout.N_SCRATCH_F, work)),
         scratch_b=np.zeros((layout.N_SCRATCH_B, 2 * n), dtype=b1),
     )  # fmt: skip

@@ -34,6 +34,8 @@ from hcomc.sim.step.state import (
     S_CAND_LEADER,
     S_CAND_TARGET,
     S_FORCE,
+    S_KNOWN,
+    S_KNOWN_LEADER,
     S_MARGIN,
     S_MOBIL,
     S_MOBIL_B,
@@ -66,7 +68,9 @@ def _mobil(
         cand[k], lanes[k], leader[k] = ids[p], c.lane[ids[p]], lead[p]
         follower[k] = neighbour(vb, lb, rank[p] - 1, lb[rank[p]])
     work = si[S_MOBIL : S_MOBIL + 4]
-    m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a), index,
+    known, known_leader = c.scratch_f[S_KNOWN], c.scratch_int[S_KNOWN_LEADER]  # (follow_into)
+    m = mobil_decide_into(Traffic(c.matrix, c.iidm, c.length, c.x, c.v, c.a, known, known_leader),
+                          index,
                           Candidates(cand, lanes, leader, follower, target, force, urgency),
                           c.lc_params,
                           c.road_int, MobilWork(work, c.scratch_b[S_MOBIL_B : S_MOBIL_B + 2],

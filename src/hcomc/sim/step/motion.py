@@ -30,7 +30,7 @@ from hcomc.sim.lane_table import (
     L_WIDTH,
     MIN_CHANGE_LENGTHS,
 )
-from hcomc.sim.mobil import LC_SAFE_DECEL
+from hcomc.sim.mobil import LC_SAFE_DECEL, NOT_KNOWN
 from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.road import lane_end_at, road_of, section_at, speed_limit, stop_point
@@ -56,6 +56,8 @@ from hcomc.sim.step.state import (
     S_IN_ORI,
     S_IN_TGT,
     S_KEY,
+    S_KNOWN,
+    S_KNOWN_LEADER,
     S_KS,
     S_LANE,
     S_LEAD,
@@ -101,7 +103,10 @@ def follow_many(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray) -> np.ndarr
 @kernel
 def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.ndarray) -> None:
     """:func:`follow_many` written into ``out[:ids.size]``, in three passes over plain arrays
-    (the step's work rows): the exact inputs, the HDVs' perceived inputs, Eq. 1/3."""
+    (the step's work rows): the exact inputs, the HDVs' perceived inputs, Eq. 1/3. Each
+    acceleration taken from exact inputs is kept with its leader (rows ``S_KNOWN``,
+    ``S_KNOWN_LEADER``), for MOBIL to reuse in the same step
+    (:class:`hcomc.sim.mobil.Traffic`)."""
     matrix, length, x, v, a, iidm = c.matrix, c.length, c.x, c.v, c.a, c.iidm
     n = ids.size
     sf = c.scratch_f
@@ -114,17 +119,20 @@ def follow_into(c: CoreArrays, ids: np.ndarray, leaders: np.ndarray, out: np.nda
         else:
             s[k], vl[k], al[k], ll[k] = math.inf, v[i], 0.0, length[i]
         vi[k] = v[i]
-    if c.flags[PERCEIVE] > 0:
+    perceive = c.flags[PERCEIVE] > 0
+    if perceive:
         history = History(c.x_hist, c.v_hist, c.taus, c.consts[DT])
         scales = ErrorScales(c.consts[GAP_ERROR], c.consts[TTC_ERROR], c.flags[ERRORS] > 0)
         errors = EstimationErrors(c.w_gap, c.w_ttc, scales)
         perceive_into(history, c.counters[STEP], errors, ids, leaders, ll, c.is_hdv,
                       Estimates(s, vi, vl))  # fmt: skip
+    known, known_leader, hdv = sf[S_KNOWN], c.scratch_int[S_KNOWN_LEADER], c.is_hdv
     for k in range(n):
         i = ids[k]
-        out[k] = follow_accel(s[k], vi[k], vl[k], al[k], matrix[0, i], matrix[1, i],
-                              matrix[2, i], matrix[3, i], matrix[4, i], matrix[5, i],
-                              matrix[6, i], iidm[i])  # fmt: skip
+        out[k] = known[i] = follow_accel(s[k], vi[k], vl[k], al[k], matrix[0, i], matrix[1, i],
+                                         matrix[2, i], matrix[3, i], matrix[4, i], matrix[5, i],
+                                         matrix[6, i], iidm[i])  # fmt: skip
+        known_leader[i] = NOT_KNOWN if perceive and hdv[i] else leaders[k]
 
 
 @kernel(inline="always")
