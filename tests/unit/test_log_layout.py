@@ -118,7 +118,7 @@ def test_a_log_that_grows_its_columns_logs_the_same_run(monkeypatch: pytest.Monk
     plain = Simulation(config, 0)
     plain.run()
     assert FIRST_SLOTS > plain.log.n_slots > 8  # about 20 vehicles on the road at once
-    monkeypatch.setattr(core_build, "FIRST_SLOTS", 4)
+    monkeypatch.setattr(core_build, "initial_slots", lambda demand: 4)
     grown = Simulation(config, 0)
     assert grown.log.n_slots == 4
     grown.run()

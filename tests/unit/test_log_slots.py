@@ -146,12 +146,14 @@ def test_active_columns_list_each_rows_vehicles_on_the_road_in_vehicle_order(
                 _same(log.cells[name][k, column[on]], getattr(plain, name)[k, vehicle[on]])
 
 
-def test_a_scene_that_starts_full_widens_its_log_once(monkeypatch) -> None:
-    """141 vehicles on the road from the first row: the engine's log grows from its first 64
-    columns to one per vehicle in one step (not 64 -> 128 -> 141), and trimming keeps those
-    columns."""
+def test_a_scene_that_starts_full_logs_without_widening(monkeypatch) -> None:
+    """141 vehicles on the road from the first row: the engine's log starts with a column for
+    each vehicle due by its first row and never widens (a copy of every column); a log
+    started narrower grows to one column per vehicle in one step (not 64 -> 128 -> 141), and
+    trimming keeps those columns."""
     from hcomc.config import load_config
     from hcomc.sim.engine import Simulation
+    from hcomc.sim.step import build
 
     config = load_config(
         "platoon", duration=2.0, warmup=0.0,
@@ -165,6 +167,12 @@ def test_a_scene_that_starts_full_widens_its_log_once(monkeypatch) -> None:
         SimulationLog, "grow_slots", lambda log, n: (grown.append(n), grow(log, n))[1]
     )
     log = Simulation(config, 0).run()
-    assert grown == [141]
+    assert grown == []
     assert log.n_slots == 141
-    assert log.active[0].sum() == 141
+    monkeypatch.setattr(build, "initial_slots", lambda demand: build.FIRST_SLOTS)
+    narrow = Simulation(config, 0).run()
+    assert grown == [141]
+    assert narrow.n_slots == 141
+    assert narrow.active[0].sum() == 141
+    for name in CELL_FIELDS:
+        _same(narrow.cells[name], log.cells[name])

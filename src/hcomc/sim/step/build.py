@@ -26,8 +26,17 @@ by the compiled loop or by the engine's Python step)."""
 
 
 FIRST_SLOTS = 64
-"""Slot columns a run's log starts with (:mod:`hcomc.sim.log.slots`; :func:`widen_log` adds
-more when more vehicles are on the road at once, up to one per vehicle)."""
+"""Slot columns a run's log starts with beyond one for each vehicle due by its first row
+(:mod:`hcomc.sim.log.slots`): a scene that starts full need not widen its log at once, a
+copy of every column; :func:`widen_log` adds more when more vehicles are on the road at
+once, up to one per vehicle."""
+
+
+def initial_slots(demand: Demand) -> int:
+    """The slot columns a run's log starts with: one for each vehicle due by its first row
+    (at most that many are on the road then) and :data:`FIRST_SLOTS` more, at most one per
+    vehicle."""
+    return min(demand.n, int(np.count_nonzero(demand.t <= 0.0)) + FIRST_SLOTS)
 
 
 def allocate_log(
@@ -35,7 +44,7 @@ def allocate_log(
 ) -> SimulationLog:
     """The empty log of a run (``rows`` logging rows, slot columns for its vehicles) with
     the run's manifest; a clear error when it would exceed ``log_memory_limit``."""
-    slots = min(demand.n, FIRST_SLOTS)
+    slots = initial_slots(demand)
     check_log_memory(config, rows, demand.n, slots)
     meta = build_manifest(seed=seed, config=config,
                           extra={"dt": config.dt, "log_interval": config.log_interval})  # fmt: skip
