@@ -42,9 +42,13 @@ class ListenedRun(Protocol):
     n_warmup: int
     fleet: Fleet  # the nominal parameters (what controllers predict with)
     decisions: list[MergePlan]
-    key_groups: dict[int, MergeGroup]
     ramps: tuple[Ramp, ...]  # the road's on-ramps (lane-code order), as controllers see them
     stalled: IntArray  # the stalled vehicles of its [[faults]], in their order
+
+    @property
+    def key_groups(self) -> dict[int, MergeGroup]:
+        """Key vehicles of each ramp vehicle, found when it entered the control zone."""
+        ...
 
     @property
     def t(self) -> float:

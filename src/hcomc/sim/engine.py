@@ -26,7 +26,8 @@ driver hands a step to Python only for its decisions: a ramp vehicle entering th
 zone (key vehicles, a first plan), a live plan due for a replan, and on every step of a run
 whose CAVs confirm their lane changes by the game (Section III-B). Python then runs the
 controller and finishes the step with the driver's own kernels, so where a step's decisions
-are taken does not change the run.
+are taken does not change the run. A run without a controller or listeners has no decisions
+to take: the driver records its key groups itself and never hands a step to Python.
 """
 
 from __future__ import annotations
@@ -156,9 +157,14 @@ class Simulation(EnginePlans):
         of the run, whichever comes first; with ``until_key_vehicles`` also stop after the
         step in which the first ramp vehicle's key vehicles were identified (it entered the
         control zone). Python is entered only at decision events."""
-        while not self.reached(step, until_key_vehicles=until_key_vehicles):
-            stop = min(self.stop_step, step)
-            self.resume(step_loop.run_steps(self.core, stop, self.logging, self.rng))
+        flags = self.arrays.flags
+        flags[layout.STOP_AT_KEYS] = until_key_vehicles  # for key groups found compiled
+        try:
+            while not self.reached(step, until_key_vehicles=until_key_vehicles):
+                stop = min(self.stop_step, step)
+                self.resume(step_loop.run_steps(self.core, stop, self.logging, self.rng))
+        finally:
+            flags[layout.STOP_AT_KEYS] = False
         self.flush_events()
 
     def reached(self, step: int, *, until_key_vehicles: bool = False) -> bool:
@@ -209,7 +215,9 @@ class Simulation(EnginePlans):
 
     def flush_events(self) -> None:
         """Move the compiled step's buffered events into the log, in order (the compiled
-        stretches buffer them; :meth:`run_to` flushes when it returns)."""
+        stretches buffer them; :meth:`run_to` flushes when it returns), and the key groups it
+        found (:meth:`take_key_groups`)."""
+        self.take_key_groups()
         c = self.arrays
         n = int(c.counters[layout.N_EVENTS])
         if n == 0:

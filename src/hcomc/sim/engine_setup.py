@@ -57,6 +57,9 @@ class EngineSetup:
         self.listeners: tuple[StepListener, ...] = tuple(listeners)
         for listener in self.listeners:
             listener.attach(self)  # type: ignore[arg-type]  # Simulation is a ListenedRun
+        # nobody in Python waits for key groups: the compiled loop records them itself
+        compiled = self.controller is None and not self.listeners
+        self.arrays.flags[layout.KEYS_COMPILED] = compiled
 
     @classmethod
     def _sibling(cls, sim: Self, *, counterfactual: bool) -> Self:
@@ -83,7 +86,8 @@ class EngineSetup:
         self.counterfactual = counterfactual
         self.demand, self.fleet, self.controller = demand, fleet, controller
         self.listeners = ()
-        self.key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
+        self._key_groups: dict[int, MergeGroup] = {}  # per VR, found at control-zone entry
+        self._keys_taken = 0  # rows of the compiled loop's key table taken into it
         self.python_steps = 0  # steps taken in Python (decision events)
         self.decisions: list[MergePlan] = []
         self.requests: list[tuple[TrafficView, MergeGroup]] = []  # what each plan was asked
@@ -117,6 +121,26 @@ class EngineSetup:
         self.lc_t0, self.lc_x0, self.lc_xf, self.lc_dur = c.lc_t0, c.lc_x0, c.lc_xf, c.lc_dur
         self.active, self.waited, self.planned = c.active, c.waited, c.planned
         self._stage = 0
+
+    @property
+    def key_groups(self) -> dict[int, MergeGroup]:
+        """Each ramp vehicle's key group, found when it entered the control zone (in Python
+        at a decision step, or by the compiled loop: :meth:`take_key_groups`), by VR."""
+        self.take_key_groups()
+        return self._key_groups
+
+    def take_key_groups(self) -> None:
+        """Move the key groups the compiled loop recorded since the last call
+        (:func:`hcomc.sim.step.loop.record_key_group`) into :attr:`key_groups` and the log's
+        ``meta["key_groups"]``, as the Python side records them: at the time of the step,
+        in order."""
+        found = int(self.arrays.counters[layout.N_KEYS])
+        for row in self.arrays.key_table[self._keys_taken : found].tolist():
+            t = -self.config.warmup + row[0] * self.dt  # the step's time, as :attr:`t`
+            group = MergeGroup(*row[1:])
+            self._key_groups[group.vr] = group
+            self.log.meta.setdefault("key_groups", []).append({"t": float(t), **group.as_dict()})
+        self._keys_taken = found
 
     @property
     def t(self) -> float:

@@ -24,11 +24,12 @@ from hcomc.sim.log import SimulationLog
 from hcomc.sim.step.batch import (
     advance_batch,
     advance_batch_serial,
+    set_flags,
     step_indices,
     thread_count,
     thread_pool,
 )
-from hcomc.sim.step.state import DONE
+from hcomc.sim.step.state import DONE, STOP_AT_KEYS
 from hcomc.sim.typed_lists import TypedListCache
 
 if TYPE_CHECKING:
@@ -45,8 +46,12 @@ class EnsembleRun(Protocol):
 
     core: Any  # hcomc.sim.step.state.Core
     rng: Any  # its generator (numpy's, as the compiled loop draws from it)
-    key_groups: dict[int, Any]
     log: SimulationLog
+
+    @property
+    def key_groups(self) -> dict[int, Any]:
+        """Its key groups by ramp vehicle (:attr:`Simulation.key_groups`)."""
+        ...
 
     @property
     def listeners(self) -> Sequence[Any]:
@@ -127,18 +132,22 @@ def advance_ensemble(
     if not batch.going.any():
         return
     advance = advance_batch_serial if threads == 1 else advance_batch
-    with thread_pool(threads):
-        reasons = np.empty(n, dtype=np.int64)
-        while batch.going.any():
-            stops = np.where(batch.going, np.minimum(batch.stop, goal), batch.step)
-            advance(batch.cores, batch.rngs, stops, batch.logging, reasons)
-            before = batch.going
-            batch.resume(reasons)
-            if progress is not None and (batch.going != before).any():
-                progress(n - int(batch.going.sum()), n)
-        if flush:
-            for sim in runs:
-                sim.flush_events()
+    set_flags(batch.cores, STOP_AT_KEYS, keys.astype(np.int64))  # key groups found compiled
+    try:
+        with thread_pool(threads):
+            reasons = np.empty(n, dtype=np.int64)
+            while batch.going.any():
+                stops = np.where(batch.going, np.minimum(batch.stop, goal), batch.step)
+                advance(batch.cores, batch.rngs, stops, batch.logging, reasons)
+                before = batch.going
+                batch.resume(reasons)
+                if progress is not None and (batch.going != before).any():
+                    progress(n - int(batch.going.sum()), n)
+    finally:
+        set_flags(batch.cores, STOP_AT_KEYS, np.zeros(n, dtype=np.int64))
+    if flush:
+        for sim in runs:
+            sim.flush_events()
 
 
 class _Batch:

@@ -105,6 +105,7 @@ def undisturbed_twin(sim: Simulation) -> Simulation:
         getattr(dst, name)[ramp] = values
     dst.x_hist[:, ramp], dst.v_hist[:, ramp] = hist
     dst.queue_pos[Lane.RAMP] = ramp_queue
+    dst.counters[layout.N_KEYS] = 0  # the key groups found so far are the ramp vehicles'
     events = sim.log.events_since(0)
     inserted = events[(events["kind"] == EventKind.INSERTION) & _marked(events["vehicle"], is_ramp)]
     steps = np.round((inserted["t"] + sim.config.warmup) / sim.dt).astype(np.int64)

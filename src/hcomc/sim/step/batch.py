@@ -23,6 +23,7 @@ from hcomc.sim.step.state import STEP, CoreArrays
 __all__ = [
     "advance_batch",
     "advance_batch_serial",
+    "set_flags",
     "step_indices",
     "thread_count",
     "thread_pool",
@@ -54,6 +55,13 @@ def advance_batch_serial(
     """
     for k in range(len(cores)):
         reasons[k] = run_steps(cores[k], stops[k], logging[k], rngs[k])
+
+
+@kernel
+def set_flags(cores: list[CoreArrays], flag: int, values: np.ndarray) -> None:
+    """Set flag ``flag`` of every run to its entry of ``values``."""
+    for k in range(len(cores)):
+        cores[k].flags[flag] = values[k]
 
 
 @kernel

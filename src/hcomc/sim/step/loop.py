@@ -24,8 +24,9 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._jit import kernel
+from hcomc.control.key_vehicles import key_vehicle_indices
 from hcomc.sim.arrays import nonzero_into
-from hcomc.sim.lane_table import L_ZONE
+from hcomc.sim.lane_table import L_LEFT, L_ZONE
 from hcomc.sim.log.slots import claim_slots
 from hcomc.sim.neighbours import LaneIndex
 from hcomc.sim.perception import advance_errors_of
@@ -63,9 +64,12 @@ from hcomc.sim.step.state import (
     FLUSH,
     GROW_LOG,
     INNOV_CURSOR,
+    KEYS,
+    KEYS_COMPILED,
     KICK,
     LOG_EVERY,
     N_EVENTS,
+    N_KEYS,
     N_PLANS,
     N_WARMUP,
     NEED_PYTHON,
@@ -77,6 +81,7 @@ from hcomc.sim.step.state import (
     S_VV,
     S_VV_FOL,
     STEP,
+    STOP_AT_KEYS,
     VEHICLE_STEPS,
     WARMUP,
     CoreArrays,
@@ -196,10 +201,13 @@ def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
 def needs_python(c: CoreArrays, t: float) -> bool:
     """Whether the step at t needs the engine's Python side: a controller decision (a ramp
     vehicle entering its lane's control zone: key vehicles and a first plan; a live plan
-    due for a replan) or game-confirmed lane changes."""
+    due for a replan) or game-confirmed lane changes. In a run whose key groups are found
+    compiled (flag ``KEYS_COMPILED``: no controller, no listeners) a ramp vehicle entering
+    the zone needs none: its key group is recorded here (:func:`record_key_group`)."""
     if c.flags[CAV_GAME] > 0:
         return True
     zone, controlled = c.road_f[L_ZONE], c.flags[CONTROLLER] > 0
+    compiled = c.flags[KEYS_COMPILED] > 0
     active, x, lane, origin, target = c.active, c.x, c.lane, c.origin, c.target
     for i in range(x.size):
         if (
@@ -208,8 +216,30 @@ def needs_python(c: CoreArrays, t: float) -> bool:
             and origin[i] == target[i]
             and (not c.identified[i] or (controlled and not c.planned[i]))
         ):
+            if compiled and not c.identified[i] and c.counters[N_KEYS] < c.key_table.shape[0]:
+                record_key_group(c, i)
+                continue
             return True  # fmt: skip
     return c.counters[N_PLANS] > 0 and due_plans(c, t).size > 0
+
+
+@kernel
+def record_key_group(c: CoreArrays, vr: int) -> None:
+    """The key vehicles of ramp vehicle ``vr`` at its control-zone entry (Section II-A:
+    :func:`hcomc.control.key_vehicles.key_vehicle_indices` with the lane left of its ramp
+    lane and the one beyond, the lanes of its ramp as :func:`hcomc.sim.roads.ramp_of` gives
+    them), written with the step into the next row of ``key_table``: what the engine's
+    Python side records at a decision step
+    (:meth:`hcomc.sim.engine.Simulation._identify_key_vehicles`), taken from there by
+    :meth:`hcomc.sim.engine_setup.EngineSetup.take_key_groups`."""
+    left = c.road_int[L_LEFT]
+    lane_1 = left[c.lane[vr]]
+    lane_2 = left[lane_1] if lane_1 >= 0 else -1
+    row = c.key_table[c.counters[N_KEYS]]
+    row[0] = c.counters[STEP]
+    row[1:] = key_vehicle_indices(c.x, c.lane, c.active, vr, lane_1, lane_2)
+    c.counters[N_KEYS] += 1
+    c.identified[vr] = True
 
 
 @kernel
@@ -300,15 +330,19 @@ def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator
     stopped. Each step is :func:`begin_step`, the decisions, :func:`step_alone` and
     :func:`record_due_row`; at a decision (:func:`needs_python`) it returns ``NEED_PYTHON``
     after the step's start, and the engine takes the decisions and the rest of that step
-    (:meth:`hcomc.sim.engine.Simulation.resume`) with the same kernels.
+    (:meth:`hcomc.sim.engine.Simulation.resume`) with the same kernels. With the flag
+    ``STOP_AT_KEYS`` it returns ``KEYS`` after a step in which it recorded a key group.
     """
     while c.counters[STEP] < stop:
         if not begin_step(c, rng):
             return FLUSH
         t = step_time(c)
+        keys = c.counters[N_KEYS]
         if needs_python(c, t):
             return NEED_PYTHON
         step_alone(c, t)
         if not record_due_row(c, log_rows):
             return GROW_LOG  # the row is written once the log has grown
+        if c.flags[STOP_AT_KEYS] > 0 and c.counters[N_KEYS] > keys:
+            return KEYS
     return DONE

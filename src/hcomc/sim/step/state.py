@@ -25,7 +25,8 @@ EV_INSERTION, EV_LC_START, EV_LC_END, EV_MERGE, EV_COLLISION, EV_WAIT, EV_EXIT =
 EV_FALLBACK, EV_MISSED_EXIT, EV_LC_ABORT = 8, 9, 10
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
-N_COUNTERS = 8
+N_KEYS = 8  # key groups found by the compiled loop (rows of ``key_table``)
+N_COUNTERS = 9
 # consts
 (DT, WARMUP, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
  LOOKAHEAD, URGENT) = range(11)  # fmt: skip
@@ -33,9 +34,12 @@ N_CONSTS = 11
 # flags
 (PERCEIVE, ERRORS, PLATOON, DECIDE_EVERY, LOG_EVERY, N_WARMUP, CONTROLLER,
  CAV_GAME, SPEED_LIMITS) = range(9)  # fmt: skip
-N_FLAGS = 9
+# the compiled loop finds key groups itself (a run without a controller or listeners), and
+# returns after a step in which it found one (a caller waiting for key vehicles)
+KEYS_COMPILED, STOP_AT_KEYS = 9, 10
+N_FLAGS = 11
 # reasons run_steps returns
-DONE, NEED_PYTHON, FLUSH, GROW_LOG = range(4)
+DONE, NEED_PYTHON, FLUSH, GROW_LOG, KEYS = range(5)
 # rows of the step's work arrays (scratch_int, scratch_f: width >= 4N + 1; scratch_b: 2N).
 # A step writes its per-vehicle and per-entry arrays into these rows instead of allocating
 # them; the arrays a kernel returns from them are valid until the same row is next written
@@ -116,6 +120,7 @@ class CoreArrays(NamedTuple):
     flags: np.ndarray  # int64, see PERCEIVE ... CAV_GAME
     plan_int: np.ndarray  # (P, k) the live merge plans (hcomc.sim.step.plans), first N_PLANS
     plan_f: np.ndarray  # (P, m) their times, positions and cubic coefficients
+    key_table: np.ndarray  # (P, 7) key groups found compiled: step, then VR ... VNR (first N_KEYS)
     road_int: np.ndarray  # (4, L) the road's lanes by code (hcomc.sim.lane_table: L_KIND ...)
     road_f: np.ndarray  # (8, L) their centres, widths, begins, ends ... [m] (L_CENTRE ...)
     sec_x0: np.ndarray  # (S,) the road's sections (hcomc.sim.lane_table.LaneTable): starts [m]
