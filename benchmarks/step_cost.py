@@ -60,6 +60,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from vs_sumo import SEED, line_config, scene_config
 
+from hcomc.config import load_config
 from hcomc.sim.engine import Simulation
 from hcomc.sim.lane_table import L_END, L_KIND, L_OPENS, L_SPEED
 from hcomc.sim.neighbours import lookup_one, neighbours_into
@@ -275,7 +276,11 @@ def _scene(scene: str, n: int, duration: float) -> tuple[Any, Callable[[Any], Si
     """The config of ``scene`` and what makes its run: ``line`` and ``onramp`` of
     ``vs_sumo.py`` at about ``n`` vehicles; ``corridor``, the preset's first ``duration``
     seconds without a controller (its own seed, every vehicle logged every step, as
-    ``corridor.py`` and ``hcomc simulate corridor`` run it; ``n`` is ignored)."""
+    ``corridor.py`` and ``hcomc simulate corridor`` run it; ``n`` is ignored); ``c1``,
+    Condition 1 as configured (the run of ``vs_sumo.py``'s ensemble; ``n`` and ``duration``
+    ignored)."""
+    if scene == "c1":
+        return load_config("C1"), lambda cfg: Simulation(cfg, SEED)
     if scene != "corridor":
         config = line_config(n, duration) if scene == "line" else scene_config(n, duration)
         return config, lambda cfg: Simulation(cfg, SEED)
@@ -313,7 +318,7 @@ def measure(scene: str, n: int, duration: float, repeats: int) -> dict[str, obje
             ns = wall / max(int(spent.sum()), 1) * 1e9  # per cycle
             phases = {p: float(spent[k] * ns / sim.vehicle_steps) for k, p in enumerate(PHASES)}
     steps = plain.n_warmup + plain.n_steps
-    vehicles = n if scene != "corridor" else round(plain.vehicle_steps / steps)  # on the road
+    vehicles = n if scene in ("line", "onramp") else round(plain.vehicle_steps / steps)  # on road
     return {"scene": scene, "vehicles": vehicles, "vehicle_steps": plain.vehicle_steps,
             "rate": rate, "timed_rate": timed_rate, "ns_per_vehicle_step": phases}  # fmt: skip
 
@@ -322,15 +327,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 2000])
     parser.add_argument("--scenes", nargs="+", default=["line", "onramp"],
-                        choices=["line", "onramp", "corridor"])  # fmt: skip
+                        choices=["line", "onramp", "corridor", "c1"])  # fmt: skip
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    sized = [s for s in args.scenes if s != "corridor"]
+    sized = [s for s in args.scenes if s in ("line", "onramp")]
     rows = [measure(s, n, args.duration, args.repeats) for n in args.sizes for s in sized]
-    if "corridor" in args.scenes:
-        rows.append(measure("corridor", 0, args.duration, args.repeats))
+    for scene in ("c1", "corridor"):
+        if scene in args.scenes:
+            rows.append(measure(scene, 0, args.duration, args.repeats))
     sizes = {int(row["vehicles"]) for row in rows}  # type: ignore[call-overload]
     idm = {n: plain_idm_rate(n, round(args.duration / 0.1), args.repeats) for n in sorted(sizes)}
     if args.json:
