@@ -34,7 +34,10 @@ def _insert(c: CoreArrays, i: int, queue: int, t: float) -> bool:
     """
     x, v = c.d_x[i], c.d_v[i]
     fill = c.d_t[i] <= -c.consts[WARMUP] + 1e-9
-    lane, j = _best_lane(c, i, queue, x)
+    if fill and c.queue_last[queue] == queue:
+        lane, j = queue, -1  # its queue's own lane, the only one (no scan of the road)
+    else:
+        lane, j = _best_lane(c, i, queue, x)
     if not fill:
         if lane < 0:
             return False
