@@ -167,7 +167,7 @@ def _back(c, ids, t, acc, index, spent):  # type: ignore[no-untyped-def]
     integrate(c, ids, acc)
     t2 = cycles()
     spent[12] += t2 - t1
-    lateral(c, t)
+    lateral(c, ids, t)
     t3 = cycles()
     spent[13] += t3 - t2
     bookkeeping(c, ids, t)

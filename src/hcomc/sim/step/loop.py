@@ -104,7 +104,7 @@ def step_finish(
     row of pre-drawn innovations, :func:`draw_innovations`) and the end of the step."""
     check_collisions(c, t, index)
     integrate(c, ids, acc)
-    lateral(c, t)
+    lateral(c, ids, t)
     bookkeeping(c, ids, t)
     if c.flags[ERRORS] > 0:
         xi = c.innov[c.counters[INNOV_CURSOR]]
