@@ -11,29 +11,37 @@ from hcomc.sim.engine import Simulation
 
 
 def test_an_ensemble_gives_each_run_bit_identical_results() -> None:
-    """Five runs (two conditions, FIFO and no controller, HCOMC included) advanced as one
-    batch on 1 and 2 threads equal the same runs simulated alone."""
+    """Six runs (three conditions, FIFO and no controller, HCOMC included, and a corridor's
+    first four minutes with its five ramps) advanced as one batch on 1 and 2 threads equal the
+    same runs simulated alone, key groups included."""
     from hcomc.config import load_config
+    from hcomc.corridor.loading import load_corridor
+    from hcomc.sim.corridor_scene import corridor_config, corridor_scene
     from hcomc.sim.ensemble import run_ensemble
 
-    def configs():
+    corridor = load_corridor("corridor", {"corridor.duration": 240.0})
+
+    def runs() -> list[Simulation]:
         return [
-            (load_config("C2", duration=40.0), 1),
-            (load_config("C5", duration=40.0, control={"controller": "fifo"}), 2),
-            (load_config("C1", duration=40.0, control={"controller": "hcomc"}), 3),
-            (load_config("C3", duration=40.0), 4),
-            (load_config("C4", duration=40.0, demand={"ramp": "flow"}), 5),
+            Simulation(load_config("C2", duration=40.0), 1),
+            Simulation(load_config("C5", duration=40.0, control={"controller": "fifo"}), 2),
+            Simulation(load_config("C1", duration=40.0, control={"controller": "hcomc"}), 3),
+            Simulation(load_config("C3", duration=40.0), 4),
+            Simulation(load_config("C4", duration=40.0, demand={"ramp": "flow"}), 5),
+            Simulation(corridor_config(corridor), 6, scene=corridor_scene(corridor)),
         ]
 
-    alone = [Simulation(c, s).run() for c, s in configs()]
+    alone = [sim.run() for sim in runs()]
     for threads in (1, 2):
-        together = run_ensemble([Simulation(c, s) for c, s in configs()], threads=threads)
+        together = run_ensemble(runs(), threads=threads)
         for a, b in zip(alone, together, strict=True):
             for name in ("x", "y", "v", "a", "lane", "active"):
                 np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
             np.testing.assert_array_equal(
                 np.asarray(a.events.tolist()), np.asarray(b.events.tolist())
             )
+            assert a.meta.get("key_groups") == b.meta.get("key_groups")
+        assert len(together[-1].meta["key_groups"]) > 20  # the corridor's ramps
 
 
 def test_typed_list_cache_follows_its_keys_as_they_change_grow_and_shrink() -> None:
