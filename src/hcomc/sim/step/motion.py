@@ -321,11 +321,11 @@ def integrate(c: CoreArrays, ids: np.ndarray, acc: np.ndarray) -> None:
 def lateral(c: CoreArrays, ids: np.ndarray, t: float) -> None:
     """Move the changing vehicles among ``ids`` (the vehicles on the road, in index order)
     along their quintic path; switch lane at the lane line; a change from a ramp lane to the
-    mainline is a merge. A change that stands still when its
-    duration is over ends where the vehicle stands: given up before the lane line (back on
-    its own lane's centre line), completed past it (on the target lane's centre line).
-    Eq. 4-6 move a vehicle sideways only as it moves along x, and one that stopped across
-    two lanes would block both for good."""
+    mainline is a merge. A change that stands still when its duration is over ends where
+    the vehicle stands: given up before the lane line (back on its own lane's centre line),
+    completed past it (on the target lane's centre line). Eq. 4-6 move a vehicle sideways
+    only as it moves along x, and one that stopped across two lanes would block both for
+    good."""
     centre, kind = c.road_f[L_CENTRE], c.road_int[L_KIND]
     for i in ids:
         if c.origin[i] == c.target[i]:
