@@ -15,7 +15,9 @@ processor; where numpy's functions differ from the C library's, a run can part f
 the last bit and go its own way. The tests hold it to pymoo's solution quality on the recorded
 merge problems (``tests/unit/test_nsga2_compiled.py``). Evaluated rows go into one preallocated
 archive, from which the Pareto set is taken in one compiled pass
-(:func:`hcomc.optim.base.archive_front`).
+(:func:`hcomc.optim.base.archive_front`); a row equal to one the run evaluated before takes
+that row's values instead of a second evaluation (the same numbers), and still counts in the
+budget and in ``n_eval``, as in pymoo without duplicate elimination.
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
@@ -150,45 +152,66 @@ class CompiledNSGA2Optimizer:
         n_gen = generations(budget, self.pop_size)
         xl = np.array(problem.xl, dtype=np.float64, copy=True)
         xu = np.array(problem.xu, dtype=np.float64, copy=True)
-        n_var, n_obj, n_constr = int(problem.n_var), int(problem.n_obj), int(problem.n_constr)
+        n_var = int(problem.n_var)
         first = initial_rows(problem, initial, self.pop_size, rng)
         gen = np.random.default_rng(draw_seed(rng))
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
-        # the archive of every evaluated row, in evaluation order
-        n_rows = first.shape[0] + (n_gen - 1) * self.pop_size
-        X_all, F_all = np.empty((n_rows, n_var)), np.empty((n_rows, n_obj))
-        G_all, cv_all = np.empty((n_rows, n_constr)), np.empty(n_rows)
-
-        def evaluate(X: FloatArray, start: int) -> IntArray:
-            """Evaluate rows ``X`` into the archive from row ``start``; their archive rows."""
-            F, G = problem.evaluate(X)
-            n = X.shape[0]
-            F = np.asarray(F, dtype=np.float64).reshape(n, n_obj)
-            G = np.asarray(G, dtype=np.float64).reshape(n, n_constr)
-            end = start + n
-            X_all[start:end], F_all[start:end], G_all[start:end] = X, F, G
-            cv_all[start:end] = violation(G)
-            return np.arange(start, end)
-
+        archive = _Archive(problem, first.shape[0] + (n_gen - 1) * self.pop_size)
         crossover = (self.crossover_eta, self.crossover_prob)
         mutation = (self.mutation_eta, self.mutation_prob)
         n_matings = -(-self.pop_size // 2)
-        rows = evaluate(first, 0)
-        n_done = rows.size
+        rows = archive.add(first)
+        X_all, F_all, G_all, cv_all = archive.X, archive.F, archive.G, archive.cv
         for g in range(n_gen):
             mate = n_matings if g < n_gen - 1 else 0  # the last survivors do not mate
             idx, parents, _, _ = survive_and_mate(F_all, cv_all, rows, self.pop_size, mate, gen)
             rows = rows[idx]
             if mate:
                 children = offspring(X_all[rows[parents].T], xl, xu, crossover, mutation, gen)
-                new = evaluate(children[: self.pop_size], n_done)
-                n_done += new.size
-                rows = np.concatenate([rows, new])
+                rows = np.concatenate([rows, archive.add(children[: self.pop_size])])
         keep = archive_front(F_all, G_all)
         feasible: BoolArray = np.ones(keep.size, dtype=bool)
         if keep.size == 0:
             # the least-violating row of the final population (the first of equals)
             keep = rows[[int(np.argmin(cv_all[rows]))]]
             feasible = np.zeros(1, dtype=bool)
-        return ParetoResult(X_all[keep], F_all[keep], G_all[keep], feasible, n_rows, self.name)
+        return ParetoResult(X_all[keep], F_all[keep], G_all[keep], feasible, archive.size,
+                            self.name)  # fmt: skip
+
+
+class _Archive:
+    """Every row a run evaluated, in evaluation order: ``X``, ``F``, ``G`` and the violation
+    ``cv``, its first ``size`` rows. Each distinct row is evaluated by the problem once: a row
+    equal to one evaluated before (an offspring that neither crossed nor mutated, about 5 % of
+    the merge problem's rows) takes that row's values, the same numbers, since the problem's
+    values are a function of the row alone."""
+
+    def __init__(self, problem: Problem, n_rows: int) -> None:
+        self.problem = problem
+        self.n_obj, self.n_constr = int(problem.n_obj), int(problem.n_constr)
+        self.X, self.F = np.empty((n_rows, int(problem.n_var))), np.empty((n_rows, self.n_obj))
+        self.G, self.cv = np.empty((n_rows, self.n_constr)), np.empty(n_rows)
+        self.size = 0
+        self._first: dict[bytes, int] = {}  # the archive row of each distinct row
+
+    def add(self, X: FloatArray) -> IntArray:
+        """Evaluate the rows ``X`` into the archive's next rows; their archive rows."""
+        start, end = self.size, self.size + X.shape[0]
+        self.X[start:end] = X
+        fresh, repeated, earlier = [], [], []
+        for row in range(start, end):
+            first = self._first.setdefault(self.X[row].tobytes(), row)
+            if first == row:
+                fresh.append(row)
+            else:
+                repeated.append(row)
+                earlier.append(first)
+        if fresh:
+            F, G = self.problem.evaluate(X if len(fresh) == X.shape[0] else self.X[fresh])
+            self.F[fresh] = np.asarray(F, dtype=np.float64).reshape(len(fresh), self.n_obj)
+            self.G[fresh] = np.asarray(G, dtype=np.float64).reshape(len(fresh), self.n_constr)
+        self.F[repeated], self.G[repeated] = self.F[earlier], self.G[earlier]
+        self.cv[start:end] = violation(self.G[start:end])
+        self.size = end
+        return np.arange(start, end)
