@@ -136,7 +136,7 @@ class EngineSetup:
         in order."""
         found = int(self.arrays.counters[layout.N_KEYS])
         for row in self.arrays.key_table[self._keys_taken : found].tolist():
-            t = -self.config.warmup + row[0] * self.dt  # the step's time, as :attr:`t`
+            t = self.time_at(row[0])
             group = MergeGroup(*row[1:])
             self._key_groups[group.vr] = group
             self.log.meta.setdefault("key_groups", []).append({"t": float(t), **group.as_dict()})
@@ -145,7 +145,11 @@ class EngineSetup:
     @property
     def t(self) -> float:
         """Current simulation time [s]; logging starts at t = 0 after the warm-up."""
-        return -self.config.warmup + self.step_index * self.dt
+        return self.time_at(self.step_index)
+
+    def time_at(self, step: int) -> float:
+        """The time [s] of step ``step`` (warm-up included), as :attr:`t` reads it then."""
+        return -self.config.warmup + step * self.dt
 
     @property
     def step_index(self) -> int:
