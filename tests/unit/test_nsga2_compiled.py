@@ -36,7 +36,8 @@ from hcomc.optim.dominance import (
     relation,
     tournament,
 )
-from hcomc.optim.nsga2 import CompiledNSGA2Optimizer, survive_and_mate, violation
+from hcomc.optim.evaluated import violation
+from hcomc.optim.nsga2 import CompiledNSGA2Optimizer, survive_and_mate
 from hcomc.optim.registry import make_optimizer
 from hcomc.sim.engine import Simulation
 from recorded_decisions import assert_quality_matches

@@ -32,7 +32,8 @@ from hcomc._typing import FloatArray, IntArray
 from hcomc.equations.pareto import pareto_optimal
 from hcomc.optim import variation
 from hcomc.optim.base import archive_front
-from hcomc.optim.nsga2 import survive_and_mate, violation
+from hcomc.optim.evaluated import violation
+from hcomc.optim.nsga2 import survive_and_mate
 from hcomc.optim.variation import offspring, polynomial_mutation
 
 

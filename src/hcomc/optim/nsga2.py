@@ -2,22 +2,22 @@
 
 :class:`CompiledNSGA2Optimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 NSGA2Optimizer` (pymoo 0.6's ``NSGA2`` with SBX, polynomial mutation, binary tournament by
-constraint violation, domination and crowding, rank-and-crowding survival with feasible rows
-first, no duplicate elimination) on plain arrays. A generation costs a handful of compiled calls:
-survival (:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival with the
-tournaments (:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
+constraint violation, domination and crowding, rank-and-crowding survival with feasible rows first,
+no duplicate elimination) on plain arrays. A generation costs a handful of compiled calls: survival
+(:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival with the tournaments
+(:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
 (:func:`hcomc.optim.variation.offspring`); Python draws the random numbers in between, the same
-numbers in the same order as pymoo from a generator seeded like pymoo's, and leaves to numpy the
-two sorts whose order of ties is numpy's own. The formulas are pymoo's, but the powers are the C
+numbers in the same order as pymoo from a generator seeded like pymoo's, and leaves to numpy the two
+sorts whose order of ties is numpy's own. The formulas are pymoo's, but the powers are the C
 library's (:mod:`hcomc.optim.variation`) and the constraint violation a plain sum
-(:func:`violation`), never numpy's CPU-dispatched functions, so that a run is the same on every
-processor; where numpy's functions differ from the C library's, a run can part from pymoo's in
-the last bit and go its own way. The tests hold it to pymoo's solution quality on the recorded
-merge problems (``tests/unit/test_nsga2_compiled.py``). Evaluated rows go into one preallocated
-archive, from which the Pareto set is taken in one compiled pass
-(:func:`hcomc.optim.base.archive_front`); a row equal to one the run evaluated before takes
-that row's values instead of a second evaluation (the same numbers), and still counts in the
-budget and in ``n_eval``, as in pymoo without duplicate elimination.
+(:func:`hcomc.optim.evaluated.violation`), never numpy's CPU-dispatched functions, so that a run is
+the same on every processor; where numpy's functions differ from the C library's, a run can part
+from pymoo's in the last bit and go its own way. The tests hold it to pymoo's solution quality on
+the recorded merge problems (``tests/unit/test_nsga2_compiled.py``). Evaluated rows go into one
+preallocated archive (:class:`hcomc.optim.evaluated.EvaluatedRows`), from which the Pareto set is
+taken in one compiled pass (:func:`hcomc.optim.base.archive_front`); a row equal to one the run
+evaluated before takes that row's values instead of a second evaluation (the same numbers), and
+still counts in the budget and in ``n_eval``, as in pymoo without duplicate elimination.
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.optim import dominance, variation
+from hcomc.optim import dominance, evaluated, variation
 from hcomc.optim.base import (
     ParetoResult,
     Problem,
@@ -44,20 +44,12 @@ from hcomc.optim.base import (
     initial_rows,
 )
 from hcomc.optim.dominance import survival_fronts, survive_and_select
+from hcomc.optim.evaluated import EvaluatedRows
 from hcomc.optim.variation import offspring
 from hcomc.rng import draw_seed
 
 _NONE = np.empty(0, dtype=np.int64)  # no permutation or sort (read only by the kernels)
 _NO_PAIRS = np.empty((0, 2), dtype=np.int64)  # no tournament
-
-
-def violation(G: FloatArray) -> FloatArray:
-    """Constraint violation per row, ``sum(max(0, G))`` (0: feasible), summed in column order
-    (a plain sum: the value does not depend on how numpy orders a reduction)."""
-    total = np.zeros(G.shape[0])
-    for j in range(G.shape[1]):
-        total += np.maximum(0.0, G[:, j])
-    return total
 
 
 def survive_and_mate(
@@ -138,6 +130,7 @@ class CompiledNSGA2Optimizer:
         check_pop_size(self.pop_size)
         dominance.warm_up()  # load the compiled kernels now, not inside a timed decision
         variation.warm_up()
+        evaluated.warm_up()
 
     def minimize(
         self,
@@ -157,7 +150,7 @@ class CompiledNSGA2Optimizer:
         gen = np.random.default_rng(draw_seed(rng))
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
-        archive = _Archive(problem, first.shape[0] + (n_gen - 1) * self.pop_size)
+        archive = EvaluatedRows(problem, first.shape[0] + (n_gen - 1) * self.pop_size)
         crossover = (self.crossover_eta, self.crossover_prob)
         mutation = (self.mutation_eta, self.mutation_prob)
         n_matings = -(-self.pop_size // 2)
@@ -178,40 +171,3 @@ class CompiledNSGA2Optimizer:
             feasible = np.zeros(1, dtype=bool)
         return ParetoResult(X_all[keep], F_all[keep], G_all[keep], feasible, archive.size,
                             self.name)  # fmt: skip
-
-
-class _Archive:
-    """Every row a run evaluated, in evaluation order: ``X``, ``F``, ``G`` and the violation
-    ``cv``, its first ``size`` rows. Each distinct row is evaluated by the problem once: a row
-    equal to one evaluated before (an offspring that neither crossed nor mutated, about 5 % of
-    the merge problem's rows) takes that row's values, the same numbers, since the problem's
-    values are a function of the row alone."""
-
-    def __init__(self, problem: Problem, n_rows: int) -> None:
-        self.problem = problem
-        self.n_obj, self.n_constr = int(problem.n_obj), int(problem.n_constr)
-        self.X, self.F = np.empty((n_rows, int(problem.n_var))), np.empty((n_rows, self.n_obj))
-        self.G, self.cv = np.empty((n_rows, self.n_constr)), np.empty(n_rows)
-        self.size = 0
-        self._first: dict[bytes, int] = {}  # the archive row of each distinct row
-
-    def add(self, X: FloatArray) -> IntArray:
-        """Evaluate the rows ``X`` into the archive's next rows; their archive rows."""
-        start, end = self.size, self.size + X.shape[0]
-        self.X[start:end] = X
-        fresh, repeated, earlier = [], [], []
-        for row in range(start, end):
-            first = self._first.setdefault(self.X[row].tobytes(), row)
-            if first == row:
-                fresh.append(row)
-            else:
-                repeated.append(row)
-                earlier.append(first)
-        if fresh:
-            F, G = self.problem.evaluate(X if len(fresh) == X.shape[0] else self.X[fresh])
-            self.F[fresh] = np.asarray(F, dtype=np.float64).reshape(len(fresh), self.n_obj)
-            self.G[fresh] = np.asarray(G, dtype=np.float64).reshape(len(fresh), self.n_constr)
-        self.F[repeated], self.G[repeated] = self.F[earlier], self.G[earlier]
-        self.cv[start:end] = violation(self.G[start:end])
-        self.size = end
-        return np.arange(start, end)
