@@ -82,9 +82,10 @@ def widen(
     if n_slots <= old:
         return cells, owner
     wide = {}
-    for name, store in cells.items():
-        wide[name] = np.full((store.shape[0], n_slots), FILL[name], dtype=store.dtype)
+    for name, store in cells.items():  # each cell written once: the old ones, then the fill
+        wide[name] = np.empty((store.shape[0], n_slots), dtype=store.dtype)
         wide[name][:, :old] = store
+        wide[name][:, old:] = FILL[name]
     return wide, np.concatenate([owner, np.full(n_slots - old, -1, dtype=np.int64)])
 
 
