@@ -1,10 +1,10 @@
 """SBX crossover and polynomial mutation for the compiled NSGA-II: pymoo's ``SBX`` and ``PM``.
 
-Random numbers are drawn from the caller's generator in Python, in the order and sizes pymoo
-draws them; the arithmetic runs in numba kernels, one call per operator, or one for a whole
-generation's offspring (:func:`offspring`), with pymoo's formulas in pymoo's order of
-operations, so that a generation's variation is one compiled call instead of pymoo's many numpy
-calls on small arrays.
+Random numbers are drawn from the caller's generator in the order and sizes pymoo draws them;
+the arithmetic runs in numba kernels, one call per operator, with pymoo's formulas in pymoo's
+order of operations. A whole generation's offspring, draws included, is one compiled call
+(:func:`offspring`: numba's ``Generator`` methods draw the numbers numpy's draw from the same
+state), instead of pymoo's many numpy calls on small arrays.
 
 Powers are the C library's ``pow`` (through numba), not numpy's ``np.power`` as in pymoo:
 numpy picks its float64 power by the CPU at run time (SIMD versions on AVX-512 differ in the last
@@ -173,6 +173,7 @@ def _sbx(X: FloatArray, bounds: Bounds, draws: SbxDraws, eta: float) -> FloatArr
     return _sbx_children(X, bounds, draws, alpha, q_low, q_high)
 
 
+@kernel
 def _sbx_draws(X: FloatArray, bounds: Bounds, prob: float, rng: np.random.Generator) -> SbxDraws:
     """pymoo's ``SBX`` draws for parents ``X`` (2, n_matings, n_var), in its order, with the
     crossed variables and bases they decide: crossed matings (probability ``prob``), then only
@@ -185,7 +186,7 @@ def _sbx_draws(X: FloatArray, bounds: Bounds, prob: float, rng: np.random.Genera
         cross = np.zeros((n_matings, n_var), np.bool_)
         return SbxDraws(crossed_mating, cross, none, none, none, none, none)
     rng.random((n_matings, 1))  # pymoo's draw for the exchange probability (1: unused)
-    cross, p1, p2, beta = _sbx_bases(X, *bounds, rng.random((n_matings, n_var)))
+    cross, p1, p2, beta = _sbx_bases(X, bounds.lower, bounds.upper, rng.random((n_matings, n_var)))
     rand = rng.random(p1.size)
     return SbxDraws(crossed_mating, cross, p1, p2, beta, rand, rng.random(p1.size))
 
@@ -254,16 +255,20 @@ def _pm(X: FloatArray, bounds: Bounds, draws: PmDraws, eta: float) -> FloatArray
     return out
 
 
+@kernel
 def _pm_draws(n: int, bounds: Bounds, prob: float, rng: np.random.Generator) -> PmDraws:
     """pymoo's ``PM`` draws for ``n`` rows, in its order: mutated variables (probability
     ``min(0.5, 1 / n_var)``, none where the bounds coincide), one number per mutated variable,
     and the rows kept mutated (probability ``prob``)."""
     xl, xu = bounds
     n_var = xl.size
-    mut: BoolArray = np.asarray(rng.random((n, n_var)) < min(0.5, 1.0 / n_var))
-    rand = rng.random(np.count_nonzero(mut & (xl != xu)))
-    rows: BoolArray = np.asarray(rng.random(n) <= prob)
-    return PmDraws(mut, rand, rows)
+    mut = rng.random((n, n_var)) < min(0.5, 1.0 / n_var)
+    m = 0
+    for i in range(n):
+        for j in range(n_var):
+            m += 1 if mut[i, j] and xl[j] != xu[j] else 0
+    rand = rng.random(m)
+    return PmDraws(mut, rand, rng.random(n) <= prob)
 
 
 def polynomial_mutation(
@@ -278,8 +283,15 @@ def polynomial_mutation(
     variables with probability ``min(0.5, 1 / n_var)`` (not where the bounds coincide), within
     the bounds."""
     X = np.ascontiguousarray(X, dtype=np.float64)
-    bounds = Bounds(xl, xu)
-    return _pm(X, bounds, _pm_draws(X.shape[0], bounds, prob, rng), float(eta))
+    return _drawn_mutation(X, Bounds(xl, xu), float(eta), float(prob), rng)
+
+
+@kernel
+def _drawn_mutation(
+    X: FloatArray, bounds: Bounds, eta: float, prob: float, rng: np.random.Generator
+) -> FloatArray:
+    """:func:`polynomial_mutation` compiled, its draws included."""
+    return _pm(X, bounds, _pm_draws(X.shape[0], bounds, prob, rng), eta)
 
 
 @kernel
@@ -312,13 +324,24 @@ def offspring(
     A mating is crossed with probability ``prob``, each of its variables with probability 1/2
     (not when the parents are within 1e-14 or the bounds coincide); the two children's values of
     a crossed variable are exchanged with probability 1/2; children are clamped to the bounds.
-    Mutation is that of :func:`polynomial_mutation`.
+    Mutation is that of :func:`polynomial_mutation`. One compiled call
+    (:func:`_drawn_offspring`), the draws included.
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
-    bounds = Bounds(xl, xu)
-    sbx = _sbx_draws(X, bounds, crossover[1], rng)
-    pm = _pm_draws(2 * X.shape[1], bounds, mutation[1], rng)
-    return _offspring(X, bounds, sbx, float(crossover[0]), pm, float(mutation[0]))
+    return _drawn_offspring(X, Bounds(xl, xu), float(crossover[0]), float(crossover[1]),
+                            float(mutation[0]), float(mutation[1]), rng)  # fmt: skip
+
+
+@kernel
+def _drawn_offspring(
+    X: FloatArray, bounds: Bounds, crossover_eta: float, crossover_prob: float,
+    mutation_eta: float, mutation_prob: float, rng: np.random.Generator,
+) -> FloatArray:  # fmt: skip
+    """:func:`offspring` compiled: the SBX draws, then the PM draws, from ``rng``
+    (:func:`_sbx_draws`, :func:`_pm_draws`), then :func:`_offspring`."""
+    sbx = _sbx_draws(X, bounds, crossover_prob, rng)
+    pm = _pm_draws(2 * X.shape[1], bounds, mutation_prob, rng)
+    return _offspring(X, bounds, sbx, crossover_eta, pm, mutation_eta)
 
 
 @functools.cache  # once per process
