@@ -14,8 +14,10 @@ from typer.testing import CliRunner
 
 from hcomc.cli import app
 from hcomc.corridor import Corridor, load_corridor
+from hcomc.corridor.layout import lane_numbers
 from hcomc.corridor.schedule import departure_times
 from hcomc.metrics.corridor import simulate_corridor
+from hcomc.metrics.detectors import vehicle_rows
 
 CAR = {"length": 5.0, "desired_speed": 30.0, "max_speed": 50.0, "cav": {}}
 
@@ -80,6 +82,28 @@ def test_one_vehicle_on_a_loop_and_in_edies_cells():
     assert grid.time.sum() == pytest.approx(run.trips.travel_time.iloc[0] - 0.1, abs=1e-6)
     busy = grid[grid.time > 0]
     assert np.allclose(busy.distance / busy.time, 30.0)
+
+
+def test_edies_cells_sum_every_move_on_the_mainline_once():
+    # the oracle: numpy's bincount of each move of a vehicle from one logged row to its next
+    # on a mainline lane, into the cell of its midpoint and the period of its start
+    c = load_corridor("corridor")
+    c = c.model_copy(update={"corridor": c.corridor.model_copy(update={"duration": 300.0})})
+    run = simulate_corridor(c)
+    rows = vehicle_rows(run.log)
+    cell, period = c.detectors.cell_length, c.detectors.period
+    n_cells = int(np.ceil(c.road.length / cell))
+    n_periods = int(np.ceil(300.0 / period - 1e-9))
+    main = lane_numbers(c.road) >= 0
+    k = np.flatnonzero(rows.next_is_same() & main[rows.lane[:-1]])
+    where = np.clip((0.5 * (rows.x[k] + rows.x[k + 1]) / cell).astype(np.int64), 0, n_cells - 1)
+    when = np.clip((rows.t[k] / period).astype(np.int64), 0, n_periods - 1)
+    index, size = where * n_periods + when, n_cells * n_periods
+    distance = np.bincount(index, rows.x[k + 1] - rows.x[k], size)
+    spent = np.bincount(index, rows.t[k + 1] - rows.t[k], size)
+    assert k.size > 100_000  # a corridor's five minutes
+    np.testing.assert_array_equal(run.grid.distance.to_numpy(), distance)
+    np.testing.assert_array_equal(run.grid.time.to_numpy(), spent)
 
 
 def test_every_vehicle_is_accounted_for_and_counted_once_per_loop():

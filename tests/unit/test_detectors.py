@@ -10,7 +10,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.config import load_config
-from hcomc.metrics.detectors import DETECTOR_COLUMNS, crossings, detector_table
+from hcomc.metrics.detectors import (
+    DETECTOR_COLUMNS,
+    VehicleRows,
+    _passes,
+    crossings,
+    detector_table,
+    holders,
+    vehicle_rows,
+)
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import SimulationLog
 
@@ -125,3 +133,72 @@ def test_simulate_reports_the_detectors_and_refuses_bad_positions(tmp_path):
         assert shown in refused.stderr
         assert refused.stderr.strip().count("\n") == 0
         assert not (tmp_path / "no").exists()
+
+
+@pytest.mark.parametrize(("scenario", "seed"), [("C1", 0), ("C3", 2)])
+def test_vehicle_rows_gathers_each_active_cell_with_the_vehicle_holding_its_column(
+    scenario: str, seed: int
+):
+    # the oracle: numpy's scan of the (S, T) transpose, each cell's vehicle the last to take
+    # its column at or before its row (holders), against the compiled two-pass gathering
+    log = Simulation(load_config(scenario, duration=120.0), seed).run()
+    assert log.n_slots < log.n_vehicles  # columns handed on: several vehicles per column
+    cells = log.cells
+    column, row = np.nonzero(cells["active"].T)
+    vehicle = holders(log, row, column)
+    rows = vehicle_rows(log)
+    expected = {
+        "vehicle": vehicle, "row": row, "column": column, "t": log.t[row],
+        "x": cells["x"][row, column], "v": cells["v"][row, column],
+        "lane": cells["lane"][row, column], "length": np.asarray(log.length)[vehicle],
+    }  # fmt: skip
+    for name, values in expected.items():
+        got = getattr(rows, name)
+        assert got.dtype == (
+            np.int64 if name in ("vehicle", "row", "column", "lane") else np.float64
+        )
+        np.testing.assert_array_equal(got, values.astype(got.dtype), err_msg=name)
+    # every vehicle's cells together, in time order, and each active row of it once
+    assert (np.diff(rows.row)[rows.vehicle[1:] == rows.vehicle[:-1]] > 0).all()
+    on_road = {(int(i), int(k)) for i, k in zip(rows.vehicle, rows.row, strict=True)}
+    assert len(on_road) == rows.row.size == int(log.active.sum())
+
+
+def test_vehicle_rows_of_a_log_with_a_column_per_vehicle():
+    log = _constant_speed_log([0.0, 30.0, 60.0], [10.0, 12.0, 14.0], [1, 2, 1], duration=2.0)
+    rows = vehicle_rows(log)
+    assert rows.vehicle.tolist() == rows.column.tolist() == [0] * 21 + [1] * 21 + [2] * 21
+    np.testing.assert_array_equal(rows.x, log.x.T.ravel().astype(np.float32))
+    assert rows.lane.tolist() == [1] * 21 + [2] * 21 + [1] * 21
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.integers(0, 3), st.integers(0, 2), st.sampled_from([0.0, 5.0, 7.5, 10.0, 12.0, 20.0])
+        ),
+        max_size=40,
+    ),
+    st.lists(st.sampled_from([5.0, 7.5, 10.0, 15.0, 20.0]), min_size=1, max_size=5, unique=True),
+    st.booleans(),
+)
+def test_passes_are_those_of_numpys_binary_search(
+    entries: list[tuple[int, int, float]], positions: list[float], rear: bool
+):
+    # the oracle: numpy's searchsorted of every entry, kept for consecutive rows of a vehicle
+    # (positions at entries' exact values, vehicles moving back and forth, rows skipped)
+    vehicle = np.array([e[0] for e in entries], dtype=np.int64)
+    row = np.cumsum([e[1] for e in entries], dtype=np.int64)
+    x = np.array([e[2] for e in entries], dtype=np.float64)
+    length = np.full(x.size, 2.5)
+    zeros = np.zeros(x.size)
+    rows = VehicleRows(vehicle, row, row, zeros, x, zeros, row, length)
+    where = np.sort(np.array(positions))
+    p = x - length if rear else x
+    lo = np.searchsorted(where, p[:-1], side="right")
+    hi = np.searchsorted(where, p[1:], side="right")
+    same = (vehicle[1:] == vehicle[:-1]) & (row[1:] == row[:-1] + 1)
+    expected = [(k, j) for k in np.flatnonzero(same) for j in range(lo[k], hi[k])]
+    entry, index = _passes(rows, rear, where)
+    assert list(zip(entry.tolist(), index.tolist(), strict=True)) == expected

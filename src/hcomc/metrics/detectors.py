@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from hcomc._typing import FloatArray
+from hcomc.metrics.cell_passes import cells_by_column, pass_entries
 from hcomc.sim.log import SimulationLog
 
 __all__ = [
@@ -103,34 +104,25 @@ def holders(log: SimulationLog, row: np.ndarray, column: np.ndarray) -> np.ndarr
 
 
 def vehicle_rows(log: SimulationLog) -> VehicleRows:
-    """The active cells of ``log`` by vehicle (:class:`VehicleRows`)."""
+    """The active cells of ``log`` by vehicle (:class:`VehicleRows`), gathered in two passes
+    over its rows (:func:`hcomc.metrics.cell_passes.cells_by_column`)."""
     cells = log.cells
-    column, row = np.nonzero(cells["active"].T)  # by stored column, then row
-    vehicle = column.astype(np.int64)
-    if not log.one_column_per_vehicle:
-        vehicle = holders(log, row, column)
-    return VehicleRows(
-        vehicle=vehicle, row=row.astype(np.int64), column=column.astype(np.int64),
-        t=log.t[row].astype(np.float64), x=cells["x"][row, column].astype(np.float64),
-        v=cells["v"][row, column].astype(np.float64),
-        lane=cells["lane"][row, column].astype(np.int64),
-        length=np.asarray(log.length, dtype=np.float64)[vehicle],
-    )  # fmt: skip
+    first = np.asarray(log.span[:, 0], dtype=np.int64)
+    takers = np.flatnonzero(log.slot >= 0)  # the vehicles that took a column, by first row
+    takers = takers[np.argsort(first[takers], kind="stable")]
+    vehicle, row, column, t, x, v, lane = cells_by_column(
+        cells["active"], cells["x"], cells["v"], cells["lane"], log.t, log.slot, first, takers
+    )
+    length = np.asarray(log.length, dtype=np.float64)[vehicle]
+    return VehicleRows(vehicle, row, column, t, x, v, lane, length)
 
 
-def _passes(
-    x: FloatArray, follows: np.ndarray, positions: FloatArray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Entries k and position indices j with x[k] < positions[j] <= x[k + 1] for the
-    consecutive entries ``follows`` marks (positions sorted)."""
-    lo = np.searchsorted(positions, x[:-1], side="right")
-    hi = np.searchsorted(positions, x[1:], side="right")
-    moved = np.flatnonzero(follows & (hi > lo))
-    n = (hi - lo)[moved]
-    entry = np.repeat(moved, n)
-    first = np.repeat(lo[moved], n)
-    offset = np.arange(entry.size) - np.repeat(np.cumsum(n) - n, n)
-    return entry, first + offset
+def _passes(rows: VehicleRows, rear: bool, positions: FloatArray) -> tuple[np.ndarray, np.ndarray]:
+    """Entries k and position indices j with p[k] < positions[j] <= p[k + 1] for entries k and
+    k + 1 that are one vehicle's consecutive logged rows (:meth:`VehicleRows.next_is_same`),
+    where p is the front position ``x``, or with ``rear`` the rear ``x - length`` (positions
+    sorted): in the order of k, then j (:func:`hcomc.metrics.cell_passes.pass_entries`)."""
+    return pass_entries(rows.x, rows.length, rows.vehicle, rows.row, rear, positions)
 
 
 def _rear_times(
@@ -154,11 +146,10 @@ def _rear_times(
 def all_crossings(rows: VehicleRows, positions: Iterable[float]) -> dict[float, Crossings]:
     """The front crossings of each position [m] (module docstring), by position."""
     where = np.unique(np.asarray(list(positions), dtype=np.float64))
-    follows = rows.next_is_same()
-    k, j = _passes(rows.x, follows, where)
+    k, j = _passes(rows, False, where)
     share = (where[j] - rows.x[k]) / (rows.x[k + 1] - rows.x[k])
     t_front = rows.t[k] + share * (rows.t[k + 1] - rows.t[k])
-    rear_k, rear_j = _passes(rows.x - rows.length, follows, where)
+    rear_k, rear_j = _passes(rows, True, where)
     rear_share = (where[rear_j] - rows.x[rear_k] + rows.length[rear_k]) / (
         rows.x[rear_k + 1] - rows.x[rear_k]
     )

@@ -25,6 +25,7 @@ import pandas as pd
 
 from hcomc.corridor import Corridor
 from hcomc.interface import MergePlan
+from hcomc.metrics.cell_passes import closing_cells
 from hcomc.metrics.corridor.trips import first_event
 from hcomc.metrics.detectors import VehicleRows
 from hcomc.road import KEY_ROLES, VMC, VMR, VNR, VR
@@ -52,10 +53,6 @@ _DTYPES = {
 
 _WATCHED = (VR, VMC, VMR, VNR)
 
-_BLOCK = 2048
-"""Rows sorted at a time by :func:`closing_in`."""
-
-_LANE_APART = 1e7
 """Sort key distance between lanes [m]: more than any road is long."""
 
 
@@ -76,35 +73,17 @@ def _decided(decisions: list[MergePlan]) -> dict[int, dict[str, Any]]:
 def closing_in(log: SimulationLog, rows: VehicleRows) -> tuple[np.ndarray, np.ndarray]:
     """(T, S) time to collision [s] and deceleration rate to avoid a crash [m/s^2] of every
     stored cell's vehicle against its leader in its logged lane, where it closes in at
-    :data:`CLOSING_SPEED` or more (inf and 0 elsewhere). Rows are sorted by lane and
-    position a block at a time, so that memory stays a few times one block's."""
+    :data:`CLOSING_SPEED` or more (inf and 0 elsewhere):
+    :func:`~hcomc.metrics.cell_passes.closing_cells` over the
+    log's cells, each column's vehicle taken from ``rows`` (its length)."""
     cells = log.cells
-    shape = cells["x"].shape
-    length = np.zeros(shape, dtype=np.float32)
-    length[rows.row, rows.column] = rows.length
-    ttc = np.full(shape, np.inf, dtype=np.float32)
-    drac = np.zeros(shape, dtype=np.float32)
-    for r0 in range(0, shape[0], _BLOCK):
-        block = slice(r0, min(r0 + _BLOCK, shape[0]))
-        x = cells["x"][block].astype(np.float64)
-        lane, active = cells["lane"][block], cells["active"][block]
-        order = np.argsort(np.where(active, lane * _LANE_APART + x, np.inf), axis=1)
-
-        def by(a: np.ndarray, order: np.ndarray = order) -> np.ndarray:
-            return np.take_along_axis(a, order, axis=1)
-
-        xs, vs, ls, on = by(x), by(cells["v"][block]), by(lane), by(active)
-        led = on[:, :-1] & on[:, 1:] & (ls[:, 1:] == ls[:, :-1])
-        gap = np.maximum(xs[:, 1:] - by(length[block])[:, 1:] - xs[:, :-1], 1e-3)
-        closing = vs[:, :-1] - vs[:, 1:]
-        hit = led & (closing >= CLOSING_SPEED)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t_sorted = np.where(hit, gap / closing, np.inf)
-            d_sorted = np.where(hit, closing * closing / (2.0 * gap), 0.0)
-        rows_here = np.arange(order.shape[0])[:, None]
-        ttc[block][rows_here, order[:, :-1]] = t_sorted
-        drac[block][rows_here, order[:, :-1]] = d_sorted
-    return ttc, drac
+    length = np.zeros(log.n_vehicles, dtype=np.float32)
+    length[rows.vehicle] = rows.length
+    first = np.asarray(log.span[:, 0], dtype=np.int64)
+    takers = np.flatnonzero(log.slot >= 0)  # the vehicles that took a column, by first row
+    takers = takers[np.argsort(first[takers], kind="stable")]
+    return closing_cells(cells["active"], cells["x"], cells["v"], cells["lane"], length,
+                          log.slot, first, takers, CLOSING_SPEED)  # fmt: skip
 
 
 def _window_safety(

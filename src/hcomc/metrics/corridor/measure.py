@@ -27,6 +27,7 @@ import pandas as pd
 
 from hcomc.corridor import Corridor, detector_positions, sections
 from hcomc.corridor.layout import lane_numbers, ramp_lane_count
+from hcomc.metrics.cell_passes import edie_sums
 from hcomc.metrics.detectors import VehicleRows, detector_table, holders
 from hcomc.sim.log import EventKind, SimulationLog
 
@@ -71,14 +72,8 @@ def edie_cells(c: Corridor, rows: VehicleRows, duration: float) -> pd.DataFrame:
     n_cells = max(1, math.ceil(c.road.length / cell))
     n_periods = max(1, math.ceil(duration / period - 1e-9))
     main = lane_numbers(c.road) >= 0  # by lane code
-    k = np.flatnonzero(rows.next_is_same() & main[rows.lane[:-1]])
-    moved = rows.x[k + 1] - rows.x[k]
-    where = np.clip((0.5 * (rows.x[k] + rows.x[k + 1]) / cell).astype(np.int64), 0, n_cells - 1)
-    when = np.clip((rows.t[k] / period).astype(np.int64), 0, n_periods - 1)
-    index = where * n_periods + when
-    size = n_cells * n_periods
-    distance = np.bincount(index, moved, size).reshape(n_cells, n_periods)
-    spent = np.bincount(index, rows.t[k + 1] - rows.t[k], size).reshape(n_cells, n_periods)
+    distance, spent = edie_sums(rows.vehicle, rows.row, rows.t, rows.x, rows.lane, main,
+                                 cell, period, n_cells, n_periods)  # fmt: skip
     ix, it = np.meshgrid(np.arange(n_cells), np.arange(n_periods), indexing="ij")
     return pd.DataFrame({
         "x0": (ix * cell).ravel(), "x1": np.minimum((ix + 1) * cell, c.road.length).ravel(),
