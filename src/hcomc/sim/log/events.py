@@ -13,6 +13,8 @@ import math
 import numpy as np
 import pandas as pd
 
+from hcomc.sim.log.event_rows import WRONG_KIND, WRONG_VEHICLE, append_events
+
 __all__ = ["EVENT_DTYPE", "EventKind", "EventTable"]
 
 
@@ -70,7 +72,6 @@ EVENT_DTYPE = np.dtype(
 """Structured dtype of :attr:`SimulationLog.events` (packed, 41 bytes per event)."""
 
 _INITIAL_CAPACITY = 64
-_FEW = 16  # events appended one by one by extend_columns
 _FIRST_KIND, _LAST_KIND = int(min(EventKind)), int(max(EventKind))
 assert list(EventKind) == list(range(_FIRST_KIND, _LAST_KIND + 1))  # kinds are contiguous
 
@@ -143,39 +144,22 @@ class EventTable:
         self, t: np.ndarray, kind: np.ndarray, vehicle: np.ndarray, other: np.ndarray,
         x: np.ndarray, value: np.ndarray,
     ) -> None:  # fmt: skip
-        """:meth:`extend` from one array per field (the engine's event buffers)."""
+        """:meth:`extend` from one array per field (the engine's event buffers), checked and
+        written by one compiled call (:func:`hcomc.sim.log.event_rows.append_events`)."""
         m = len(t)
         if m == 0:
             return
+        if self._n + m > self._buf.size:
+            grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
+            grown[: self._n] = self._buf[: self._n]
+            self._buf = grown
         n = self.n_vehicles
-        if m <= _FEW:  # a few events: Python lists are cheaper than array calls
-            cols = [t.tolist(), kind.tolist(), vehicle.tolist(), other.tolist(), x.tolist(),
-                    value.tolist()]  # fmt: skip
-            lo = (min(cols[1]), min(cols[2]), min(cols[3]))
-            hi = (max(cols[1]), max(cols[2]), max(cols[3]))
-        else:
-            lo = (kind.min(), vehicle.min(), other.min())
-            hi = (kind.max(), vehicle.max(), other.max())
-        if lo[0] < _FIRST_KIND or hi[0] > _LAST_KIND:
+        wrong = append_events(self._buf, self._n, (t, kind, vehicle, other, x, value), n,
+                              _FIRST_KIND, _LAST_KIND)  # fmt: skip
+        if wrong == WRONG_KIND:
             raise ValueError(f"unknown event kinds in {sorted(set(kind.tolist()))}")
-        if lo[1] < 0 or hi[1] >= n or lo[2] < -1 or hi[2] >= n:
+        if wrong == WRONG_VEHICLE:
             raise ValueError(f"event vehicles outside [0, {n}) (other: [-1, {n}))")
-        if self._n + m > self._buf.size:
-            grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
-            grown[: self._n] = self._buf[: self._n]
-            self._buf = grown
-        if m <= _FEW:
-            for k, row in enumerate(zip(*cols, strict=True)):
-                self._buf[self._n + k] = row
-            self._n += m
-            return
-        if self._n + m > self._buf.size:
-            grown = np.empty(max(2 * self._buf.size, self._n + m), dtype=EVENT_DTYPE)
-            grown[: self._n] = self._buf[: self._n]
-            self._buf = grown
-        rows = self._buf[self._n : self._n + m]
-        rows["t"], rows["kind"], rows["vehicle"] = t, kind, vehicle
-        rows["other"], rows["x"], rows["value"] = other, x, value
         self._n += m
 
     def since(self, start: int) -> np.ndarray:
