@@ -38,13 +38,17 @@ class MergeGroup:
     vnf: int = -1
     vnr: int = -1
 
+    def as_tuple(self) -> tuple[int, int, int, int, int, int]:
+        """Indices in role order VR, VMC, VMF, VMR, VNF, VNR."""
+        return (self.vr, self.vmc, self.vmf, self.vmr, self.vnf, self.vnr)
+
     def as_array(self) -> IntArray:
         """Indices in role order VR, VMC, VMF, VMR, VNF, VNR."""
-        return np.array([self.vr, self.vmc, self.vmf, self.vmr, self.vnf, self.vnr])
+        return np.array(self.as_tuple())
 
     def as_dict(self) -> dict[str, int]:
         """Role name -> vehicle index."""
-        return dict(zip(KEY_ROLES, self.as_array().tolist(), strict=True))
+        return dict(zip(KEY_ROLES, self.as_tuple(), strict=True))
 
 
 @dataclass(frozen=True, slots=True)

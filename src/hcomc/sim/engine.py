@@ -142,7 +142,9 @@ class Simulation(EnginePlans):
 
     def _next_stage(self) -> None:
         if self._stage == 0:
-            self._release(self.t)  # vehicles due at t = 0 are on the road in the first row
+            # vehicles due at t = 0 are on the road in the first row; their events are moved
+            # into the log with the stage's (every driver flushes before it returns)
+            step_loop.release(self.core, self.t)
             self._record()
         else:
             self.flush_events()
@@ -309,11 +311,6 @@ class Simulation(EnginePlans):
                 chosen, target = chosen[keep], target[keep]
             step_loop.start_lane_changes(self.core, chosen, target, t, _NO_FLOAT)
         step_loop.step_back(self.core, ids, t, acc, index)
-
-    def _release(self, t: float) -> None:
-        """Insert the vehicles due at t (a no-op when repeated at the same t)."""
-        step_loop.release(self.core, t)
-        self.flush_events()
 
     def follow(self, ids: IntArray, leader: IntArray) -> FloatArray:
         """Car-following acceleration behind ``leader`` (-1: none), HDVs perceiving Eq. 2."""
