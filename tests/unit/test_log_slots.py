@@ -176,3 +176,32 @@ def test_a_scene_that_starts_full_logs_without_widening(monkeypatch) -> None:
     assert narrow.active[0].sum() == 141
     for name in CELL_FIELDS:
         _same(narrow.cells[name], log.cells[name])
+
+
+def test_a_log_widened_while_written_equals_one_allocated_wide(monkeypatch):
+    """The corridor fills from an empty road: its log (64 columns to start) widens while the
+    run writes it. The finished log equals, cell for cell, that of the same run with a column
+    per vehicle from the start (which never widens)."""
+    from hcomc.corridor import load_corridor
+    from hcomc.metrics.corridor import simulate_corridor
+    from hcomc.sim.step import build
+
+    c = load_corridor("corridor")
+    grown: list[int] = []
+    grow = SimulationLog.grow_slots
+    monkeypatch.setattr(
+        SimulationLog, "grow_slots", lambda log, n: (grown.append(n), grow(log, n))[1]
+    )
+    narrow = simulate_corridor(c, duration=240.0).log
+    assert grown == [128, 256]  # 64 -> 128 -> 256 columns while the road fills
+    grown.clear()
+    monkeypatch.setattr(build, "initial_slots", lambda demand: demand.n)
+    wide = simulate_corridor(c, duration=240.0).log
+    assert grown == []
+    assert narrow.n_slots == wide.n_slots
+    for name in CELL_FIELDS:
+        _same(narrow.cells[name], wide.cells[name])
+    np.testing.assert_array_equal(narrow.t, wide.t)
+    np.testing.assert_array_equal(narrow.slot, wide.slot)
+    np.testing.assert_array_equal(narrow.span, wide.span)
+    assert narrow.events.tobytes() == wide.events.tobytes()  # NaN payloads among them
