@@ -1,9 +1,10 @@
 """Compiled passes over a run log's stored cells, for the measures read from the log.
 
 A corridor hour logs some ten million (row, vehicle) cells. Numpy's vectorised forms of these
-measures build arrays the size of the log at every step (masks, gathers, differences), and in
-a fresh process each such array costs its memory's first touch; here each measure is one or
-two compiled passes in the order the cells are stored, writing only what it returns. The
+measures build an array the size of the log for each of their intermediate results (masks,
+gathers, differences), and in a fresh process each such array costs its memory's first touch;
+here each measure is one or two compiled passes in the order the cells are stored, writing only
+what it returns. The
 results are those of the numpy forms, in the same order of summation (the tests hold them to
 it): :func:`cells_by_column` (the cells by vehicle,
 :func:`hcomc.metrics.detectors.vehicle_rows`), :func:`pass_entries` (detector crossings),
