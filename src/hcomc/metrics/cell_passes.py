@@ -20,7 +20,8 @@ from hcomc._jit import kernel
 from hcomc._typing import FloatArray
 
 LANE_APART = 1e7
-"""Lanes apart in :func:`closing_cells`'s sort key (lane x LANE_APART + position)."""
+"""Lanes apart in :func:`closing_cells`'s sort key (lane x LANE_APART + position) [m]: more
+than any road is long."""
 
 _BLOCK = 16
 """Columns :func:`cells_by_column` gathers side by side: one cache line of a row of ``active``

@@ -41,8 +41,8 @@ from hcomc.metrics.cell_passes import cells_by_column, pass_entries
 from hcomc.sim.log import SimulationLog
 
 __all__ = [
-    "DETECTOR_COLUMNS", "Crossings", "VehicleRows", "all_crossings", "crossings",
-    "detector_table", "holders", "vehicle_rows",
+    "DETECTOR_COLUMNS", "Crossings", "VehicleRows", "all_crossings", "column_takers",
+    "crossings", "detector_table", "holders", "vehicle_rows",
 ]  # fmt: skip
 
 DETECTOR_COLUMNS = (
@@ -103,13 +103,20 @@ def holders(log: SimulationLog, row: np.ndarray, column: np.ndarray) -> np.ndarr
     return held[order][at]
 
 
+def column_takers(log: SimulationLog) -> tuple[np.ndarray, np.ndarray]:
+    """Each vehicle's first logged row, and the vehicles that took a stored column, ordered
+    by that row (stably): what the compiled passes walk to know a column's holder at a row
+    (:mod:`hcomc.metrics.cell_passes`)."""
+    first = np.asarray(log.span[:, 0], dtype=np.int64)
+    takers = np.flatnonzero(log.slot >= 0)
+    return first, takers[np.argsort(first[takers], kind="stable")]
+
+
 def vehicle_rows(log: SimulationLog) -> VehicleRows:
     """The active cells of ``log`` by vehicle (:class:`VehicleRows`), gathered in two passes
     over its rows (:func:`hcomc.metrics.cell_passes.cells_by_column`)."""
     cells = log.cells
-    first = np.asarray(log.span[:, 0], dtype=np.int64)
-    takers = np.flatnonzero(log.slot >= 0)  # the vehicles that took a column, by first row
-    takers = takers[np.argsort(first[takers], kind="stable")]
+    first, takers = column_takers(log)
     vehicle, row, column, t, x, v, lane = cells_by_column(
         cells["active"], cells["x"], cells["v"], cells["lane"], log.t, log.slot, first, takers
     )

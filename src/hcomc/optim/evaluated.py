@@ -12,6 +12,7 @@ generation's bookkeeping is two compiled calls around the problem's evaluation.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -132,6 +133,7 @@ class EvaluatedRows:
         return np.arange(start, end)
 
 
+@functools.cache  # once per process
 def warm_up() -> None:
     """Compile (or load from numba's cache) every kernel of this module now."""
     X = np.zeros((2, 1))

@@ -6,18 +6,19 @@ constraint violation, domination and crowding, rank-and-crowding survival with f
 no duplicate elimination) on plain arrays. A generation costs a handful of compiled calls: survival
 (:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival with the tournaments
 (:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
-(:func:`hcomc.optim.variation.offspring`); Python draws the random numbers in between, the same
-numbers in the same order as pymoo from a generator seeded like pymoo's, and leaves to numpy the two
-sorts whose order of ties is numpy's own. The formulas are pymoo's, but the powers are the C
-library's (:mod:`hcomc.optim.variation`) and the constraint violation a plain sum
-(:func:`hcomc.optim.evaluated.violation`), never numpy's CPU-dispatched functions, so that a run is
-the same on every processor; where numpy's functions differ from the C library's, a run can part
-from pymoo's in the last bit and go its own way. The tests hold it to pymoo's solution quality on
-the recorded merge problems (``tests/unit/test_nsga2_compiled.py``). Evaluated rows go into one
-preallocated archive (:class:`hcomc.optim.evaluated.EvaluatedRows`), from which the Pareto set is
-taken in one compiled pass (:func:`hcomc.optim.base.archive_front`); a row equal to one the run
-evaluated before takes that row's values instead of a second evaluation (the same numbers), and
-still counts in the budget and in ``n_eval``, as in pymoo without duplicate elimination.
+(:func:`hcomc.optim.variation.offspring`, its draws included), with survival's and the tournaments'
+draws made in Python in between: all the same numbers in the same order as pymoo's, from a generator
+seeded like pymoo's. Numpy is left the two sorts whose order of ties is numpy's own. The formulas
+are pymoo's, but the powers are the C library's (:mod:`hcomc.optim.variation`) and the constraint
+violation a plain sum (:func:`hcomc.optim.evaluated.violation`), never numpy's CPU-dispatched
+functions, so that a run is the same on every processor; where numpy's functions differ from the C
+library's, a run can part from pymoo's in the last bit and go its own way. The tests hold it to
+pymoo's solution quality on the recorded merge problems (``tests/unit/test_nsga2_compiled.py``).
+Evaluated rows go into one preallocated archive (:class:`hcomc.optim.evaluated.EvaluatedRows`), from
+which the Pareto set is taken in one compiled pass (:func:`hcomc.optim.base.archive_front`); a row
+equal to one the run evaluated before takes that row's values instead of a second evaluation (the
+same numbers), and still counts in the budget and in ``n_eval``, as in pymoo without duplicate
+elimination.
 
 Budget, seeding, warm start and the returned set are those of the pymoo optimiser:
 ``n_gen = max(1, budget // pop_size)`` generations of ``pop_size`` rows; one integer seed

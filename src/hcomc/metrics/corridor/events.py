@@ -27,7 +27,7 @@ from hcomc.corridor import Corridor
 from hcomc.interface import MergePlan
 from hcomc.metrics.cell_passes import closing_cells
 from hcomc.metrics.corridor.trips import first_event
-from hcomc.metrics.detectors import VehicleRows
+from hcomc.metrics.detectors import VehicleRows, column_takers
 from hcomc.road import KEY_ROLES, VMC, VMR, VNR, VR
 from hcomc.safety.surrogate import CLOSING_SPEED
 from hcomc.sim.log import EventKind, SimulationLog
@@ -53,8 +53,6 @@ _DTYPES = {
 
 _WATCHED = (VR, VMC, VMR, VNR)
 
-"""Sort key distance between lanes [m]: more than any road is long."""
-
 
 def _decided(decisions: list[MergePlan]) -> dict[int, dict[str, Any]]:
     def empty() -> dict[str, Any]:
@@ -79,9 +77,7 @@ def closing_in(log: SimulationLog, rows: VehicleRows) -> tuple[np.ndarray, np.nd
     cells = log.cells
     length = np.zeros(log.n_vehicles, dtype=np.float32)
     length[rows.vehicle] = rows.length
-    first = np.asarray(log.span[:, 0], dtype=np.int64)
-    takers = np.flatnonzero(log.slot >= 0)  # the vehicles that took a column, by first row
-    takers = takers[np.argsort(first[takers], kind="stable")]
+    first, takers = column_takers(log)
     return closing_cells(cells["active"], cells["x"], cells["v"], cells["lane"], length,
                           log.slot, first, takers, CLOSING_SPEED)  # fmt: skip
 
