@@ -1,5 +1,7 @@
-"""The step's sort of lane entries (hcomc.sim.neighbours.sort_entries and the natural merge
-sort hcomc.sim.arrays.sort_runs it uses lane by lane) against numpy's stable argsort."""
+"""The step's sort of lane entries (hcomc.sim.neighbours.sort_entries, the natural merge
+sort hcomc.sim.arrays.sort_runs it uses lane by lane on the paper road, and the resort from
+the previous step's order, hcomc.sim.arrays.resort_into, that the engine's steps use) against
+numpy's stable argsort."""
 
 from __future__ import annotations
 
@@ -8,8 +10,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hcomc.sim.arrays import sort_runs
-from hcomc.sim.neighbours import OFFSET, build_lane_index, neighbour, neighbours_into
+from hcomc.sim.arrays import resort_into, sort_runs
+from hcomc.sim.neighbours import (
+    OFFSET,
+    PreviousOrder,
+    build_lane_index,
+    neighbour,
+    neighbours_into,
+    sort_entries_into,
+)
 
 
 def _stable(vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -105,3 +114,81 @@ def test_neighbours_into_is_neighbour_of_each_entry(xs, lanes, step):
         for k in range(x.size)
     ]
     np.testing.assert_array_equal(out, want)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    keys=st.lists(st.integers(0, 8).map(float), max_size=60),
+    kept=st.lists(st.booleans(), min_size=60, max_size=60),
+    seed=st.integers(0, 2**16),
+    swaps=st.integers(0, 6),
+)
+def test_resort_gives_the_stable_order_from_any_start(keys, kept, seed, swaps):
+    """Kept indices in a nearly sorted order (a few swaps), the others added in ascending
+    order: the result is numpy's stable order, or False when the moves exceed the budget."""
+    k = np.array(keys, dtype=np.float64)
+    stable = np.argsort(k, kind="stable")
+    keep = np.array(kept[: k.size], dtype=bool)
+    start = stable[keep[stable]].copy()
+    rng = np.random.default_rng(seed)
+    for _ in range(swaps if start.size > 1 else 0):
+        a, b = rng.integers(0, start.size, 2)
+        start[[a, b]] = start[[b, a]]
+    order = np.zeros(k.size, dtype=np.int64)
+    order[: start.size] = start
+    added = np.flatnonzero(~keep).astype(np.int64)
+    work = np.concatenate([added, np.zeros(k.size - added.size, dtype=np.int64)])
+    assert resort_into(k, order, start.size, work, added.size, 10**6)
+    np.testing.assert_array_equal(order, stable)
+
+
+def test_resort_gives_up_beyond_its_budget_or_on_nan():
+    k = np.arange(50, dtype=np.float64)
+    reverse = np.arange(50, dtype=np.int64)[::-1].copy()
+    assert not resort_into(k, reverse.copy(), 50, np.zeros(0, dtype=np.int64), 0, 100)
+    assert resort_into(k, reverse.copy(), 50, np.zeros(0, dtype=np.int64), 0, 50 * 49 // 2)
+    k[3] = np.nan
+    assert not resort_into(k, np.arange(50, dtype=np.int64), 50, np.zeros(0, np.int64), 0, 10**6)
+
+
+def _step_entries(
+    rng: np.random.Generator, x: np.ndarray, lane: np.ndarray, alive: np.ndarray, lanes: int
+):
+    """One step of a road of lanes ``0 .. lanes - 1``: vehicles move on at random speeds
+    (overtaking each other), a few enter, leave, change lane (a changer has a second entry in
+    its target lane, after all first entries)."""
+    x += rng.uniform(0.0, 3.0, x.size)
+    alive &= rng.random(x.size) > 0.02
+    born = ~alive & (rng.random(x.size) < 0.05)
+    alive |= born
+    x[born] = rng.choice([0.0, 500.0, 1000.0], born.sum())  # ramps: ties with each other
+    lane[born] = rng.integers(0, lanes, born.sum())
+    moved = alive & (rng.random(x.size) < 0.03)
+    lane[moved] = rng.integers(0, lanes, moved.sum())
+    ids = np.flatnonzero(alive)
+    changers = ids[rng.random(ids.size) < 0.1]
+    vehicle = np.concatenate([ids, changers]).astype(np.int64)
+    lane_of = np.concatenate([lane[ids], (lane[changers] + 1) % lanes]).astype(np.int64)
+    return vehicle, lane_of, x[vehicle]
+
+
+@pytest.mark.parametrize("lanes", [3, 8])
+def test_entries_sorted_from_the_previous_steps_order_equal_a_fresh_sort(lanes):
+    """The engine's path: each step sorts from the last step's sorted entries
+    (:class:`PreviousOrder`) and must give numpy's stable order, as a fresh sort; on the
+    paper road's three lane codes and on a road of eight."""
+    rng = np.random.default_rng(11)
+    n = 300
+    x, lane = rng.uniform(0.0, 2000.0, n), rng.integers(0, lanes, n)
+    alive = rng.random(n) < 0.7
+    width = 2 * n + 1
+    ints = np.zeros((7, width), dtype=np.int64)
+    floats = np.zeros((2, width))
+    n_sorted = 0
+    for _ in range(200):
+        vehicle, lane_of, xs = _step_entries(rng, x, lane, alive, lanes)
+        previous = PreviousOrder(n_sorted, ints[5], ints[6])
+        got = sort_entries_into(vehicle, lane_of, xs, *ints[:5], *floats, previous)
+        for g, want in zip(got, _stable(vehicle, lane_of, xs), strict=True):
+            np.testing.assert_array_equal(g, want)
+        n_sorted = vehicle.size

@@ -211,3 +211,63 @@ def join(parts: tuple[np.ndarray, ...]) -> np.ndarray:
         out[m : m + p.size] = p
         m += p.size
     return out
+
+
+@kernel(inline="always")
+def _after(keys: np.ndarray, p: int, q: int) -> bool:
+    """Whether index p comes after index q in the stable order of ``keys``: a larger key, or
+    an equal key and a larger index."""
+    return keys[p] > keys[q] or (keys[p] == keys[q] and p > q)
+
+
+@kernel
+def resort_into(
+    keys: np.ndarray, order: np.ndarray, n_kept: int, added: np.ndarray, n_added: int,
+    budget: int,
+) -> bool:  # fmt: skip
+    """The stable order of ``keys`` (as :func:`stable_argsort`) in ``order[:keys.size]``,
+    from a nearly sorted start: ``order[:n_kept]`` holds some indices in about their order
+    (the previous step's), ``added[:n_added]`` the others in ascending index order, and
+    ``n_kept + n_added == keys.size``.
+
+    Both parts are put in order by insertion, which costs one comparison per index and one
+    move per inversion, then merged from the back of ``order``. Equal keys are ordered by
+    index, so the result is the one stable order whatever the start. False (``order`` then
+    undefined) when they need more than ``budget`` moves or a key is NaN: the caller sorts
+    afresh.
+    """
+    for p in range(keys.size):
+        if keys[p] != keys[p]:
+            return False
+    moves = 0
+    for i in range(1, n_kept):
+        item = order[i]
+        j = i - 1
+        while j >= 0 and _after(keys, order[j], item):
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = item
+        moves += i - 1 - j
+        if moves > budget:
+            return False
+    for i in range(1, n_added):  # ascending indices: a strict comparison keeps ties in order
+        item = added[i]
+        j = i - 1
+        while j >= 0 and keys[added[j]] > keys[item]:
+            added[j + 1] = added[j]
+            j -= 1
+        added[j + 1] = item
+        moves += i - 1 - j
+        if moves > budget:
+            return False
+    a, b = n_kept - 1, n_added - 1
+    for w in range(n_kept + n_added - 1, -1, -1):  # the larger tail goes last
+        if b < 0:
+            break
+        if a >= 0 and _after(keys, order[a], added[b]):
+            order[w] = order[a]
+            a -= 1
+        else:
+            order[w] = added[b]
+            b -= 1
+    return True

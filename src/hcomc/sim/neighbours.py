@@ -20,11 +20,20 @@ import numpy as np
 from hcomc._jit import borrow, kernel
 from hcomc._typing import FloatArray, IntArray
 from hcomc.road import Lane
-from hcomc.sim.arrays import search_right, sort_runs, stable_argsort_into
+from hcomc.sim.arrays import resort_into, search_right, sort_runs, stable_argsort_into
 
 OFFSET = 1.0e7
 """Key offset between lanes [m]; larger than any road length."""
 _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
+
+
+class PreviousOrder(NamedTuple):
+    """The entries the step sorted last, from which :func:`sort_entries_into` starts: their
+    vehicles and lanes are the first ``n_sorted`` of its ``vehicle_out`` and ``lane_out``."""
+
+    n_sorted: int  # entries sorted by the previous step (0: none, sort afresh)
+    first_of: np.ndarray  # (N,) work: the given position of each vehicle's first entry
+    second_of: np.ndarray  # (N,) work: the given position of its second entry, -1 if none
 
 
 @kernel
@@ -36,24 +45,37 @@ def sort_entries(
     n = vehicle.size
     ints = np.empty((5, n), dtype=np.int64)
     floats = np.empty((2, n))
+    no_previous = PreviousOrder(0, ints[0, :0], ints[0, :0])
     return sort_entries_into(
-        vehicle, lane, x, ints[0], ints[1], ints[2], ints[3], ints[4], floats[0], floats[1]
-    )
+        vehicle, lane, x, ints[0], ints[1], ints[2], ints[3], ints[4], floats[0], floats[1],
+        no_previous,
+    )  # fmt: skip
 
 
 @kernel(inline="always")  # its four views returned from a call would be reference-counted
 def sort_entries_into(
     vehicle: np.ndarray, lane: np.ndarray, x: np.ndarray, order: np.ndarray,
     buffer: np.ndarray, rank: np.ndarray, vehicle_out: np.ndarray, lane_out: np.ndarray,
-    key: np.ndarray, key_out: np.ndarray,
+    key: np.ndarray, key_out: np.ndarray, previous: PreviousOrder,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """:func:`sort_entries` in the caller's work arrays (each at least as long as
-    ``vehicle``); returns views of them."""
+    ``vehicle``); returns views of them.
+
+    The entries are ordered from the order of the previous step's (``previous``, whose
+    vehicles and lanes ``vehicle_out`` and ``lane_out`` still hold), which vehicles rarely
+    change (:func:`_order_from_previous`); the first step's on the paper road lane by lane
+    (:func:`_order_by_lane`), and by the general sort when neither applies. All three give
+    the one stable order."""
     n = vehicle.size
     key = key[:n]
     for p in range(n):
         key[p] = lane[p] * OFFSET + x[p]
-    if not _order_by_lane(lane, key, order, buffer):
+    ordered = previous.n_sorted > 0 and _order_from_previous(
+        vehicle, lane, key, vehicle_out, lane_out, previous, order, buffer, rank
+    )
+    if not ordered:
+        ordered = _order_by_lane(lane, key, order, buffer)
+    if not ordered:
         order = stable_argsort_into(key, order, buffer)
     rank, vehicle_out, lane_out, key_out = rank[:n], vehicle_out[:n], lane_out[:n], key_out[:n]
     for p in range(n):
@@ -104,6 +126,51 @@ def _order_by_lane(
             return False
         last = key[order[hi - 1]]
     return True
+
+
+@kernel
+def _order_from_previous(
+    vehicle: np.ndarray, lane: np.ndarray, key: np.ndarray, previous_vehicle: np.ndarray,
+    previous_lane: np.ndarray, previous: PreviousOrder, order: np.ndarray, buffer: np.ndarray,
+    placed: np.ndarray,
+) -> bool:  # fmt: skip
+    """The stable order of ``key`` in ``order[:n]``, from the previous step's sorted entries
+    (``previous.n_sorted`` of them, (vehicle, lane) in ``previous_vehicle``, ``previous_lane``):
+    each entry that was there starts at its place then, each new one (a vehicle entered, a
+    change begun) among the others; :func:`~hcomc.sim.arrays.resort_into` orders them, in
+    one pass when nobody overtook. A vehicle's entries are found by ``previous``'s work
+    arrays; ``placed`` (n,) is work space. False (``order`` then undefined) when the order
+    changed too much, for the general sort."""
+    n = vehicle.size
+    first_of, second_of = previous.first_of, previous.second_of
+    for p in range(n):  # a vehicle's entries in the order given: the first, then its other
+        i = vehicle[p]
+        f = first_of[i]
+        if 0 <= f < p and vehicle[f] == i:
+            second_of[i] = p
+        else:
+            first_of[i], second_of[i] = p, -1
+        placed[p] = 0
+    n_kept = 0
+    for e in range(previous.n_sorted):
+        i, lane_then = previous_vehicle[e], previous_lane[e]
+        p = first_of[i]
+        if not (0 <= p < n and vehicle[p] == i):
+            continue  # the vehicle has left the road
+        if lane[p] != lane_then:
+            p = second_of[i]
+            if p < 0 or lane[p] != lane_then:
+                continue  # it has left that lane
+        if not placed[p]:
+            placed[p] = 1
+            order[n_kept] = p
+            n_kept += 1
+    n_added = 0
+    for p in range(n):
+        if not placed[p]:
+            buffer[n_added] = p
+            n_added += 1
+    return resort_into(key, order, n_kept, buffer, n_added, 4 * n + 64)
 
 
 @kernel(inline="always")

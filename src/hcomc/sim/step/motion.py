@@ -31,7 +31,13 @@ from hcomc.sim.lane_table import (
     MIN_CHANGE_LENGTHS,
 )
 from hcomc.sim.mobil import LC_SAFE_DECEL, NOT_KNOWN
-from hcomc.sim.neighbours import LaneIndex, lookup_one, neighbours_into, sort_entries_into
+from hcomc.sim.neighbours import (
+    LaneIndex,
+    PreviousOrder,
+    lookup_one,
+    neighbours_into,
+    sort_entries_into,
+)
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
 from hcomc.sim.step.road import lane_end_at, road_of, section_at, speed_limit, stop_point
 from hcomc.sim.step.state import (
@@ -46,12 +52,14 @@ from hcomc.sim.step.state import (
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
+    N_ENTRIES,
     PERCEIVE,
     S_ACC,
     S_BUFFER,
     S_CHANGER_IDS,
     S_CHANGERS,
     S_CHANGING,
+    S_FIRST_ENTRY,
     S_GAP,
     S_IN_ORI,
     S_IN_TGT,
@@ -69,6 +77,7 @@ from hcomc.sim.step.state import (
     S_NEW_LEADER,
     S_ORDER,
     S_RANK,
+    S_SECOND_ENTRY,
     S_SPEED,
     S_VEH,
     S_VS,
@@ -174,10 +183,12 @@ def lane_index(
             continue
         veh[m], lanes[m], xs[m] = i, (c.origin[i] if crossed else c.target[i]), c.x[i]
         m += 1
+    previous = PreviousOrder(c.counters[N_ENTRIES], si[S_FIRST_ENTRY], si[S_SECOND_ENTRY])
     vs, ls, ks, rank = sort_entries_into(
         veh[:m], lanes[:m], xs[:m], si[S_ORDER], si[S_BUFFER], si[S_RANK], si[S_VS], si[S_LS],
-        sf[S_KEY], sf[S_KS],
+        sf[S_KEY], sf[S_KS], previous,
     )  # fmt: skip
+    c.counters[N_ENTRIES] = m
     return LaneIndex(vs, ls, ks, rank), in_ori, in_tgt
 
 

@@ -26,7 +26,8 @@ EV_FALLBACK, EV_MISSED_EXIT, EV_LC_ABORT = 8, 9, 10
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_KEYS = 8  # key groups found by the compiled loop (rows of ``key_table``)
-N_COUNTERS = 9
+N_ENTRIES = 9  # lane entries the last step sorted (their order is the next step's start)
+N_COUNTERS = 10
 # consts
 (DT, WARMUP, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
  LOOKAHEAD, URGENT) = range(11)  # fmt: skip
@@ -52,7 +53,9 @@ S_POS, S_CAND, S_CAND_LANE, S_CAND_LEADER, S_CAND_FOLLOWER, S_CAND_TARGET = rang
 S_MOBIL = 17
 S_CHANGERS, S_CHANGER_IDS, S_NEW_LEADER = range(21, 24)
 S_KNOWN_LEADER = 24  # the leader behind which each vehicle's S_KNOWN was taken (MOBIL's reuse)
-N_SCRATCH_INT = 25
+# where each vehicle's lane entries are in this step's given order (the sort's work rows)
+S_FIRST_ENTRY, S_SECOND_ENTRY = 25, 26
+N_SCRATCH_INT = 27
 S_X, S_KEY, S_KS, S_ACC, S_VV = range(5)  # S_VV .. S_VV + 3: x, v, a, length of virtual rows
 S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # car following
 S_MOBIL_F = 14  # .. S_MOBIL_F + 1: MOBIL's work rows over the vehicles
