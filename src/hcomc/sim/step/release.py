@@ -67,9 +67,11 @@ def _ahead(c: CoreArrays, lane: int, x: float, clear: float) -> int:
     from or to it) (-1: none; -2: the lane is taken, a vehicle's front lying in
     ``[x - clear, x)``)."""
     j, best = -1, math.inf
-    for k in range(c.x.size):
-        overlaps = c.lane[k] == lane or c.target[k] == lane or c.origin[k] == lane
-        if not (c.active[k] and overlaps):
+    active, lanes, targets, origins = c.active, c.lane, c.target, c.origin
+    for k in range(active.size):  # most of a long run's vehicles are not (or no longer) on it
+        if not active[k]:
+            continue
+        if not (lanes[k] == lane or targets[k] == lane or origins[k] == lane):
             continue
         if x <= c.x[k] < best:
             j, best = k, c.x[k]
