@@ -183,12 +183,11 @@ def test_entries_sorted_from_the_previous_steps_order_equal_a_fresh_sort(lanes):
     alive = rng.random(n) < 0.7
     width = 2 * n + 1
     ints = np.zeros((7, width), dtype=np.int64)
+    ints[3] = -1  # the sorted vehicles' row: nothing sorted yet
     floats = np.zeros((2, width))
-    n_sorted = 0
     for _ in range(200):
         vehicle, lane_of, xs = _step_entries(rng, x, lane, alive, lanes)
-        previous = PreviousOrder(n_sorted, ints[5], ints[6])
+        previous = PreviousOrder(True, ints[5], ints[6])
         got = sort_entries_into(vehicle, lane_of, xs, *ints[:5], *floats, previous)
         for g, want in zip(got, _stable(vehicle, lane_of, xs), strict=True):
             np.testing.assert_array_equal(g, want)
-        n_sorted = vehicle.size

@@ -29,9 +29,10 @@ _RAMP, _MAIN_1, _MAIN_2 = int(Lane.RAMP), int(Lane.MAIN_1), int(Lane.MAIN_2)
 
 class PreviousOrder(NamedTuple):
     """The entries the step sorted last, from which :func:`sort_entries_into` starts: their
-    vehicles and lanes are the first ``n_sorted`` of its ``vehicle_out`` and ``lane_out``."""
+    vehicles and lanes, which its ``vehicle_out`` and ``lane_out`` hold from the last sort
+    until a vehicle -1 (the engine's work rows start with -1: nothing sorted yet)."""
 
-    n_sorted: int  # entries sorted by the previous step (0: none, sort afresh)
+    kept: bool  # whether they do (False: the arrays hold nothing of a last sort)
     first_of: np.ndarray  # (N,) work: the given position of each vehicle's first entry
     second_of: np.ndarray  # (N,) work: the given position of its second entry, -1 if none
 
@@ -45,7 +46,7 @@ def sort_entries(
     n = vehicle.size
     ints = np.empty((5, n), dtype=np.int64)
     floats = np.empty((2, n))
-    no_previous = PreviousOrder(0, ints[0, :0], ints[0, :0])
+    no_previous = PreviousOrder(False, ints[0, :0], ints[0, :0])
     return sort_entries_into(
         vehicle, lane, x, ints[0], ints[1], ints[2], ints[3], ints[4], floats[0], floats[1],
         no_previous,
@@ -70,13 +71,15 @@ def sort_entries_into(
     key = key[:n]
     for p in range(n):
         key[p] = lane[p] * OFFSET + x[p]
-    ordered = previous.n_sorted > 0 and _order_from_previous(
+    ordered = previous.kept and _order_from_previous(
         vehicle, lane, key, vehicle_out, lane_out, previous, order, buffer, rank
     )
     if not ordered:
         ordered = _order_by_lane(lane, key, order, buffer)
     if not ordered:
         order = stable_argsort_into(key, order, buffer)
+    if previous.kept and n < vehicle_out.size:
+        vehicle_out[n] = -1  # where the next sort's start ends
     rank, vehicle_out, lane_out, key_out = rank[:n], vehicle_out[:n], lane_out[:n], key_out[:n]
     for p in range(n):
         q = order[p]
@@ -135,12 +138,12 @@ def _order_from_previous(
     placed: np.ndarray,
 ) -> bool:  # fmt: skip
     """The stable order of ``key`` in ``order[:n]``, from the previous step's sorted entries
-    (``previous.n_sorted`` of them, (vehicle, lane) in ``previous_vehicle``, ``previous_lane``):
+    ((vehicle, lane) in ``previous_vehicle``, ``previous_lane``, until a vehicle -1):
     each entry that was there starts at its place then, each new one (a vehicle entered, a
     change begun) among the others; :func:`~hcomc.sim.arrays.resort_into` orders them, in
     one pass when nobody overtook. A vehicle's entries are found by ``previous``'s work
     arrays; ``placed`` (n,) is work space. False (``order`` then undefined) when the order
-    changed too much, for the general sort."""
+    changed too much or nothing was sorted before, for the other sorts."""
     n = vehicle.size
     first_of, second_of = previous.first_of, previous.second_of
     for p in range(n):  # a vehicle's entries in the order given: the first, then its other
@@ -152,8 +155,10 @@ def _order_from_previous(
             first_of[i], second_of[i] = p, -1
         placed[p] = 0
     n_kept = 0
-    for e in range(previous.n_sorted):
+    for e in range(previous_vehicle.size):
         i, lane_then = previous_vehicle[e], previous_lane[e]
+        if i < 0:
+            break
         p = first_of[i]
         if not (0 <= p < n and vehicle[p] == i):
             continue  # the vehicle has left the road
@@ -165,6 +170,8 @@ def _order_from_previous(
             placed[p] = 1
             order[n_kept] = p
             n_kept += 1
+    if n_kept == 0:
+        return False
     n_added = 0
     for p in range(n):
         if not placed[p]:

@@ -146,6 +146,7 @@ def build_arrays(
     work = max(4 * n + 1, 3 * plan_rows)  # entries, collision pairs, virtual rows
     scratch_int = np.zeros((layout.N_SCRATCH_INT, work), dtype=i8)
     scratch_int[layout.S_KNOWN_LEADER] = NOT_KNOWN  # no acceleration taken yet
+    scratch_int[layout.S_VS] = -1  # no lane entries sorted yet (neighbours.PreviousOrder)
     return CoreArrays(
         matrix=np.ascontiguousarray(fleet.matrix), iidm=fleet.iidm.astype(b1),
         length=fleet.length, width=fleet.width, lc_duration=fleet.lc_duration,

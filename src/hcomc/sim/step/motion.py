@@ -52,7 +52,6 @@ from hcomc.sim.step.state import (
     EV_WAIT,
     GAMMA,
     GAP_ERROR,
-    N_ENTRIES,
     PERCEIVE,
     S_ACC,
     S_BUFFER,
@@ -184,12 +183,11 @@ def lane_index(
             continue
         veh[m], lanes[m], xs[m] = i, (c.origin[i] if crossed else c.target[i]), c.x[i]
         m += 1
-    previous = PreviousOrder(c.counters[N_ENTRIES], si[S_FIRST_ENTRY], si[S_SECOND_ENTRY])
+    previous = PreviousOrder(True, si[S_FIRST_ENTRY], si[S_SECOND_ENTRY])
     vs, ls, ks, rank = sort_entries_into(
         veh[:m], lanes[:m], xs[:m], si[S_ORDER], si[S_BUFFER], si[S_RANK], si[S_VS], si[S_LS],
         sf[S_KEY], sf[S_KS], previous,
     )  # fmt: skip
-    c.counters[N_ENTRIES] = m
     return LaneIndex(vs, ls, ks, rank), in_ori, in_tgt
 
 

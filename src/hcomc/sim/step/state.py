@@ -26,8 +26,7 @@ EV_FALLBACK, EV_MISSED_EXIT, EV_LC_ABORT = 8, 9, 10
 # counters
 STEP, VEHICLE_STEPS, N_EVENTS, N_COLLIDING, INNOV_CURSOR, ROWS, COLLISIONS, N_PLANS = range(8)
 N_KEYS = 8  # key groups found by the compiled loop (rows of ``key_table``)
-N_ENTRIES = 9  # lane entries the last step sorted (their order is the next step's start)
-N_COUNTERS = 10
+N_COUNTERS = 9
 # consts
 (DT, WARMUP, EMERGENCY, GAMMA, DECAY, KICK, GAP_ERROR, TTC_ERROR, REPLAN_PERIOD,
  LOOKAHEAD, URGENT) = range(11)  # fmt: skip
