@@ -39,7 +39,7 @@ from hcomc.sim.neighbours import (
     sort_entries_into,
 )
 from hcomc.sim.perception import Estimates, EstimationErrors, History, perceive_into
-from hcomc.sim.step.road import lane_end_at, road_of, section_near, speed_limit, stop_point
+from hcomc.sim.step.road import lane_end_at, road_of, section_at, speed_limit, stop_point
 from hcomc.sim.step.state import (
     DT,
     EMERGENCY,
@@ -77,7 +77,6 @@ from hcomc.sim.step.state import (
     S_ORDER,
     S_RANK,
     S_SECOND_ENTRY,
-    S_SECTION,
     S_SPEED,
     S_VEH,
     S_VS,
@@ -212,12 +211,10 @@ def step_accelerations(
     if c.flags[SPEED_LIMITS] > 0:
         kinds, rows, sec_x0, sec_speed = c.road_int[L_KIND], c.road_f, c.sec_x0, c.sec_speed
         matrix, desired, lane, x = c.matrix, c.desired, c.lane, c.x
-        section = c.scratch_int[S_SECTION]
         for k in range(n):  # the desired speed within the limit where the vehicle is
             i, g = ids[k], lane[ids[k]]
-            s = section[i] = section_near(sec_x0, x[i], section[i])
             limit = speed_limit(kinds[g], rows[L_OPENS, g], rows[L_END, g], rows[L_SPEED, g],
-                                sec_speed[s], x[i])  # fmt: skip
+                                sec_speed[section_at(sec_x0, x[i])], x[i])  # fmt: skip
             matrix[0, i] = min(desired[i], limit)
     changing = c.scratch_b[S_CHANGING, :n]
     for k in range(n):

@@ -70,20 +70,6 @@ def section_at(sec_x0: np.ndarray, x: float) -> int:
 
 
 @kernel(inline="always")
-def section_near(sec_x0: np.ndarray, x: float, s: int) -> int:
-    """:func:`section_at` found by walking from section ``s`` (a vehicle's section at its
-    last step: it has moved on by a step at most, so by no section or one): the same index
-    from any ``s`` in range, in a comparison or two instead of a search."""
-    if math.isnan(x):  # as the search finds it
-        return section_at(sec_x0, x)
-    while s + 1 < sec_x0.size and sec_x0[s + 1] <= x:
-        s += 1
-    while s > 0 and sec_x0[s] > x:
-        s -= 1
-    return s
-
-
-@kernel(inline="always")
 def main_index(road: RoadArrays, code: int) -> int:
     """k of mainline lane ``code`` (0 = rightmost; the mainline's codes are the last)."""
     return code - (road.ints.shape[1] - road.main_end.shape[0])

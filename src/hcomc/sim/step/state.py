@@ -54,8 +54,7 @@ S_CHANGERS, S_CHANGER_IDS, S_NEW_LEADER = range(21, 24)
 S_KNOWN_LEADER = 24  # the leader behind which each vehicle's S_KNOWN was taken (MOBIL's reuse)
 # where each vehicle's lane entries are in this step's given order (the sort's work rows)
 S_FIRST_ENTRY, S_SECOND_ENTRY = 25, 26
-S_SECTION = 27  # the road section each vehicle was in at its last step (the speed limits')
-N_SCRATCH_INT = 28
+N_SCRATCH_INT = 27
 S_X, S_KEY, S_KS, S_ACC, S_VV = range(5)  # S_VV .. S_VV + 3: x, v, a, length of virtual rows
 S_GAP, S_SPEED, S_LEADER_SPEED, S_LEADER_ACC, S_LEADER_LENGTH = range(9, 14)  # car following
 S_MOBIL_F = 14  # .. S_MOBIL_F + 1: MOBIL's work rows over the vehicles
