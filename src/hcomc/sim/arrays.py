@@ -220,6 +220,24 @@ def _after(keys: np.ndarray, p: int, q: int) -> bool:
     return keys[p] > keys[q] or (keys[p] == keys[q] and p > q)
 
 
+@kernel(inline="always")
+def _insertion_sort(keys: np.ndarray, order: np.ndarray, n: int, budget: int) -> int:
+    """``order[:n]`` sorted in place by key, then index (:func:`_after`), by insertion; the
+    moves it took, or -1 (``order`` then half sorted) once they exceed ``budget``."""
+    moves = 0
+    for i in range(1, n):
+        item = order[i]
+        j = i - 1
+        while j >= 0 and _after(keys, order[j], item):
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = item
+        moves += i - 1 - j
+        if moves > budget:
+            return -1
+    return moves
+
+
 @kernel
 def resort_into(
     keys: np.ndarray, order: np.ndarray, n_kept: int, added: np.ndarray, n_added: int,
@@ -227,8 +245,8 @@ def resort_into(
 ) -> bool:  # fmt: skip
     """The stable order of ``keys`` (as :func:`stable_argsort`) in ``order[:keys.size]``,
     from a nearly sorted start: ``order[:n_kept]`` holds some indices in about their order
-    (the previous step's), ``added[:n_added]`` the others in ascending index order, and
-    ``n_kept + n_added == keys.size``.
+    (the previous step's), ``added[:n_added]`` the others, and ``n_kept + n_added ==
+    keys.size``.
 
     Both parts are put in order by insertion, which costs one comparison per index and one
     move per inversion, then merged from the back of ``order``. Equal keys are ordered by
@@ -239,27 +257,9 @@ def resort_into(
     for p in range(keys.size):
         if keys[p] != keys[p]:
             return False
-    moves = 0
-    for i in range(1, n_kept):
-        item = order[i]
-        j = i - 1
-        while j >= 0 and _after(keys, order[j], item):
-            order[j + 1] = order[j]
-            j -= 1
-        order[j + 1] = item
-        moves += i - 1 - j
-        if moves > budget:
-            return False
-    for i in range(1, n_added):  # ascending indices: a strict comparison keeps ties in order
-        item = added[i]
-        j = i - 1
-        while j >= 0 and keys[added[j]] > keys[item]:
-            added[j + 1] = added[j]
-            j -= 1
-        added[j + 1] = item
-        moves += i - 1 - j
-        if moves > budget:
-            return False
+    moves = _insertion_sort(keys, order, n_kept, budget)
+    if moves < 0 or _insertion_sort(keys, added, n_added, budget - moves) < 0:
+        return False
     a, b = n_kept - 1, n_added - 1
     for w in range(n_kept + n_added - 1, -1, -1):  # the larger tail goes last
         if b < 0:
