@@ -43,7 +43,8 @@ DONE, NEED_PYTHON, FLUSH, GROW_LOG, KEYS = range(5)
 # rows of the step's work arrays (scratch_int, scratch_f: width >= 4N + 1; scratch_b: 2N).
 # A step writes its per-vehicle and per-entry arrays into these rows instead of allocating
 # them; the arrays a kernel returns from them are valid until the same row is next written
-# (the next step)
+# (the next step). S_VS and S_LS, the sorted entries' vehicles and lanes, are also where the
+# next step's sort starts from (hcomc.sim.neighbours.PreviousOrder): only that sort writes them
 (S_IDS, S_LEAD, S_VEH, S_LANE, S_ORDER, S_BUFFER, S_RANK, S_VS, S_LS, S_CODES,
  S_VV_FOL) = range(11)  # fmt: skip
 # MOBIL's candidates (hcomc.sim.step.lane_change) and its work rows S_MOBIL .. S_MOBIL + 3
