@@ -10,7 +10,8 @@ problem for the hypervolume: the per-objective worst feasible value over 2,000 u
 candidates and the NSGA-II fronts of three seeds, plus 10 % of that objective's range.
 
 Evaluation: every recorded problem is decided ``--repeats`` times (generators seeded 0..R-1) by
-a full ``HCOMCController.plan`` call with the given optimiser at the config's budget; the
+a full ``HCOMCController.plan`` call with the given optimiser at the config's budget (or at
+``--budget`` candidate evaluations, to see what a smaller budget costs in quality); the
 hypervolume (pymoo ``HV``) of the returned feasible front against the problem's reference
 point is averaged over the repeats, and all decision times give the median and p95. With
 ``--save-baseline`` the per-problem hypervolumes are stored as the baseline; later
@@ -22,7 +23,7 @@ With several ``--optimizer`` options the optimisers take each decision in turn, 
 equals the first optimiser's bit for bit.
 
     python benchmarks/record_decisions.py [--record] [--count 60] [--optimizer nsga2 ...]
-                                          [--repeats 3] [--save-baseline] [--json]
+                                          [--repeats 3] [--budget N] [--save-baseline] [--json]
 """
 
 from __future__ import annotations
@@ -39,13 +40,13 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from dataclasses import dataclass, fields  # noqa: E402
 from pathlib import Path  # noqa: E402
-from typing import Any  # noqa: E402
+from typing import Any, NoReturn  # noqa: E402
 
 import numpy as np  # noqa: E402
 from pymoo.indicators.hv import HV  # noqa: E402
 from throughput import machine  # noqa: E402
 
-from hcomc.config import ScenarioConfig, load_config, validate_config  # noqa: E402
+from hcomc.config import ConfigError, ScenarioConfig, load_config, validate_config  # noqa: E402
 from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails  # noqa: E402
 from hcomc.interface import (  # noqa: E402
     Fleet,
@@ -76,7 +77,7 @@ class Decision:
     reference: np.ndarray  # (n_obj,) hypervolume reference point
 
 
-def fail(message: str) -> None:
+def fail(message: str) -> NoReturn:
     """One-line error on stderr, exit status 2."""
     print(f"error: {message}", file=sys.stderr)
     sys.exit(2)
@@ -182,6 +183,17 @@ def load_decisions(path: Path = PROBLEMS_FILE) -> list[Decision]:
     return [Decision(r["name"], *_rebuild(r), np.asarray(r["reference"])) for r in data["problems"]]
 
 
+def with_budget(decisions: list[Decision], budget: int) -> list[Decision]:
+    """The same problems decided with ``budget`` candidate evaluations (``control.budget``,
+    validated as a config value is)."""
+    out = []
+    for d in decisions:
+        raw = d.config.model_dump(mode="json")
+        raw["control"]["budget"] = budget
+        out.append(Decision(d.name, validate_config(raw, d.name), d.view, d.group, d.reference))
+    return out
+
+
 # --------------------------------------------------------------------------- evaluation
 def hypervolume(front: np.ndarray, reference: np.ndarray) -> float:
     """Hypervolume of the (feasible) front against ``reference``; 0 for an empty front."""
@@ -273,6 +285,20 @@ def against_baseline(result: dict[str, Any], baseline: dict[str, Any]) -> dict[s
     }
 
 
+def _problems(path: Path, record_first: bool, count: int, budget: int | None) -> list[Decision]:
+    """The problems of ``path`` (recorded first with ``record_first``), at ``budget`` if
+    given."""
+    if record_first:
+        record(count, path)
+    if not path.exists():
+        fail(f"{path} missing; run with --record first")
+    decisions = load_decisions(path)
+    try:
+        return decisions if budget is None else with_budget(decisions, budget)
+    except ConfigError as exc:
+        fail(str(exc))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", action="store_true", help="capture the problems first")
@@ -287,6 +313,10 @@ def main() -> None:
     )
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument(
+        "--budget", type=int, default=None, help="candidate evaluations per decision "
+        "(default: each recorded config's own, 360)",
+    )  # fmt: skip
+    parser.add_argument(
         "--save-baseline",
         action="store_true",
         help="store the hypervolumes as the baseline (<problems>_baseline.json)",
@@ -296,14 +326,12 @@ def main() -> None:
     args = parser.parse_args()
     if args.count < 1 or args.repeats < 1:
         parser.error("--count and --repeats must be >= 1")
+    if args.budget is not None and args.save_baseline:
+        parser.error("--save-baseline records the configs' own budget; drop --budget")
     baseline = args.problems.with_name(args.problems.stem + "_baseline.json")
     if args.save_baseline and baseline.exists():
         fail(f"{baseline} exists; remove it to store a new baseline (nothing was overwritten)")
-    if args.record:
-        record(args.count, args.problems)
-    if not args.problems.exists():
-        fail(f"{args.problems} missing; run with --record first")
-    decisions = load_decisions(args.problems)
+    decisions = _problems(args.problems, args.record, args.count, args.budget)
     optimizers: list[Optimizer | None] = [None]
     if args.optimizer is not None:
         optimizers = []
