@@ -10,10 +10,10 @@ planning instant (same process), so their figures are comparable under the same 
     python benchmarks/decision_latency.py [--json] [--seeds 8] [--repeats 5] [--split]
 
 ``--split`` also says where the default optimiser's decisions spend their time: the same
-decisions again under cProfile, the share of the compiled scoring of candidate rows
-(``score_rows``: rollout, objectives, constraints) and of the lane-change game, and the rest
-(the optimiser's own steps, problem set-up and selection in Python). cProfile's own cost
-inflates the Python part a little; the shares, not the times, are the figures.
+decisions again, with a clock around each call of the compiled scoring of candidate rows
+(``score_rows``: rollout, objectives, constraints; the rows counted) and of the lane-change
+game: milliseconds per decision of each and of the rest (the optimiser's own steps, problem
+set-up and selection), the rows scored per decision and their mean cost.
 """
 
 from __future__ import annotations
@@ -24,8 +24,12 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ.setdefault(_var, "1")  # one core, comparable across machines
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import json  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
+from typing import Any  # noqa: E402
+from unittest import mock  # noqa: E402
 
 import numpy as np  # noqa: E402
 from throughput import machine  # noqa: E402
@@ -84,31 +88,54 @@ def measure(optimizers: tuple[str, ...], instants: list, repeats: int) -> list[d
 
 
 def split(instants: list, repeats: int) -> dict[str, float]:
-    """Shares [%] of NSGA-II decisions' time under cProfile: the compiled row scoring, the
-    lane-change game, and everything else."""
-    import cProfile
-    import pstats
+    """Where NSGA-II decisions' time goes, timed without a profiler: the same decisions
+    again, with a clock around each call of the compiled row scoring (``score_rows`` and
+    ``score_row`` as the problem calls them, counting the rows) and of the lane-change game
+    (as the controller calls it). Milliseconds per decision of each, the rest (the
+    optimiser's steps, the problem's set-up and selection, in Python and compiled) and the
+    rows scored per decision with their mean cost [us]."""
+    import hcomc.control.hierarchical.controller as controller_module
+    import hcomc.control.hierarchical.problem as problem_module
 
-    profile = cProfile.Profile()
-    for config, view, group in instants:
-        controller = HCOMCController(config)
-        controller.plan(view, group, np.random.default_rng(0))  # warm, unprofiled
-        profile.enable()
-        for r in range(repeats):
-            controller.plan(view, group, np.random.default_rng(r))
-        profile.disable()
-    stats = pstats.Stats(profile).stats  # type: ignore[attr-defined]
-    total = sum(tt for _, _, tt, _, _ in stats.values())
+    spent = {"scoring": 0.0, "game": 0.0, "rows": 0.0, "counting": 0.0}
 
-    def own(name: str, cumulative: bool) -> float:
-        return sum((ct if cumulative else tt) for (_, _, fn), (_, _, tt, ct, _) in stats.items()
-                   if fn == name)  # fmt: skip
+    def timed(part: str, function: Callable[..., Any], count: Callable[..., int]) -> Any:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            start = time.perf_counter()
+            result = function(*args, **kwargs)
+            if spent["counting"]:
+                spent[part] += time.perf_counter() - start
+                spent["rows"] += count(*args)
+            return result
 
-    scoring = own("score_rows", False) + own("score_row", False)
-    game = own("lane_change_game", True)
-    return {"row_scoring_pct": round(100 * scoring / total, 1),
-            "game_pct": round(100 * game / total, 1),
-            "rest_pct": round(100 * (total - scoring - game) / total, 1)}  # fmt: skip
+        return wrapper
+
+    patches = (
+        (problem_module, "score_rows", "scoring", lambda c, X, r, *_: int(r.size)),
+        (problem_module, "score_row", "scoring", lambda *_: 1),
+        (controller_module, "play_lane_change_game", "game", lambda *_, **__: 0),
+    )
+    total, decisions = 0.0, 0
+    with contextlib.ExitStack() as stack:
+        for module, name, part, count in patches:
+            wrapped = timed(part, getattr(module, name), count)
+            stack.enter_context(mock.patch.object(module, name, wrapped))
+        for config, view, group in instants:
+            controller = HCOMCController(config)
+            spent["counting"] = 0.0
+            controller.plan(view, group, np.random.default_rng(0))  # warm, not counted
+            spent["counting"] = 1.0
+            for r in range(repeats):
+                start = time.perf_counter()
+                controller.plan(view, group, np.random.default_rng(r))
+                total += time.perf_counter() - start
+                decisions += 1
+    scoring, game = spent["scoring"] / decisions, spent["game"] / decisions
+    return {"decision_ms": round(1e3 * total / decisions, 2),
+            "scoring_ms": round(1e3 * scoring, 2), "game_ms": round(1e3 * game, 2),
+            "rest_ms": round(1e3 * (total / decisions - scoring - game), 2),
+            "rows_per_decision": round(spent["rows"] / decisions, 1),
+            "us_per_row": round(1e6 * spent["scoring"] / max(spent["rows"], 1), 1)}  # fmt: skip
 
 
 def main() -> None:
