@@ -99,7 +99,7 @@ def claim_slots(
     Raises ``ValueError`` for a vehicle back on the road after its span ended (the engine
     never re-inserts a vehicle).
     """
-    if _unchanged(active, slot, span):  # the usual row: the same vehicles as at the last
+    if _unchanged(active, owner):  # the usual row: the same vehicles as at the last
         return True
     if not _room_for_entering(active, slot, span, owner):
         return False
@@ -118,12 +118,23 @@ def claim_slots(
 
 
 @kernel(inline="always")
-def _unchanged(active: np.ndarray, slot: np.ndarray, span: np.ndarray) -> bool:
-    """Whether the vehicles on the road are exactly those holding a slot."""
-    i = 0
-    while i < active.size and active[i] == (slot[i] >= 0 and span[i, 1] == OPEN):
-        i += 1
-    return i == active.size
+def _unchanged(active: np.ndarray, owner: np.ndarray) -> bool:
+    """Whether the vehicles on the road are exactly those holding a slot: every holder is on
+    the road, and as many vehicles are on the road as hold slots. (A vehicle holds a slot
+    exactly while its span is open, which :func:`claim_slots` keeps true.) The slots are
+    visited one by one and the vehicles only counted, which costs a long run with many
+    vehicles gone far less than visiting each vehicle's slot and span."""
+    held = 0
+    for s in range(owner.size):
+        i = owner[s]
+        if i >= 0:
+            if not active[i]:
+                return False
+            held += 1
+    on_road = 0
+    for i in range(active.size):
+        on_road += 1 if active[i] else 0
+    return on_road == held
 
 
 @kernel(inline="always")

@@ -128,17 +128,18 @@ def record_row(c: CoreArrays, k: int, t: float) -> bool:
     """Write log row k for the vehicles on the road, each in its slot column
     (:func:`hcomc.sim.log.slots.claim_slots`); the other cells keep the log's fill (NaN,
     lane -1, inactive), so a row costs what is on the road. False, writing nothing, when the
-    log needs more columns first."""
+    log needs more columns first. Once the slots are claimed, their holders are the vehicles
+    on the road, so the row visits the slots, not every vehicle of the run."""
     if not claim_slots(c.active, c.log_slot, c.log_span, c.log_owner, k):
         return False
     c.log_t[k] = t
-    active, slot, x, y, v, a = c.active, c.log_slot, c.x, c.y, c.v, c.a
+    active, owner, x, y, v, a = c.active, c.log_owner, c.x, c.y, c.v, c.a
     heading, lane = c.heading, c.lane
     log_x, log_y, log_v, log_a = c.log_x, c.log_y, c.log_v, c.log_a
     log_heading, log_lane, log_active = c.log_heading, c.log_lane, c.log_active
-    for i in range(x.size):
-        if active[i]:
-            s = slot[i]
+    for s in range(owner.size):
+        i = owner[s]
+        if i >= 0 and active[i]:
             log_active[k, s] = True
             log_x[k, s], log_y[k, s], log_v[k, s] = x[i], y[i], v[i]
             log_a[k, s], log_heading[k, s], log_lane[k, s] = a[i], heading[i], lane[i]
