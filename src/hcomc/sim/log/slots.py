@@ -119,11 +119,9 @@ def claim_slots(
 
 @kernel(inline="always")
 def _unchanged(active: np.ndarray, owner: np.ndarray) -> bool:
-    """Whether the vehicles on the road are exactly those holding a slot: every holder is on
-    the road, and as many vehicles are on the road as hold slots. (A vehicle holds a slot
-    exactly while its span is open, which :func:`claim_slots` keeps true.) The slots are
-    visited one by one and the vehicles only counted, which costs a long run with many
-    vehicles gone far less than visiting each vehicle's slot and span."""
+    """Whether the vehicles on the road are exactly those holding a slot (a vehicle holds one
+    while its span is open): every holder is on the road and as many are on the road as hold
+    slots. A long run's many vehicles gone are only counted, not visited."""
     held = 0
     for s in range(owner.size):
         i = owner[s]
