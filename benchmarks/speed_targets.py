@@ -129,7 +129,7 @@ def decisions() -> dict[str, Any]:
     progress(f"decisions: {len(problems)} recorded problems x {repeats}")
     result = evaluate(problems, None, repeats)
     result["vs_baseline"] = against_baseline(result, baseline)
-    result["instants"] = [(d.config, d.view, d.group) for d in problems]
+    del result["per_problem"]  # summarised in vs_baseline
     return result
 
 
@@ -144,10 +144,11 @@ def phases(scene: str, n: int, repeats: int) -> str:
     return f"{scene} {row['vehicles']}: {1e9 / rate:.0f} ns a vehicle-step ({listed})"
 
 
-def decision_split(instants: list[Any]) -> str:
-    """Where a decision's time goes (``decision_latency.py --split``), one decision each."""
+def decision_split() -> str:
+    """Where a decision's time goes (``decision_latency.py --split``), one decision of each
+    recorded problem."""
     progress("cost model: decisions")
-    part = split(instants, 1)
+    part = split([(d.config, d.view, d.group) for d in load_decisions(PROBLEMS_FILE)], 1)
     return (f"a decision {part['decision_ms']} ms: the compiled scoring of "
             f"{part['rows_per_decision']:.0f} candidate rows of {part['us_per_row']} us, "
             f"{part['scoring_ms']} ms; the lane-change game {part['game_ms']} ms; the rest "
@@ -187,7 +188,7 @@ def judge(
             "one HCOMC decision", f"median <= {DECISION_MS:g} ms, equal quality",
             f"{decided['median_ms']} ms median (p95 {decided['p95_ms']}); hypervolume "
             f"{quality['min_ratio']}-{quality['mean_ratio']} of the baseline (least, mean)", met,
-            "" if met else decision_split(decided["instants"])))  # fmt: skip
+            "" if met else decision_split()))  # fmt: skip
     if repro is not None:
         ratio = round(1.0 / repro["ratio"], 2)  # our time over SUMO's
         targets.append(Target(
@@ -230,8 +231,6 @@ def main() -> None:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
     targets = judge(runs, batch, decided, repro, max(args.repeats, 3))
-    if decided is not None:
-        del decided["instants"], decided["per_problem"]
     if args.json:
         print(json.dumps({"stamp": stamp, "single_runs": runs, "ensemble": batch,
                           "decisions": decided, "reproduce": repro,
