@@ -24,7 +24,8 @@ from hcomc.control.hierarchical.row_scoring import (
     RowConstants,
     constants_handle,
     score_row,
-    score_rows,
+    score_rows_parallel,
+    score_rows_serial,
 )
 from hcomc.control.lane_change_game.params import GAME_DEFAULT
 from hcomc.control.lane_change_game.players import GameVehicle, simulate_sv
@@ -134,7 +135,9 @@ def load_prediction_kernels() -> None:
     row, F, G = np.array([800.0, 4.0, 6.0, 0.0, 0.0]), np.empty(3), np.empty(len(CONSTRAINTS))
     score_row(constants, row, False, 0.0, 0.0, F, G)
     rows, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)  # evaluate's
-    score_rows(constants, row[None], rows, lateral, True, lateral, F[None], G[None])
+    for_rows = (constants, row[None], rows, lateral, True, lateral, F[None], G[None])
+    score_rows_serial(*for_rows)
+    score_rows_parallel(*for_rows, 1)  # in any process: a main process's decisions use it
     trajectory = np.zeros((1, 2, N_ROLES))
     roles = np.zeros(1, dtype=np.int64)
     _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, FUEL_COEFFICIENTS)

@@ -13,6 +13,10 @@ and the others a decision needs, once per process. What is read from the config 
 model, the game's parameters) is prepared there, beside the problem, so that these kernels'
 cache depends on the kernels alone.
 
+A population's rows are independent, so :func:`score_rows` scores them on every core of a
+main process and on one in a worker process (:func:`scoring_threads`); each row's values are
+the same bit for bit either way.
+
 The constants are a :class:`RowConstants` record, which the kernels receive through its
 compiled handle (:func:`constants_handle`), as the engine's step receives its ``CoreArrays``
 through ``Core`` (:mod:`hcomc.sim.step.state`): numba types a record argument anew at every
@@ -23,13 +27,18 @@ pointer.
 
 from __future__ import annotations
 
+import multiprocessing
+import threading
 from typing import Any, NamedTuple
 
+import numba
 import numpy as np
+from numba import prange
 from numba.core import types
 from numba.experimental import structref
 
 from hcomc._jit import kernel
+from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.control.hierarchical.problem_terms import G_LATERAL, G_SEQUENCE
 from hcomc.control.prediction.candidate import RolloutWork
 from hcomc.control.prediction.fuel import FuelCoefficients, common_distance_fuel
@@ -45,6 +54,9 @@ __all__ = [
     "score_into",
     "score_row",
     "score_rows",
+    "score_rows_parallel",
+    "score_rows_serial",
+    "scoring_threads",
 ]
 
 FUEL_ROLES = (np.array([VR], dtype=np.int64), np.array([VR, VMC], dtype=np.int64))
@@ -142,20 +154,73 @@ def score_into(
     return penalised_cost(F, G, c.threshold, c.fuel_ref)
 
 
+@kernel(inline="always")
+def _score_part(
+    constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
+    allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray, part: int,
+    n_parts: int, work: RolloutWork,
+) -> None:  # fmt: skip
+    """Rows ``rows[part::n_parts]`` of ``X`` scored into the same rows of ``F`` and ``G`` by
+    :func:`score_into`, rolling out into ``work`` (arguments of :func:`score_rows`)."""
+    for q in range(part, rows.size, n_parts):
+        r = rows[q]
+        lat = lateral[r]
+        score_into(constants, X[r], lat, 1.0 if lat and not allowed else 0.0,
+                   1.0 if no_behind[r] else 0.0, F[r], G[r], work)  # fmt: skip
+
+
 @kernel
-def score_rows(
+def score_rows_serial(
     constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
     allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray,
+) -> None:  # fmt: skip
+    """:func:`score_rows` on the calling thread, the rollout's arrays allocated once for all
+    rows."""
+    work = rollout_work(constants.n_steps)
+    _score_part(constants, X, rows, lateral, allowed, no_behind, F, G, 0, 1, work)
+
+
+@kernel(parallel=True)
+def score_rows_parallel(
+    constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
+    allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray, n_parts: int,
+) -> None:  # fmt: skip
+    """:func:`score_rows` on ``n_parts`` threads (``numba.prange``): part p scores rows p,
+    p + n_parts, ... with rollout arrays of its own. A function of its own, not
+    :func:`score_rows_serial` compiled twice: numba's cache keys an entry by the function
+    and its signature, not by ``parallel``."""
+    for part in prange(n_parts):
+        work = rollout_work(constants.n_steps)
+        _score_part(constants, X, rows, lateral, allowed, no_behind, F, G, part, n_parts, work)
+
+
+def scoring_threads() -> int:
+    """The threads a population's rows are scored on: numba's (every core, unless
+    ``NUMBA_NUM_THREADS`` or :func:`numba.set_num_threads` says fewer) on a main process's main
+    thread; one in a worker process (hcomc's run pools, a user's ``multiprocessing`` or Dask
+    workers), whose siblings take the other cores, and on any other thread (numba's
+    ``workqueue`` layer, its fallback, cannot run two parallel kernels at once)."""
+    if multiprocessing.parent_process() is not None:
+        return 1
+    if threading.current_thread() is not threading.main_thread():
+        return 1
+    return int(numba.get_num_threads())
+
+
+def score_rows(
+    constants: RowConstants, X: FloatArray, rows: IntArray, lateral: BoolArray, allowed: bool,
+    no_behind: BoolArray, F: FloatArray, G: FloatArray,
 ) -> None:  # fmt: skip
     """Rows ``rows`` of ``X`` (all of one sequence, whose ``constants`` are as for
     :func:`score_row`) scored into the same rows of ``F`` and ``G``, each by
     :func:`score_row`'s body (``lateral``: per row of ``X``, its mode; ``allowed``: whether
     the sequence admits lateral cooperation; ``no_behind``: per row of ``X``, a "behind" row
-    moved ahead for want of a vehicle); the rollout's arrays are allocated once for all
-    rows."""
-    work = rollout_work(constants.n_steps)
-    for q in range(rows.size):
-        r = rows[q]
-        lat = lateral[r]
-        score_into(constants, X[r], lat, 1.0 if lat and not allowed else 0.0,
-                   1.0 if no_behind[r] else 0.0, F[r], G[r], work)  # fmt: skip
+    moved ahead for want of a vehicle), on :func:`scoring_threads` threads.
+
+    A row's values depend on its own inputs alone, so they are the same bit for bit
+    whatever the number of threads."""
+    threads = min(scoring_threads(), rows.size)
+    if threads > 1:
+        score_rows_parallel(constants, X, rows, lateral, allowed, no_behind, F, G, threads)
+    else:
+        score_rows_serial(constants, X, rows, lateral, allowed, no_behind, F, G)
