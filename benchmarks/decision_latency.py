@@ -5,7 +5,9 @@ control zone, seeds 0..S-1); each decision is then repeated R times with fresh g
 The whole ``HCOMCController.plan`` call is timed: lane-change game, problem set-up,
 optimisation (360 candidate evaluations by default) and Eq. 19 selection. One warm-up
 decision per optimiser loads the compiled kernels first. The optimisers take turns on each
-planning instant (same process), so their figures are comparable under the same load.
+planning instant (same process), so their figures are comparable under the same load. One
+core unless ``NUMBA_NUM_THREADS`` says more (a main process then scores a population's rows
+side by side on that many threads).
 
     python benchmarks/decision_latency.py [--json] [--seeds 8] [--repeats 5] [--split]
 

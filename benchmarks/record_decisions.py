@@ -20,7 +20,8 @@ the ratio to it per problem.
 
 With several ``--optimizer`` options the optimisers take each decision in turn, in one process
 (:func:`evaluate_side_by_side`), and ``identical_to_first`` counts the decisions whose Pareto set
-equals the first optimiser's bit for bit.
+equals the first optimiser's bit for bit. One core unless ``NUMBA_NUM_THREADS`` says more (a
+main process then scores a population's rows side by side on that many threads).
 
     python benchmarks/record_decisions.py [--record] [--count 60] [--optimizer nsga2 ...]
                                           [--repeats 3] [--budget N] [--save-baseline] [--json]
