@@ -1,5 +1,6 @@
 """The rows an NSGA-II run evaluated (hcomc.optim.evaluated): each distinct row evaluated once,
-found by its bits, against a dictionary of the rows' bytes as the oracle."""
+found by its bits, against a dictionary of the rows' bytes as the oracle; for a problem with
+canonical rows, each distinct canonical row."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from hcomc._typing import FloatArray
+from hcomc.optim.base import CanonicalProblem
 from hcomc.optim.evaluated import EvaluatedRows, admit_rows, violation
 
 # few values, signed zeros among them: repeated rows are common, and 0.0 and -0.0 differ in bits
@@ -82,3 +84,35 @@ def test_violation_sums_positive_parts_in_column_order() -> None:
     for j in range(G.shape[1]):
         expected += np.maximum(0.0, G[:, j])
     np.testing.assert_array_equal(violation(G), expected)
+
+
+class _Thresholded(_Counting):
+    """:class:`_Counting` whose second variable counts only as ``>= 0.5`` or not (its values
+    use the canonical row), a :class:`~hcomc.optim.base.CanonicalProblem`."""
+
+    def canonical_rows(self, X: FloatArray) -> FloatArray:
+        out = np.array(X, dtype=np.float64)
+        out[:, 1] = np.where(X[:, 1] >= 0.5, 1.0, 0.0)
+        return out
+
+    def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return super().evaluate(self.canonical_rows(X))
+
+
+def test_rows_with_equal_canonical_rows_are_evaluated_once() -> None:
+    problem = _Thresholded()
+    assert isinstance(problem, CanonicalProblem)
+    assert not isinstance(_Counting(), CanonicalProblem)
+    rows = EvaluatedRows(problem, 6)  # type: ignore[arg-type]
+    first = np.array([[0.25, 0.5], [0.75, 0.1], [0.25, 0.9]])
+    second = np.array([[0.75, 0.0], [0.25, 0.49], [0.75, 0.6]])
+    rows.add(first)
+    rows.add(second)
+    # canonical rows (0.25, 1), (0.75, 0), (0.25, 0), (0.75, 1): each evaluated once, as given
+    np.testing.assert_array_equal(np.concatenate(problem.asked),
+                                  [[0.25, 1.0], [0.75, 0.0], [0.25, 0.0], [0.75, 1.0]])  # fmt: skip
+    X = np.concatenate([first, second])
+    np.testing.assert_array_equal(rows.X, X)  # the rows themselves are kept
+    F, G = problem.evaluate(X)
+    np.testing.assert_array_equal(rows.F, F)
+    np.testing.assert_array_equal(rows.G, G)

@@ -62,6 +62,20 @@ class RowProblem(Protocol):
         ...
 
 
+@runtime_checkable
+class CanonicalProblem(Protocol):
+    """A :class:`Problem` whose values depend on fewer distinctions than its rows make (a
+    variable read only through a threshold, say). It maps rows to canonical rows such that
+    rows with equal canonical rows have equal objectives and constraints, bit for bit, and
+    an optimiser that keeps the rows it evaluated evaluates one of them
+    (:class:`hcomc.optim.evaluated.EvaluatedRows`): the same decisions, fewer evaluations.
+    """
+
+    def canonical_rows(self, X: FloatArray) -> FloatArray:
+        """The canonical row (n_var,) of each row of ``X`` (n, n_var)."""
+        ...
+
+
 @dataclass(frozen=True, slots=True)
 class ParetoResult:
     """What an optimiser returns.

@@ -193,10 +193,16 @@ class MergeProblem:
         return self._variants_cache
 
     # ------------------------------------------------------------------ evaluate
-    def _sequences(self, X: FloatArray) -> tuple[IntArray, BoolArray, BoolArray]:
-        """Merge sequence, lateral flag and "behind without a vehicle" flag of every row."""
-        seq, lateral, _, no_behind = self._rows(X)
-        return seq, lateral, no_behind
+    def canonical_rows(self, X: FloatArray) -> FloatArray:
+        """``X`` with the mode and sequence variables set to one value of what they select
+        (:meth:`_rows`): rows with equal canonical rows have equal values, so an optimiser
+        evaluates one of them (``optim.base.CanonicalProblem``)."""
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
+        seq, lateral, variant, no_behind = self._rows(X)
+        out = X.copy()
+        out[:, 3] = np.where(variant >= 2, MODE_NONE, np.where(lateral, 0.5, 0.0))
+        out[:, 4] = np.where((seq == BEHIND) | no_behind, 1.0, 0.0)
+        return out
 
     def _rows(self, X: FloatArray) -> tuple[IntArray, BoolArray, IntArray, BoolArray]:
         """Per row: merge sequence, lateral flag, variant (the group it is rolled out in:
@@ -273,15 +279,10 @@ class MergeProblem:
 
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Objectives (n, 3) and constraints (n, 9) of candidate rows ``X`` (n, 5): F(x) and the
-        constraints of Ω in Eq. 18, those of :meth:`predict`, without assembling the
-        trajectories.
-
-        An optimiser needs the scores only, so each sequence's rows are scored in one compiled
-        call (:func:`~hcomc.control.hierarchical.row_scoring.score_rows`) by the single-row body of
-        :meth:`evaluate_row`, on the per-sequence constants prepared once per problem: no
-        population of trajectories is allocated and VMC's pre-pass tracks are not rolled out
-        again per call. The values are those of :meth:`predict` bit for bit (the tests hold
-        both paths to it).
+        constraints of Ω in Eq. 18, those of :meth:`predict` bit for bit (the tests hold both
+        paths to it), without the trajectories: each sequence's rows in one compiled call
+        (:func:`~hcomc.control.hierarchical.row_scoring.score_rows`) of :meth:`evaluate_row`'s
+        body, on the per-sequence constants prepared once per problem.
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
         _, lateral, variant, no_behind = self._rows(X)
@@ -387,14 +388,9 @@ class MergeProblem:
         self, cf: FloatArray, roles: tuple[int, ...], X: FloatArray, V: FloatArray, A: FloatArray
     ) -> FloatArray:
         """Fuel [mL] of ``roles`` (n,) over the distance each covers in the counterfactual
-        ``cf`` (3, K + 1, 6), per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C).
-
-        Each vehicle's fuel over the window is completed to that distance at its end speed's
-        cruise rate (a negative completion when it went further):
-        ``fuel(D) = sum fe dt + fe_cruise(max(v_K, 1)) (D - dx) / max(v_K, 1)``, with the
-        rates of :func:`~hcomc.equations.fuel.fuel_rate_scalar`
-        (:func:`~hcomc.control.prediction.fuel._fuel_to_distance_kernel`).
-        """
+        ``cf`` (3, K + 1, 6), per trajectory of ``X``, ``V``, ``A`` (C, K + 1, 6): (n, C),
+        completed to that distance at the end speed's cruise rate
+        (:func:`~hcomc.control.prediction.fuel._fuel_to_distance_kernel`)."""
         return _fuel_to_distance_kernel(
             cf, np.array(roles, dtype=np.int64), X, V, A, self.dt, FUEL_COEFFICIENTS
         )
