@@ -40,6 +40,7 @@ os.environ.setdefault("NUMBA_NUM_THREADS", str(os.cpu_count() or 1))  # ensemble
 import argparse  # noqa: E402
 import datetime  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -171,6 +172,15 @@ def decision_split() -> str:
             f"{part['rest_ms']} ms")  # fmt: skip
 
 
+def per_core(batch: dict[str, Any]) -> str:
+    """The ensemble's rate on one thread and the cores the target would take at that rate
+    (every core as fast as one alone)."""
+    one, sumo = batch["hcomc_one_thread_steps_per_s"], batch["sumo_steps_per_s"]
+    cores = math.ceil(ENSEMBLE_RATIO * sumo / one)
+    return (f"on one thread {one / 1e6:.2f} M vehicle-steps/s ({one / sumo:.1f}x SUMO), so "
+            f"{ENSEMBLE_RATIO:g}x takes {cores} such cores")  # fmt: skip
+
+
 def judge(
     runs: list[dict[str, Any]], batch: dict[str, Any] | None, decided: dict[str, Any] | None,
     repro: dict[str, Any] | None, repeats: int,
@@ -196,7 +206,7 @@ def judge(
         targets.append(Target(
             f"ensemble of {batch['runs']} C1 runs", f">= {ENSEMBLE_RATIO:g}x SUMO's single run",
             f"{batch['ratio']}x on {batch['threads']} threads", met,
-            "" if met else phases("c1", 0, repeats)))  # fmt: skip
+            "" if met else f"{phases('c1', 0, repeats)}; {per_core(batch)}"))  # fmt: skip
     if decided is not None:
         quality = decided["vs_baseline"]
         met = decided["median_ms"] <= DECISION_MS and quality["min_ratio"] >= EQUAL_QUALITY

@@ -37,7 +37,8 @@ and paper scenario: the tables' mean decision time times the plans), a floor und
 
 ``--ensemble N`` (default 100) runs N Condition 1 runs as one ensemble
 (:func:`hcomc.sim.ensemble.run_ensemble`, on every core) and compares their aggregate
-vehicle-steps/s with SUMO's single-run rate on the same scene.
+vehicle-steps/s with SUMO's single-run rate on the same scene; the same ensemble on one thread
+takes turns with it (the rate of one core).
 
     python benchmarks/vs_sumo.py [--json] [--sizes 100 500 2000] [--repeats 3]
                                  [--reproduce-seeds 1 [--reproduce-workers 1]]
@@ -283,19 +284,22 @@ def compare(scenes: list[Scene], repeats: int) -> list[dict[str, object]]:
 def ensemble(runs: int, repeats: int, tmp: Path) -> dict[str, object]:
     """``runs`` Condition 1 runs (seeds 0..runs-1) as one ensemble on every core, against
     SUMO's single-run rate on the same scene (seed ``SEED``, collision detection off); the
-    median of ``repeats`` timed ensembles, as for the scenes."""
+    median of ``repeats`` timed ensembles, as for the scenes. The same ensemble on one
+    thread takes turns with it: the rate of one core, from which the rate of more cores
+    is projected."""
     from hcomc.sim.ensemble import run_ensemble
 
     config = load_config("C1")
     run_ensemble([Simulation(config, runs)])  # load the compiled kernels
-    walls = []
+    walls: dict[int | None, list[float]] = {None: [], 1: []}
     for _ in range(repeats):
-        sims = [Simulation(config, seed) for seed in range(runs)]
-        gc.collect()
-        start = time.perf_counter()
-        run_ensemble(sims)
-        walls.append(time.perf_counter() - start)
-    wall = statistics.median(walls)
+        for threads, timed in walls.items():
+            sims = [Simulation(config, seed) for seed in range(runs)]
+            gc.collect()
+            start = time.perf_counter()
+            run_ensemble(sims, threads=threads)
+            timed.append(time.perf_counter() - start)
+    wall, wall_one = statistics.median(walls[None]), statistics.median(walls[1])
     vehicle_steps = sum(sim.vehicle_steps for sim in sims)
     exported = export_scenario(config, SEED, tmp / "ensemble_c1")
     steps = round((config.warmup + config.duration) / config.dt)
@@ -307,6 +311,7 @@ def ensemble(runs: int, repeats: int, tmp: Path) -> dict[str, object]:
         "vehicle_steps": vehicle_steps,
         "hcomc_wall_s": round(wall, 3),
         "hcomc_steps_per_s": round(vehicle_steps / wall),
+        "hcomc_one_thread_steps_per_s": round(vehicle_steps / wall_one),
         "sumo_steps_per_s": round(rate),
         "ratio": round(vehicle_steps / wall / rate, 2),
     }
