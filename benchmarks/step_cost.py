@@ -12,7 +12,8 @@ phase           kernels
 release         :func:`~hcomc.sim.step.loop.begin_step`: event room, Eq. 2 error innovations,
                 the vehicles due
 decide?         :func:`~hcomc.sim.step.loop.needs_python`: does a controller decide now
-on road         :func:`~hcomc.sim.step.loop.on_road`
+                (and :func:`~hcomc.sim.step.loop.count_on_road`)
+on road         :func:`~hcomc.sim.step.loop.road_ids`
 plans in        the live plans' followers and virtual leaders (Section III-A)
 speed zones     desired speeds capped by the road's limits (roads that have them)
 neighbours      the step's sorted lane entries and every vehicle's leader
@@ -198,12 +199,13 @@ def timed_steps(c, stop, log_rows, rng, spent):  # type: ignore[no-untyped-def]
         t = loop.step_time(c)
         t1 = cycles()
         spent[0] += t1 - t0
-        if loop.needs_python(c, t):
-            return S.NEED_PYTHON
+        ids = loop.road_ids(c)
         t2 = cycles()
-        spent[1] += t2 - t1
-        ids = loop.on_road(c)
-        spent[2] += cycles() - t2
+        spent[2] += t2 - t1
+        if loop.needs_python(c, t, ids):
+            return S.NEED_PYTHON
+        loop.count_on_road(c, ids)
+        spent[1] += cycles() - t2
         if ids.size > 0:
             acc, changing, index, lead = _front(c, ids, t, spent)
             t3 = cycles()

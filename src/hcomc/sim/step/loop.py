@@ -89,10 +89,11 @@ from hcomc.sim.step.state import (
 )
 
 __all__ = [
-    "begin_step", "commanded_changes", "discretionary_changes", "draw_innovations", "due_plans",
-    "end_step", "follow_many", "holding", "on_road", "push_history", "record_due_row",
-    "record_row", "release", "run_steps", "start_lane_changes", "step_accelerations",
-    "step_alone", "step_back", "step_body", "step_finish", "step_front", "step_time",
+    "begin_step", "commanded_changes", "count_on_road", "discretionary_changes",
+    "draw_innovations", "due_plans", "end_step", "follow_many", "holding", "on_road",
+    "push_history", "record_due_row", "record_row", "release", "road_ids", "run_steps",
+    "start_lane_changes", "step_accelerations", "step_alone", "step_back", "step_body",
+    "step_finish", "step_front", "step_time", "step_vehicles",
 ]  # fmt: skip
 
 
@@ -199,21 +200,21 @@ def step_body(c: CoreArrays, ids: np.ndarray, t: float) -> None:
 
 # ----------------------------------------------------------------------------- loop
 @kernel
-def needs_python(c: CoreArrays, t: float) -> bool:
+def needs_python(c: CoreArrays, t: float, ids: np.ndarray) -> bool:
     """Whether the step at t needs the engine's Python side: a controller decision (a ramp
     vehicle entering its lane's control zone: key vehicles and a first plan; a live plan
     due for a replan) or game-confirmed lane changes. In a run whose key groups are found
     compiled (flag ``KEYS_COMPILED``: no controller, no listeners) a ramp vehicle entering
-    the zone needs none: its key group is recorded here (:func:`record_key_group`)."""
+    the zone needs none: its key group is recorded here (:func:`record_key_group`). ``ids``
+    are the vehicles on the road (:func:`road_ids`), the only ones that can enter a zone."""
     if c.flags[CAV_GAME] > 0:
         return True
     zone, controlled = c.road_f[L_ZONE], c.flags[CONTROLLER] > 0
     compiled = c.flags[KEYS_COMPILED] > 0
-    active, x, lane, origin, target = c.active, c.x, c.lane, c.origin, c.target
-    for i in range(x.size):
+    x, lane, origin, target = c.x, c.lane, c.origin, c.target
+    for i in ids:
         if (
-            active[i]
-            and x[i] >= zone[lane[i]]  # first: false at once on a lane without a zone (inf)
+            x[i] >= zone[lane[i]]  # first: false at once on a lane without a zone (inf)
             and origin[i] == target[i]
             and (not c.identified[i] or (controlled and not c.planned[i]))
         ):
@@ -293,22 +294,41 @@ def begin_step(c: CoreArrays, rng: np.random.Generator) -> bool:
 
 
 @kernel
-def on_road(c: CoreArrays) -> np.ndarray:
-    """The vehicles on the road, counted into the run's vehicle-steps (a view of the step's
-    work row); with none, the step ends here (:func:`end_step`)."""
+def road_ids(c: CoreArrays) -> np.ndarray:
+    """The vehicles on the road, in index order (a view of the step's work row)."""
     work = c.scratch_int[S_IDS]
-    ids = work[: nonzero_into(c.active, work)]
+    return work[: nonzero_into(c.active, work)]
+
+
+@kernel
+def on_road(c: CoreArrays) -> np.ndarray:
+    """The vehicles on the road (:func:`road_ids`), counted into the run's vehicle-steps;
+    with none, the step ends here (:func:`end_step`)."""
+    ids = road_ids(c)
+    count_on_road(c, ids)
+    return ids
+
+
+@kernel(inline="always")
+def count_on_road(c: CoreArrays, ids: np.ndarray) -> None:
+    """The vehicles ``ids`` on the road counted into the run's vehicle-steps; with none, the
+    step ends here (:func:`end_step`)."""
     if ids.size == 0:
         end_step(c)
     c.counters[VEHICLE_STEPS] += ids.size
-    return ids
 
 
 @kernel
 def step_alone(c: CoreArrays, t: float) -> None:
     """One whole step after its start and decisions, without the game (live plans are
     executed from the plan table)."""
-    ids = on_road(c)
+    step_vehicles(c, t, road_ids(c))
+
+
+@kernel
+def step_vehicles(c: CoreArrays, t: float, ids: np.ndarray) -> None:
+    """:func:`step_alone` of the vehicles on the road ``ids`` (:func:`road_ids`)."""
+    count_on_road(c, ids)
     if ids.size > 0:
         step_body(c, ids, t)
 
@@ -339,9 +359,10 @@ def run_steps(c: CoreArrays, stop: int, log_rows: bool, rng: np.random.Generator
             return FLUSH
         t = step_time(c)
         keys = c.counters[N_KEYS]
-        if needs_python(c, t):
+        ids = road_ids(c)  # release is done: who is on the road for the rest of the step
+        if needs_python(c, t, ids):
             return NEED_PYTHON
-        step_alone(c, t)
+        step_vehicles(c, t, ids)
         if not record_due_row(c, log_rows):
             return GROW_LOG  # the row is written once the log has grown
         if c.flags[STOP_AT_KEYS] > 0 and c.counters[N_KEYS] > keys:
