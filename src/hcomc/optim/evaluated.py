@@ -120,16 +120,15 @@ class EvaluatedRows:
         self._first = np.empty(n_rows, dtype=np.int64)
         self._fresh = np.empty(n_rows, dtype=np.int64)
         self._table = np.full(1 << (2 * n_rows).bit_length(), _EMPTY, dtype=np.int64)
-        canonical = isinstance(problem, CanonicalProblem)
-        self._keys = np.empty_like(self.X) if canonical else self.X  # the rows compared
+        self._canonical = problem.canonical_rows if isinstance(problem, CanonicalProblem) else None
+        self._keys = self.X if self._canonical is None else np.empty_like(self.X)  # compared
 
     def add(self, X: FloatArray) -> IntArray:
         """Evaluate the rows ``X`` into the archive's next rows; their archive rows."""
         start, end = self.size, self.size + X.shape[0]
         self.X[start:end] = X
-        if self._keys is not self.X:
-            assert isinstance(self.problem, CanonicalProblem)
-            self._keys[start:end] = self.problem.canonical_rows(X)
+        if self._canonical is not None:
+            self._keys[start:end] = self._canonical(X)
         n = admit_rows(self._keys, start, end, self._table, self._first, self._fresh)
         if n:
             fresh = self._fresh[:n]

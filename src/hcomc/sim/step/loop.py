@@ -4,8 +4,9 @@ The step is split into kernels (here, :mod:`hcomc.sim.step.motion`,
 :mod:`hcomc.sim.step.lane_change`, :mod:`hcomc.sim.step.collisions`,
 :mod:`hcomc.sim.step.plans` and :mod:`hcomc.sim.step.release`), and every step of a run is
 driven by one driver, :func:`run_steps`: :func:`begin_step` (event room, error innovations,
-release), the decisions, :func:`step_alone` (:func:`step_body`: :func:`step_front`, the
-discretionary lane changes, :func:`step_back`) and :func:`record_due_row`. It advances many
+release), the vehicles on the road (:func:`road_ids`), the decisions, :func:`step_vehicles`
+(:func:`step_body`: :func:`step_front`, the discretionary lane changes, :func:`step_back`)
+and :func:`record_due_row`. It advances many
 steps in one compiled call, live merge plans included (executed from the plan table of the
 compiled state), and hands a step to Python only for its decisions (:func:`needs_python`): a
 ramp vehicle entering the control zone (key vehicles, a first plan), a live plan due for a
