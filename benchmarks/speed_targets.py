@@ -125,8 +125,9 @@ def decisions() -> dict[str, Any]:
     """The default controller's decisions on the recorded problems: times and quality, each
     problem decided with the baseline's generators (its hypervolume is their mean), on every
     core (a main process scores a population's rows on all of numba's threads) and then on
-    one (as ``record_decisions.py`` and ``decision_latency.py`` measure by default); the
-    Pareto sets must be the same bit for bit."""
+    one (as ``record_decisions.py`` and ``decision_latency.py`` measure by default); every
+    problem's hypervolume must be the same both ways (the tests hold the Pareto sets equal
+    bit for bit)."""
     problems = load_decisions(PROBLEMS_FILE)
     baseline = json.loads(
         PROBLEMS_FILE.with_name(PROBLEMS_FILE.stem + "_baseline.json").read_text()
