@@ -23,19 +23,17 @@ from hcomc.equations.pareto import pareto_mask
 
 @kernel
 def relation(a: FloatArray, b: FloatArray) -> int:
-    """1 if ``a`` dominates ``b``, -1 if ``b`` dominates ``a``, 0 otherwise (pymoo's order of
-    comparison: the first strict difference in each direction decides)."""
-    val = 0
+    """1 if ``a`` dominates ``b``, -1 if ``b`` dominates ``a``, 0 otherwise: strictly better
+    in some objective and strictly worse in none (a comparison with NaN is neither). Counted
+    over every objective rather than decided at the first difference, which is the same
+    answer without a branch per objective (the order of random rows mispredicts them)."""
+    better, worse = 0, 0
     for i in range(a.shape[0]):
-        if a[i] < b[i]:
-            if val == -1:
-                return 0
-            val = 1
-        elif b[i] < a[i]:
-            if val == 1:
-                return 0
-            val = -1
-    return val
+        better += a[i] < b[i]
+        worse += b[i] < a[i]
+    if worse == 0:
+        return 1 if better > 0 else 0
+    return -1 if better == 0 else 0
 
 
 @kernel

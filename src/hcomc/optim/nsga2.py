@@ -29,12 +29,14 @@ vector), or the least-violating row of the final population when nothing is feas
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
-from hcomc.optim import dominance, evaluated, variation
+from hcomc.optim import dominance, evaluated
 from hcomc.optim.base import (
     ParetoResult,
     Problem,
@@ -46,13 +48,11 @@ from hcomc.optim.base import (
 )
 from hcomc.optim.dominance import survival_fronts, survive_and_select
 from hcomc.optim.evaluated import EvaluatedRows
-from hcomc.optim.variation import offspring
+from hcomc.optim.variation import Bounds, drawn_offspring
 from hcomc.rng import draw_seed
 
-_NONE = np.empty(0, dtype=np.int64)  # no permutation or sort (read only by the kernels)
-_NO_PAIRS = np.empty((0, 2), dtype=np.int64)  # no tournament
 
-
+@kernel
 def survive_and_mate(
     F: FloatArray,
     cv: FloatArray,
@@ -63,13 +63,14 @@ def survive_and_mate(
 ) -> tuple[IntArray, IntArray, IntArray, FloatArray]:
     """Rank-and-crowding survival with feasible rows first (pymoo's ``RankAndCrowding``), then
     ``n_matings`` pairs of parents by binary tournament among the survivors (pymoo's
-    ``TournamentSelection``), drawing from ``rng`` as pymoo does.
+    ``TournamentSelection``), drawing from ``rng`` what pymoo draws, in its order.
 
     Survival: feasible rows are taken front by front (rows of a front in position order); the
     front that does not fit is cut by crowding distance, largest first, ties broken by a random
     permutation. The remaining places go to infeasible rows by increasing violation.
     Selection: pairs of survivors from concatenated random permutations compete as
-    :func:`hcomc.optim.dominance.tournament` decides; a tie is a fair coin.
+    :func:`hcomc.optim.dominance.tournament` decides; a tie is a fair coin. numba's
+    ``Generator`` methods draw the numbers numpy's draw from the same state.
 
     Parameters
     ----------
@@ -83,28 +84,56 @@ def survive_and_mate(
     (-1 and NaN where not computed).
     """
     order, key, rank, crowding, counts = survival_fronts(F, cv, rows, n_survive)
-    n_inner, n_front, n_remove, n_infeasible = counts.tolist()
-    perm, by_crowding, by_violation, P = _NONE, _NONE, _NONE, _NO_PAIRS
+    n_inner, n_front, n_remove, n_infeasible = counts[0], counts[1], counts[2], counts[3]
+    none = np.empty(0, dtype=np.int64)
+    perm, by_crowding, by_violation = none, none, none  # no permutation, no sort
     # Ties are ordered stably: numpy's default sort orders equal keys by the CPU's (its
     # AVX-512 sort differs from its portable one), so the survivors would depend on the machine
     if n_remove > 0:  # the front that does not fit: sorted from a random permutation
         perm = rng.permutation(n_front)
-        by_crowding = key[n_inner : n_inner + n_front][perm].argsort(kind="stable")
+        by_crowding = np.argsort(key[n_inner : n_inner + n_front][perm], kind="mergesort")
     if n_infeasible > 0:
-        by_violation = key[n_inner + n_front :].argsort(kind="stable")
-    if n_matings > 0:
-        n = min(n_survive, rows.size)
-        n_random = n_matings * 2 * 2
-        n_perms = -(-n_random // n)
-        P = np.concatenate([rng.permutation(n) for _ in range(n_perms)])[:n_random]
-        P = P.reshape(n_matings * 2, 2)
+        by_violation = np.argsort(key[n_inner + n_front :], kind="mergesort")
+    P = np.empty((2 * n_matings, 2), dtype=np.int64)
+    pairs = P.reshape(4 * n_matings)
+    n = min(n_survive, rows.size)
+    taken = 0
+    while taken < pairs.size:  # concatenated permutations of the survivors, cut to size
+        drawn = rng.permutation(n)
+        m = min(n, pairs.size - taken)
+        pairs[taken : taken + m] = drawn[:m]
+        taken += m
     idx, S, ties = survive_and_select(
         F, cv, rows, crowding, order, counts, perm, by_crowding, by_violation, P
     )
-    for i in ties.tolist():
+    for i in ties:
         # a fair coin, the draw pymoo's ``rng.choice([a, b])`` makes (same stream)
-        S[i] = P[i, int(rng.integers(0, 2))]
+        S[i] = P[i, rng.integers(0, 2)]
     return idx, S.reshape(n_matings, 2), rank, crowding
+
+
+@kernel
+def next_generation(
+    X: FloatArray, F: FloatArray, cv: FloatArray, rows: IntArray, pop_size: int,
+    n_matings: int, bounds: Bounds, crossover: tuple[float, float],
+    mutation: tuple[float, float], rng: np.random.Generator,
+) -> tuple[IntArray, FloatArray]:  # fmt: skip
+    """One generation's steps between two evaluations, in one compiled call: the survivors of
+    the population ``rows`` of the archive ``X``, ``F``, ``cv`` (:func:`survive_and_mate`, as
+    rows of the archive, best first) and the offspring (2 ``n_matings``, n_var) of their
+    ``n_matings`` tournaments (:func:`hcomc.optim.variation.drawn_offspring`; none when 0);
+    ``crossover`` and ``mutation`` are (eta, probability)."""
+    idx, parents, _, _ = survive_and_mate(F, cv, rows, pop_size, n_matings, rng)
+    survivors = rows[idx]
+    if n_matings == 0:
+        return survivors, np.empty((0, X.shape[1]))
+    mates = np.empty((2, n_matings, X.shape[1]))
+    for i in range(n_matings):
+        mates[0, i] = X[survivors[parents[i, 0]]]
+        mates[1, i] = X[survivors[parents[i, 1]]]
+    children = drawn_offspring(mates, bounds, crossover[0], crossover[1], mutation[0],
+                               mutation[1], rng)  # fmt: skip
+    return survivors, children
 
 
 @dataclass(frozen=True, slots=True)
@@ -129,9 +158,7 @@ class CompiledNSGA2Optimizer:
 
     def __post_init__(self) -> None:
         check_pop_size(self.pop_size)
-        dominance.warm_up()  # load the compiled kernels now, not inside a timed decision
-        variation.warm_up()
-        evaluated.warm_up()
+        warm_up()  # load the compiled kernels now, not inside a timed decision
 
     def minimize(
         self,
@@ -152,17 +179,17 @@ class CompiledNSGA2Optimizer:
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
         archive = EvaluatedRows(problem, first.shape[0] + (n_gen - 1) * self.pop_size)
-        crossover = (self.crossover_eta, self.crossover_prob)
-        mutation = (self.mutation_eta, self.mutation_prob)
+        crossover = (float(self.crossover_eta), float(self.crossover_prob))
+        mutation = (float(self.mutation_eta), float(self.mutation_prob))
         n_matings = -(-self.pop_size // 2)
         rows = archive.add(first)
         X_all, F_all, G_all, cv_all = archive.X, archive.F, archive.G, archive.cv
+        bounds = Bounds(xl, xu)
         for g in range(n_gen):
             mate = n_matings if g < n_gen - 1 else 0  # the last survivors do not mate
-            idx, parents, _, _ = survive_and_mate(F_all, cv_all, rows, self.pop_size, mate, gen)
-            rows = rows[idx]
+            rows, children = next_generation(X_all, F_all, cv_all, rows, self.pop_size, mate,
+                                             bounds, crossover, mutation, gen)  # fmt: skip
             if mate:
-                children = offspring(X_all[rows[parents].T], xl, xu, crossover, mutation, gen)
                 rows = np.concatenate([rows, archive.add(children[: self.pop_size])])
         keep = archive_front(F_all, G_all)
         feasible: BoolArray = np.ones(keep.size, dtype=bool)
@@ -172,3 +199,15 @@ class CompiledNSGA2Optimizer:
             feasible = np.zeros(1, dtype=bool)
         return ParetoResult(X_all[keep], F_all[keep], G_all[keep], feasible, archive.size,
                             self.name)  # fmt: skip
+
+
+@functools.cache  # once per process
+def warm_up() -> None:
+    """Compile (or load from numba's cache) the kernels a run calls: a generation's
+    (:func:`next_generation`), the archive's (:mod:`hcomc.optim.evaluated`), the fronts'
+    (:mod:`hcomc.optim.dominance`)."""
+    dominance.warm_up()
+    evaluated.warm_up()
+    F, rng = np.array([[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]]), np.random.default_rng(0)
+    bounds = Bounds(np.zeros(2), np.ones(2))
+    next_generation(F, F, np.zeros(3), np.arange(3), 2, 1, bounds, (15.0, 0.9), (20.0, 0.9), rng)

@@ -325,15 +325,15 @@ def offspring(
     (not when the parents are within 1e-14 or the bounds coincide); the two children's values of
     a crossed variable are exchanged with probability 1/2; children are clamped to the bounds.
     Mutation is that of :func:`polynomial_mutation`. One compiled call
-    (:func:`_drawn_offspring`), the draws included.
+    (:func:`drawn_offspring`), the draws included.
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
-    return _drawn_offspring(X, Bounds(xl, xu), float(crossover[0]), float(crossover[1]),
+    return drawn_offspring(X, Bounds(xl, xu), float(crossover[0]), float(crossover[1]),
                             float(mutation[0]), float(mutation[1]), rng)  # fmt: skip
 
 
 @kernel
-def _drawn_offspring(
+def drawn_offspring(
     X: FloatArray, bounds: Bounds, crossover_eta: float, crossover_prob: float,
     mutation_eta: float, mutation_prob: float, rng: np.random.Generator,
 ) -> FloatArray:  # fmt: skip
