@@ -36,16 +36,12 @@ def _scored(problem: MergeProblem, X: np.ndarray, parts: int) -> tuple[np.ndarra
     X = np.ascontiguousarray(X)
     _, lateral, variant, no_behind = problem._rows(X)
     F, G = np.full((len(X), problem.n_obj), -7.0), np.full((len(X), problem.n_constr), -7.0)
-    for which in range(4):
-        rows = np.flatnonzero(variant == which)
-        if rows.size == 0 or problem._variants[which] is None:
-            continue
-        args = (problem._row_constants(which), X, rows, lateral,
-                bool(problem.lateral_allowed[which % 2]), no_behind, F, G)  # fmt: skip
-        if parts:
-            score_rows_parallel(*args, parts)
-        else:
-            score_rows_serial(*args)
+    variants, scored, allowed = problem._scoring()
+    args = (*variants, scored, allowed, X, variant, lateral, no_behind, F, G)
+    if parts:
+        score_rows_parallel(*args, parts)
+    else:
+        score_rows_serial(*args)
     return F, G
 
 

@@ -83,6 +83,8 @@ from hcomc.control.hierarchical.problem_terms import (
     OBJECTIVES,
     KeyState,
     Prediction,
+    canonical_form,
+    decode_rows,
 )
 from hcomc.control.hierarchical.row_scoring import (
     FUEL_ROLES,
@@ -175,8 +177,9 @@ class MergeProblem:
         self._fuel_no_merge = tuple(
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
-        # the per-sequence constants of the compiled scoring, prepared on first use
-        self._row_cache: dict[int, RowConstants] = {}
+        # the constants of the compiled scoring, prepared on first use (:meth:`_scoring`)
+        self._scoring_of: tuple[KeyState | None, ...] = ()
+        self._scoring_cache: tuple[tuple[RowConstants, ...], BoolArray, BoolArray]
 
     @property
     def _variants(self) -> tuple[KeyState | None, ...]:
@@ -195,26 +198,21 @@ class MergeProblem:
     # ------------------------------------------------------------------ evaluate
     def canonical_rows(self, X: FloatArray) -> FloatArray:
         """``X`` with the mode and sequence variables set to one value of what they select
-        (:meth:`_rows`): rows with equal canonical rows have equal values, so an optimiser
-        evaluates one of them (``optim.base.CanonicalProblem``)."""
+        (:func:`~hcomc.control.hierarchical.problem_terms.canonical_form`): rows with equal
+        canonical rows have equal values, so an optimiser evaluates one of them
+        (``optim.base.CanonicalProblem``)."""
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
-        seq, lateral, variant, no_behind = self._rows(X)
-        out = X.copy()
-        out[:, 3] = np.where(variant >= 2, MODE_NONE, np.where(lateral, 0.5, 0.0))
-        out[:, 4] = np.where((seq == BEHIND) | no_behind, 1.0, 0.0)
+        out: FloatArray = canonical_form(X, self.no_cooperation, self.states[BEHIND] is not None)
         return out
 
     def _rows(self, X: FloatArray) -> tuple[IntArray, BoolArray, IntArray, BoolArray]:
         """Per row: merge sequence, lateral flag, variant (the group it is rolled out in:
-        sequence + 2 for mode "none") and the "behind without a vehicle" flag."""
-        seq: IntArray = np.where(X[:, 4] >= 0.5, BEHIND, AHEAD).astype(np.int64)
-        none: BoolArray = (X[:, 3] >= MODE_NONE) & self.no_cooperation
-        lateral: BoolArray = (X[:, 3] >= 0.5) & ~none
-        seq[lateral] = AHEAD  # lateral: the cooperating vehicle leaves; VR takes its slot
-        no_behind: BoolArray = (seq == BEHIND) & (self.states[BEHIND] is None)
-        seq[no_behind] = AHEAD
-        variant: IntArray = seq + 2 * none
-        return seq, lateral, variant, no_behind
+        sequence + 2 for mode "none") and the "behind without a vehicle" flag
+        (:func:`~hcomc.control.hierarchical.problem_terms.decode_rows`)."""
+        X = np.ascontiguousarray(X, dtype=np.float64)
+        decoded: tuple[IntArray, BoolArray, IntArray, BoolArray]
+        decoded = decode_rows(X, self.no_cooperation, self.states[BEHIND] is not None)
+        return decoded
 
     def sequences(self, X: FloatArray) -> IntArray:
         """The merge sequence (AHEAD or BEHIND) each row is rolled out in."""
@@ -280,20 +278,15 @@ class MergeProblem:
     def evaluate(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Objectives (n, 3) and constraints (n, 9) of candidate rows ``X`` (n, 5): F(x) and the
         constraints of Ω in Eq. 18, those of :meth:`predict` bit for bit (the tests hold both
-        paths to it), without the trajectories: each sequence's rows in one compiled call
+        paths to it), without the trajectories: every row in one compiled call
         (:func:`~hcomc.control.hierarchical.row_scoring.score_rows`) of :meth:`evaluate_row`'s
-        body, on the per-sequence constants prepared once per problem.
+        body, on the per-variant constants prepared once per problem.
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=np.float64)
         _, lateral, variant, no_behind = self._rows(X)
         F = np.zeros((X.shape[0], self.n_obj))
         G = np.zeros((X.shape[0], self.n_constr))
-        for which in range(len(self._variants)):
-            rows = np.flatnonzero(variant == which)
-            if rows.size == 0 or self._variants[which] is None:
-                continue  # "behind" rows without a vehicle to merge behind were moved ahead
-            allowed = bool(self.lateral_allowed[which % 2])
-            score_rows(self._row_constants(which), X, rows, lateral, allowed, no_behind, F, G)
+        score_rows(*self._scoring(), X, variant, lateral, no_behind, F, G)
         return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
@@ -338,25 +331,35 @@ class MergeProblem:
 
     def _row_constants(self, which: int) -> RowConstants:
         """What :func:`~hcomc.control.hierarchical.row_scoring.score_row` takes from the planning
-        instant and the variant ``which`` alone
-        (:func:`~hcomc.control.hierarchical.problem_setup.row_constants`), as the kernels take it
-        (:func:`~hcomc.control.hierarchical.row_scoring.constants_handle`); prepared on first
-        use."""
-        cached = self._row_cache.get(which)
-        if cached is not None:
-            return cached
+        instant and the variant ``which`` (:meth:`_scoring`)."""
+        return self._scoring()[0][which]
+
+    def _scoring(self) -> tuple[tuple[RowConstants, ...], BoolArray, BoolArray]:
+        """What :func:`~hcomc.control.hierarchical.row_scoring.score_rows` takes from the
+        problem, prepared on first use: every variant's constants (``problem_setup.
+        row_constants`` in a ``row_scoring.constants_handle``; an absent variant's place holds
+        the "ahead" group's, which always exists), which variants exist, and per sequence
+        whether it admits lateral cooperation."""
+        if self._scoring_of is not self.states:  # first use, or a copy with other states
+            on = [state is not None for state in self._variants]
+            made = {w: self._constants(w) for w in range(len(on)) if on[w]}
+            variants = tuple(made[w if on[w] else AHEAD] for w in range(len(on)))
+            allowed = np.array(self.lateral_allowed, dtype=np.bool_)
+            self._scoring_cache = (variants, np.array(on), allowed)
+            self._scoring_of = self.states
+        return self._scoring_cache
+
+    def _constants(self, which: int) -> RowConstants:
+        """The constants handle of the existing variant ``which``."""
         seq = which % 2
         state, cf, starts = self._variants[which], self._no_merge[seq], self._starts[seq]
-        # "behind" rows are scored only when that group exists
         assert state is not None
         assert cf is not None
         assert starts is not None
-        constants = constants_handle(row_constants(
+        return constants_handle(row_constants(
             state, starts, cf, self.consts, self.n_steps, self._fuel_no_merge[seq], self.dt,
             self.safety.threshold, self._fuel_ref,
         ))  # fmt: skip
-        self._row_cache[which] = constants
-        return constants
 
     # ----------------------------------------------------------------- helpers
     def _fuel(

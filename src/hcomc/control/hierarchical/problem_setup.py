@@ -134,8 +134,9 @@ def load_prediction_kernels() -> None:
                                               1.0))  # fmt: skip
     row, F, G = np.array([800.0, 4.0, 6.0, 0.0, 0.0]), np.empty(3), np.empty(len(CONSTRAINTS))
     score_row(constants, row, False, 0.0, 0.0, F, G)
-    rows, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)  # evaluate's
-    for_rows = (constants, row[None], rows, lateral, True, lateral, F[None], G[None])
+    variants, on = (constants,) * 4, np.ones(4, dtype=np.bool_)  # evaluate's
+    variant, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)
+    for_rows = (*variants, on, on[:2], row[None], variant, lateral, lateral, F[None], G[None])
     score_rows_serial(*for_rows)
     score_rows_parallel(*for_rows, 1)  # in any process: a main process's decisions use it
     trajectory = np.zeros((1, 2, N_ROLES))

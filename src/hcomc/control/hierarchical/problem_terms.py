@@ -5,7 +5,9 @@ The names of the objectives and constraints (the columns of ``F`` and ``G``), th
 sequences and the threshold of the mode "none" are those of the decision vector described in
 :mod:`hcomc.control.hierarchical.problem`; :class:`KeyState` holds the six key vehicles at the
 planning instant, :class:`Prediction` the rolled-out candidates and :func:`default_starts` the
-virtual vehicles' start states of a first plan. The compiled row scoring
+virtual vehicles' start states of a first plan, :func:`decode_rows` what a row of the decision
+vector selects and :func:`canonical_form` one row for all that select the same. The compiled row
+scoring
 (:mod:`~hcomc.control.hierarchical.row_scoring`) reads these terms, so they import no config:
 the rollout's constants read from the scenario are
 :func:`~hcomc.control.hierarchical.problem_setup.problem_constants`.
@@ -17,6 +19,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from hcomc._jit import kernel
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.control.prediction.population import N_STARTS, P_A, P_V0, VMC, KeyVehicles
 
@@ -31,6 +34,8 @@ __all__ = [
     "SEQUENCES",
     "KeyState",
     "Prediction",
+    "canonical_form",
+    "decode_rows",
     "default_starts",
 ]
 
@@ -121,3 +126,41 @@ class Prediction:
 def default_starts() -> FloatArray:
     """Start states of VV0 and VV1 for a first plan: the Eq. 8 defaults (all NaN)."""
     return np.full(N_STARTS, np.nan)
+
+
+@kernel
+def decode_rows(
+    X: FloatArray, no_cooperation: bool, has_behind: bool
+) -> tuple[IntArray, BoolArray, IntArray, BoolArray]:
+    """What each row of the decision vector ``X`` (n, 5) selects: its merge sequence (AHEAD or
+    BEHIND), its lateral flag, its variant (the group it is rolled out in: sequence + 2 for
+    the mode "none") and whether it asked to merge behind without a vehicle to merge behind
+    (``has_behind`` false: it is rolled out ahead). The mode variable x[3] asks for "none"
+    from :data:`MODE_NONE` (with ``no_cooperation`` only), else for lateral cooperation from
+    0.5; the sequence variable x[4] for "behind" from 0.5; a lateral row merges ahead (the
+    cooperating vehicle leaves, VR takes its slot). A NaN selects neither."""
+    n = X.shape[0]
+    seq, lateral = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.bool_)
+    variant, no_behind = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.bool_)
+    for r in range(n):
+        none = X[r, 3] >= MODE_NONE and no_cooperation
+        lateral[r] = X[r, 3] >= 0.5 and not none
+        behind = X[r, 4] >= 0.5 and not lateral[r]
+        no_behind[r] = behind and not has_behind
+        seq[r] = BEHIND if behind and has_behind else AHEAD
+        variant[r] = seq[r] + 2 * none
+    return seq, lateral, variant, no_behind
+
+
+@kernel
+def canonical_form(X: FloatArray, no_cooperation: bool, has_behind: bool) -> FloatArray:
+    """``X`` with the mode and sequence variables set to one value of what they select
+    (:func:`decode_rows`): mode 0 (longitudinal), 0.5 (lateral) or :data:`MODE_NONE`;
+    sequence 1 for a row rolled out behind or asking to be, 0 otherwise. Rows with equal
+    canonical rows are the same candidate."""
+    seq, lateral, variant, no_behind = decode_rows(X, no_cooperation, has_behind)
+    out = X.copy()
+    for r in range(X.shape[0]):
+        out[r, 3] = MODE_NONE if variant[r] >= 2 else 0.5 if lateral[r] else 0.0
+        out[r, 4] = 1.0 if seq[r] == BEHIND or no_behind[r] else 0.0
+    return out

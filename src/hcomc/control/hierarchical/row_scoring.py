@@ -156,42 +156,52 @@ def score_into(
 
 @kernel(inline="always")
 def _score_part(
-    constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
-    allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray, part: int,
-    n_parts: int, work: RolloutWork,
+    variants: tuple[RowConstants, ...], scored: np.ndarray, allowed: np.ndarray, X: np.ndarray,
+    variant: np.ndarray, lateral: np.ndarray, no_behind: np.ndarray, F: np.ndarray,
+    G: np.ndarray, part: int, n_parts: int, work: RolloutWork,
 ) -> None:  # fmt: skip
-    """Rows ``rows[part::n_parts]`` of ``X`` scored into the same rows of ``F`` and ``G`` by
+    """Rows ``part::n_parts`` of ``X`` scored into the same rows of ``F`` and ``G`` by
     :func:`score_into`, rolling out into ``work`` (arguments of :func:`score_rows`)."""
-    for q in range(part, rows.size, n_parts):
-        r = rows[q]
+    for r in range(part, X.shape[0], n_parts):
+        v = variant[r]
+        if not scored[v]:
+            continue
         lat = lateral[r]
-        score_into(constants, X[r], lat, 1.0 if lat and not allowed else 0.0,
+        score_into(variants[v], X[r], lat, 1.0 if lat and not allowed[v % 2] else 0.0,
                    1.0 if no_behind[r] else 0.0, F[r], G[r], work)  # fmt: skip
 
 
 @kernel
 def score_rows_serial(
-    constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
-    allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray,
+    ahead: RowConstants, behind: RowConstants, ahead_none: RowConstants,
+    behind_none: RowConstants, scored: np.ndarray, allowed: np.ndarray, X: np.ndarray,
+    variant: np.ndarray, lateral: np.ndarray, no_behind: np.ndarray, F: np.ndarray,
+    G: np.ndarray,
 ) -> None:  # fmt: skip
     """:func:`score_rows` on the calling thread, the rollout's arrays allocated once for all
-    rows."""
-    work = rollout_work(constants.n_steps)
-    _score_part(constants, X, rows, lateral, allowed, no_behind, F, G, 0, 1, work)
+    rows. The variants' constants come one by one (numba types a tuple of handles from
+    Python at every call, 10 us) and are gathered here."""
+    variants = (ahead, behind, ahead_none, behind_none)
+    work = rollout_work(ahead.n_steps)
+    _score_part(variants, scored, allowed, X, variant, lateral, no_behind, F, G, 0, 1, work)
 
 
 @kernel(parallel=True)
 def score_rows_parallel(
-    constants: RowConstants, X: np.ndarray, rows: np.ndarray, lateral: np.ndarray,
-    allowed: bool, no_behind: np.ndarray, F: np.ndarray, G: np.ndarray, n_parts: int,
+    ahead: RowConstants, behind: RowConstants, ahead_none: RowConstants,
+    behind_none: RowConstants, scored: np.ndarray, allowed: np.ndarray, X: np.ndarray,
+    variant: np.ndarray, lateral: np.ndarray, no_behind: np.ndarray, F: np.ndarray,
+    G: np.ndarray, n_parts: int,
 ) -> None:  # fmt: skip
     """:func:`score_rows` on ``n_parts`` threads (``numba.prange``): part p scores rows p,
     p + n_parts, ... with rollout arrays of its own. A function of its own, not
     :func:`score_rows_serial` compiled twice: numba's cache keys an entry by the function
     and its signature, not by ``parallel``."""
+    variants = (ahead, behind, ahead_none, behind_none)
     for part in prange(n_parts):
-        work = rollout_work(constants.n_steps)
-        _score_part(constants, X, rows, lateral, allowed, no_behind, F, G, part, n_parts, work)
+        work = rollout_work(ahead.n_steps)
+        _score_part(variants, scored, allowed, X, variant, lateral, no_behind, F, G, part,
+                    n_parts, work)  # fmt: skip
 
 
 def scoring_threads() -> int:
@@ -208,19 +218,26 @@ def scoring_threads() -> int:
 
 
 def score_rows(
-    constants: RowConstants, X: FloatArray, rows: IntArray, lateral: BoolArray, allowed: bool,
-    no_behind: BoolArray, F: FloatArray, G: FloatArray,
+    variants: tuple[RowConstants, ...], scored: BoolArray, allowed: BoolArray, X: FloatArray,
+    variant: IntArray, lateral: BoolArray, no_behind: BoolArray, F: FloatArray, G: FloatArray,
 ) -> None:  # fmt: skip
-    """Rows ``rows`` of ``X`` (all of one sequence, whose ``constants`` are as for
-    :func:`score_row`) scored into the same rows of ``F`` and ``G``, each by
-    :func:`score_row`'s body (``lateral``: per row of ``X``, its mode; ``allowed``: whether
-    the sequence admits lateral cooperation; ``no_behind``: per row of ``X``, a "behind" row
-    moved ahead for want of a vehicle), on :func:`scoring_threads` threads.
+    """The rows of ``X`` scored into the same rows of ``F`` and ``G``, each by
+    :func:`score_row`'s body in its variant, on :func:`scoring_threads` threads, in one
+    compiled call.
+
+    ``variants``: the :class:`RowConstants` handles of the problem's four variants (sequence
+    + 2 for the mode "none"; every variant's n_steps the same), of which those with ``scored``
+    true are scored (the others' rows are left as they are); ``allowed``: per sequence,
+    whether it admits lateral cooperation; per row of ``X``: its ``variant``, its mode
+    (``lateral``) and whether it is a "behind" row moved ahead for want of a vehicle
+    (``no_behind``).
 
     A row's values depend on its own inputs alone, so they are the same bit for bit
     whatever the number of threads."""
-    threads = min(scoring_threads(), rows.size)
+    threads = min(scoring_threads(), X.shape[0])
+    ahead, behind, ahead_none, behind_none = variants
+    args = (scored, allowed, X, variant, lateral, no_behind, F, G)
     if threads > 1:
-        score_rows_parallel(constants, X, rows, lateral, allowed, no_behind, F, G, threads)
+        score_rows_parallel(ahead, behind, ahead_none, behind_none, *args, threads)
     else:
-        score_rows_serial(constants, X, rows, lateral, allowed, no_behind, F, G)
+        score_rows_serial(ahead, behind, ahead_none, behind_none, *args)
