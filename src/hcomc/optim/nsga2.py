@@ -3,16 +3,17 @@
 :class:`CompiledNSGA2Optimizer` runs the algorithm of :class:`~hcomc.optim.pymoo_backend.
 NSGA2Optimizer` (pymoo 0.6's ``NSGA2`` with SBX, polynomial mutation, binary tournament by
 constraint violation, domination and crowding, rank-and-crowding survival with feasible rows first,
-no duplicate elimination) on plain arrays. A generation costs a handful of compiled calls: survival
-(:func:`hcomc.optim.dominance.survival_fronts`), the rest of survival with the tournaments
-(:func:`hcomc.optim.dominance.survive_and_select`), and crossover with mutation
-(:func:`hcomc.optim.variation.offspring`, its draws included), with survival's and the tournaments'
-draws made in Python in between: all the same numbers in the same order as pymoo's, from a generator
-seeded like pymoo's. Numpy is left the two sorts whose order of ties is numpy's own. The formulas
-are pymoo's, but the powers are the C library's (:mod:`hcomc.optim.variation`) and the constraint
-violation a plain sum (:func:`hcomc.optim.evaluated.violation`), never numpy's CPU-dispatched
-functions, so that a run is the same on every processor; where numpy's functions differ from the C
-library's, a run can part from pymoo's in the last bit and go its own way. The tests hold it to
+no duplicate elimination) on plain arrays. Between two evaluations a generation is one compiled
+call (:func:`next_generation`): rank-and-crowding survival (:func:`hcomc.optim.dominance.
+survival_fronts`, :func:`hcomc.optim.dominance.survive_and_select`), the tournaments and
+crossover with mutation (:func:`hcomc.optim.variation.drawn_offspring`), their draws made by
+numba's ``Generator`` methods, which draw what numpy's draw from the same state: all the same
+numbers in the same order as pymoo's, from a generator seeded like pymoo's. Its sorts are stable,
+so that ties keep one order on every machine. The formulas are pymoo's, but the powers are the C
+library's (:mod:`hcomc.optim.variation`) and the constraint violation a plain sum
+(:func:`hcomc.optim.evaluated.violation`), never numpy's CPU-dispatched functions, so that a run
+is the same on every processor; where numpy's functions differ from the C library's, a run can
+part from pymoo's in the last bit and go its own way. The tests hold it to
 pymoo's solution quality on the recorded merge problems (``tests/unit/test_nsga2_compiled.py``).
 Evaluated rows go into one preallocated archive (:class:`hcomc.optim.evaluated.EvaluatedRows`), from
 which the Pareto set is taken in one compiled pass (:func:`hcomc.optim.base.archive_front`); a row
