@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -107,9 +108,22 @@ def settle_rows(
     violation_into(G[start:end], cv[start:end])
 
 
+class ArchiveArrays(NamedTuple):
+    """The arrays of an :class:`EvaluatedRows`, as compiled code that fills it takes them."""
+
+    X: np.ndarray  # (n_rows, n_var) the rows, in evaluation order
+    F: np.ndarray  # (n_rows, n_obj) their objectives
+    G: np.ndarray  # (n_rows, n_constr) their constraints
+    cv: np.ndarray  # (n_rows,) their violation
+    keys: np.ndarray  # (n_rows, n_var) what is compared: the rows, or their canonical rows
+    table: np.ndarray  # the hash table of :func:`admit_rows`
+    first: np.ndarray  # (n_rows,) the earliest equal row of each row (admit_rows)
+    fresh: np.ndarray  # (n_rows,) work space: the new rows of an admission
+
+
 class EvaluatedRows:
     """Every row a run evaluated, in evaluation order: ``X``, ``F``, ``G`` and the violation
-    ``cv``, their first ``size`` rows (module docstring)."""
+    ``cv``, their first ``size`` rows (module docstring); all its arrays in ``arrays``."""
 
     def __init__(self, problem: Problem, n_rows: int) -> None:
         self.problem = problem
@@ -122,6 +136,8 @@ class EvaluatedRows:
         self._table = np.full(1 << (2 * n_rows).bit_length(), _EMPTY, dtype=np.int64)
         self._canonical = problem.canonical_rows if isinstance(problem, CanonicalProblem) else None
         self._keys = self.X if self._canonical is None else np.empty_like(self.X)  # compared
+        self.arrays = ArchiveArrays(self.X, self.F, self.G, self.cv, self._keys, self._table,
+                                    self._first, self._fresh)  # fmt: skip
 
     def add(self, X: FloatArray) -> IntArray:
         """Evaluate the rows ``X`` into the archive's next rows; their archive rows."""

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -137,6 +138,52 @@ def next_generation(
     return survivors, children
 
 
+class Generations(NamedTuple):
+    """A run's generations, as :func:`run_generations` takes them: ``n_gen`` generations of
+    ``pop_size`` rows, ``n_matings`` tournaments a generation (none after the last), the
+    variables' ``bounds``, and the operators' (eta, probability): ``crossover`` and
+    ``mutation``."""
+
+    n_gen: int
+    pop_size: int
+    n_matings: int
+    bounds: Bounds
+    crossover: tuple[float, float]
+    mutation: tuple[float, float]
+
+
+@runtime_checkable
+class CompiledGenerations(Protocol):
+    """A problem that runs NSGA-II's generations on itself in compiled code: the same rows,
+    values and draws as :func:`run_generations` (with its ``evaluate`` and canonical rows),
+    bit for bit, without returning to Python between generations."""
+
+    def nsga2_generations(
+        self, archive: EvaluatedRows, first: FloatArray, plan: Generations,
+        rng: np.random.Generator,
+    ) -> IntArray:  # fmt: skip
+        """:func:`run_generations` on this problem."""
+        ...
+
+
+def run_generations(
+    archive: EvaluatedRows, first: FloatArray, plan: Generations, rng: np.random.Generator
+) -> IntArray:
+    """NSGA-II's generations from the first population ``first``: its rows evaluated into
+    ``archive``, then ``plan.n_gen`` times the survivors of the population, whose offspring
+    (the first ``pop_size``; none after the last generation) are evaluated and join them
+    (:func:`next_generation`). Returns the final population's rows of the archive."""
+    rows = archive.add(first)
+    X, F, cv = archive.X, archive.F, archive.cv
+    for g in range(plan.n_gen):
+        mate = plan.n_matings if g < plan.n_gen - 1 else 0  # the last survivors do not mate
+        rows, children = next_generation(X, F, cv, rows, plan.pop_size, mate, plan.bounds,
+                                         plan.crossover, plan.mutation, rng)  # fmt: skip
+        if mate:
+            rows = np.concatenate([rows, archive.add(children[: plan.pop_size])])
+    return rows
+
+
 @dataclass(frozen=True, slots=True)
 class CompiledNSGA2Optimizer:
     """NSGA-II on arrays with numba kernels, pymoo's algorithm (see the module).
@@ -180,18 +227,16 @@ class CompiledNSGA2Optimizer:
         if first is None:
             first = xl + (xu - xl) * gen.random((self.pop_size, n_var))
         archive = EvaluatedRows(problem, first.shape[0] + (n_gen - 1) * self.pop_size)
-        crossover = (float(self.crossover_eta), float(self.crossover_prob))
-        mutation = (float(self.mutation_eta), float(self.mutation_prob))
-        n_matings = -(-self.pop_size // 2)
-        rows = archive.add(first)
+        plan = Generations(
+            n_gen, self.pop_size, -(-self.pop_size // 2), Bounds(xl, xu),
+            (float(self.crossover_eta), float(self.crossover_prob)),
+            (float(self.mutation_eta), float(self.mutation_prob)),
+        )  # fmt: skip
+        if isinstance(problem, CompiledGenerations):
+            rows = problem.nsga2_generations(archive, first, plan, gen)
+        else:
+            rows = run_generations(archive, first, plan, gen)
         X_all, F_all, G_all, cv_all = archive.X, archive.F, archive.G, archive.cv
-        bounds = Bounds(xl, xu)
-        for g in range(n_gen):
-            mate = n_matings if g < n_gen - 1 else 0  # the last survivors do not mate
-            rows, children = next_generation(X_all, F_all, cv_all, rows, self.pop_size, mate,
-                                             bounds, crossover, mutation, gen)  # fmt: skip
-            if mate:
-                rows = np.concatenate([rows, archive.add(children[: self.pop_size])])
         keep = archive_front(F_all, G_all)
         feasible: BoolArray = np.ones(keep.size, dtype=bool)
         if keep.size == 0:

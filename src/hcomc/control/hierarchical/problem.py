@@ -68,6 +68,7 @@ import numpy as np
 
 from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.config import ScenarioConfig
+from hcomc.control.hierarchical import search
 from hcomc.control.hierarchical.problem_setup import (
     FUEL_COEFFICIENTS,
     problem_constants,
@@ -127,6 +128,7 @@ class MergeProblem:
     n_obj = 3
     n_constr = len(CONSTRAINTS)
     objective_names = OBJECTIVES
+    nsga2_generations = search.nsga2_generations  # optim.nsga2.CompiledGenerations
 
     def __init__(
         self,
@@ -336,10 +338,9 @@ class MergeProblem:
 
     def _scoring(self) -> tuple[tuple[RowConstants, ...], BoolArray, BoolArray]:
         """What :func:`~hcomc.control.hierarchical.row_scoring.score_rows` takes from the
-        problem, prepared on first use: every variant's constants (``problem_setup.
-        row_constants`` in a ``row_scoring.constants_handle``; an absent variant's place holds
-        the "ahead" group's, which always exists), which variants exist, and per sequence
-        whether it admits lateral cooperation."""
+        problem, prepared on first use: every variant's constants (``row_constants`` in a
+        ``constants_handle``; an absent variant's place holds the "ahead" group's, which always
+        exists), which variants exist, per sequence whether it admits lateral cooperation."""
         if self._scoring_of is not self.states:  # first use, or a copy with other states
             on = [state is not None for state in self._variants]
             made = {w: self._constants(w) for w in range(len(on)) if on[w]}

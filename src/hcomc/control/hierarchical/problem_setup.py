@@ -18,6 +18,7 @@ import numpy as np
 from hcomc._typing import FloatArray
 from hcomc.config import IDMParams, ScenarioConfig
 from hcomc.config.fuel import FUEL_DEFAULT
+from hcomc.control.hierarchical import search
 from hcomc.control.hierarchical.problem_terms import CONSTRAINTS, KeyState
 from hcomc.control.hierarchical.row_scoring import (
     FUEL_ROLES,
@@ -139,6 +140,7 @@ def load_prediction_kernels() -> None:
     for_rows = (*variants, on, on[:2], row[None], variant, lateral, lateral, F[None], G[None])
     score_rows_serial(*for_rows)
     score_rows_parallel(*for_rows, 1)  # in any process: a main process's decisions use it
+    search.warm_up(constants)  # NSGA-II's generations on the merge problem
     trajectory = np.zeros((1, 2, N_ROLES))
     roles = np.zeros(1, dtype=np.int64)
     _fuel_to_distance_kernel(trajectory, roles, *(trajectory,) * 3, 0.25, FUEL_COEFFICIENTS)
