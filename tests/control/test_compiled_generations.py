@@ -133,10 +133,23 @@ def test_a_copy_with_other_key_states_scores_its_own_states() -> None:
     assert F_after.tobytes() == problem.predict(X).F.tobytes()
 
 
-def test_an_archive_without_canonical_rows_is_refused() -> None:
+def test_an_archive_of_whole_rows_is_filled_by_the_python_loop() -> None:
+    """An archive that compares whole rows (its keys are its rows) is left to the Python
+    loop: its canonical keys would overwrite the rows, and its duplicates are not those of
+    canonical rows. The rows and values it ends with are those of the loop."""
     problem = recorded_problem(2)
-    plan = Generations(1, 4, 2, Bounds(problem.xl, problem.xu), (15.0, 0.9), (20.0, 0.9))
-    archive = EvaluatedRows(problem, 4)
-    archive.arrays = archive.arrays._replace(keys=archive.X)
-    with pytest.raises(TypeError, match="canonical rows"):
-        problem.nsga2_generations(archive, _first(problem, 4, 0), plan, np.random.default_rng(0))
+    bounds = Bounds(np.asarray(problem.xl, dtype=float), np.asarray(problem.xu, dtype=float))
+    plan = Generations(3, 8, 4, bounds, (15.0, 0.9), (20.0, 0.9))
+    first = _first(problem, 8, 0)
+    runs = []
+    for compiled in (True, False):
+        archive = EvaluatedRows(problem, 8 + 2 * 8)
+        archive._canonical, archive._keys = None, archive.X  # as for a problem of whole rows
+        archive.arrays = archive.arrays._replace(keys=archive.X)
+        rng = np.random.default_rng(1)
+        run = problem.nsga2_generations if compiled else run_generations
+        runs.append((run(archive, first, plan, rng), archive))
+    (rows_a, a), (rows_b, b) = runs
+    np.testing.assert_array_equal(rows_a, rows_b)
+    for name in ("X", "F", "G", "cv"):
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name

@@ -36,7 +36,7 @@ def _scored(problem: MergeProblem, X: np.ndarray, parts: int) -> tuple[np.ndarra
     X = np.ascontiguousarray(X)
     _, lateral, variant, no_behind = problem._rows(X)
     F, G = np.full((len(X), problem.n_obj), -7.0), np.full((len(X), problem.n_constr), -7.0)
-    variants, scored, allowed = problem._scoring()
+    variants, scored, allowed = problem.scoring()
     args = (*variants, scored, allowed, X, variant, lateral, no_behind, F, G)
     if parts:
         score_rows_parallel(*args, parts)

@@ -179,7 +179,7 @@ class MergeProblem:
         self._fuel_no_merge = tuple(
             0.0 if cf is None else self._counterfactual_fuel(cf) for cf in self._no_merge
         )
-        # the constants of the compiled scoring, prepared on first use (:meth:`_scoring`)
+        # the constants of the compiled scoring, prepared on first use (:meth:`scoring`)
         self._scoring_of: tuple[KeyState | None, ...] = ()
         self._scoring_cache: tuple[tuple[RowConstants, ...], BoolArray, BoolArray]
 
@@ -288,7 +288,7 @@ class MergeProblem:
         _, lateral, variant, no_behind = self._rows(X)
         F = np.zeros((X.shape[0], self.n_obj))
         G = np.zeros((X.shape[0], self.n_constr))
-        score_rows(*self._scoring(), X, variant, lateral, no_behind, F, G)
+        score_rows(*self.scoring(), X, variant, lateral, no_behind, F, G)
         return F, G
 
     def scalarise(self, F: FloatArray, G: FloatArray) -> FloatArray:
@@ -333,10 +333,10 @@ class MergeProblem:
 
     def _row_constants(self, which: int) -> RowConstants:
         """What :func:`~hcomc.control.hierarchical.row_scoring.score_row` takes from the planning
-        instant and the variant ``which`` (:meth:`_scoring`)."""
-        return self._scoring()[0][which]
+        instant and the variant ``which`` (:meth:`scoring`)."""
+        return self.scoring()[0][which]
 
-    def _scoring(self) -> tuple[tuple[RowConstants, ...], BoolArray, BoolArray]:
+    def scoring(self) -> tuple[tuple[RowConstants, ...], BoolArray, BoolArray]:
         """What :func:`~hcomc.control.hierarchical.row_scoring.score_rows` takes from the
         problem, prepared on first use: every variant's constants (``row_constants`` in a
         ``constants_handle``; an absent variant's place holds the "ahead" group's, which always

@@ -17,15 +17,16 @@ tests compare both loops on the recorded planning instants). It is the merge pro
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
 from hcomc._jit import kernel
-from hcomc._typing import FloatArray, IntArray
+from hcomc._typing import BoolArray, FloatArray, IntArray
 from hcomc.control.hierarchical.problem_terms import (
     BEHIND,
     CONSTRAINTS,
+    KeyState,
     canonical_form,
     decode_rows,
 )
@@ -36,13 +37,29 @@ from hcomc.control.hierarchical.row_scoring import (
     scoring_threads,
 )
 from hcomc.optim.evaluated import ArchiveArrays, EvaluatedRows, admit_rows, settle_rows
-from hcomc.optim.nsga2 import Generations, next_generation
+from hcomc.optim.nsga2 import Generations, next_generation, run_generations
 from hcomc.optim.variation import Bounds
 
-if TYPE_CHECKING:
-    from hcomc.control.hierarchical.problem import MergeProblem
+__all__ = [
+    "Scoring",
+    "SearchedProblem",
+    "admit_and_score",
+    "generations",
+    "nsga2_generations",
+    "warm_up",
+]
 
-__all__ = ["Scoring", "admit_and_score", "generations", "nsga2_generations", "warm_up"]
+
+class SearchedProblem(Protocol):
+    """What :func:`nsga2_generations` reads of a merge problem
+    (:class:`~hcomc.control.hierarchical.problem.MergeProblem`)."""
+
+    no_cooperation: bool  # HCOMC+: the mode "none" exists
+    states: tuple[KeyState, KeyState | None]  # the key groups ahead and behind
+
+    def scoring(self) -> tuple[tuple[RowConstants, ...], BoolArray, BoolArray]:
+        """The variants' constants, which exist, and the sequences' lateral admission."""
+        ...
 
 
 class Scoring(NamedTuple):
@@ -116,15 +133,17 @@ def generations(
 
 
 def nsga2_generations(
-    problem: MergeProblem, archive: EvaluatedRows, first: FloatArray, plan: Generations,
+    problem: SearchedProblem, archive: EvaluatedRows, first: FloatArray, plan: Generations,
     rng: np.random.Generator,
 ) -> IntArray:  # fmt: skip
     """:func:`hcomc.optim.nsga2.run_generations` on ``problem`` in one compiled call
     (:func:`generations`), its rows scored on :func:`~hcomc.control.hierarchical.row_scoring.
-    scoring_threads` threads; the final population's rows."""
-    if archive.arrays.keys is archive.X:  # keys must hold the canonical rows, apart from X
-        raise TypeError("the archive of a merge problem must keep its canonical rows")
-    (ahead, behind, ahead_none, behind_none), scored, allowed = problem._scoring()
+    scoring_threads` threads; the final population's rows. An archive that compares whole
+    rows, not canonical ones (its keys are its rows), is filled by the Python loop, which
+    evaluates the rows as that archive compares them."""
+    if archive.arrays.keys is archive.X:
+        return run_generations(archive, first, plan, rng)
+    (ahead, behind, ahead_none, behind_none), scored, allowed = problem.scoring()
     scoring = Scoring(ahead, behind, ahead_none, behind_none, scored, allowed,
                       problem.no_cooperation, problem.states[BEHIND] is not None)  # fmt: skip
     first = np.ascontiguousarray(first, dtype=np.float64)
