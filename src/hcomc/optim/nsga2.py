@@ -99,6 +99,8 @@ def survive_and_mate(
     P = np.empty((2 * n_matings, 2), dtype=np.int64)
     pairs = P.reshape(4 * n_matings)
     n = min(n_survive, rows.size)
+    if n == 0 and pairs.size > 0:
+        raise ValueError("no survivors to mate")
     taken = 0
     while taken < pairs.size:  # concatenated permutations of the survivors, cut to size
         drawn = rng.permutation(n)

@@ -329,7 +329,7 @@ def offspring(
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
     return drawn_offspring(X, Bounds(xl, xu), float(crossover[0]), float(crossover[1]),
-                            float(mutation[0]), float(mutation[1]), rng)  # fmt: skip
+                           float(mutation[0]), float(mutation[1]), rng)  # fmt: skip
 
 
 @kernel

@@ -4,8 +4,9 @@
 population) and :meth:`~hcomc.control.hierarchical.problem.MergeProblem.evaluate_row` (simulated
 annealing's single rows) score each row in one compiled body (:func:`score_into`): its rollout,
 U_fuel, the objectives, the constraints and the penalised cost, on constants prepared once per
-planning instant and sequence
-(:func:`~hcomc.control.hierarchical.problem_setup.row_constants`). No population of
+planning instant and variant (sequence and mode "none",
+:func:`~hcomc.control.hierarchical.problem_setup.row_constants`), as does NSGA-II's compiled
+search (:mod:`~hcomc.control.hierarchical.search`). No population of
 trajectories is allocated and the values equal those of :meth:`MergeProblem.predict
 <hcomc.control.hierarchical.problem.MergeProblem.predict>` bit for bit.
 :func:`~hcomc.control.hierarchical.problem_setup.load_prediction_kernels` loads these kernels,
