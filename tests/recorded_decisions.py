@@ -1,7 +1,8 @@
 """The recorded first planning instants of C1-C5 (``benchmarks/record_decisions.py``,
-``benchmarks/data/decisions.pkl``), shared by the tests that score real merge problems; and
-:func:`compare_quality`, a compiled optimiser's solution quality against its library reference
-on them (hypervolume and best Eq. 19 cost, paired over seeds)."""
+``benchmarks/data/decisions.pkl``), shared by the tests that score real merge problems, with
+:func:`problem_variants` and :func:`threshold_rows` to vary them; and :func:`compare_quality`, a
+compiled optimiser's solution quality against its library reference on them (hypervolume and
+best Eq. 19 cost, paired over seeds)."""
 
 from __future__ import annotations
 
@@ -79,6 +80,35 @@ class Quality:
     cost_gap: float
     cost_spread: float
     pairs: tuple[tuple[int, int, float, float, float, float], ...]
+
+
+MODE_EDGES = np.array([0.0, 1.0, 0.5, np.nextafter(0.5, 0.0), 1.5, np.nextafter(1.0, 0.0)])
+"""Values of the mode and sequence variables at and beside their thresholds (0.5, 1.0)."""
+
+
+def problem_variants(problem: MergeProblem) -> list[MergeProblem]:
+    """The problem, without a vehicle to merge behind, with lateral cooperation admitted in
+    both sequences, and HCOMC+ (the mode "none")."""
+    plus = problem.config.model_copy(
+        update={"control": problem.config.control.model_copy(update={"no_cooperation": True})}
+    )
+    return [
+        problem,
+        MergeProblem((problem.state, None), problem.config, problem.lateral_allowed),
+        MergeProblem(problem.states, problem.config, (True, True)),
+        MergeProblem(problem.states, plus, problem.lateral_allowed),
+    ]
+
+
+def threshold_rows(problem: MergeProblem, n: int, seed: int) -> FloatArray:
+    """``n`` rows in the bounds, the mode and sequence variables often at their thresholds."""
+    rng = np.random.default_rng(seed)
+    xl, xu = np.asarray(problem.xl), np.asarray(problem.xu)
+    X = xl + rng.random((n, xl.size)) * (xu - xl)
+    pick = rng.random((n, 2)) < 0.4
+    X[:, 3:][pick] = rng.choice(MODE_EDGES, size=int(pick.sum()))
+    rows: FloatArray = np.clip(X, xl, xu)
+    return rows
 
 
 def _run(name: str, index: int, seed: int) -> ParetoResult:

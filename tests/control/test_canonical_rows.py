@@ -20,33 +20,12 @@ from hcomc.control.hierarchical.controller import HCOMCController, HCOMCDetails
 from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.optim import evaluated
 from hcomc.optim.base import CanonicalProblem
-from recorded_decisions import recorded_instants, recorded_problem
-
-_EDGES = np.array([0.0, 1.0, 0.5, np.nextafter(0.5, 0.0), 1.5, np.nextafter(1.0, 0.0)])
-
-
-def _variants(problem: MergeProblem) -> list[MergeProblem]:
-    """The problem, without a vehicle to merge behind, with lateral cooperation admitted in
-    both sequences, and HCOMC+ (the mode "none")."""
-    plus = problem.config.model_copy(
-        update={"control": problem.config.control.model_copy(update={"no_cooperation": True})}
-    )
-    return [
-        problem,
-        MergeProblem((problem.state, None), problem.config, problem.lateral_allowed),
-        MergeProblem(problem.states, problem.config, (True, True)),
-        MergeProblem(problem.states, plus, problem.lateral_allowed),
-    ]
-
-
-def _rows(problem: MergeProblem, n: int, seed: int) -> np.ndarray:
-    """``n`` rows in the bounds, the mode and sequence variables often at their thresholds."""
-    rng = np.random.default_rng(seed)
-    xl, xu = np.asarray(problem.xl), np.asarray(problem.xu)
-    X = xl + rng.random((n, xl.size)) * (xu - xl)
-    pick = rng.random((n, 2)) < 0.4
-    X[:, 3:][pick] = rng.choice(_EDGES, size=int(pick.sum()))
-    return np.clip(X, xl, xu)
+from recorded_decisions import (
+    problem_variants,
+    recorded_instants,
+    recorded_problem,
+    threshold_rows,
+)
 
 
 def _assert_same_values(problem: MergeProblem, X: np.ndarray) -> None:
@@ -67,8 +46,8 @@ def test_the_merge_problem_is_canonical() -> None:
 
 @pytest.mark.parametrize("index", [0, 9, 23, 38, 52])
 def test_rows_and_their_canonical_rows_have_the_same_values(index: int) -> None:
-    for k, problem in enumerate(_variants(recorded_problem(index))):
-        _assert_same_values(problem, _rows(problem, 120, seed=100 * index + k))
+    for k, problem in enumerate(problem_variants(recorded_problem(index))):
+        _assert_same_values(problem, threshold_rows(problem, 120, seed=100 * index + k))
 
 
 @settings(max_examples=60, deadline=None)
@@ -76,8 +55,8 @@ def test_rows_and_their_canonical_rows_have_the_same_values(index: int) -> None:
 def test_any_rows_have_the_values_of_their_canonical_rows(
     index: int, variant: int, seed: int
 ) -> None:
-    problem = _variants(recorded_problem(index))[variant]
-    _assert_same_values(problem, _rows(problem, 8, seed))
+    problem = problem_variants(recorded_problem(index))[variant]
+    _assert_same_values(problem, threshold_rows(problem, 8, seed))
 
 
 def test_a_decision_is_the_same_with_and_without_canonical_rows(

@@ -24,35 +24,15 @@ from hcomc.control.longitudinal_candidate import with_cooperation
 from hcomc.optim.evaluated import EvaluatedRows
 from hcomc.optim.nsga2 import CompiledGenerations, Generations, run_generations
 from hcomc.optim.variation import Bounds
-from recorded_decisions import recorded_problem
-
-_EDGES = np.array([0.0, 0.5, np.nextafter(0.5, 0.0), 1.0, np.nextafter(1.0, 0.0), 1.5])
-
-
-def _variants(problem: MergeProblem) -> list[MergeProblem]:
-    """The problem, without a vehicle to merge behind, with lateral cooperation admitted in
-    both sequences, and HCOMC+ (the mode "none")."""
-    plus = problem.config.model_copy(
-        update={"control": problem.config.control.model_copy(update={"no_cooperation": True})}
-    )
-    return [
-        problem,
-        MergeProblem((problem.state, None), problem.config, problem.lateral_allowed),
-        MergeProblem(problem.states, problem.config, (True, True)),
-        MergeProblem(problem.states, plus, problem.lateral_allowed),
-    ]
+from recorded_decisions import MODE_EDGES, problem_variants, recorded_problem, threshold_rows
 
 
 def _first(problem: MergeProblem, n: int, seed: int) -> np.ndarray:
-    """``n`` first rows in the bounds, the mode and sequence variables often at their
-    thresholds, two of them equal (as a warm start can repeat a row)."""
-    rng = np.random.default_rng(seed)
-    xl, xu = np.asarray(problem.xl), np.asarray(problem.xu)
-    X = xl + rng.random((n, xl.size)) * (xu - xl)
-    pick = rng.random((n, 2)) < 0.4
-    X[:, 3:][pick] = rng.choice(_EDGES, size=int(pick.sum()))
+    """``n`` first rows (:func:`threshold_rows`), two of them equal, as a warm start can repeat
+    a row."""
+    X = threshold_rows(problem, n, seed)
     X[1] = X[0]
-    return np.clip(X, xl, xu)
+    return X
 
 
 def _run(
@@ -71,7 +51,7 @@ def _run(
 @pytest.mark.parametrize("index", [0, 9, 23, 38, 51])
 @pytest.mark.parametrize("variant", range(4))
 def test_compiled_generations_equal_the_python_loop(index: int, variant: int) -> None:
-    problem = _variants(recorded_problem(index))[variant]
+    problem = problem_variants(recorded_problem(index))[variant]
     assert isinstance(problem, CompiledGenerations)
     bounds = Bounds(np.asarray(problem.xl, dtype=float), np.asarray(problem.xu, dtype=float))
     for seed, (pop_size, n_gen, n_first) in enumerate([(12, 4, 12), (10, 3, 7), (8, 1, 8)]):
@@ -102,7 +82,9 @@ def _decoded_by_numpy(
 @settings(max_examples=60, deadline=None)
 @given(
     values=st.lists(
-        st.tuples(st.sampled_from([*_EDGES.tolist(), np.nan]), st.sampled_from(_EDGES.tolist())),
+        st.tuples(
+            st.sampled_from([*MODE_EDGES.tolist(), np.nan]), st.sampled_from(MODE_EDGES.tolist())
+        ),
         min_size=1,
         max_size=20,
     ),
