@@ -25,8 +25,7 @@ from hcomc.control.hierarchical.row_scoring import (
     RowConstants,
     constants_handle,
     score_row,
-    score_rows_parallel,
-    score_rows_serial,
+    score_rows_on,
 )
 from hcomc.control.lane_change_game.params import GAME_DEFAULT
 from hcomc.control.lane_change_game.players import GameVehicle, simulate_sv
@@ -138,8 +137,7 @@ def load_prediction_kernels() -> None:
     variants, on = (constants,) * 4, np.ones(4, dtype=np.bool_)  # evaluate's
     variant, lateral = np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.bool_)
     for_rows = (*variants, on, on[:2], row[None], variant, lateral, lateral, F[None], G[None])
-    score_rows_serial(*for_rows)
-    score_rows_parallel(*for_rows, 1)  # in any process: a main process's decisions use it
+    score_rows_on(*for_rows, 1)  # its serial and parallel kernels (a main process's decisions)
     search.warm_up(constants)  # NSGA-II's generations on the merge problem
     trajectory = np.zeros((1, 2, N_ROLES))
     roles = np.zeros(1, dtype=np.int64)

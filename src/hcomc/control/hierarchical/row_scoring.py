@@ -55,6 +55,7 @@ __all__ = [
     "score_into",
     "score_row",
     "score_rows",
+    "score_rows_on",
     "score_rows_parallel",
     "score_rows_serial",
     "scoring_threads",
@@ -205,6 +206,23 @@ def score_rows_parallel(
                     n_parts, work)  # fmt: skip
 
 
+@kernel
+def score_rows_on(
+    ahead: RowConstants, behind: RowConstants, ahead_none: RowConstants,
+    behind_none: RowConstants, scored: np.ndarray, allowed: np.ndarray, X: np.ndarray,
+    variant: np.ndarray, lateral: np.ndarray, no_behind: np.ndarray, F: np.ndarray,
+    G: np.ndarray, n_parts: int,
+) -> None:  # fmt: skip
+    """:func:`score_rows` on ``n_parts`` threads: :func:`score_rows_parallel` for more than
+    one, else :func:`score_rows_serial` (which alone runs where parallel kernels must not)."""
+    args = (ahead, behind, ahead_none, behind_none, scored, allowed, X, variant, lateral,
+            no_behind, F, G)  # fmt: skip
+    if n_parts > 1:
+        score_rows_parallel(*args, n_parts)
+    else:
+        score_rows_serial(*args)
+
+
 def scoring_threads() -> int:
     """The threads a population's rows are scored on: numba's (every core, unless
     ``NUMBA_NUM_THREADS`` or :func:`numba.set_num_threads` says fewer) on a main process's main
@@ -235,10 +253,6 @@ def score_rows(
 
     A row's values depend on its own inputs alone, so they are the same bit for bit
     whatever the number of threads."""
-    threads = min(scoring_threads(), X.shape[0])
     ahead, behind, ahead_none, behind_none = variants
-    args = (scored, allowed, X, variant, lateral, no_behind, F, G)
-    if threads > 1:
-        score_rows_parallel(ahead, behind, ahead_none, behind_none, *args, threads)
-    else:
-        score_rows_serial(ahead, behind, ahead_none, behind_none, *args)
+    score_rows_on(ahead, behind, ahead_none, behind_none, scored, allowed, X, variant, lateral,
+                  no_behind, F, G, min(scoring_threads(), X.shape[0]))  # fmt: skip

@@ -32,8 +32,7 @@ from hcomc.control.hierarchical.problem_terms import (
 )
 from hcomc.control.hierarchical.row_scoring import (
     RowConstants,
-    score_rows_parallel,
-    score_rows_serial,
+    score_rows_on,
     scoring_threads,
 )
 from hcomc.optim.evaluated import ArchiveArrays, EvaluatedRows, admit_rows, settle_rows
@@ -96,12 +95,8 @@ def admit_and_score(
             rows[q] = X[fresh[q]]
         _, lateral, variant, no_behind = decode_rows(rows, c.no_cooperation, c.has_behind)
         F_new, G_new = np.zeros((n, F.shape[1])), np.zeros((n, G.shape[1]))
-        args = (c.scored, c.allowed, rows, variant, lateral, no_behind, F_new, G_new)
-        if min(n_parts, n) > 1:
-            score_rows_parallel(c.ahead, c.behind, c.ahead_none, c.behind_none, *args,
-                                min(n_parts, n))  # fmt: skip
-        else:
-            score_rows_serial(c.ahead, c.behind, c.ahead_none, c.behind_none, *args)
+        score_rows_on(c.ahead, c.behind, c.ahead_none, c.behind_none, c.scored, c.allowed, rows,
+                      variant, lateral, no_behind, F_new, G_new, min(n_parts, n))  # fmt: skip
         for q in range(n):
             F[fresh[q]], G[fresh[q]] = F_new[q], G_new[q]
     settle_rows(F, G, archive.cv, archive.first, start, end)
