@@ -127,7 +127,6 @@ def test_an_archive_of_whole_rows_is_filled_by_the_python_loop() -> None:
     for compiled in (True, False):
         archive = EvaluatedRows(problem, 8 + 2 * 8)
         archive._canonical, archive._keys = None, archive.X  # as for a problem of whole rows
-        archive.arrays = archive.arrays._replace(keys=archive.X)
         rng = np.random.default_rng(1)
         run = problem.nsga2_generations if compiled else run_generations
         runs.append((run(archive, first, plan, rng), archive))

@@ -136,8 +136,12 @@ class EvaluatedRows:
         self._table = np.full(1 << (2 * n_rows).bit_length(), _EMPTY, dtype=np.int64)
         self._canonical = problem.canonical_rows if isinstance(problem, CanonicalProblem) else None
         self._keys = self.X if self._canonical is None else np.empty_like(self.X)  # compared
-        self.arrays = ArchiveArrays(self.X, self.F, self.G, self.cv, self._keys, self._table,
-                                    self._first, self._fresh)  # fmt: skip
+
+    @property
+    def arrays(self) -> ArchiveArrays:
+        """Every array of the archive, as compiled code that fills it takes them."""
+        return ArchiveArrays(self.X, self.F, self.G, self.cv, self._keys, self._table,
+                             self._first, self._fresh)  # fmt: skip
 
     def add(self, X: FloatArray) -> IntArray:
         """Evaluate the rows ``X`` into the archive's next rows; their archive rows."""
