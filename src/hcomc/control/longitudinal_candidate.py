@@ -30,6 +30,7 @@ __all__ = [
     "MIN_HORIZON",
     "MIN_SPEED",
     "POSITION_STEP",
+    "SEARCH_BLOCK",
     "feasible_candidate",
     "last_merge_position",
     "merge_position",
@@ -52,6 +53,11 @@ steps at the default ``control.prediction_dt``)."""
 
 POSITION_STEP = MERGE_OFFSET
 """Step of the nearest-feasible search over the merge position [m]."""
+
+SEARCH_BLOCK = 16
+"""Rows of the nearest-feasible grid scored in its search's first call (then 32, 64, ...).
+A grid holds hundreds of candidates and its first feasible one usually lies among the first
+few dozen, so the search scores a fraction of the rows it would score all at once."""
 
 MIN_SPEED = 0.1
 """Floor on a speed in the arrival-time predictions [m/s] (no division by zero)."""
@@ -176,28 +182,42 @@ def nearest_feasible(
     k :data:`HORIZON_STEP` (k = 1, 2, ...) and ``h_max``; then each merge position ``merge_x`` +
     i :data:`POSITION_STEP` (i = 1, 2, ...) up to ``x_last`` (and ``x_last`` itself), each with
     H = ``horizon`` + k :data:`HORIZON_STEP` (k = 0, 1, ...) and ``h_max``. The candidates are
-    scored in one call of :meth:`MergeProblem.evaluate
-    <hcomc.control.hierarchical.problem.MergeProblem.evaluate>` (longitudinal, ``sequence``); only
-    the virtual-vehicle constraint is asked of them, the criterion of the rule's own candidate.
+    scored by :meth:`MergeProblem.evaluate
+    <hcomc.control.hierarchical.problem.MergeProblem.evaluate>` (longitudinal, ``sequence``) in
+    that order, :data:`SEARCH_BLOCK` rows at first and twice as many in each next call, until
+    a block holds a feasible one: a row's score does not depend on the rows scored beside it,
+    so the answer is that of scoring the whole grid at once. Only the virtual-vehicle
+    constraint is asked of them, the criterion of the rule's own candidate.
 
     Returns
     -------
     (merge_x, H) of the first feasible candidate [m, s], or None when none is feasible.
     """
+    grid = _search_grid(merge_x, horizon, h_max, x_last)
+    start, block = 0, SEARCH_BLOCK
+    while start < len(grid):
+        cells = grid[start : start + block]
+        n = len(cells)
+        rows = np.column_stack(
+            [cells[:, 0], np.full(n, vr_duration), cells[:, 1], np.zeros(n),
+             np.full(n, float(sequence))]
+        )  # fmt: skip
+        _, G = problem.evaluate(rows)
+        ok = np.flatnonzero(G[:, _G_VIRTUAL] <= 0.0)
+        if ok.size:
+            return float(cells[ok[0], 0]), float(cells[ok[0], 1])
+        start, block = start + n, 2 * block
+    return None
+
+
+def _search_grid(merge_x: float, horizon: float, h_max: float, x_last: float) -> FloatArray:
+    """The (merge_x, H) cells :func:`nearest_feasible` searches, in its order, (n, 2)."""
     positions = _steps(merge_x, max(x_last, merge_x), POSITION_STEP)
     horizons = _steps(horizon, max(h_max, horizon), HORIZON_STEP)
-    grid = np.array([(x, h) for x in positions for h in horizons])[1:]  # the rule's one tried
-    if grid.size == 0:
-        return None
-    rows = np.column_stack(
-        [grid[:, 0], np.full(len(grid), vr_duration), grid[:, 1],
-         np.zeros(len(grid)), np.full(len(grid), float(sequence))]
-    )  # fmt: skip
-    _, G = problem.evaluate(rows)
-    ok = np.flatnonzero(G[:, _G_VIRTUAL] <= 0.0)
-    if ok.size == 0:
-        return None
-    return float(grid[ok[0], 0]), float(grid[ok[0], 1])
+    grid: FloatArray = np.column_stack(
+        (np.repeat(positions, horizons.size), np.tile(horizons, positions.size))
+    )
+    return grid[1:]  # the rule's own candidate was tried already
 
 
 def feasible_candidate(
