@@ -107,8 +107,12 @@ def _load_module(spec: str, target: str) -> Any:
 
 
 def controller_class(spec: str) -> type:
-    """The class a controller name (module doc) stands for; ConfigError if there is none."""
-    target = registered().get(spec, spec)
+    """The class a controller name (module doc) stands for; ConfigError if there is none.
+
+    A built-in name is resolved without reading the installed packages' entry points (no
+    package can take one, :func:`registered`): that reading takes milliseconds, and every run
+    resolves its controller when it is built and again for its manifest."""
+    target = BUILTIN[spec] if spec in BUILTIN else registered().get(spec, spec)
     module_name, colon, attr = target.rpartition(":")
     if not colon or not module_name:
         raise _error(spec, "not a registered name")
