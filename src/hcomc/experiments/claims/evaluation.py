@@ -118,30 +118,47 @@ def p_verdict(p: float, direction: int) -> str:
     return "holds" if direction > 0 else "reversed"
 
 
-def _values(runs: pd.DataFrame, cell: tuple[str, str], metric: str) -> pd.Series:
-    part = runs[(runs["condition"] == cell[0]) & (runs["configuration"] == cell[1])]
-    return part.groupby("seed")[metric].first()
+class _Cells:
+    """The runs split once by (condition, configuration) cell, and each cell by seed: there
+    are hundreds of claims, each reading two cells, and selecting a cell from all the runs
+    anew took most of :func:`claims`' time."""
+
+    def __init__(self, runs: pd.DataFrame) -> None:
+        self.runs = runs
+        groups = runs.groupby(["condition", "configuration"], sort=False) if len(runs) else ()
+        self._parts: dict[tuple[str, str], pd.DataFrame] = dict(iter(groups))
+        self._by_seed: dict[tuple[str, str], pd.DataFrame] = {}
+
+    def part(self, cell: tuple[str, str]) -> pd.DataFrame:
+        """The runs of ``cell`` (none: no rows)."""
+        return self._parts.get(cell, self.runs.iloc[:0])
+
+    def values(self, cell: tuple[str, str], metric: str) -> pd.Series:
+        """``metric`` of ``cell``'s runs by seed (a seed's first value)."""
+        if cell not in self._by_seed:
+            self._by_seed[cell] = self.part(cell).groupby("seed").first()
+        return self._by_seed[cell][metric]
 
 
-def _failed(runs: pd.DataFrame, cell: tuple[str, str], seeds: pd.Index) -> np.ndarray:
+def _failed(cells: _Cells, cell: tuple[str, str], seeds: pd.Index) -> np.ndarray:
     """Whether the run of ``cell`` failed to merge, on each of ``seeds`` (all False when the
     runs have no ``merged`` column)."""
-    if "merged" not in runs:
+    if "merged" not in cells.runs:
         return np.zeros(len(seeds), dtype=bool)
-    merged = _values(runs, cell, "merged").reindex(seeds)
+    merged = cells.values(cell, "merged").reindex(seeds)
     return ~merged.fillna(False).astype(bool).to_numpy()
 
 
-def _evaluate(runs: pd.DataFrame, claim: Claim) -> dict[str, object] | None:
+def _evaluate(cells: _Cells, claim: Claim) -> dict[str, object] | None:
     """Paired differences A - B by seed: median, bootstrap CI, counts, sign test (a failed
     merge the worst outcome), means."""
-    if claim.metric not in runs:
+    if claim.metric not in cells.runs:
         return None
-    a, b = _values(runs, claim.a, claim.metric), _values(runs, claim.b, claim.metric)
+    a, b = cells.values(claim.a, claim.metric), cells.values(claim.b, claim.metric)
     if a.empty or b.empty:
         return None
     a, b = a.align(b, join="inner")
-    fail_a, fail_b = _failed(runs, claim.a, a.index), _failed(runs, claim.b, b.index)
+    fail_a, fail_b = _failed(cells, claim.a, a.index), _failed(cells, claim.b, b.index)
     both = (a.notna() & b.notna()).to_numpy() & ~fail_a & ~fail_b
     va, vb = a.to_numpy(dtype=np.float64)[both], b.to_numpy(dtype=np.float64)[both]
     diff = va - vb
@@ -187,12 +204,12 @@ def mcnemar_exact(a_only: int, b_only: int) -> float:
     return sign_test(a_only, b_only)
 
 
-def _success_row(runs: pd.DataFrame, claim: SuccessClaim) -> dict[str, object] | None:
+def _success_row(cells: _Cells, claim: SuccessClaim) -> dict[str, object] | None:
     """Merge success of A against B on their common seeds (exact McNemar)."""
-    if "merged" not in runs:
+    if "merged" not in cells.runs:
         return None
-    a = _values(runs, (claim.condition, claim.a), "merged")
-    b = _values(runs, (claim.condition, claim.b), "merged")
+    a = cells.values((claim.condition, claim.a), "merged")
+    b = cells.values((claim.condition, claim.b), "merged")
     a, b = a.align(b, join="inner")
     if a.empty:
         return None
@@ -218,8 +235,8 @@ def _success_row(runs: pd.DataFrame, claim: SuccessClaim) -> dict[str, object] |
     }
 
 
-def _mode_row(runs: pd.DataFrame, claim: ModeClaim) -> dict[str, object] | None:
-    part = runs[(runs["condition"] == claim.condition) & (runs["configuration"] == "HCOMC")]
+def _mode_row(cells: _Cells, claim: ModeClaim) -> dict[str, object] | None:
+    part = cells.part((claim.condition, "HCOMC"))
     if part.empty or "mode" not in part:
         return None
     n, k = len(part), int((part["mode"] == claim.mode).sum())
@@ -242,13 +259,13 @@ def _mode_row(runs: pd.DataFrame, claim: ModeClaim) -> dict[str, object] | None:
     }
 
 
-def _row(runs: pd.DataFrame, claim: AnyClaim) -> dict[str, object] | None:
+def _row(cells: _Cells, claim: AnyClaim) -> dict[str, object] | None:
     if isinstance(claim, ModeClaim):
-        rec = _mode_row(runs, claim)
+        rec = _mode_row(cells, claim)
     elif isinstance(claim, SuccessClaim):
-        rec = _success_row(runs, claim)
+        rec = _success_row(cells, claim)
     else:
-        result = _evaluate(runs, claim)
+        result = _evaluate(cells, claim)
         if result is None:
             return None
         same = claim.a[0] == claim.b[0]
@@ -290,14 +307,15 @@ def claims(runs: pd.DataFrame, uniform: pd.DataFrame | None = None) -> pd.DataFr
     module docstring for the rules.
     """
     records: list[dict[str, object]] = []
+    cells, uniform_cells = _Cells(runs), None if uniform is None else _Cells(uniform)
     for claim in all_claims():
-        rec = _row(runs, claim)
+        rec = _row(cells, claim)
         if rec is None:
             continue
         k, n = int(rec["holds"]), int(rec["n"])  # type: ignore[call-overload]
         rec["share"] = k / n if n else float("nan")
-        if uniform is not None:
-            check = _row(uniform, claim)
+        if uniform_cells is not None:
+            check = _row(uniform_cells, claim)
             defined = check is not None and int(check["n"]) > 0  # type: ignore[call-overload]
             rec["uniform"] = ("yes" if check["holds"] else "no") if defined else ""  # type: ignore[index]
         records.append(rec)
