@@ -26,6 +26,7 @@ from hcomc.metrics import (
     lane_speed_field,
     low_speed_region_volume,
 )
+from hcomc.metrics.lane_order import lane_order
 from hcomc.metrics.lane_profile import interp_ascending_into, interp_into, lane_knots
 from hcomc.metrics.leaders import lane_follower, lane_leaders
 from hcomc.metrics.paper import disturbance_metrics
@@ -112,6 +113,33 @@ def test_lane_knots_are_the_lanes_vehicles_in_numpys_stable_order(
     want = on[np.argsort(x_row[on].astype(np.float64), kind="stable")]
     same(cols[:m], want)
     same(xs[:m], x_row[want].astype(np.float64))
+
+
+_entry = st.tuples(st.integers(0, 3), st.one_of(_grid, st.just(math.nan)), st.integers(0, 1))
+"""A row's entry: lane, position, and whether the vehicle has a second entry."""
+
+
+@settings(max_examples=300, deadline=None)
+@given(rows=st.lists(st.lists(_entry, max_size=40), max_size=6))
+def test_lane_order_is_numpys_lexsort(rows: list[list[tuple[int, float, int]]]) -> None:
+    """Rows of entries (lane, x, and whether the vehicle has a second entry, as a lane
+    changer has in :func:`hcomc.metrics.bodies.body_pairs`), each row's in vehicle order: the
+    order of ``np.lexsort`` by row, lane, x (ties and NaN) and vehicle."""
+    lane, x, vehicle, row, counts = [], [], [], [], []
+    for r, entries in enumerate(rows):
+        count = 0
+        for i, (g, xi, twice) in enumerate(entries):
+            for other in range(1 + twice):  # the second entry in the next lane up
+                lane.append((g + other) % 4)
+                x.append(xi)
+                vehicle.append(i)
+                row.append(r)
+                count += 1
+        counts.append(count)
+    start = np.concatenate(([0], np.cumsum(counts))).astype(np.int64)
+    lanes, xs = np.array(lane, dtype=np.int64), np.array(x, dtype=np.float64)
+    vehicles, row_of = np.array(vehicle, dtype=np.int64), np.array(row, dtype=np.int64)
+    same(lane_order(start, lanes, xs, vehicles), np.lexsort((vehicles, xs, lanes, row_of)))
 
 
 @pytest.mark.parametrize("seed", range(5))

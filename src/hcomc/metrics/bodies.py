@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
+from hcomc.metrics.lane_order import lane_order
 from hcomc.metrics.window import EPS_T, road_of, times
 from hcomc.road import N_LANES
 from hcomc.sim.log import EventKind, SimulationLog
@@ -111,11 +112,14 @@ def body_pairs(
     v = cells["v"][row, column].astype(np.float64)
     lane = cells["lane"][row, column].astype(np.int64)
     second = _second_lanes(log, row, vehicle, cells["y"][row, column].astype(np.float64), lane)
-    twice = second >= 0
-    row, vehicle = np.concatenate([row, row[twice]]), np.concatenate([vehicle, vehicle[twice]])
-    x, v = np.concatenate([x, x[twice]]), np.concatenate([v, v[twice]])
-    lane = np.concatenate([lane, second[twice]])
-    order = np.lexsort((vehicle, x, lane, row))  # by row, lane, x (NaN last), vehicle
+    twice = np.flatnonzero(second >= 0)
+    extra = np.bincount(row[twice] - r0, minlength=r1 - r0)  # second entries per row
+    start = start + np.concatenate(([0], np.cumsum(extra)))
+    at = twice + 1  # a vehicle's second-lane entry right after its first: rows in vehicle order
+    row, vehicle = np.insert(row, at, row[twice]), np.insert(vehicle, at, vehicle[twice])
+    x, v = np.insert(x, at, x[twice]), np.insert(v, at, v[twice])
+    lane = np.insert(lane, at, second[twice])
+    order = lane_order(start, lane, x, vehicle)  # by row, lane, x (NaN last), vehicle
     f, ld = order[:-1], order[1:]  # each entry and the next one: follower, leader
     key = np.isin(vehicle, vehicles)
     pair = (row[f] == row[ld]) & (lane[f] == lane[ld]) & (key[f] | key[ld])

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from hcomc._typing import FloatArray, IntArray
+from hcomc.metrics.lane_order import lane_order
 from hcomc.sim.log import SimulationLog
 from hcomc.sim.log.slots import active_columns
 
@@ -60,7 +61,7 @@ def lane_leaders(
     row = np.repeat(np.arange(r0, r1), np.diff(start))  # each roster entry's row
     x = cells["x"][row, column].astype(np.float64)
     lane = cells["lane"][row, column].astype(np.int64)
-    order = np.lexsort((vehicle, x, lane, row))  # by row, lane, x (NaN last), vehicle
+    order = lane_order(start, lane, x, vehicle)  # by row, lane, x (NaN last), vehicle
     ahead = np.empty(order.size, dtype=np.int64)  # the roster entry of each entry's leader
     ahead[order[:-1]] = order[1:]
     if order.size:
