@@ -243,8 +243,15 @@ def judge(
             f"{ratio}x ({repro['hcomc_wall_s']} s against {repro['sumo_wall_s']} s)",
             ratio <= REPRODUCE_RATIO,
             f"{repro['hcomc_decisions_s']} s of the runs' {repro['hcomc_runs_wall_s']} s in "
-            f"{repro['hcomc_decisions']:,} merge decisions"))  # fmt: skip
+            f"{repro['hcomc_decisions']:,} merge decisions ({largest(repro)})"))  # fmt: skip
     return targets
+
+
+def largest(repro: dict[str, Any], count: int = 3) -> str:
+    """The configurations whose decisions took the most of the reproduction's time."""
+    by_configuration = repro["hcomc_decisions_s_by_configuration"]
+    return ", ".join(f"{name} {seconds} s" for name, seconds in
+                     list(by_configuration.items())[:count])  # fmt: skip
 
 
 def main() -> None:
