@@ -25,7 +25,8 @@ def lane_order(
     """The entries in lane order, row after row: ``np.lexsort((vehicle, x, lane, row))``.
 
     Row k's entries are ``start[k]:start[k + 1]`` (``start`` (R + 1,) int64, rising), each
-    row's in ascending ``vehicle`` order; ``lane`` (int64, >= 0) and ``x`` (float64) of each.
+    row's in vehicle order (a vehicle's entry in a second lane right after its first);
+    ``lane`` (int64, >= 0) and ``x`` (float64) of each.
     A row's entries are sorted by ``x`` (stable: ties and NaNs keep the vehicle order, NaN
     last), then by lane (stable, by counting), so the order is by lane, x, vehicle.
     """
