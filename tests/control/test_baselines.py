@@ -14,8 +14,6 @@ from hcomc.control.fifo import FIFOController, FIFODetails
 from hcomc.control.key_group import behind_group, find_key_vehicles
 from hcomc.control.lane_change_game.solvers import solve_cooperative
 from hcomc.control.longitudinal_candidate import (
-    HORIZON_STEP,
-    POSITION_STEP,
     last_merge_position,
     merge_position,
     nearest_feasible,
@@ -40,6 +38,7 @@ from hcomc.interface import Fleet, MergeGroup, MergePlan, Mode, Ramp, TrafficVie
 from hcomc.road import Kind, Lane
 from hcomc.sim.engine import Simulation
 from hcomc.sim.log import EventKind, SimulationLog
+from search_grid import documented_grid
 
 CONTROLLERS = ("fifo", "game")
 CONDITIONS = ("C1", "C2", "C3", "C4", "C5")
@@ -457,17 +456,8 @@ def _far_leader_view(config: ScenarioConfig | None = None) -> TrafficView:
 
 def _grid(view: TrafficView, merge_x: float, horizon: float) -> list[tuple[float, float]]:
     """The search grid in its documented order (oracle, written out independently)."""
-    h_max = view.config.control.horizon_max
-    x_last = last_merge_position(view, 0)
-    positions = [
-        merge_x + i * POSITION_STEP for i in range(100) if merge_x + i * POSITION_STEP <= x_last
-    ]
-    positions += [x_last] if positions[-1] < x_last else []
-    horizons = [
-        horizon + k * HORIZON_STEP for k in range(100) if horizon + k * HORIZON_STEP <= h_max
-    ]
-    horizons += [h_max] if horizons[-1] < h_max else []
-    return [(x, h) for x in positions for h in horizons][1:]  # fmt: skip
+    return documented_grid(merge_x, horizon, view.config.control.horizon_max,
+                           last_merge_position(view, 0))  # fmt: skip
 
 
 def _feasible(problem, cells: list[tuple[float, float]], duration: float) -> np.ndarray:

@@ -9,12 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hcomc.control.hierarchical.problem_terms import CONSTRAINTS
-from hcomc.control.longitudinal_candidate import (
-    HORIZON_STEP,
-    POSITION_STEP,
-    SEARCH_BLOCK,
-    nearest_feasible,
-)
+from hcomc.control.longitudinal_candidate import SEARCH_BLOCK, nearest_feasible
+from search_grid import documented_grid
 
 G_VIRTUAL = CONSTRAINTS.index("virtual_vehicle")
 MERGE_X, DURATION, HORIZON, H_MAX = 710.0, 4.0, 6.3, 20.0
@@ -37,15 +33,8 @@ class MaskedProblem:
 
 
 def whole_grid(x_last: float) -> list[tuple[float, float]]:
-    """The grid in its documented order, written out independently (the rule's own cell
-    excluded)."""
-    positions = [MERGE_X + i * POSITION_STEP for i in range(200)
-                 if MERGE_X + i * POSITION_STEP <= x_last]  # fmt: skip
-    positions += [x_last] if positions[-1] < x_last else []
-    horizons = [HORIZON + k * HORIZON_STEP for k in range(200)
-                if HORIZON + k * HORIZON_STEP <= H_MAX]  # fmt: skip
-    horizons += [H_MAX] if horizons[-1] < H_MAX else []
-    return [(x, h) for x in positions for h in horizons][1:]
+    """The grid searched from the test's candidate up to ``x_last``."""
+    return documented_grid(MERGE_X, HORIZON, H_MAX, x_last)
 
 
 @settings(max_examples=60, deadline=None)

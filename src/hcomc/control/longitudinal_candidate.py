@@ -33,6 +33,7 @@ __all__ = [
     "SEARCH_BLOCK",
     "feasible_candidate",
     "last_merge_position",
+    "longitudinal_rows",
     "merge_position",
     "nearest_feasible",
     "predict_longitudinal",
@@ -138,7 +139,7 @@ def predict_longitudinal(
     prediction : :class:`~hcomc.control.hierarchical.problem.Prediction` of the single row.
     horizon : the H used [s].
     """
-    row = np.array([[merge_x, vr_duration, horizon, 0.0, float(sequence)]])
+    row = longitudinal_rows(merge_x, horizon, vr_duration, sequence)
     pred = problem.predict(row)
     reached = np.flatnonzero(pred.X[0, :, VR] >= merge_x)
     if reached.size:
@@ -148,6 +149,21 @@ def predict_longitudinal(
             row[0, 2] = horizon
             pred = problem.predict(row)
     return pred, float(horizon)
+
+
+def longitudinal_rows(
+    merge_x: FloatArray | float, horizon: FloatArray | float, vr_duration: float, sequence: int
+) -> FloatArray:
+    """The longitudinal candidate rows ``[merge_x, vr_duration, H, 0, sequence]`` (n, 5) of
+    the merge positions ``merge_x`` [m] and horizons ``horizon`` [s] (numbers, or arrays of
+    one length)."""
+    x, h = np.broadcast_arrays(np.atleast_1d(np.asarray(merge_x, dtype=np.float64)),
+                               np.atleast_1d(np.asarray(horizon, dtype=np.float64)))  # fmt: skip
+    n = x.size
+    rows: FloatArray = np.column_stack(
+        [x, np.full(n, float(vr_duration)), h, np.zeros(n), np.full(n, float(sequence))]
+    )
+    return rows
 
 
 def virtual_vehicle_feasible(pred: Prediction, row: int = 0) -> bool:
@@ -197,16 +213,11 @@ def nearest_feasible(
     start, block = 0, SEARCH_BLOCK
     while start < len(grid):
         cells = grid[start : start + block]
-        n = len(cells)
-        rows = np.column_stack(
-            [cells[:, 0], np.full(n, vr_duration), cells[:, 1], np.zeros(n),
-             np.full(n, float(sequence))]
-        )  # fmt: skip
-        _, G = problem.evaluate(rows)
+        _, G = problem.evaluate(longitudinal_rows(cells[:, 0], cells[:, 1], vr_duration, sequence))
         ok = np.flatnonzero(G[:, _G_VIRTUAL] <= 0.0)
         if ok.size:
             return float(cells[ok[0], 0]), float(cells[ok[0], 1])
-        start, block = start + n, 2 * block
+        start, block = start + len(cells), 2 * block
     return None
 
 
@@ -250,5 +261,4 @@ def feasible_candidate(
     if found is None:
         return pred, merge_x, horizon, nominal
     x, h = found
-    row = np.array([[x, vr_duration, h, 0.0, float(sequence)]])
-    return problem.predict(row), x, h, nominal
+    return problem.predict(longitudinal_rows(x, h, vr_duration, sequence)), x, h, nominal

@@ -140,6 +140,7 @@ from hcomc.control.hierarchical.problem import MergeProblem
 from hcomc.control.hierarchical.problem_terms import Prediction
 from hcomc.control.longitudinal_candidate import (
     last_merge_position,
+    longitudinal_rows,
     merge_position,
     nearest_feasible,
     predict_longitudinal,
@@ -252,12 +253,14 @@ class GameController(PredictingBaseline):
         nominal = (merge_x, horizon)
         rows = [nominal, nominal]
         for i in (AHEAD, BEHIND):
-            pred = first if i == AHEAD else yielding.predict(_row(*nominal, duration, i))
+            pred = (
+                first if i == AHEAD else yielding.predict(longitudinal_rows(*nominal, duration, i))
+            )
             if not virtual_vehicle_feasible(pred):
                 found = nearest_feasible(yielding, merge_x, duration, horizon, h_max, x_last, i)
                 rows[i] = found or nominal
         if rows[AHEAD] != nominal:
-            first = yielding.predict(_row(*rows[AHEAD], duration, AHEAD))
+            first = yielding.predict(longitudinal_rows(*rows[AHEAD], duration, AHEAD))
         return rows[AHEAD], rows[BEHIND], first
 
     def plan(self, view: TrafficView, group: MergeGroup, rng: np.random.Generator) -> MergePlan:
@@ -286,7 +289,7 @@ class GameController(PredictingBaseline):
         for i in (AHEAD, BEHIND):
             for j in (YIELD, NOT_YIELD):
                 if not (i == AHEAD and j == YIELD):
-                    preds[i][j] = variants[j].predict(_row(*rows[i], vr_duration, i))
+                    preds[i][j] = variants[j].predict(longitudinal_rows(*rows[i], vr_duration, i))
                 pred = preds[i][j]
                 u_safe[i, j] = float(pred.F[0, 0]) if pred.k_merge[0] >= 0 else np.inf
                 j_s = safety_term(pred, problem, u_safe[i, j], self.safety)
@@ -326,8 +329,3 @@ class GameController(PredictingBaseline):
             sequence=outcome.row,
             commands=outcome.col == YIELD and view.is_cav(exec_group.vmc),
         )
-
-
-def _row(merge_x: float, horizon: float, duration: float, sequence: int) -> FloatArray:
-    """The longitudinal candidate row ``[merge_x, duration, H, 0, sequence]`` (1, 5)."""
-    return np.array([[merge_x, duration, horizon, 0.0, float(sequence)]])
