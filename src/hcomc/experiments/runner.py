@@ -23,10 +23,9 @@ workers, so tables are identical for 1 or N workers.
 from __future__ import annotations
 
 import json
-import multiprocessing
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,12 +34,10 @@ import pandas as pd
 from hcomc.config import ScenarioConfig, load_config
 from hcomc.config.impairment_tables import fault_entries
 from hcomc.control.registry import canonical_name, controller_source
+from hcomc.experiments.pool import local_pool
 from hcomc.experiments.results_row import run_columns
 from hcomc.interface import Engine
 from hcomc.sim.log import SimulationLog
-
-_SPAWN = multiprocessing.get_context("spawn")
-"""Worker processes start afresh: a fork would copy the parallel ensemble's thread pool."""
 
 CONFIGURATIONS: dict[str, tuple[str, str]] = {
     "FIFO": ("fifo", "nsga2"),
@@ -378,7 +375,7 @@ def run_grid(
                 outcome = failure
             deliver(i, outcome)
     else:  # one core per worker process: the processes share the cores
-        with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
+        with local_pool(workers) as pool:
             futures = {
                 pool.submit(run_batch, [specs[i] for i in chunk], threads=1): chunk
                 for chunk in chunks

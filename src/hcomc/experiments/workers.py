@@ -10,7 +10,7 @@ tasks itself. Each finished run is handed to a ``store(i, (row, manifest))`` cal
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
@@ -18,7 +18,8 @@ import pandas as pd
 
 from hcomc.config import ConfigError
 from hcomc.experiments.corridor.runs import CorridorSpec, reference_group, run_corridor_batch
-from hcomc.experiments.runner import _SPAWN, RunSpec, batches, batches_by_reference, run_batch
+from hcomc.experiments.pool import local_pool
+from hcomc.experiments.runner import RunSpec, batches, batches_by_reference, run_batch
 
 __all__ = ["BATCH_SIZE", "AnySpec", "connect", "run_dask", "run_local", "run_rows"]
 
@@ -101,7 +102,7 @@ def run_local(
     for _ in range(restarts + 1):
         finished: set[int] = set()
         try:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=_SPAWN) as pool:
+            with local_pool(workers) as pool:
                 futures = {
                     _submit(pool.submit, runs, chunk, threads=1): k
                     for k, chunk in enumerate(pending)

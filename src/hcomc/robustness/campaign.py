@@ -15,10 +15,9 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import multiprocessing
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,6 +34,7 @@ from hcomc.config.impairment_tables import (
     FaultParams,
     ShieldParams,
 )
+from hcomc.experiments.pool import local_pool
 from hcomc.sim.log import EventKind, SimulationLog
 from hcomc.sim.manifest import atomic_paths, git_revision, write_json_atomic
 
@@ -43,8 +43,6 @@ __all__ = ["LARGE_CAMPAIGN", "CampaignSpec", "FaultRun", "run_campaign", "run_fa
 if TYPE_CHECKING:
     from hcomc.robustness.impairments import Impairments
     from hcomc.sumo.cosim import SumoSimulation
-
-_SPAWN = multiprocessing.get_context("spawn")
 
 
 @dataclass(frozen=True)
@@ -384,7 +382,7 @@ def run_campaign(
         for cell in todo:
             store(cell, _run_cell(spec.runs(cell)))
     else:
-        with ProcessPoolExecutor(workers, mp_context=_SPAWN) as pool:
+        with local_pool(workers) as pool:
             futures = {pool.submit(_run_cell, spec.runs(c)): c for c in todo}
             for future in as_completed(futures):
                 store(futures[future], future.result())
