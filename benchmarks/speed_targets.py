@@ -22,8 +22,9 @@ One process measures, in this order:
 then, for every target not met, **the cost model**: the phases of the compiled step
 (``step_cost.py``: ns per vehicle-step, the largest first) of the scenes behind it, the
 decisions' time in NSGA-II's compiled search (the rollouts of its rows, its steps), the
-lane-change game and the rest (``decision_latency.py --split``), and the reproduction's time
-in merge decisions.
+lane-change game and the rest (``decision_latency.py --split``), the reproduction's time
+in merge decisions; and, for the targets of many runs (the ensemble, the reproduction), the
+cores that would meet them at this run's pace per core.
 
     python benchmarks/speed_targets.py [--repeats 3] [--ensemble 100] [--reproduce-seeds 30]
                                        [--reproduce-workers 2] [--no-decisions] [--json]
@@ -199,6 +200,46 @@ def per_core(batch: dict[str, Any]) -> str:
             f"{ENSEMBLE_RATIO:g}x takes {cores} such cores")  # fmt: skip
 
 
+def allowed(ratio: float, rate: float) -> int:
+    """The ns a vehicle-step may take to run ``ratio`` times as fast as ``rate``
+    [vehicle-steps/s]."""
+    return round(1e9 / (ratio * rate))
+
+
+def short_of(run: dict[str, Any], bound: float, repeats: int) -> str:
+    """The step's cost model of a single run below its bound, with what the bound allows."""
+    budget = allowed(bound, run["sumo_steps_per_s"])
+    model = phases(run["scene"], run["size"], repeats)
+    return f"{model} against the {budget} ns {bound:g}x SUMO allows"
+
+
+def idm_allowance(lines: list[dict[str, Any]]) -> str:
+    """The ns a vehicle-step of the line may take within the plain IDM's factor, per size."""
+    sizes = ", ".join(
+        f"{allowed(1.0 / PLAIN_IDM_FACTOR, r['plain_idm_steps_per_s'])} ns at {r['size']}"
+        for r in lines
+    )
+    return f"the {sizes} that {PLAIN_IDM_FACTOR:g}x the plain IDM's time allows"
+
+
+def reproduce_cores(repro: dict[str, Any], most: int = 64) -> str:
+    """What more cores would give the reproduction: the runs' seconds (the sum of their
+    shares of their batches' time on the workers) spread over N workers, each core as fast as
+    one of this run's, plus the rest of its wall time (start, workers' start, uneven ends,
+    claims, report), which more cores do not shorten; the least N that meets the target."""
+    wall, runs, workers = repro["hcomc_wall_s"], repro["hcomc_runs_wall_s"], repro["workers"]
+    rest = max(wall - runs / workers, 0.0)
+    bound = REPRODUCE_RATIO * repro["sumo_wall_s"]
+    cores = next((n for n in range(1, most + 1) if rest + runs / n <= bound), None)
+    reach = (
+        f"so {REPRODUCE_RATIO:g}x takes {cores} such cores"
+        if cores is not None
+        else f"no number of such cores up to {most} reaches {REPRODUCE_RATIO:g}x"
+    )
+    return (f"its wall time is the runs' {runs} s over {workers} workers and {rest:.1f} s "
+            f"besides them, {reach}")  # fmt: skip
+
+
 def judge(
     runs: list[dict[str, Any]], batch: dict[str, Any] | None, decided: dict[str, Any] | None,
     repro: dict[str, Any] | None, repeats: int,
@@ -208,7 +249,7 @@ def judge(
     for n, bound in SIZES.items():
         of_size = [r for r in runs if r["size"] == n]
         met = all(r["ratio"] >= bound for r in of_size)
-        slow = [phases(r["scene"], n, repeats) for r in of_size if r["ratio"] < bound]
+        slow = [short_of(r, bound, repeats) for r in of_size if r["ratio"] < bound]
         targets.append(Target(
             f"single run, {n} vehicles", f">= {bound:g}x SUMO, both scenes",
             ", ".join(f"{r['scene']} {r['ratio']}x" for r in of_size), met,
@@ -218,7 +259,7 @@ def judge(
     targets.append(Target(
         "the line's step", f"within {PLAIN_IDM_FACTOR:g}x the plain IDM's rate",
         ", ".join(f"{r['plain_idm_over_hcomc']}x at {r['size']}" for r in lines), met,
-        "" if met else "the cost model of the line above"))  # fmt: skip
+        "" if met else f"the line's cost model above, against {idm_allowance(lines)}"))  # fmt: skip
     if batch is not None:
         met = batch["ratio"] >= ENSEMBLE_RATIO
         targets.append(Target(
@@ -243,7 +284,8 @@ def judge(
             f"{ratio}x ({repro['hcomc_wall_s']} s against {repro['sumo_wall_s']} s)",
             ratio <= REPRODUCE_RATIO,
             f"{repro['hcomc_decisions_s']} s of the runs' {repro['hcomc_runs_wall_s']} s in "
-            f"{repro['hcomc_decisions']:,} merge decisions ({largest(repro)})"))  # fmt: skip
+            f"{repro['hcomc_decisions']:,} merge decisions ({largest(repro)}); "
+            f"{reproduce_cores(repro)}"))  # fmt: skip
     return targets
 
 
