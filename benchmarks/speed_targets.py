@@ -54,11 +54,12 @@ from typing import Any  # noqa: E402
 import numba  # noqa: E402
 from decision_latency import split  # noqa: E402
 from record_decisions import PROBLEMS_FILE, against_baseline, evaluate, load_decisions  # noqa: E402
-from step_cost import measure, plain_idm_rate  # noqa: E402
+from step_cost import measure, paper_following_rate, plain_idm_rate  # noqa: E402
 from throughput import machine  # noqa: E402
 from vs_sumo import (  # noqa: E402
     NO_COLLISION_CHECK,
     ensemble,
+    line_config,
     make_scenes,
     reproduce,
     sumo_version,
@@ -207,10 +208,20 @@ def allowed(ratio: float, rate: float) -> int:
 
 
 def short_of(run: dict[str, Any], bound: float, repeats: int) -> str:
-    """The step's cost model of a single run below its bound, with what the bound allows."""
+    """The step's cost model of a single run below its bound, with what the bound allows
+    and, on the line, what the paper's car following alone takes."""
     budget = allowed(bound, run["sumo_steps_per_s"])
     model = phases(run["scene"], run["size"], repeats)
-    return f"{model} against the {budget} ns {bound:g}x SUMO allows"
+    floor = f" ({following_alone(run['size'], repeats)})" if run["scene"] == "line" else ""
+    return f"{model} against the {budget} ns {bound:g}x SUMO allows{floor}"
+
+
+def following_alone(n: int, repeats: int) -> str:
+    """What the paper's car following alone takes on the line of ``n`` vehicles
+    (``step_cost.py``'s ``paper_following``)."""
+    progress(f"cost model: the paper's car following alone, line {n}")
+    rate = paper_following_rate(line_config(n, DURATION), repeats)
+    return f"the paper's car following alone, Eq. 2 and Eq. 1/3, takes {1e9 / rate:.0f} ns"
 
 
 def idm_allowance(lines: list[dict[str, Any]]) -> str:

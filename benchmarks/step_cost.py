@@ -37,6 +37,10 @@ once by the driver, and the benchmark stops unless both end in the same state to
 
 The reference is a plain IDM on one lane (each vehicle behind the one ahead, no perception,
 no log; ``plain_idm``), the 56-59 M vehicle-steps/s a compiled loop reaches on these hosts.
+Beside it, on the line, the paper's car following alone (``paper_following``): the line's
+vehicles with Eq. 2's two error draws a driver, its delayed, noisy perception and Eq. 1/3
+by the engine's own equation kernels, the ballistic update and the delays' ring buffer, and
+nothing else: the least a step of these equations costs, whatever the rest of the step does.
 
 Run: ``python benchmarks/step_cost.py [--sizes 100 2000] [--duration 60] [--json]``.
 """
@@ -62,10 +66,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from vs_sumo import SEED, line_config, scene_config
 
 from hcomc.config import load_config
+from hcomc.equations.car_following import follow_accel
+from hcomc.equations.integrate import ballistic_step
+from hcomc.equations.perception import ErrorScales, interpolate, perceived
 from hcomc.sim.engine import Simulation
 from hcomc.sim.lane_table import L_END, L_KIND, L_OPENS, L_SPEED
 from hcomc.sim.neighbours import lookup_one, neighbours_into
-from hcomc.sim.perception import advance_errors_of
+from hcomc.sim.perception import advance_errors_of, perception_rows
 from hcomc.sim.step import loop
 from hcomc.sim.step import state as S  # noqa: N812
 from hcomc.sim.step.collisions import check_collisions
@@ -269,6 +276,64 @@ def plain_idm_rate(n: int, steps: int, repeats: int) -> float:
     return float(np.median(rates))
 
 
+@njit
+def paper_following(c, steps, rng):  # type: ignore[no-untyped-def]
+    """The paper's car following alone on the line scene's vehicles ``c`` (the arrays of
+    its run, :class:`~hcomc.sim.step.state.CoreArrays`): each step, the HDVs' two error
+    innovations of Eq. 2 drawn per driver, their delayed, noisy perception of the vehicle
+    ahead (Eq. 2) and Eq. 1/3, the ballistic update and the ring buffer of the delays,
+    with the engine's equation kernels and nothing else (no neighbours, lane changes,
+    collisions, log or bookkeeping): the least any step of these equations can cost."""
+    n, size, dt = c.x.size, c.x_hist.shape[0], c.consts[S.DT]
+    x, v, matrix, iidm, length = c.x.copy(), c.v.copy(), c.matrix, c.iidm, c.length
+    x_hist, v_hist, w_gap, w_ttc = c.x_hist.copy(), c.v_hist.copy(), c.w_gap.copy(), c.w_ttc.copy()
+    decay, kick = c.consts[S.DECAY], c.consts[S.KICK]
+    scales = ErrorScales(c.consts[S.GAP_ERROR], c.consts[S.TTC_ERROR], c.flags[S.ERRORS] > 0)
+    acc = np.zeros(n)
+    for step in range(steps):
+        for i in range(n):
+            w_gap[i] = decay * w_gap[i] + kick * rng.standard_normal()
+            w_ttc[i] = decay * w_ttc[i] + kick * rng.standard_normal()
+        (n0, p0, r0), (n1, p1, r1), (n2, p2, r2) = perception_rows(step, c.taus, dt, size)
+        for i in range(n):  # vehicle i follows i - 1, as on the line
+            has = i > 0
+            lead = i - 1 if has else i
+            x_i = interpolate(x_hist[n0, i], x_hist[p0, i], r0)
+            x_l = interpolate(x_hist[n0, lead], x_hist[p0, lead], r0)
+            v_i = interpolate(v_hist[n1, i], v_hist[p1, i], r1)
+            dv = interpolate(v_hist[n2, i], v_hist[p2, i], r2) - interpolate(
+                v_hist[n2, lead], v_hist[p2, lead], r2
+            )
+            s_est, v_est, vl_est = perceived(
+                x_i, x_l, length[lead], v_i, dv, has, w_gap[i], w_ttc[i], scales
+            )
+            acc[i] = follow_accel(s_est, v_est, vl_est, 0.0, matrix[0, i], matrix[1, i],
+                                  matrix[2, i], matrix[3, i], matrix[4, i], matrix[5, i],
+                                  matrix[6, i], iidm[i])  # fmt: skip
+        for i in range(n):
+            dx, v[i], _ = ballistic_step(v[i], acc[i], dt)
+            x[i] += dx
+        row = (step + 1) % size
+        x_hist[row] = x
+        v_hist[row] = v
+    return x
+
+
+def paper_following_rate(config: Any, repeats: int) -> float:
+    """Vehicle-steps/s of :func:`paper_following` on the vehicles of ``config``'s run (the
+    line scene), the whole run's steps, the best of ``repeats``."""
+    sim = Simulation(config, SEED)
+    sim.run_to(1)  # released, on the road: the arrays hold the scene's vehicles
+    arrays, steps = sim.core._arrays, sim.n_warmup + sim.n_steps
+    paper_following(arrays, 2, np.random.default_rng(0))  # compiled before timing
+    best = 0.0
+    for rep in range(repeats):
+        start = time.perf_counter()
+        paper_following(arrays, steps, np.random.default_rng(rep))
+        best = max(best, arrays.x.size * steps / (time.perf_counter() - start))
+    return best
+
+
 def _same_state(a: Simulation, b: Simulation) -> bool:
     fields = ("x", "v", "a", "y", "lane", "active")
     return all(np.array_equal(getattr(a.arrays, f), getattr(b.arrays, f)) for f in fields)
@@ -341,8 +406,10 @@ def main() -> None:
             rows.append(measure(scene, 0, args.duration, args.repeats))
     sizes = {int(row["vehicles"]) for row in rows}  # type: ignore[call-overload]
     idm = {n: plain_idm_rate(n, round(args.duration / 0.1), args.repeats) for n in sorted(sizes)}
+    floor = {n: paper_following_rate(line_config(n, args.duration), args.repeats)
+             for n in args.sizes if "line" in args.scenes}  # fmt: skip
     if args.json:
-        print(json.dumps({"phases": rows, "plain_idm": idm}, indent=1))
+        print(json.dumps({"phases": rows, "plain_idm": idm, "paper_following": floor}, indent=1))
         return
     for row in rows:
         n = int(row["vehicles"])  # type: ignore[call-overload]
@@ -352,6 +419,11 @@ def main() -> None:
             f"{row['scene']} {n}: {row['rate'] / 1e6:.2f} M vehicle-steps/s "
             f"({1e9 / row['rate']:.0f} ns each; timed {total:.0f} ns); plain IDM "
             f"{idm[n] / 1e6:.1f} M ({1e9 / idm[n]:.0f} ns)"
+            + (
+                f"; the paper's car following alone {1e9 / floor[n]:.0f} ns"
+                if row["scene"] == "line" and n in floor
+                else ""
+            )
         )  # type: ignore[operator]
         for phase, value in sorted(parts.items(), key=lambda kv: -kv[1]):  # type: ignore[union-attr]
             print(f"  {phase:13s} {value:7.1f} ns  {100 * value / total:5.1f} %")
