@@ -40,7 +40,7 @@ no log; ``plain_idm``), the 56-59 M vehicle-steps/s a compiled loop reaches on t
 Beside it, on the line, the paper's car following alone (``paper_following``): the line's
 vehicles with Eq. 2's two error draws a driver, its delayed, noisy perception and Eq. 1/3
 by the engine's own equation kernels, the ballistic update and the delays' ring buffer, and
-nothing else: the least a step of these equations costs, whatever the rest of the step does.
+nothing else: what a step of these equations costs by itself, before the rest of the step.
 
 Run: ``python benchmarks/step_cost.py [--sizes 100 2000] [--duration 60] [--json]``.
 """
@@ -283,7 +283,8 @@ def paper_following(c, steps, rng):  # type: ignore[no-untyped-def]
     innovations of Eq. 2 drawn per driver, their delayed, noisy perception of the vehicle
     ahead (Eq. 2) and Eq. 1/3, the ballistic update and the ring buffer of the delays,
     with the engine's equation kernels and nothing else (no neighbours, lane changes,
-    collisions, log or bookkeeping): the least any step of these equations can cost."""
+    collisions, log or bookkeeping): what a step of these equations costs by itself with the
+    engine's kernels."""
     n, size, dt = c.x.size, c.x_hist.shape[0], c.consts[S.DT]
     x, v, matrix, iidm, length = c.x.copy(), c.v.copy(), c.matrix, c.iidm, c.length
     x_hist, v_hist, w_gap, w_ttc = c.x_hist.copy(), c.v_hist.copy(), c.w_gap.copy(), c.w_ttc.copy()
